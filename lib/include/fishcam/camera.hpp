@@ -1,0 +1,134 @@
+// A fisheye camera: imager size, principal point, per-axis pixel scale (the
+// paper's eq. 5), a radial model rho(theta) and an optional pose.
+// Conventions (docs/conventions.md): pixel centres at integer coordinates, (0, 0)
+// the centre of the top-left pixel; camera frame x right, y down, z forward;
+//   theta = atan2(sqrt(X^2 + Y^2), Z),  u = cx + a_x rho(theta) X / chi,  v = cy + a_y rho(theta) Y / chi.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "fishcam/error.hpp"
+#include "fishcam/radial_inverse.hpp"
+#include "fishcam/radial_models.hpp"
+
+namespace fishcam {
+
+// Projection of one point through a model, generic in the scalar type (usable by
+// ceres::AutoDiffCostFunction). pixel_mapping = (cx, cy, a_x, a_y). Returns theta;
+// the caller decides validity from it. On the optical axis rho/chi is replaced by
+// its limit rho'(0)/Z, so Jets get the right first-order derivatives there.
+template <class Model, typename T>
+T project_radial(const Model& model, const T* pixel_mapping, const T* point, T* pixel) {
+  using std::atan2;
+  using std::sqrt;
+  const T chi2 = point[0] * point[0] + point[1] * point[1];
+  T theta, scale;  // scale = rho(theta) / chi
+  if (chi2 == T(0)) {
+    theta = point[2] > T(0) ? T(0) : T(std::numbers::pi);
+    scale = model.drho(T(0)) / point[2];
+  } else {
+    const T chi = sqrt(chi2);
+    theta = atan2(chi, point[2]);
+    scale = model.rho(theta) / chi;
+  }
+  pixel[0] = pixel_mapping[0] + pixel_mapping[2] * scale * point[0];
+  pixel[1] = pixel_mapping[1] + pixel_mapping[3] * scale * point[1];
+  return theta;
+}
+
+using RadialModel =
+    std::variant<Polynomial<double>, Equidistant<double>, Stereographic<double>, Pinhole<double>, KannalaBrandt<double>>;
+
+std::string_view model_name(const RadialModel& model);
+std::vector<double> model_params(const RadialModel& model);
+// Parses a model name ("polynomial", "equidistant", ...) and its parameters (in the
+// order params() documents); throws Error naming what is wrong.
+RadialModel make_model(std::string_view name, std::span<const double> params);
+
+// Rigid transform camera -> reference: p_ref = rotation * p_cam + translation.
+struct Pose {
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+};
+
+struct CameraParameters {
+  int width = 0;
+  int height = 0;
+  Eigen::Vector2d principal_point = Eigen::Vector2d::Zero();  // (cx, cy), pixels
+  Eigen::Vector2d pixel_scale = Eigen::Vector2d::Ones();      // (a_x, a_y)
+  RadialModel model;
+  std::optional<double> theta_limit;  // radians; a user cap on the valid domain
+  std::optional<Pose> pose;
+};
+
+// Which theta(rho) a batch unprojection uses.
+enum class InversePath {
+  robust,  // bracketed Newton per point: |rho(theta) - rho| <= 1e-10 px
+  table,   // the camera's inverse table (robust solver in cells next to a fold)
+};
+
+class Camera {
+ public:
+  // Validates the parameters and computes the valid domain and the inverse table.
+  // Throws Error naming the offending parameter.
+  explicit Camera(CameraParameters parameters, double table_tolerance_px = InverseTable::kDefaultTolerancePx);
+
+  const CameraParameters& parameters() const { return params_; }
+  int width() const { return params_.width; }
+  int height() const { return params_.height; }
+  const Eigen::Vector2d& principal_point() const { return params_.principal_point; }
+  const Eigen::Vector2d& pixel_scale() const { return params_.pixel_scale; }
+  const RadialModel& model() const { return params_.model; }
+  const ValidDomain& domain() const { return domain_; }
+  const InverseTable& inverse_table() const { return table_; }
+
+  double rho(double theta) const;
+  double drho(double theta) const;
+  // The unique theta in the valid domain with rho(theta) = rho (robust solver or
+  // closed form); NaN when rho is outside [0, rho_max] or NaN.
+  double theta_from_rho(double rho) const;
+  // Same through the bulk path (inverse table); error <= inverse_table().worst_error_px().
+  double theta_from_rho_table(double rho) const;
+  // rho of a pixel: the radius of ((u - cx) / a_x, (v - cy) / a_y).
+  double rho_of_pixel(const Eigen::Vector2d& pixel) const;
+
+  // Projects a camera-frame point. False (and NaN pixel) when the point is the
+  // origin, non-finite, outside the valid domain, or on the -z axis (the pixel
+  // direction is undefined there). The Jacobian d pixel / d point on request.
+  bool project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+               Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const;
+  // Unit ray of a pixel. False (and NaN ray) when rho is outside the valid domain.
+  bool unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const;
+
+  // Batches: model dispatch once per batch, multithreaded. valid may be empty;
+  // otherwise it must have the size of the input (1 = valid).
+  void project(std::span<const Eigen::Vector3d> points, std::span<Eigen::Vector2d> pixels,
+               std::span<std::uint8_t> valid = {}) const;
+  void unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen::Vector3d> rays,
+                 std::span<std::uint8_t> valid = {}, InversePath path = InversePath::robust) const;
+  // Unit rays of every pixel centre, row-major, W*H*3 floats (x, y, z); NaN where invalid.
+  void unproject_image(std::span<float> rays_xyz, InversePath path = InversePath::table) const;
+
+  // Angular coverage of the image (degrees) through the principal point: theta of
+  // the two opposite image borders added (borders at -0.5 and W - 0.5 / H - 0.5),
+  // each capped at theta_max when the border is outside the valid domain.
+  struct FieldOfView {
+    double horizontal, vertical, diagonal;
+  };
+  FieldOfView field_of_view_deg() const;
+
+ private:
+  CameraParameters params_;
+  ValidDomain domain_;
+  InverseTable table_;
+};
+
+}  // namespace fishcam

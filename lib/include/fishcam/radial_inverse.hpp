@@ -1,0 +1,129 @@
+// theta(rho): the valid domain of a radial model and its robust inversion.
+//
+// The valid domain is [0, theta_max] where theta_max is the smallest of the
+// model's own limit, the first theta > 0 with drho/dtheta = 0 (a fold: past it
+// two angles share one radius), and an optional user limit. On that domain rho
+// is strictly increasing, so every rho in [0, rho_max] has exactly one theta.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "fishcam/radial_models.hpp"
+
+namespace fishcam {
+
+struct ValidDomain {
+  enum class Limit { model, fold, user };
+  double theta_max = 0;   // radians
+  double rho_max = 0;     // rho(theta_max); +inf when the model diverges there
+  bool closed = true;     // theta_max itself is valid (false: theta < theta_max only)
+  Limit limited_by = Limit::model;
+
+  bool contains_theta(double theta) const {
+    return theta >= 0 && (closed ? theta <= theta_max : theta < theta_max);
+  }
+  bool contains_rho(double rho) const { return rho >= 0 && (closed ? rho <= rho_max : rho < rho_max); }
+};
+
+const char* to_string(ValidDomain::Limit limit);
+
+// All complex roots of sum_i c[i] x^i (c[i] for i = 0..N, trailing zeros ignored),
+// from the eigenvalues of the companion matrix.
+std::vector<std::complex<double>> polynomial_roots(std::span<const double> coefficients);
+
+// The smallest root in (0, limit] of sum_i c[i] x^i, exactly (companion-matrix roots
+// polished by bracketed Newton, cross-checked by a sign scan); nullopt if none.
+std::optional<double> first_positive_root(std::span<const double> coefficients, double limit);
+
+// theta for rho from the companion-matrix roots of rho(theta) - rho (polynomial-type
+// models): an independent algebraic cross-check of the iterative solver. NaN when
+// no real root lies in the domain.
+double algebraic_theta(std::span<const double> power_coefficients, double rho, const ValidDomain& domain);
+
+// Valid domain of a model; nullopt user limit = none. Throws fishcam::Error when
+// rho does not increase at theta = 0 or the user limit is not in (0, model limit].
+template <class Model>
+ValidDomain compute_domain(const Model& model, std::optional<double> user_limit);
+
+// Bracketed Newton: the unique theta in the domain with rho(theta) = rho, to
+// |rho(theta) - rho| <= 1e-10 px (or the bracket collapses to adjacent doubles).
+// NaN for rho outside [0, rho_max], or NaN rho.
+template <class Model>
+double solve_theta(const Model& model, double rho, const ValidDomain& domain) {
+  if constexpr (ClosedFormInverse<Model>) {
+    if (!domain.contains_rho(rho)) return std::numeric_limits<double>::quiet_NaN();
+    return std::min(model.theta_from_rho(rho), domain.theta_max);  // rounding at rho_max
+  } else {
+    if (!domain.contains_rho(rho)) return std::numeric_limits<double>::quiet_NaN();
+    if (rho == 0) return 0;
+    if (rho == domain.rho_max) return domain.theta_max;
+    double lo = 0, hi = domain.theta_max;
+    double theta = rho / model.drho(0.0);
+    if (!(theta > lo && theta < hi)) theta = 0.5 * (lo + hi);
+    constexpr double kTolerancePx = 1e-10;
+    for (int iteration = 0; iteration < 200; ++iteration) {
+      const double residual = model.rho(theta) - rho;
+      if (std::abs(residual) <= kTolerancePx) return theta;
+      (residual < 0 ? lo : hi) = theta;
+      double next = theta - residual / model.drho(theta);
+      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // Newton left the bracket
+      if (next == theta || hi - lo <= 4 * std::numeric_limits<double>::epsilon() * hi) return next;
+      theta = next;
+    }
+    return theta;
+  }
+}
+
+// The bulk path: a per-camera table of theta over a uniform rho grid, cubic Hermite
+// in each cell (values and exact slopes 1/rho'(theta) at the nodes). The error of
+// every cell is measured when it is built; cells worse than the tolerance (next to
+// a fold, where theta(rho) has a square-root singularity) are marked, and lookups
+// there return false so the caller uses the robust solver.
+class InverseTable {
+ public:
+  static constexpr double kDefaultTolerancePx = 1e-6;
+  static constexpr int kDefaultCells = 2048;
+
+  InverseTable() = default;
+  template <class Model>
+  InverseTable(const Model& model, const ValidDomain& domain, double tolerance_px = kDefaultTolerancePx,
+               int cells = kDefaultCells);
+
+  // theta for rho in [0, rho_max]; false if rho is outside the table or its cell
+  // needs the robust solver (the output is then untouched).
+  bool lookup(double rho, double* theta) const {
+    const double x = rho * inverse_step_;
+    if (!(x >= 0 && x <= last_)) return false;
+    int cell = static_cast<int>(x);
+    cell -= cell == cells_;  // rho == rho_max belongs to the last cell
+    const double* c = &coefficients_[4 * static_cast<size_t>(cell)];
+    if (std::isnan(c[0])) return false;
+    const double t = x - cell;
+    *theta = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+    return true;
+  }
+
+  bool empty() const { return cells_ == 0; }
+  int cells() const { return cells_; }
+  int fallback_cells() const { return fallback_cells_; }
+  // Largest |rho(theta_table(rho)) - rho| over the sample points of the table cells used.
+  double worst_error_px() const { return worst_error_px_; }
+  double tolerance_px() const { return tolerance_px_; }
+
+ private:
+  std::vector<double> coefficients_;  // 4 per cell: theta = c0 + c1 t + c2 t^2 + c3 t^3, t in [0, 1]
+  double inverse_step_ = 0;
+  double last_ = -1;  // cells_ as double, the largest valid x
+  int cells_ = 0;
+  int fallback_cells_ = 0;
+  double worst_error_px_ = 0;
+  double tolerance_px_ = kDefaultTolerancePx;
+};
+
+}  // namespace fishcam

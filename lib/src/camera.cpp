@@ -1,0 +1,276 @@
+#include "fishcam/camera.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+namespace fishcam {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kDeg = 180 / std::numbers::pi;
+
+template <typename... T>
+[[noreturn]] void fail(const T&... parts) {
+  std::ostringstream msg;
+  (msg << ... << parts);
+  throw Error(msg.str());
+}
+
+bool finite(const Eigen::Vector2d& v) { return v.allFinite(); }
+
+// Projection of one point through a concrete model, with the analytic Jacobian
+// when requested (compiled away otherwise).
+template <bool kWithJacobian, class Model>
+bool project_one(const Model& model, const double* mapping, const ValidDomain& domain, const Eigen::Vector3d& p,
+                 Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* jacobian) {
+  const double chi2 = p.x() * p.x() + p.y() * p.y();
+  bool ok = p.allFinite() && (chi2 > 0 || p.z() > 0);  // the -z axis has no pixel direction
+  const double theta = ok ? project_radial(model, mapping, p.data(), pixel->data()) : kNaN;
+  ok = ok && domain.contains_theta(theta) && pixel->allFinite();
+  if (!ok) {
+    pixel->setConstant(kNaN);
+    if constexpr (kWithJacobian) jacobian->setConstant(kNaN);
+    return false;
+  }
+  if constexpr (kWithJacobian) {
+    const double ax = mapping[2], ay = mapping[3];
+    if (chi2 == 0) {  // on the axis: u = cx + a_x rho'(0) X / Z to first order
+      const double s = model.drho(0.0) / p.z();
+      *jacobian << ax * s, 0, 0, 0, ay * s, 0;
+    } else {
+      // s = rho(theta) / chi; ds/dX = X A, ds/dY = Y A, ds/dZ = -rho' / r^2.
+      const double chi = std::sqrt(chi2), r2 = chi2 + p.z() * p.z();
+      const double rho = model.rho(theta), drho = model.drho(theta);
+      const double s = rho / chi;
+      const double a = drho * p.z() / (chi2 * r2) - rho / (chi2 * chi);
+      const double sz = -drho / r2;
+      *jacobian << ax * (s + p.x() * p.x() * a), ax * p.x() * p.y() * a, ax * p.x() * sz,  //
+          ay * p.x() * p.y() * a, ay * (s + p.y() * p.y() * a), ay * p.y() * sz;
+    }
+  }
+  return true;
+}
+
+// The unit ray of normalized image coordinates (x, y) = ((u - cx) / a_x, (v - cy) / a_y) at angle theta.
+inline void ray_from_theta(double x, double y, double rho, double theta, double* ray) {
+  if (rho == 0) {
+    ray[0] = 0, ray[1] = 0, ray[2] = 1;
+    return;
+  }
+  const double s = std::sin(theta) / rho;
+  ray[0] = x * s, ray[1] = y * s, ray[2] = std::cos(theta);
+}
+
+template <class Model>
+double theta_of(const Model& model, const ValidDomain& domain, const InverseTable& table, double rho,
+                InversePath path) {
+  double theta;
+  if (path == InversePath::table && table.lookup(rho, &theta)) return theta;
+  return solve_theta(model, rho, domain);
+}
+
+// Runs body(begin, end) over [0, n) on OpenCV's thread pool, in chunks worth a thread.
+template <class Body>
+void parallel_chunks(size_t n, const Body& body) {
+  constexpr size_t kChunk = 8192;
+  const int stripes = static_cast<int>((n + kChunk - 1) / kChunk);
+  if (stripes <= 1) return body(size_t{0}, n);
+  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
+    body(static_cast<size_t>(r.start) * kChunk, std::min(n, static_cast<size_t>(r.end) * kChunk));
+  });
+}
+
+}  // namespace
+
+std::string_view model_name(const RadialModel& model) {
+  return std::visit([](const auto& m) { return std::decay_t<decltype(m)>::kName; }, model);
+}
+
+std::vector<double> model_params(const RadialModel& model) {
+  return std::visit(
+      [](const auto& m) {
+        const auto params = m.params();
+        return std::vector<double>(params.begin(), params.end());
+      },
+      model);
+}
+
+RadialModel make_model(std::string_view name, std::span<const double> params) {
+  auto expect = [&](size_t n) {
+    if (params.size() != n) fail(name, ": expected ", n, " parameter(s), got ", params.size());
+  };
+  for (size_t i = 0; i < params.size(); ++i) {
+    if (!std::isfinite(params[i])) fail(name, ": parameter ", i + 1, " is not finite");
+  }
+  if (name == Polynomial<double>::kName) {
+    if (params.empty()) fail(name, ": needs at least one coefficient (k1)");
+    return Polynomial<double>(std::vector<double>(params.begin(), params.end()));
+  }
+  if (name == KannalaBrandt<double>::kName) {
+    expect(5);
+    return KannalaBrandt<double>(params.data());
+  }
+  if (name == Equidistant<double>::kName || name == Stereographic<double>::kName || name == Pinhole<double>::kName) {
+    expect(1);
+    if (name == Equidistant<double>::kName) return Equidistant<double>(params[0]);
+    if (name == Stereographic<double>::kName) return Stereographic<double>(params[0]);
+    return Pinhole<double>(params[0]);
+  }
+  fail("unknown model '", name, "' (expected polynomial, equidistant, stereographic, pinhole or kannala-brandt)");
+}
+
+Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_(std::move(parameters)) {
+  if (params_.width <= 0 || params_.height <= 0 || params_.width > (1 << 16) || params_.height > (1 << 16)) {
+    fail("width/height: must be in [1, 65536], got ", params_.width, "x", params_.height);
+  }
+  if (!finite(params_.principal_point)) fail("principal_point: must be finite");
+  if (!finite(params_.pixel_scale) || !(params_.pixel_scale.minCoeff() > 0)) {
+    fail("pixel_scale: a_x and a_y must be finite and > 0, got ", params_.pixel_scale.x(), ", ",
+         params_.pixel_scale.y());
+  }
+  for (double p : model_params(params_.model)) {
+    if (!std::isfinite(p)) fail(model_name(params_.model), ": parameters must be finite");
+  }
+  if (params_.pose) {
+    Pose& pose = *params_.pose;
+    if (!pose.rotation.coeffs().allFinite() || !pose.translation.allFinite()) fail("pose: must be finite");
+    const double norm = pose.rotation.norm();
+    if (std::abs(norm - 1) > 1e-6) fail("pose: rotation quaternion must have unit norm, got ", norm);
+    pose.rotation.normalize();
+  }
+  domain_ = std::visit([&](const auto& m) { return compute_domain(m, params_.theta_limit); }, params_.model);
+  table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
+}
+
+double Camera::rho(double theta) const {
+  return std::visit([&](const auto& m) { return m.rho(theta); }, params_.model);
+}
+
+double Camera::drho(double theta) const {
+  return std::visit([&](const auto& m) { return m.drho(theta); }, params_.model);
+}
+
+double Camera::theta_from_rho(double rho) const {
+  return std::visit([&](const auto& m) { return solve_theta(m, rho, domain_); }, params_.model);
+}
+
+double Camera::theta_from_rho_table(double rho) const {
+  return std::visit([&](const auto& m) { return theta_of(m, domain_, table_, rho, InversePath::table); },
+                    params_.model);
+}
+
+double Camera::rho_of_pixel(const Eigen::Vector2d& pixel) const {
+  return (pixel - params_.principal_point).cwiseQuotient(params_.pixel_scale).norm();
+}
+
+bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                     Eigen::Matrix<double, 2, 3>* jacobian) const {
+  const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(),
+                                      params_.pixel_scale.x(), params_.pixel_scale.y()};
+  return std::visit(
+      [&](const auto& m) {
+        return jacobian ? project_one<true>(m, mapping.data(), domain_, point, pixel, jacobian)
+                        : project_one<false>(m, mapping.data(), domain_, point, pixel, nullptr);
+      },
+      params_.model);
+}
+
+bool Camera::unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const {
+  const double x = (pixel.x() - params_.principal_point.x()) / params_.pixel_scale.x();
+  const double y = (pixel.y() - params_.principal_point.y()) / params_.pixel_scale.y();
+  const double rho = std::sqrt(x * x + y * y);
+  const double theta = theta_from_rho(rho);
+  if (std::isnan(theta)) {
+    ray->setConstant(kNaN);
+    return false;
+  }
+  ray_from_theta(x, y, rho, theta, ray->data());
+  return true;
+}
+
+void Camera::project(std::span<const Eigen::Vector3d> points, std::span<Eigen::Vector2d> pixels,
+                     std::span<std::uint8_t> valid) const {
+  if (pixels.size() != points.size() || (!valid.empty() && valid.size() != points.size())) {
+    throw Error("project: output sizes must match the number of points");
+  }
+  const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(),
+                                      params_.pixel_scale.x(), params_.pixel_scale.y()};
+  std::visit(
+      [&](const auto& m) {
+        parallel_chunks(points.size(), [&](size_t begin, size_t end) {
+          for (size_t i = begin; i < end; ++i) {
+            const bool ok = project_one<false>(m, mapping.data(), domain_, points[i], &pixels[i], nullptr);
+            if (!valid.empty()) valid[i] = ok;
+          }
+        });
+      },
+      params_.model);
+}
+
+void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen::Vector3d> rays,
+                       std::span<std::uint8_t> valid, InversePath path) const {
+  if (rays.size() != pixels.size() || (!valid.empty() && valid.size() != pixels.size())) {
+    throw Error("unproject: output sizes must match the number of pixels");
+  }
+  const Eigen::Vector2d c = params_.principal_point, inv_scale = params_.pixel_scale.cwiseInverse();
+  std::visit(
+      [&](const auto& m) {
+        parallel_chunks(pixels.size(), [&](size_t begin, size_t end) {
+          for (size_t i = begin; i < end; ++i) {
+            const double x = (pixels[i].x() - c.x()) * inv_scale.x(), y = (pixels[i].y() - c.y()) * inv_scale.y();
+            const double rho = std::sqrt(x * x + y * y);
+            const double theta = theta_of(m, domain_, table_, rho, path);
+            const bool ok = !std::isnan(theta);
+            if (ok) {
+              ray_from_theta(x, y, rho, theta, rays[i].data());
+            } else {
+              rays[i].setConstant(kNaN);
+            }
+            if (!valid.empty()) valid[i] = ok;
+          }
+        });
+      },
+      params_.model);
+}
+
+void Camera::unproject_image(std::span<float> rays_xyz, InversePath path) const {
+  const size_t w = static_cast<size_t>(params_.width), h = static_cast<size_t>(params_.height);
+  if (rays_xyz.size() != 3 * w * h) throw Error("unproject_image: output must hold 3 * width * height floats");
+  const Eigen::Vector2d c = params_.principal_point, inv_scale = params_.pixel_scale.cwiseInverse();
+  std::visit(
+      [&](const auto& m) {
+        cv::parallel_for_(cv::Range(0, static_cast<int>(h)), [&](const cv::Range& rows) {
+          for (int row = rows.start; row < rows.end; ++row) {
+            const double y = (row - c.y()) * inv_scale.y();
+            float* out = &rays_xyz[3 * w * static_cast<size_t>(row)];
+            for (size_t col = 0; col < w; ++col, out += 3) {
+              const double x = (double(col) - c.x()) * inv_scale.x();
+              const double rho = std::sqrt(x * x + y * y);
+              const double theta = theta_of(m, domain_, table_, rho, path);
+              double ray[3] = {kNaN, kNaN, kNaN};
+              if (!std::isnan(theta)) ray_from_theta(x, y, rho, theta, ray);
+              out[0] = float(ray[0]), out[1] = float(ray[1]), out[2] = float(ray[2]);
+            }
+          }
+        });
+      },
+      params_.model);
+}
+
+Camera::FieldOfView Camera::field_of_view_deg() const {
+  const double w = params_.width - 0.5, h = params_.height - 0.5, cx = params_.principal_point.x(),
+               cy = params_.principal_point.y();
+  auto theta_at = [&](double u, double v) {
+    const double rho = rho_of_pixel({u, v});
+    return domain_.contains_rho(rho) ? theta_from_rho(rho) : domain_.theta_max;
+  };
+  return {kDeg * (theta_at(-0.5, cy) + theta_at(w, cy)), kDeg * (theta_at(cx, -0.5) + theta_at(cx, h)),
+          kDeg * std::max(theta_at(-0.5, -0.5) + theta_at(w, h), theta_at(w, -0.5) + theta_at(-0.5, h))};
+}
+
+}  // namespace fishcam

@@ -1,0 +1,116 @@
+// Algebraic root tools for polynomial-type radial models: the exact fold of a
+// model (first root of its derivative) and an independent theta(rho) check.
+#include <unsupported/Eigen/Polynomials>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "fishcam/radial_inverse.hpp"
+
+namespace fishcam {
+namespace {
+
+double evaluate(std::span<const double> c, double x) {
+  double r = 0;
+  for (size_t i = c.size(); i-- > 0;) r = r * x + c[i];
+  return r;
+}
+
+double evaluate_derivative(std::span<const double> c, double x) {
+  double r = 0;
+  for (size_t i = c.size(); i-- > 1;) r = r * x + double(i) * c[i];
+  return r;
+}
+
+// Sum of |c_i x^i|: the scale against which a residual is "zero".
+double magnitude(std::span<const double> c, double x) {
+  double r = 0;
+  for (size_t i = c.size(); i-- > 0;) r = r * std::abs(x) + std::abs(c[i]);
+  return r;
+}
+
+bool is_real(const std::complex<double>& z) { return std::abs(z.imag()) <= 1e-7 * std::max(1.0, std::abs(z)); }
+
+// Root of c in [lo, hi] where c(lo) and c(hi) have opposite signs: bracketed Newton.
+double refine_in_bracket(std::span<const double> c, double lo, double hi) {
+  const bool increasing = evaluate(c, lo) < 0;
+  double x = 0.5 * (lo + hi);
+  for (int i = 0; i < 200 && hi - lo > 2 * std::numeric_limits<double>::epsilon() * hi; ++i) {
+    const double f = evaluate(c, x);
+    if (f == 0) return x;
+    ((f < 0) == increasing ? lo : hi) = x;
+    double next = x - f / evaluate_derivative(c, x);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (next == x) break;
+    x = next;
+  }
+  return x;
+}
+
+}  // namespace
+
+std::vector<std::complex<double>> polynomial_roots(std::span<const double> coefficients) {
+  size_t n = coefficients.size();
+  while (n > 0 && coefficients[n - 1] == 0) --n;
+  if (n <= 1) return {};
+  Eigen::VectorXd c(n);
+  for (size_t i = 0; i < n; ++i) c[i] = coefficients[i];
+  Eigen::PolynomialSolver<double, Eigen::Dynamic> solver(c);
+  const auto& roots = solver.roots();
+  return {roots.data(), roots.data() + roots.size()};
+}
+
+std::optional<double> first_positive_root(std::span<const double> c, double limit) {
+  // Exact candidates: real eigenvalues of the companion matrix in (0, limit].
+  std::optional<double> best;
+  for (const auto& z : polynomial_roots(c)) {
+    if (is_real(z) && z.real() > 0 && z.real() <= limit * (1 + 1e-12) && (!best || z.real() < *best)) best = z.real();
+  }
+  // Safety net against a real root the eigenvalues reported as complex: the first
+  // sign change on a fine grid brackets a root that then gets refined exactly.
+  constexpr int kScan = 4096;
+  const double sign0 = evaluate(c, 0.0) > 0 ? 1.0 : -1.0;
+  double previous = 0;
+  for (int i = 1; i <= kScan; ++i) {
+    const double x = limit * i / kScan;
+    if (best && x >= *best) break;
+    if (sign0 * evaluate(c, x) <= 0) return refine_in_bracket(c, previous, x);
+    previous = x;
+  }
+  if (!best) return std::nullopt;
+  // Polish the eigenvalue: a bracket if the sign changes across it, else Newton
+  // (a double root, where the derivative touches zero).
+  const double r = *best, delta = 1e-6 * std::max(r, 1e-3);
+  const double lo = std::max(r - delta, 0.0), hi = r + delta;
+  if (evaluate(c, lo) * evaluate(c, hi) < 0) return std::min(refine_in_bracket(c, lo, hi), limit);
+  double x = r;
+  for (int i = 0; i < 100; ++i) {
+    const double d = evaluate_derivative(c, x);
+    if (d == 0) break;
+    const double next = x - evaluate(c, x) / d;
+    if (!(std::abs(next - r) < delta) || next == x) break;
+    x = next;
+  }
+  return std::min(std::abs(evaluate(c, x)) <= std::abs(evaluate(c, r)) ? x : r, limit);
+}
+
+double algebraic_theta(std::span<const double> power_coefficients, double rho, const ValidDomain& domain) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!domain.contains_rho(rho)) return nan;
+  std::vector<double> shifted(power_coefficients.begin(), power_coefficients.end());
+  shifted[0] -= rho;
+  // Tolerances: a double root at a fold splits into a complex pair of size ~sqrt(eps).
+  const double slack = 1e-6 * std::max(1.0, domain.theta_max);
+  double best = nan, best_residual = std::numeric_limits<double>::infinity();
+  for (const auto& z : polynomial_roots(shifted)) {
+    if (std::abs(z.imag()) > 1e-6 * std::max(1.0, std::abs(z))) continue;
+    if (z.real() < -slack || z.real() > domain.theta_max + slack) continue;
+    const double theta = std::clamp(z.real(), 0.0, domain.theta_max);
+    const double residual = std::abs(evaluate(shifted, theta)) / std::max(1.0, magnitude(power_coefficients, theta));
+    if (residual < best_residual) best = theta, best_residual = residual;
+  }
+  return best;
+}
+
+}  // namespace fishcam

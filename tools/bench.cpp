@@ -1,0 +1,141 @@
+// fishcam bench roots CAMERA [--json]: the cost of theta(rho), every method in one
+// run on one camera (this machine is shared and noisy: compare within a run).
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <vector>
+
+#include "commands.hpp"
+#include "fishcam/camera_io.hpp"
+
+namespace fishcam::cli {
+namespace {
+
+// Median wall time of `repeats` runs of fn(), in seconds.
+template <class Fn>
+double median_seconds(int repeats, const Fn& fn) {
+  std::vector<double> times;
+  for (int r = 0; r < repeats; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    fn();
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::nth_element(times.begin(), times.begin() + repeats / 2, times.end());
+  return times[repeats / 2];
+}
+
+// The OpenCV-style baseline: 10 plain Newton steps from theta = rho / rho'(0), no bracket.
+template <class Model>
+double newton10(const Model& model, double rho) {
+  double theta = rho / model.drho(0.0);
+  for (int i = 0; i < 10; ++i) theta -= (model.rho(theta) - rho) / model.drho(theta);
+  return theta;
+}
+
+volatile double g_sink;  // keeps the timed loops from being optimised away
+
+void run_roots(const std::string& path, bool json, int repeats) {
+  const Camera camera = read_camera(path);
+  // Radii of the image (the largest pixel radius, capped at rho_max), uniformly.
+  double rho_hi = 0;
+  for (double u : {-0.5, camera.width() - 0.5}) {
+    for (double v : {-0.5, camera.height() - 0.5}) rho_hi = std::max(rho_hi, camera.rho_of_pixel({u, v}));
+  }
+  if (camera.domain().closed) rho_hi = std::min(rho_hi, camera.domain().rho_max);
+  constexpr size_t kSamples = 1 << 20;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> uniform(0.0, rho_hi);
+  std::vector<double> rhos(kSamples);
+  for (auto& r : rhos) r = uniform(rng);
+
+  const int threads_before = cv::getNumThreads();
+  cv::setNumThreads(1);
+  auto per_call_ns = [&](size_t n, const auto& theta_of) {
+    return 1e9 / double(n) * median_seconds(repeats, [&] {
+             double sum = 0;
+             for (size_t i = 0; i < n; ++i) sum += theta_of(rhos[i]);
+             g_sink = sum;
+           });
+  };
+  nlohmann::json out = {{"camera", path}, {"samples", kSamples}, {"rho_range_px", {0.0, rho_hi}}};
+  out["robust_ns"] = per_call_ns(kSamples, [&](double r) { return camera.theta_from_rho(r); });
+  out["table_ns"] = per_call_ns(kSamples, [&](double r) { return camera.theta_from_rho_table(r); });
+  out["newton10_ns"] = std::visit(
+      [&](const auto& m) { return per_call_ns(kSamples, [&](double r) { return newton10(m, r); }); },
+      camera.model());
+  std::visit(
+      [&](const auto& m) {
+        if constexpr (PolynomialInTheta<std::decay_t<decltype(m)>>) {
+          const auto c = m.power_coefficients();
+          out["companion_ns"] = per_call_ns(kSamples / 64, [&](double r) {
+            return algebraic_theta(c, r, camera.domain());
+          });
+        }
+      },
+      camera.model());
+  // Worst residual of the Newton baseline over the same radii (it has no bracket).
+  double newton_worst = 0;
+  std::visit(
+      [&](const auto& m) {
+        for (size_t i = 0; i < kSamples; i += 16) {
+          const double e = std::abs(m.rho(newton10(m, rhos[i])) - rhos[i]);
+          newton_worst = std::isfinite(e) ? std::max(newton_worst, e) : INFINITY;
+        }
+      },
+      camera.model());
+  out["newton10_worst_residual_px"] = newton_worst;
+  out["table_worst_error_px"] = camera.inverse_table().worst_error_px();
+
+  std::vector<float> rays(3 * size_t(camera.width()) * size_t(camera.height()));
+  for (int threads : {1, 2}) {
+    cv::setNumThreads(threads);
+    for (auto [name, path_kind] : {std::pair{"robust", InversePath::robust}, std::pair{"table", InversePath::table}}) {
+      out["unproject_image_ms"][name][std::to_string(threads)] =
+          1e3 * median_seconds(repeats, [&] { camera.unproject_image(rays, path_kind); });
+    }
+  }
+  cv::setNumThreads(threads_before);
+
+  if (json) {
+    std::printf("%s\n", out.dump(2).c_str());
+    return;
+  }
+  std::printf("theta(rho) on %s, %zu radii uniform in [0, %.1f] px, median of %d runs, 1 thread\n", path.c_str(),
+              kSamples, rho_hi, repeats);
+  std::printf("  robust solver (bracketed Newton)  %8.1f ns/call\n", out["robust_ns"].get<double>());
+  std::printf("  bulk path (inverse table)         %8.1f ns/call  (worst error %.2g px)\n",
+              out["table_ns"].get<double>(), camera.inverse_table().worst_error_px());
+  if (out.contains("companion_ns")) {
+    std::printf("  companion-matrix eigenvalues      %8.1f ns/call\n", out["companion_ns"].get<double>());
+  }
+  std::printf("  plain 10-step Newton (OpenCV)     %8.1f ns/call  (worst residual %.2g px)\n",
+              out["newton10_ns"].get<double>(), newton_worst);
+  std::printf("full-image unprojection %dx%d (ms):\n", camera.width(), camera.height());
+  for (const char* name : {"robust", "table"}) {
+    std::printf("  %-7s 1 thread %7.2f   2 threads %7.2f\n", name,
+                out["unproject_image_ms"][name]["1"].get<double>(), out["unproject_image_ms"][name]["2"].get<double>());
+  }
+}
+
+}  // namespace
+
+void register_bench(CLI::App& app) {
+  auto* bench = app.add_subcommand("bench", "Benchmarks (numbers for docs/performance.md)");
+  bench->require_subcommand(1);
+  auto* roots = bench->add_subcommand("roots", "ns per theta(rho) for every inversion method, and full-image "
+                                               "unprojection on 1 and 2 threads");
+  auto path = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  auto repeats = std::make_shared<int>(7);
+  roots->add_option("CAMERA", *path, "Camera file (e.g. data/woodscape_front.json)")->required();
+  roots->add_flag("--json", *json, "Print one JSON object");
+  roots->add_option("--repeats", *repeats, "Runs per measurement (the median is reported)")
+      ->check(CLI::Range(1, 1000));
+  roots->callback([=] { run_roots(*path, *json, *repeats); });
+}
+
+}  // namespace fishcam::cli

@@ -1,0 +1,13 @@
+// The fishcam program's subcommands: each file registers one.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace fishcam::cli {
+
+void register_info(CLI::App& app);
+void register_project(CLI::App& app);
+void register_unproject(CLI::App& app);
+void register_bench(CLI::App& app);
+
+}  // namespace fishcam::cli

@@ -1,0 +1,102 @@
+// fishcam info CAMERA [--json]: what a calibration says and where it is valid.
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "commands.hpp"
+#include "fishcam/camera_io.hpp"
+
+namespace fishcam::cli {
+namespace {
+
+constexpr double kDeg = 180 / std::numbers::pi;
+
+nlohmann::json describe(const Camera& camera, CameraFormat format) {
+  const auto& p = camera.parameters();
+  const auto& d = camera.domain();
+  const auto fov = camera.field_of_view_deg();
+  nlohmann::json j = {
+      {"format", to_string(format)},
+      {"model", model_name(p.model)},
+      {"parameters", model_params(p.model)},
+      {"width", p.width},
+      {"height", p.height},
+      {"cx", p.principal_point.x()},
+      {"cy", p.principal_point.y()},
+      {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
+      {"theta_max_deg", d.theta_max * kDeg},
+      {"theta_max_closed", d.closed},
+      {"theta_max_limited_by", to_string(d.limited_by)},
+      {"rho_max_px", d.closed ? nlohmann::json(d.rho_max) : nlohmann::json(nullptr)},
+      {"fov_deg", {{"horizontal", fov.horizontal}, {"vertical", fov.vertical}, {"diagonal", fov.diagonal}}},
+      {"inverse_table", {{"cells", camera.inverse_table().cells()},
+                         {"fallback_cells", camera.inverse_table().fallback_cells()},
+                         {"worst_error_px", camera.inverse_table().worst_error_px()}}},
+  };
+  if (p.pose) {
+    const auto& q = p.pose->rotation;
+    const auto& t = p.pose->translation;
+    j["pose"] = {{"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
+  }
+  return j;
+}
+
+void print_text(const nlohmann::json& j) {
+  std::printf("format            %s\n", j["format"].get<std::string>().c_str());
+  std::printf("model             %s\n", j["model"].get<std::string>().c_str());
+  std::printf("parameters       ");
+  for (double v : j["parameters"]) std::printf(" %.10g", v);
+  std::printf("\nimage             %d x %d\n", j["width"].get<int>(), j["height"].get<int>());
+  std::printf("principal point   (%.6f, %.6f)\n", j["cx"].get<double>(), j["cy"].get<double>());
+  std::printf("pixel scale       (%.10g, %.10g)\n", j["pixel_scale"][0].get<double>(),
+              j["pixel_scale"][1].get<double>());
+  std::printf("theta_max         %.6f deg%s (limited by %s)\n", j["theta_max_deg"].get<double>(),
+              j["theta_max_closed"].get<bool>() ? "" : ", exclusive",
+              j["theta_max_limited_by"].get<std::string>().c_str());
+  if (j["rho_max_px"].is_null()) {
+    std::printf("rho_max           unbounded\n");
+  } else {
+    std::printf("rho_max           %.6f px\n", j["rho_max_px"].get<double>());
+  }
+  const auto& fov = j["fov_deg"];
+  std::printf("field of view     %.3f deg horizontal, %.3f vertical, %.3f diagonal\n",
+              fov["horizontal"].get<double>(), fov["vertical"].get<double>(), fov["diagonal"].get<double>());
+  const auto& table = j["inverse_table"];
+  if (table["cells"].get<int>() > 0) {
+    std::printf("inverse table     %d cells, worst error %.3g px, %d cells use the robust solver\n",
+                table["cells"].get<int>(), table["worst_error_px"].get<double>(),
+                table["fallback_cells"].get<int>());
+  } else {
+    std::printf("inverse table     none (closed-form inverse)\n");
+  }
+  if (j.contains("pose")) {
+    const auto& q = j["pose"]["quaternion_xyzw"];
+    const auto& t = j["pose"]["translation"];
+    std::printf("pose (cam->ref)   q_xyzw [%.10g, %.10g, %.10g, %.10g], t [%.10g, %.10g, %.10g]\n",
+                q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>(), t[0].get<double>(),
+                t[1].get<double>(), t[2].get<double>());
+  }
+}
+
+}  // namespace
+
+void register_info(CLI::App& app) {
+  auto* cmd = app.add_subcommand("info", "Print a camera's model, parameters, valid domain and field of view");
+  auto path = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("CAMERA", *path, "Camera file (WoodScape JSON, fishcam JSON, mrcal .cameramodel, OpenCV YAML)")
+      ->required();
+  cmd->add_flag("--json", *json, "Print one JSON object");
+  cmd->callback([path, json] {
+    CameraFormat format{};
+    const Camera camera = read_camera(*path, &format);
+    const nlohmann::json j = describe(camera, format);
+    if (*json) {
+      std::printf("%s\n", j.dump(2).c_str());
+    } else {
+      print_text(j);
+    }
+  });
+}
+
+}  // namespace fishcam::cli

@@ -1,0 +1,34 @@
+#include <cstdio>
+#include <exception>
+#include <opencv2/core.hpp>
+
+#include "commands.hpp"
+#include "fishcam/error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"fishcam: calibration-aware fisheye projection models"};
+  app.require_subcommand(1);
+  // One line on stderr for a usage error; --help shows the rest.
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return std::string("fishcam: error: ") + e.what() + " (see --help)\n";
+  });
+  fishcam::cli::register_info(app);
+  fishcam::cli::register_project(app);
+  fishcam::cli::register_unproject(app);
+  fishcam::cli::register_bench(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const fishcam::Error& e) {
+    std::fprintf(stderr, "fishcam: error: %s\n", e.what());
+    return 1;
+  } catch (const cv::Exception& e) {
+    std::fprintf(stderr, "fishcam: error: OpenCV: %s\n", e.err.c_str());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "fishcam: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
