@@ -30,7 +30,8 @@ double magnitude(std::span<const double> c, double x) {
   return r;
 }
 
-bool is_real(const std::complex<double>& z) { return std::abs(z.imag()) <= 1e-7 * std::max(1.0, std::abs(z)); }
+// Relative: a root of size 1e-100 with an imaginary part of 1e-100 is complex.
+bool is_real(const std::complex<double>& z) { return std::abs(z.imag()) <= 1e-7 * std::abs(z); }
 
 // Root of c in [lo, hi] where c(lo) and c(hi) have opposite signs: bracketed Newton.
 double refine_in_bracket(std::span<const double> c, double lo, double hi) {
@@ -62,10 +63,33 @@ std::vector<std::complex<double>> polynomial_roots(std::span<const double> coeff
 }
 
 std::optional<double> first_positive_root(std::span<const double> c, double limit) {
-  // Exact candidates: real eigenvalues of the companion matrix in (0, limit].
-  std::optional<double> best;
+  // Exact candidates: real eigenvalues of the companion matrix in (0, limit], each
+  // polished (a bracket where the sign changes across it, else Newton: a double root
+  // where the derivative only touches zero) and kept only if it is a root indeed.
+  std::vector<double> candidates;
   for (const auto& z : polynomial_roots(c)) {
-    if (is_real(z) && z.real() > 0 && z.real() <= limit * (1 + 1e-12) && (!best || z.real() < *best)) best = z.real();
+    if (is_real(z) && z.real() > 0 && z.real() <= limit * (1 + 1e-12)) candidates.push_back(z.real());
+  }
+  std::sort(candidates.begin(), candidates.end());
+  std::optional<double> best;
+  for (const double r : candidates) {
+    const double delta = 1e-6 * r, lo = r - delta, hi = r + delta;
+    double x = r;
+    if (evaluate(c, lo) * evaluate(c, hi) < 0) {
+      x = refine_in_bracket(c, lo, hi);
+    } else {
+      for (int i = 0; i < 100; ++i) {
+        const double d = evaluate_derivative(c, x);
+        if (d == 0) break;
+        const double next = x - evaluate(c, x) / d;
+        if (!(std::abs(next - r) < delta) || next == x) break;
+        x = next;
+      }
+    }
+    if (std::abs(evaluate(c, x)) <= 1e-9 * magnitude(c, x)) {
+      best = std::min(x, limit);
+      break;
+    }
   }
   // Safety net against a real root the eigenvalues reported as complex: the first
   // sign change on a fine grid brackets a root that then gets refined exactly.
@@ -78,21 +102,7 @@ std::optional<double> first_positive_root(std::span<const double> c, double limi
     if (sign0 * evaluate(c, x) <= 0) return refine_in_bracket(c, previous, x);
     previous = x;
   }
-  if (!best) return std::nullopt;
-  // Polish the eigenvalue: a bracket if the sign changes across it, else Newton
-  // (a double root, where the derivative touches zero).
-  const double r = *best, delta = 1e-6 * std::max(r, 1e-3);
-  const double lo = std::max(r - delta, 0.0), hi = r + delta;
-  if (evaluate(c, lo) * evaluate(c, hi) < 0) return std::min(refine_in_bracket(c, lo, hi), limit);
-  double x = r;
-  for (int i = 0; i < 100; ++i) {
-    const double d = evaluate_derivative(c, x);
-    if (d == 0) break;
-    const double next = x - evaluate(c, x) / d;
-    if (!(std::abs(next - r) < delta) || next == x) break;
-    x = next;
-  }
-  return std::min(std::abs(evaluate(c, x)) <= std::abs(evaluate(c, r)) ? x : r, limit);
+  return best;
 }
 
 double algebraic_theta(std::span<const double> power_coefficients, double rho, const ValidDomain& domain) {

@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <charconv>
+#include <limits>
 #include <string>
 
 #include "fishcam/error.hpp"
@@ -128,6 +129,9 @@ class Parser {
     if (word == "True") return true;
     if (word == "False") return false;
     if (word == "None") return nullptr;
+    // Python prints non-finite floats as nan / inf; the reader decides what they mean.
+    if (word == "nan") return std::numeric_limits<double>::quiet_NaN();
+    if (word == "inf") return std::numeric_limits<double>::infinity();
     pos_ = start;
     fail("unexpected word '" + std::string(word) + "' (only numbers, strings, True, False, None are allowed)");
   }

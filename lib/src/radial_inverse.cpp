@@ -20,7 +20,10 @@ template <class Model>
 ValidDomain compute_domain(const Model& model, std::optional<double> user_limit) {
   constexpr double kDeg = 180 / std::numbers::pi;
   const double slope0 = model.drho(0.0);
-  if (!(slope0 > 0) || !std::isfinite(slope0)) {
+  if (!std::isfinite(slope0)) {  // e.g. N * kN overflows
+    throw Error(std::string(Model::kName) + ": coefficients too large (drho/dtheta overflows)");
+  }
+  if (!(slope0 > 0)) {
     std::ostringstream msg;
     msg << Model::kName << ": rho must increase at theta = 0 (drho/dtheta(0) = " << slope0 << "); "
         << (std::is_same_v<Model, Polynomial<double>> ? "k1 must be > 0" : "f must be > 0");

@@ -52,7 +52,8 @@ template <class Model>
 ValidDomain compute_domain(const Model& model, std::optional<double> user_limit);
 
 // Bracketed Newton: the unique theta in the domain with rho(theta) = rho, to
-// |rho(theta) - rho| <= 1e-10 px (or the bracket collapses to adjacent doubles).
+// |rho(theta) - rho| <= 1e-10 px plus one final Newton step (or until the bracket
+// collapses to adjacent doubles, for models too large to reach that).
 // NaN for rho outside [0, rho_max], or NaN rho.
 template <class Model>
 double solve_theta(const Model& model, double rho, const ValidDomain& domain) {
@@ -69,9 +70,12 @@ double solve_theta(const Model& model, double rho, const ValidDomain& domain) {
     constexpr double kTolerancePx = 1e-10;
     for (int iteration = 0; iteration < 200; ++iteration) {
       const double residual = model.rho(theta) - rho;
-      if (std::abs(residual) <= kTolerancePx) return theta;
+      if (residual == 0) return theta;
       (residual < 0 ? lo : hi) = theta;
       double next = theta - residual / model.drho(theta);
+      // Converged: the last Newton step costs nothing more and brings theta to
+      // full precision even where rho' is small (near a fold).
+      if (std::abs(residual) <= kTolerancePx) return next >= lo && next <= hi ? next : theta;
       if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // Newton left the bracket
       if (next == theta || hi - lo <= 4 * std::numeric_limits<double>::epsilon() * hi) return next;
       theta = next;

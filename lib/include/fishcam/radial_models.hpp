@@ -73,7 +73,6 @@ class Equidistant {
 
   Equidistant() = default;
   explicit Equidistant(Scalar f) : f_(f) {}
-  explicit Equidistant(const Scalar* p) : f_(p[0]) {}
 
   Scalar rho(const Scalar& theta) const { return f_ * theta; }
   Scalar drho(const Scalar&) const { return f_; }
@@ -97,7 +96,6 @@ class Stereographic {
 
   Stereographic() = default;
   explicit Stereographic(Scalar f) : f_(f) {}
-  explicit Stereographic(const Scalar* p) : f_(p[0]) {}
 
   Scalar rho(const Scalar& theta) const {
     using std::tan;
@@ -130,7 +128,6 @@ class Pinhole {
 
   Pinhole() = default;
   explicit Pinhole(Scalar f) : f_(f) {}
-  explicit Pinhole(const Scalar* p) : f_(p[0]) {}
 
   Scalar rho(const Scalar& theta) const {
     using std::tan;

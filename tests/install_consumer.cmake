@@ -1,0 +1,19 @@
+# Installs the build tree into WORK_DIR/prefix, then configures, builds and runs
+# tests/consumer against it with find_package(fishcam).
+file(REMOVE_RECURSE ${WORK_DIR})
+function(run)
+  execute_process(COMMAND ${ARGV} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (${rc}): ${ARGV}\n${out}\n${err}")
+  endif()
+  message(STATUS "${out}")
+endfunction()
+run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix)
+run(${CMAKE_COMMAND} -S ${CONSUMER_DIR} -B ${WORK_DIR}/build -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
+    -DCMAKE_BUILD_TYPE=Release)
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run(${WORK_DIR}/build/consumer)
+if(NOT EXISTS ${WORK_DIR}/prefix/bin/fishcam)
+  message(FATAL_ERROR "the fishcam program was not installed")
+endif()
+run(${WORK_DIR}/prefix/bin/fishcam info ${WORK_DIR}/prefix/share/fishcam/woodscape_front.json --json)

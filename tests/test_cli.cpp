@@ -1,0 +1,100 @@
+// The fishcam program: its stable interface and its errors.
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+using test::run_fishcam;
+
+// The quoted path of a bundled file (built by appending: GCC 12 warns falsely on "'" + string).
+std::string data(const char* name) {
+  std::string quoted = "'";
+  quoted += test::data_path(name).string();
+  quoted += "'";
+  return quoted;
+}
+
+TEST(Cli, InfoJsonHasTheDocumentedKeys) {
+  const auto r = run_fishcam("info " + data("woodscape_front.json") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"model", "width", "height", "cx", "cy", "theta_max_deg", "rho_max_px", "fov_deg"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j["model"], "polynomial");
+  EXPECT_EQ(j["width"], 1280);
+  EXPECT_NEAR(j["cx"].get<double>(), 643.442, 1e-12);
+  EXPECT_NEAR(j["theta_max_deg"].get<double>(), 180.0, 1e-12);
+  EXPECT_NEAR(j["fov_deg"]["horizontal"].get<double>(), 190, 1);
+  for (const char* key : {"horizontal", "vertical", "diagonal"}) EXPECT_TRUE(j["fov_deg"].contains(key));
+}
+
+TEST(Cli, InfoTextForEveryBundledCamera) {
+  for (const char* name : {"woodscape_front.json", "stereographic.cameramodel", "pinhole.cameramodel",
+                           "kannala_brandt.yaml", "equidistant.json"}) {
+    const auto r = run_fishcam(std::string("info ") + data(name));
+    EXPECT_EQ(r.exit_code, 0) << name << r.err;
+    EXPECT_NE(r.out.find("theta_max"), std::string::npos);
+  }
+}
+
+TEST(Cli, ProjectThenUnprojectRoundTrips) {
+  const auto projected = run_fishcam("project " + data("woodscape_front.json"),
+                                     "1 0.5 2\n# a comment\n\n1 -1 -0.5\n0 0 -1\n0 0 0\nnan 1 1\n");
+  ASSERT_EQ(projected.exit_code, 0) << projected.err;
+  std::istringstream lines(projected.out);
+  std::string line;
+  std::vector<std::string> rows;
+  while (std::getline(lines, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows[0], "796.19202223284162 555.78201111642079");  // the worked value of test_woodscape
+  EXPECT_EQ(rows[2], "nan nan");
+  EXPECT_EQ(rows[3], "nan nan");
+  EXPECT_EQ(rows[4], "nan nan");
+  const auto unprojected = run_fishcam("unproject " + data("woodscape_front.json"), rows[0] + "\n" + rows[1] +
+                                                                                        "\n99999 0\n");
+  ASSERT_EQ(unprojected.exit_code, 0) << unprojected.err;
+  std::istringstream rays(unprojected.out);
+  Eigen::Vector3d a, b;
+  rays >> a.x() >> a.y() >> a.z() >> b.x() >> b.y() >> b.z();
+  EXPECT_LT(test::angle_between(a, Eigen::Vector3d(1, 0.5, 2).normalized()), 1e-12);
+  EXPECT_LT(test::angle_between(b, Eigen::Vector3d(1, -1, -0.5).normalized()), 1e-12);
+  EXPECT_NE(unprojected.out.find("nan nan nan"), std::string::npos);
+}
+
+TEST(Cli, BadInputExitsNonZeroWithOneLine) {
+  const struct {
+    std::string args, stdin_text, expected;
+  } cases[] = {
+      {"project " + data("woodscape_front.json"), "1 2\n", "stdin line 1: expected three numbers"},
+      {"project " + data("woodscape_front.json"), "1 2 3\n1 2 x\n", "stdin line 2"},
+      {"project " + data("woodscape_front.json"), "1 2 3 4\n", "too many values"},
+      {"unproject " + data("woodscape_front.json"), "1,2\n", "stdin line 1: expected two numbers"},
+      {"info /no/such/camera.json", "", "/no/such/camera.json: cannot open"},
+      {"info", "", "CAMERA is required"},
+      {"frobnicate", "", "fishcam: error"},
+      {"", "", "fishcam: error"},
+      {"info " + data("woodscape_front.json") + " --jsn", "", "--jsn"},
+      {"bench roots " + data("woodscape_front.json") + " --repeats 0", "", "--repeats"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_fishcam(c.args, c.stdin_text);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << " -> " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << " -> " << r.err;
+  }
+}
+
+TEST(Cli, EverySubcommandHasHelp) {
+  for (const char* sub : {"", "info", "project", "unproject", "bench", "bench roots"}) {
+    const auto r = run_fishcam(std::string(sub) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << sub;
+    EXPECT_NE(r.out.find("Usage"), std::string::npos) << sub << r.out;
+  }
+}
+
+}  // namespace
+}  // namespace fishcam

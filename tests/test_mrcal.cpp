@@ -1,0 +1,96 @@
+// Agreement with libmrcal's C API (mrcal_project / mrcal_unproject) for the two
+// lens models both libraries have, with fx != fy, behind the camera too for
+// stereographic.
+extern "C" {  // mrcal 2.2's headers have no extern "C" of their own
+#include <mrcal/mrcal.h>
+}
+
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+struct Case {
+  const char* file;
+  mrcal_lensmodel_type_t type;
+  double theta_max;  // where to draw test rays
+};
+
+void check_against_mrcal(const Case& c) {
+  const Camera camera = read_camera(test::data_path(c.file));
+  const double f = model_params(camera.model())[0];
+  const double intrinsics[4] = {f * camera.pixel_scale().x(), f * camera.pixel_scale().y(),
+                                camera.principal_point().x(), camera.principal_point().y()};
+  ASSERT_NE(intrinsics[0], intrinsics[1]) << "the test needs fx != fy";
+  mrcal_lensmodel_t lensmodel{};
+  lensmodel.type = c.type;
+
+  const auto rays = test::random_rays(20000, c.theta_max, 31);
+  std::vector<mrcal_point3_t> points(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const Eigen::Vector3d p = (0.5 + double(i % 7)) * rays[i];  // any distance
+    points[i] = {{p.x(), p.y(), p.z()}};
+  }
+  std::vector<mrcal_point2_t> expected(points.size());
+  ASSERT_TRUE(mrcal_project(expected.data(), nullptr, nullptr, points.data(), int(points.size()), &lensmodel,
+                            intrinsics));
+  double worst_project = 0, worst_unproject = 0, widest = 0;
+  std::vector<mrcal_point3_t> mrcal_rays(points.size());
+  ASSERT_TRUE(mrcal_unproject(mrcal_rays.data(), expected.data(), int(expected.size()), &lensmodel, intrinsics));
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d p(points[i].x, points[i].y, points[i].z);
+    const Eigen::Vector2d q(expected[i].x, expected[i].y);
+    Eigen::Vector2d pixel;
+    ASSERT_TRUE(camera.project(p, &pixel)) << p.transpose();
+    worst_project = std::max(worst_project, (pixel - q).norm());
+    // Unprojection: both rays, projected back through the same (mrcal's) model, land on the pixel.
+    Eigen::Vector3d ray;
+    ASSERT_TRUE(camera.unproject(q, &ray));
+    const mrcal_point3_t ours = {{ray.x(), ray.y(), ray.z()}};
+    mrcal_point2_t q_ours, q_theirs;
+    ASSERT_TRUE(mrcal_project(&q_ours, nullptr, nullptr, &ours, 1, &lensmodel, intrinsics));
+    ASSERT_TRUE(mrcal_project(&q_theirs, nullptr, nullptr, &mrcal_rays[i], 1, &lensmodel, intrinsics));
+    worst_unproject = std::max(worst_unproject, std::hypot(q_ours.x - q_theirs.x, q_ours.y - q_theirs.y));
+    const Eigen::Vector3d theirs(mrcal_rays[i].x, mrcal_rays[i].y, mrcal_rays[i].z);
+    EXPECT_LT(test::angle_between(ray, theirs.normalized()), 1e-12);
+    widest = std::max(widest, std::acos(ray.z()));
+  }
+  EXPECT_LE(worst_project, 1e-9) << c.file;
+  EXPECT_LE(worst_unproject, 1e-9) << c.file;
+  std::printf("  %s: %zu points up to %.1f deg, worst project %.2e px, unproject %.2e px\n", c.file, points.size(),
+              widest * 180 / M_PI, worst_project, worst_unproject);
+}
+
+TEST(Mrcal, StereographicAgreesWithLibmrcalBehindTheCameraToo) {
+  check_against_mrcal({"stereographic.cameramodel", MRCAL_LENSMODEL_STEREOGRAPHIC, 170 * M_PI / 180});
+}
+
+TEST(Mrcal, PinholeAgreesWithLibmrcal) {
+  check_against_mrcal({"pinhole.cameramodel", MRCAL_LENSMODEL_PINHOLE, 80 * M_PI / 180});
+}
+
+TEST(Mrcal, LibmrcalReadsOurCameramodelFiles) {
+  for (const char* name : {"stereographic.cameramodel", "pinhole.cameramodel"}) {
+    CameraParameters p = read_camera(test::data_path(name)).parameters();
+    p.pose = Pose{Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())),
+                  Eigen::Vector3d(0.1, -0.2, 1.5)};
+    const std::string text = format_camera(p, CameraFormat::mrcal);
+    mrcal_cameramodel_t* model = mrcal_read_cameramodel_string(text.c_str(), int(text.size()));
+    ASSERT_NE(model, nullptr) << text;
+    const double f = model_params(p.model)[0];
+    EXPECT_EQ(model->intrinsics[0], f * p.pixel_scale.x());
+    EXPECT_EQ(model->intrinsics[1], f * p.pixel_scale.y());
+    EXPECT_EQ(model->intrinsics[2], p.principal_point.x());
+    EXPECT_EQ(model->imagersize[0], unsigned(p.width));
+    // rt_cam_ref maps reference points into the camera: p_cam = R p_ref + t.
+    const Eigen::Vector3d r(model->rt_cam_ref[0], model->rt_cam_ref[1], model->rt_cam_ref[2]);
+    const Eigen::Vector3d t(model->rt_cam_ref[3], model->rt_cam_ref[4], model->rt_cam_ref[5]);
+    const Eigen::Vector3d p_ref(2, -1, 7);
+    const Eigen::Vector3d p_cam = Eigen::AngleAxisd(r.norm(), r.normalized()) * p_ref + t;
+    EXPECT_LT((p.pose->rotation * p_cam + p.pose->translation - p_ref).norm(), 1e-14);
+    mrcal_free_cameramodel(&model);
+  }
+}
+
+}  // namespace
+}  // namespace fishcam

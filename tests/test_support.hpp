@@ -1,0 +1,103 @@
+// Shared test helpers: bundled data, the test cameras, scratch files, running the CLI.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "fishcam/camera.hpp"
+#include "fishcam/camera_io.hpp"
+
+namespace fishcam::test {
+
+inline std::filesystem::path data_path(const std::string& name) { return std::filesystem::path(FISHCAM_DATA_DIR) / name; }
+
+// A fresh scratch folder for one test.
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  const auto dir = std::filesystem::path(FISHCAM_TEST_TMP) / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline std::filesystem::path write_file(const std::filesystem::path& path, const std::string& content) {
+  std::ofstream(path, std::ios::binary) << content;
+  return path;
+}
+
+inline std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The WoodScape front camera's public intrinsics, without pose.
+inline CameraParameters woodscape_front() {
+  CameraParameters p;
+  p.width = 1280, p.height = 966;
+  p.principal_point = {1280 / 2.0 + 3.942 - 0.5, 966 / 2.0 - 3.093 - 0.5};
+  p.model = Polynomial<double>({339.749, -31.988, 48.275, -7.201});
+  return p;
+}
+
+inline CameraParameters with_model(CameraParameters p, RadialModel model, Eigen::Vector2d scale = {1, 1}) {
+  p.model = std::move(model);
+  p.pixel_scale = scale;
+  return p;
+}
+
+// One camera of every model (a_x != a_y where the model allows), all 1280x966.
+inline std::vector<std::pair<std::string, CameraParameters>> every_model() {
+  const CameraParameters ws = woodscape_front();
+  return {
+      {"woodscape_polynomial", ws},
+      {"polynomial_aspect", with_model(ws, Polynomial<double>({339.749, -31.988, 48.275, -7.201}), {1.0, 1.02})},
+      {"equidistant", with_model(ws, Equidistant<double>(340.0), {1.0, 0.99})},
+      {"stereographic", with_model(ws, Stereographic<double>(330.0), {1.0, 1.0045})},
+      {"pinhole", with_model(ws, Pinhole<double>(640.0), {1.0, 1.003})},
+      {"kannala_brandt",
+       with_model(ws, KannalaBrandt<double>(331.5526, 0.0346514, 0.0241055, -0.0074981, 0.0007767), {1.0, 1.001})},
+  };
+}
+
+// Uniformly distributed unit vectors with theta in [0, theta_max].
+inline std::vector<Eigen::Vector3d> random_rays(size_t n, double theta_max, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<Eigen::Vector3d> rays;
+  const double z_min = std::cos(theta_max);
+  while (rays.size() < n) {
+    const double z = 1 - uniform(rng) * (1 - z_min), phi = 2 * M_PI * uniform(rng);
+    const double r = std::sqrt(std::max(0.0, 1 - z * z));
+    rays.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+  }
+  return rays;
+}
+
+// Angle between two directions, accurate for tiny angles.
+inline double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+#ifdef FISHCAM_BINARY
+struct CommandResult {
+  int exit_code;
+  std::string out, err;
+};
+
+// Runs `fishcam ARGS` with STDIN as its standard input.
+inline CommandResult run_fishcam(const std::string& args, const std::string& stdin_text = "") {
+  const auto dir = std::filesystem::path(FISHCAM_TEST_TMP) / "cli";
+  std::filesystem::create_directories(dir);
+  const auto in = write_file(dir / "stdin.txt", stdin_text), out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string command = std::string("'") + FISHCAM_BINARY + "' " + args + " < '" + in.string() + "' > '" +
+                              out.string() + "' 2> '" + err.string() + "'";
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};
+}
+#endif
+
+}  // namespace fishcam::test
