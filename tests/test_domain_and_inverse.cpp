@@ -214,6 +214,19 @@ TEST(Inverse, TableErrorIsMeasuredAndWithinTolerance) {
       worst = std::max(worst, residual_px(camera, rho, camera.theta_from_rho_table(rho)));
     }
     EXPECT_LE(worst, 1e-6);
+    // The ray table: angle error times rho'(theta), in pixels, within the same tolerance.
+    EXPECT_LE(table.worst_ray_error_px(), 1e-6);
+    double worst_ray = 0;
+    for (int i = 0; i < 200000; ++i) {
+      const double rho = uniform(rng);
+      double s, c;
+      if (!table.lookup_ray(rho, &s, &c)) continue;
+      const double theta = camera.theta_from_rho(rho);
+      const Eigen::Vector3d exact(std::sin(theta), 0, std::cos(theta)), approx(s * rho, 0, c);
+      worst_ray = std::max(worst_ray, test::angle_between(exact, approx) * camera.drho(theta));
+      ASSERT_NEAR(approx.norm(), 1.0, 1e-8);
+    }
+    EXPECT_LE(worst_ray, 1e-6);
   }
   // The fold's square-root singularity forces the last cells onto the robust solver.
   EXPECT_GT(Camera(polynomial_camera({300, 0, 0, -40})).inverse_table().fallback_cells(), 0);

@@ -66,12 +66,33 @@ inline void ray_from_theta(double x, double y, double rho, double theta, double*
   ray[0] = x * s, ray[1] = y * s, ray[2] = std::cos(theta);
 }
 
+// theta(rho) by either path. The robust path starts Newton from the table's value
+// where there is one: it then converges in one step, and the bracket still
+// guarantees convergence wherever the table is missing or poor.
 template <class Model>
 double theta_of(const Model& model, const ValidDomain& domain, const InverseTable& table, double rho,
                 InversePath path) {
-  double theta;
-  if (path == InversePath::table && table.lookup(rho, &theta)) return theta;
-  return solve_theta(model, rho, domain);
+  if constexpr (ClosedFormInverse<Model>) return solve_theta(model, rho, domain);  // cheaper than the table
+  double theta = std::numeric_limits<double>::quiet_NaN();
+  const bool found = table.lookup(rho, &theta);
+  if (found && path == InversePath::table) return theta;
+  return solve_theta(model, rho, domain, theta);
+}
+
+// The unit ray of normalized image coordinates (x, y); false (ray untouched) outside the domain.
+template <class Model>
+bool ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table, double x, double y,
+            InversePath path, double* ray) {
+  const double rho = std::sqrt(x * x + y * y);
+  double s, c;
+  if (path == InversePath::table && table.lookup_ray(rho, &s, &c)) {
+    ray[0] = x * s, ray[1] = y * s, ray[2] = c;
+    return true;
+  }
+  const double theta = theta_of(model, domain, table, rho, InversePath::robust);
+  if (std::isnan(theta)) return false;
+  ray_from_theta(x, y, rho, theta, ray);
+  return true;
 }
 
 // Runs body(begin, end) over [0, n) on OpenCV's thread pool, in chunks worth a thread.
@@ -156,7 +177,8 @@ double Camera::drho(double theta) const {
 }
 
 double Camera::theta_from_rho(double rho) const {
-  return std::visit([&](const auto& m) { return solve_theta(m, rho, domain_); }, params_.model);
+  return std::visit([&](const auto& m) { return theta_of(m, domain_, table_, rho, InversePath::robust); },
+                    params_.model);
 }
 
 double Camera::theta_from_rho_table(double rho) const {
@@ -183,14 +205,11 @@ bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
 bool Camera::unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const {
   const double x = (pixel.x() - params_.principal_point.x()) / params_.pixel_scale.x();
   const double y = (pixel.y() - params_.principal_point.y()) / params_.pixel_scale.y();
-  const double rho = std::sqrt(x * x + y * y);
-  const double theta = theta_from_rho(rho);
-  if (std::isnan(theta)) {
-    ray->setConstant(kNaN);
-    return false;
-  }
-  ray_from_theta(x, y, rho, theta, ray->data());
-  return true;
+  const bool ok =
+      std::visit([&](const auto& m) { return ray_of(m, domain_, table_, x, y, InversePath::robust, ray->data()); },
+                 params_.model);
+  if (!ok) ray->setConstant(kNaN);
+  return ok;
 }
 
 void Camera::project(std::span<const Eigen::Vector3d> points, std::span<Eigen::Vector2d> pixels,
@@ -223,14 +242,8 @@ void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen:
         parallel_chunks(pixels.size(), [&](size_t begin, size_t end) {
           for (size_t i = begin; i < end; ++i) {
             const double x = (pixels[i].x() - c.x()) * inv_scale.x(), y = (pixels[i].y() - c.y()) * inv_scale.y();
-            const double rho = std::sqrt(x * x + y * y);
-            const double theta = theta_of(m, domain_, table_, rho, path);
-            const bool ok = !std::isnan(theta);
-            if (ok) {
-              ray_from_theta(x, y, rho, theta, rays[i].data());
-            } else {
-              rays[i].setConstant(kNaN);
-            }
+            const bool ok = ray_of(m, domain_, table_, x, y, path, rays[i].data());
+            if (!ok) rays[i].setConstant(kNaN);
             if (!valid.empty()) valid[i] = ok;
           }
         });
@@ -250,10 +263,8 @@ void Camera::unproject_image(std::span<float> rays_xyz, InversePath path) const 
             float* out = &rays_xyz[3 * w * static_cast<size_t>(row)];
             for (size_t col = 0; col < w; ++col, out += 3) {
               const double x = (double(col) - c.x()) * inv_scale.x();
-              const double rho = std::sqrt(x * x + y * y);
-              const double theta = theta_of(m, domain_, table_, rho, path);
               double ray[3] = {kNaN, kNaN, kNaN};
-              if (!std::isnan(theta)) ray_from_theta(x, y, rho, theta, ray);
+              ray_of(m, domain_, table_, x, y, path, ray);
               out[0] = float(ray[0]), out[1] = float(ray[1]), out[2] = float(ray[2]);
             }
           }

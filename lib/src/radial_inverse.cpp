@@ -62,40 +62,74 @@ ValidDomain compute_domain(const Model& model, std::optional<double> user_limit)
   return domain;
 }
 
+namespace {
+
+// Power coefficients of the cubic Hermite interpolant on t in [0, 1] from the end
+// values v and slopes m (per unit t).
+void hermite(double v0, double m0, double v1, double m1, double* c) {
+  c[0] = v0;
+  c[1] = m0;
+  c[2] = -3 * v0 - 2 * m0 + 3 * v1 - m1;
+  c[3] = 2 * v0 + m0 - 2 * v1 + m1;
+}
+
+double cubic(const double* c, double t) { return c[0] + t * (c[1] + t * (c[2] + t * c[3])); }
+
+}  // namespace
+
 template <class Model>
 InverseTable::InverseTable(const Model& model, const ValidDomain& domain, double tolerance_px, int cells)
     : tolerance_px_(tolerance_px) {
   if (cells < 1 || !(tolerance_px > 0)) throw Error("inverse table: needs >= 1 cell and a positive tolerance");
   const double range = domain.closed ? domain.rho_max : 0.0;
-  if (!(range > 0 && std::isfinite(range))) return;  // open domain: callers use the solver
+  if (!(range > 0 && std::isfinite(range))) return;  // open domain: callers use the closed form
   const double step = range / cells;
-  std::vector<double> theta(cells + 1), slope(cells + 1);
+  // Node values and slopes (d/dt = step * d/drho) of theta, sin(theta)/rho, cos(theta).
+  struct Node {
+    double theta, dtheta, s, ds, c, dc;
+  };
+  // At rho = 0: sin(theta)/rho -> 1/rho'(0), slope -rho''(0) / (2 rho'(0)^3).
+  const double a = model.drho(0.0), delta = 1e-4;
+  const double second = (model.drho(delta) - model.drho(-delta)) / (2 * delta);
+  std::vector<Node> nodes(cells + 1);
   for (int i = 0; i <= cells; ++i) {
     const double rho = i == cells ? domain.rho_max : step * i;
-    theta[i] = solve_theta(model, rho, domain);
-    slope[i] = step / model.drho(theta[i]);  // dtheta/dt with t the cell coordinate
+    const double theta = solve_theta(model, rho, domain);
+    const double dtheta = 1 / model.drho(theta);  // infinite at a fold
+    const double sin = std::sin(theta), cos = std::cos(theta);
+    Node& n = nodes[i];
+    n.theta = theta, n.dtheta = step * dtheta;
+    n.c = cos, n.dc = -step * sin * dtheta;
+    n.s = rho > 0 ? sin / rho : 1 / a;
+    n.ds = rho > 0 ? step * (cos * dtheta * rho - sin) / (rho * rho) : -step * second / (2 * a * a * a);
   }
-  coefficients_.resize(4 * static_cast<size_t>(cells));
+  theta_coefficients_.resize(4 * static_cast<size_t>(cells));
+  ray_coefficients_.resize(8 * static_cast<size_t>(cells));
   constexpr int kSamples = 8;
   for (int i = 0; i < cells; ++i) {
-    double* c = &coefficients_[4 * static_cast<size_t>(i)];
-    const double t0 = theta[i], t1 = theta[i + 1], m0 = slope[i], m1 = slope[i + 1];
-    c[0] = t0;
-    c[1] = m0;
-    c[2] = -3 * t0 - 2 * m0 + 3 * t1 - m1;
-    c[3] = 2 * t0 + m0 - 2 * t1 + m1;
-    double worst = 0;
-    for (int s = 0; s <= kSamples; ++s) {
-      const double t = double(s) / kSamples;
-      const double rho = step * (i + t);
-      const double error = std::abs(model.rho(c[0] + t * (c[1] + t * (c[2] + t * c[3]))) - rho);
-      worst = std::isfinite(error) ? std::max(worst, error) : std::numeric_limits<double>::infinity();
+    double* ct = &theta_coefficients_[4 * static_cast<size_t>(i)];
+    double* cr = &ray_coefficients_[8 * static_cast<size_t>(i)];
+    const Node &n0 = nodes[i], &n1 = nodes[i + 1];
+    hermite(n0.theta, n0.dtheta, n1.theta, n1.dtheta, ct);
+    hermite(n0.s, n0.ds, n1.s, n1.ds, cr);
+    hermite(n0.c, n0.dc, n1.c, n1.dc, cr + 4);
+    double worst = 0, worst_ray = 0;
+    for (int k = 0; k <= kSamples; ++k) {
+      const double t = double(k) / kSamples, rho = step * (i + t);
+      const double theta_error = std::abs(model.rho(cubic(ct, t)) - rho);
+      // The ray's angle error, from its components against the exact angle, in px.
+      const double exact = solve_theta(model, rho, domain);
+      const double ray_error = std::max(std::abs(cubic(cr, t) * rho - std::sin(exact)),
+                                        std::abs(cubic(cr + 4, t) - std::cos(exact))) * model.drho(exact);
+      worst = std::isfinite(theta_error) ? std::max(worst, theta_error) : INFINITY;
+      worst_ray = std::isfinite(ray_error) ? std::max(worst_ray, ray_error) : INFINITY;
     }
-    if (worst > tolerance_px) {
-      c[0] = std::numeric_limits<double>::quiet_NaN();
+    if (worst > tolerance_px || worst_ray > tolerance_px) {
+      ct[0] = cr[0] = std::numeric_limits<double>::quiet_NaN();
       ++fallback_cells_;
     } else {
       worst_error_px_ = std::max(worst_error_px_, worst);
+      worst_ray_error_px_ = std::max(worst_ray_error_px_, worst_ray);
     }
   }
   cells_ = cells;

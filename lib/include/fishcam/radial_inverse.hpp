@@ -53,26 +53,28 @@ ValidDomain compute_domain(const Model& model, std::optional<double> user_limit)
 
 // Bracketed Newton: the unique theta in the domain with rho(theta) = rho, to
 // |rho(theta) - rho| <= 1e-10 px plus one final Newton step (or until the bracket
-// collapses to adjacent doubles, for models too large to reach that).
-// NaN for rho outside [0, rho_max], or NaN rho.
+// collapses to adjacent doubles, for models too large to reach that). Converges
+// from any start; a good initial guess (e.g. from the inverse table) only makes it
+// faster. NaN for rho outside [0, rho_max], or NaN rho.
 template <class Model>
-double solve_theta(const Model& model, double rho, const ValidDomain& domain) {
+double solve_theta(const Model& model, double rho, const ValidDomain& domain,
+                   double initial_guess = std::numeric_limits<double>::quiet_NaN()) {
+  if (!domain.contains_rho(rho)) return std::numeric_limits<double>::quiet_NaN();
   if constexpr (ClosedFormInverse<Model>) {
-    if (!domain.contains_rho(rho)) return std::numeric_limits<double>::quiet_NaN();
-    return std::min(model.theta_from_rho(rho), domain.theta_max);  // rounding at rho_max
+    return std::min(model.theta_from_rho(rho), domain.theta_max);  // min: rounding at rho_max
   } else {
-    if (!domain.contains_rho(rho)) return std::numeric_limits<double>::quiet_NaN();
     if (rho == 0) return 0;
     if (rho == domain.rho_max) return domain.theta_max;
     double lo = 0, hi = domain.theta_max;
-    double theta = rho / model.drho(0.0);
+    double theta = std::isnan(initial_guess) ? rho / model.drho(0.0) : initial_guess;
     if (!(theta > lo && theta < hi)) theta = 0.5 * (lo + hi);
     constexpr double kTolerancePx = 1e-10;
     for (int iteration = 0; iteration < 200; ++iteration) {
-      const double residual = model.rho(theta) - rho;
+      double slope;
+      const double residual = rho_and_drho(model, theta, &slope) - rho;
       if (residual == 0) return theta;
       (residual < 0 ? lo : hi) = theta;
-      double next = theta - residual / model.drho(theta);
+      double next = theta - residual / slope;
       // Converged: the last Newton step costs nothing more and brings theta to
       // full precision even where rho' is small (near a fold).
       if (std::abs(residual) <= kTolerancePx) return next >= lo && next <= hi ? next : theta;
@@ -84,10 +86,13 @@ double solve_theta(const Model& model, double rho, const ValidDomain& domain) {
   }
 }
 
-// The bulk path: a per-camera table of theta over a uniform rho grid, cubic Hermite
-// in each cell (values and exact slopes 1/rho'(theta) at the nodes). The error of
-// every cell is measured when it is built; cells worse than the tolerance (next to
-// a fold, where theta(rho) has a square-root singularity) are marked, and lookups
+// The bulk path: a per-camera table over a uniform rho grid on [0, rho_max], cubic
+// Hermite in each cell (values and exact slopes at the nodes), of theta and of the
+// two numbers a unit ray needs, sin(theta)/rho and cos(theta) (so unprojecting an
+// image needs no trigonometry). The error of every cell is measured when it is
+// built, in pixels: |rho(theta_table) - rho| for theta, and the ray's angular
+// error times rho'(theta) for the ray. Cells worse than the tolerance (next to a
+// fold, where theta(rho) has a square-root singularity) are marked, and lookups
 // there return false so the caller uses the robust solver.
 class InverseTable {
  public:
@@ -102,31 +107,53 @@ class InverseTable {
   // theta for rho in [0, rho_max]; false if rho is outside the table or its cell
   // needs the robust solver (the output is then untouched).
   bool lookup(double rho, double* theta) const {
-    const double x = rho * inverse_step_;
-    if (!(x >= 0 && x <= last_)) return false;
-    int cell = static_cast<int>(x);
-    cell -= cell == cells_;  // rho == rho_max belongs to the last cell
-    const double* c = &coefficients_[4 * static_cast<size_t>(cell)];
-    if (std::isnan(c[0])) return false;
-    const double t = x - cell;
+    double t;
+    const double* c = cell(rho, theta_coefficients_, 4, &t);
+    if (!c) return false;
     *theta = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+    return true;
+  }
+  // sin(theta) / rho and cos(theta) for rho (the unit ray of image offset (x, y) is
+  // (x s, y s, c)); false like lookup().
+  bool lookup_ray(double rho, double* sin_theta_over_rho, double* cos_theta) const {
+    double t;
+    const double* c = cell(rho, ray_coefficients_, 8, &t);
+    if (!c) return false;
+    *sin_theta_over_rho = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+    *cos_theta = c[4] + t * (c[5] + t * (c[6] + t * c[7]));
     return true;
   }
 
   bool empty() const { return cells_ == 0; }
   int cells() const { return cells_; }
   int fallback_cells() const { return fallback_cells_; }
-  // Largest |rho(theta_table(rho)) - rho| over the sample points of the table cells used.
+  // Largest measured error (px) over the cells in use, for theta and for rays.
   double worst_error_px() const { return worst_error_px_; }
+  double worst_ray_error_px() const { return worst_ray_error_px_; }
   double tolerance_px() const { return tolerance_px_; }
 
  private:
-  std::vector<double> coefficients_;  // 4 per cell: theta = c0 + c1 t + c2 t^2 + c3 t^3, t in [0, 1]
+  // The coefficients of rho's cell (nullptr outside the table or in a marked cell)
+  // and rho's position t in [0, 1] inside it.
+  const double* cell(double rho, const std::vector<double>& coefficients, int stride, double* t) const {
+    const double x = rho * inverse_step_;
+    if (!(x >= 0 && x <= last_)) return nullptr;
+    int index = static_cast<int>(x);
+    index -= index == cells_;  // rho == rho_max belongs to the last cell
+    const double* c = &coefficients[static_cast<size_t>(stride) * static_cast<size_t>(index)];
+    if (std::isnan(c[0])) return nullptr;
+    *t = x - index;
+    return c;
+  }
+
+  std::vector<double> theta_coefficients_;  // 4 per cell: c0 + c1 t + c2 t^2 + c3 t^3, t in [0, 1]
+  std::vector<double> ray_coefficients_;    // 8 per cell: sin(theta)/rho, then cos(theta)
   double inverse_step_ = 0;
   double last_ = -1;  // cells_ as double, the largest valid x
   int cells_ = 0;
   int fallback_cells_ = 0;
   double worst_error_px_ = 0;
+  double worst_ray_error_px_ = 0;
   double tolerance_px_ = kDefaultTolerancePx;
 };
 

@@ -8,6 +8,7 @@
 //
 // Each model provides
 //   rho(theta), drho(theta)          the model and its analytic derivative
+//   (optionally rho(theta, &drho)    both at once, where that is cheaper)
 //   kThetaLimit, kLimitIsOpen        where the model itself stops (pinhole: theta < pi/2)
 //   scaled(s)                        the model for s * rho(theta), exactly
 //   params()                         parameters in the documented order
@@ -44,6 +45,17 @@ class Polynomial {
     Scalar d = Scalar(double(n)) * k_[n - 1];
     for (int i = n - 2; i >= 0; --i) d = d * theta + Scalar(double(i + 1)) * k_[i];
     return d;
+  }
+  // rho and drho/dtheta in one Horner pass (the solver's inner loop):
+  // rho = t p(t) with p = k1 + k2 t + ..., rho' = p(t) + t p'(t).
+  Scalar rho(const Scalar& theta, Scalar* drho) const {
+    Scalar p = k_.back(), dp = Scalar(0);
+    for (int i = static_cast<int>(k_.size()) - 2; i >= 0; --i) {
+      dp = dp * theta + p;
+      p = p * theta + k_[i];
+    }
+    *drho = p + theta * dp;
+    return p * theta;
   }
   Polynomial scaled(const Scalar& s) const {
     Polynomial out = *this;
@@ -175,6 +187,14 @@ class KannalaBrandt {
                                        t2 * (Scalar(5) * p_[2] + t2 * (Scalar(7) * p_[3] + t2 * Scalar(9) * p_[4])));
     return p_[0] * d;
   }
+  Scalar rho(const Scalar& theta, Scalar* drho) const {
+    const Scalar t2 = theta * theta;
+    const Scalar poly = Scalar(1) + t2 * (p_[1] + t2 * (p_[2] + t2 * (p_[3] + t2 * p_[4])));
+    const Scalar d = Scalar(1) + t2 * (Scalar(3) * p_[1] +
+                                       t2 * (Scalar(5) * p_[2] + t2 * (Scalar(7) * p_[3] + t2 * Scalar(9) * p_[4])));
+    *drho = p_[0] * d;
+    return p_[0] * theta * poly;
+  }
   KannalaBrandt scaled(const Scalar& s) const {
     KannalaBrandt out = *this;
     out.p_[0] = out.p_[0] * s;
@@ -195,6 +215,20 @@ class KannalaBrandt {
 
 template <class Model>
 concept ClosedFormInverse = requires(const Model& m, double r) { m.theta_from_rho(r); };
+
+template <class Model>
+concept FusedDerivative = requires(const Model& m, double t, double* d) { m.rho(t, d); };
+
+// rho and drho/dtheta together, fused where the model offers it.
+template <class Model, typename Scalar>
+Scalar rho_and_drho(const Model& model, const Scalar& theta, Scalar* drho) {
+  if constexpr (FusedDerivative<Model>) {
+    return model.rho(theta, drho);
+  } else {
+    *drho = model.drho(theta);
+    return model.rho(theta);
+  }
+}
 
 template <class Model>
 concept PolynomialInTheta = requires(const Model& m) { m.power_coefficients(); };
