@@ -175,6 +175,8 @@ const Malformed kMalformed[] = {
     {"ws_width_fraction", replaced(kWoodScape, "\"width\": 1280", "\"width\": 1280.5"), "intrinsic.width"},
     {"ws_nan", replaced(kWoodScape, "339.749", "NaN"), "not valid JSON"},
     {"ws_truncated", kWoodScape.substr(0, kWoodScape.size() / 2), "not valid JSON"},
+    {"ws_no_order", replaced(kWoodScape, "\"poly_order\": 4,", ""), "intrinsic.poly_order: missing"},
+    {"ws_order", replaced(kWoodScape, "\"poly_order\": 4,", "\"poly_order\": 5,"), "intrinsic.k5: missing"},
     {"ws_model", replaced(kWoodScape, "radial_poly", "fisheye_mei"), "intrinsic.model: unsupported WoodScape model"},
     {"ws_aspect", replaced(kWoodScape, "\"aspect_ratio\": 1.0", "\"aspect_ratio\": 0"), "intrinsic.aspect_ratio"},
     {"ws_quaternion", replaced(kWoodScape, "0.5941767906169857", "0.9"), "extrinsic.quaternion: must have unit norm"},

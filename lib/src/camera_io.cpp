@@ -134,12 +134,11 @@ CameraParameters read_woodscape(const json& root, const std::string& source) {
   const Fields in = top.object("intrinsic");
   const std::string model = in.string("model");
   if (model != "radial_poly") in.fail("model", "unsupported WoodScape model '" + model + "' (expected radial_poly)");
-  int order = 4;
-  if (in.has("poly_order")) {
-    const double o = in.number("poly_order");
-    if (!(o >= 1 && o <= 16) || o != std::floor(o)) in.fail("poly_order", "expected an integer in [1, 16]");
-    order = static_cast<int>(o);
+  const double poly_order = in.number("poly_order");
+  if (!(poly_order >= 1 && poly_order <= 16) || poly_order != std::floor(poly_order)) {
+    in.fail("poly_order", "expected an integer in [1, 16]");
   }
+  const int order = static_cast<int>(poly_order);
   std::vector<double> k;
   for (int i = 1; i <= order; ++i) k.push_back(in.number(coefficient_key(i)));
   CameraParameters p;
