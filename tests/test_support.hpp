@@ -8,6 +8,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <unistd.h>
 
 #include "fishcam/camera.hpp"
 #include "fishcam/camera_io.hpp"
@@ -90,13 +91,18 @@ struct CommandResult {
 
 // Runs `fishcam ARGS` with STDIN as its standard input.
 inline CommandResult run_fishcam(const std::string& args, const std::string& stdin_text = "") {
-  const auto dir = std::filesystem::path(FISHCAM_TEST_TMP) / "cli";
+  // One folder per process and call: CTest runs the tests in parallel.
+  static int calls = 0;
+  const auto dir = std::filesystem::path(FISHCAM_TEST_TMP) /
+                   ("cli-" + std::to_string(::getpid()) + "-" + std::to_string(calls++));
   std::filesystem::create_directories(dir);
   const auto in = write_file(dir / "stdin.txt", stdin_text), out = dir / "stdout.txt", err = dir / "stderr.txt";
   const std::string command = std::string("'") + FISHCAM_BINARY + "' " + args + " < '" + in.string() + "' > '" +
                               out.string() + "' 2> '" + err.string() + "'";
   const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};
+  CommandResult result{WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};
+  std::filesystem::remove_all(dir);
+  return result;
 }
 #endif
 
