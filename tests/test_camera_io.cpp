@@ -23,13 +23,15 @@ void expect_same_camera(const CameraParameters& a, const CameraParameters& b, do
   }
 }
 
+// Every bundled camera file and its format.
+const std::pair<const char*, CameraFormat> kBundled[] = {{"woodscape_front.json", CameraFormat::woodscape},
+                                                         {"stereographic.cameramodel", CameraFormat::mrcal},
+                                                         {"pinhole.cameramodel", CameraFormat::mrcal},
+                                                         {"kannala_brandt.yaml", CameraFormat::opencv},
+                                                         {"equidistant.json", CameraFormat::fishcam}};
+
 TEST(CameraIo, BundledFilesAreDetectedByContent) {
-  const std::pair<const char*, CameraFormat> files[] = {{"woodscape_front.json", CameraFormat::woodscape},
-                                                        {"stereographic.cameramodel", CameraFormat::mrcal},
-                                                        {"pinhole.cameramodel", CameraFormat::mrcal},
-                                                        {"kannala_brandt.yaml", CameraFormat::opencv},
-                                                        {"equidistant.json", CameraFormat::fishcam}};
-  for (const auto& [name, format] : files) {
+  for (const auto& [name, format] : kBundled) {
     CameraFormat detected{};
     read_camera(data_path(name), &detected);
     EXPECT_EQ(detected, format) << name;
@@ -37,12 +39,7 @@ TEST(CameraIo, BundledFilesAreDetectedByContent) {
 }
 
 TEST(CameraIo, EveryFormatRoundTrips) {
-  const std::pair<const char*, CameraFormat> files[] = {{"woodscape_front.json", CameraFormat::woodscape},
-                                                        {"stereographic.cameramodel", CameraFormat::mrcal},
-                                                        {"pinhole.cameramodel", CameraFormat::mrcal},
-                                                        {"kannala_brandt.yaml", CameraFormat::opencv},
-                                                        {"equidistant.json", CameraFormat::fishcam}};
-  for (const auto& [name, format] : files) {
+  for (const auto& [name, format] : kBundled) {
     const CameraParameters original = read_camera(data_path(name)).parameters();
     // Own format: WoodScape stores offsets from the image centre (cx - W/2 + 0.5), a
     // rounding step away from exact; the others store the numbers themselves.

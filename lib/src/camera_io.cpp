@@ -121,6 +121,21 @@ void reject_theta_limit(const CameraParameters& p, std::string_view format) {
   }
 }
 
+// A pose as JSON / from JSON: quaternion (x, y, z, w: scalar last, unit norm) and translation.
+json pose_to_json(const Pose& pose, const char* quaternion_key) {
+  const auto& q = pose.rotation;
+  const auto& t = pose.translation;
+  return {{quaternion_key, {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
+}
+
+Pose pose_from_json(const Fields& f, const char* quaternion_key) {
+  const std::vector<double> q = f.numbers(quaternion_key, 4, 4);
+  const std::vector<double> t = f.numbers("translation", 3, 3);
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (std::abs(norm - 1) > 1e-6) f.fail(quaternion_key, "must have unit norm, got " + std::to_string(norm));
+  return Pose{Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
+}
+
 // ---------------------------------------------------------------- WoodScape
 // "k1", "k2", ... (appended, not `"k" + to_string(i)`: GCC 12 warns falsely on that).
 std::string coefficient_key(int i) {
@@ -151,14 +166,7 @@ CameraParameters read_woodscape(const json& root, const std::string& source) {
   if (!(aspect > 0)) in.fail("aspect_ratio", "must be > 0");
   p.pixel_scale = {1.0, aspect};
   p.model = Polynomial<double>(k);
-  if (top.has("extrinsic")) {
-    const Fields ex = top.object("extrinsic");
-    const std::vector<double> q = ex.numbers("quaternion", 4, 4);  // x, y, z, w
-    const std::vector<double> t = ex.numbers("translation", 3, 3);
-    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (std::abs(norm - 1) > 1e-6) ex.fail("quaternion", "must have unit norm, got " + std::to_string(norm));
-    p.pose = Pose{Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
-  }
+  if (top.has("extrinsic")) p.pose = pose_from_json(top.object("extrinsic"), "quaternion");
   return p;
 }
 
@@ -184,11 +192,7 @@ json write_woodscape(const CameraParameters& original) {
              {"aspect_ratio", p.pixel_scale.y()}};
   for (size_t i = 0; i < k.size(); ++i) in[coefficient_key(int(i) + 1)] = k[i];
   json root = {{"intrinsic", in}};
-  if (p.pose) {
-    const auto& q = p.pose->rotation;
-    const auto& t = p.pose->translation;
-    root["extrinsic"] = {{"quaternion", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
-  }
+  if (p.pose) root["extrinsic"] = pose_to_json(*p.pose, "quaternion");
   return root;
 }
 
@@ -212,12 +216,7 @@ CameraParameters read_fishcam(const json& root, const std::string& source) {
     f.fail("model", e.what());
   }
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
-  if (f.has("pose")) {
-    const Fields pose = f.object("pose");
-    const auto q = pose.numbers("quaternion_xyzw", 4, 4);
-    const auto t = pose.numbers("translation", 3, 3);
-    p.pose = Pose{Eigen::Quaterniond(q[3], q[0], q[1], q[2]), Eigen::Vector3d(t[0], t[1], t[2])};
-  }
+  if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
   return p;
 }
 
@@ -230,11 +229,7 @@ json write_fishcam(const CameraParameters& p) {
                {"model", model_name(p.model)},
                {"parameters", model_params(p.model)}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
-  if (p.pose) {
-    const auto& q = p.pose->rotation;
-    const auto& t = p.pose->translation;
-    root["pose"] = {{"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
-  }
+  if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
   return root;
 }
 
