@@ -1,0 +1,66 @@
+// Viewpoint changes (the paper's eq. 7), depth priors and seeded random poses.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+namespace fishcam {
+
+// Where a source pixel's scene point is assumed to be (docs/augmentation.md).
+enum class DepthPrior {
+  source_sphere,  // on the source camera's unit sphere (the paper)
+  target_sphere,  // at distance 1 along the output ray (mrcal's distance = 1)
+  infinity,       // at infinity: rotation only, translation ignored (mrcal's default)
+};
+std::string_view to_string(DepthPrior prior);
+std::optional<DepthPrior> parse_depth_prior(std::string_view name);
+
+// P' = R P + t (eq. 7): a point P of the source camera frame, in the frame of the
+// output camera. The camera appears to move the opposite way.
+struct ViewpointChange {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+
+  // Degrees about the camera x, y, z axes, R = Rz * Ry * Rx (x applied first).
+  static ViewpointChange from_euler_deg(const Eigen::Vector3d& degrees_xyz,
+                                        const Eigen::Vector3d& translation = Eigen::Vector3d::Zero());
+  // Rodrigues vector (axis * angle, radians).
+  static ViewpointChange from_rodrigues(const Eigen::Vector3d& r,
+                                        const Eigen::Vector3d& translation = Eigen::Vector3d::Zero());
+  static ViewpointChange from_quaternion(const Eigen::Quaterniond& q,
+                                         const Eigen::Vector3d& translation = Eigen::Vector3d::Zero());
+  // The x, y, z angles (degrees) with rotation = Rz * Ry * Rx, y in [-90, 90].
+  Eigen::Vector3d euler_deg() const;
+  ViewpointChange inverse() const;
+  bool is_identity() const { return rotation == Eigen::Matrix3d::Identity() && translation.isZero(0); }
+};
+
+// Uniform, independent ranges per degree of freedom: rotation in
+// [-max_rotation_deg, +max_rotation_deg] about each axis, translation in
+// [-max_translation, +max_translation] along each axis (unit-sphere units).
+struct PosePreset {
+  std::string_view name;
+  double max_rotation_deg;
+  double max_translation;
+};
+// The paper's: small (10 deg, 0.1), medium (20, 0.3), large (30, 0.5), train (30, 0.5).
+const std::array<PosePreset, 4>& pose_presets();
+std::optional<PosePreset> find_pose_preset(std::string_view name);
+
+struct RandomPose {
+  Eigen::Vector3d rotation_deg;  // about x, y, z
+  Eigen::Vector3d translation;
+  ViewpointChange change() const { return ViewpointChange::from_euler_deg(rotation_deg, translation); }
+};
+// Reproducible on any platform: std::mt19937_64 (its output is fixed by the
+// standard) mapped to [0, 1) by our own code, not by a standard distribution.
+// Draw order: rx, ry, rz, tx, ty, tz.
+RandomPose random_pose(const PosePreset& preset, std::uint64_t seed);
+// A seed per (key, index) from one user seed (SplitMix64 over FNV-1a of the key).
+std::uint64_t derive_seed(std::uint64_t seed, std::string_view key, std::uint64_t index);
+
+}  // namespace fishcam

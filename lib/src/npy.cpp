@@ -1,0 +1,80 @@
+#include "fishcam/npy.hpp"
+
+#include <bit>
+#include <cstring>
+#include <fstream>
+#include <regex>
+#include <string>
+
+#include "fishcam/error.hpp"
+
+namespace fishcam {
+
+static_assert(std::endian::native == std::endian::little, "the .npy code writes native little-endian floats");
+
+void write_npy(const std::filesystem::path& path, const NpyArray& array, bool overwrite) {
+  size_t count = 1;
+  std::string shape = "(";
+  for (size_t d : array.shape) {
+    count *= d;
+    shape += std::to_string(d) + ", ";
+  }
+  if (array.shape.size() > 1) shape.erase(shape.size() - 1);  // "(3, 4)" and "(3,)"
+  shape += ")";
+  if (count != array.data.size()) throw Error(path.string() + ": shape does not match the data size");
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape + ", }";
+  // magic (6) + version (2) + header length (2) + header, padded with spaces and
+  // ended by a newline to a multiple of 64 bytes.
+  const size_t total = (10 + header.size() + 1 + 63) / 64 * 64;
+  header.append(total - 10 - header.size() - 1, ' ');
+  header += '\n';
+  std::error_code ec;
+  if (!overwrite && std::filesystem::exists(path, ec)) throw Error(path.string() + ": already exists (refusing to overwrite)");
+  const std::filesystem::path tmp = path.string() + ".fishcam-tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw Error(path.string() + ": cannot write");
+    const unsigned char preamble[10] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0, static_cast<unsigned char>(header.size() & 0xff),
+                                        static_cast<unsigned char>(header.size() >> 8)};
+    out.write(reinterpret_cast<const char*>(preamble), sizeof preamble);
+    out.write(header.data(), static_cast<std::streamsize>(header.size()));
+    out.write(reinterpret_cast<const char*>(array.data.data()), static_cast<std::streamsize>(count * sizeof(float)));
+    if (!out) {
+      std::filesystem::remove(tmp, ec);
+      throw Error(path.string() + ": write failed (disk full?)");
+    }
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw Error(path.string() + ": cannot move the written file into place");
+}
+
+NpyArray read_npy(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot open");
+  unsigned char preamble[10];
+  if (!in.read(reinterpret_cast<char*>(preamble), 10) || std::memcmp(preamble, "\x93NUMPY", 6) != 0) {
+    throw Error(path.string() + ": not a .npy file");
+  }
+  if (preamble[6] != 1) throw Error(path.string() + ": only .npy format version 1.0 is read");
+  std::string header(size_t(preamble[8]) | (size_t(preamble[9]) << 8), '\0');
+  if (!in.read(header.data(), static_cast<std::streamsize>(header.size()))) throw Error(path.string() + ": truncated header");
+  if (header.find("'descr': '<f4'") == std::string::npos) throw Error(path.string() + ": descr: expected '<f4' (float32)");
+  if (header.find("'fortran_order': False") == std::string::npos) throw Error(path.string() + ": fortran_order: expected False");
+  std::smatch match;
+  if (!std::regex_search(header, match, std::regex(R"('shape': \(([0-9, ]*)\))"))) throw Error(path.string() + ": shape: missing");
+  NpyArray array;
+  size_t count = 1;
+  const std::string dims = match[1];
+  const std::regex number("[0-9]+");
+  for (std::sregex_iterator it(dims.begin(), dims.end(), number), end; it != end; ++it) {
+    array.shape.push_back(std::stoul(it->str()));
+    count *= array.shape.back();
+  }
+  array.data.resize(count);
+  if (!in.read(reinterpret_cast<char*>(array.data.data()), static_cast<std::streamsize>(count * sizeof(float)))) {
+    throw Error(path.string() + ": truncated data");
+  }
+  return array;
+}
+
+}  // namespace fishcam

@@ -1,0 +1,109 @@
+#include "fishcam/viewpoint.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace fishcam {
+namespace {
+
+constexpr double kRad = std::numbers::pi / 180;
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+std::string_view to_string(DepthPrior prior) {
+  switch (prior) {
+    case DepthPrior::source_sphere: return "source-sphere";
+    case DepthPrior::target_sphere: return "target-sphere";
+    case DepthPrior::infinity: return "infinity";
+  }
+  return "?";
+}
+
+std::optional<DepthPrior> parse_depth_prior(std::string_view name) {
+  for (auto p : {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity}) {
+    if (name == to_string(p)) return p;
+  }
+  return std::nullopt;
+}
+
+ViewpointChange ViewpointChange::from_euler_deg(const Eigen::Vector3d& d, const Eigen::Vector3d& translation) {
+  const Eigen::Matrix3d r = (Eigen::AngleAxisd(d.z() * kRad, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(d.y() * kRad, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(d.x() * kRad, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  return {r, translation};
+}
+
+ViewpointChange ViewpointChange::from_rodrigues(const Eigen::Vector3d& r, const Eigen::Vector3d& translation) {
+  const double angle = r.norm();
+  if (angle == 0) return {Eigen::Matrix3d::Identity(), translation};
+  return {Eigen::AngleAxisd(angle, r / angle).toRotationMatrix(), translation};
+}
+
+ViewpointChange ViewpointChange::from_quaternion(const Eigen::Quaterniond& q, const Eigen::Vector3d& translation) {
+  return {q.normalized().toRotationMatrix(), translation};
+}
+
+Eigen::Vector3d ViewpointChange::euler_deg() const {
+  // R = Rz(c) Ry(b) Rx(a): R(2,0) = -sin b, R(2,1) = cos b sin a, R(1,0) = sin c cos b.
+  const Eigen::Matrix3d& r = rotation;
+  const double b = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  double a, c;
+  if (std::abs(r(2, 0)) < 1 - 1e-12) {
+    a = std::atan2(r(2, 1), r(2, 2));
+    c = std::atan2(r(1, 0), r(0, 0));
+  } else {  // gimbal lock: only a - c (or a + c) is defined; put it all in a
+    a = std::atan2(-r(1, 2), r(1, 1));
+    c = 0;
+  }
+  return Eigen::Vector3d(a, b, c) / kRad;
+}
+
+ViewpointChange ViewpointChange::inverse() const {
+  return {rotation.transpose(), -(rotation.transpose() * translation)};
+}
+
+const std::array<PosePreset, 4>& pose_presets() {
+  static const std::array<PosePreset, 4> presets = {{
+      {"small", 10, 0.1},
+      {"medium", 20, 0.3},
+      {"large", 30, 0.5},
+      {"train", 30, 0.5},
+  }};
+  return presets;
+}
+
+std::optional<PosePreset> find_pose_preset(std::string_view name) {
+  for (const auto& p : pose_presets()) {
+    if (p.name == name) return p;
+  }
+  return std::nullopt;
+}
+
+RandomPose random_pose(const PosePreset& preset, std::uint64_t seed) {
+  std::mt19937_64 engine(seed);
+  auto uniform = [&](double half_range) {
+    const double u = double(engine() >> 11) * 0x1.0p-53;  // [0, 1), 53 random bits
+    return (2 * u - 1) * half_range;
+  };
+  RandomPose pose;
+  for (int i = 0; i < 3; ++i) pose.rotation_deg[i] = uniform(preset.max_rotation_deg);
+  for (int i = 0; i < 3; ++i) pose.translation[i] = uniform(preset.max_translation);
+  return pose;
+}
+
+std::uint64_t derive_seed(std::uint64_t seed, std::string_view key, std::uint64_t index) {
+  std::uint64_t h = 0xCBF29CE484222325ull;  // FNV-1a
+  for (unsigned char c : key) h = (h ^ c) * 0x100000001B3ull;
+  return splitmix64(splitmix64(seed ^ h) + index);
+}
+
+}  // namespace fishcam

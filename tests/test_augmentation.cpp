@@ -1,0 +1,333 @@
+// The viewpoint warp: its defining equation, the float kernel against the double
+// reference, identity, inverse, label handling, and a brute-force forward splat of
+// the paper's eqs. 6-10.
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <random>
+
+#include "fishcam/augmentation.hpp"
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+constexpr DepthPrior kPriors[] = {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity};
+
+Camera woodscape() { return read_camera(test::data_path("woodscape_front.json")); }
+
+// A smooth, textured 8-bit test image (bilinear sampling of it is well-behaved).
+cv::Mat test_image(int width, int height, int type) {
+  cv::Mat image(height, width, type);
+  const int channels = image.channels();
+  const double scale = type == CV_16UC3 || CV_MAT_DEPTH(type) == CV_16U ? 257 : 1;
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      for (int c = 0; c < channels; ++c) {
+        const double value = 127.5 + 120 * std::sin(0.05 * u + 0.7 * c) * std::cos(0.043 * v - 0.3 * c);
+        if (CV_MAT_DEPTH(type) == CV_8U) {
+          image.ptr<uchar>(v)[u * channels + c] = cv::saturate_cast<uchar>(value);
+        } else {
+          image.ptr<ushort>(v)[u * channels + c] = cv::saturate_cast<ushort>(value * scale);
+        }
+      }
+    }
+  }
+  return image;
+}
+
+TEST(Augmentation, SourcePointSatisfiesItsDefiningEquation) {
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  int checked = 0, missed = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double scale = i % 2 ? 0.99 : 1.6;  // inside the unit sphere and outside
+    const Eigen::Vector3d t = scale * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized() *
+                              std::abs(uniform(rng));
+    const ViewpointChange change =
+        ViewpointChange::from_euler_deg({30 * uniform(rng), 30 * uniform(rng), 30 * uniform(rng)}, t);
+    const Eigen::Vector3d d = Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized();
+    const auto p = source_point(d, change, DepthPrior::source_sphere);
+    if (!p) {
+      ASSERT_GE(t.norm(), 1.0) << "inside the sphere every ray has a source point";
+      ++missed;
+      continue;
+    }
+    const Eigen::Vector3d moved = change.rotation * *p + change.translation;  // = s d
+    EXPECT_NEAR(p->norm(), 1.0, 1e-12);
+    EXPECT_LT(moved.cross(d).norm(), 1e-9);
+    EXPECT_GT(moved.dot(d), 0);
+    // |t| >= 1: the nearer of the two intersections.
+    if (t.norm() >= 1) {
+      const double s = moved.dot(d), b = d.dot(t);
+      EXPECT_LE(s, b + 1e-9);
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 15000);
+  EXPECT_GT(missed, 100);
+}
+
+TEST(Augmentation, PriorsAgreeWithoutTranslationAndDifferWithIt) {
+  const Eigen::Vector3d d = Eigen::Vector3d(0.2, -0.1, 1).normalized();
+  const auto rotation_only = ViewpointChange::from_euler_deg({5, -7, 12});
+  const Eigen::Vector3d a = *source_point(d, rotation_only, DepthPrior::source_sphere);
+  for (DepthPrior prior : kPriors) EXPECT_LT((*source_point(d, rotation_only, prior) - a).norm(), 1e-15);
+  const auto moved = ViewpointChange::from_euler_deg({5, -7, 12}, {0.3, 0, 0});
+  EXPECT_GT((*source_point(d, moved, DepthPrior::source_sphere) - *source_point(d, moved, DepthPrior::infinity)).norm(),
+            0.1);
+}
+
+TEST(Augmentation, EulerAnglesAreZYXAndRoundTrip) {
+  const auto change = ViewpointChange::from_euler_deg({90, 0, 0});
+  // A rotation of +90 deg about x takes the y axis to z.
+  EXPECT_LT((change.rotation * Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitZ()).norm(), 1e-15);
+  const Eigen::Vector3d angles(12, -25, 33);
+  EXPECT_LT((ViewpointChange::from_euler_deg(angles).euler_deg() - angles).norm(), 1e-12);
+  const Eigen::Matrix3d rz = Eigen::AngleAxisd(33 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d ry = Eigen::AngleAxisd(-25 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d rx = Eigen::AngleAxisd(12 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  EXPECT_LT((ViewpointChange::from_euler_deg(angles).rotation - rz * ry * rx).norm(), 1e-15);
+  const Eigen::Vector3d r(0.1, -0.2, 0.3);
+  EXPECT_LT((ViewpointChange::from_rodrigues(r).rotation -
+             ViewpointChange::from_quaternion(Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized()))).rotation)
+                .norm(),
+            1e-15);
+}
+
+TEST(Augmentation, RandomPosesAreReproducibleAndInRange) {
+  const PosePreset train = *find_pose_preset("train");
+  const RandomPose a = random_pose(train, 42), b = random_pose(train, 42), c = random_pose(train, 43);
+  EXPECT_EQ(a.rotation_deg, b.rotation_deg);
+  EXPECT_EQ(a.translation, b.translation);
+  EXPECT_NE(a.rotation_deg, c.rotation_deg);
+  // Fixed by std::mt19937_64's specified output and our own mapping to [0, 1):
+  // these digits must be the same on every platform.
+  EXPECT_NEAR(random_pose(*find_pose_preset("small"), 1).rotation_deg.x(), 10 * (2 * double(std::mt19937_64(1)() >> 11) * 0x1.0p-53 - 1), 0);
+  double max_rotation = 0, max_translation = 0;
+  for (std::uint64_t seed = 0; seed < 2000; ++seed) {
+    const RandomPose p = random_pose(*find_pose_preset("medium"), derive_seed(7, "frame", seed));
+    max_rotation = std::max(max_rotation, p.rotation_deg.cwiseAbs().maxCoeff());
+    max_translation = std::max(max_translation, p.translation.cwiseAbs().maxCoeff());
+  }
+  EXPECT_LE(max_rotation, 20);
+  EXPECT_GT(max_rotation, 19.9);
+  EXPECT_LE(max_translation, 0.3);
+  EXPECT_GT(max_translation, 0.29);
+  EXPECT_FALSE(find_pose_preset("huge").has_value());
+  EXPECT_NE(derive_seed(7, "a", 0), derive_seed(7, "b", 0));
+  EXPECT_NE(derive_seed(7, "a", 0), derive_seed(7, "a", 1));
+}
+
+// The float SIMD kernel against the double reference, every prior, every source model kind.
+TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
+  const Camera ws = woodscape();
+  const std::pair<const char*, Camera> targets[] = {
+      {"woodscape", ws},
+      {"stereographic", read_camera(test::data_path("stereographic.cameramodel"))},
+      {"pinhole", read_camera(test::data_path("pinhole.cameramodel"))},
+  };
+  for (const auto& [name, other] : targets) {
+    // Both directions: woodscape -> other and other -> woodscape.
+    for (const auto& [source, target] : {std::pair{ws, other}, std::pair{other, ws}}) {
+      const ViewpointWarp warp(source, target);
+      for (std::uint64_t seed = 0; seed < 3; ++seed) {
+        const ViewpointChange change = random_pose(*find_pose_preset("train"), seed).change();
+        for (DepthPrior prior : kPriors) {
+          WarpMaps fast, exact;
+          warp.compute(change, prior, &fast);
+          warp.compute_exact(change, prior, &exact);
+          double worst = 0;
+          long disagree = 0, both = 0;
+          for (int v = 0; v < target.height(); ++v) {
+            for (int u = 0; u < target.width(); ++u) {
+              const float fx = fast.map_x.at<float>(v, u), ex = exact.map_x.at<float>(v, u);
+              disagree += fast.valid.at<uchar>(v, u) != exact.valid.at<uchar>(v, u);
+              if (!exact.valid.at<uchar>(v, u) || !fast.valid.at<uchar>(v, u)) continue;
+              ++both;
+              worst = std::max<double>(worst, std::hypot(fx - ex, fast.map_y.at<float>(v, u) - exact.map_y.at<float>(v, u)));
+            }
+          }
+          EXPECT_LE(worst, 1e-3) << name << " " << to_string(prior);
+          EXPECT_LE(disagree, 20) << name << " " << to_string(prior) << ": validity differs (only on the image border)";
+          EXPECT_GT(both, 50000);
+        }
+      }
+    }
+  }
+}
+
+TEST(Augmentation, IdentityReproducesTheInputExactly) {
+  const Camera camera = woodscape();
+  const ViewpointWarp warp(camera);
+  for (DepthPrior prior : kPriors) {
+    WarpMaps maps;
+    warp.compute(ViewpointChange{}, prior, &maps);
+    EXPECT_EQ(maps.invalid_count, 0);
+    for (int type : {CV_8UC1, CV_8UC3, CV_8UC4, CV_16UC1, CV_16UC3}) {
+      const cv::Mat image = test_image(camera.width(), camera.height(), type);
+      cv::Mat out;
+      warp_image(image, maps, &out);
+      EXPECT_EQ(cv::norm(image, out, cv::NORM_INF), 0) << to_string(prior) << " type " << type;
+    }
+    cv::Mat labels(camera.height(), camera.width(), CV_8UC1), out;
+    cv::randu(labels, 0, 10);
+    warp_labels(labels, maps, 255, &out);
+    EXPECT_EQ(cv::norm(labels, out, cv::NORM_INF), 0);
+  }
+}
+
+TEST(Augmentation, RotationThenInverseRecoversTheGeometry) {
+  const Camera camera = woodscape();
+  const ViewpointWarp warp(camera);
+  const ViewpointChange change = ViewpointChange::from_euler_deg({15, -20, 25});
+  WarpMaps forward, back;
+  warp.compute(change, DepthPrior::infinity, &forward);
+  warp.compute(change.inverse(), DepthPrior::infinity, &back);
+  // back maps output -> intermediate, forward maps intermediate -> original.
+  double worst = 0;
+  long count = 0;
+  for (int v = 0; v < camera.height(); v += 2) {
+    for (int u = 0; u < camera.width(); u += 2) {
+      if (!back.valid.at<uchar>(v, u)) continue;
+      const float x = back.map_x.at<float>(v, u), y = back.map_y.at<float>(v, u);
+      // Bilinear interpolation of the forward map at (x, y), where all four neighbours are valid.
+      const int u0 = int(std::floor(x)), v0 = int(std::floor(y));
+      if (u0 < 0 || v0 < 0 || u0 + 1 >= camera.width() || v0 + 1 >= camera.height()) continue;
+      if (!forward.valid.at<uchar>(v0, u0) || !forward.valid.at<uchar>(v0, u0 + 1) ||
+          !forward.valid.at<uchar>(v0 + 1, u0) || !forward.valid.at<uchar>(v0 + 1, u0 + 1)) {
+        continue;
+      }
+      const double a = x - u0, b = y - v0;
+      auto lerp = [&](const cv::Mat& m) {
+        return (1 - b) * ((1 - a) * m.at<float>(v0, u0) + a * m.at<float>(v0, u0 + 1)) +
+               b * ((1 - a) * m.at<float>(v0 + 1, u0) + a * m.at<float>(v0 + 1, u0 + 1));
+      };
+      worst = std::max(worst, std::hypot(lerp(forward.map_x) - u, lerp(forward.map_y) - v));
+      ++count;
+    }
+  }
+  EXPECT_GT(count, 100000);
+  EXPECT_LT(worst, 0.05);  // the maps are smooth: linear interpolation error only
+  // And the image: rotate, rotate back; in the valid region only interpolation blur remains.
+  const cv::Mat image = test_image(camera.width(), camera.height(), CV_8UC3);
+  cv::Mat once, twice;
+  warp_image(image, forward, &once);
+  warp_image(once, back, &twice);
+  cv::Mat difference;
+  cv::absdiff(image, twice, difference);
+  const cv::Scalar mean_error = cv::mean(difference, back.valid);
+  EXPECT_LT(mean_error[0], 1.0);
+}
+
+TEST(Augmentation, LabelValuesArePreservedAndFillIsConfigurable) {
+  const Camera camera = woodscape();
+  const ViewpointWarp warp(camera);
+  cv::Mat labels(camera.height(), camera.width(), CV_8UC1);
+  // Blocks of classes 1..9 (no 0 and no 255: so any 0 or 255 in the output was invented).
+  for (int v = 0; v < labels.rows; ++v) {
+    for (int u = 0; u < labels.cols; ++u) labels.at<uchar>(v, u) = uchar(1 + ((u / 37 + v / 23) % 9));
+  }
+  WarpMaps maps;
+  warp.compute(random_pose(*find_pose_preset("large"), 5).change(), DepthPrior::source_sphere, &maps);
+  ASSERT_GT(maps.invalid_count, 0);
+  for (int fill : {0, 255}) {
+    cv::Mat out;
+    warp_labels(labels, maps, fill, &out);
+    for (int v = 0; v < out.rows; ++v) {
+      for (int u = 0; u < out.cols; ++u) {
+        const int value = out.at<uchar>(v, u);
+        if (maps.valid.at<uchar>(v, u)) {
+          ASSERT_TRUE(value >= 1 && value <= 9);
+          // Nearest neighbour: exactly the label of the rounded source pixel.
+          const int su = int(std::lrint(maps.map_x.at<float>(v, u))), sv = int(std::lrint(maps.map_y.at<float>(v, u)));
+          ASSERT_EQ(value, labels.at<uchar>(std::clamp(sv, 0, labels.rows - 1), std::clamp(su, 0, labels.cols - 1)));
+        } else {
+          ASSERT_EQ(value, fill);
+        }
+      }
+    }
+  }
+  cv::Mat out;
+  EXPECT_THROW(warp_labels(labels, maps, 256, &out), Error);
+  EXPECT_THROW(warp_labels(cv::Mat(10, 10, CV_8UC1), maps, 0, &out), Error);
+  EXPECT_THROW(warp_image(cv::Mat(camera.height(), camera.width(), CV_32FC1), maps, &out), Error);
+}
+
+// The paper's forward model, literally: every source pixel onto the unit sphere
+// (eq. 6), moved (eq. 7), reprojected (eqs. 8-10) and rounded to an output pixel.
+// Where exactly one source pixel lands, our inverse map must point back at it.
+TEST(Augmentation, AgreesWithABruteForceForwardSplat) {
+  CameraParameters p = test::woodscape_front();
+  p.width = 160, p.height = 121;  // a small image of the same lens: 1/8 scale
+  p.principal_point = {79.5 + 3.942 / 8, 60 - 3.093 / 8};
+  p.model = Polynomial<double>({339.749 / 8, -31.988 / 8, 48.275 / 8, -7.201 / 8});
+  const Camera camera(p);
+  const ViewpointWarp warp(camera);
+  for (const auto& change : {ViewpointChange::from_euler_deg({10, -5, 8}, {0.1, -0.05, 0.2}),
+                             ViewpointChange::from_euler_deg({-20, 10, 0}, {0.3, 0.3, -0.3})}) {
+    cv::Mat hits = cv::Mat::zeros(p.height, p.width, CV_32SC1);
+    cv::Mat hit_x(p.height, p.width, CV_64FC1), hit_y(p.height, p.width, CV_64FC1);
+    for (int v = 0; v < p.height; ++v) {
+      for (int u = 0; u < p.width; ++u) {
+        Eigen::Vector3d sphere;
+        Eigen::Vector2d out;
+        if (!camera.unproject({double(u), double(v)}, &sphere)) continue;
+        if (!camera.project(change.rotation * sphere + change.translation, &out)) continue;
+        const int ou = int(std::lround(out.x())), ov = int(std::lround(out.y()));
+        if (ou < 0 || ov < 0 || ou >= p.width || ov >= p.height) continue;
+        hits.at<int>(ov, ou) += 1;
+        hit_x.at<double>(ov, ou) = u, hit_y.at<double>(ov, ou) = v;
+      }
+    }
+    WarpMaps maps;
+    warp.compute(change, DepthPrior::source_sphere, &maps);
+    long single = 0, close = 0;
+    for (int v = 0; v < p.height; ++v) {
+      for (int u = 0; u < p.width; ++u) {
+        if (hits.at<int>(v, u) != 1) continue;
+        ++single;
+        // The splat rounded the output position by up to half a pixel; mapped
+        // back, that is at most ~half a pixel times the local scale (~1).
+        close += std::hypot(maps.map_x.at<float>(v, u) - hit_x.at<double>(v, u),
+                            maps.map_y.at<float>(v, u) - hit_y.at<double>(v, u)) <= 1.0;
+      }
+    }
+    EXPECT_GT(single, p.width * p.height / 3);
+    EXPECT_GE(double(close) / double(single), 0.999) << close << " of " << single;
+  }
+}
+
+TEST(Augmentation, RealWoodScapeImageStaysInsideTheImageCircle) {
+  const auto image_path = std::filesystem::path(FISHCAM_SHARED_DIR) / "data/woodscape/front.jpg";
+  if (!std::filesystem::exists(image_path)) GTEST_SKIP() << "no ../shared checkout";
+  const cv::Mat image = cv::imread(image_path.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(image.empty());
+  const Camera camera = read_camera(std::filesystem::path(FISHCAM_SHARED_DIR) / "data/woodscape/front.json");
+  ASSERT_EQ(image.cols, camera.width());
+  ASSERT_EQ(image.rows, camera.height());
+  const ViewpointWarp warp(camera);
+  for (std::uint64_t seed = 0; seed < 8; ++seed) {
+    WarpMaps maps;
+    warp.compute(random_pose(*find_pose_preset("large"), seed).change(), DepthPrior::source_sphere, &maps);
+    cv::Mat out;
+    warp_image(image, maps, &out);
+    ASSERT_EQ(out.size(), image.size());
+    ASSERT_EQ(out.type(), image.type());
+    for (int v = 0; v < out.rows; ++v) {
+      for (int u = 0; u < out.cols; ++u) {
+        const float x = maps.map_x.at<float>(v, u), y = maps.map_y.at<float>(v, u);
+        if (maps.valid.at<uchar>(v, u)) {
+          // Inside the source image and inside the lens's valid domain.
+          ASSERT_TRUE(x >= -0.5f && x < camera.width() - 0.5f && y >= -0.5f && y < camera.height() - 0.5f);
+          ASSERT_LE(camera.rho_of_pixel({x, y}), camera.domain().rho_max);
+        } else {
+          ASSERT_EQ(out.at<cv::Vec3b>(v, u), cv::Vec3b(0, 0, 0));
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace fishcam
