@@ -25,21 +25,17 @@ void compare_with_mrcal(const char* source_file, const char* target_file, std::u
   src.pose = Pose{};
   write_camera(src, dir / "source.cameramodel", CameraFormat::mrcal);
   write_camera(with_change(target.parameters(), change), dir / "target.cameramodel", CameraFormat::mrcal);
-  const std::string script =
-      "import sys, numpy as np, mrcal\n"
-      "d = sys.argv[1]\n"
-      "src = mrcal.cameramodel(d + '/source.cameramodel')\n"
-      "dst = mrcal.cameramodel(d + '/target.cameramodel')\n"
-      "np.save(d + '/infinity.npy', mrcal.image_transformation_map(src, dst).astype(np.float32))\n"
-      "np.save(d + '/target-sphere.npy', mrcal.image_transformation_map(src, dst, distance=1.0).astype(np.float32))\n";
-  test::write_file(dir / "map.py", script);
-  const std::string command =
-      "/usr/bin/python3 '" + (dir / "map.py").string() + "' '" + dir.string() + "' > '" + (dir / "log").string() + "' 2>&1";
-  ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "log");
+  for (const char* distance : {"none", "1"}) {
+    const std::string out = (dir / (std::string(distance) + ".npy")).string();
+    const std::string command = "/usr/bin/python3 '" FISHCAM_MRCAL_MAP_SCRIPT "' '" + (dir / "source.cameramodel").string() +
+                                "' '" + (dir / "target.cameramodel").string() + "' " + distance + " '" + out + "' > '" +
+                                (dir / "log").string() + "' 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "log");
+  }
 
   const ViewpointWarp warp(source, target);
   for (DepthPrior prior : {DepthPrior::infinity, DepthPrior::target_sphere}) {
-    const NpyArray theirs = read_npy(dir / (std::string(to_string(prior)) + ".npy"));
+    const NpyArray theirs = read_npy(dir / (prior == DepthPrior::infinity ? "none.npy" : "1.npy"));
     ASSERT_EQ(theirs.shape, (std::vector<size_t>{size_t(target.height()), size_t(target.width()), 2}));
     WarpMaps ours;
     warp.compute(change, prior, &ours);

@@ -9,5 +9,10 @@ void register_info(CLI::App& app);
 void register_project(CLI::App& app);
 void register_unproject(CLI::App& app);
 void register_bench(CLI::App& app);
+void register_render(CLI::App& app);
+void register_map(CLI::App& app);
+void register_augment(CLI::App& app);
+void register_check_mrcal(CLI::App& app);
+void register_demo(CLI::App& app);
 
 }  // namespace fishcam::cli

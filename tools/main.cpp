@@ -16,6 +16,11 @@ int main(int argc, char** argv) {
   fishcam::cli::register_project(app);
   fishcam::cli::register_unproject(app);
   fishcam::cli::register_bench(app);
+  fishcam::cli::register_render(app);
+  fishcam::cli::register_map(app);
+  fishcam::cli::register_augment(app);
+  fishcam::cli::register_check_mrcal(app);
+  fishcam::cli::register_demo(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

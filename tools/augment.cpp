@@ -1,0 +1,72 @@
+// fishcam augment SOURCE --image IN ...: one augmented image (and labels).
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdio>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+
+namespace fishcam::cli {
+
+void register_augment(CLI::App& app) {
+  auto* cmd = app.add_subcommand("augment", "Augment one image (and its labels) with a viewpoint change");
+  struct Options {
+    std::string source, target, image, label, out_image, out_label, out_mask, preset;
+    PoseOptions pose;
+    std::uint64_t seed = 0;
+    int label_fill = 0;
+    bool force = false;
+  };
+  auto o = std::make_shared<Options>();
+  cmd->add_option("SOURCE", o->source, "Source camera file")->required();
+  cmd->add_option("--image", o->image, "Input image (8/16-bit, 1-4 channels)")->required();
+  cmd->add_option("--label", o->label, "Input label image (single channel 8/16-bit)");
+  cmd->add_option("--out-image", o->out_image, "Output image")->required();
+  auto* out_label = cmd->add_option("--out-label", o->out_label, "Output label image (needs --label)");
+  cmd->add_option("--out-mask", o->out_mask, "Output validity mask (255 = has a source inside the source image)");
+  add_pose_options(cmd, &o->pose);
+  auto* preset = cmd->add_option("--preset", o->preset, "Random pose preset")
+                     ->check(CLI::IsMember({"small", "medium", "large", "train"}));
+  auto* seed = cmd->add_option("--seed", o->seed, "Seed of the random pose");
+  preset->needs(seed);
+  seed->needs(preset);
+  preset->excludes("--rotate")->excludes("--translate");
+  cmd->add_option("--target", o->target, "Output camera file (default: the source camera)");
+  cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source (0 = WoodScape background)")
+      ->capture_default_str();
+  cmd->add_flag("--force", o->force, "Replace existing output files");
+  cmd->callback([o, out_label] {
+    if (out_label->count() && o->label.empty()) throw Error("--out-label needs --label");
+    const ViewpointWarp warp = make_warp(o->source, o->target);
+    const RandomPose pose = o->preset.empty() ? RandomPose{{o->pose.rotate[0], o->pose.rotate[1], o->pose.rotate[2]},
+                                                           {o->pose.translate[0], o->pose.translate[1], o->pose.translate[2]}}
+                                              : random_pose(*find_pose_preset(o->preset), o->seed);
+    const cv::Mat image = read_image(o->image, cv::IMREAD_UNCHANGED);
+    cv::Mat labels;
+    if (!o->label.empty()) {
+      labels = read_image(o->label, cv::IMREAD_UNCHANGED);
+      if (labels.channels() != 1) throw Error(o->label + ": expected a single-channel label image");
+    }
+    WarpMaps maps;
+    warp.compute(pose.change(), o->pose.prior(), &maps);
+    cv::Mat out;
+    try {
+      warp_image(image, maps, &out);
+    } catch (const Error& e) {
+      throw Error(o->image + ": " + e.what());
+    }
+    write_image(o->out_image, out, o->force);
+    if (!o->out_label.empty()) {
+      try {
+        warp_labels(labels, maps, o->label_fill, &out);
+      } catch (const Error& e) {
+        throw Error(o->label + ": " + e.what());
+      }
+      write_image(o->out_label, out, o->force);
+    }
+    if (!o->out_mask.empty()) write_image(o->out_mask, maps.valid * 255, o->force);
+    std::printf("pose: %s, depth %s\n", describe(pose.rotation_deg, pose.translation).c_str(), o->pose.depth.c_str());
+  });
+}
+
+}  // namespace fishcam::cli

@@ -1,0 +1,101 @@
+#include "cli_common.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdio>
+#include <unistd.h>
+
+#include "fishcam/camera_io.hpp"
+#include "fishcam/error.hpp"
+#include "fishcam/scene.hpp"
+
+namespace fishcam::cli {
+
+ViewpointChange PoseOptions::change() const {
+  return ViewpointChange::from_euler_deg({rotate[0], rotate[1], rotate[2]}, {translate[0], translate[1], translate[2]});
+}
+
+DepthPrior PoseOptions::prior() const { return *parse_depth_prior(depth); }
+
+void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth) {
+  cmd->add_option("--rotate", options->rotate, "Rotation rx,ry,rz in degrees about the camera x, y, z axes "
+                                               "(R = Rz Ry Rx, acting on the points)")
+      ->delimiter(',')
+      ->expected(3);
+  cmd->add_option("--translate", options->translate, "Translation tx,ty,tz in unit-sphere units (metres for render)")
+      ->delimiter(',')
+      ->expected(3);
+  if (with_depth) {
+    cmd->add_option("--depth", options->depth, "Depth prior")
+        ->check(CLI::IsMember({"source-sphere", "target-sphere", "infinity"}))
+        ->capture_default_str();
+  }
+}
+
+ViewpointWarp make_warp(const std::string& source, const std::string& target) {
+  const Camera source_camera = read_camera(source);
+  return target.empty() ? ViewpointWarp(source_camera) : ViewpointWarp(source_camera, read_camera(target));
+}
+
+cv::Mat read_image(const std::string& path, int flags) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file");
+  cv::Mat image = cv::imread(path, flags);
+  if (image.empty()) throw Error(path + ": cannot read image (unsupported or corrupt file)");
+  return image;
+}
+
+void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite) {
+  std::error_code ec;
+  if (!overwrite && std::filesystem::exists(path, ec)) {
+    throw Error(path.string() + ": already exists (refusing to overwrite; use --force)");
+  }
+  // Same extension, so imwrite picks the same encoder.
+  const std::filesystem::path tmp =
+      path.parent_path() / (path.stem().string() + ".fishcam-tmp" + path.extension().string());
+  bool ok = false;
+  try {
+    ok = cv::imwrite(tmp.string(), image);
+  } catch (const cv::Exception& e) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(path.string() + ": cannot write image (" + e.err + ")");
+  }
+  if (!ok) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(path.string() + ": cannot write image (unknown extension or unwritable folder)");
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw Error(path.string() + ": cannot move the written image into place");
+}
+
+std::filesystem::path bundled_data(const std::string& name) {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const auto installed = exe.parent_path().parent_path() / "share" / "fishcam" / name;
+    if (std::filesystem::exists(installed, ec)) return installed;
+  }
+  for (const char* dir : {FISHCAM_SOURCE_DATA_DIR, FISHCAM_SOURCE_TOOLS_DIR}) {
+    const auto source_tree = std::filesystem::path(dir) / name;
+    if (std::filesystem::exists(source_tree, ec)) return source_tree;
+  }
+  throw Error("bundled file " + name + " not found (looked in ../share/fishcam next to the program and in " +
+              std::string(FISHCAM_SOURCE_DATA_DIR) + ")");
+}
+
+std::string describe(const Eigen::Vector3d& r, const Eigen::Vector3d& t) {
+  char buffer[200];
+  std::snprintf(buffer, sizeof buffer, "rotation [%.4f, %.4f, %.4f] deg, translation [%.4f, %.4f, %.4f]", r.x(), r.y(),
+                r.z(), t.x(), t.y(), t.z());
+  return buffer;
+}
+
+cv::Mat colourise_labels(const cv::Mat& labels) {
+  cv::Mat out(labels.size(), CV_8UC3);
+  for (int v = 0; v < labels.rows; ++v) {
+    for (int u = 0; u < labels.cols; ++u) out.at<cv::Vec3b>(v, u) = woodscape_class_colour(labels.at<uchar>(v, u));
+  }
+  return out;
+}
+
+}  // namespace fishcam::cli

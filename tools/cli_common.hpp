@@ -1,0 +1,45 @@
+// What several subcommands share: pose options, image files, bundled data.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "fishcam/augmentation.hpp"
+#include "fishcam/camera.hpp"
+#include "fishcam/viewpoint.hpp"
+
+namespace fishcam::cli {
+
+// --rotate rx,ry,rz (degrees, R = Rz Ry Rx), --translate tx,ty,tz, --depth PRIOR.
+struct PoseOptions {
+  std::vector<double> rotate{0, 0, 0};
+  std::vector<double> translate{0, 0, 0};
+  std::string depth = "source-sphere";
+  ViewpointChange change() const;
+  DepthPrior prior() const;
+};
+void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth = true);
+
+// The warp from SOURCE to TARGET (TARGET empty: the source camera again).
+ViewpointWarp make_warp(const std::string& source, const std::string& target);
+
+// Reads an image or fails with "PATH: cannot read image".
+cv::Mat read_image(const std::string& path, int flags);
+// Writes atomically; refuses to replace an existing file unless overwrite.
+void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite);
+
+// A bundled file (data/NAME, or a helper script of tools/): next to an installed
+// binary (../share/fishcam) or in the source tree this binary was built from.
+std::filesystem::path bundled_data(const std::string& name);
+
+// "rotation [rx, ry, rz] deg, translation [tx, ty, tz]".
+std::string describe(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3d& translation);
+
+// Labels as colours (WoodScape classes), for looking at.
+cv::Mat colourise_labels(const cv::Mat& labels);
+
+}  // namespace fishcam::cli
