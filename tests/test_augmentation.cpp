@@ -135,7 +135,7 @@ TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
         const ViewpointChange change = random_pose(*find_pose_preset("train"), seed).change();
         for (DepthPrior prior : kPriors) {
           WarpMaps fast, exact;
-          warp.compute(change, prior, &fast);
+          warp.compute(change, prior, &fast, MapKind::geometric);
           warp.compute_exact(change, prior, &exact);
           double worst = 0;
           long disagree = 0, both = 0;
@@ -160,9 +160,11 @@ TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
 TEST(Augmentation, IdentityReproducesTheInputExactly) {
   const Camera camera = woodscape();
   const ViewpointWarp warp(camera);
-  for (DepthPrior prior : kPriors) {
+  for (const auto& [prior, kind] : {std::pair{DepthPrior::source_sphere, MapKind::sampling},
+                                    std::pair{DepthPrior::target_sphere, MapKind::geometric},
+                                    std::pair{DepthPrior::infinity, MapKind::sampling}}) {
     WarpMaps maps;
-    warp.compute(ViewpointChange{}, prior, &maps);
+    warp.compute(ViewpointChange{}, prior, &maps, kind);
     EXPECT_EQ(maps.invalid_count, 0);
     for (int type : {CV_8UC1, CV_8UC3, CV_8UC4, CV_16UC1, CV_16UC3}) {
       const cv::Mat image = test_image(camera.width(), camera.height(), type);
@@ -182,8 +184,8 @@ TEST(Augmentation, RotationThenInverseRecoversTheGeometry) {
   const ViewpointWarp warp(camera);
   const ViewpointChange change = ViewpointChange::from_euler_deg({15, -20, 25});
   WarpMaps forward, back;
-  warp.compute(change, DepthPrior::infinity, &forward);
-  warp.compute(change.inverse(), DepthPrior::infinity, &back);
+  warp.compute(change, DepthPrior::infinity, &forward, MapKind::geometric);
+  warp.compute(change.inverse(), DepthPrior::infinity, &back, MapKind::geometric);
   // back maps output -> intermediate, forward maps intermediate -> original.
   double worst = 0;
   long count = 0;
@@ -229,7 +231,8 @@ TEST(Augmentation, LabelValuesArePreservedAndFillIsConfigurable) {
     for (int u = 0; u < labels.cols; ++u) labels.at<uchar>(v, u) = uchar(1 + ((u / 37 + v / 23) % 9));
   }
   WarpMaps maps;
-  warp.compute(random_pose(*find_pose_preset("large"), 5).change(), DepthPrior::source_sphere, &maps);
+  warp.compute(random_pose(*find_pose_preset("large"), 5).change(), DepthPrior::source_sphere, &maps,
+               MapKind::geometric);
   ASSERT_GT(maps.invalid_count, 0);
   for (int fill : {0, 255}) {
     cv::Mat out;
@@ -252,6 +255,40 @@ TEST(Augmentation, LabelValuesArePreservedAndFillIsConfigurable) {
   EXPECT_THROW(warp_labels(labels, maps, 256, &out), Error);
   EXPECT_THROW(warp_labels(cv::Mat(10, 10, CV_8UC1), maps, 0, &out), Error);
   EXPECT_THROW(warp_image(cv::Mat(camera.height(), camera.width(), CV_32FC1), maps, &out), Error);
+}
+
+// Sampling maps are the geometric maps made ready for cv::remap: the same pixels
+// valid, coordinates moved by at most half a pixel (onto the image), and the same
+// resampled images.
+TEST(Augmentation, SamplingMapsResampleLikeGeometricMaps) {
+  const Camera camera = woodscape();
+  const ViewpointWarp warp(camera);
+  const ViewpointChange change = random_pose(*find_pose_preset("large"), 11).change();
+  WarpMaps sampling, geometric;
+  warp.compute(change, DepthPrior::source_sphere, &sampling, MapKind::sampling);
+  warp.compute(change, DepthPrior::source_sphere, &geometric, MapKind::geometric);
+  EXPECT_EQ(sampling.invalid_count, geometric.invalid_count);
+  EXPECT_EQ(cv::countNonZero(sampling.validity() != geometric.validity()), 0);
+  for (int v = 0; v < camera.height(); ++v) {
+    for (int u = 0; u < camera.width(); ++u) {
+      if (!geometric.valid.at<uchar>(v, u)) {
+        ASSERT_EQ(sampling.map_x.at<float>(v, u), kOutsideSource);
+        continue;
+      }
+      ASSERT_LE(std::abs(sampling.map_x.at<float>(v, u) - geometric.map_x.at<float>(v, u)), 0.5f);
+      ASSERT_LE(std::abs(sampling.map_y.at<float>(v, u) - geometric.map_y.at<float>(v, u)), 0.5f);
+    }
+  }
+  const cv::Mat image = test_image(camera.width(), camera.height(), CV_8UC3);
+  cv::Mat a, b;
+  warp_image(image, sampling, &a);
+  warp_image(image, geometric, &b);
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0);
+  cv::Mat labels(camera.height(), camera.width(), CV_8UC1);
+  cv::randu(labels, 1, 10);
+  warp_labels(labels, sampling, 255, &a);
+  warp_labels(labels, geometric, 255, &b);
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0);
 }
 
 // The paper's forward model, literally: every source pixel onto the unit sphere
@@ -281,7 +318,7 @@ TEST(Augmentation, AgreesWithABruteForceForwardSplat) {
       }
     }
     WarpMaps maps;
-    warp.compute(change, DepthPrior::source_sphere, &maps);
+    warp.compute(change, DepthPrior::source_sphere, &maps, MapKind::geometric);
     long single = 0, close = 0;
     for (int v = 0; v < p.height; ++v) {
       for (int u = 0; u < p.width; ++u) {
@@ -309,7 +346,8 @@ TEST(Augmentation, RealWoodScapeImageStaysInsideTheImageCircle) {
   const ViewpointWarp warp(camera);
   for (std::uint64_t seed = 0; seed < 8; ++seed) {
     WarpMaps maps;
-    warp.compute(random_pose(*find_pose_preset("large"), seed).change(), DepthPrior::source_sphere, &maps);
+    warp.compute(random_pose(*find_pose_preset("large"), seed).change(), DepthPrior::source_sphere, &maps,
+                 MapKind::geometric);
     cv::Mat out;
     warp_image(image, maps, &out);
     ASSERT_EQ(out.size(), image.size());

@@ -38,7 +38,7 @@ void compare_with_mrcal(const char* source_file, const char* target_file, std::u
     const NpyArray theirs = read_npy(dir / (prior == DepthPrior::infinity ? "none.npy" : "1.npy"));
     ASSERT_EQ(theirs.shape, (std::vector<size_t>{size_t(target.height()), size_t(target.width()), 2}));
     WarpMaps ours;
-    warp.compute(change, prior, &ours);
+    warp.compute(change, prior, &ours, MapKind::geometric);
     double worst = 0, sum2 = 0;
     long count = 0;
     for (int v = 0; v < target.height(); ++v) {

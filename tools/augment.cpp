@@ -64,7 +64,7 @@ void register_augment(CLI::App& app) {
       }
       write_image(o->out_label, out, o->force);
     }
-    if (!o->out_mask.empty()) write_image(o->out_mask, maps.valid * 255, o->force);
+    if (!o->out_mask.empty()) write_image(o->out_mask, maps.validity() * 255, o->force);
     std::printf("pose: %s, depth %s\n", describe(pose.rotation_deg, pose.translation).c_str(), o->pose.depth.c_str());
   });
 }

@@ -1,6 +1,7 @@
 // fishcam bench roots CAMERA [--json]: the cost of theta(rho), every method in one
 // run on one camera (this machine is shared and noisy: compare within a run).
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -10,7 +11,10 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "cli_common.hpp"
+#include "fishcam/augmentation.hpp"
 #include "fishcam/camera_io.hpp"
+#include "fishcam/scene.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -129,6 +133,67 @@ void run_roots(const std::string& path, bool json, int repeats) {
   }
 }
 
+// Augmentation of one 1280x966 training sample (RGB bilinear + labels nearest), a
+// new random `train` pose per sample, against cv::remap with a precomputed map.
+void run_augment(const std::string& path, bool json, int samples) {
+  const Camera camera = read_camera(path);
+  if (!camera.parameters().pose) throw Error(path + ": the benchmark renders the scene and needs a camera pose");
+  const SceneRender scene = render_street_scene(camera, *camera.parameters().pose);
+  const ViewpointWarp warp(camera);
+  const PosePreset train = *find_pose_preset("train");
+  WarpMaps maps, fixed;
+  warp.compute(random_pose(train, 12345).change(), DepthPrior::source_sphere, &fixed);
+  cv::Mat image, labels;
+  const int threads_before = cv::getNumThreads();
+  nlohmann::json results = nlohmann::json::array();
+  for (int threads : {1, 2}) {
+    cv::setNumThreads(threads);
+    std::uint64_t seed = 0;
+    const double map_s = median_seconds(samples, [&] {
+      warp.compute(random_pose(train, ++seed).change(), DepthPrior::source_sphere, &maps);
+    });
+    const double sample_s = median_seconds(samples, [&] {
+      warp_image(scene.image, maps, &image);
+      warp_labels(scene.labels, maps, 0, &labels);
+    });
+    const double total_s = median_seconds(samples, [&] {
+      warp.compute(random_pose(train, ++seed).change(), DepthPrior::source_sphere, &maps);
+      warp_image(scene.image, maps, &image);
+      warp_labels(scene.labels, maps, 0, &labels);
+    });
+    // The floor: OpenCV's remap of the same images with a map computed beforehand.
+    const double remap_s = median_seconds(samples, [&] {
+      cv::remap(scene.image, image, fixed.map_x, fixed.map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+      cv::remap(scene.labels, labels, fixed.map_x, fixed.map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+    });
+    results.push_back({{"threads", threads},
+                       {"map_ms", 1e3 * map_s},
+                       {"sample_ms", 1e3 * sample_s},
+                       {"total_ms", 1e3 * total_s},
+                       {"remap_only_ms", 1e3 * remap_s},
+                       {"total_over_remap", total_s / remap_s}});
+  }
+  cv::setNumThreads(threads_before);
+  nlohmann::json out = results.back();  // the 2-thread numbers at the top level
+  out["camera"] = path;
+  out["width"] = camera.width();
+  out["height"] = camera.height();
+  out["samples"] = samples;
+  out["results"] = results;
+  if (json) {
+    std::printf("%s\n", out.dump(2).c_str());
+    return;
+  }
+  std::printf("augmentation of a %dx%d sample (RGB bilinear + labels nearest), new train pose each, median of %d\n",
+              camera.width(), camera.height(), samples);
+  std::printf("threads   map ms   sample ms   total ms   cv::remap only ms   total / remap\n");
+  for (const auto& r : results) {
+    std::printf("%7d %8.2f %11.2f %10.2f %19.2f %15.2f\n", r["threads"].get<int>(), r["map_ms"].get<double>(),
+                r["sample_ms"].get<double>(), r["total_ms"].get<double>(), r["remap_only_ms"].get<double>(),
+                r["total_over_remap"].get<double>());
+  }
+}
+
 }  // namespace
 
 void register_bench(CLI::App& app) {
@@ -144,6 +209,22 @@ void register_bench(CLI::App& app) {
   roots->add_option("--repeats", *repeats, "Runs per measurement (the median is reported)")
       ->check(CLI::Range(1, 1000));
   roots->callback([=] { run_roots(*path, *json, *repeats); });
+
+  auto* augment = bench->add_subcommand("augment", "Augmentation per training sample (map, sampling, total) on 1 "
+                                                   "and 2 threads, beside cv::remap with a precomputed map");
+  auto augment_camera = std::make_shared<std::string>();
+  auto augment_json = std::make_shared<bool>(false);
+  auto samples = std::make_shared<int>(30);
+  augment->add_option("CAMERA", *augment_camera, "Camera file with a pose (default: the bundled WoodScape front camera)");
+  augment->add_flag("--json", *augment_json, "Print one JSON object");
+  augment->add_option("--samples", *samples, "Samples per measurement (the median is reported)")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  augment->callback([=] {
+    const std::string camera =
+        augment_camera->empty() ? bundled_data("woodscape_front.json").string() : *augment_camera;
+    run_augment(camera, *augment_json, *samples);
+  });
 }
 
 }  // namespace fishcam::cli

@@ -64,7 +64,7 @@ void register_check_mrcal(CLI::App& app) {
     }
     const NpyArray theirs = read_npy(dir / "map.npy");
     WarpMaps ours;
-    warp.compute(change, o->pose.prior(), &ours);
+    warp.compute(change, o->pose.prior(), &ours, MapKind::geometric);
     const int w = ours.map_x.cols, h = ours.map_x.rows;
     double worst = 0, sum2 = 0;
     long count = 0, missing = 0;

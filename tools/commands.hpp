@@ -14,5 +14,6 @@ void register_map(CLI::App& app);
 void register_augment(CLI::App& app);
 void register_check_mrcal(CLI::App& app);
 void register_demo(CLI::App& app);
+void register_augment_dataset(CLI::App& app);
 
 }  // namespace fishcam::cli

@@ -28,7 +28,7 @@ void register_map(CLI::App& app) {
     if (o->exact) {
       warp.compute_exact(o->pose.change(), o->pose.prior(), &maps);
     } else {
-      warp.compute(o->pose.change(), o->pose.prior(), &maps);
+      warp.compute(o->pose.change(), o->pose.prior(), &maps, MapKind::geometric);
     }
     const int h = maps.map_x.rows, w = maps.map_x.cols;
     NpyArray array{{size_t(h), size_t(w), 2}, std::vector<float>(2 * size_t(h) * size_t(w))};

@@ -215,13 +215,4 @@ SceneRender render_street_scene(const Camera& camera, const Pose& camera_to_vehi
   return out;
 }
 
-Pose moved_camera(const Pose& camera_to_vehicle, const ViewpointChange& change) {
-  // p_new = R p_cam + t  =>  p_vehicle = R_vc R^T p_new + (t_vc - R_vc R^T t).
-  const Eigen::Matrix3d r = camera_to_vehicle.rotation.toRotationMatrix() * change.rotation.transpose();
-  Pose moved;
-  moved.rotation = Eigen::Quaterniond(r).normalized();
-  moved.translation = camera_to_vehicle.translation - r * change.translation;
-  return moved;
-}
-
 }  // namespace fishcam

@@ -71,6 +71,15 @@ ViewpointChange ViewpointChange::inverse() const {
   return {rotation.transpose(), -(rotation.transpose() * translation)};
 }
 
+Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change) {
+  // p_new = R p_cam + t  =>  p_reference = R_vc R^T p_new + (t_vc - R_vc R^T t).
+  const Eigen::Matrix3d r = camera_to_reference.rotation.toRotationMatrix() * change.rotation.transpose();
+  Pose moved;
+  moved.rotation = Eigen::Quaterniond(r).normalized();
+  moved.translation = camera_to_reference.translation - r * change.translation;
+  return moved;
+}
+
 const std::array<PosePreset, 4>& pose_presets() {
   static const std::array<PosePreset, 4> presets = {{
       {"small", 10, 0.1},

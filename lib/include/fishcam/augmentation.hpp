@@ -12,13 +12,33 @@
 
 namespace fishcam {
 
+// What the maps hold.
+enum class MapKind {
+  // For resampling (what augment uses): where a pixel has a source inside the
+  // source image, its coordinates (clamped onto the outer pixel centres, which
+  // moves them by at most half a pixel); elsewhere kOutsideSource, so that
+  // cv::remap with BORDER_CONSTANT yields exactly the fill value there.
+  sampling,
+  // For inspection and export (`fishcam map`, the mrcal check): the source
+  // coordinates as computed, also outside the source image; NaN where there is
+  // no valid source; plus `valid`.
+  geometric,
+};
+
+// The sampling maps' coordinate for pixels without a source inside the source image.
+constexpr float kOutsideSource = -100000.0f;
+
 // Where each output pixel samples the source image.
 struct WarpMaps {
-  cv::Mat map_x, map_y;  // CV_32FC1, output size: source pixel (x, y); NaN where there is no valid source
-  cv::Mat valid;         // CV_8UC1: 1 where the source pixel lies inside the source image
-                         // ([-0.5, W - 0.5) x [-0.5, H - 0.5)), else 0
-  long invalid_count = 0;  // number of zeros in `valid`
+  MapKind kind = MapKind::sampling;
+  cv::Mat map_x, map_y;  // CV_32FC1, output size (see MapKind)
+  cv::Mat valid;         // geometric maps: CV_8UC1, 1 where the source pixel lies inside the
+                         // source image ([-0.5, W - 0.5) x [-0.5, H - 0.5)); empty for sampling maps
+  long invalid_count = 0;  // output pixels without a source inside the source image
   cv::Size source_size;    // the source image size the maps sample
+
+  // 1 where the output pixel has a source inside the source image (either kind).
+  cv::Mat validity() const;
 };
 
 // The source point on the unit sphere (source camera frame) seen along the output
@@ -37,10 +57,11 @@ class ViewpointWarp {
   const Camera& source() const { return source_; }
   const Camera& target() const { return target_; }
 
-  // The maps, in float with SIMD (OpenCV universal intrinsics) on OpenCV's threads.
-  // Accuracy against compute_exact: a few 1e-4 px (float32 maps).
-  void compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
-  // The same in double through Camera::project, pixel by pixel: the reference.
+  // The maps, in float with SIMD (OpenCV universal intrinsics; AVX2 where the CPU
+  // has it) on OpenCV's threads. Accuracy against compute_exact: a few 1e-4 px.
+  void compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps,
+               MapKind kind = MapKind::sampling) const;
+  // Geometric maps in double through Camera::project, pixel by pixel: the reference.
   void compute_exact(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
 
  private:
@@ -48,8 +69,8 @@ class ViewpointWarp {
   cv::Mat rays_;  // 3 x (W*H) CV_32F planes x, y, z of the target's unit rays; NaN where invalid
 };
 
-// Bilinear resampling of an image (CV_8U or CV_16U, 1-4 channels, source size);
-// pixels without a valid source become 0.
+// Bilinear resampling of an image (CV_8U or CV_16U, 1-4 channels, source size) with
+// either kind of maps; pixels without a source inside the source image become 0.
 void warp_image(const cv::Mat& image, const WarpMaps& maps, cv::Mat* out);
 // Nearest-neighbour resampling of a label image (CV_8UC1 or CV_16UC1): values are
 // copied, never blended; pixels without a valid source become `fill`.

@@ -46,8 +46,4 @@ struct SceneRender {
 // valid domain are black and background.
 SceneRender render_street_scene(const Camera& camera, const Pose& camera_to_vehicle);
 
-// The pose of the camera that sees P' = R P + t (t in metres) when the camera at
-// camera_to_vehicle sees P: the camera after the viewpoint change.
-Pose moved_camera(const Pose& camera_to_vehicle, const ViewpointChange& change);
-
 }  // namespace fishcam

@@ -8,16 +8,10 @@
 #include <optional>
 #include <string_view>
 
-namespace fishcam {
+#include "fishcam/camera.hpp"
+#include "fishcam/depth_prior.hpp"
 
-// Where a source pixel's scene point is assumed to be (docs/augmentation.md).
-enum class DepthPrior {
-  source_sphere,  // on the source camera's unit sphere (the paper)
-  target_sphere,  // at distance 1 along the output ray (mrcal's distance = 1)
-  infinity,       // at infinity: rotation only, translation ignored (mrcal's default)
-};
-std::string_view to_string(DepthPrior prior);
-std::optional<DepthPrior> parse_depth_prior(std::string_view name);
+namespace fishcam {
 
 // P' = R P + t (eq. 7): a point P of the source camera frame, in the frame of the
 // output camera. The camera appears to move the opposite way.
@@ -38,6 +32,11 @@ struct ViewpointChange {
   ViewpointChange inverse() const;
   bool is_identity() const { return rotation == Eigen::Matrix3d::Identity() && translation.isZero(0); }
 };
+
+// The pose (camera -> reference) of the camera that sees P' = R P + t when the
+// camera at camera_to_reference sees P: the camera after the viewpoint change
+// (t in the reference's units).
+Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change);
 
 // Uniform, independent ranges per degree of freedom: rotation in
 // [-max_rotation_deg, +max_rotation_deg] about each axis, translation in

@@ -1,0 +1,17 @@
+#pragma once
+
+#include <optional>
+#include <string_view>
+
+namespace fishcam {
+
+// Where a source pixel's scene point is assumed to be (docs/augmentation.md).
+enum class DepthPrior {
+  source_sphere,  // on the source camera's unit sphere (the paper)
+  target_sphere,  // at distance 1 along the output ray (mrcal's distance = 1)
+  infinity,       // at infinity: rotation only, translation ignored (mrcal's default)
+};
+std::string_view to_string(DepthPrior prior);
+std::optional<DepthPrior> parse_depth_prior(std::string_view name);
+
+}  // namespace fishcam

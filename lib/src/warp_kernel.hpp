@@ -1,0 +1,52 @@
+// The per-pixel kernel of ViewpointWarp::compute, compiled once per instruction set
+// (warp_kernel_baseline.cpp, warp_kernel_avx2.cpp) from warp_kernel_impl.hpp and
+// chosen at run time. Kept free of OpenCV's Mat and of the standard library's
+// out-of-line templates, so the ISA-specific objects share no inline code.
+#pragma once
+
+#include <cstddef>
+
+#include "fishcam/depth_prior.hpp"
+
+namespace fishcam::detail {
+
+// The source camera as the float kernel needs it.
+struct SourceParams {
+  enum class Kind { polynomial, stereographic, pinhole };
+  Kind kind = Kind::polynomial;
+  float c[16] = {};  // rho = c[1] theta + ... + c[n] theta^n
+  int n = 0;
+  float f = 0;  // stereographic, pinhole
+  float cx = 0, cy = 0, ax = 1, ay = 1;
+  float cos_theta_max = -1;
+  bool closed = true;
+  float width = 0, height = 0;
+};
+
+struct PoseParams {
+  float rt[9];  // R transposed, row-major: P = R^T q
+  float t[3];
+  float c;  // |t|^2 - 1
+};
+
+// Where the sampling maps send pixels without a source inside the source image:
+// far enough outside that bilinear sampling sees only the border value.
+constexpr float kOutside = -100000.0f;
+
+struct KernelOutput {
+  float* map_x;
+  float* map_y;
+  unsigned char* valid;  // geometric maps only
+};
+
+// Output pixels [begin, end) of the flat image; returns how many have no source
+// inside the source image. Geometric maps: raw source coordinates, NaN without a
+// source, and `valid`. Sampling maps: coordinates clamped into the image, kOutside
+// without a source inside it.
+using RangeKernel = long (*)(const float* rx, const float* ry, const float* rz, std::size_t begin, std::size_t end,
+                             const PoseParams& pose, const SourceParams& source, const KernelOutput& out);
+
+RangeKernel select_kernel_baseline(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling);
+RangeKernel select_kernel_avx2(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling);
+
+}  // namespace fishcam::detail

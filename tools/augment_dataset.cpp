@@ -1,0 +1,203 @@
+// fishcam augment-dataset ROOT: every image of a WoodScape-layout dataset, K copies
+// each, with seeded random poses; resumable, never writes inside ROOT.
+#include <opencv2/imgcodecs.hpp>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "fishcam/camera_io.hpp"
+
+namespace fishcam::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_image(const fs::path& p) {
+  std::string ext = p.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+}
+
+bool inside(const fs::path& path, const fs::path& root) {
+  const fs::path p = fs::weakly_canonical(path), r = fs::weakly_canonical(root);
+  auto pi = p.begin();
+  for (auto ri = r.begin(); ri != r.end(); ++ri, ++pi) {
+    if (ri->empty()) continue;  // a trailing separator
+    if (pi == p.end() || *pi != *ri) return false;
+  }
+  return true;
+}
+
+class Progress {
+ public:
+  explicit Progress(size_t total) : total_(total), terminal_(isatty(STDERR_FILENO)) {}
+  void step(const std::string& what) {
+    ++done_;
+    if (!terminal_) return;
+    const int width = 30, filled = int(width * done_ / std::max<size_t>(total_, 1));
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu %-40.40s", std::string(filled, '#').c_str(),
+                 std::string(width - filled, ' ').c_str(), done_, total_, what.c_str());
+    if (done_ == total_) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  }
+  // A message on its own line, without breaking the bar.
+  void report(const std::string& message) const {
+    std::fprintf(stderr, "%s%s\n", terminal_ ? "\r\033[K" : "", message.c_str());
+  }
+
+ private:
+  size_t total_, done_ = 0;
+  bool terminal_;
+};
+
+struct Options {
+  std::string root, out, presets = "train", depth = "source-sphere";
+  std::uint64_t seed = 0;
+  int copies = 1, threads = 0, label_fill = 0;
+};
+
+}  // namespace
+
+void register_augment_dataset(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "augment-dataset",
+      "Augment a WoodScape-layout dataset (rgb_images/, semantic_annotations/gtLabels/, calibration/): K copies per "
+      "image with seeded random poses, a manifest.jsonl, resumable");
+  auto o = std::make_shared<Options>();
+  cmd->add_option("ROOT", o->root, "Dataset folder (read only)")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("--preset", o->presets,
+                  "Pose preset, or several separated by commas (small,medium,large: the paper's test sets, one "
+                  "sub-folder each)")
+      ->required();
+  cmd->add_option("--seed", o->seed, "Seed; each image and copy gets its own seed derived from it")->required();
+  cmd->add_option("--out", o->out, "Output folder (must not be inside ROOT)")->required();
+  cmd->add_option("--copies", o->copies, "Augmented copies per image")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("-j,--threads", o->threads, "Threads (0: all cores)")->check(CLI::Range(0, 256))->capture_default_str();
+  cmd->add_option("--depth", o->depth, "Depth prior")
+      ->check(CLI::IsMember({"source-sphere", "target-sphere", "infinity"}))
+      ->capture_default_str();
+  cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source")->capture_default_str();
+  cmd->callback([o] {
+    const fs::path root = o->root, out = o->out;
+    if (inside(out, root)) throw Error(out.string() + ": is inside the dataset " + root.string() + " (never written)");
+    std::vector<PosePreset> presets;
+    std::stringstream list(o->presets);
+    for (std::string name; std::getline(list, name, ',');) {
+      const auto preset = find_pose_preset(name);
+      if (!preset) throw Error("--preset: unknown preset '" + name + "' (small, medium, large, train)");
+      presets.push_back(*preset);
+    }
+    const DepthPrior prior = *parse_depth_prior(o->depth);
+    if (o->threads > 0) cv::setNumThreads(o->threads);
+    const fs::path images_dir = root / "rgb_images";
+    if (!fs::is_directory(images_dir)) throw Error(images_dir.string() + ": missing (expected WoodScape layout)");
+    std::vector<fs::path> images;
+    for (const auto& entry : fs::directory_iterator(images_dir)) {
+      if (entry.is_regular_file() && is_image(entry.path())) images.push_back(entry.path());
+    }
+    std::sort(images.begin(), images.end());
+    if (images.empty()) throw Error(images_dir.string() + ": no images");
+
+    Progress progress(images.size() * presets.size());
+    long written = 0, skipped = 0;
+    std::vector<std::string> failures;
+    for (const PosePreset& preset : presets) {
+      const fs::path dir = presets.size() > 1 ? out / std::string(preset.name) : out;
+      for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
+        fs::create_directories(dir / sub);
+      }
+      // Lines already in the manifest (a resumed run appends only what is new).
+      std::set<std::string> listed;
+      {
+        std::ifstream manifest(dir / "manifest.jsonl");
+        for (std::string line; std::getline(manifest, line);) {
+          try {
+            listed.insert(nlohmann::json::parse(line).at("output").get<std::string>());
+          } catch (const std::exception&) {
+            throw Error((dir / "manifest.jsonl").string() + ": unreadable line (not written by fishcam?)");
+          }
+        }
+      }
+      std::ofstream manifest(dir / "manifest.jsonl", std::ios::app);
+      if (!manifest) throw Error((dir / "manifest.jsonl").string() + ": cannot write");
+      for (const fs::path& image_path : images) {
+        const std::string stem = image_path.stem().string();
+        progress.step(stem);
+        try {
+          const fs::path label_path = root / "semantic_annotations" / "gtLabels" / (stem + ".png");
+          const fs::path calibration_path = root / "calibration" / (stem + ".json");
+          std::optional<Camera> camera;
+          std::optional<ViewpointWarp> warp;
+          cv::Mat image, labels;
+          for (int copy = 0; copy < o->copies; ++copy) {
+            const std::string name = stem + "_" + std::string(preset.name) + std::to_string(copy);
+            const fs::path out_image = dir / "rgb_images" / (name + image_path.extension().string());
+            const fs::path out_label = dir / "semantic_annotations" / "gtLabels" / (name + ".png");
+            const fs::path out_calibration = dir / "calibration" / (name + ".json");
+            const std::uint64_t seed = derive_seed(o->seed, stem + "/" + std::string(preset.name), copy);
+            const RandomPose pose = random_pose(preset, seed);
+            const bool done = fs::exists(out_image) && fs::exists(out_label) && fs::exists(out_calibration);
+            if (!done) {
+              if (!warp) {  // load once per image, only when there is work
+                camera = read_camera(calibration_path);
+                warp.emplace(*camera);
+                image = read_image(image_path.string(), cv::IMREAD_UNCHANGED);
+                labels = read_image(label_path.string(), cv::IMREAD_UNCHANGED);
+                if (labels.channels() != 1) throw Error(label_path.string() + ": expected a single-channel label image");
+              }
+              WarpMaps maps;
+              warp->compute(pose.change(), prior, &maps);
+              cv::Mat out_pixels, out_labels;
+              warp_image(image, maps, &out_pixels);
+              warp_labels(labels, maps, o->label_fill, &out_labels);
+              // The output camera: same intrinsics, the moved pose (translation in
+              // unit-sphere units, written as metres).
+              CameraParameters moved = camera->parameters();
+              if (moved.pose) moved.pose = moved_camera(*moved.pose, pose.change());
+              write_image(out_image, out_pixels, true);
+              write_image(out_label, out_labels, true);
+              write_camera(moved, out_calibration, CameraFormat::woodscape, true);
+              ++written;
+            } else {
+              ++skipped;
+            }
+            const std::string output = fs::relative(out_image, dir).string();
+            if (!listed.count(output)) {
+              const auto& r = pose.rotation_deg;
+              const auto& t = pose.translation;
+              manifest << nlohmann::json{{"image", image_path.filename().string()},
+                                         {"output", output},
+                                         {"copy", copy},
+                                         {"preset", preset.name},
+                                         {"seed", seed},
+                                         {"rotation_deg", {r.x(), r.y(), r.z()}},
+                                         {"translation", {t.x(), t.y(), t.z()}},
+                                         {"depth", to_string(prior)}}
+                              .dump()
+                       << "\n";
+              manifest.flush();
+              listed.insert(output);
+            }
+          }
+        } catch (const std::exception& e) {
+          failures.push_back(stem + ": " + e.what());
+          progress.report("skipped " + failures.back());
+        }
+      }
+    }
+    std::printf("%ld written, %ld already there, %zu failed, into %s\n", written, skipped, failures.size(),
+                out.c_str());
+    if (!failures.empty()) {
+      throw Error(std::to_string(failures.size()) + " image/preset run(s) failed, first: " + failures.front());
+    }
+  });
+}
+
+}  // namespace fishcam::cli
