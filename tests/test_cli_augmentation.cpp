@@ -1,0 +1,178 @@
+// The augmentation subcommands end to end: render, map, augment, augment-dataset,
+// check-mrcal, demo, bench augment.
+#include <opencv2/imgcodecs.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include "fishcam/npy.hpp"
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+using test::run_fishcam;
+
+std::string quoted(const std::filesystem::path& p) {
+  std::string q = "'";
+  q += p.string();
+  q += "'";
+  return q;
+}
+
+std::string data(const char* name) { return quoted(test::data_path(name)); }
+
+TEST(CliAugmentation, RenderAugmentAndMap) {
+  const auto dir = test::scratch_dir("cli_augment");
+  auto r = run_fishcam("render " + data("woodscape_front.json") + " --out-image " + quoted(dir / "render.png") +
+                       " --out-label " + quoted(dir / "labels.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Refuses to overwrite without --force.
+  r = run_fishcam("render " + data("woodscape_front.json") + " --out-image " + quoted(dir / "render.png") +
+                  " --out-label " + quoted(dir / "labels.png"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("refusing to overwrite"), std::string::npos) << r.err;
+
+  r = run_fishcam("augment " + data("woodscape_front.json") + " --image " + quoted(dir / "render.png") + " --label " +
+                  quoted(dir / "labels.png") + " --out-image " + quoted(dir / "aug.png") + " --out-label " +
+                  quoted(dir / "aug_labels.png") + " --out-mask " + quoted(dir / "mask.png") +
+                  " --preset medium --seed 7 --label-fill 255");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("pose: rotation ["), std::string::npos) << r.out;
+  const cv::Mat labels = cv::imread((dir / "aug_labels.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat mask = cv::imread((dir / "mask.png").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(labels.size(), cv::Size(1280, 966));
+  EXPECT_EQ(cv::countNonZero((labels == 255) != (mask == 0)), 0) << "the fill marks exactly the invalid pixels";
+
+  // The same seed gives the same pose.
+  const auto again = run_fishcam("augment " + data("woodscape_front.json") + " --image " + quoted(dir / "render.png") +
+                                 " --out-image " + quoted(dir / "aug2.png") + " --preset medium --seed 7");
+  EXPECT_EQ(again.out, r.out);
+
+  r = run_fishcam("map " + data("woodscape_front.json") + " --rotate 10,-5,3 --translate 0.1,0,0 --out " +
+                  quoted(dir / "map.npy"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const NpyArray map = read_npy(dir / "map.npy");
+  EXPECT_EQ(map.shape, (std::vector<size_t>{966, 1280, 2}));
+  // numpy reads it too.
+  const std::string check = "/usr/bin/python3 -c \"import numpy as np; m = np.load('" + (dir / "map.npy").string() +
+                            "'); assert m.dtype == np.float32 and m.shape == (966, 1280, 2); print(np.isnan(m).sum())\"";
+  EXPECT_EQ(std::system(check.c_str()), 0);
+}
+
+TEST(CliAugmentation, BadArguments) {
+  const auto dir = test::scratch_dir("cli_augment_bad");
+  const struct {
+    std::string args, expected;
+  } cases[] = {
+      {"augment " + data("woodscape_front.json") + " --image /no/such.png --out-image " + quoted(dir / "o.png"),
+       "/no/such.png: no such file"},
+      {"augment " + data("woodscape_front.json") + " --image " + data("woodscape_front.json") + " --out-image " +
+           quoted(dir / "o.png"),
+       "cannot read image"},
+      {"augment " + data("woodscape_front.json") + " --image x.png --out-image o.png --preset huge --seed 1",
+       "--preset"},
+      {"augment " + data("woodscape_front.json") + " --image x.png --out-image o.png --preset small",
+       "--seed"},
+      {"augment " + data("woodscape_front.json") + " --image x.png --out-image o.png --preset small --seed 1 --rotate "
+       "1,2,3",
+       "excludes"},
+      {"map " + data("woodscape_front.json") + " --rotate 1,2 --out " + quoted(dir / "m.npy"), "--rotate"},
+      {"map " + data("woodscape_front.json") + " --depth sideways --out " + quoted(dir / "m.npy"), "--depth"},
+      {"render " + data("equidistant.json") + " --out-image " + quoted(dir / "a.png") + " --out-label " +
+           quoted(dir / "b.png"),
+       "has no pose"},
+      {"check-mrcal " + data("woodscape_front.json") + " --rotate 1,2,3", "mrcal-representable"},
+      {"augment-dataset /no/such/root --preset small --seed 1 --out " + quoted(dir / "x"), "ROOT"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_fishcam(c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << " -> " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << " -> " << r.err;
+  }
+}
+
+TEST(CliAugmentation, CheckMrcal) {
+  const auto r = run_fishcam("check-mrcal " + data("stereographic.cameramodel") + " --target " +
+                             data("pinhole.cameramodel") + " --rotate 10,-20,5 --translate 0.1,0.2,-0.1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto pos = r.out.find("max difference ");
+  ASSERT_NE(pos, std::string::npos) << r.out;
+  EXPECT_LT(std::stod(r.out.substr(pos + 15)), 1e-3) << r.out;
+}
+
+TEST(CliAugmentation, DatasetIsMirroredResumableAndReportsBadFiles) {
+  const auto root = test::scratch_dir("dataset_root"), out = test::scratch_dir("dataset_out") / "sets";
+  for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
+    std::filesystem::create_directories(root / sub);
+  }
+  for (int i = 0; i < 2; ++i) {
+    const std::string stem = "frame" + std::to_string(i);
+    const auto r = run_fishcam("render " + data("woodscape_front.json") + " --rotate 0," + std::to_string(5 * i) +
+                               ",0 --out-image " + quoted(root / "rgb_images" / (stem + ".png")) + " --out-label " +
+                               quoted(root / "semantic_annotations/gtLabels" / (stem + ".png")));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::filesystem::copy_file(test::data_path("woodscape_front.json"), root / "calibration" / (stem + ".json"));
+  }
+  // A third image whose calibration is broken, a fourth without labels.
+  std::filesystem::copy_file(root / "rgb_images/frame0.png", root / "rgb_images/broken.png");
+  test::write_file(root / "calibration/broken.json", "{\"intrinsic\": {");
+  std::filesystem::copy_file(root / "rgb_images/frame0.png", root / "rgb_images/unlabelled.png");
+  std::filesystem::copy_file(test::data_path("woodscape_front.json"), root / "calibration/unlabelled.json");
+
+  const std::string command = "augment-dataset " + quoted(root) + " --preset small,medium,large --seed 5 --copies 2 "
+                              "-j 2 --out " + quoted(out);
+  auto r = run_fishcam(command);
+  EXPECT_NE(r.exit_code, 0) << "failures make the exit code non-zero";
+  EXPECT_NE(r.err.find("broken"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("unlabelled"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("12 written"), std::string::npos) << r.out;
+  for (const char* preset : {"small", "medium", "large"}) {
+    const auto dir = out / preset;
+    for (int i = 0; i < 2; ++i) {
+      for (int copy = 0; copy < 2; ++copy) {
+        const std::string name = "frame" + std::to_string(i) + "_" + preset + std::to_string(copy);
+        EXPECT_TRUE(std::filesystem::exists(dir / "rgb_images" / (name + ".png"))) << name;
+        EXPECT_TRUE(std::filesystem::exists(dir / "semantic_annotations/gtLabels" / (name + ".png"))) << name;
+        EXPECT_NO_THROW(read_camera(dir / "calibration" / (name + ".json"))) << name;
+      }
+    }
+    const std::string manifest = test::read_file(dir / "manifest.jsonl");
+    EXPECT_EQ(std::count(manifest.begin(), manifest.end(), '\n'), 4);
+    const auto first = nlohmann::json::parse(manifest.substr(0, manifest.find('\n')));
+    for (const char* key : {"image", "copy", "seed", "rotation_deg", "translation", "depth"}) {
+      EXPECT_TRUE(first.contains(key)) << key;
+    }
+  }
+  // The dataset is untouched.
+  EXPECT_FALSE(std::filesystem::exists(root / "manifest.jsonl"));
+  // Resuming: nothing new is written, the manifest does not grow.
+  const auto before = std::filesystem::last_write_time(out / "small/rgb_images/frame0_small0.png");
+  r = run_fishcam(command);
+  EXPECT_NE(r.out.find("0 written, 12 already there"), std::string::npos) << r.out;
+  EXPECT_EQ(std::filesystem::last_write_time(out / "small/rgb_images/frame0_small0.png"), before);
+  const std::string manifest = test::read_file(out / "small/manifest.jsonl");
+  EXPECT_EQ(std::count(manifest.begin(), manifest.end(), '\n'), 4);
+  // Never inside ROOT.
+  r = run_fishcam("augment-dataset " + quoted(root) + " --preset small --seed 1 --out " + quoted(root / "augmented"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("inside the dataset"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(root / "augmented"));
+}
+
+TEST(CliAugmentation, DemoAndBench) {
+  const auto dir = test::scratch_dir("demo");
+  auto r = run_fishcam("demo --out " + quoted(dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* name : {"demo-fig5.png", "demo-presets.png", "demo-render.png", "demo-render-labels.png"}) {
+    EXPECT_FALSE(cv::imread((dir / name).string()).empty()) << name;
+    EXPECT_NE(r.out.find(name), std::string::npos) << r.out;
+  }
+  r = run_fishcam("bench augment --json --samples 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"total_ms", "map_ms", "remap_only_ms", "threads"}) EXPECT_TRUE(j.contains(key)) << key;
+}
+
+}  // namespace
+}  // namespace fishcam
