@@ -68,6 +68,48 @@ TEST(Augmentation, SourcePointSatisfiesItsDefiningEquation) {
   EXPECT_GT(missed, 100);
 }
 
+// Every output pixel of a (small) WoodScape-lens camera, for poses inside and
+// outside the unit sphere: the source point satisfies R P + t = s d, s > 0, |P| = 1,
+// and the fast map points where the source camera projects it.
+TEST(Augmentation, EveryValidMapEntrySatisfiesItsDefiningEquation) {
+  CameraParameters p = test::woodscape_front();
+  p.width = 320, p.height = 242;
+  p.principal_point = {159.5 + 3.942 / 4, 120.5 - 3.093 / 4};
+  p.model = Polynomial<double>({339.749 / 4, -31.988 / 4, 48.275 / 4, -7.201 / 4});
+  const Camera camera(p);
+  const ViewpointWarp warp(camera);
+  for (const auto& change : {random_pose(*find_pose_preset("train"), 3).change(),
+                             ViewpointChange::from_euler_deg({5, 10, -20}, {0.6, -0.7, 0.5})}) {  // |t| > 1
+    WarpMaps maps;
+    warp.compute(change, DepthPrior::source_sphere, &maps, MapKind::geometric);
+    long checked = 0;
+    for (int v = 0; v < p.height; ++v) {
+      for (int u = 0; u < p.width; ++u) {
+        Eigen::Vector3d d;
+        ASSERT_TRUE(camera.unproject({double(u), double(v)}, &d));
+        const auto source = source_point(d, change, DepthPrior::source_sphere);
+        if (!std::isfinite(maps.map_x.at<float>(v, u))) continue;
+        ASSERT_TRUE(source.has_value()) << u << "," << v;
+        const Eigen::Vector3d moved = change.rotation * *source + change.translation;
+        ASSERT_NEAR(source->norm(), 1.0, 1e-12);
+        ASSERT_LT(moved.cross(d).norm(), 1e-9);
+        ASSERT_GT(moved.dot(d), 0);
+        Eigen::Vector2d pixel;
+        ASSERT_TRUE(camera.project(*source, &pixel));
+        // Where the ray grazes the sphere (|t| > 1, b^2 - c -> 0) s depends on d like a
+        // square root: float maps lose digits there, and only there.
+        const double b = d.dot(change.translation), disc = b * b - (change.translation.squaredNorm() - 1);
+        const double tolerance = disc > 1e-2 ? 1e-3 : 2e-2;
+        ASSERT_LT(std::hypot(pixel.x() - maps.map_x.at<float>(v, u), pixel.y() - maps.map_y.at<float>(v, u)),
+                  tolerance)
+            << "disc " << disc;
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, p.width * p.height / 3);
+  }
+}
+
 TEST(Augmentation, PriorsAgreeWithoutTranslationAndDifferWithIt) {
   const Eigen::Vector3d d = Eigen::Vector3d(0.2, -0.1, 1).normalized();
   const auto rotation_only = ViewpointChange::from_euler_deg({5, -7, 12});
