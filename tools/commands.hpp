@@ -15,5 +15,6 @@ void register_augment(CLI::App& app);
 void register_check_mrcal(CLI::App& app);
 void register_demo(CLI::App& app);
 void register_augment_dataset(CLI::App& app);
+void register_convert(CLI::App& app);
 
 }  // namespace fishcam::cli

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   fishcam::cli::register_check_mrcal(app);
   fishcam::cli::register_demo(app);
   fishcam::cli::register_augment_dataset(app);
+  fishcam::cli::register_convert(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,70 @@
+// Fitting a camera model to correspondences (rays and the pixels they hit), and
+// converting one model into another, with the error it costs reported honestly.
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "fishcam/camera.hpp"
+
+namespace fishcam {
+
+// A model to fit: "polynomial[:N]" (default N = 4), "equidistant", "stereographic",
+// "pinhole", "kannala-brandt".
+struct ModelSpec {
+  std::string name;
+  int order = 4;  // polynomial only
+};
+ModelSpec parse_model_spec(std::string_view text);  // throws Error on unknown names
+
+struct Correspondence {
+  Eigen::Vector3d ray;     // camera frame, any length
+  Eigen::Vector2d pixel;   // where it is seen
+};
+
+// Pixels of the camera's image inside its valid domain, every `step` pixels in u and
+// v (offset by `offset`), with their unit rays; only rays up to max_theta when given.
+std::vector<Correspondence> sample_image(const Camera& camera, int step, int offset = 0,
+                                         std::optional<double> max_theta = std::nullopt);
+
+struct FitOptions {
+  bool fit_center = false;  // free the principal point
+  bool fit_aspect = false;  // free a_y (a_x stays)
+};
+
+// The model that best reprojects the correspondences (least squares on pixel error):
+// a weighted linear least-squares start on rho(theta) for fixed principal point and
+// pixel scale (exact for that case: every model is linear in its parameters, after
+// Kannala-Brandt's reparametrization), then Ceres on the full pixel error with the
+// freed parameters. `start` gives the image size, principal point and pixel scale.
+// Throws Error if the data cannot determine the model (too few samples, pinhole
+// with rays at or past 90 deg, a degenerate system).
+CameraParameters fit_camera(std::span<const Correspondence> samples, const ModelSpec& model,
+                            const CameraParameters& start, const FitOptions& options = {});
+
+// The paper's eqs. 13-14: f = rho / theta (equidistant), f = rho / (2 tan(theta / 2))
+// (stereographic), with rho = W / 2 (half the image width, px) and theta = half the
+// source's horizontal field of view (Camera::field_of_view_deg).
+CameraParameters paper_camera(const Camera& source, const ModelSpec& model);
+
+struct ErrorReport {
+  long samples = 0;
+  long unprojectable = 0;  // samples the camera cannot project (outside its valid domain)
+  double rms_px = 0, p99_px = 0, max_px = 0;
+  // The same over rays with theta < 90 deg (what OpenCV's fisheye functions can use).
+  long samples_below_90 = 0;
+  double rms_below_90_px = 0, max_below_90_px = 0;
+  struct Bin {
+    double theta_from_deg, theta_to_deg;
+    long samples;
+    double rms_px, max_px;
+  };
+  std::vector<Bin> by_angle;  // 10-degree bins
+};
+// Pixel error of `camera` reprojecting the correspondences.
+ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspondence> samples);
+
+}  // namespace fishcam

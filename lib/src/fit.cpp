@@ -1,0 +1,271 @@
+#include "fishcam/fit.hpp"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace fishcam {
+namespace {
+
+constexpr double kDeg = 180 / std::numbers::pi;
+
+double theta_of(const Eigen::Vector3d& ray) { return std::atan2(ray.head<2>().norm(), ray.z()); }
+
+// The linear basis of each model's rho(theta): rho = sum_j p_j g_j(theta).
+int basis_size(const ModelSpec& m) {
+  if (m.name == "polynomial") return m.order;
+  if (m.name == "kannala-brandt") return 5;
+  return 1;
+}
+
+void basis(const ModelSpec& m, double theta, double* g) {
+  if (m.name == "polynomial") {
+    double power = theta;
+    for (int j = 0; j < m.order; ++j, power *= theta) g[j] = power;
+  } else if (m.name == "kannala-brandt") {
+    double power = theta;
+    for (int j = 0; j < 5; ++j, power *= theta * theta) g[j] = power;
+  } else if (m.name == "equidistant") {
+    g[0] = theta;
+  } else if (m.name == "stereographic") {
+    g[0] = 2 * std::tan(theta / 2);
+  } else {
+    g[0] = std::tan(theta);
+  }
+}
+
+// The model's parameters (docs/conventions.md order) from the basis coefficients.
+std::vector<double> params_from_basis(const ModelSpec& m, const Eigen::VectorXd& p) {
+  std::vector<double> out(p.data(), p.data() + p.size());
+  if (m.name == "kannala-brandt") {
+    for (int j = 1; j < 5; ++j) out[j] = p[j] / p[0];  // rho = f theta (1 + k1 theta^2 + ...)
+  }
+  return out;
+}
+
+// Residuals of a chunk of samples, for Ceres: projected minus observed pixel.
+template <template <typename> class Model>
+struct ChunkResidual {
+  std::span<const Correspondence> samples;
+  int params;
+  double ax;
+
+  template <typename T>
+  Model<T> model(const T* p) const {
+    if constexpr (std::is_same_v<Model<T>, Polynomial<T>>) {
+      return Polynomial<T>(p, params);
+    } else if constexpr (std::is_same_v<Model<T>, KannalaBrandt<T>>) {
+      return KannalaBrandt<T>(p);
+    } else {
+      return Model<T>(p[0]);
+    }
+  }
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    const Model<T> m = model(p[0]);
+    const T mapping[4] = {p[1][0], p[1][1], T(ax), p[2][0]};
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const T point[3] = {T(samples[i].ray.x()), T(samples[i].ray.y()), T(samples[i].ray.z())};
+      T pixel[2];
+      project_radial(m, mapping, point, pixel);
+      residuals[2 * i] = pixel[0] - samples[i].pixel.x();
+      residuals[2 * i + 1] = pixel[1] - samples[i].pixel.y();
+    }
+    return true;
+  }
+};
+
+template <template <typename> class Model>
+void refine(std::span<const Correspondence> samples, int params, double ax, std::vector<double>* model,
+            Eigen::Vector2d* center, double* ay, const FitOptions& options) {
+  ceres::Problem problem;
+  constexpr size_t kChunk = 512;
+  for (size_t begin = 0; begin < samples.size(); begin += kChunk) {
+    const auto chunk = samples.subspan(begin, std::min(kChunk, samples.size() - begin));
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<ChunkResidual<Model>, 8>(
+        new ChunkResidual<Model>{chunk, params, ax});
+    cost->AddParameterBlock(params);
+    cost->AddParameterBlock(2);
+    cost->AddParameterBlock(1);
+    cost->SetNumResiduals(static_cast<int>(2 * chunk.size()));
+    problem.AddResidualBlock(cost, nullptr, model->data(), center->data(), ay);
+  }
+  if (!options.fit_center) problem.SetParameterBlockConstant(center->data());
+  if (!options.fit_aspect) problem.SetParameterBlockConstant(ay);
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  solver.max_num_iterations = 100;
+  solver.function_tolerance = 1e-14;
+  solver.parameter_tolerance = 1e-14;
+  solver.gradient_tolerance = 1e-14;
+  solver.num_threads = 2;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  if (!summary.IsSolutionUsable()) throw Error("fit: the least-squares solve failed: " + summary.message);
+}
+
+}  // namespace
+
+ModelSpec parse_model_spec(std::string_view text) {
+  ModelSpec spec;
+  const auto colon = text.find(':');
+  spec.name = std::string(text.substr(0, colon));
+  if (colon != std::string_view::npos) {
+    if (spec.name != "polynomial") throw Error("model '" + std::string(text) + "': only polynomial takes an order");
+    const std::string order(text.substr(colon + 1));
+    size_t used = 0;
+    int n = 0;
+    try {
+      n = std::stoi(order, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != order.size() || n < 1 || n > 12) throw Error("model '" + std::string(text) + "': order must be 1..12");
+    spec.order = n;
+  }
+  for (const char* known : {"polynomial", "equidistant", "stereographic", "pinhole", "kannala-brandt"}) {
+    if (spec.name == known) return spec;
+  }
+  throw Error("unknown model '" + std::string(text) +
+              "' (expected polynomial[:N], equidistant, stereographic, pinhole or kannala-brandt)");
+}
+
+std::vector<Correspondence> sample_image(const Camera& camera, int step, int offset, std::optional<double> max_theta) {
+  if (step < 1 || offset < 0) throw Error("sample_image: step must be >= 1 and offset >= 0");
+  std::vector<Correspondence> out;
+  for (int v = offset; v < camera.height(); v += step) {
+    for (int u = offset; u < camera.width(); u += step) {
+      Eigen::Vector3d ray;
+      if (!camera.unproject({double(u), double(v)}, &ray)) continue;
+      if (max_theta && theta_of(ray) > *max_theta) continue;
+      out.push_back({ray, {double(u), double(v)}});
+    }
+  }
+  return out;
+}
+
+CameraParameters fit_camera(std::span<const Correspondence> samples, const ModelSpec& spec,
+                            const CameraParameters& start, const FitOptions& options) {
+  const int k = basis_size(spec);
+  if (samples.size() < size_t(2 * k + 3)) {
+    throw Error("fit: " + std::to_string(samples.size()) + " samples cannot determine a " + spec.name + " model");
+  }
+  if (spec.name == "pinhole") {
+    for (const auto& s : samples) {
+      if (!(s.ray.z() > 0)) throw Error("fit: a pinhole model cannot see rays at or past 90 deg (use --max-angle)");
+    }
+  }
+  // Linear start (exact for fixed centre and scale): with e the ray's azimuth
+  // direction and a = (a_x, a_y), the pixel error |c + a.(rho e) - q|^2 is
+  // w (rho - t)^2 + const with w = |a.e|^2 and t = (q - c).(a.e) / w.
+  const Eigen::Vector2d c = start.principal_point, a = start.pixel_scale;
+  Eigen::MatrixXd design(samples.size(), k);
+  Eigen::VectorXd target(samples.size());
+  std::vector<double> g(k);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Eigen::Vector3d& ray = samples[i].ray;
+    const double chi = ray.head<2>().norm();
+    basis(spec, theta_of(ray), g.data());
+    if (chi == 0) {  // on the axis: rho = 0 carries no information about the shape
+      design.row(i).setZero();
+      target[i] = 0;
+      continue;
+    }
+    const Eigen::Vector2d ae = a.cwiseProduct(ray.head<2>() / chi);
+    const double w = ae.squaredNorm(), sw = std::sqrt(w);
+    for (int j = 0; j < k; ++j) design(i, j) = sw * g[j];
+    target[i] = sw * (samples[i].pixel - c).dot(ae) / w;
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
+  if (qr.rank() < k) throw Error("fit: the samples do not determine the " + spec.name + " model (degenerate data)");
+  const Eigen::VectorXd p = qr.solve(target);
+  CameraParameters fitted = start;
+  std::vector<double> params = params_from_basis(spec, p);
+  if (options.fit_center || options.fit_aspect) {
+    Eigen::Vector2d center = c;
+    double ay = a.y();
+    if (spec.name == "polynomial") {
+      refine<Polynomial>(samples, k, a.x(), &params, &center, &ay, options);
+    } else if (spec.name == "kannala-brandt") {
+      refine<KannalaBrandt>(samples, k, a.x(), &params, &center, &ay, options);
+    } else if (spec.name == "equidistant") {
+      refine<Equidistant>(samples, k, a.x(), &params, &center, &ay, options);
+    } else if (spec.name == "stereographic") {
+      refine<Stereographic>(samples, k, a.x(), &params, &center, &ay, options);
+    } else {
+      refine<Pinhole>(samples, k, a.x(), &params, &center, &ay, options);
+    }
+    fitted.principal_point = center;
+    fitted.pixel_scale.y() = ay;
+  }
+  fitted.model = make_model(spec.name, params);
+  fitted.theta_limit.reset();
+  try {
+    Camera check(fitted);
+  } catch (const Error& e) {
+    throw Error(std::string("fit: the best ") + spec.name + " model is not a valid camera: " + e.what());
+  }
+  return fitted;
+}
+
+CameraParameters paper_camera(const Camera& source, const ModelSpec& spec) {
+  if (spec.name != "equidistant" && spec.name != "stereographic") {
+    throw Error("the paper's method (eqs. 13-14) defines equidistant and stereographic models only, not " + spec.name);
+  }
+  const double rho = source.width() / 2.0;
+  const double theta = source.field_of_view_deg().horizontal / 2 / kDeg;
+  CameraParameters p = source.parameters();
+  p.theta_limit.reset();
+  p.model = spec.name == "equidistant" ? RadialModel(Equidistant<double>(rho / theta))
+                                       : RadialModel(Stereographic<double>(rho / (2 * std::tan(theta / 2))));
+  return p;
+}
+
+ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspondence> samples) {
+  ErrorReport report;
+  std::vector<double> errors;
+  errors.reserve(samples.size());
+  const double theta_max = camera.domain().theta_max;
+  const int bins = std::max(1, int(std::ceil(theta_max * kDeg / 10)));
+  std::vector<double> sum2(bins, 0), worst(bins, 0);
+  std::vector<long> counts(bins, 0);
+  double sum2_all = 0, sum2_below = 0;
+  for (const auto& s : samples) {
+    Eigen::Vector2d pixel;
+    if (!camera.project(s.ray, &pixel)) {
+      ++report.unprojectable;
+      continue;
+    }
+    const double e = (pixel - s.pixel).norm(), theta = theta_of(s.ray);
+    errors.push_back(e);
+    sum2_all += e * e;
+    const int bin = std::min(bins - 1, int(theta * kDeg / 10));
+    sum2[bin] += e * e, worst[bin] = std::max(worst[bin], e), ++counts[bin];
+    if (theta < std::numbers::pi / 2) {
+      sum2_below += e * e;
+      report.max_below_90_px = std::max(report.max_below_90_px, e);
+      ++report.samples_below_90;
+    }
+  }
+  report.samples = static_cast<long>(errors.size());
+  if (errors.empty()) return report;
+  report.rms_px = std::sqrt(sum2_all / double(errors.size()));
+  report.max_px = *std::max_element(errors.begin(), errors.end());
+  const size_t p99 = std::min(errors.size() - 1, size_t(std::ceil(0.99 * double(errors.size()))) - 1);
+  std::nth_element(errors.begin(), errors.begin() + p99, errors.end());
+  report.p99_px = errors[p99];
+  if (report.samples_below_90) report.rms_below_90_px = std::sqrt(sum2_below / double(report.samples_below_90));
+  for (int b = 0; b < bins; ++b) {
+    if (!counts[b]) continue;
+    report.by_angle.push_back({10.0 * b, std::min(10.0 * (b + 1), theta_max * kDeg), counts[b],
+                               std::sqrt(sum2[b] / double(counts[b])), worst[b]});
+  }
+  return report;
+}
+
+}  // namespace fishcam
