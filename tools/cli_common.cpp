@@ -90,6 +90,48 @@ std::string describe(const Eigen::Vector3d& r, const Eigen::Vector3d& t) {
   return buffer;
 }
 
+CameraFormat output_format(const std::string& format, const std::filesystem::path& out) {
+  if (!format.empty()) return *parse_camera_format(format);
+  const std::string ext = out.extension().string();
+  if (ext == ".cameramodel") return CameraFormat::mrcal;
+  if (ext == ".yaml" || ext == ".yml" || ext == ".xml") return CameraFormat::opencv;
+  if (ext == ".json") return CameraFormat::fishcam;
+  throw Error(out.string() + ": cannot tell the format from the extension; pass --format");
+}
+
+nlohmann::json fit_report_json(const CameraParameters& fitted, const ErrorReport& r) {
+  nlohmann::json bins = nlohmann::json::array();
+  for (const auto& b : r.by_angle) {
+    bins.push_back({{"theta_from_deg", b.theta_from_deg}, {"theta_to_deg", b.theta_to_deg}, {"samples", b.samples},
+                    {"rms_px", b.rms_px}, {"max_px", b.max_px}});
+  }
+  return {{"samples", r.samples},
+          {"unprojectable", r.unprojectable},
+          {"rms_px", r.rms_px},
+          {"p99_px", r.p99_px},
+          {"max_px", r.max_px},
+          {"below_90_deg", {{"samples", r.samples_below_90}, {"rms_px", r.rms_below_90_px}, {"max_px", r.max_below_90_px}}},
+          {"by_angle", bins},
+          {"model", model_name(fitted.model)},
+          {"parameters", model_params(fitted.model)},
+          {"principal_point", {fitted.principal_point.x(), fitted.principal_point.y()}},
+          {"pixel_scale", {fitted.pixel_scale.x(), fitted.pixel_scale.y()}}};
+}
+
+void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what) {
+  std::printf("parameters      ");
+  for (double p : model_params(fitted.model)) std::printf(" %.10g", p);
+  std::printf("\nprincipal point  (%.6f, %.6f), pixel scale (%.10g, %.10g)\n", fitted.principal_point.x(),
+              fitted.principal_point.y(), fitted.pixel_scale.x(), fitted.pixel_scale.y());
+  std::printf("pixel error over %ld %s: rms %.4f, p99 %.4f, max %.4f px", report.samples, over_what, report.rms_px,
+              report.p99_px, report.max_px);
+  if (report.unprojectable) std::printf(" (%ld outside the new model's domain)", report.unprojectable);
+  std::printf("\n  theta (deg)   samples     rms px      max px\n");
+  for (const auto& b : report.by_angle) {
+    std::printf("  %5.0f-%-5.0f %8ld %11.4f %11.4f\n", b.theta_from_deg, b.theta_to_deg, b.samples, b.rms_px, b.max_px);
+  }
+}
+
 cv::Mat colourise_labels(const cv::Mat& labels) {
   cv::Mat out(labels.size(), CV_8UC3);
   for (int v = 0; v < labels.rows; ++v) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include <filesystem>
@@ -10,6 +11,8 @@
 
 #include "fishcam/augmentation.hpp"
 #include "fishcam/camera.hpp"
+#include "fishcam/camera_io.hpp"
+#include "fishcam/fit.hpp"
 #include "fishcam/viewpoint.hpp"
 
 namespace fishcam::cli {
@@ -38,6 +41,14 @@ std::filesystem::path bundled_data(const std::string& name);
 
 // "rotation [rx, ry, rz] deg, translation [tx, ty, tz]".
 std::string describe(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3d& translation);
+
+// The output format: --format if given, else from the extension (.cameramodel,
+// .yaml/.yml/.xml, .json = fishcam).
+CameraFormat output_format(const std::string& format, const std::filesystem::path& out);
+
+// A fitted camera and its error report: as JSON (rms_px, p99_px, max_px, ...) and as text.
+nlohmann::json fit_report_json(const CameraParameters& fitted, const ErrorReport& report);
+void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what);
 
 // Labels as colours (WoodScape classes), for looking at.
 cv::Mat colourise_labels(const cv::Mat& labels);

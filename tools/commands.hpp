@@ -16,5 +16,6 @@ void register_check_mrcal(CLI::App& app);
 void register_demo(CLI::App& app);
 void register_augment_dataset(CLI::App& app);
 void register_convert(CLI::App& app);
+void register_fit(CLI::App& app);
 
 }  // namespace fishcam::cli

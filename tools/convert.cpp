@@ -1,7 +1,6 @@
 // fishcam convert SOURCE --to MODEL: the best camera of another model, and what it costs.
 #include <chrono>
 #include <cstdio>
-#include <nlohmann/json.hpp>
 #include <numbers>
 
 #include "cli_common.hpp"
@@ -13,30 +12,6 @@ namespace fishcam::cli {
 namespace {
 
 constexpr double kDeg = 180 / std::numbers::pi;
-
-CameraFormat format_for(const std::string& format, const std::filesystem::path& out) {
-  if (!format.empty()) return *parse_camera_format(format);
-  const std::string ext = out.extension().string();
-  if (ext == ".cameramodel") return CameraFormat::mrcal;
-  if (ext == ".yaml" || ext == ".yml" || ext == ".xml") return CameraFormat::opencv;
-  if (ext == ".json") return CameraFormat::fishcam;
-  throw Error(out.string() + ": cannot tell the format from the extension; pass --format");
-}
-
-nlohmann::json report_json(const ErrorReport& r) {
-  nlohmann::json bins = nlohmann::json::array();
-  for (const auto& b : r.by_angle) {
-    bins.push_back({{"theta_from_deg", b.theta_from_deg}, {"theta_to_deg", b.theta_to_deg}, {"samples", b.samples},
-                    {"rms_px", b.rms_px}, {"max_px", b.max_px}});
-  }
-  return {{"samples", r.samples},
-          {"unprojectable", r.unprojectable},
-          {"rms_px", r.rms_px},
-          {"p99_px", r.p99_px},
-          {"max_px", r.max_px},
-          {"below_90_deg", {{"samples", r.samples_below_90}, {"rms_px", r.rms_below_90_px}, {"max_px", r.max_below_90_px}}},
-          {"by_angle", bins}};
-}
 
 }  // namespace
 
@@ -68,7 +43,7 @@ void register_convert(CLI::App& app) {
     const auto started = std::chrono::steady_clock::now();
     const Camera source = read_camera(o->source);
     const ModelSpec spec = parse_model_spec(o->to);
-    const CameraFormat format = format_for(o->format, o->out);
+    const CameraFormat format = output_format(o->format, o->out);
     const std::optional<double> max_theta = o->max_angle > 0 ? std::optional(o->max_angle / kDeg) : std::nullopt;
     if (o->method == "paper" && (fit_center->count() || fit_aspect->count())) {
       throw Error("--fit-center/--fit-aspect apply to --method lsq only");
@@ -100,11 +75,7 @@ void register_convert(CLI::App& app) {
     write_camera(fitted, o->out, format, o->force);
     if (!warning.empty()) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
     if (o->json) {
-      nlohmann::json j = report_json(report);
-      j["model"] = model_name(fitted.model);
-      j["parameters"] = model_params(fitted.model);
-      j["principal_point"] = {fitted.principal_point.x(), fitted.principal_point.y()};
-      j["pixel_scale"] = {fitted.pixel_scale.x(), fitted.pixel_scale.y()};
+      nlohmann::json j = fit_report_json(fitted, report);
       j["method"] = o->method;
       j["out"] = o->out;
       j["format"] = to_string(format);
@@ -115,18 +86,7 @@ void register_convert(CLI::App& app) {
     }
     std::printf("%s -> %s (%s), wrote %s (%s)\n", o->source.c_str(), o->to.c_str(), o->method.c_str(), o->out.c_str(),
                 std::string(to_string(format)).c_str());
-    std::printf("parameters      ");
-    for (double p : model_params(fitted.model)) std::printf(" %.10g", p);
-    std::printf("\nprincipal point  (%.6f, %.6f), pixel scale (%.10g, %.10g)\n", fitted.principal_point.x(),
-                fitted.principal_point.y(), fitted.pixel_scale.x(), fitted.pixel_scale.y());
-    std::printf("pixel error over %ld pixels of the source's valid image: rms %.4f, p99 %.4f, max %.4f px", report.samples,
-                report.rms_px, report.p99_px, report.max_px);
-    if (report.unprojectable) std::printf(" (%ld outside the new model's domain)", report.unprojectable);
-    std::printf("\n  theta (deg)   pixels      rms px      max px\n");
-    for (const auto& b : report.by_angle) {
-      std::printf("  %5.0f-%-5.0f %8ld %11.4f %11.4f\n", b.theta_from_deg, b.theta_to_deg, b.samples, b.rms_px,
-                  b.max_px);
-    }
+    print_fit_report(fitted, report, "pixels of the source's valid image");
   });
 }
 

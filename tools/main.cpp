@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   fishcam::cli::register_demo(app);
   fishcam::cli::register_augment_dataset(app);
   fishcam::cli::register_convert(app);
+  fishcam::cli::register_fit(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

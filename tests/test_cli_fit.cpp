@@ -1,0 +1,111 @@
+// fishcam convert and fishcam fit end to end.
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+using test::run_fishcam;
+
+std::string quoted(const std::filesystem::path& p) {
+  std::string q = "'";
+  q += p.string();
+  q += "'";
+  return q;
+}
+
+TEST(CliFit, ConvertReportsAndWritesEveryFormat) {
+  const auto dir = test::scratch_dir("cli_convert");
+  const std::string source = quoted(test::data_path("woodscape_front.json"));
+  auto r = run_fishcam("convert " + source + " --to kannala-brandt --out " + quoted(dir / "kb.yaml") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"rms_px", "p99_px", "max_px", "by_angle", "below_90_deg"}) EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_LT(j["rms_px"].get<double>(), 0.2);
+  EXPECT_NE(r.err.find("warning: OpenCV's fisheye functions"), std::string::npos) << r.err;
+  EXPECT_EQ(read_camera(dir / "kb.yaml").parameters().model.index(), RadialModel(KannalaBrandt<double>()).index());
+
+  r = run_fishcam("convert " + source + " --to stereographic --out " + quoted(dir / "st.cameramodel"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("rms"), std::string::npos);
+  r = run_fishcam("convert " + source + " --to equidistant --method paper --out " + quoted(dir / "eq.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_fishcam("convert " + source + " --to polynomial:5 --out " + quoted(dir / "ws.json") + " --format woodscape");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  const struct {
+    std::string args, expected;
+  } bad[] = {
+      {"--to polynomial --out " + quoted(dir / "p.cameramodel"), "mrcal's format holds pinhole and stereographic"},
+      {"--to fisheye --out " + quoted(dir / "x.json"), "unknown model 'fisheye'"},
+      {"--to pinhole --out " + quoted(dir / "x.json"), "--max-angle"},
+      {"--to kannala-brandt --method paper --out " + quoted(dir / "x.json"), "eqs. 13-14"},
+      {"--to equidistant --out " + quoted(dir / "x.txt"), "cannot tell the format"},
+      {"--to kannala-brandt --out " + quoted(dir / "kb.yaml"), "refusing to overwrite"},
+  };
+  for (const auto& c : bad) {
+    r = run_fishcam("convert " + source + " " + c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << " -> " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "p.cameramodel"));
+}
+
+TEST(CliFit, FitFromCsv) {
+  const auto dir = test::scratch_dir("cli_fit");
+  std::string theta_rho = "# the WoodScape front camera's radial curve\ntheta,rho\n";
+  const Polynomial<double> truth({339.749, -31.988, 48.275, -7.201});
+  for (int i = 1; i <= 60; ++i) {
+    const double t = 0.03 * i;
+    theta_rho += std::to_string(t) + ", " + std::to_string(truth.rho(t)) + "\n";
+  }
+  test::write_file(dir / "tr.csv", theta_rho);
+  auto r = run_fishcam("fit " + quoted(dir / "tr.csv") + " --to polynomial --imagersize 1280,966 --center 643.442,479.407 "
+                       "--out " + quoted(dir / "fit.json") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto params = model_params(read_camera(dir / "fit.json").model());
+  EXPECT_NEAR(params[0], 339.749, 1e-3);  // the CSV holds 6 decimals
+  EXPECT_LT(nlohmann::json::parse(r.out)["max_px"].get<double>(), 1e-5);
+
+  // Rays and pixels, with an unknown principal point.
+  std::string rays = "x,y,z,u,v\n";
+  const Camera camera = read_camera(test::data_path("stereographic.cameramodel"));
+  for (const auto& ray : test::random_rays(500, 2.5, 4)) {
+    Eigen::Vector2d q;
+    ASSERT_TRUE(camera.project(ray, &q));
+    char line[256];
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g,%.17g\n", ray.x(), ray.y(), ray.z(), q.x(), q.y());
+    rays += line;
+  }
+  test::write_file(dir / "rays.csv", rays);
+  r = run_fishcam("fit " + quoted(dir / "rays.csv") + " --to stereographic --imagersize 1280,966 --center 640,480 "
+                  "--fit-center --fit-aspect --out " + quoted(dir / "st.cameramodel"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Camera fitted = read_camera(dir / "st.cameramodel");
+  EXPECT_LT((fitted.principal_point() - camera.principal_point()).norm(), 1e-6);
+  EXPECT_NEAR(model_params(fitted.model())[0], model_params(camera.model())[0], 1e-6);
+
+  const struct {
+    std::string content, expected;
+  } bad[] = {
+      {"theta;rho\n1;2\n", "expected a header"},
+      {"theta,rho\n0.1,20\n0.2,x\n", ":3: expected 2 finite numbers"},
+      {"theta,rho\n0.1,20,3\n", "expected 2 numbers, got 3"},
+      {"theta,rho\n", "no data rows"},
+      {"", "empty"},
+      {"theta,rho\n4,20\n", "theta must be in [0, pi]"},
+      {"theta,rho\n0.1,nan\n", "finite numbers"},
+  };
+  for (const auto& c : bad) {
+    test::write_file(dir / "bad.csv", c.content);
+    r = run_fishcam("fit " + quoted(dir / "bad.csv") + " --to equidistant --imagersize 1280,966 --center 640,480 --out " +
+                    quoted(dir / "bad.json"));
+    EXPECT_NE(r.exit_code, 0) << c.content;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.content << " -> " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
+
+}  // namespace
+}  // namespace fishcam

@@ -1,0 +1,135 @@
+// fishcam fit DATA.csv --to MODEL: a camera model from measured correspondences.
+#include <charconv>
+#include <cstdio>
+#include <fstream>
+#include <numbers>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+
+namespace fishcam::cli {
+namespace {
+
+// A CSV with a header naming its columns: "theta,rho" (radians, px), "theta_deg,rho",
+// or "x,y,z,u,v" (a ray in the camera frame and the pixel it hits). '#' comments.
+struct CorrespondenceFile {
+  enum class Kind { theta_rho, ray_pixel } kind;
+  bool degrees = false;
+  std::vector<std::vector<double>> rows;
+};
+
+CorrespondenceFile read_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open");
+  CorrespondenceFile file{};
+  size_t columns = 0;
+  std::string line;
+  for (long number = 1; std::getline(in, line); ++number) {
+    std::string compact;
+    for (char c : line) {
+      if (c != ' ' && c != '\t' && c != '\r') compact += c;
+    }
+    if (compact.empty() || compact[0] == '#') continue;
+    if (columns == 0) {
+      if (compact == "theta,rho" || compact == "theta_deg,rho") {
+        file.kind = CorrespondenceFile::Kind::theta_rho, file.degrees = compact == "theta_deg,rho", columns = 2;
+      } else if (compact == "x,y,z,u,v") {
+        file.kind = CorrespondenceFile::Kind::ray_pixel, columns = 5;
+      } else {
+        throw Error(path + ":" + std::to_string(number) + ": expected a header 'theta,rho', 'theta_deg,rho' or "
+                    "'x,y,z,u,v', got '" + line.substr(0, 60) + "'");
+      }
+      continue;
+    }
+    std::vector<double> row;
+    const char* p = compact.data();
+    const char* end = p + compact.size();
+    while (p <= end && row.size() <= columns) {
+      double value;
+      const auto [next, ec] = std::from_chars(p, end, value);
+      if (ec != std::errc() || !std::isfinite(value) || (next != end && *next != ',')) {
+        throw Error(path + ":" + std::to_string(number) + ": expected " + std::to_string(columns) +
+                    " finite numbers separated by commas");
+      }
+      row.push_back(value);
+      p = next + 1;
+    }
+    if (row.size() != columns) {
+      throw Error(path + ":" + std::to_string(number) + ": expected " + std::to_string(columns) + " numbers, got " +
+                  std::to_string(row.size()));
+    }
+    file.rows.push_back(std::move(row));
+  }
+  if (columns == 0) throw Error(path + ": empty (no header)");
+  if (file.rows.empty()) throw Error(path + ": no data rows");
+  return file;
+}
+
+}  // namespace
+
+void register_fit(CLI::App& app) {
+  auto* cmd = app.add_subcommand("fit", "Fit a camera model to measured correspondences (CSV: theta,rho or "
+                                        "x,y,z,u,v) and report the pixel error");
+  struct Options {
+    std::string data, to, out, format;
+    std::vector<int> imagersize;
+    std::vector<double> center;
+    double aspect = 1;
+    bool fit_center = false, fit_aspect = false, json = false, force = false;
+  };
+  auto o = std::make_shared<Options>();
+  cmd->add_option("DATA", o->data, "CSV with a header: theta,rho | theta_deg,rho | x,y,z,u,v")->required();
+  cmd->add_option("--to", o->to, "Model: polynomial[:N], equidistant, stereographic, pinhole, kannala-brandt")
+      ->required();
+  cmd->add_option("--imagersize", o->imagersize, "Image size W,H")->delimiter(',')->expected(2)->required();
+  cmd->add_option("--center", o->center, "Principal point cx,cy (px; the start when --fit-center)")
+      ->delimiter(',')
+      ->expected(2)
+      ->required();
+  cmd->add_option("--aspect", o->aspect, "a_y (a_x = 1)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_flag("--fit-center", o->fit_center, "Also fit the principal point (x,y,z,u,v data only)");
+  cmd->add_flag("--fit-aspect", o->fit_aspect, "Also fit a_y (x,y,z,u,v data only)");
+  cmd->add_option("--out", o->out, "Output camera file")->required();
+  cmd->add_option("--format", o->format, "Output format (default: from the extension)")
+      ->check(CLI::IsMember({"woodscape", "fishcam", "mrcal", "opencv"}));
+  cmd->add_flag("--json", o->json, "Print the report as one JSON object");
+  cmd->add_flag("--force", o->force, "Replace an existing output file");
+  cmd->callback([o] {
+    const ModelSpec spec = parse_model_spec(o->to);
+    const CameraFormat format = output_format(o->format, o->out);
+    const CorrespondenceFile file = read_csv(o->data);
+    CameraParameters start;
+    start.width = o->imagersize[0], start.height = o->imagersize[1];
+    start.principal_point = {o->center[0], o->center[1]};
+    start.pixel_scale = {1.0, o->aspect};
+    std::vector<Correspondence> samples;
+    if (file.kind == CorrespondenceFile::Kind::theta_rho) {
+      if (o->fit_center || o->fit_aspect) throw Error("--fit-center/--fit-aspect need x,y,z,u,v data");
+      for (const auto& r : file.rows) {
+        const double theta = file.degrees ? r[0] * std::numbers::pi / 180 : r[0];
+        if (!(theta >= 0 && theta <= std::numbers::pi) || r[1] < 0) {
+          throw Error(o->data + ": theta must be in [0, pi] (or [0, 180] deg) and rho >= 0");
+        }
+        // Along +x: the pixel lies rho (a_x = 1) to the right of the centre.
+        samples.push_back({{std::sin(theta), 0, std::cos(theta)}, start.principal_point + Eigen::Vector2d(r[1], 0)});
+      }
+    } else {
+      for (const auto& r : file.rows) samples.push_back({{r[0], r[1], r[2]}, {r[3], r[4]}});
+    }
+    const CameraParameters fitted = fit_camera(samples, spec, start, {o->fit_center, o->fit_aspect});
+    const ErrorReport report = reprojection_errors(Camera(fitted), samples);
+    write_camera(fitted, o->out, format, o->force);
+    if (o->json) {
+      nlohmann::json j = fit_report_json(fitted, report);
+      j["out"] = o->out;
+      j["format"] = to_string(format);
+      std::printf("%s\n", j.dump(2).c_str());
+      return;
+    }
+    std::printf("%s: %zu correspondences -> %s, wrote %s (%s)\n", o->data.c_str(), samples.size(), o->to.c_str(),
+                o->out.c_str(), std::string(to_string(format)).c_str());
+    print_fit_report(fitted, report, "correspondences");
+  });
+}
+
+}  // namespace fishcam::cli
