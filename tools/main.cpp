@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   fishcam::cli::register_augment_dataset(app);
   fishcam::cli::register_convert(app);
   fishcam::cli::register_fit(app);
+  fishcam::cli::register_corners(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

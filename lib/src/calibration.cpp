@@ -1,0 +1,519 @@
+#include "fishcam/calibration.hpp"
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <Eigen/SVD>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+
+namespace fishcam {
+namespace {
+
+// Uniform [0, 1) and Gaussian draws from std::mt19937_64 by our own mapping, so a
+// seed gives the same numbers with every standard library.
+struct Random {
+  std::mt19937_64 engine;
+  double uniform() { return double(engine() >> 11) * 0x1.0p-53; }
+  double normal() {  // Box-Muller
+    const double u1 = 1 - uniform(), u2 = uniform();
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+  }
+};
+
+Eigen::Vector3d to_camera(const BoardPose& pose, const Eigen::Vector3d& p) { return pose.rotation * p + pose.translation; }
+
+// Kabsch: the rigid transform taking `from` onto `to` (least squares).
+BoardPose rigid_fit(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to) {
+  Eigen::Vector3d mean_from = Eigen::Vector3d::Zero(), mean_to = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < from.size(); ++i) mean_from += from[i], mean_to += to[i];
+  mean_from /= double(from.size()), mean_to /= double(to.size());
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < from.size(); ++i) h += (from[i] - mean_from) * (to[i] - mean_to).transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d r = svd.matrixV() * svd.matrixU().transpose();
+  if (r.determinant() < 0) {
+    Eigen::Matrix3d v = svd.matrixV();
+    v.col(2) *= -1;
+    r = v * svd.matrixU().transpose();
+  }
+  return BoardPose{Eigen::Quaterniond(r), mean_to - r * mean_from};
+}
+
+// A board pose from its corners' rays: all corners first put at one distance
+// (from the angle between neighbouring rays), then a few rounds of "fit the board,
+// intersect the rays with its plane, fit again".
+std::optional<BoardPose> pose_from_rays(const std::vector<Eigen::Vector3d>& rays, const std::vector<Eigen::Vector3d>& points,
+                                        const BoardSpec& board) {
+  double angle = 0;
+  int pairs = 0;
+  for (int j = 0; j < board.rows; ++j) {
+    for (int i = 0; i + 1 < board.cols; ++i) {
+      const auto& a = rays[size_t(j * board.cols + i)];
+      const auto& b = rays[size_t(j * board.cols + i + 1)];
+      angle += std::atan2(a.cross(b).norm(), a.dot(b));
+      ++pairs;
+    }
+  }
+  if (!(angle > 0)) return std::nullopt;
+  const double distance = board.spacing / (angle / pairs);
+  std::vector<Eigen::Vector3d> in_camera(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) in_camera[i] = distance * rays[i];
+  BoardPose pose = rigid_fit(points, in_camera);
+  for (int round = 0; round < 5; ++round) {
+    const Eigen::Vector3d normal = pose.rotation * Eigen::Vector3d::UnitZ();
+    const double offset = normal.dot(pose.translation);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const double along = normal.dot(rays[i]);
+      if (std::abs(along) < 1e-6) return std::nullopt;
+      in_camera[i] = offset / along * rays[i];
+    }
+    pose = rigid_fit(points, in_camera);
+  }
+  if (!pose.translation.allFinite()) return std::nullopt;
+  return pose;
+}
+
+// One corner's reprojection residual, for Ceres. One block per corner, so that a
+// robust loss (applied per block) discounts single bad corners, not whole boards.
+template <template <typename> class Model>
+struct CornerResidual {
+  Eigen::Vector3d point;
+  Eigen::Vector2d corner;
+  int params;
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    Model<T> model;
+    if constexpr (std::is_same_v<Model<T>, Polynomial<T>>) {
+      model = Polynomial<T>(p[0], params);
+    } else if constexpr (std::is_same_v<Model<T>, KannalaBrandt<T>>) {
+      model = KannalaBrandt<T>(p[0]);
+    } else {
+      model = Model<T>(p[0][0]);
+    }
+    const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
+    const T* pose = p[3];  // angle-axis, translation
+    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
+    T camera[3];
+    ceres::AngleAxisRotatePoint(pose, board, camera);
+    for (int k = 0; k < 3; ++k) camera[k] += pose[3 + k];
+    T pixel[2];
+    project_radial(model, mapping, camera, pixel);
+    residuals[0] = pixel[0] - corner.x();
+    residuals[1] = pixel[1] - corner.y();
+    return true;
+  }
+};
+
+std::array<double, 6> pose_block(const BoardPose& pose) {
+  const Eigen::AngleAxisd aa(pose.rotation);
+  const Eigen::Vector3d r = aa.axis() * aa.angle();
+  return {r.x(), r.y(), r.z(), pose.translation.x(), pose.translation.y(), pose.translation.z()};
+}
+
+BoardPose pose_of(const std::array<double, 6>& b) {
+  const Eigen::Vector3d r(b[0], b[1], b[2]);
+  const double angle = r.norm();
+  BoardPose pose;
+  pose.rotation = angle > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, r / angle)) : Eigen::Quaterniond::Identity();
+  pose.translation = {b[3], b[4], b[5]};
+  return pose;
+}
+
+struct Solve {
+  std::vector<double> model;
+  Eigen::Vector2d center;
+  double ay = 1;
+  std::vector<std::array<double, 6>> poses;
+};
+
+// The joint (or, with intrinsics_fixed, pose-only) solve over all boards; each
+// board's points and corners pair up. With sigmas: the intrinsics' 1-sigma from
+// the covariance, scaled by the residual variance.
+template <template <typename> class Model>
+ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vector3d>>& points,
+                             const std::vector<std::vector<Eigen::Vector2d>>& corners, bool intrinsics_fixed,
+                             ceres::LossFunction* loss, std::vector<double>* sigmas) {
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  const int n = static_cast<int>(s->model.size());
+  for (size_t b = 0; b < corners.size(); ++b) {
+    for (size_t i = 0; i < corners[b].size(); ++i) {
+      auto* cost = new ceres::DynamicAutoDiffCostFunction<CornerResidual<Model>, 8>(
+          new CornerResidual<Model>{points[b][i], corners[b][i], n});
+      cost->AddParameterBlock(n);
+      cost->AddParameterBlock(2);
+      cost->AddParameterBlock(1);
+      cost->AddParameterBlock(6);
+      cost->SetNumResiduals(2);
+      problem.AddResidualBlock(cost, loss, s->model.data(), s->center.data(), &s->ay, s->poses[b].data());
+    }
+  }
+  if (intrinsics_fixed) {
+    problem.SetParameterBlockConstant(s->model.data());
+    problem.SetParameterBlockConstant(s->center.data());
+    problem.SetParameterBlockConstant(&s->ay);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::SPARSE_SCHUR;
+  options.max_num_iterations = 200;
+  options.function_tolerance = 1e-14;
+  options.parameter_tolerance = 1e-14;
+  options.gradient_tolerance = 1e-14;
+  options.num_threads = 2;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (!summary.IsSolutionUsable()) throw Error("calibrate: the solve failed: " + summary.message);
+  if (sigmas) {
+    ceres::Covariance::Options covariance_options;
+    covariance_options.algorithm_type = ceres::DENSE_SVD;
+    covariance_options.null_space_rank = -1;
+    covariance_options.num_threads = 2;
+    ceres::Covariance covariance(covariance_options);
+    const std::vector<std::pair<const double*, const double*>> blocks = {
+        {s->model.data(), s->model.data()}, {s->center.data(), s->center.data()}, {&s->ay, &s->ay}};
+    sigmas->assign(size_t(n) + 3, std::numeric_limits<double>::quiet_NaN());
+    if (covariance.Compute(blocks, &problem)) {
+      const double dof = double(summary.num_residuals - summary.num_effective_parameters);
+      const double variance = dof > 0 ? 2 * summary.final_cost / dof : std::numeric_limits<double>::quiet_NaN();
+      std::vector<double> m(size_t(n) * n), c(4), a(1);
+      covariance.GetCovarianceBlock(s->model.data(), s->model.data(), m.data());
+      covariance.GetCovarianceBlock(s->center.data(), s->center.data(), c.data());
+      covariance.GetCovarianceBlock(&s->ay, &s->ay, a.data());
+      for (int i = 0; i < n; ++i) (*sigmas)[i] = std::sqrt(m[size_t(i) * n + i] * variance);
+      (*sigmas)[n] = std::sqrt(c[0] * variance), (*sigmas)[n + 1] = std::sqrt(c[3] * variance);
+      (*sigmas)[n + 2] = std::sqrt(a[0] * variance);
+    }
+  }
+  return summary;
+}
+
+// The model's parameters starting from an equidistant focal length f.
+std::vector<double> initial_model(const ModelSpec& spec, double f) {
+  if (spec.name == "polynomial") {
+    std::vector<double> k(size_t(spec.order), 0.0);
+    k[0] = f;
+    return k;
+  }
+  if (spec.name == "kannala-brandt") return {f, 0, 0, 0, 0};
+  return {f};
+}
+
+template <template <typename> class Model>
+CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boards, const BoardSpec& board, int width,
+                                 int height, const ModelSpec& spec) {
+  const std::vector<Eigen::Vector3d> points = board_points(board);
+  const std::vector<std::vector<Eigen::Vector3d>> all_points(boards.size(), points);
+  std::vector<std::vector<Eigen::Vector2d>> corners;
+  for (const auto* b : boards) corners.push_back(b->corners);
+  const Eigen::Vector2d center0((width - 1) / 2.0, (height - 1) / 2.0);
+
+  // Initialisation: equidistant cameras over a range of focal lengths (fisheye to
+  // narrow), boards placed from their rays; the focal length that reprojects best wins.
+  double best_cost = std::numeric_limits<double>::infinity();
+  Solve best;
+  for (int step = 0; step < 12; ++step) {
+    const double f = width * 0.1 * std::pow(1.25, step);
+    Solve s{{f}, center0, 1.0, {}};
+    CameraParameters p;
+    p.width = width, p.height = height, p.principal_point = center0, p.model = Equidistant<double>(f);
+    const Camera guess(p);
+    bool ok = true;
+    for (size_t b = 0; b < boards.size() && ok; ++b) {
+      std::vector<Eigen::Vector3d> rays(corners[b].size());
+      for (size_t i = 0; i < rays.size(); ++i) ok = ok && guess.unproject(corners[b][i], &rays[i]);
+      const auto pose = ok ? pose_from_rays(rays, points, board) : std::nullopt;
+      ok = ok && pose.has_value();
+      if (ok) s.poses.push_back(pose_block(*pose));
+    }
+    if (!ok) continue;
+    // Score: the robust (truncated at 20 px) reprojection error of these poses.
+    double cost = 0;
+    for (size_t b = 0; b < boards.size(); ++b) {
+      const BoardPose pose = pose_of(s.poses[b]);
+      for (size_t i = 0; i < points.size(); ++i) {
+        Eigen::Vector2d q;
+        const double e = guess.project(to_camera(pose, points[i]), &q) ? (q - corners[b][i]).norm() : 20.0;
+        cost += std::min(e, 20.0);
+      }
+    }
+    if (cost < best_cost) best_cost = cost, best = s;
+  }
+  if (!std::isfinite(best_cost)) throw Error("calibrate: could not initialise any board pose (are the corners valid?)");
+  {
+    ceres::CauchyLoss loss(2.0);
+    solve<Equidistant>(&best, all_points, corners, /*intrinsics_fixed=*/true, &loss, nullptr);
+  }
+
+  // Joint solve of the target model from the best start: robust first, then plain
+  // least squares without the outliers.
+  Solve s = best;
+  s.model = initial_model(spec, best.model[0]);
+  {
+    ceres::CauchyLoss loss(1.0);
+    solve<Model>(&s, all_points, corners, false, &loss, nullptr);
+  }
+  CalibrationResult result;
+  CameraParameters camera;
+  camera.width = width, camera.height = height;
+  auto current_camera = [&] {
+    camera.principal_point = s.center;
+    camera.pixel_scale = {1.0, s.ay};
+    camera.model = make_model(spec.name, s.model);
+    return Camera(camera);
+  };
+  // Outliers: corners beyond 5 robust sigmas (median absolute error * 1.4826 * sqrt(2) ~ 2D).
+  {
+    const Camera c = current_camera();
+    std::vector<double> errors;
+    std::vector<std::vector<double>> per_board(boards.size());
+    for (size_t b = 0; b < boards.size(); ++b) {
+      const BoardPose pose = pose_of(s.poses[b]);
+      for (size_t i = 0; i < points.size(); ++i) {
+        Eigen::Vector2d q;
+        const double e = c.project(to_camera(pose, points[i]), &q) ? (q - corners[b][i]).norm()
+                                                                     : std::numeric_limits<double>::infinity();
+        per_board[b].push_back(e);
+        errors.push_back(e);
+      }
+    }
+    std::vector<double> sorted = errors;
+    std::nth_element(sorted.begin(), sorted.begin() + long(sorted.size() / 2), sorted.end());
+    const double sigma = std::max(1.4826 * sorted[sorted.size() / 2], 1e-9);
+    for (size_t b = 0; b < boards.size(); ++b) {
+      for (size_t i = 0; i < points.size(); ++i) {
+        if (per_board[b][i] > 5 * sigma + 1e-6) {
+          result.outliers.push_back({boards[b]->filename, int(i), per_board[b][i]});
+        }
+      }
+    }
+  }
+  // Drop outliers (keep board order of the remaining corners consistent with points).
+  std::vector<std::vector<Eigen::Vector3d>> board_points_kept(boards.size(), points);
+  for (const auto& o : result.outliers) {
+    for (size_t b = 0; b < boards.size(); ++b) {
+      if (boards[b]->filename != o.filename) continue;
+      board_points_kept[b][size_t(o.corner)] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  std::vector<std::vector<Eigen::Vector3d>> kept_points(boards.size());
+  std::vector<std::vector<Eigen::Vector2d>> kept_corners(boards.size());
+  for (size_t b = 0; b < boards.size(); ++b) {
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (board_points_kept[b][i].allFinite()) {
+        kept_points[b].push_back(points[i]);
+        kept_corners[b].push_back(corners[b][i]);
+      }
+    }
+  }
+  // Final plain least squares without the outliers, and the covariance.
+  std::vector<double> sigmas;
+  result.observations = solve<Model>(&s, kept_points, kept_corners, false, nullptr, &sigmas).num_residuals / 2;
+  const Camera final_camera = current_camera();
+  result.camera = camera;
+  double sum2 = 0;
+  for (size_t b = 0; b < boards.size(); ++b) {
+    const BoardPose pose = pose_of(s.poses[b]);
+    result.poses.push_back(pose);
+    result.used_images.push_back(boards[b]->filename);
+    double board_sum2 = 0;
+    for (size_t i = 0; i < kept_points[b].size(); ++i) {
+      Eigen::Vector2d q;
+      final_camera.project(to_camera(pose, kept_points[b][i]), &q);
+      board_sum2 += (q - kept_corners[b][i]).squaredNorm();
+    }
+    sum2 += board_sum2;
+    result.per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max<size_t>(1, kept_points[b].size()))));
+  }
+  result.rms_px = std::sqrt(sum2 / double(std::max(1L, result.observations)));
+  const auto names = [&] {
+    std::vector<std::string> out;
+    if (spec.name == "polynomial") {
+      for (int i = 1; i <= spec.order; ++i) out.push_back(std::string("k") + std::to_string(i));
+    } else if (spec.name == "kannala-brandt") {
+      out = {"f", "k1", "k2", "k3", "k4"};
+    } else {
+      out = {"f"};
+    }
+    out.insert(out.end(), {"cx", "cy", "a_y"});
+    return out;
+  }();
+  result.parameter_names = names;
+  result.parameters = s.model;
+  result.parameters.insert(result.parameters.end(), {s.center.x(), s.center.y(), s.ay});
+  result.sigmas = sigmas;
+  return result;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> board_points(const BoardSpec& board) {
+  std::vector<Eigen::Vector3d> points;
+  for (int j = 0; j < board.rows; ++j) {
+    for (int i = 0; i < board.cols; ++i) points.emplace_back(i * board.spacing, j * board.spacing, 0.0);
+  }
+  return points;
+}
+
+std::vector<BoardObservation> read_corners(const std::filesystem::path& path, const BoardSpec& board) {
+  std::ifstream in(path);
+  if (!in) throw Error(path.string() + ": cannot open");
+  std::vector<BoardObservation> out;
+  std::map<std::string, long> seen;
+  std::string line;
+  bool empty_board = false;
+  auto close_image = [&](long number) {
+    if (out.empty()) return;
+    const auto& last = out.back();
+    if (!empty_board && int(last.corners.size()) != board.corners()) {
+      throw Error(path.string() + ":" + std::to_string(number) + ": image " + last.filename + ": expected " +
+                  std::to_string(board.corners()) + " corners (" + std::to_string(board.cols) + "x" +
+                  std::to_string(board.rows) + "), got " + std::to_string(last.corners.size()));
+    }
+  };
+  long number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string filename, x, y, level, extra;
+    if (!(fields >> filename >> x >> y >> level) || (fields >> extra)) {
+      throw Error(path.string() + ":" + std::to_string(number) + ": expected 'filename x y level'");
+    }
+    if (out.empty() || out.back().filename != filename) {
+      close_image(number - 1);
+      if (seen.count(filename)) {
+        throw Error(path.string() + ":" + std::to_string(number) + ": image " + filename +
+                    " appears twice (its rows must be together)");
+      }
+      seen[filename] = number;
+      out.push_back({filename, {}});
+      empty_board = x == "-";
+      if (empty_board) continue;
+    } else if (empty_board || x == "-") {
+      throw Error(path.string() + ":" + std::to_string(number) + ": image " + filename +
+                  ": '- - -' (no board) must be the image's only row");
+    }
+    char* end_x = nullptr;
+    char* end_y = nullptr;
+    const double u = std::strtod(x.c_str(), &end_x), v = std::strtod(y.c_str(), &end_y);
+    if (*end_x || *end_y || !std::isfinite(u) || !std::isfinite(v)) {
+      throw Error(path.string() + ":" + std::to_string(number) + ": x and y must be finite numbers");
+    }
+    out.back().corners.emplace_back(u, v);
+  }
+  close_image(number);
+  if (out.empty()) throw Error(path.string() + ": no corners");
+  return out;
+}
+
+void write_corners(const std::filesystem::path& path, const std::vector<BoardObservation>& observations,
+                   bool overwrite) {
+  std::error_code ec;
+  if (!overwrite && std::filesystem::exists(path, ec)) throw Error(path.string() + ": already exists (refusing to overwrite)");
+  const std::filesystem::path tmp = path.string() + ".fishcam-tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw Error(path.string() + ": cannot write");
+    out << "# filename x y level\n";
+    char buffer[128];
+    for (const auto& o : observations) {
+      if (o.corners.empty()) out << o.filename << " - - -\n";
+      for (const auto& c : o.corners) {
+        std::snprintf(buffer, sizeof buffer, " %.17g %.17g 0\n", c.x(), c.y());
+        out << o.filename << buffer;
+      }
+    }
+    if (!out) throw Error(path.string() + ": write failed");
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw Error(path.string() + ": cannot move the written file into place");
+}
+
+SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, int count, double noise_px,
+                                  std::uint64_t seed) {
+  if (board.cols < 2 || board.rows < 2 || !(board.spacing > 0)) throw Error("board: needs >= 2x2 corners and spacing > 0");
+  if (count < 1 || !(noise_px >= 0)) throw Error("synthesize_boards: needs >= 1 board and noise >= 0");
+  Random random{std::mt19937_64(seed)};
+  const auto points = board_points(board);
+  const Eigen::Vector3d middle((board.cols - 1) * board.spacing / 2, (board.rows - 1) * board.spacing / 2, 0);
+  const double extent = std::max(board.cols - 1, board.rows - 1) * board.spacing;
+  SyntheticBoards out;
+  for (int b = 0; b < count; ++b) {
+    bool placed = false;
+    for (int attempt = 0; attempt < 2000 && !placed; ++attempt) {
+      // Aim at a random pixel (the whole image, rim included), at 1.2-3 board sizes.
+      const Eigen::Vector2d target(random.uniform() * (camera.width() - 1), random.uniform() * (camera.height() - 1));
+      Eigen::Vector3d m;
+      if (!camera.unproject(target, &m)) continue;
+      const double distance = extent * (1.2 + 1.8 * random.uniform());
+      // Facing the camera, tilted up to 40 deg, turned in plane at random.
+      const Eigen::Vector3d axis = Eigen::Vector3d(random.normal(), random.normal(), random.normal()).normalized();
+      const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.7 * random.uniform(), axis).toRotationMatrix();
+      const Eigen::Vector3d z = tilt * m;  // board normal pointing away from the camera
+      Eigen::Vector3d x = z.unitOrthogonal();
+      x = Eigen::AngleAxisd(2 * std::numbers::pi * random.uniform(), z) * x;
+      Eigen::Matrix3d r;
+      r << x, z.cross(x), z;
+      const BoardPose pose{Eigen::Quaterniond(r), distance * m - r * middle};
+      BoardObservation o{std::string("synth-") + std::to_string(1000 + b).substr(1) + ".png", {}};
+      bool inside = true;
+      for (const auto& p : points) {
+        Eigen::Vector2d q;
+        inside = inside && camera.project(to_camera(pose, p), &q) && q.x() > 2 && q.y() > 2 &&
+                 q.x() < camera.width() - 3 && q.y() < camera.height() - 3;
+        o.corners.push_back(q);
+      }
+      if (!inside) continue;
+      for (auto& q : o.corners) q += noise_px * Eigen::Vector2d(random.normal(), random.normal());
+      out.observations.push_back(std::move(o));
+      out.poses.push_back(pose);
+      placed = true;
+    }
+    if (!placed) throw Error("synthesize_boards: could not place board " + std::to_string(b) + " inside the image");
+  }
+  return out;
+}
+
+CalibrationResult calibrate(const std::vector<BoardObservation>& observations, const BoardSpec& board, int width,
+                            int height, const ModelSpec& spec) {
+  if (board.cols < 2 || board.rows < 2 || !(board.spacing > 0)) throw Error("--board/--spacing: needs >= 2x2 corners and spacing > 0");
+  std::vector<const BoardObservation*> boards;
+  for (const auto& o : observations) {
+    if (!o.corners.empty()) boards.push_back(&o);
+  }
+  if (boards.size() < 3) {
+    throw Error("calibrate: " + std::to_string(boards.size()) + " image(s) with a board; at least 3 are needed (" +
+                "more, spread over the whole image, for a good calibration)");
+  }
+  CalibrationResult result =
+      spec.name == "polynomial"       ? calibrate_with<Polynomial>(boards, board, width, height, spec)
+      : spec.name == "kannala-brandt" ? calibrate_with<KannalaBrandt>(boards, board, width, height, spec)
+      : spec.name == "equidistant"    ? calibrate_with<Equidistant>(boards, board, width, height, spec)
+      : spec.name == "stereographic"  ? calibrate_with<Stereographic>(boards, board, width, height, spec)
+                                      : calibrate_with<Pinhole>(boards, board, width, height, spec);
+  // Coverage: the share of an 8 x 6 grid over the image that holds corners. A lens
+  // calibrated from its centre only is extrapolated at the rim.
+  bool cell[6][8] = {};
+  for (const auto* b : boards) {
+    for (const auto& c : b->corners) {
+      const int i = std::clamp(int(c.x() * 8 / width), 0, 7), j = std::clamp(int(c.y() * 6 / height), 0, 5);
+      cell[j][i] = true;
+    }
+  }
+  int covered = 0;
+  for (const auto& row : cell) covered += int(std::count(std::begin(row), std::end(row), true));
+  if (covered < 24) {
+    result.warnings.push_back("the boards cover only " + std::to_string(100 * covered / 48) +
+                              "% of the image (8x6 grid): the model is extrapolated elsewhere; add boards near the rim");
+  }
+  return result;
+}
+
+}  // namespace fishcam

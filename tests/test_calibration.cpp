@@ -1,0 +1,156 @@
+// Chessboard calibration: exact recovery without noise, honest uncertainties with
+// noise, mrcal's corners format, detection, and bad input.
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "fishcam/calibration.hpp"
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+const BoardSpec kBoard{10, 10, 0.1};
+
+ModelSpec spec_of(const RadialModel& m) {
+  ModelSpec s{std::string(model_name(m))};
+  if (const auto* p = std::get_if<Polynomial<double>>(&m)) s.order = p->order();
+  return s;
+}
+
+std::vector<double> truth_vector(const CameraParameters& p) {
+  auto v = model_params(p.model);
+  v.insert(v.end(), {p.principal_point.x(), p.principal_point.y(), p.pixel_scale.y()});
+  return v;
+}
+
+TEST(Calibration, NoiseFreeBoardsRecoverEveryFisheyeModel) {
+  for (const auto& [name, truth] : test::every_model()) {
+    if (name == "pinhole") continue;  // pinhole below, with a narrower field of view
+    const Camera camera(truth);
+    const auto boards = synthesize_boards(camera, kBoard, 25, 0.0, 11);
+    const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, spec_of(truth.model));
+    const auto expected = truth_vector(truth);
+    ASSERT_EQ(result.parameters.size(), expected.size()) << name;
+    for (size_t i = 0; i < expected.size(); ++i) {
+      EXPECT_NEAR(result.parameters[i], expected[i], 1e-6 * std::abs(expected[i]) + 1e-9)
+          << name << " " << result.parameter_names[i];
+    }
+    EXPECT_LT(result.rms_px, 1e-6) << name;
+    EXPECT_TRUE(result.outliers.empty()) << name;
+    EXPECT_TRUE(result.warnings.empty()) << name;
+  }
+  const CameraParameters pinhole = read_camera(test::data_path("pinhole.cameramodel")).parameters();
+  const auto boards = synthesize_boards(Camera(pinhole), kBoard, 25, 0.0, 12);
+  const auto result = calibrate(boards.observations, kBoard, pinhole.width, pinhole.height, spec_of(pinhole.model));
+  EXPECT_NEAR(result.parameters[0], model_params(pinhole.model)[0], 1e-6 * 640);
+}
+
+TEST(Calibration, WithNoiseTheErrorsSitWithinThreeSigma) {
+  const CameraParameters truth = read_camera(test::data_path("woodscape_front.json")).parameters();
+  const auto expected = truth_vector(truth);
+  for (std::uint64_t seed : {2, 3}) {
+    const auto boards = synthesize_boards(Camera(truth), kBoard, 50, 0.3, seed);
+    const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, {"polynomial", 4});
+    EXPECT_NEAR(result.rms_px, 0.3 * std::sqrt(2.0), 0.03);  // two noisy coordinates per corner
+    for (size_t i = 0; i < expected.size(); ++i) {
+      ASSERT_TRUE(std::isfinite(result.sigmas[i]) && result.sigmas[i] > 0) << result.parameter_names[i];
+      EXPECT_LE(std::abs(result.parameters[i] - expected[i]), 3 * result.sigmas[i])
+          << "seed " << seed << " " << result.parameter_names[i] << " sigma " << result.sigmas[i];
+    }
+  }
+}
+
+TEST(Calibration, OutliersAreFoundAndDoNotBiasTheResult) {
+  const CameraParameters truth = read_camera(test::data_path("stereographic.cameramodel")).parameters();
+  auto boards = synthesize_boards(Camera(truth), kBoard, 30, 0.1, 4);
+  boards.observations[3].corners[17] += Eigen::Vector2d(25, -30);  // a wrong detection
+  boards.observations[9].corners[50] += Eigen::Vector2d(-12, 8);
+  const auto result = calibrate(boards.observations, kBoard, truth.width, truth.height, {"stereographic"});
+  ASSERT_EQ(result.outliers.size(), 2u);
+  EXPECT_EQ(result.outliers[0].filename, boards.observations[3].filename);
+  EXPECT_EQ(result.outliers[0].corner, 17);
+  EXPECT_NEAR(result.parameters[0], model_params(truth.model)[0], 3 * result.sigmas[0]);
+  EXPECT_LT(result.rms_px, 0.2);
+}
+
+TEST(Calibration, CornersFileRoundTripAndErrors) {
+  const auto dir = test::scratch_dir("corners");
+  auto boards = synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 3, 0.2, 5).observations;
+  boards.push_back({"empty.png", {}});
+  write_corners(dir / "c.vnl", boards);
+  const auto back = read_corners(dir / "c.vnl", kBoard);
+  ASSERT_EQ(back.size(), boards.size());
+  for (size_t b = 0; b < boards.size(); ++b) {
+    EXPECT_EQ(back[b].filename, boards[b].filename);
+    EXPECT_EQ(back[b].corners, boards[b].corners);  // %.17g: exact
+  }
+  EXPECT_THROW(write_corners(dir / "c.vnl", boards), Error);  // no overwrite
+  const std::string good = test::read_file(dir / "c.vnl");
+  const struct {
+    std::string content, expected;
+  } bad[] = {
+      {good.substr(0, good.rfind("synth-002.png")), "image synth-002.png: expected 100 corners (10x10), got 99"},
+      {"# filename x y level\na.png 1 2\n", "expected 'filename x y level'"},
+      {"b.png - - -\nb.png 1 2 0\n", "only row"},
+      {"a.png x 2 0\n", "finite numbers"},
+      {"# nothing\n", "no corners"},
+  };
+  for (const auto& c : bad) {
+    test::write_file(dir / "bad.vnl", c.content);
+    try {
+      read_corners(dir / "bad.vnl", kBoard);
+      ADD_FAILURE() << "accepted: " << c.expected;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Calibration, DegenerateDataIsReported) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  const auto one = synthesize_boards(camera, kBoard, 1, 0.0, 6);
+  EXPECT_THROW(calibrate(one.observations, kBoard, 1280, 966, {"polynomial", 4}), Error);
+  // Boards only near the centre: it solves, and says the rim is extrapolated.
+  CameraParameters narrow = camera.parameters();
+  narrow.width = 400, narrow.height = 300;
+  narrow.principal_point = {199.5, 149.5};
+  auto centre = synthesize_boards(Camera(narrow), kBoard, 10, 0.0, 7).observations;
+  for (auto& o : centre) {
+    for (auto& c : o.corners) c += Eigen::Vector2d(640 - 199.5 + 3.942, 480 - 149.5 - 3.093);
+  }
+  const auto result = calibrate(centre, kBoard, 1280, 966, {"polynomial", 4});
+  ASSERT_FALSE(result.warnings.empty());
+  EXPECT_NE(result.warnings[0].find("cover only"), std::string::npos);
+}
+
+TEST(Calibration, OpenCVDetectionFindsTheCornersOfARenderedBoard) {
+  // A fronto-parallel board drawn directly: squares of 40 px, inner corners at 100 + 40 k.
+  cv::Mat image(600, 700, CV_8UC1, cv::Scalar(255));
+  for (int j = 0; j < 11; ++j) {
+    for (int i = 0; i < 11; ++i) {
+      if ((i + j) % 2 == 0) cv::rectangle(image, cv::Rect(60 + 40 * i, 60 + 40 * j, 40, 40), cv::Scalar(0), cv::FILLED);
+    }
+  }
+  cv::GaussianBlur(image, image, {3, 3}, 0.8);
+  const auto dir = test::scratch_dir("detect");
+  cv::imwrite((dir / "board.png").string(), image);
+  cv::imwrite((dir / "blank.png").string(), cv::Mat(600, 700, CV_8UC1, cv::Scalar(128)));
+  const std::string command = std::string("'") + FISHCAM_BINARY + "' detect-corners '" + (dir / "board.png").string() +
+                              "' '" + (dir / "blank.png").string() + "' --board 10x10 --out '" +
+                              (dir / "c.vnl").string() + "' > /dev/null";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const auto observations = read_corners(dir / "c.vnl", kBoard);
+  ASSERT_EQ(observations.size(), 2u);
+  ASSERT_EQ(observations[0].corners.size(), 100u);
+  EXPECT_TRUE(observations[1].corners.empty());
+  // The same grid (OpenCV may start from any corner: compare as sets).
+  double worst = 0;
+  for (const auto& c : observations[0].corners) {
+    const double u = 100 + 40 * std::round((c.x() - 99.5) / 40), v = 100 + 40 * std::round((c.y() - 99.5) / 40);
+    worst = std::max(worst, std::hypot(c.x() - (u - 0.5), c.y() - (v - 0.5)));
+  }
+  EXPECT_LT(worst, 0.2);
+}
+
+}  // namespace
+}  // namespace fishcam
