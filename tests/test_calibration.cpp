@@ -123,6 +123,43 @@ TEST(Calibration, DegenerateDataIsReported) {
   EXPECT_NE(result.warnings[0].find("cover only"), std::string::npos);
 }
 
+// The same corners through mrcal-calibrate-cameras (LENSMODEL_STEREOGRAPHIC, no board
+// warp): the two calibrations project within 0.05 px across the image, compared as
+// mrcal.projection_diff does (after fitting the rotation between the frames).
+TEST(Calibration, AgreesWithMrcalCalibrateCameras) {
+  const auto dir = test::scratch_dir("mrcal_calibrate");
+  const Camera truth = read_camera(test::data_path("stereographic.cameramodel"));
+  const auto boards = synthesize_boards(truth, kBoard, 30, 0.3, 9);
+  write_corners(dir / "corners.vnl", boards.observations);
+  const std::string command = "cd '" + dir.string() + "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl "
+                              "--lensmodel LENSMODEL_STEREOGRAPHIC --focal 300 --object-spacing 0.1 --object-width-n 10 "
+                              "--object-height-n 10 --imagersize 1280 966 --outdir . --skip-calobject-warp-solve "
+                              "'synth-*.png' > log.txt 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "log.txt");
+  const Camera theirs = read_camera(dir / "camera-0.cameramodel");  // mrcal's own file, optimization_inputs and all
+  const CalibrationResult ours = calibrate(boards.observations, kBoard, 1280, 966, {"stereographic"});
+  const ProjectionDiff diff = projection_diff(theirs, Camera(ours.camera), 4);
+  EXPECT_GT(diff.pixels, 70000);
+  EXPECT_LE(diff.max_px, 0.05);
+  std::printf("  fishcam vs mrcal-calibrate-cameras: rms %.2g px, max %.2g px over %ld pixels\n", diff.rms_px,
+              diff.max_px, diff.pixels);
+  // And both against the truth: the noise shows, at the size the uncertainty predicts.
+  EXPECT_LT(projection_diff(truth, Camera(ours.camera), 8).rms_px, 1.0);
+}
+
+TEST(Calibration, ProjectionDiffFitsTheRotationBetweenFrames) {
+  const Camera a = read_camera(test::data_path("woodscape_front.json"));
+  EXPECT_LT(projection_diff(a, a).max_px, 1e-9);
+  // The same lens with its principal point moved: without a rotation, pixels
+  // differ by the shift; with one, much of the shift is absorbed near the centre.
+  CameraParameters moved = a.parameters();
+  moved.principal_point += Eigen::Vector2d(1.0, 0);
+  const Camera b(moved);
+  const ProjectionDiff plain = projection_diff(a, b, 8, false), rotated = projection_diff(a, b, 8, true);
+  EXPECT_NEAR(plain.rms_px, 1.0, 1e-9);
+  EXPECT_LT(rotated.rms_px, plain.rms_px);
+}
+
 TEST(Calibration, OpenCVDetectionFindsTheCornersOfARenderedBoard) {
   // A fronto-parallel board drawn directly: squares of 40 px, inner corners at 100 + 40 k.
   cv::Mat image(600, 700, CV_8UC1, cv::Scalar(255));

@@ -17,6 +17,7 @@ void register_demo(CLI::App& app);
 void register_augment_dataset(CLI::App& app);
 void register_convert(CLI::App& app);
 void register_fit(CLI::App& app);
+void register_diff(CLI::App& app);
 void register_corners(CLI::App& app);  // detect-corners, synth-corners, calibrate
 
 }  // namespace fishcam::cli

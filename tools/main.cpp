@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   fishcam::cli::register_convert(app);
   fishcam::cli::register_fit(app);
   fishcam::cli::register_corners(app);
+  fishcam::cli::register_diff(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -268,4 +268,51 @@ ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspond
   return report;
 }
 
+ProjectionDiff projection_diff(const Camera& a, const Camera& b, int step, bool fit_rotation) {
+  const auto samples = sample_image(a, step, step / 2);
+  ProjectionDiff diff;
+  auto residuals = [&](const Eigen::Matrix3d& r, Eigen::MatrixXd* jacobian) {
+    std::vector<double> errors;
+    std::vector<Eigen::Vector2d> out;
+    if (jacobian) jacobian->resize(0, 3);
+    std::vector<Eigen::Matrix<double, 2, 3>> rows;
+    for (const auto& s : samples) {
+      Eigen::Vector2d q;
+      Eigen::Matrix<double, 2, 3> j;
+      const Eigen::Vector3d rotated = r * s.ray;
+      if (!b.project(rotated, &q, &j)) continue;
+      if (!(q.x() >= -0.5 && q.y() >= -0.5 && q.x() < b.width() - 0.5 && q.y() < b.height() - 0.5)) continue;
+      out.push_back(q - s.pixel);
+      // d q / d w for a small rotation w applied on the left: J * (-[r ray]x).
+      Eigen::Matrix3d cross;
+      cross << 0, -rotated.z(), rotated.y(), rotated.z(), 0, -rotated.x(), -rotated.y(), rotated.x(), 0;
+      rows.push_back(-j * cross);
+    }
+    if (jacobian) {
+      jacobian->resize(long(2 * rows.size()), 3);
+      for (size_t i = 0; i < rows.size(); ++i) jacobian->block<2, 3>(long(2 * i), 0) = rows[i];
+    }
+    return out;
+  };
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  for (int iteration = 0; fit_rotation && iteration < 20; ++iteration) {  // Gauss-Newton on the rotation
+    Eigen::MatrixXd jacobian;
+    const auto e = residuals(r, &jacobian);
+    if (e.size() < 10) break;
+    Eigen::VectorXd rhs(long(2 * e.size()));
+    for (size_t i = 0; i < e.size(); ++i) rhs.segment<2>(long(2 * i)) = e[i];
+    const Eigen::Vector3d w = -(jacobian.transpose() * jacobian).ldlt().solve(jacobian.transpose() * rhs);
+    r = Eigen::AngleAxisd(w.norm(), w.norm() > 0 ? Eigen::Vector3d(w.normalized()) : Eigen::Vector3d::UnitX()) * r;
+    if (w.norm() < 1e-15) break;
+  }
+  const auto e = residuals(r, nullptr);
+  if (e.empty()) throw Error("diff: the two cameras share no pixels");
+  double sum2 = 0;
+  for (const auto& v : e) sum2 += v.squaredNorm(), diff.max_px = std::max(diff.max_px, v.norm());
+  diff.pixels = long(e.size());
+  diff.rms_px = std::sqrt(sum2 / double(e.size()));
+  diff.rotation = r;
+  return diff;
+}
+
 }  // namespace fishcam

@@ -56,6 +56,9 @@ class Parser {
       value = parse_list(c == '[' ? ']' : ')');
     } else if (c == '\'' || c == '"') {
       value = parse_strings();
+    } else if ((c == 'b' || c == 'B') && pos_ + 1 < s_.size() && (s_[pos_ + 1] == '\'' || s_[pos_ + 1] == '"')) {
+      ++pos_;  // a bytes literal (mrcal's optimization_inputs): read as a string
+      value = parse_strings();
     } else if (std::isalpha(static_cast<unsigned char>(c))) {
       value = parse_word();
     } else {

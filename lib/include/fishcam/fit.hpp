@@ -67,4 +67,15 @@ struct ErrorReport {
 // Pixel error of `camera` reprojecting the correspondences.
 ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspondence> samples);
 
+// How differently two calibrations of one camera project, after fitting the small
+// rotation between their frames (a calibration fixes the camera frame only up to
+// a rotation traded against the principal point), as mrcal.projection_diff does:
+// rays of A's pixels (every `step` px), rotated, projected by B.
+struct ProjectionDiff {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // A's camera frame -> B's
+  long pixels = 0;  // compared (valid in both and inside B's image)
+  double rms_px = 0, max_px = 0;
+};
+ProjectionDiff projection_diff(const Camera& a, const Camera& b, int step = 8, bool fit_rotation = true);
+
 }  // namespace fishcam
