@@ -89,7 +89,7 @@ TEST(Cli, BadInputExitsNonZeroWithOneLine) {
 }
 
 TEST(Cli, EverySubcommandHasHelp) {
-  for (const char* sub : {"", "info", "project", "unproject", "bench", "bench roots", "bench augment", "render", "map",
+  for (const char* sub : {"", "info", "project", "unproject", "bench", "bench roots", "bench augment", "bench fit", "render", "map",
                           "augment", "augment-dataset", "check-mrcal", "demo", "convert", "fit", "diff", "detect-corners", "synth-corners", "calibrate"}) {
     const auto r = run_fishcam(std::string(sub) + " --help");
     EXPECT_EQ(r.exit_code, 0) << sub;

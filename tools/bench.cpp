@@ -13,6 +13,8 @@
 #include "commands.hpp"
 #include "cli_common.hpp"
 #include "fishcam/augmentation.hpp"
+#include "fishcam/calibration.hpp"
+#include "fishcam/fit.hpp"
 #include "fishcam/camera_io.hpp"
 #include "fishcam/scene.hpp"
 
@@ -194,6 +196,38 @@ void run_augment(const std::string& path, bool json, int samples) {
   }
 }
 
+// Conversion of the WoodScape front camera and calibration from 50 boards of 10x10
+// corners (synthetic, 0.3 px noise): the costs the fitting issue sets targets for.
+void run_fit(bool json, int repeats) {
+  const Camera source = read_camera(bundled_data("woodscape_front.json"));
+  nlohmann::json out = {{"repeats", repeats}};
+  for (const char* model : {"kannala-brandt", "polynomial:4", "equidistant"}) {
+    const ModelSpec spec = parse_model_spec(model);
+    out["convert_ms"][model] = 1e3 * median_seconds(repeats, [&] {
+      g_sink = model_params(fit_camera(sample_image(source, 4, 1), spec, source.parameters()).model)[0];
+    });
+    out["convert_fit_center_ms"][model] = 1e3 * median_seconds(repeats, [&] {
+      g_sink = model_params(fit_camera(sample_image(source, 4, 1), spec, source.parameters(), {true, true}).model)[0];
+    });
+  }
+  const BoardSpec board{10, 10, 0.1};
+  const auto boards = synthesize_boards(source, board, 50, 0.3, 1);
+  out["calibrate_50_boards_ms"] = 1e3 * median_seconds(std::max(1, repeats / 2), [&] {
+    g_sink = calibrate(boards.observations, board, source.width(), source.height(), {"polynomial", 4}).rms_px;
+  });
+  if (json) {
+    std::printf("%s\n", out.dump(2).c_str());
+    return;
+  }
+  std::printf("conversion of the WoodScape front camera (every 4th pixel, fit only), median of %d:\n", repeats);
+  for (const char* model : {"kannala-brandt", "polynomial:4", "equidistant"}) {
+    std::printf("  %-15s %7.1f ms   with --fit-center --fit-aspect %7.1f ms\n", model,
+                out["convert_ms"][model].get<double>(), out["convert_fit_center_ms"][model].get<double>());
+  }
+  std::printf("calibration, 50 boards of 10x10 corners, WoodScape polynomial with centre and aspect: %.0f ms\n",
+              out["calibrate_50_boards_ms"].get<double>());
+}
+
 }  // namespace
 
 void register_bench(CLI::App& app) {
@@ -220,6 +254,15 @@ void register_bench(CLI::App& app) {
   augment->add_option("--samples", *samples, "Samples per measurement (the median is reported)")
       ->check(CLI::Range(1, 10000))
       ->capture_default_str();
+  auto* fit = bench->add_subcommand("fit", "Model conversion and chessboard calibration times");
+  auto fit_json = std::make_shared<bool>(false);
+  auto fit_repeats = std::make_shared<int>(5);
+  fit->add_flag("--json", *fit_json, "Print one JSON object");
+  fit->add_option("--repeats", *fit_repeats, "Runs per measurement (the median is reported)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  fit->callback([=] { run_fit(*fit_json, *fit_repeats); });
+
   augment->callback([=] {
     const std::string camera =
         augment_camera->empty() ? bundled_data("woodscape_front.json").string() : *augment_camera;
