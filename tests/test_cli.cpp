@@ -9,13 +9,7 @@ namespace {
 
 using test::run_fishcam;
 
-// The quoted path of a bundled file (built by appending: GCC 12 warns falsely on "'" + string).
-std::string data(const char* name) {
-  std::string quoted = "'";
-  quoted += test::data_path(name).string();
-  quoted += "'";
-  return quoted;
-}
+std::string data(const char* name) { return test::quoted(test::data_path(name)); }
 
 TEST(Cli, InfoJsonHasTheDocumentedKeys) {
   const auto r = run_fishcam("info " + data("woodscape_front.json") + " --json");

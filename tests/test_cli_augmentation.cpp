@@ -12,12 +12,7 @@ namespace {
 
 using test::run_fishcam;
 
-std::string quoted(const std::filesystem::path& p) {
-  std::string q = "'";
-  q += p.string();
-  q += "'";
-  return q;
-}
+using test::quoted;
 
 std::string data(const char* name) { return quoted(test::data_path(name)); }
 

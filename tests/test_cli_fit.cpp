@@ -8,12 +8,7 @@ namespace {
 
 using test::run_fishcam;
 
-std::string quoted(const std::filesystem::path& p) {
-  std::string q = "'";
-  q += p.string();
-  q += "'";
-  return q;
-}
+using test::quoted;
 
 TEST(CliFit, ConvertReportsAndWritesEveryFormat) {
   const auto dir = test::scratch_dir("cli_convert");

@@ -25,6 +25,15 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   return dir;
 }
 
+// A path in single quotes, for shell commands (built by appending: GCC 12 warns
+// falsely on "'" + string).
+inline std::string quoted(const std::filesystem::path& p) {
+  std::string q = "'";
+  q += p.string();
+  q += "'";
+  return q;
+}
+
 inline std::filesystem::path write_file(const std::filesystem::path& path, const std::string& content) {
   std::ofstream(path, std::ios::binary) << content;
   return path;

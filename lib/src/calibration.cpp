@@ -1,7 +1,8 @@
 #include "fishcam/calibration.hpp"
 
-#include <ceres/ceres.h>
 #include <ceres/rotation.h>
+
+#include "ceres_support.hpp"
 
 #include <Eigen/SVD>
 #include <cmath>
@@ -87,14 +88,7 @@ struct CornerResidual {
 
   template <typename T>
   bool operator()(T const* const* p, T* residuals) const {
-    Model<T> model;
-    if constexpr (std::is_same_v<Model<T>, Polynomial<T>>) {
-      model = Polynomial<T>(p[0], params);
-    } else if constexpr (std::is_same_v<Model<T>, KannalaBrandt<T>>) {
-      model = KannalaBrandt<T>(p[0]);
-    } else {
-      model = Model<T>(p[0][0]);
-    }
+    const Model<T> model = detail::model_from_block<Model>(p[0], params);
     const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
     const T* pose = p[3];  // angle-axis, translation
     const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
@@ -159,16 +153,8 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
     problem.SetParameterBlockConstant(s->center.data());
     problem.SetParameterBlockConstant(&s->ay);
   }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_SCHUR;
-  options.max_num_iterations = 200;
-  options.function_tolerance = 1e-14;
-  options.parameter_tolerance = 1e-14;
-  options.gradient_tolerance = 1e-14;
-  options.num_threads = 2;
-  options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  ceres::Solve(detail::solver_options(ceres::SPARSE_SCHUR), &problem, &summary);
   if (!summary.IsSolutionUsable()) throw Error("calibrate: the solve failed: " + summary.message);
   if (sigmas) {
     ceres::Covariance::Options covariance_options;
@@ -492,12 +478,9 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
     throw Error("calibrate: " + std::to_string(boards.size()) + " image(s) with a board; at least 3 are needed (" +
                 "more, spread over the whole image, for a good calibration)");
   }
-  CalibrationResult result =
-      spec.name == "polynomial"       ? calibrate_with<Polynomial>(boards, board, width, height, spec)
-      : spec.name == "kannala-brandt" ? calibrate_with<KannalaBrandt>(boards, board, width, height, spec)
-      : spec.name == "equidistant"    ? calibrate_with<Equidistant>(boards, board, width, height, spec)
-      : spec.name == "stereographic"  ? calibrate_with<Stereographic>(boards, board, width, height, spec)
-                                      : calibrate_with<Pinhole>(boards, board, width, height, spec);
+  CalibrationResult result = detail::with_model_class(spec.name, [&]<template <typename> class Model>() {
+    return calibrate_with<Model>(boards, board, width, height, spec);
+  });
   // Coverage: the share of an 8 x 6 grid over the image that holds corners. A lens
   // calibrated from its centre only is extrapolated at the rim.
   bool cell[6][8] = {};

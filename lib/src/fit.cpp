@@ -1,6 +1,6 @@
 #include "fishcam/fit.hpp"
 
-#include <ceres/ceres.h>
+#include "ceres_support.hpp"
 
 #include <Eigen/QR>
 #include <algorithm>
@@ -54,19 +54,8 @@ struct ChunkResidual {
   double ax;
 
   template <typename T>
-  Model<T> model(const T* p) const {
-    if constexpr (std::is_same_v<Model<T>, Polynomial<T>>) {
-      return Polynomial<T>(p, params);
-    } else if constexpr (std::is_same_v<Model<T>, KannalaBrandt<T>>) {
-      return KannalaBrandt<T>(p);
-    } else {
-      return Model<T>(p[0]);
-    }
-  }
-
-  template <typename T>
   bool operator()(T const* const* p, T* residuals) const {
-    const Model<T> m = model(p[0]);
+    const Model<T> m = detail::model_from_block<Model>(p[0], params);
     const T mapping[4] = {p[1][0], p[1][1], T(ax), p[2][0]};
     for (size_t i = 0; i < samples.size(); ++i) {
       const T point[3] = {T(samples[i].ray.x()), T(samples[i].ray.y()), T(samples[i].ray.z())};
@@ -96,16 +85,8 @@ void refine(std::span<const Correspondence> samples, int params, double ax, std:
   }
   if (!options.fit_center) problem.SetParameterBlockConstant(center->data());
   if (!options.fit_aspect) problem.SetParameterBlockConstant(ay);
-  ceres::Solver::Options solver;
-  solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver.max_num_iterations = 100;
-  solver.function_tolerance = 1e-14;
-  solver.parameter_tolerance = 1e-14;
-  solver.gradient_tolerance = 1e-14;
-  solver.num_threads = 2;
-  solver.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
+  ceres::Solve(detail::solver_options(ceres::DENSE_NORMAL_CHOLESKY), &problem, &summary);
   if (!summary.IsSolutionUsable()) throw Error("fit: the least-squares solve failed: " + summary.message);
 }
 
@@ -189,17 +170,9 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
   if (options.fit_center || options.fit_aspect) {
     Eigen::Vector2d center = c;
     double ay = a.y();
-    if (spec.name == "polynomial") {
-      refine<Polynomial>(samples, k, a.x(), &params, &center, &ay, options);
-    } else if (spec.name == "kannala-brandt") {
-      refine<KannalaBrandt>(samples, k, a.x(), &params, &center, &ay, options);
-    } else if (spec.name == "equidistant") {
-      refine<Equidistant>(samples, k, a.x(), &params, &center, &ay, options);
-    } else if (spec.name == "stereographic") {
-      refine<Stereographic>(samples, k, a.x(), &params, &center, &ay, options);
-    } else {
-      refine<Pinhole>(samples, k, a.x(), &params, &center, &ay, options);
-    }
+    detail::with_model_class(spec.name, [&]<template <typename> class Model>() {
+      refine<Model>(samples, k, a.x(), &params, &center, &ay, options);
+    });
     fitted.principal_point = center;
     fitted.pixel_scale.y() = ay;
   }
