@@ -102,5 +102,50 @@ TEST(CliFit, FitFromCsv) {
   }
 }
 
+TEST(CliFit, SynthCornersCalibrateDiff) {
+  const auto dir = test::scratch_dir("cli_calibrate");
+  auto r = run_fishcam("synth-corners " + quoted(test::data_path("woodscape_front.json")) +
+                       " --boards 20 --noise 0.2 --seed 3 --board 8x6 --spacing 0.05 --out " + quoted(dir / "c.vnl") +
+                       " --truth " + quoted(dir / "truth.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_fishcam("calibrate --corners " + quoted(dir / "c.vnl") + " --board 8x6 --spacing 0.05 --imagersize 1280x966 "
+                  "--model polynomial --out " + quoted(dir / "calibrated.json") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["rms_px"].get<double>(), 0.2 * std::sqrt(2.0), 0.05);
+  for (const char* p : {"k1", "k2", "k3", "k4", "cx", "cy", "a_y"}) {
+    EXPECT_TRUE(j["parameters"].contains(p)) << p;
+    EXPECT_GT(j["parameters"][p]["sigma"].get<double>(), 0) << p;
+  }
+  EXPECT_EQ(j["per_image_rms_px"].size(), 20u);
+  EXPECT_EQ(j["outliers"], 0);
+  // Against the truth across the whole image: only the noise's effect remains.
+  // (A Kannala-Brandt model calibrated from the same corners fits them as well but
+  // extrapolates to 24 px in the image corners no board reached: diff shows that too.)
+  r = run_fishcam("diff " + quoted(dir / "truth.json") + " " + quoted(dir / "calibrated.json") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_LT(nlohmann::json::parse(r.out)["rms_px"].get<double>(), 0.5);
+
+  const struct {
+    std::string args, expected;
+  } bad[] = {
+      {"calibrate --corners " + quoted(dir / "c.vnl") + " --board 10x10 --spacing 0.05 --imagersize 1280x966 --model "
+       "polynomial --out " + quoted(dir / "x.json"), "expected 100 corners (10x10), got 48"},
+      {"calibrate --corners " + quoted(dir / "c.vnl") + " --board 8 --spacing 0.05 --imagersize 1280x966 --model "
+       "polynomial --out " + quoted(dir / "x.json"), "--board: expected WxH"},
+      {"calibrate --corners " + quoted(dir / "c.vnl") + " --board 8x6 --spacing 0.05 --imagersize 1280x966 --model "
+       "fisheye --out " + quoted(dir / "x.json"), "unknown model 'fisheye'"},
+      {"synth-corners " + quoted(test::data_path("woodscape_front.json")) + " --boards 0 --noise 0 --seed 1 --out " +
+       quoted(dir / "y.vnl"), "--boards"},
+      {"detect-corners /no/such.png --board 8x6 --out " + quoted(dir / "d.vnl"), "/no/such.png: no such file"},
+  };
+  for (const auto& c : bad) {
+    r = run_fishcam(c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << " -> " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.json"));
+}
+
 }  // namespace
 }  // namespace fishcam
