@@ -99,6 +99,14 @@ CameraFormat output_format(const std::string& format, const std::filesystem::pat
   throw Error(out.string() + ": cannot tell the format from the extension; pass --format");
 }
 
+void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options) {
+  cmd->add_option("--out", options->out, "Output camera file")->required();
+  cmd->add_option("--format", options->format, "Output format (default: from the extension; .json = fishcam)")
+      ->check(CLI::IsMember({"woodscape", "fishcam", "mrcal", "opencv"}));
+  cmd->add_flag("--json", options->json, "Print the report as one JSON object");
+  cmd->add_flag("--force", options->force, "Replace an existing output file");
+}
+
 nlohmann::json fit_report_json(const CameraParameters& fitted, const ErrorReport& r) {
   nlohmann::json bins = nlohmann::json::array();
   for (const auto& b : r.by_angle) {

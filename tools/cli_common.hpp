@@ -46,6 +46,15 @@ std::string describe(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3d&
 // .yaml/.yml/.xml, .json = fishcam).
 CameraFormat output_format(const std::string& format, const std::filesystem::path& out);
 
+// --out FILE (required), --format, --json, --force: what subcommands that write a
+// camera and print a report (convert, fit, calibrate) share.
+struct CameraOutputOptions {
+  std::string out, format;
+  bool json = false, force = false;
+  CameraFormat resolved_format() const { return output_format(format, out); }
+};
+void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options);
+
 // A fitted camera and its error report: as JSON (rms_px, p99_px, max_px, ...) and as text.
 nlohmann::json fit_report_json(const CameraParameters& fitted, const ErrorReport& report);
 void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what);

@@ -19,9 +19,10 @@ void register_convert(CLI::App& app) {
   auto* cmd = app.add_subcommand("convert", "Fit another projection model to a camera and report the pixel error "
                                             "it costs");
   struct Options {
-    std::string source, to, method = "lsq", out, format;
+    std::string source, to, method = "lsq";
     double max_angle = 0;
-    bool fit_center = false, fit_aspect = false, json = false, force = false;
+    bool fit_center = false, fit_aspect = false;
+    CameraOutputOptions output;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("SOURCE", o->source, "Camera file")->required();
@@ -34,16 +35,12 @@ void register_convert(CLI::App& app) {
   auto* fit_aspect = cmd->add_flag("--fit-aspect", o->fit_aspect, "Also fit a_y (the aspect)");
   cmd->add_option("--max-angle", o->max_angle, "Fit and report only rays up to this angle of incidence (degrees)")
       ->check(CLI::Range(0.1, 180.0));
-  cmd->add_option("--out", o->out, "Output camera file")->required();
-  cmd->add_option("--format", o->format, "Output format (default: from the extension; .json = fishcam)")
-      ->check(CLI::IsMember({"woodscape", "fishcam", "mrcal", "opencv"}));
-  cmd->add_flag("--json", o->json, "Print the report as one JSON object");
-  cmd->add_flag("--force", o->force, "Replace an existing output file");
+  add_camera_output_options(cmd, &o->output);
   cmd->callback([o, fit_center, fit_aspect] {
     const auto started = std::chrono::steady_clock::now();
     const Camera source = read_camera(o->source);
     const ModelSpec spec = parse_model_spec(o->to);
-    const CameraFormat format = output_format(o->format, o->out);
+    const CameraFormat format = o->output.resolved_format();
     const std::optional<double> max_theta = o->max_angle > 0 ? std::optional(o->max_angle / kDeg) : std::nullopt;
     if (o->method == "paper" && (fit_center->count() || fit_aspect->count())) {
       throw Error("--fit-center/--fit-aspect apply to --method lsq only");
@@ -72,19 +69,19 @@ void register_convert(CLI::App& app) {
                     widest * kDeg, report.rms_below_90_px, report.max_below_90_px);
       warning = buffer;
     }
-    write_camera(fitted, o->out, format, o->force);
+    write_camera(fitted, o->output.out, format, o->output.force);
     if (!warning.empty()) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
-    if (o->json) {
+    if (o->output.json) {
       nlohmann::json j = fit_report_json(fitted, report);
       j["method"] = o->method;
-      j["out"] = o->out;
+      j["out"] = o->output.out;
       j["format"] = to_string(format);
       j["fit_ms"] = fit_ms;
       if (!warning.empty()) j["warning"] = warning;
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
-    std::printf("%s -> %s (%s), wrote %s (%s)\n", o->source.c_str(), o->to.c_str(), o->method.c_str(), o->out.c_str(),
+    std::printf("%s -> %s (%s), wrote %s (%s)\n", o->source.c_str(), o->to.c_str(), o->method.c_str(), o->output.out.c_str(),
                 std::string(to_string(format)).c_str());
     print_fit_report(fitted, report, "pixels of the source's valid image");
   });

@@ -71,11 +71,12 @@ void register_fit(CLI::App& app) {
   auto* cmd = app.add_subcommand("fit", "Fit a camera model to measured correspondences (CSV: theta,rho or "
                                         "x,y,z,u,v) and report the pixel error");
   struct Options {
-    std::string data, to, out, format;
+    std::string data, to;
     std::vector<int> imagersize;
     std::vector<double> center;
     double aspect = 1;
-    bool fit_center = false, fit_aspect = false, json = false, force = false;
+    bool fit_center = false, fit_aspect = false;
+    CameraOutputOptions output;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("DATA", o->data, "CSV with a header: theta,rho | theta_deg,rho | x,y,z,u,v")->required();
@@ -89,14 +90,10 @@ void register_fit(CLI::App& app) {
   cmd->add_option("--aspect", o->aspect, "a_y (a_x = 1)")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_flag("--fit-center", o->fit_center, "Also fit the principal point (x,y,z,u,v data only)");
   cmd->add_flag("--fit-aspect", o->fit_aspect, "Also fit a_y (x,y,z,u,v data only)");
-  cmd->add_option("--out", o->out, "Output camera file")->required();
-  cmd->add_option("--format", o->format, "Output format (default: from the extension)")
-      ->check(CLI::IsMember({"woodscape", "fishcam", "mrcal", "opencv"}));
-  cmd->add_flag("--json", o->json, "Print the report as one JSON object");
-  cmd->add_flag("--force", o->force, "Replace an existing output file");
+  add_camera_output_options(cmd, &o->output);
   cmd->callback([o] {
     const ModelSpec spec = parse_model_spec(o->to);
-    const CameraFormat format = output_format(o->format, o->out);
+    const CameraFormat format = o->output.resolved_format();
     const CorrespondenceFile file = read_csv(o->data);
     CameraParameters start;
     start.width = o->imagersize[0], start.height = o->imagersize[1];
@@ -118,16 +115,16 @@ void register_fit(CLI::App& app) {
     }
     const CameraParameters fitted = fit_camera(samples, spec, start, {o->fit_center, o->fit_aspect});
     const ErrorReport report = reprojection_errors(Camera(fitted), samples);
-    write_camera(fitted, o->out, format, o->force);
-    if (o->json) {
+    write_camera(fitted, o->output.out, format, o->output.force);
+    if (o->output.json) {
       nlohmann::json j = fit_report_json(fitted, report);
-      j["out"] = o->out;
+      j["out"] = o->output.out;
       j["format"] = to_string(format);
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
     std::printf("%s: %zu correspondences -> %s, wrote %s (%s)\n", o->data.c_str(), samples.size(), o->to.c_str(),
-                o->out.c_str(), std::string(to_string(format)).c_str());
+                o->output.out.c_str(), std::string(to_string(format)).c_str());
     print_fit_report(fitted, report, "correspondences");
   });
 }
