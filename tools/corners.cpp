@@ -144,6 +144,11 @@ void register_corners(CLI::App& app) {
       for (size_t i = 0; i < result.parameters.size(); ++i) {
         std::printf("  %-4s %16.10g +- %.3g\n", result.parameter_names[i].c_str(), result.parameters[i], result.sigmas[i]);
       }
+      std::printf("  per-image rms (px):");
+      for (size_t i = 0; i < result.used_images.size(); ++i) {
+        std::printf("%s %s %.3f", i % 4 ? "," : "\n   ", result.used_images[i].c_str(), result.per_image_rms_px[i]);
+      }
+      std::printf("\n");
       for (const auto& outlier : result.outliers) {
         std::printf("  outlier: %s corner %d, %.2f px\n", outlier.filename.c_str(), outlier.corner, outlier.error_px);
       }
