@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <atomic>
+#include <cstdlib>
 #include <cmath>
 
 #include "warp_kernel.hpp"
@@ -63,8 +64,10 @@ void allocate(const Camera& source, const Camera& target, MapKind kind, WarpMaps
 }
 
 // The kernel for this CPU: AVX2 + FMA where available, else the build's baseline.
+// FISHCAM_NO_AVX2 (set to anything) forces the baseline: how the tests cover it.
 detail::RangeKernel select_kernel(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling) {
-  static const bool avx2 = cv::checkHardwareSupport(CV_CPU_AVX2) && cv::checkHardwareSupport(CV_CPU_FMA3);
+  static const bool avx2 = !std::getenv("FISHCAM_NO_AVX2") && cv::checkHardwareSupport(CV_CPU_AVX2) &&
+                           cv::checkHardwareSupport(CV_CPU_FMA3);
   return avx2 ? detail::select_kernel_avx2(prior, inside_sphere, kind, sampling)
               : detail::select_kernel_baseline(prior, inside_sphere, kind, sampling);
 }
