@@ -140,6 +140,15 @@ void print_fit_report(const CameraParameters& fitted, const ErrorReport& report,
   }
 }
 
+BoardSpec parse_board(const std::string& text, double spacing) {
+  int cols = 0, rows = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &cols, &x, &rows, &extra) != 3 || x != 'x' || cols < 2 || rows < 2) {
+    throw Error("--board: expected WxH inner corners (e.g. 10x10), got '" + text + "'");
+  }
+  return {cols, rows, spacing};
+}
+
 cv::Mat colourise_labels(const cv::Mat& labels) {
   cv::Mat out(labels.size(), CV_8UC3);
   for (int v = 0; v < labels.rows; ++v) {

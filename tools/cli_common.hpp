@@ -12,6 +12,7 @@
 #include "fishcam/augmentation.hpp"
 #include "fishcam/camera.hpp"
 #include "fishcam/camera_io.hpp"
+#include "fishcam/calibration.hpp"
 #include "fishcam/fit.hpp"
 #include "fishcam/viewpoint.hpp"
 
@@ -58,6 +59,9 @@ void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options);
 // A fitted camera and its error report: as JSON (rms_px, p99_px, max_px, ...) and as text.
 nlohmann::json fit_report_json(const CameraParameters& fitted, const ErrorReport& report);
 void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what);
+
+// --board WxH (inner corners) with the corner spacing.
+BoardSpec parse_board(const std::string& text, double spacing);
 
 // Labels as colours (WoodScape classes), for looking at.
 cv::Mat colourise_labels(const cv::Mat& labels);

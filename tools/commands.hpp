@@ -18,6 +18,8 @@ void register_augment_dataset(CLI::App& app);
 void register_convert(CLI::App& app);
 void register_fit(CLI::App& app);
 void register_diff(CLI::App& app);
-void register_corners(CLI::App& app);  // detect-corners, synth-corners, calibrate
+void register_detect_corners(CLI::App& app);
+void register_synth_corners(CLI::App& app);
+void register_calibrate(CLI::App& app);
 
 }  // namespace fishcam::cli

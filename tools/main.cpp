@@ -24,7 +24,9 @@ int main(int argc, char** argv) {
   fishcam::cli::register_augment_dataset(app);
   fishcam::cli::register_convert(app);
   fishcam::cli::register_fit(app);
-  fishcam::cli::register_corners(app);
+  fishcam::cli::register_detect_corners(app);
+  fishcam::cli::register_synth_corners(app);
+  fishcam::cli::register_calibrate(app);
   fishcam::cli::register_diff(app);
   try {
     app.parse(argc, argv);
