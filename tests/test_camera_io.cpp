@@ -231,6 +231,29 @@ TEST(CameraIo, MalformedFilesGiveOneLineErrorsNamingFileAndField) {
   }
 }
 
+// Every prefix of every bundled file, and single-byte corruptions of them: a clean
+// Error or a valid camera, never a crash or another exception.
+TEST(CameraIo, TruncatedAndCorruptedFilesNeverCrash) {
+  long errors = 0, parsed = 0;
+  for (const auto& [name, format] : kBundled) {
+    const std::string content = test::read_file(data_path(name));
+    for (size_t cut = 0; cut < content.size(); cut += 3) {
+      for (const std::string& variant : {content.substr(0, cut), content.substr(0, cut) + "\x01" + content.substr(cut + 1),
+                                         content.substr(0, cut) + "}" + content.substr(cut + 1)}) {
+        try {
+          Camera camera(parse_camera(variant, name));
+          ++parsed;
+        } catch (const Error& e) {
+          ASSERT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+          ++errors;
+        }
+      }
+    }
+  }
+  EXPECT_GT(errors, 1000);
+  EXPECT_GT(parsed, 10);  // some corruptions only touch comments or digits
+}
+
 TEST(CameraIo, MissingFilesAndDirectories) {
   const auto dir = test::scratch_dir("missing");
   EXPECT_THROW(read_camera(dir / "nope.json"), Error);

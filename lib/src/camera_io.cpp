@@ -443,7 +443,15 @@ CameraParameters parse_camera(std::string_view content, std::string_view source_
   const std::string source(source_name);
   CameraParameters p;
   switch (detect_camera_format(content, source_name)) {
-    case CameraFormat::opencv: p = read_opencv(content, source); break;
+    case CameraFormat::opencv:
+      try {
+        p = read_opencv(content, source);
+      } catch (const cv::Exception& e) {  // e.g. a top level that is not a map
+        std::string why = e.err;
+        for (char& c : why) c = c == '\n' ? ' ' : c;
+        throw Error(source + ": not a readable OpenCV YAML/XML file (" + why + ")");
+      }
+      break;
     case CameraFormat::mrcal: {
       json root;
       try {
