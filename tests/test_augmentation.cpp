@@ -4,6 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <cstring>
 #include <random>
 
 #include "fishcam/augmentation.hpp"
@@ -197,6 +198,122 @@ TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
       }
     }
   }
+}
+
+// The same lens written three ways (order 4, order 16 with k5..k16 = 0; f theta as
+// equidistant, polynomial and Kannala-Brandt with zero k) gives bit-identical maps:
+// the kernel sees one input. Run on both kernels (FISHCAM_NO_AVX2).
+TEST(Augmentation, FastMapsOfEquivalentParameterisationsAreIdentical) {
+  const CameraParameters ws = test::woodscape_front();
+  std::vector<double> k16 = {339.749, -31.988, 48.275, -7.201};
+  k16.resize(16, 0.0);
+  const std::vector<std::vector<RadialModel>> groups = {
+      {Polynomial<double>({339.749, -31.988, 48.275, -7.201}), Polynomial<double>(k16)},
+      {Equidistant<double>(340.0), Polynomial<double>({340.0}), Polynomial<double>({340.0, 0.0, 0.0}),
+       KannalaBrandt<double>(340.0, 0, 0, 0, 0)},
+  };
+  const ViewpointChange change = random_pose(*find_pose_preset("large"), 3).change();
+  for (const auto& group : groups) {
+    WarpMaps first;
+    for (size_t i = 0; i < group.size(); ++i) {
+      const ViewpointWarp warp(Camera(test::with_model(ws, group[i])));
+      EXPECT_TRUE(warp.float_kernel()) << model_name(group[i]);
+      WarpMaps maps;
+      warp.compute(change, DepthPrior::source_sphere, &maps, MapKind::geometric);
+      if (i == 0) {
+        first = maps;
+        continue;
+      }
+      EXPECT_EQ(std::memcmp(first.map_x.data, maps.map_x.data, maps.map_x.total() * sizeof(float)), 0)
+          << model_name(group[i]) << " " << group[i].index();
+      EXPECT_EQ(cv::norm(first.valid, maps.valid, cv::NORM_INF), 0);
+    }
+  }
+}
+
+// Maps from compute() against compute_exact, whichever path compute() chose.
+double worst_fast_vs_exact(const ViewpointWarp& warp, const ViewpointChange& change, long* validity_differs) {
+  WarpMaps fast, exact;
+  warp.compute(change, DepthPrior::source_sphere, &fast, MapKind::geometric);
+  warp.compute_exact(change, DepthPrior::source_sphere, &exact);
+  double worst = 0;
+  *validity_differs = 0;
+  for (int v = 0; v < fast.map_x.rows; ++v) {
+    for (int u = 0; u < fast.map_x.cols; ++u) {
+      *validity_differs += fast.valid.at<uchar>(v, u) != exact.valid.at<uchar>(v, u);
+      if (!exact.valid.at<uchar>(v, u)) continue;
+      const double error = std::hypot(fast.map_x.at<float>(v, u) - exact.map_x.at<float>(v, u),
+                                      fast.map_y.at<float>(v, u) - exact.map_y.at<float>(v, u));
+      if (fast.valid.at<uchar>(v, u)) worst = std::max(worst, error);
+    }
+  }
+  return worst;
+}
+
+// Cameras the float kernel cannot evaluate to 1e-3 px take the exact path, and
+// their maps stay right (they were 723 px off, all-NaN, or 94 % wrong at identity).
+TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
+  CameraParameters small = test::woodscape_front();
+  small.width = 160, small.height = 121;
+  small.principal_point = {79.5, 60.5};
+  small.model = Polynomial<double>({339.749 / 8, -31.988 / 8, 48.275 / 8, -7.201 / 8});
+  std::vector<double> k17 = {339.749 / 8, -31.988 / 8, 48.275 / 8, -7.201 / 8};
+  k17.resize(17, 0.0);
+  k17.back() = 1e-12;  // degree 17: past what the kernel holds
+  CameraParameters far_centre = small;
+  far_centre.principal_point = {1e6, 1e6};
+  far_centre.model = Equidistant<double>(1e6);
+  const std::pair<const char*, CameraParameters> cases[] = {
+      {"degree 17", test::with_model(small, Polynomial<double>(k17))},
+      {"principal point at 1e6", far_centre},
+      {"f = 1e39", test::with_model(small, Equidistant<double>(1e39))},
+      {"kannala-brandt f = 1e39", test::with_model(small, KannalaBrandt<double>(1e39, 0.01, 0, 0, 0))},
+      // Every pixel within 1e-7 rad of theta = pi: the fast path holds (no cos test at pi).
+      {"stereographic f = 1e-6", test::with_model(small, Stereographic<double>(1e-6))},
+  };
+  for (const auto& [name, p] : cases) {
+    const ViewpointWarp warp{Camera(p)};
+    EXPECT_EQ(warp.float_kernel(), name == std::string("stereographic f = 1e-6")) << name;
+    long differs = 0;
+    EXPECT_LE(worst_fast_vs_exact(warp, random_pose(*find_pose_preset("large"), 1).change(), &differs), 1e-3)
+        << name;
+    EXPECT_LE(differs, 2) << name;
+    WarpMaps identity;
+    warp.compute(ViewpointChange{}, DepthPrior::source_sphere, &identity);
+    const cv::Mat image = test_image(p.width, p.height, CV_8UC1);
+    cv::Mat out;
+    warp_image(image, identity, &out);
+    // Pixels with a source inside the image come back unchanged.
+    EXPECT_EQ(cv::norm(image, out, cv::NORM_INF, identity.validity()), 0) << name;
+  }
+  // The principal point far outside but a normal lens: the identity has every pixel.
+  const ViewpointWarp far{Camera(far_centre)};
+  WarpMaps identity;
+  far.compute(ViewpointChange{}, DepthPrior::source_sphere, &identity);
+  EXPECT_EQ(identity.invalid_count, 0);
+  // Every bundled kind of camera keeps the fast path.
+  for (const auto& [name, p] : test::every_model()) EXPECT_TRUE(ViewpointWarp(Camera(p)).float_kernel()) << name;
+}
+
+TEST(Augmentation, NonFiniteOrNonRotationChangesAreRefused) {
+  CameraParameters p = test::woodscape_front();
+  p.width = 64, p.height = 48, p.principal_point = {31.5, 23.5};
+  const ViewpointWarp warp{Camera(p)};
+  WarpMaps maps;
+  const double nan = std::nan("");
+  for (const ViewpointChange& change :
+       {ViewpointChange::from_euler_deg({nan, 0, 0}), ViewpointChange::from_euler_deg({0, 0, 0}, {0, INFINITY, 0}),
+        ViewpointChange{Eigen::Matrix3d::Identity() * 2, Eigen::Vector3d::Zero()},
+        ViewpointChange{-Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()}}) {
+    EXPECT_THROW(warp.compute(change, DepthPrior::source_sphere, &maps), Error);
+    EXPECT_THROW(warp.compute_exact(change, DepthPrior::source_sphere, &maps), Error);
+  }
+}
+
+TEST(Augmentation, ImagesPastTheResamplingLimitAreRefused) {
+  CameraParameters p = test::woodscape_front();
+  p.width = 32768, p.height = 10;
+  EXPECT_THROW(ViewpointWarp{Camera(p)}, Error);
 }
 
 TEST(Augmentation, IdentityReproducesTheInputExactly) {

@@ -2,7 +2,10 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <atomic>
+#include <limits>
+#include <numbers>
 #include <cstdlib>
 #include <cmath>
 
@@ -15,29 +18,71 @@ using detail::PoseParams;
 using detail::SourceParams;
 static_assert(detail::kOutside == kOutsideSource);
 
+// The float kernel is used only where it agrees with the exact path to this.
+constexpr double kFloatTolerancePx = 1e-3;
+// Float spacing at 8192 is 2^-10 px: coordinates beyond it cannot meet the tolerance.
+constexpr double kFloatCoordinateLimit = 8192;
+// cv::remap's own limit on image sizes (it asserts otherwise).
+constexpr int kRemapSizeLimit = 32767;
 
-SourceParams source_params(const Camera& camera) {
+
+// The float kernel's form of each model; nullopt for a model it has no form for
+// (such a camera takes the exact path: never another model's formula).
+template <class Model>
+std::optional<SourceParams> kernel_model(const Model& m) {
   SourceParams p;
-  std::visit(
-      [&](const auto& m) {
-        using Model = std::decay_t<decltype(m)>;
-        if constexpr (PolynomialInTheta<Model>) {
-          const auto c = m.power_coefficients();
-          p.kind = SourceParams::Kind::polynomial;
-          p.n = static_cast<int>(c.size()) - 1;
-          for (size_t i = 0; i < c.size(); ++i) p.c[i] = static_cast<float>(c[i]);
-        } else {
-          p.kind = std::is_same_v<Model, Stereographic<double>> ? SourceParams::Kind::stereographic
-                                                                : SourceParams::Kind::pinhole;
-          p.f = static_cast<float>(m.f());
-        }
-      },
-      camera.model());
-  p.cx = float(camera.principal_point().x()), p.cy = float(camera.principal_point().y());
-  p.ax = float(camera.pixel_scale().x()), p.ay = float(camera.pixel_scale().y());
-  p.cos_theta_max = float(std::cos(camera.domain().theta_max));
-  p.closed = camera.domain().closed;
-  p.width = float(camera.width()), p.height = float(camera.height());
+  if constexpr (PolynomialInTheta<Model>) {
+    std::vector<double> c = m.power_coefficients();
+    while (c.size() > 2 && c.back() == 0) c.pop_back();  // equivalent parameterisations, one kernel input
+    if (c.size() - 1 > size_t(SourceParams::kMaxDegree)) return std::nullopt;
+    p.kind = SourceParams::Kind::polynomial;
+    p.n = static_cast<int>(c.size()) - 1;
+    for (size_t i = 0; i < c.size(); ++i) p.c[i] = static_cast<float>(c[i]);
+  } else if constexpr (std::is_same_v<Model, Stereographic<double>>) {
+    p.kind = SourceParams::Kind::stereographic;
+    p.f = static_cast<float>(m.f());
+  } else if constexpr (std::is_same_v<Model, Pinhole<double>>) {
+    p.kind = SourceParams::Kind::pinhole;
+    p.f = static_cast<float>(m.f());
+  } else {
+    return std::nullopt;
+  }
+  return p;
+}
+
+// A double that survives the conversion to float: finite, and not flushed into
+// the subnormal range (where float keeps too few digits).
+bool float_exact_enough(double x) {
+  const double a = std::abs(x);
+  return a == 0 || (a >= double(std::numeric_limits<float>::min()) && a <= double(std::numeric_limits<float>::max()));
+}
+
+// The source camera for the float kernel, or nullopt where float arithmetic
+// cannot be trusted to kFloatTolerancePx: the one place that decides.
+std::optional<SourceParams> float_source_params(const Camera& camera) {
+  std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
+  if (!p) return std::nullopt;
+  const double cx = camera.principal_point().x(), cy = camera.principal_point().y();
+  // Every coordinate the kernel adds up must have float spacing well below the tolerance.
+  const double magnitude = std::max({std::abs(cx), std::abs(cy), double(camera.width()), double(camera.height())});
+  if (magnitude > kFloatCoordinateLimit) return std::nullopt;
+  for (double x : {cx, cy, camera.pixel_scale().x(), camera.pixel_scale().y(), double(p->f)}) {
+    if (!float_exact_enough(x)) return std::nullopt;
+  }
+  for (int i = 0; i <= p->n; ++i) {
+    if (!std::isfinite(p->c[i]) || (p->c[i] != 0 && std::abs(p->c[i]) < std::numeric_limits<float>::min())) {
+      return std::nullopt;
+    }
+  }
+  if (!std::isfinite(p->f)) return std::nullopt;
+  p->cx = float(cx), p->cy = float(cy);
+  p->ax = float(camera.pixel_scale().x()), p->ay = float(camera.pixel_scale().y());
+  // A domain up to pi needs no angle test (the kernel excludes the -z axis itself):
+  // float rays next to -z have z = -1 exactly, which a cos test would reject.
+  p->cos_theta_max = camera.domain().theta_max >= std::numbers::pi ? -2.0f
+                                                                   : float(std::cos(camera.domain().theta_max));
+  p->closed = camera.domain().closed;
+  p->width = float(camera.width()), p->height = float(camera.height());
   return p;
 }
 
@@ -98,7 +143,61 @@ std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const View
   return Eigen::Vector3d(change.rotation.transpose() * q / norm);
 }
 
+namespace {
+
+// The kernel for this CPU against Camera::project over the source's whole valid
+// domain (rays at 512 angles x 8 azimuths, the identity change): true when every
+// pixel inside the image agrees to kFloatTolerancePx and so does the inside/
+// outside decision (but within the tolerance of the image border or the limit angle).
+bool float_kernel_agrees(const Camera& camera, const SourceParams& src) {
+  constexpr int kAngles = 512, kAzimuths = 8;
+  constexpr size_t kCount = size_t(kAngles) * kAzimuths;  // a multiple of every SIMD width
+  std::vector<float> rx(kCount), ry(kCount), rz(kCount), map_x(kCount), map_y(kCount);
+  std::vector<unsigned char> valid(kCount);
+  const double theta_max = camera.domain().theta_max;
+  for (int a = 0; a < kAngles; ++a) {
+    const double theta = theta_max * a / kAngles;
+    for (int k = 0; k < kAzimuths; ++k) {
+      const double phi = 2 * std::numbers::pi * (k + 0.25 * (a % 4)) / kAzimuths;
+      const size_t i = size_t(a) * kAzimuths + size_t(k);
+      rx[i] = float(std::sin(theta) * std::cos(phi)), ry[i] = float(std::sin(theta) * std::sin(phi));
+      rz[i] = float(std::cos(theta));
+    }
+  }
+  PoseParams identity{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}, -1};
+  const detail::RangeKernel kernel = select_kernel(DepthPrior::infinity, true, src.kind, false);
+  kernel(rx.data(), ry.data(), rz.data(), 0, kCount, identity, src,
+         detail::KernelOutput{map_x.data(), map_y.data(), valid.data()});
+  const double w = camera.width() - 0.5, h = camera.height() - 0.5;
+  for (size_t i = 0; i < kCount; ++i) {
+    const Eigen::Vector3d ray(rx[i], ry[i], rz[i]);  // the very input the kernel saw
+    Eigen::Vector2d pixel;
+    const bool projects = camera.project(ray, &pixel);
+    const bool inside = projects && pixel.x() >= -0.5 && pixel.x() < w && pixel.y() >= -0.5 && pixel.y() < h;
+    if (inside && valid[i]) {
+      if (std::hypot(map_x[i] - pixel.x(), map_y[i] - pixel.y()) > kFloatTolerancePx) return false;
+    } else if (inside != bool(valid[i])) {
+      const double theta = std::atan2(std::hypot(ray.x(), ray.y()), ray.z());
+      const bool at_limit = std::abs(theta - theta_max) < 1e-6;
+      const double border = std::min({pixel.x() + 0.5, w - pixel.x(), pixel.y() + 0.5, h - pixel.y()});
+      if (!at_limit && !(projects && std::abs(border) <= kFloatTolerancePx)) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
 ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(source)), target_(std::move(target)) {
+  for (const Camera* c : {&source_, &target_}) {
+    if (c->width() > kRemapSizeLimit || c->height() > kRemapSizeLimit) {
+      throw Error("ViewpointWarp: image size " + std::to_string(c->width()) + "x" + std::to_string(c->height()) +
+                  " exceeds the resampling limit of " + std::to_string(kRemapSizeLimit) + " pixels per side");
+    }
+  }
+  const std::optional<SourceParams> src = float_source_params(source_);
+  float_kernel_ = src && float_kernel_agrees(source_, *src);
+  if (!float_kernel_) return;  // the exact path needs no cached rays
   const size_t n = size_t(target_.width()) * size_t(target_.height());
   const size_t padded = (n + 63) / 64 * 64;
   std::vector<float> interleaved(3 * n);
@@ -112,8 +211,10 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
 }
 
 void ViewpointWarp::compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const {
+  check_change(change);
+  if (!float_kernel_) return compute_double(change, prior, maps, kind);
   allocate(source_, target_, kind, maps);
-  const SourceParams src = source_params(source_);
+  const SourceParams src = *float_source_params(source_);
   const PoseParams pose = pose_params(change);
   const bool sampling = kind == MapKind::sampling;
   const detail::RangeKernel kernel = select_kernel(prior, change.translation.squaredNorm() < 1, src.kind, sampling);
@@ -131,29 +232,43 @@ void ViewpointWarp::compute(const ViewpointChange& change, DepthPrior prior, War
 }
 
 void ViewpointWarp::compute_exact(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const {
-  allocate(source_, target_, MapKind::geometric, maps);
+  check_change(change);
+  compute_double(change, prior, maps, MapKind::geometric);
+}
+
+void ViewpointWarp::compute_double(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps,
+                                   MapKind kind) const {
+  allocate(source_, target_, kind, maps);
   std::atomic<long> invalid{0};
   const double w = source_.width() - 0.5, h = source_.height() - 0.5;
+  const float max_x = float(source_.width() - 1), max_y = float(source_.height() - 1);
   cv::parallel_for_(cv::Range(0, target_.height()), [&](const cv::Range& rows) {
     long local = 0;
     for (int v = rows.start; v < rows.end; ++v) {
+      float* out_x = maps->map_x.ptr<float>(v);
+      float* out_y = maps->map_y.ptr<float>(v);
       for (int u = 0; u < target_.width(); ++u) {
         Eigen::Vector3d ray;
         Eigen::Vector2d pixel(std::nan(""), std::nan(""));
         if (target_.unproject(Eigen::Vector2d(u, v), &ray)) {
           if (const auto p = source_point(ray, change, prior)) source_.project(*p, &pixel);
         }
-        maps->map_x.at<float>(v, u) = float(pixel.x());
-        maps->map_y.at<float>(v, u) = float(pixel.y());
         const bool ok = pixel.x() >= -0.5 && pixel.x() < w && pixel.y() >= -0.5 && pixel.y() < h;
-        maps->valid.at<uchar>(v, u) = ok;
         local += !ok;
+        if (kind == MapKind::geometric) {
+          out_x[u] = float(pixel.x()), out_y[u] = float(pixel.y());
+          maps->valid.ptr<uchar>(v)[u] = ok;
+        } else {  // as the kernel's sampling maps: clamped onto the outer pixel centres, or far outside
+          out_x[u] = ok ? std::clamp(float(pixel.x()), 0.0f, max_x) : kOutsideSource;
+          out_y[u] = ok ? std::clamp(float(pixel.y()), 0.0f, max_y) : kOutsideSource;
+        }
       }
     }
     invalid += local;
   });
   maps->invalid_count = invalid;
 }
+
 
 namespace {
 

@@ -37,14 +37,15 @@ inline ceres::Solver::Options solver_options(ceres::LinearSolverType linear_solv
 }
 
 // Calls f.template operator()<Model>() for the model class named `name`
-// (a name parse_model_spec accepted).
+// (a name parse_model_spec accepted); throws Error for any other name.
 template <class F>
 decltype(auto) with_model_class(const std::string& name, F&& f) {
   if (name == "polynomial") return f.template operator()<Polynomial>();
   if (name == "kannala-brandt") return f.template operator()<KannalaBrandt>();
   if (name == "equidistant") return f.template operator()<Equidistant>();
   if (name == "stereographic") return f.template operator()<Stereographic>();
-  return f.template operator()<Pinhole>();
+  if (name == "pinhole") return f.template operator()<Pinhole>();
+  throw Error("unknown model '" + name + "'");  // never another model's formula
 }
 
 }  // namespace fishcam::detail

@@ -115,4 +115,14 @@ std::uint64_t derive_seed(std::uint64_t seed, std::string_view key, std::uint64_
   return splitmix64(splitmix64(seed ^ h) + index);
 }
 
+void check_change(const ViewpointChange& change) {
+  if (!change.rotation.allFinite() || !change.translation.allFinite()) {
+    throw Error("viewpoint change: rotation and translation must be finite");
+  }
+  const double orthogonality = (change.rotation.transpose() * change.rotation - Eigen::Matrix3d::Identity()).norm();
+  if (!(orthogonality <= 1e-9) || !(change.rotation.determinant() > 0)) {
+    throw Error("viewpoint change: rotation must be a rotation matrix (orthonormal, determinant +1)");
+  }
+}
+
 }  // namespace fishcam

@@ -10,11 +10,14 @@
 
 namespace fishcam::detail {
 
-// The source camera as the float kernel needs it.
+// The source camera as the float kernel needs it. Which cameras the kernel can
+// evaluate accurately is decided in one place, float_source_params() in
+// augmentation.cpp; the others take the exact path.
 struct SourceParams {
   enum class Kind { polynomial, stereographic, pinhole };
+  static constexpr int kMaxDegree = 15;
   Kind kind = Kind::polynomial;
-  float c[16] = {};  // rho = c[1] theta + ... + c[n] theta^n
+  float c[kMaxDegree + 1] = {};  // rho = c[1] theta + ... + c[n] theta^n, 1 <= n <= kMaxDegree
   int n = 0;
   float f = 0;  // stereographic, pinhole
   float cx = 0, cy = 0, ax = 1, ay = 1;

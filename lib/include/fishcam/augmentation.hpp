@@ -50,7 +50,8 @@ std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const View
 class ViewpointWarp {
  public:
   // Caches the output camera's rays (all that depends on it alone): each pose then
-  // costs only rotate / intersect / project per pixel.
+  // costs only rotate / intersect / project per pixel. Throws Error for images
+  // wider or taller than cv::remap's limit (32767).
   ViewpointWarp(Camera source, Camera target);
   explicit ViewpointWarp(const Camera& camera) : ViewpointWarp(camera, camera) {}
 
@@ -58,14 +59,24 @@ class ViewpointWarp {
   const Camera& target() const { return target_; }
 
   // The maps, in float with SIMD (OpenCV universal intrinsics; AVX2 where the CPU
-  // has it) on OpenCV's threads. Accuracy against compute_exact: a few 1e-4 px.
+  // has it) on OpenCV's threads; accuracy against compute_exact: <= 1e-3 px. Where
+  // float cannot promise that (float_kernel() false: models without a float form,
+  // polynomials past degree 15, coordinates past 8192 px, parameters outside
+  // float's range, or a failed check of the kernel against Camera::project over
+  // the source's valid domain at construction), the maps come from the exact path.
+  // Throws Error for a non-finite or non-rotation change.
   void compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps,
                MapKind kind = MapKind::sampling) const;
   // Geometric maps in double through Camera::project, pixel by pixel: the reference.
   void compute_exact(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
+  // Whether compute() uses the float kernel (decided once, at construction).
+  bool float_kernel() const { return float_kernel_; }
 
  private:
+  void compute_double(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const;
+
   Camera source_, target_;
+  bool float_kernel_ = false;
   cv::Mat rays_;  // 3 x (W*H) CV_32F planes x, y, z of the target's unit rays; NaN where invalid
 };
 

@@ -33,6 +33,10 @@ struct ViewpointChange {
   bool is_identity() const { return rotation == Eigen::Matrix3d::Identity() && translation.isZero(0); }
 };
 
+// Throws Error unless the change is finite and its rotation a rotation matrix
+// (what every warp checks before use: a NaN change must not become a black image).
+void check_change(const ViewpointChange& change);
+
 // The pose (camera -> reference) of the camera that sees P' = R P + t when the
 // camera at camera_to_reference sees P: the camera after the viewpoint change
 // (t in the reference's units).
