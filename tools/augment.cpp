@@ -37,6 +37,8 @@ void register_augment(CLI::App& app) {
   cmd->add_flag("--force", o->force, "Replace existing output files");
   cmd->callback([o, out_label] {
     if (out_label->count() && o->label.empty()) throw Error("--out-label needs --label");
+    check_outputs({{o->out_image}, {o->out_label, true}, {o->out_mask}}, {o->source, o->target, o->image, o->label},
+                  o->force);
     const ViewpointWarp warp = make_warp(o->source, o->target);
     const RandomPose pose = o->preset.empty() ? RandomPose{{o->pose.rotate[0], o->pose.rotate[1], o->pose.rotate[2]},
                                                            {o->pose.translate[0], o->pose.translate[1], o->pose.translate[2]}}
@@ -55,16 +57,18 @@ void register_augment(CLI::App& app) {
     } catch (const Error& e) {
       throw Error(o->image + ": " + e.what());
     }
-    write_image(o->out_image, out, o->force);
+    std::vector<std::pair<std::filesystem::path, cv::Mat>> outputs{{o->out_image, out}};
     if (!o->out_label.empty()) {
+      cv::Mat out_labels;
       try {
-        warp_labels(labels, maps, o->label_fill, &out);
+        warp_labels(labels, maps, o->label_fill, &out_labels);
       } catch (const Error& e) {
         throw Error(o->label + ": " + e.what());
       }
-      write_image(o->out_label, out, o->force);
+      outputs.emplace_back(o->out_label, out_labels);
     }
-    if (!o->out_mask.empty()) write_image(o->out_mask, maps.validity() * 255, o->force);
+    if (!o->out_mask.empty()) outputs.emplace_back(o->out_mask, maps.validity() * 255);
+    write_images(outputs, o->force);
     std::printf("pose: %s, depth %s\n", describe(pose.rotation_deg, pose.translation).c_str(), o->pose.depth.c_str());
   });
 }

@@ -25,6 +25,7 @@ void register_calibrate(CLI::App& app) {
       ->required();
   add_camera_output_options(cmd, &o->output);
   cmd->callback([o] {
+    check_outputs({{o->output.out}}, {o->corners}, o->output.force);
     const BoardSpec board = parse_board(o->board, o->spacing);
     const ModelSpec spec = parse_model_spec(o->model);
     const CameraFormat format = o->output.resolved_format();

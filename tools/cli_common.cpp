@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <unistd.h>
 
+#include "fishcam/atomic_file.hpp"
 #include "fishcam/camera_io.hpp"
 #include "fishcam/error.hpp"
 #include "fishcam/scene.hpp"
@@ -45,27 +46,70 @@ cv::Mat read_image(const std::string& path, int flags) {
   return image;
 }
 
-void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite) {
-  std::error_code ec;
-  if (!overwrite && std::filesystem::exists(path, ec)) {
-    throw Error(path.string() + ": already exists (refusing to overwrite; use --force)");
-  }
-  // Same extension, so imwrite picks the same encoder.
-  const std::filesystem::path tmp =
-      path.parent_path() / (path.stem().string() + ".fishcam-tmp" + path.extension().string());
+namespace {
+
+bool lossless_label_format(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".png" || ext == ".tif" || ext == ".tiff" || ext == ".pgm";
+}
+
+std::string encode_image(const std::filesystem::path& path, const cv::Mat& image) {
+  std::vector<uchar> bytes;
   bool ok = false;
   try {
-    ok = cv::imwrite(tmp.string(), image);
+    ok = cv::imencode(path.extension().string(), image, bytes);
   } catch (const cv::Exception& e) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path.string() + ": cannot write image (" + e.err + ")");
+    throw Error(path.string() + ": cannot encode the image in this format (" + e.err + ")");
   }
-  if (!ok) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path.string() + ": cannot write image (unknown extension or unwritable folder)");
+  if (!ok) throw Error(path.string() + ": cannot encode the image in this format");
+  return std::string(bytes.begin(), bytes.end());
+}
+
+}  // namespace
+
+void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std::string>& inputs, bool overwrite) {
+  std::error_code ec;
+  std::vector<std::filesystem::path> taken;
+  for (const std::string& input : inputs) {
+    if (!input.empty()) taken.push_back(std::filesystem::weakly_canonical(input, ec));
   }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(path.string() + ": cannot move the written image into place");
+  const size_t input_count = taken.size();
+  for (const OutputFile& out : outputs) {
+    if (out.path.empty()) continue;
+    const std::filesystem::path canonical = std::filesystem::weakly_canonical(out.path, ec);
+    for (size_t i = 0; i < taken.size(); ++i) {
+      if (taken[i] == canonical) {
+        throw Error(out.path.string() + (i < input_count ? ": is also an input (refusing to replace it)"
+                                                         : ": given as more than one output"));
+      }
+    }
+    taken.push_back(canonical);
+    if (out.labels && !lossless_label_format(out.path)) {
+      throw Error(out.path.string() + ": labels need a lossless format (.png, .tif, .pgm)");
+    }
+    if (!std::filesystem::is_directory(out.path.parent_path().empty() ? "." : out.path.parent_path(), ec)) {
+      throw Error(out.path.string() + ": its folder does not exist");
+    }
+    if (!overwrite && std::filesystem::exists(out.path, ec)) {
+      throw Error(out.path.string() + ": already exists (refusing to overwrite; use --force)");
+    }
+  }
+}
+
+void write_images(const std::vector<std::pair<std::filesystem::path, cv::Mat>>& images, bool overwrite) {
+  std::vector<std::pair<std::filesystem::path, std::string>> files;
+  for (const auto& [path, image] : images) files.emplace_back(path, encode_image(path, image));
+  try {
+    write_files_atomically(files, overwrite);
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    throw Error(message.ends_with("(refusing to overwrite)") ? message + "; use --force" : message);
+  }
+}
+
+void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite) {
+  write_images({{path, image}}, overwrite);
 }
 
 std::filesystem::path bundled_data(const std::string& name) {
@@ -146,7 +190,13 @@ BoardSpec parse_board(const std::string& text, double spacing) {
   if (std::sscanf(text.c_str(), "%d%c%d%c", &cols, &x, &rows, &extra) != 3 || x != 'x' || cols < 2 || rows < 2) {
     throw Error("--board: expected WxH inner corners (e.g. 10x10), got '" + text + "'");
   }
-  return {cols, rows, spacing};
+  const BoardSpec board{cols, rows, spacing};
+  try {
+    check_board(board);
+  } catch (const Error& e) {
+    throw Error(std::string("--board/--spacing: ") + e.what());
+  }
+  return board;
 }
 
 cv::Mat colourise_labels(const cv::Mat& labels) {

@@ -33,7 +33,17 @@ ViewpointWarp make_warp(const std::string& source, const std::string& target);
 
 // Reads an image or fails with "PATH: cannot read image".
 cv::Mat read_image(const std::string& path, int flags);
-// Writes atomically; refuses to replace an existing file unless overwrite.
+// A file a command will write (empty path: not requested); labels need a lossless format.
+struct OutputFile {
+  std::filesystem::path path;
+  bool labels = false;
+};
+// Checks every output before anything is computed or written: none is an input
+// or given twice, label files are lossless, folders exist, and nothing is
+// replaced unless overwrite.
+void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std::string>& inputs, bool overwrite);
+// Encodes all images first, then commits them together (fishcam/atomic_file.hpp).
+void write_images(const std::vector<std::pair<std::filesystem::path, cv::Mat>>& images, bool overwrite);
 void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite);
 
 // A bundled file (data/NAME, or a helper script of tools/): next to an installed

@@ -37,6 +37,7 @@ void register_convert(CLI::App& app) {
       ->check(CLI::Range(0.1, 180.0));
   add_camera_output_options(cmd, &o->output);
   cmd->callback([o, fit_center, fit_aspect] {
+    check_outputs({{o->output.out}}, {o->source}, o->output.force);
     const auto started = std::chrono::steady_clock::now();
     const Camera source = read_camera(o->source);
     const ModelSpec spec = parse_model_spec(o->to);

@@ -24,7 +24,13 @@ void register_detect_corners(CLI::App& app) {
   cmd->add_option("--out", o->out, "Output corners.vnl")->required();
   cmd->add_flag("--force", o->force, "Replace an existing output file");
   cmd->callback([o] {
+    {
+      std::vector<OutputFile> outputs{{o->out}};
+      check_outputs(outputs, o->images, o->force);
+    }
     const BoardSpec board = parse_board(o->board, 1.0);
+    // OpenCV's detector needs more than 2 corners per side.
+    if (board.cols < 3 || board.rows < 3) throw Error("--board: detection needs at least 3x3 inner corners");
     std::vector<BoardObservation> observations;
     long found = 0;
     std::vector<std::string> failures;
@@ -47,7 +53,8 @@ void register_detect_corners(CLI::App& app) {
       }
       observations.push_back(std::move(observation));
     }
-    if (!observations.empty()) write_corners(o->out, observations, o->force);
+    if (observations.empty()) throw Error("no image could be read; nothing written (first: " + failures[0] + ")");
+    write_corners(o->out, observations, o->force);
     std::printf("%ld of %zu images show a %dx%d board; wrote %s\n", found, o->images.size(), board.cols, board.rows,
                 o->out.c_str());
     if (!failures.empty()) throw Error(std::to_string(failures.size()) + " image(s) unreadable, first: " + failures[0]);

@@ -92,6 +92,7 @@ void register_fit(CLI::App& app) {
   cmd->add_flag("--fit-aspect", o->fit_aspect, "Also fit a_y (x,y,z,u,v data only)");
   add_camera_output_options(cmd, &o->output);
   cmd->callback([o] {
+    check_outputs({{o->output.out}}, {o->data}, o->output.force);
     const ModelSpec spec = parse_model_spec(o->to);
     const CameraFormat format = o->output.resolved_format();
     const CorrespondenceFile file = read_csv(o->data);

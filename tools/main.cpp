@@ -1,9 +1,39 @@
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <opencv2/core.hpp>
 
 #include "commands.hpp"
 #include "fishcam/error.hpp"
+
+namespace {
+
+// Every number option of every subcommand, whoever declared it: floating-point
+// values must be finite (a NaN rotation used to write a black image) and unsigned
+// integers must not be negative (CLI11 reads -1 as 2^64 - 1).
+void guard_number_options(CLI::App* app) {
+  static const CLI::Validator finite(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        return std::isfinite(value) ? "" : "must be a finite number, got '" + text + "'";
+      },
+      "", "finite");
+  static const CLI::Validator non_negative(
+      [](std::string& text) -> std::string {
+        return text.find('-') == std::string::npos ? "" : "must not be negative, got '" + text + "'";
+      },
+      "", "non-negative");
+  for (CLI::Option* option : app->get_options()) {
+    const std::string type = option->get_type_name();  // with the validators' words after it
+    if (type.starts_with("FLOAT")) option->check(finite);
+    if (type.starts_with("UINT")) option->check(non_negative);
+  }
+  for (CLI::App* sub : app->get_subcommands({})) guard_number_options(sub);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"fishcam: calibration-aware fisheye projection models"};
@@ -28,6 +58,7 @@ int main(int argc, char** argv) {
   fishcam::cli::register_synth_corners(app);
   fishcam::cli::register_calibrate(app);
   fishcam::cli::register_diff(app);
+  guard_number_options(&app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -23,6 +23,7 @@ void register_map(CLI::App& app) {
   cmd->add_flag("--exact", o->exact, "Compute in double precision pixel by pixel (slow reference)");
   cmd->add_flag("--force", o->force, "Replace an existing output file");
   cmd->callback([o] {
+    check_outputs({{o->out}}, {o->source, o->target}, o->force);
     const ViewpointWarp warp = make_warp(o->source, o->target);
     WarpMaps maps;
     if (o->exact) {

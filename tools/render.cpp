@@ -25,6 +25,7 @@ void register_render(CLI::App& app) {
   cmd->add_option("--out-label", o->out_label, "Output label image (PNG, WoodScape class ids)")->required();
   cmd->add_flag("--force", o->force, "Replace existing output files");
   cmd->callback([o] {
+    check_outputs({{o->out_image}, {o->out_label, true}}, {o->camera, o->mount}, o->force);
     const Camera camera = read_camera(o->camera);
     const std::optional<Pose> mount_pose = o->mount.empty() ? camera.parameters().pose : read_camera(o->mount).parameters().pose;
     if (!mount_pose) {
@@ -33,8 +34,7 @@ void register_render(CLI::App& app) {
     }
     const Pose pose = moved_camera(*mount_pose, o->pose.change());
     const SceneRender render = render_street_scene(camera, pose);
-    write_image(o->out_image, render.image, o->force);
-    write_image(o->out_label, render.labels, o->force);
+    write_images({{o->out_image, render.image}, {o->out_label, render.labels}}, o->force);
     std::printf("wrote %s and %s (%dx%d)\n", o->out_image.c_str(), o->out_label.c_str(), camera.width(),
                 camera.height());
   });

@@ -1,5 +1,7 @@
 #include "fishcam/calibration.hpp"
 
+#include "fishcam/atomic_file.hpp"
+
 #include <ceres/rotation.h>
 
 #include "ceres_support.hpp"
@@ -339,6 +341,14 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
 
 }  // namespace
 
+void check_board(const BoardSpec& board) {
+  if (board.cols < 2 || board.rows < 2 || board.cols > 1000 || board.rows > 1000) {
+    throw Error("board: needs 2 to 1000 corners per side, got " + std::to_string(board.cols) + "x" +
+                std::to_string(board.rows));
+  }
+  if (!(board.spacing > 0) || !std::isfinite(board.spacing)) throw Error("board: the corner spacing must be finite and > 0");
+}
+
 std::vector<Eigen::Vector3d> board_points(const BoardSpec& board) {
   std::vector<Eigen::Vector3d> points;
   for (int j = 0; j < board.rows; ++j) {
@@ -401,31 +411,25 @@ std::vector<BoardObservation> read_corners(const std::filesystem::path& path, co
 
 void write_corners(const std::filesystem::path& path, const std::vector<BoardObservation>& observations,
                    bool overwrite) {
-  std::error_code ec;
-  if (!overwrite && std::filesystem::exists(path, ec)) throw Error(path.string() + ": already exists (refusing to overwrite)");
-  const std::filesystem::path tmp = path.string() + ".fishcam-tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw Error(path.string() + ": cannot write");
-    out << "# filename x y level\n";
-    char buffer[128];
-    for (const auto& o : observations) {
-      if (o.corners.empty()) out << o.filename << " - - -\n";
-      for (const auto& c : o.corners) {
-        std::snprintf(buffer, sizeof buffer, " %.17g %.17g 0\n", c.x(), c.y());
-        out << o.filename << buffer;
-      }
+  std::string out = "# filename x y level\n";
+  char buffer[128];
+  for (const auto& o : observations) {
+    if (o.corners.empty()) out += o.filename + " - - -\n";
+    for (const auto& c : o.corners) {
+      if (!c.allFinite()) throw Error(path.string() + ": image " + o.filename + ": corners must be finite");
+      std::snprintf(buffer, sizeof buffer, " %.17g %.17g 0\n", c.x(), c.y());
+      out += o.filename + buffer;
     }
-    if (!out) throw Error(path.string() + ": write failed");
   }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(path.string() + ": cannot move the written file into place");
+  write_file_atomically(path, out, overwrite);
 }
 
 SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, int count, double noise_px,
                                   std::uint64_t seed) {
-  if (board.cols < 2 || board.rows < 2 || !(board.spacing > 0)) throw Error("board: needs >= 2x2 corners and spacing > 0");
-  if (count < 1 || !(noise_px >= 0)) throw Error("synthesize_boards: needs >= 1 board and noise >= 0");
+  check_board(board);
+  if (count < 1 || !(noise_px >= 0 && noise_px <= 100)) {
+    throw Error("synthesize_boards: needs >= 1 board and a noise sigma in [0, 100] px");
+  }
   Random random{std::mt19937_64(seed)};
   const auto points = board_points(board);
   const Eigen::Vector3d middle((board.cols - 1) * board.spacing / 2, (board.rows - 1) * board.spacing / 2, 0);
@@ -469,10 +473,17 @@ SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, 
 
 CalibrationResult calibrate(const std::vector<BoardObservation>& observations, const BoardSpec& board, int width,
                             int height, const ModelSpec& spec) {
-  if (board.cols < 2 || board.rows < 2 || !(board.spacing > 0)) throw Error("--board/--spacing: needs >= 2x2 corners and spacing > 0");
+  check_board(board);
   std::vector<const BoardObservation*> boards;
   for (const auto& o : observations) {
-    if (!o.corners.empty()) boards.push_back(&o);
+    if (o.corners.empty()) continue;
+    // A board seen as (almost) one point fits any lens perfectly: refuse, not report rms 0.
+    Eigen::Vector2d lo = o.corners.front(), hi = o.corners.front();
+    for (const auto& c : o.corners) lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+    if (!((hi - lo).maxCoeff() >= 2.0)) {
+      throw Error("calibrate: image " + o.filename + ": its corners span less than 2 px (a degenerate board)");
+    }
+    boards.push_back(&o);
   }
   if (boards.size() < 3) {
     throw Error("calibrate: " + std::to_string(boards.size()) + " image(s) with a board; at least 3 are needed (" +

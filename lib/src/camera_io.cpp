@@ -9,6 +9,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "fishcam/atomic_file.hpp"
 #include "python_literal.hpp"
 
 namespace fishcam {
@@ -499,27 +500,7 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
 
 void write_camera(const CameraParameters& camera, const std::filesystem::path& path, CameraFormat format,
                   bool overwrite) {
-  const std::string content = format_camera(camera, format);
-  std::error_code ec;
-  if (!overwrite && std::filesystem::exists(path, ec)) {
-    throw Error(path.string() + ": already exists (refusing to overwrite)");
-  }
-  const std::filesystem::path tmp = path.string() + ".fishcam-tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(path.string() + ": cannot write (is the folder there and writable?)");
-    out << content;
-    out.close();
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      throw Error(path.string() + ": write failed (disk full?)");
-    }
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path.string() + ": cannot move the written file into place");
-  }
+  write_file_atomically(path, format_camera(camera, format), overwrite);
 }
 
 }  // namespace fishcam

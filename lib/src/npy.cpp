@@ -6,6 +6,7 @@
 #include <regex>
 #include <string>
 
+#include "fishcam/atomic_file.hpp"
 #include "fishcam/error.hpp"
 
 namespace fishcam {
@@ -28,24 +29,12 @@ void write_npy(const std::filesystem::path& path, const NpyArray& array, bool ov
   const size_t total = (10 + header.size() + 1 + 63) / 64 * 64;
   header.append(total - 10 - header.size() - 1, ' ');
   header += '\n';
-  std::error_code ec;
-  if (!overwrite && std::filesystem::exists(path, ec)) throw Error(path.string() + ": already exists (refusing to overwrite)");
-  const std::filesystem::path tmp = path.string() + ".fishcam-tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(path.string() + ": cannot write");
-    const unsigned char preamble[10] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0, static_cast<unsigned char>(header.size() & 0xff),
-                                        static_cast<unsigned char>(header.size() >> 8)};
-    out.write(reinterpret_cast<const char*>(preamble), sizeof preamble);
-    out.write(header.data(), static_cast<std::streamsize>(header.size()));
-    out.write(reinterpret_cast<const char*>(array.data.data()), static_cast<std::streamsize>(count * sizeof(float)));
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      throw Error(path.string() + ": write failed (disk full?)");
-    }
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(path.string() + ": cannot move the written file into place");
+  const unsigned char preamble[10] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0, static_cast<unsigned char>(header.size() & 0xff),
+                                      static_cast<unsigned char>(header.size() >> 8)};
+  std::string bytes(reinterpret_cast<const char*>(preamble), sizeof preamble);
+  bytes += header;
+  bytes.append(reinterpret_cast<const char*>(array.data.data()), count * sizeof(float));
+  write_file_atomically(path, bytes, overwrite);
 }
 
 NpyArray read_npy(const std::filesystem::path& path) {

@@ -20,6 +20,8 @@ struct BoardSpec {
   double spacing = 0;
   int corners() const { return cols * rows; }
 };
+// Throws Error unless the board has 2..1000 corners per side and a finite spacing > 0.
+void check_board(const BoardSpec& board);
 std::vector<Eigen::Vector3d> board_points(const BoardSpec& board);
 
 // One image's corners, in board order; empty when the image shows no board.

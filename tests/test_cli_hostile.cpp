@@ -1,0 +1,127 @@
+// The fishcam program against hostile input: non-finite and negative numbers,
+// lossy label files, outputs that are inputs or each other, failures part-way.
+// Every case: a one-line error naming the option or file, non-zero exit, and no
+// file written or changed.
+#include <opencv2/imgcodecs.hpp>
+
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+using test::quoted;
+using test::run_fishcam;
+
+class CliHostile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = test::scratch_dir(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    camera_ = dir_ / "camera.json";
+    std::filesystem::copy_file(test::data_path("woodscape_front.json"), camera_);
+    image_ = dir_ / "image.png";
+    labels_ = dir_ / "labels.png";
+    cv::imwrite(image_.string(), cv::Mat(966, 1280, CV_8UC3, cv::Scalar(10, 20, 30)));
+    cv::imwrite(labels_.string(), cv::Mat(966, 1280, CV_8UC1, cv::Scalar(3)));
+  }
+  // Fails with one line containing `expected`, and leaves the folder as it was.
+  void expect_refused(const std::string& args, const std::string& expected) {
+    std::vector<std::pair<std::string, std::string>> before;
+    for (const auto& e : std::filesystem::directory_iterator(dir_)) {
+      before.emplace_back(e.path().filename().string(), test::read_file(e.path()));
+    }
+    const auto r = run_fishcam(args);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    std::vector<std::pair<std::string, std::string>> after;
+    for (const auto& e : std::filesystem::directory_iterator(dir_)) {
+      after.emplace_back(e.path().filename().string(), test::read_file(e.path()));
+    }
+    std::sort(before.begin(), before.end()), std::sort(after.begin(), after.end());
+    EXPECT_TRUE(before == after) << args << ": the folder changed";
+  }
+  std::string q(const std::string& name) { return quoted(dir_ / name); }
+  std::filesystem::path dir_, camera_, image_, labels_;
+};
+
+TEST_F(CliHostile, NonFiniteNumbersAreRefusedNamingTheOption) {
+  const std::string augment = "augment " + q("camera.json") + " --image " + q("image.png") + " --out-image " + q("o.png");
+  for (const char* value : {"nan,0,0", "0,inf,0", "0,0,-inf", "1e400,0,0"}) {
+    expect_refused(augment + " --rotate " + value, "--rotate: must be a finite number");
+    expect_refused(augment + " --translate " + value, "--translate: must be a finite number");
+    expect_refused("map " + q("camera.json") + " --out " + q("m.npy") + " --rotate " + value, "--rotate");
+  }
+  expect_refused("convert " + q("camera.json") + " --to equidistant --max-angle nan --out " + q("e.json"),
+                 "--max-angle: must be a finite number");
+  expect_refused("fit " + q("x.csv") + " --to equidistant --imagersize 10,10 --center nan,nan --out " + q("f.json"),
+                 "--center: must be a finite number");
+  expect_refused("fit " + q("x.csv") + " --to equidistant --imagersize 10,10 --center 5,5 --aspect nan --out " +
+                     q("f.json"),
+                 "--aspect: must be a finite number");
+  expect_refused("check-mrcal " + test::quoted(test::data_path("stereographic.cameramodel")) + " --rotate nan,0,0",
+                 "--rotate: must be a finite number");
+}
+
+TEST_F(CliHostile, NegativeSeedsAreRefused) {
+  expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --out-image " + q("o.png") +
+                     " --preset train --seed -1",
+                 "--seed: must not be negative");
+}
+
+TEST_F(CliHostile, LabelsAreNeverWrittenLossily) {
+  expect_refused("render " + q("camera.json") + " --out-image " + q("r.png") + " --out-label " + q("r.jpg"),
+                 "r.jpg: labels need a lossless format");
+  expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --label " + q("labels.png") +
+                     " --out-image " + q("o.png") + " --out-label " + q("o.jpg"),
+                 "o.jpg: labels need a lossless format");
+}
+
+TEST_F(CliHostile, OutputsThatAreInputsAreRefusedEvenWithForce) {
+  expect_refused("map " + q("camera.json") + " --out " + q("camera.json") + " --force", "is also an input");
+  expect_refused("convert " + q("camera.json") + " --to equidistant --out " + q("camera.json") + " --force",
+                 "is also an input");
+  expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --out-image " + q("image.png") +
+                     " --force",
+                 "is also an input");
+  expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --label " + q("labels.png") +
+                     " --out-image " + q("o.png") + " --out-label " + q("o.png"),
+                 "given as more than one output");
+}
+
+// Nothing is written when any output would fail: an existing label output, a
+// missing folder, a label image of the wrong size.
+TEST_F(CliHostile, AFailurePartWayWritesNothing) {
+  test::write_file(dir_ / "exists.png", "keep me");
+  expect_refused("render " + q("camera.json") + " --out-image " + q("r.png") + " --out-label " + q("exists.png"),
+                 "exists.png: already exists");
+  expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --label " + q("labels.png") +
+                     " --out-image " + q("o.png") + " --out-label " + q("missing/o.png"),
+                 "its folder does not exist");
+  cv::imwrite((dir_ / "small_labels.png").string(), cv::Mat(10, 10, CV_8UC1, cv::Scalar(1)));
+  expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --label " + q("small_labels.png") +
+                     " --out-image " + q("o.png") + " --out-label " + q("ol.png"),
+                 "small_labels.png");
+  expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --label " + q("labels.png") +
+                     " --out-image " + q("o.png") + " --out-label " + q("ol.png") + " --label-fill 300",
+                 "fill");
+}
+
+TEST_F(CliHostile, DegenerateCalibrationDataIsRefused) {
+  expect_refused("synth-corners " + q("camera.json") + " --boards 2 --noise 1e308 --seed 1 --out " + q("c.vnl"),
+                 "noise");
+  std::string collapsed = "# filename x y level\n";
+  for (int image = 0; image < 3; ++image) {
+    for (int i = 0; i < 100; ++i) collapsed += "img" + std::to_string(image) + ".png 640 480 0\n";
+  }
+  test::write_file(dir_ / "collapsed.vnl", collapsed);
+  expect_refused("calibrate --corners " + q("collapsed.vnl") +
+                     " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model equidistant --out " + q("cal.json"),
+                 "degenerate board");
+  expect_refused("calibrate --corners " + q("collapsed.vnl") +
+                     " --board 100000x100000 --spacing 0.1 --imagersize 1280x966 --model equidistant --out " +
+                     q("cal.json"),
+                 "1000 corners per side");
+}
+
+}  // namespace
+}  // namespace fishcam
