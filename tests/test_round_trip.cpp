@@ -111,3 +111,54 @@ TEST(RoundTrip, BatchSizeMismatchIsAnError) {
 
 }  // namespace
 }  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// A point projected exactly at theta_max (closed domains) unprojects, whatever
+// rounding does to its radius; also under a user limit on theta.
+TEST(RoundTrip, PointsAtThetaMaxUnproject) {
+  auto all = test::every_model();
+  for (auto [name, p] : test::every_model()) {
+    p.theta_limit = 1.3;
+    all.emplace_back(name + "_limited", p);
+  }
+  for (const auto& [name, p] : all) {
+    const Camera camera(p);
+    if (!camera.domain().closed) continue;
+    const double t = camera.domain().theta_max;
+    for (int k = 0; k < 360; ++k) {
+      const double phi = k * M_PI / 180 + 0.001;
+      const Eigen::Vector3d ray(std::sin(t) * std::cos(phi), std::sin(t) * std::sin(phi), std::cos(t));
+      Eigen::Vector2d pixel;
+      if (!camera.project(ray, &pixel)) continue;  // rounding put the ray itself past theta_max
+      Eigen::Vector3d back;
+      EXPECT_TRUE(camera.unproject(pixel, &back)) << name << " phi " << phi;
+    }
+  }
+}
+
+// Only the direction of a point matters: scaled by 1e-300 ... 1e300 it projects
+// to the same pixel (bit for bit: the scaling inside is by powers of two), with
+// the Jacobian scaled by 1/s.
+TEST(RoundTrip, ProjectionIsScaleInvariantOverTheWholeDoubleRange) {
+  for (const auto& [name, p] : test::every_model()) {
+    const Camera camera(p);
+    for (const Eigen::Vector3d& ray : test::random_rays(50, std::min(camera.domain().theta_max, 1.5), 3)) {
+      Eigen::Vector2d reference;
+      Eigen::Matrix<double, 2, 3> reference_jacobian;
+      ASSERT_TRUE(camera.project(ray, &reference, &reference_jacobian)) << name;
+      for (double scale : {1e-300, 1e-170, 1e-160, 1e-20, 1e20, 1e160, 1e170, 1e300}) {
+        Eigen::Vector2d pixel;
+        Eigen::Matrix<double, 2, 3> jacobian;
+        ASSERT_TRUE(camera.project(ray * scale, &pixel, &jacobian)) << name << " " << scale;
+        EXPECT_LE((pixel - reference).norm(), 1e-9) << name << " " << scale;
+        EXPECT_LE((jacobian * scale - reference_jacobian).norm(), 1e-9 * reference_jacobian.norm())
+            << name << " " << scale;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace fishcam

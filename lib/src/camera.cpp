@@ -26,8 +26,14 @@ bool finite(const Eigen::Vector2d& v) { return v.allFinite(); }
 // Projection of one point through a concrete model, with the analytic Jacobian
 // when requested (compiled away otherwise).
 template <bool kWithJacobian, class Model>
-bool project_one(const Model& model, const double* mapping, const ValidDomain& domain, const Eigen::Vector3d& p,
+bool project_one(const Model& model, const double* mapping, const ValidDomain& domain, const Eigen::Vector3d& point,
                  Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* jacobian) {
+  // Only the direction matters: scale by a power of two (exact) to magnitude ~1, so
+  // squares neither overflow (1e160) nor underflow (1e-170).
+  int exponent = 0;
+  std::frexp(point.cwiseAbs().maxCoeff(), &exponent);
+  const double to_unit = std::ldexp(1.0, -exponent);
+  const Eigen::Vector3d p = point * to_unit;
   const double chi2 = p.x() * p.x() + p.y() * p.y();
   bool ok = p.allFinite() && (chi2 > 0 || p.z() > 0);  // the -z axis has no pixel direction
   const double theta = ok ? project_radial(model, mapping, p.data(), pixel->data()) : kNaN;
@@ -52,6 +58,7 @@ bool project_one(const Model& model, const double* mapping, const ValidDomain& d
       *jacobian << ax * (s + p.x() * p.x() * a), ax * p.x() * p.y() * a, ax * p.x() * sz,  //
           ay * p.x() * p.y() * a, ay * (s + p.y() * p.y() * a), ay * p.y() * sz;
     }
+    *jacobian *= to_unit;  // d pixel / d point = d pixel / d p * to_unit
   }
   return true;
 }
@@ -83,7 +90,11 @@ double theta_of(const Model& model, const ValidDomain& domain, const InverseTabl
 template <class Model>
 bool ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table, double x, double y,
             InversePath path, double* ray) {
-  const double rho = std::sqrt(x * x + y * y);
+  double rho = std::sqrt(x * x + y * y);
+  // A point projected at theta_max may come back a few ulps past rho_max: it is valid.
+  if (domain.closed && rho > domain.rho_max && rho <= domain.rho_max * (1 + 8 * std::numeric_limits<double>::epsilon())) {
+    rho = domain.rho_max;
+  }
   double s, c;
   if (path == InversePath::table && table.lookup_ray(rho, &s, &c)) {
     ray[0] = x * s, ray[1] = y * s, ray[2] = c;
