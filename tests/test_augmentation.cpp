@@ -413,7 +413,37 @@ TEST(Augmentation, LabelValuesArePreservedAndFillIsConfigurable) {
   cv::Mat out;
   EXPECT_THROW(warp_labels(labels, maps, 256, &out), Error);
   EXPECT_THROW(warp_labels(cv::Mat(10, 10, CV_8UC1), maps, 0, &out), Error);
-  EXPECT_THROW(warp_image(cv::Mat(camera.height(), camera.width(), CV_32FC1), maps, &out), Error);
+  EXPECT_THROW(warp_image(cv::Mat(camera.height(), camera.width(), CV_64FC1), maps, &out), Error);
+  EXPECT_THROW(warp_image(cv::Mat(camera.height(), camera.width(), CV_8UC1), maps, &out, std::nan("")), Error);
+}
+
+// Pixels without a source take the image fill value, for every supported depth.
+TEST(Augmentation, ImageFillIsConfigurable) {
+  const Camera camera = woodscape();
+  const ViewpointWarp warp(camera);
+  for (MapKind kind : {MapKind::sampling, MapKind::geometric}) {
+    WarpMaps maps;
+    warp.compute(random_pose(*find_pose_preset("large"), 5).change(), DepthPrior::source_sphere, &maps, kind);
+    const cv::Mat invalid = maps.validity() == 0;
+    ASSERT_GT(cv::countNonZero(invalid), 0);
+    for (int type : {CV_8UC3, CV_16UC1, CV_32FC3}) {
+      const cv::Mat image(camera.height(), camera.width(), type, cv::Scalar::all(7));
+      cv::Mat out;
+      warp_image(image, maps, &out, 42.5);
+      const double expected = CV_MAT_DEPTH(type) == CV_32F ? 42.5 : 42;  // saturate_cast rounds half to even
+      cv::Mat channels[4];
+      cv::split(out, channels);
+      for (int c = 0; c < out.channels(); ++c) {
+        double lo, hi;
+        cv::minMaxLoc(channels[c], &lo, &hi, nullptr, nullptr, invalid);
+        EXPECT_EQ(lo, expected) << type;
+        EXPECT_EQ(hi, expected) << type;
+        cv::minMaxLoc(channels[c], &lo, &hi, nullptr, nullptr, ~invalid);
+        EXPECT_EQ(lo, 7) << type;
+        EXPECT_EQ(hi, 7) << type;
+      }
+    }
+  }
 }
 
 // Sampling maps are the geometric maps made ready for cv::remap: the same pixels

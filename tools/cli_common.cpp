@@ -151,25 +151,6 @@ void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options) {
   cmd->add_flag("--force", options->force, "Replace an existing output file");
 }
 
-nlohmann::json fit_report_json(const CameraParameters& fitted, const ErrorReport& r) {
-  nlohmann::json bins = nlohmann::json::array();
-  for (const auto& b : r.by_angle) {
-    bins.push_back({{"theta_from_deg", b.theta_from_deg}, {"theta_to_deg", b.theta_to_deg}, {"samples", b.samples},
-                    {"rms_px", b.rms_px}, {"max_px", b.max_px}});
-  }
-  return {{"samples", r.samples},
-          {"unprojectable", r.unprojectable},
-          {"rms_px", r.rms_px},
-          {"p99_px", r.p99_px},
-          {"max_px", r.max_px},
-          {"below_90_deg", {{"samples", r.samples_below_90}, {"rms_px", r.rms_below_90_px}, {"max_px", r.max_below_90_px}}},
-          {"by_angle", bins},
-          {"model", model_name(fitted.model)},
-          {"parameters", model_params(fitted.model)},
-          {"principal_point", {fitted.principal_point.x(), fitted.principal_point.y()}},
-          {"pixel_scale", {fitted.pixel_scale.x(), fitted.pixel_scale.y()}}};
-}
-
 void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what) {
   std::printf("parameters      ");
   for (double p : model_params(fitted.model)) std::printf(" %.10g", p);

@@ -66,8 +66,7 @@ struct CameraOutputOptions {
 };
 void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options);
 
-// A fitted camera and its error report: as JSON (rms_px, p99_px, max_px, ...) and as text.
-nlohmann::json fit_report_json(const CameraParameters& fitted, const ErrorReport& report);
+// A fitted camera and its error report as text (as JSON: fishcam::fit_report_json).
 void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what);
 
 // --board WxH (inner corners) with the corner spacing.

@@ -46,21 +46,11 @@ void register_convert(CLI::App& app) {
     if (o->method == "paper" && (fit_center->count() || fit_aspect->count())) {
       throw Error("--fit-center/--fit-aspect apply to --method lsq only");
     }
-    CameraParameters fitted;
-    if (o->method == "paper") {
-      fitted = paper_camera(source, spec);
-    } else {
-      // Every 4th pixel, weighted as images are (per pixel).
-      fitted = fit_camera(sample_image(source, 4, 1, max_theta), spec, source.parameters(),
-                          {o->fit_center, o->fit_aspect});
-    }
+    const Conversion conversion = convert_camera(source, spec, o->method, max_theta, {o->fit_center, o->fit_aspect});
     const double fit_ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    // The report: a denser grid than the fit saw.
-    const Camera result(fitted);
-    const auto evaluation = sample_image(source, 2, 0, max_theta);
-    const ErrorReport report = reprojection_errors(result, evaluation);
-    double widest = 0;
-    for (const auto& s : evaluation) widest = std::max(widest, std::atan2(s.ray.head<2>().norm(), s.ray.z()));
+    const CameraParameters& fitted = conversion.camera;
+    const ErrorReport& report = conversion.report;
+    const double widest = conversion.widest_theta;
     std::string warning;
     if (format == CameraFormat::opencv && widest > std::numbers::pi / 2) {
       char buffer[256];
@@ -73,7 +63,7 @@ void register_convert(CLI::App& app) {
     write_camera(fitted, o->output.out, format, o->output.force);
     if (!warning.empty()) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
     if (o->output.json) {
-      nlohmann::json j = fit_report_json(fitted, report);
+      nlohmann::json j = nlohmann::json::parse(fit_report_json(fitted, report));
       j["method"] = o->method;
       j["out"] = o->output.out;
       j["format"] = to_string(format);

@@ -118,7 +118,7 @@ void register_fit(CLI::App& app) {
     const ErrorReport report = reprojection_errors(Camera(fitted), samples);
     write_camera(fitted, o->output.out, format, o->output.force);
     if (o->output.json) {
-      nlohmann::json j = fit_report_json(fitted, report);
+      nlohmann::json j = nlohmann::json::parse(fit_report_json(fitted, report));
       j["out"] = o->output.out;
       j["format"] = to_string(format);
       std::printf("%s\n", j.dump(2).c_str());

@@ -9,38 +9,6 @@
 namespace fishcam::cli {
 namespace {
 
-constexpr double kDeg = 180 / std::numbers::pi;
-
-nlohmann::json describe(const Camera& camera, CameraFormat format) {
-  const auto& p = camera.parameters();
-  const auto& d = camera.domain();
-  const auto fov = camera.field_of_view_deg();
-  nlohmann::json j = {
-      {"format", to_string(format)},
-      {"model", model_name(p.model)},
-      {"parameters", model_params(p.model)},
-      {"width", p.width},
-      {"height", p.height},
-      {"cx", p.principal_point.x()},
-      {"cy", p.principal_point.y()},
-      {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
-      {"theta_max_deg", d.theta_max * kDeg},
-      {"theta_max_closed", d.closed},
-      {"theta_max_limited_by", to_string(d.limited_by)},
-      {"rho_max_px", d.closed ? nlohmann::json(d.rho_max) : nlohmann::json(nullptr)},
-      {"fov_deg", {{"horizontal", fov.horizontal}, {"vertical", fov.vertical}, {"diagonal", fov.diagonal}}},
-      {"inverse_table", {{"cells", camera.inverse_table().cells()},
-                         {"fallback_cells", camera.inverse_table().fallback_cells()},
-                         {"worst_error_px", camera.inverse_table().worst_error_px()}}},
-  };
-  if (p.pose) {
-    const auto& q = p.pose->rotation;
-    const auto& t = p.pose->translation;
-    j["pose"] = {{"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
-  }
-  return j;
-}
-
 void print_text(const nlohmann::json& j) {
   std::printf("format            %s\n", j["format"].get<std::string>().c_str());
   std::printf("model             %s\n", j["model"].get<std::string>().c_str());
@@ -90,7 +58,7 @@ void register_info(CLI::App& app) {
   cmd->callback([path, json] {
     CameraFormat format{};
     const Camera camera = read_camera(*path, &format);
-    const nlohmann::json j = describe(camera, format);
+    const nlohmann::json j = nlohmann::json::parse(camera_info_json(camera, format));
     if (*json) {
       std::printf("%s\n", j.dump(2).c_str());
     } else {

@@ -290,20 +290,23 @@ cv::Mat WarpMaps::validity() const {
   return inside & 1;
 }
 
-void warp_image(const cv::Mat& image, const WarpMaps& maps, cv::Mat* out) {
+void warp_image(const cv::Mat& image, const WarpMaps& maps, cv::Mat* out, double fill) {
   check_input(image, maps, "warp_image");
-  if (image.depth() != CV_8U && image.depth() != CV_16U) throw Error("warp_image: expected an 8- or 16-bit image");
+  if (image.depth() != CV_8U && image.depth() != CV_16U && image.depth() != CV_32F) {
+    throw Error("warp_image: expected an 8- or 16-bit or float32 image");
+  }
   if (image.channels() < 1 || image.channels() > 4) throw Error("warp_image: expected 1 to 4 channels");
+  if (!std::isfinite(fill)) throw Error("warp_image: fill must be finite");
   if (maps.kind == MapKind::sampling) {
     // Sources inside the image were clamped onto it; the rest are far outside.
-    cv::remap(image, *out, maps.map_x, maps.map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+    cv::remap(image, *out, maps.map_x, maps.map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(fill));
     return;
   }
   // Geometric maps: replicating the border only affects the outermost half pixel
   // (still inside the image); everything else is set by the mask, whatever remap
   // made of NaN coordinates.
   cv::remap(image, *out, maps.map_x, maps.map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-  if (maps.invalid_count > 0) out->setTo(cv::Scalar::all(0), maps.valid == 0);
+  if (maps.invalid_count > 0) out->setTo(cv::Scalar::all(fill), maps.valid == 0);
 }
 
 void warp_labels(const cv::Mat& labels, const WarpMaps& maps, int fill, cv::Mat* out) {

@@ -156,6 +156,16 @@ RadialModel make_model(std::string_view name, std::span<const double> params) {
   fail("unknown model '", name, "' (expected polynomial, equidistant, stereographic, pinhole or kannala-brandt)");
 }
 
+CameraParameters resized(const CameraParameters& camera, int width, int height) {
+  if (width < 1 || height < 1) fail("resized: width and height must be >= 1, got ", width, "x", height);
+  const Eigen::Vector2d s(double(width) / camera.width, double(height) / camera.height);
+  CameraParameters out = camera;
+  out.width = width, out.height = height;
+  out.principal_point = (camera.principal_point.array() + 0.5) * s.array() - 0.5;
+  out.pixel_scale = camera.pixel_scale.cwiseProduct(s);
+  return out;
+}
+
 Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_(std::move(parameters)) {
   if (params_.width <= 0 || params_.height <= 0 || params_.width > (1 << 16) || params_.height > (1 << 16)) {
     fail("width/height: must be in [1, 65536], got ", params_.width, "x", params_.height);

@@ -440,10 +440,11 @@ CameraFormat detect_camera_format(std::string_view content, std::string_view sou
               "fisheye YAML/XML)");
 }
 
-CameraParameters parse_camera(std::string_view content, std::string_view source_name) {
+CameraParameters parse_camera(std::string_view content, std::string_view source_name,
+                              std::optional<CameraFormat> format) {
   const std::string source(source_name);
   CameraParameters p;
-  switch (detect_camera_format(content, source_name)) {
+  switch (format ? *format : detect_camera_format(content, source_name)) {
     case CameraFormat::opencv:
       try {
         p = read_opencv(content, source);
@@ -476,6 +477,10 @@ CameraParameters parse_camera(std::string_view content, std::string_view source_
 }
 
 Camera read_camera(const std::filesystem::path& path, CameraFormat* format) {
+  return read_camera(path, CameraReadOptions{}, format);
+}
+
+Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& options, CameraFormat* format) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw Error(path.string() + ": is a directory, not a camera file");
   std::ifstream in(path, std::ios::binary);
@@ -483,8 +488,51 @@ Camera read_camera(const std::filesystem::path& path, CameraFormat* format) {
   std::ostringstream content;
   content << in.rdbuf();
   if (in.bad()) throw Error(path.string() + ": read error");
-  if (format) *format = detect_camera_format(content.str(), path.string());
-  return Camera(parse_camera(content.str(), path.string()));
+  const CameraFormat detected = options.format ? *options.format : detect_camera_format(content.str(), path.string());
+  if (format) *format = detected;
+  // Every format read today holds exactly one camera and its image size.
+  if (options.camera && *options.camera != "0") {
+    throw Error(path.string() + ": camera: a " + std::string(to_string(detected)) +
+                " file holds one camera (index 0), got '" + *options.camera + "'");
+  }
+  CameraParameters p = parse_camera(content.str(), path.string(), detected);
+  if (options.image_size && (options.image_size->first != p.width || options.image_size->second != p.height)) {
+    throw Error(path.string() + ": image_size: the file says " + std::to_string(p.width) + "x" +
+                std::to_string(p.height) + ", got " + std::to_string(options.image_size->first) + "x" +
+                std::to_string(options.image_size->second));
+  }
+  return Camera(std::move(p));
+}
+
+std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> format) {
+  constexpr double kToDeg = 180 / std::numbers::pi;
+  const auto& p = camera.parameters();
+  const auto& d = camera.domain();
+  const auto fov = camera.field_of_view_deg();
+  json j = {
+      {"format", format ? json(to_string(*format)) : json(nullptr)},
+      {"model", model_name(p.model)},
+      {"parameters", model_params(p.model)},
+      {"width", p.width},
+      {"height", p.height},
+      {"cx", p.principal_point.x()},
+      {"cy", p.principal_point.y()},
+      {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
+      {"theta_max_deg", d.theta_max * kToDeg},
+      {"theta_max_closed", d.closed},
+      {"theta_max_limited_by", to_string(d.limited_by)},
+      {"rho_max_px", d.closed ? json(d.rho_max) : json(nullptr)},
+      {"fov_deg", {{"horizontal", fov.horizontal}, {"vertical", fov.vertical}, {"diagonal", fov.diagonal}}},
+      {"inverse_table", {{"cells", camera.inverse_table().cells()},
+                         {"fallback_cells", camera.inverse_table().fallback_cells()},
+                         {"worst_error_px", camera.inverse_table().worst_error_px()}}},
+  };
+  if (p.pose) {
+    const auto& q = p.pose->rotation;
+    const auto& t = p.pose->translation;
+    j["pose"] = {{"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
+  }
+  return j.dump();
 }
 
 std::string format_camera(const CameraParameters& camera, CameraFormat format) {

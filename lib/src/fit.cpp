@@ -1,5 +1,7 @@
 #include "fishcam/fit.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include "ceres_support.hpp"
 
 #include <Eigen/QR>
@@ -286,6 +288,51 @@ ProjectionDiff projection_diff(const Camera& a, const Camera& b, int step, bool 
   diff.rms_px = std::sqrt(sum2 / double(e.size()));
   diff.rotation = r;
   return diff;
+}
+
+Conversion convert_camera(const Camera& source, const ModelSpec& model, std::string_view method,
+                          std::optional<double> max_theta, const FitOptions& options) {
+  if (max_theta && !(*max_theta > 0 && *max_theta <= std::numbers::pi)) {
+    throw Error("max_angle: must be in (0, 180] degrees");
+  }
+  Conversion out;
+  if (method == "paper") {
+    if (options.fit_center || options.fit_aspect) throw Error("fit_center/fit_aspect apply to the lsq method only");
+    out.camera = paper_camera(source, model);
+  } else if (method == "lsq") {
+    // Every 4th pixel, weighted as images are (per pixel).
+    out.camera = fit_camera(sample_image(source, 4, 1, max_theta), model, source.parameters(), options);
+  } else {
+    throw Error("method: expected lsq or paper, got '" + std::string(method) + "'");
+  }
+  const Camera result(out.camera);
+  const auto evaluation = sample_image(source, 2, 0, max_theta);  // denser than the fit saw
+  out.report = reprojection_errors(result, evaluation);
+  for (const auto& s : evaluation) {
+    out.widest_theta = std::max(out.widest_theta, std::atan2(s.ray.head<2>().norm(), s.ray.z()));
+  }
+  return out;
+}
+
+std::string fit_report_json(const CameraParameters& fitted, const ErrorReport& r) {
+  nlohmann::json bins = nlohmann::json::array();
+  for (const auto& b : r.by_angle) {
+    bins.push_back({{"theta_from_deg", b.theta_from_deg}, {"theta_to_deg", b.theta_to_deg}, {"samples", b.samples},
+                    {"rms_px", b.rms_px}, {"max_px", b.max_px}});
+  }
+  return nlohmann::json{
+      {"samples", r.samples},
+      {"unprojectable", r.unprojectable},
+      {"rms_px", r.rms_px},
+      {"p99_px", r.p99_px},
+      {"max_px", r.max_px},
+      {"below_90_deg", {{"samples", r.samples_below_90}, {"rms_px", r.rms_below_90_px}, {"max_px", r.max_below_90_px}}},
+      {"by_angle", bins},
+      {"model", model_name(fitted.model)},
+      {"parameters", model_params(fitted.model)},
+      {"principal_point", {fitted.principal_point.x(), fitted.principal_point.y()}},
+      {"pixel_scale", {fitted.pixel_scale.x(), fitted.pixel_scale.y()}}}
+      .dump();
 }
 
 }  // namespace fishcam

@@ -80,9 +80,11 @@ class ViewpointWarp {
   cv::Mat rays_;  // 3 x (W*H) CV_32F planes x, y, z of the target's unit rays; NaN where invalid
 };
 
-// Bilinear resampling of an image (CV_8U or CV_16U, 1-4 channels, source size) with
-// either kind of maps; pixels without a source inside the source image become 0.
-void warp_image(const cv::Mat& image, const WarpMaps& maps, cv::Mat* out);
+// Bilinear resampling of an image (CV_8U, CV_16U or CV_32F, 1-4 channels, source
+// size) with either kind of maps; pixels without a source inside the source image
+// become `fill` (saturated to the image's type). *out may be preallocated (size of
+// the maps, type of the image): it is then written in place.
+void warp_image(const cv::Mat& image, const WarpMaps& maps, cv::Mat* out, double fill = 0);
 // Nearest-neighbour resampling of a label image (CV_8UC1 or CV_16UC1): values are
 // copied, never blended; pixels without a valid source become `fill`.
 void warp_labels(const cv::Mat& labels, const WarpMaps& maps, int fill, cv::Mat* out);

@@ -69,6 +69,11 @@ struct CameraParameters {
   std::optional<Pose> pose;
 };
 
+// The same lens for the image resized to width x height: with pixel centres at
+// integer coordinates, c' = (c + 0.5) s - 0.5 and a' = a s per axis (s = new / old
+// size), exactly; model, user limit and pose unchanged. Throws Error for sizes < 1.
+CameraParameters resized(const CameraParameters& camera, int width, int height);
+
 // Which theta(rho) a batch unprojection uses.
 enum class InversePath {
   robust,  // bracketed Newton per point: |rho(theta) - rho| <= 1e-10 px

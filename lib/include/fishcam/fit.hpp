@@ -67,6 +67,21 @@ struct ErrorReport {
 // Pixel error of `camera` reprojecting the correspondences.
 ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspondence> samples);
 
+// What `fishcam convert` does: the model fitted to the source camera ("lsq": least
+// squares over every 4th pixel of its valid image, up to max_theta when given;
+// "paper": eqs. 13-14), and its error over a denser grid (every 2nd pixel).
+struct Conversion {
+  CameraParameters camera;
+  ErrorReport report;
+  double widest_theta = 0;  // radians: the widest ray of the evaluation grid
+};
+Conversion convert_camera(const Camera& source, const ModelSpec& model, std::string_view method = "lsq",
+                          std::optional<double> max_theta = std::nullopt, const FitOptions& options = {});
+
+// An error report as one JSON object: rms_px, p99_px, max_px, samples, unprojectable,
+// below_90_deg, by_angle, and the fitted model, parameters, principal_point, pixel_scale.
+std::string fit_report_json(const CameraParameters& fitted, const ErrorReport& report);
+
 // How differently two calibrations of one camera project, after fitting the small
 // rotation between their frames (a calibration fixes the camera frame only up to
 // a rotation traded against the principal point), as mrcal.projection_diff does:
