@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libceres-dev libopencv-dev nlohmann-json3-dev
   libmrcal-dev mrcal python3-mrcal python3-numpy python3-opencv
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
+  pybind11-dev python3-pybind11 python3-pytest python3-torch
 )
 
 missing=()

@@ -1,0 +1,98 @@
+"""fishcam: calibration-aware fisheye camera models and exact viewpoint augmentation.
+
+The compute lives in C++ (fishcam._fishcam); this package adds the Python-side
+conveniences. Every error is a ``fishcam.Error`` (a ``ValueError``) carrying the
+library's one-line message. See docs/python.md.
+"""
+
+import json as _json
+
+import numpy as _np
+
+from ._fishcam import (  # noqa: F401  (re-exported API)
+    Camera,
+    Error,
+    ViewpointChange,
+    ViewpointWarp,
+    __version__,
+    derive_seed,
+    get_num_threads,
+    random_change_in,
+)
+from . import _fishcam
+
+__all__ = [
+    "Camera", "Error", "ViewpointChange", "ViewpointWarp", "convert", "derive_seed", "get_num_threads",
+    "random_change", "set_num_threads", "presets", "change_to_dict", "__version__",
+]
+
+DEPTH_PRIORS = ("source-sphere", "target-sphere", "infinity")
+
+
+def _info(self):
+    """The fields of ``fishcam info --json`` as a dict."""
+    return _json.loads(self.info_json())
+
+
+def _camera_eq(self, other):
+    return isinstance(other, Camera) and self.to_json() == other.to_json()
+
+
+Camera.info = _info
+Camera.__eq__ = _camera_eq
+Camera.__hash__ = lambda self: hash(self.to_json())
+
+
+def convert(camera, to, method="lsq", max_angle=None, fit_center=False, fit_aspect=False):
+    """Fit model ``to`` to ``camera`` as ``fishcam convert`` does.
+
+    Returns ``(camera, report)``; the report dict has the keys of ``fishcam convert
+    --json`` (rms_px, p99_px, max_px, by_angle, model, parameters, ...) and ``method``,
+    and ``warning`` where OpenCV's fisheye functions could not use the whole field of view.
+    """
+    fitted, report_json, widest_theta = _fishcam.convert(camera, to, method, max_angle, fit_center, fit_aspect)
+    report = _json.loads(report_json)
+    report["method"] = method
+    report["widest_theta_deg"] = float(_np.degrees(widest_theta))
+    return fitted, report
+
+
+def random_change(preset, seed):
+    """The viewpoint change of the CLI's ``--preset PRESET --seed SEED``."""
+    seed = _check_seed(seed)
+    return _fishcam.random_change(preset, seed)
+
+
+def _check_seed(seed):
+    if isinstance(seed, (bool, _np.bool_)) or not isinstance(seed, (int, _np.integer)):
+        raise Error(f"seed: expected an integer, got {type(seed).__name__}")
+    seed = int(seed)
+    if not 0 <= seed < 2**64:
+        raise Error(f"seed: must be in [0, 2^64), got {seed}")
+    return seed
+
+
+def presets():
+    """The pose presets: name -> (max_rotation_deg, max_translation)."""
+    return _fishcam.presets()
+
+
+def set_num_threads(n):
+    """The threads fishcam's compute uses.
+
+    fishcam runs on OpenCV's thread pool, which ``cv2`` in the same process shares:
+    this also sets ``cv2.setNumThreads``.
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, _np.integer)):
+        raise Error(f"set_num_threads: expected an integer, got {type(n).__name__}")
+    _fishcam.set_num_threads(int(n))
+
+
+def change_to_dict(change, seed=None, depth="source-sphere"):
+    """A change as the manifest records it: seed, rotation_deg, translation, depth (JSON-able)."""
+    return {
+        "seed": seed,
+        "rotation_deg": [float(x) for x in change.rotation_deg],
+        "translation": [float(x) for x in change.translation],
+        "depth": depth,
+    }

@@ -1,0 +1,151 @@
+"""fishcam for PyTorch: the viewpoint transform as an nn.Module, a WoodScape dataset,
+and the DataLoader worker set-up.
+
+    dataset = fishcam.torch.WoodScapeDataset(root, transform=fishcam.torch.RandomViewpoint(preset="train"))
+    loader = torch.utils.data.DataLoader(dataset, batch_size=8, num_workers=2,
+                                         worker_init_fn=fishcam.torch.worker_init_fn,
+                                         generator=torch.Generator().manual_seed(0))
+
+Seeding: without a dataset seed, each sample's change comes from torch's generator
+(two 32-bit draws, since torch.randint cannot draw 64 bits), which the DataLoader
+seeds per worker from its own generator: workers differ, and the same generator
+seed reproduces a run. With ``WoodScapeDataset(seed=S)`` each sample's change is
+``derive_seed(S, "epoch/index", ...)``: independent of workers and processes.
+"""
+
+import os
+
+import numpy as np
+import torch
+
+from . import Camera, Error, derive_seed, set_num_threads
+from . import transforms as _transforms
+
+
+def torch_seed():
+    """One 64-bit seed from torch's (per-worker) generator."""
+    hi, lo = torch.randint(0, 2**32, (2,), dtype=torch.int64).tolist()
+    return (hi << 32) | lo
+
+
+def worker_init_fn(worker_id):
+    """For DataLoader workers: one fishcam thread each (the workers are the parallelism)."""
+    del worker_id
+    set_num_threads(1)
+
+
+def _to_numpy(x, what):
+    """HWC numpy from a numpy array or a CHW / HW tensor; returns (array, was_tensor)."""
+    if isinstance(x, torch.Tensor):
+        if x.device.type != "cpu":
+            raise Error(f"{what}: fishcam runs on the CPU; got a tensor on {x.device} (move it with .cpu())")
+        array = x.detach().numpy()
+        if array.ndim == 3:
+            array = np.moveaxis(array, 0, -1)  # CHW -> HWC (a view; copied to contiguous in C++)
+        return array, True
+    if isinstance(x, np.ndarray):
+        return x, False
+    raise Error(f"{what}: expected a numpy array or a torch tensor, got {type(x).__name__}")
+
+
+def _from_numpy(array, as_tensor):
+    if not as_tensor:
+        return array
+    tensor = torch.from_numpy(array)
+    return tensor.permute(2, 0, 1) if tensor.ndim == 3 else tensor
+
+
+class RandomViewpoint(torch.nn.Module):
+    """fishcam.transforms.RandomViewpoint as a module: ``forward(image, mask=None,
+    camera=None, seed=None)`` -> ``(image, mask, change)``. Images HWC numpy or CHW
+    tensors (returned the same way), masks HW; the change is the manifest dict."""
+
+    def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
+                 depth="source-sphere", p=1.0, fill=0, fill_mask=0):
+        super().__init__()
+        self.transform = _transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
+                                                     max_translation=max_translation, depth=depth, p=p, fill=fill,
+                                                     fill_mask=fill_mask)
+
+    def forward(self, image, mask=None, camera=None, seed=None):
+        image_np, image_tensor = _to_numpy(image, "image")
+        mask_np, mask_tensor = (None, False) if mask is None else _to_numpy(mask, "mask")
+        if seed is None:
+            seed = torch_seed()
+        out = self.transform(image=image_np, mask=mask_np, camera=camera, seed=seed)
+        new_mask = _from_numpy(out["mask"], mask_tensor) if mask is not None else None
+        return _from_numpy(out["image"], image_tensor), new_mask, out["change"]
+
+
+class WoodScapeDataset(torch.utils.data.Dataset):
+    """Samples of a WoodScape-layout folder: ``rgb_images/NAME.png``,
+    ``semantic_annotations/gtLabels/NAME.png`` and ``calibration/NAME.json`` (one
+    calibration per image, as WoodScape has).
+
+    Each item is a dict: ``image`` (CHW uint8 tensor), ``mask`` (HW int64 tensor),
+    ``name``, and ``change`` when a transform is set. Cameras are read once per
+    distinct calibration file content; the transform keeps one warp per calibration.
+    With ``seed``, sample ``index`` in epoch ``e`` (``set_epoch(e)``) gets the seed
+    ``derive_seed(seed, f"epoch{e}", index)``: the same whatever the workers.
+    """
+
+    def __init__(self, root, transform=None, seed=None):
+        import cv2  # python3-opencv; only the dataset needs it
+
+        self._cv2 = cv2
+        self.root = os.fspath(root)
+        self.transform = transform
+        self.seed = None if seed is None else int(seed)
+        self.epoch = 0
+        images = os.path.join(self.root, "rgb_images")
+        if not os.path.isdir(images):
+            raise Error(f"{images}: missing (expected the WoodScape layout)")
+        self.names = sorted(os.path.splitext(f)[0] for f in os.listdir(images)
+                            if f.lower().endswith((".png", ".jpg", ".jpeg")))
+        if not self.names:
+            raise Error(f"{images}: no images")
+        self._files = {os.path.splitext(f)[0]: f for f in os.listdir(images)}
+        self._cameras = {}
+
+    def set_epoch(self, epoch):
+        self.epoch = int(epoch)
+
+    def __len__(self):
+        return len(self.names)
+
+    def camera(self, name):
+        path = os.path.join(self.root, "calibration", name + ".json")
+        with open(path, "rb") as f:
+            key = f.read()
+        camera = self._cameras.get(key)
+        if camera is None:
+            camera = Camera.read(path)
+            self._cameras[key] = camera
+        return camera
+
+    def _read(self, path, flags):
+        image = self._cv2.imread(path, flags)
+        if image is None:
+            raise Error(f"{path}: cannot read image")
+        return image
+
+    def __getitem__(self, index):
+        name = self.names[index]
+        image = self._read(os.path.join(self.root, "rgb_images", self._files[name]), self._cv2.IMREAD_COLOR)
+        image = self._cv2.cvtColor(image, self._cv2.COLOR_BGR2RGB)
+        mask = self._read(os.path.join(self.root, "semantic_annotations", "gtLabels", name + ".png"),
+                          self._cv2.IMREAD_UNCHANGED)
+        if mask.ndim != 2:
+            raise Error(f"{name}: expected a single-channel label image")
+        item = {"name": name}
+        if self.transform is not None:
+            seed = None if self.seed is None else derive_seed(self.seed, f"epoch{self.epoch}", index)
+            camera = self.camera(name)
+            if isinstance(self.transform, RandomViewpoint):
+                image, mask, item["change"] = self.transform(image, mask, camera=camera, seed=seed)
+            else:
+                out = self.transform(image=image, mask=mask, camera=camera, seed=seed)
+                image, mask, item["change"] = out["image"], out["mask"], out["change"]
+        item["image"] = torch.from_numpy(np.ascontiguousarray(image)).permute(2, 0, 1)
+        item["mask"] = torch.from_numpy(mask.astype(np.int64))
+        return item

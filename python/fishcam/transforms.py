@@ -1,0 +1,132 @@
+"""Viewpoint augmentation as a numpy transform with albumentations' call convention.
+
+    t = RandomViewpoint(camera, preset="train")
+    out = t(image=image, mask=labels)            # dict: image, mask, change
+    out = t(image=image, mask=labels, seed=7)    # reproducible: the CLI's --preset train --seed 7
+
+Randomness: no generator lives inside the transform (or any C++ object). Without
+``seed=``, one 64-bit seed is drawn per call from the ``rng`` given to the
+constructor (a ``numpy.random.Generator``) or else from numpy's global generator,
+which PyTorch reseeds in every DataLoader worker; the change then follows from
+that seed exactly as the CLI's ``--seed`` does.
+"""
+
+import numpy as np
+
+from . import Camera, Error, ViewpointWarp, _check_seed, _fishcam, change_to_dict, DEPTH_PRIORS
+
+
+def draw_seed(rng=None):
+    """One 64-bit seed from ``rng`` (a numpy Generator) or numpy's global generator."""
+    if rng is not None:
+        return int(rng.integers(0, 2**64, dtype=np.uint64))
+    hi = int(np.random.randint(0, 2**32, dtype=np.uint64))
+    lo = int(np.random.randint(0, 2**32, dtype=np.uint64))
+    return (hi << 32) | lo
+
+
+class _WarpCache:
+    """One ViewpointWarp per distinct calibration (intrinsics + size): building one
+    unprojects every pixel, so it is kept, not rebuilt per sample."""
+
+    def __init__(self, limit=64):
+        self._warps = {}
+        self._limit = limit
+
+    def get(self, camera):
+        key = camera.to_json()
+        warp = self._warps.get(key)
+        if warp is None:
+            if len(self._warps) >= self._limit:
+                self._warps.pop(next(iter(self._warps)))
+            warp = ViewpointWarp(camera)
+            self._warps[key] = warp
+        return warp
+
+    def __getstate__(self):
+        return {"limit": self._limit}  # warps are rebuilt on demand after unpickling
+
+    def __setstate__(self, state):
+        self._warps = {}
+        self._limit = state["limit"]
+
+
+class RandomViewpoint:
+    """A random viewpoint change per call (the paper's eq. 7), applied exactly.
+
+    camera: the fishcam.Camera of the images (or None: then every call passes camera=).
+    preset: "small", "medium", "large" or "train"; or give max_rotation_deg and
+        max_translation instead (uniform per axis in [-max, max]).
+    depth: "source-sphere" (default), "target-sphere" or "infinity".
+    p: probability of applying a change (else the identity, still reported).
+    fill: image value where the new view has no source; fill_mask: the label there.
+    rng: a numpy Generator to draw seeds from (default: numpy's global generator).
+    """
+
+    def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
+                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, rng=None):
+        if camera is not None and not isinstance(camera, Camera):
+            raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
+        if (max_rotation_deg is None) != (max_translation is None):
+            raise Error("max_rotation_deg and max_translation go together")
+        if max_rotation_deg is not None:
+            preset = None
+            if not (np.isfinite(max_rotation_deg) and 0 <= max_rotation_deg <= 180):
+                raise Error(f"max_rotation_deg: must be in [0, 180], got {max_rotation_deg}")
+            if not (np.isfinite(max_translation) and max_translation >= 0):
+                raise Error(f"max_translation: must be finite and >= 0, got {max_translation}")
+        elif preset not in _fishcam.presets():
+            raise Error(f"preset: unknown preset {preset!r} (small, medium, large, train)")
+        if depth not in DEPTH_PRIORS:
+            raise Error(f"depth: expected one of {', '.join(DEPTH_PRIORS)}, got {depth!r}")
+        if not (0 <= p <= 1):
+            raise Error(f"p: must be in [0, 1], got {p}")
+        if not np.isfinite(fill):
+            raise Error("fill: must be finite")
+        self.camera = camera
+        self.preset = preset
+        self.max_rotation_deg = max_rotation_deg
+        self.max_translation = max_translation
+        self.depth = depth
+        self.p = float(p)
+        self.fill = fill
+        self.fill_mask = int(fill_mask)
+        self.rng = rng
+        self._warps = _WarpCache()
+
+    def change_for(self, seed):
+        """The change this transform applies for ``seed`` (what the CLI's --seed gives)."""
+        seed = _check_seed(seed)
+        if self.preset is not None:
+            return _fishcam.random_change(self.preset, seed)
+        return _fishcam.random_change_in(self.max_rotation_deg, self.max_translation, seed)
+
+    def __call__(self, image=None, mask=None, camera=None, seed=None):
+        camera = camera if camera is not None else self.camera
+        if camera is None:
+            raise Error("camera: none given (pass camera= to the constructor or the call)")
+        if image is None and mask is None:
+            raise Error("nothing to transform: pass image= and/or mask=")
+        if seed is None:
+            seed = draw_seed(self.rng)
+        seed = _check_seed(seed)
+        if self.p < 1:
+            # The apply/skip decision follows from the seed too, so seed= reproduces it.
+            apply = np.random.default_rng(seed).random() < self.p
+        else:
+            apply = True
+        change = self.change_for(seed) if apply else _fishcam.ViewpointChange()
+        warp = self._warps.get(camera)
+        out = warp.warp(image=image, labels=mask, change=change, depth=self.depth, fill=self.fill,
+                        label_fill=self.fill_mask)
+        result = {"change": change_to_dict(change, seed, self.depth)}
+        if image is not None:
+            result["image"] = out["image"]
+        if mask is not None:
+            result["mask"] = out["labels"]
+        return result
+
+    def __repr__(self):
+        what = (f"preset={self.preset!r}" if self.preset is not None else
+                f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}")
+        return f"RandomViewpoint({what}, depth={self.depth!r}, p={self.p})"

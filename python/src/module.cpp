@@ -1,0 +1,408 @@
+// fishcam._fishcam: the C++ library for Python. Thin: argument checks and array
+// plumbing only (zero-copy numpy inputs when C-contiguous, outputs allocated as
+// numpy arrays and written in place), the GIL released around every computation.
+// The package's Python modules (fishcam/__init__.py, transforms.py, torch.py)
+// build the documented API on top.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <opencv2/core.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "fishcam/augmentation.hpp"
+#include "fishcam/camera_io.hpp"
+#include "fishcam/fit.hpp"
+#include "fishcam/viewpoint.hpp"
+
+namespace py = pybind11;
+
+namespace fishcam::python {
+namespace {
+
+using PointArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// (N, k) float64, C-contiguous: the input itself when it already is one (no copy),
+// else a converted copy (forcecast). `what` names the argument in errors.
+PointArray rows_of(const py::handle& input, py::ssize_t k, const char* what) {
+  PointArray array = PointArray::ensure(input);
+  if (!array) throw Error(std::string(what) + ": expected an array of numbers");
+  if (array.ndim() != 2 || array.shape(1) != k) {
+    std::string shape = "(";
+    for (py::ssize_t i = 0; i < array.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(array.shape(i));
+    throw Error(std::string(what) + ": expected shape (N, " + std::to_string(k) + "), got " + shape + ")");
+  }
+  return array;
+}
+
+// A numpy image as a cv::Mat header on its memory (no copy). HxW or HxWxC, C <= 4,
+// C-contiguous (else copied), dtype among `depths`.
+cv::Mat as_mat(py::array& array, const char* what, bool labels) {
+  if (!(array.flags() & py::array::c_style)) {
+    array = py::array::ensure(array, py::array::c_style);  // a contiguous copy: never strided reads
+  }
+  if (array.ndim() >= 2 && (array.shape(0) > 32767 || array.shape(1) > 32767)) {
+    throw Error(std::string(what) + ": larger than 32767 pixels per side");
+  }
+  const int ndim = static_cast<int>(array.ndim());
+  if (ndim != 2 && !(ndim == 3 && !labels)) {
+    throw Error(std::string(what) + (labels ? ": expected an HxW array" : ": expected an HxW or HxWxC array"));
+  }
+  const int channels = ndim == 3 ? static_cast<int>(array.shape(2)) : 1;
+  if (channels < 1 || channels > 4) throw Error(std::string(what) + ": expected 1 to 4 channels, got " + std::to_string(channels));
+  int depth = -1;
+  if (py::isinstance<py::array_t<std::uint8_t>>(array)) depth = CV_8U;
+  if (py::isinstance<py::array_t<std::uint16_t>>(array)) depth = CV_16U;
+  if (!labels && py::isinstance<py::array_t<float>>(array)) depth = CV_32F;
+  if (depth < 0) {
+    throw Error(std::string(what) + ": expected dtype " + (labels ? "uint8 or uint16" : "uint8, uint16 or float32") +
+                ", got " + std::string(py::str(array.dtype())));
+  }
+  return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_MAKETYPE(depth, channels),
+                 array.mutable_data());
+}
+
+// A new numpy array of height x width (x the channels of `like`), dtype of `like`,
+// and a cv::Mat header on its memory.
+py::array new_image(const py::array& like, int height, int width, cv::Mat* header) {
+  std::vector<py::ssize_t> shape{height, width};
+  if (like.ndim() == 3) shape.push_back(like.shape(2));
+  py::array out(like.dtype(), shape);
+  const int channels = like.ndim() == 3 ? static_cast<int>(like.shape(2)) : 1;
+  const int depth = like.itemsize() == 1 ? CV_8U : like.itemsize() == 2 ? CV_16U : CV_32F;
+  *header = cv::Mat(height, width, CV_MAKETYPE(depth, channels), out.mutable_data());
+  return out;
+}
+
+DepthPrior depth_prior(const std::string& name) {
+  const auto prior = parse_depth_prior(name);
+  if (!prior) throw Error("depth: expected source-sphere, target-sphere or infinity, got '" + name + "'");
+  return *prior;
+}
+
+MapKind map_kind(const std::string& name) {
+  if (name == "geometric") return MapKind::geometric;
+  if (name == "sampling") return MapKind::sampling;
+  throw Error("kind: expected geometric or sampling, got '" + name + "'");
+}
+
+std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
+  if (!name) return std::nullopt;
+  const auto format = parse_camera_format(*name);
+  if (!format) throw Error("format: unknown camera format '" + *name + "' (woodscape, fishcam, mrcal, opencv)");
+  return format;
+}
+
+// The camera's full state as fishcam JSON (exact: doubles are written round-trip).
+std::string camera_state(const Camera& camera) { return format_camera(camera.parameters(), CameraFormat::fishcam); }
+Camera camera_from_state(const std::string& state) {
+  return Camera(parse_camera(state, "pickled camera", CameraFormat::fishcam));
+}
+
+RandomPose change_from(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3d& translation) {
+  if (!rotation_deg.allFinite()) throw Error("rotation_deg: must be finite");
+  if (!translation.allFinite()) throw Error("translation: must be finite");
+  return RandomPose{rotation_deg, translation};
+}
+
+void bind_camera(py::module_& m) {
+  py::class_<Camera>(m, "Camera")
+      .def_static(
+          "read",
+          [](const std::string& path, std::optional<py::object> camera, std::optional<std::pair<int, int>> image_size,
+             std::optional<std::string> format) {
+            CameraReadOptions options;
+            options.format = format_of(format);
+            if (camera && !camera->is_none()) options.camera = py::str(*camera);
+            options.image_size = image_size;
+            py::gil_scoped_release release;
+            return read_camera(path, options);
+          },
+          py::arg("path"), py::arg("camera") = py::none(), py::arg("image_size") = py::none(),
+          py::arg("format") = py::none())
+      .def(
+          "write",
+          [](const Camera& camera, const std::string& path, std::optional<std::string> format, bool overwrite) {
+            CameraFormat resolved;
+            if (format) {
+              resolved = *format_of(format);
+            } else {
+              const std::string ext = std::filesystem::path(path).extension().string();
+              if (ext == ".cameramodel") {
+                resolved = CameraFormat::mrcal;
+              } else if (ext == ".yaml" || ext == ".yml" || ext == ".xml") {
+                resolved = CameraFormat::opencv;
+              } else if (ext == ".json") {
+                resolved = CameraFormat::fishcam;
+              } else {
+                throw Error(path + ": cannot tell the format from the extension; pass format=");
+              }
+            }
+            write_camera(camera.parameters(), path, resolved, overwrite);
+          },
+          py::arg("path"), py::arg("format") = py::none(), py::arg("overwrite") = false)
+      .def_property_readonly("width", &Camera::width)
+      .def_property_readonly("height", &Camera::height)
+      .def_property_readonly("model", [](const Camera& c) { return std::string(model_name(c.model())); })
+      .def_property_readonly("parameters", [](const Camera& c) { return model_params(c.model()); })
+      .def_property_readonly("principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); })
+      .def_property_readonly("pixel_scale", [](const Camera& c) { return Eigen::Vector2d(c.pixel_scale()); })
+      .def(
+          "project",
+          [](const Camera& camera, const py::handle& points_in) {
+            const PointArray points = rows_of(points_in, 3, "points");
+            const size_t n = static_cast<size_t>(points.shape(0));
+            py::array_t<double> pixels({py::ssize_t(n), py::ssize_t(2)});
+            py::array_t<bool> ok{py::ssize_t(n)};
+            {
+              py::gil_scoped_release release;
+              camera.project(std::span<const Eigen::Vector3d>(reinterpret_cast<const Eigen::Vector3d*>(points.data()), n),
+                             std::span<Eigen::Vector2d>(reinterpret_cast<Eigen::Vector2d*>(pixels.mutable_data()), n),
+                             std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(ok.mutable_data()), n));
+            }
+            return py::make_tuple(pixels, ok);
+          },
+          py::arg("points"))
+      .def(
+          "unproject",
+          [](const Camera& camera, const py::handle& pixels_in) {
+            const PointArray pixels = rows_of(pixels_in, 2, "pixels");
+            const size_t n = static_cast<size_t>(pixels.shape(0));
+            py::array_t<double> rays({py::ssize_t(n), py::ssize_t(3)});
+            py::array_t<bool> ok{py::ssize_t(n)};
+            {
+              py::gil_scoped_release release;
+              camera.unproject(std::span<const Eigen::Vector2d>(reinterpret_cast<const Eigen::Vector2d*>(pixels.data()), n),
+                               std::span<Eigen::Vector3d>(reinterpret_cast<Eigen::Vector3d*>(rays.mutable_data()), n),
+                               std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(ok.mutable_data()), n));
+            }
+            return py::make_tuple(rays, ok);
+          },
+          py::arg("pixels"))
+      .def(
+          "theta_from_rho",
+          [](const Camera& camera, py::array_t<double, py::array::c_style | py::array::forcecast> rho) {
+            py::array_t<double> theta(std::vector<py::ssize_t>(rho.shape(), rho.shape() + rho.ndim()));
+            const double* in = rho.data();
+            double* out = theta.mutable_data();
+            const py::ssize_t n = rho.size();
+            {
+              py::gil_scoped_release release;
+              for (py::ssize_t i = 0; i < n; ++i) out[i] = camera.theta_from_rho(in[i]);
+            }
+            return theta;
+          },
+          py::arg("rho"))
+      .def("info_json", [](const Camera& c) { return camera_info_json(c); })
+      .def(
+          "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
+          py::arg("width"), py::arg("height"))
+      .def("to_json", &camera_state, "The camera as fishcam JSON text")
+      .def_static("from_json", &camera_from_state, py::arg("text"))
+      .def(py::pickle([](const Camera& c) { return camera_state(c); },
+                      [](const std::string& state) { return camera_from_state(state); }))
+      .def("__repr__", [](const Camera& c) {
+        return "<fishcam.Camera " + std::string(model_name(c.model())) + " " + std::to_string(c.width()) + "x" +
+               std::to_string(c.height()) + ">";
+      });
+
+  m.def(
+      "convert",
+      [](const Camera& source, const std::string& to, const std::string& method, std::optional<double> max_angle_deg,
+         bool fit_center, bool fit_aspect) {
+        std::optional<double> max_theta;
+        if (max_angle_deg) {
+          if (!std::isfinite(*max_angle_deg)) throw Error("max_angle: must be finite");
+          max_theta = *max_angle_deg * std::numbers::pi / 180;
+        }
+        const ModelSpec spec = parse_model_spec(to);
+        std::optional<Conversion> c;
+        {
+          py::gil_scoped_release release;
+          c = convert_camera(source, spec, method, max_theta, {fit_center, fit_aspect});
+        }
+        return py::make_tuple(Camera(c->camera), fit_report_json(c->camera, c->report), c->widest_theta);
+      },
+      py::arg("camera"), py::arg("to"), py::arg("method") = "lsq", py::arg("max_angle") = py::none(),
+      py::arg("fit_center") = false, py::arg("fit_aspect") = false);
+}
+
+void bind_augmentation(py::module_& m) {
+  py::class_<RandomPose>(m, "ViewpointChange")
+      .def(py::init(&change_from), py::arg("rotation_deg") = Eigen::Vector3d::Zero(),
+           py::arg("translation") = Eigen::Vector3d::Zero())
+      .def_readonly("rotation_deg", &RandomPose::rotation_deg)
+      .def_readonly("translation", &RandomPose::translation)
+      .def_property_readonly("rotation", [](const RandomPose& p) { return Eigen::Matrix3d(p.change().rotation); })
+      .def(py::pickle(
+          [](const RandomPose& p) { return py::make_tuple(p.rotation_deg, p.translation); },
+          [](const py::tuple& t) { return change_from(t[0].cast<Eigen::Vector3d>(), t[1].cast<Eigen::Vector3d>()); }))
+      .def("__repr__", [](const RandomPose& p) {
+        char buffer[256];
+        std::snprintf(buffer, sizeof buffer, "ViewpointChange(rotation_deg=(%.17g, %.17g, %.17g), translation=(%.17g, %.17g, %.17g))",
+                      p.rotation_deg.x(), p.rotation_deg.y(), p.rotation_deg.z(), p.translation.x(),
+                      p.translation.y(), p.translation.z());
+        return std::string(buffer);
+      });
+
+  m.def(
+      "random_change",
+      [](const std::string& preset, std::uint64_t seed) {
+        const auto found = find_pose_preset(preset);
+        if (!found) throw Error("preset: unknown preset '" + preset + "' (small, medium, large, train)");
+        return random_pose(*found, seed);
+      },
+      py::arg("preset"), py::arg("seed"));
+  m.def(
+      "random_change_in",
+      [](double max_rotation_deg, double max_translation, std::uint64_t seed) {
+        if (!(max_rotation_deg >= 0 && max_rotation_deg <= 180) || !(max_translation >= 0) ||
+            !std::isfinite(max_translation)) {
+          throw Error("max_rotation_deg must be in [0, 180] and max_translation finite and >= 0");
+        }
+        return random_pose(PosePreset{"custom", max_rotation_deg, max_translation}, seed);
+      },
+      py::arg("max_rotation_deg"), py::arg("max_translation"), py::arg("seed"));
+  m.def("presets", [] {
+    py::dict out;
+    for (const PosePreset& p : pose_presets()) {
+      out[py::str(std::string(p.name))] = py::make_tuple(p.max_rotation_deg, p.max_translation);
+    }
+    return out;
+  });
+  m.def("derive_seed", &derive_seed, py::arg("seed"), py::arg("key"), py::arg("index"));
+
+  py::class_<ViewpointWarp>(m, "ViewpointWarp")
+      .def(py::init([](const Camera& source, std::optional<Camera> target) {
+             py::gil_scoped_release release;
+             return target ? ViewpointWarp(source, *target) : ViewpointWarp(source);
+           }),
+           py::arg("camera"), py::arg("target") = py::none())
+      .def_property_readonly("source", &ViewpointWarp::source)
+      .def_property_readonly("target", &ViewpointWarp::target)
+      .def_property_readonly("float_kernel", &ViewpointWarp::float_kernel)
+      .def(
+          "maps",
+          [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth, const std::string& kind,
+             bool exact) {
+            const DepthPrior prior = depth_prior(depth);
+            const MapKind map = map_kind(kind);
+            if (exact && map != MapKind::geometric) throw Error("exact: only geometric maps have an exact path");
+            const int h = warp.target().height(), w = warp.target().width();
+            py::array_t<float> map_x({h, w}), map_y({h, w});
+            py::array_t<bool> valid({h, w});
+            WarpMaps maps;
+            // Preallocated outputs: the library writes into the numpy buffers.
+            maps.map_x = cv::Mat(h, w, CV_32FC1, map_x.mutable_data());
+            maps.map_y = cv::Mat(h, w, CV_32FC1, map_y.mutable_data());
+            if (map == MapKind::geometric) maps.valid = cv::Mat(h, w, CV_8UC1, valid.mutable_data());
+            {
+              py::gil_scoped_release release;
+              if (exact) {
+                warp.compute_exact(change.change(), prior, &maps);
+              } else {
+                warp.compute(change.change(), prior, &maps, map);
+              }
+              if (map == MapKind::sampling) {
+                cv::Mat header(h, w, CV_8UC1, valid.mutable_data());
+                maps.validity().copyTo(header);  // same size and type: written in place
+              }
+            }
+            return py::make_tuple(map_x, map_y, valid);
+          },
+          py::arg("change"), py::arg("depth") = "source-sphere", py::arg("kind") = "geometric",
+          py::arg("exact") = false)
+      .def(
+          "warp",
+          [](const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
+             const RandomPose& change, const std::string& depth, double fill, int label_fill, bool return_valid) {
+            const DepthPrior prior = depth_prior(depth);
+            py::dict out;
+            const int h = warp.target().height(), w = warp.target().width();
+            cv::Mat image_in, labels_in, image_out, labels_out;
+            if (image) {
+              image_in = as_mat(*image, "image", false);
+              out["image"] = new_image(*image, h, w, &image_out);
+            }
+            if (labels) {
+              labels_in = as_mat(*labels, "labels", true);
+              out["labels"] = new_image(*labels, h, w, &labels_out);
+            }
+            py::array_t<bool> valid;
+            cv::Mat valid_out;
+            if (return_valid) {
+              valid = py::array_t<bool>({warp.target().height(), warp.target().width()});
+              valid_out = cv::Mat(warp.target().height(), warp.target().width(), CV_8UC1, valid.mutable_data());
+              out["valid"] = valid;
+            }
+            {
+              py::gil_scoped_release release;
+              check_change(change.change());
+              const cv::Size source(warp.source().width(), warp.source().height());
+              if (image && image_in.size() != source) {
+                throw Error("image: is " + std::to_string(image_in.cols) + "x" + std::to_string(image_in.rows) +
+                            " but the camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
+              }
+              if (labels && labels_in.size() != source) {
+                throw Error("labels: is " + std::to_string(labels_in.cols) + "x" + std::to_string(labels_in.rows) +
+                            " but the camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
+              }
+              WarpMaps maps;
+              warp.compute(change.change(), prior, &maps);
+              if (image) {
+                // The same maps and calls as `fishcam augment`; the library writes
+                // into the numpy buffer (same size and type).
+                const uchar* before = image_out.data;
+                warp_image(image_in, maps, &image_out, fill);
+                if (image_out.data != before) throw Error("internal: warp_image reallocated its output");
+              }
+              if (labels) {
+                const uchar* before = labels_out.data;
+                warp_labels(labels_in, maps, label_fill, &labels_out);
+                if (labels_out.data != before) throw Error("internal: warp_labels reallocated its output");
+              }
+              if (return_valid) maps.validity().copyTo(valid_out);
+            }
+            return out;
+          },
+          py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
+          py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
+          py::arg("return_valid") = false)
+      .def(py::pickle(
+          [](const ViewpointWarp& w) { return py::make_tuple(camera_state(w.source()), camera_state(w.target())); },
+          [](const py::tuple& t) {
+            return ViewpointWarp(camera_from_state(t[0].cast<std::string>()),
+                                 camera_from_state(t[1].cast<std::string>()));
+          }));
+
+  m.def("set_num_threads", [](int n) {
+    if (n < 1 || n > 1024) throw Error("set_num_threads: expected 1 to 1024, got " + std::to_string(n));
+    cv::setNumThreads(n);
+  });
+  m.def("get_num_threads", [] { return cv::getNumThreads(); });
+}
+
+}  // namespace
+}  // namespace fishcam::python
+
+PYBIND11_MODULE(_fishcam, m) {
+  using fishcam::Error;
+  m.doc() = "fishcam's C++ library (use the fishcam package, not this module)";
+  static py::exception<Error> error(m, "Error", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Error& e) {
+      PyErr_SetString(error.ptr(), e.what());
+    } catch (const cv::Exception& e) {
+      PyErr_SetString(error.ptr(), ("OpenCV: " + e.err).c_str());
+    }
+  });
+  m.attr("__version__") = FISHCAM_VERSION;
+  fishcam::python::bind_camera(m);
+  fishcam::python::bind_augmentation(m);
+}
