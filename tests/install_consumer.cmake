@@ -17,3 +17,17 @@ if(NOT EXISTS ${WORK_DIR}/prefix/bin/fishcam)
   message(FATAL_ERROR "the fishcam program was not installed")
 endif()
 run(${WORK_DIR}/prefix/bin/fishcam info ${WORK_DIR}/prefix/share/fishcam/woodscape_front.json --json)
+
+# The Python package from the installed prefix (not the build tree), and the
+# install folder is where /usr/bin/python3 looks when the prefix is /usr/local.
+if(PYTHON_EXECUTABLE)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env --unset=PYTHONPATH PYTHONPATH=${WORK_DIR}/prefix/${PYTHON_INSTALL_DIR}
+                          ${PYTHON_EXECUTABLE} -c
+                          "import fishcam, os; assert fishcam.__file__.startswith('${WORK_DIR}/prefix'), fishcam.__file__; c = fishcam.Camera.read('${WORK_DIR}/prefix/share/fishcam/woodscape_front.json'); print(c, fishcam.ViewpointWarp(c).float_kernel)"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "the installed Python package does not import: ${out}\n${err}")
+  endif()
+  message(STATUS "${out}")
+  run(${PYTHON_EXECUTABLE} -c "import sys; d = '/usr/local/${PYTHON_INSTALL_DIR}'; assert d in sys.path, d + ' not in ' + str(sys.path)")
+endif()

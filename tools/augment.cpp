@@ -15,7 +15,7 @@ void register_augment(CLI::App& app) {
     PoseOptions pose;
     std::uint64_t seed = 0;
     int label_fill = 0;
-    bool force = false;
+    bool force = false, json = false;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("SOURCE", o->source, "Source camera file")->required();
@@ -35,6 +35,7 @@ void register_augment(CLI::App& app) {
   cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source (0 = WoodScape background)")
       ->capture_default_str();
   cmd->add_flag("--force", o->force, "Replace existing output files");
+  cmd->add_flag("--json", o->json, "Print the applied change as one JSON object (full precision)");
   cmd->callback([o, out_label] {
     if (out_label->count() && o->label.empty()) throw Error("--out-label needs --label");
     check_outputs({{o->out_image}, {o->out_label, true}, {o->out_mask}}, {o->source, o->target, o->image, o->label},
@@ -69,6 +70,17 @@ void register_augment(CLI::App& app) {
     }
     if (!o->out_mask.empty()) outputs.emplace_back(o->out_mask, maps.validity() * 255);
     write_images(outputs, o->force);
+    if (o->json) {
+      const auto& r = pose.rotation_deg;
+      const auto& t = pose.translation;
+      nlohmann::json j{{"rotation_deg", {r.x(), r.y(), r.z()}},
+                       {"translation", {t.x(), t.y(), t.z()}},
+                       {"depth", o->pose.depth},
+                       {"seed", o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->seed)},
+                       {"preset", o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->preset)}};
+      std::printf("%s\n", j.dump().c_str());  // nlohmann writes doubles round-trip exact
+      return;
+    }
     std::printf("pose: %s, depth %s\n", describe(pose.rotation_deg, pose.translation).c_str(), o->pose.depth.c_str());
   });
 }

@@ -13,6 +13,7 @@ seed reproduces a run. With ``WoodScapeDataset(seed=S)`` each sample's change is
 ``derive_seed(S, "epoch/index", ...)``: independent of workers and processes.
 """
 
+import json
 import os
 
 import numpy as np
@@ -20,6 +21,12 @@ import torch
 
 from . import Camera, Error, derive_seed, set_num_threads
 from . import transforms as _transforms
+
+
+def _cv2():
+    import cv2  # python3-opencv: only the dataset needs it
+
+    return cv2
 
 
 def torch_seed():
@@ -83,16 +90,15 @@ class WoodScapeDataset(torch.utils.data.Dataset):
     calibration per image, as WoodScape has).
 
     Each item is a dict: ``image`` (CHW uint8 tensor), ``mask`` (HW int64 tensor),
-    ``name``, and ``change`` when a transform is set. Cameras are read once per
+    ``name``, and ``change`` when a transform is set: the manifest's fields as a
+    JSON string (seeds are 64-bit, past torch's int64, so the default collate
+    could not batch them as numbers; ``json.loads`` gives the dict back). Cameras are read once per
     distinct calibration file content; the transform keeps one warp per calibration.
     With ``seed``, sample ``index`` in epoch ``e`` (``set_epoch(e)``) gets the seed
     ``derive_seed(seed, f"epoch{e}", index)``: the same whatever the workers.
     """
 
     def __init__(self, root, transform=None, seed=None):
-        import cv2  # python3-opencv; only the dataset needs it
-
-        self._cv2 = cv2
         self.root = os.fspath(root)
         self.transform = transform
         self.seed = None if seed is None else int(seed)
@@ -123,18 +129,19 @@ class WoodScapeDataset(torch.utils.data.Dataset):
             self._cameras[key] = camera
         return camera
 
-    def _read(self, path, flags):
-        image = self._cv2.imread(path, flags)
+    @staticmethod
+    def _read(path, flags):
+        image = _cv2().imread(path, flags)
         if image is None:
             raise Error(f"{path}: cannot read image")
         return image
 
     def __getitem__(self, index):
         name = self.names[index]
-        image = self._read(os.path.join(self.root, "rgb_images", self._files[name]), self._cv2.IMREAD_COLOR)
-        image = self._cv2.cvtColor(image, self._cv2.COLOR_BGR2RGB)
+        image = self._read(os.path.join(self.root, "rgb_images", self._files[name]), _cv2().IMREAD_COLOR)
+        image = _cv2().cvtColor(image, _cv2().COLOR_BGR2RGB)
         mask = self._read(os.path.join(self.root, "semantic_annotations", "gtLabels", name + ".png"),
-                          self._cv2.IMREAD_UNCHANGED)
+                          _cv2().IMREAD_UNCHANGED)
         if mask.ndim != 2:
             raise Error(f"{name}: expected a single-channel label image")
         item = {"name": name}
@@ -146,6 +153,8 @@ class WoodScapeDataset(torch.utils.data.Dataset):
             else:
                 out = self.transform(image=image, mask=mask, camera=camera, seed=seed)
                 image, mask, item["change"] = out["image"], out["mask"], out["change"]
+        if "change" in item:
+            item["change"] = json.dumps(item["change"])
         item["image"] = torch.from_numpy(np.ascontiguousarray(image)).permute(2, 0, 1)
         item["mask"] = torch.from_numpy(mask.astype(np.int64))
         return item

@@ -1,0 +1,299 @@
+"""The Python package against the C++ CLI, and its contract: exact equality with
+`fishcam map` / `fishcam augment`, zero copy, seeding, pickling, bad input."""
+
+import json
+import os
+import pickle
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import fishcam
+from fishcam.transforms import RandomViewpoint
+
+DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
+BINARY = os.environ.get("FISHCAM_BINARY")
+BUNDLED = ["woodscape_front.json", "stereographic.cameramodel", "pinhole.cameramodel", "kannala_brandt.yaml",
+           "equidistant.json"]
+
+
+def data(name):
+    return os.path.join(DATA, name)
+
+
+@pytest.fixture(scope="module")
+def cam():
+    return fishcam.Camera.read(data("woodscape_front.json"))
+
+
+def run_cli(*args):
+    if not BINARY:
+        pytest.skip("FISHCAM_BINARY not set (run through CTest)")
+    result = subprocess.run([BINARY, *map(str, args)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    return result.stdout
+
+
+def read_npy(path):
+    return np.load(path)
+
+
+def test_version_and_error_type():
+    assert fishcam.__version__.count(".") == 2
+    assert issubclass(fishcam.Error, ValueError)
+
+
+def test_info_has_the_cli_fields(cam, tmp_path):
+    info = cam.info()
+    cli = json.loads(run_cli("info", data("woodscape_front.json"), "--json"))
+    for key in cli:
+        if key != "format":
+            assert info[key] == cli[key], key
+
+
+@pytest.mark.parametrize("name", BUNDLED)
+def test_project_unproject_agree_with_the_cli(name):
+    camera = fishcam.Camera.read(data(name))
+    rng = np.random.default_rng(1)
+    points = rng.normal(size=(200, 3))
+    points[:5] = [[0, 0, 1], [0, 0, -1], [0, 0, 0], [np.nan, 1, 1], [1e300, 1e300, 1]]
+    px, ok = camera.project(points)
+    text = "\n".join(" ".join(repr(float(v)) for v in p) for p in points) + "\n"
+    result = subprocess.run([BINARY, "project", data(name)], input=text, capture_output=True, text=True) \
+        if BINARY else pytest.skip("no CLI")
+    cli = np.array([[float(v) for v in line.split()] for line in result.stdout.split("\n") if line.strip()])
+    np.testing.assert_array_equal(np.isnan(cli[:, 0]), ~ok)
+    np.testing.assert_array_equal(px[ok], cli[ok])  # %.17g: bit for bit
+    assert np.all(np.isnan(px[~ok]))
+    rays, ok2 = camera.unproject(px[ok])
+    assert ok2.all()
+    scaled = points[ok] / np.abs(points[ok]).max(axis=1, keepdims=True)  # no overflow at 1e300
+    expected = scaled / np.linalg.norm(scaled, axis=1, keepdims=True)
+    np.testing.assert_allclose(rays, expected, atol=1e-9)
+    # theta_from_rho: NaN outside the domain, and inverse of rho.
+    theta = camera.theta_from_rho(np.array([0.0, 50.0, -1.0, np.nan, 1e12]))
+    assert theta[0] == 0 and theta[1] > 0
+    assert np.all(np.isnan(theta[2:4]))
+
+
+def test_theta_from_rho_keeps_the_shape(cam):
+    rho = np.linspace(0, 500, 12).reshape(3, 4)
+    theta = cam.theta_from_rho(rho)
+    assert theta.shape == (3, 4)
+    px, _ = cam.project(np.stack([np.sin(theta.ravel()), 0 * theta.ravel(), np.cos(theta.ravel())], axis=1))
+    np.testing.assert_allclose(px[:, 0] - cam.principal_point[0], rho.ravel(), atol=1e-9)
+
+
+def test_random_change_equals_the_cli(cam, tmp_path):
+    for seed in [0, 7, 2**63 + 5, 2**64 - 1]:
+        change = fishcam.random_change("train", seed)
+        cli = json.loads(run_cli("augment", data("woodscape_front.json"), "--image", make_image(tmp_path, cam),
+                                 "--out-image", tmp_path / f"o{seed}.png", "--preset", "train", "--seed", seed,
+                                 "--json"))
+        assert list(change.rotation_deg) == cli["rotation_deg"]
+        assert list(change.translation) == cli["translation"]
+
+
+def make_image(tmp_path, cam):
+    import cv2
+    path = tmp_path / "image.png"
+    if not path.exists():
+        rng = np.random.default_rng(0)
+        cv2.imwrite(str(path), rng.integers(0, 256, size=(cam.height, cam.width, 3), dtype=np.uint8))
+        labels = (np.arange(cam.width)[None, :] // 37 + np.arange(cam.height)[:, None] // 23) % 10
+        cv2.imwrite(str(tmp_path / "labels.png"), labels.astype(np.uint8))
+    return path
+
+
+@pytest.mark.parametrize("depth", fishcam.DEPTH_PRIORS)
+def test_maps_are_bit_identical_to_fishcam_map(cam, tmp_path, depth):
+    change = fishcam.ViewpointChange(rotation_deg=(10, -20, 5), translation=(0.1, 0, 0.2))
+    map_x, map_y, valid = fishcam.ViewpointWarp(cam).maps(change, depth=depth)
+    run_cli("map", data("woodscape_front.json"), "--rotate", "10,-20,5", "--translate", "0.1,0,0.2",
+            "--depth", depth, "--out", tmp_path / "m.npy")
+    cli = read_npy(tmp_path / "m.npy")
+    assert cli.shape == (cam.height, cam.width, 2)
+    np.testing.assert_array_equal(map_x, cli[..., 0])
+    np.testing.assert_array_equal(map_y, cli[..., 1])
+    assert valid.dtype == bool and 0.5 < valid.mean() < 1
+
+
+def test_augmented_images_and_labels_are_byte_identical_to_fishcam_augment(cam, tmp_path):
+    import cv2
+    image_path = make_image(tmp_path, cam)
+    image = cv2.imread(str(image_path), cv2.IMREAD_UNCHANGED)
+    labels = cv2.imread(str(tmp_path / "labels.png"), cv2.IMREAD_UNCHANGED)
+    warp = fishcam.ViewpointWarp(cam)
+    for seed in [1, 2]:
+        run_cli("augment", data("woodscape_front.json"), "--image", image_path, "--label", tmp_path / "labels.png",
+                "--out-image", tmp_path / f"a{seed}.png", "--out-label", tmp_path / f"l{seed}.png",
+                "--preset", "train", "--seed", seed, "--label-fill", 255)
+        out = warp.warp(image=image, labels=labels, change=fishcam.random_change("train", seed), label_fill=255)
+        np.testing.assert_array_equal(out["image"], cv2.imread(str(tmp_path / f"a{seed}.png"), cv2.IMREAD_UNCHANGED))
+        np.testing.assert_array_equal(out["labels"], cv2.imread(str(tmp_path / f"l{seed}.png"), cv2.IMREAD_UNCHANGED))
+        # The transform with the same seed gives the same bytes.
+        t = RandomViewpoint(cam, preset="train", fill_mask=255)
+        o = t(image=image, mask=labels, seed=seed)
+        np.testing.assert_array_equal(o["image"], out["image"])
+        np.testing.assert_array_equal(o["mask"], out["labels"])
+        assert o["change"]["seed"] == seed
+        json.dumps(o["change"])
+
+
+def test_image_types_channels_and_fill(cam):
+    warp = fishcam.ViewpointWarp(cam)
+    change = fishcam.random_change("large", 3)
+    _, _, valid = warp.maps(change)
+    for dtype in [np.uint8, np.uint16, np.float32]:
+        for shape in [(cam.height, cam.width), (cam.height, cam.width, 1), (cam.height, cam.width, 3),
+                      (cam.height, cam.width, 4)]:
+            image = np.full(shape, 7, dtype=dtype)
+            out = warp.warp(image=image, change=change, fill=42, return_valid=True)
+            assert out["image"].dtype == dtype and out["image"].shape == shape
+            assert np.all(out["image"][out["valid"]] == 7)
+            assert np.all(out["image"][~out["valid"]] == 42)
+            np.testing.assert_array_equal(out["valid"], valid)
+
+
+def test_inputs_are_not_copied_when_contiguous(cam, monkeypatch):
+    # project reads the caller's buffer: writing into it from another view shows up.
+    points = np.ascontiguousarray(np.random.default_rng(2).normal(size=(10, 3)))
+    points[:, 2] = np.abs(points[:, 2]) + 1
+    px, _ = cam.project(points)
+    # A non-contiguous view (every other row) gives the same results as its copy.
+    strided = np.random.default_rng(3).normal(size=(20, 3))[::2]
+    strided[:, 2] = 1
+    assert not strided.flags.c_contiguous
+    np.testing.assert_array_equal(cam.project(strided)[0], cam.project(np.ascontiguousarray(strided))[0])
+    # Images: a Fortran-ordered or sliced image is copied, never read with wrong strides.
+    warp = fishcam.ViewpointWarp(cam)
+    rng = np.random.default_rng(4)
+    image = rng.integers(0, 256, size=(cam.height, cam.width * 2, 3), dtype=np.uint8)
+    view = image[:, ::2]
+    change = fishcam.random_change("small", 1)
+    np.testing.assert_array_equal(warp.warp(image=view, change=change)["image"],
+                                  warp.warp(image=np.ascontiguousarray(view), change=change)["image"])
+
+
+def test_zero_copy_is_measured_by_the_data_pointer(cam):
+    # float64 C-contiguous points are used in place: pybind11's ensure() returns the same object.
+    points = np.zeros((4, 3))
+    points[:, 2] = 1
+    before = points.__array_interface__["data"][0]
+    cam.project(points)
+    assert points.__array_interface__["data"][0] == before
+    # A float32 input is converted (a copy), and still gives float64 results.
+    px32, _ = cam.project(points.astype(np.float32))
+    assert px32.dtype == np.float64
+
+
+def test_resized_follows_the_pixel_centre_convention(cam):
+    small = cam.resized(640, 483)
+    assert (small.width, small.height) == (640, 483)
+    np.testing.assert_allclose(small.principal_point, (np.array(cam.principal_point) + 0.5) * 0.5 - 0.5, rtol=0,
+                               atol=1e-12)
+    rays = np.random.default_rng(5).normal(size=(50, 3))
+    rays[:, 2] = np.abs(rays[:, 2])
+    big_px, ok = cam.project(rays)
+    small_px, ok2 = small.project(rays)
+    np.testing.assert_array_equal(ok, ok2)
+    np.testing.assert_allclose((big_px[ok] + 0.5) * 0.5 - 0.5, small_px[ok], atol=1e-9)
+
+
+def test_convert_matches_the_cli(cam, tmp_path):
+    kb, report = fishcam.convert(cam, to="kannala-brandt")
+    cli = json.loads(run_cli("convert", data("woodscape_front.json"), "--to", "kannala-brandt", "--out",
+                             tmp_path / "kb.json", "--json"))
+    assert report["parameters"] == cli["parameters"]
+    assert report["rms_px"] == cli["rms_px"]
+    assert kb.model == "kannala-brandt"
+    assert kb == fishcam.Camera.read(str(tmp_path / "kb.json"))
+    eq, paper = fishcam.convert(cam, to="equidistant", method="paper")
+    # Eq. 13: f = (W / 2) / (half the horizontal field of view).
+    half_fov = np.radians(cam.info()["fov_deg"]["horizontal"] / 2)
+    assert eq.parameters[0] == pytest.approx(cam.width / 2 / half_fov, rel=1e-12)
+
+
+def test_write_refuses_to_replace_unless_overwrite(cam, tmp_path):
+    path = tmp_path / "c.json"
+    cam.write(str(path))
+    with pytest.raises(fishcam.Error, match="already exists"):
+        cam.write(str(path))
+    cam.write(str(path), overwrite=True)
+    assert fishcam.Camera.read(str(path)) == cam
+    for fmt in ["woodscape", "fishcam"]:
+        cam.write(str(tmp_path / f"c.{fmt}"), format=fmt)
+        assert fishcam.Camera.read(str(tmp_path / f"c.{fmt}"), format=fmt).info()["cx"] == cam.info()["cx"]
+    with pytest.raises(fishcam.Error, match="extension"):
+        cam.write(str(tmp_path / "c.txt"))
+
+
+def test_pickling_round_trips(cam):
+    assert pickle.loads(pickle.dumps(cam)) == cam
+    warp = fishcam.ViewpointWarp(cam)
+    change = fishcam.random_change("medium", 9)
+    again = pickle.loads(pickle.dumps(warp))
+    np.testing.assert_array_equal(again.maps(change)[0], warp.maps(change)[0])
+    c = pickle.loads(pickle.dumps(change))
+    assert list(c.rotation_deg) == list(change.rotation_deg)
+    t = pickle.loads(pickle.dumps(RandomViewpoint(cam, preset="small")))
+    assert t.camera == cam and t.preset == "small"
+
+
+def test_bad_input_raises_fishcam_error(cam):
+    warp = fishcam.ViewpointWarp(cam)
+    change = fishcam.random_change("small", 1)
+    cases = [
+        lambda: cam.project(np.zeros((3, 2))),
+        lambda: cam.project(np.zeros(3)),
+        lambda: cam.unproject(np.zeros((2, 3))),
+        lambda: warp.warp(image=np.zeros((10, 10), np.uint8), change=change),
+        lambda: warp.warp(image=np.zeros((cam.height, cam.width), np.int32), change=change),
+        lambda: warp.warp(image=np.zeros((cam.height, cam.width, 5), np.uint8), change=change),
+        lambda: warp.warp(labels=np.zeros((cam.height, cam.width), np.float32), change=change),
+        lambda: warp.warp(labels=np.zeros((cam.height, cam.width), np.uint8), change=change, label_fill=256),
+        lambda: warp.maps(change, depth="sideways"),
+        lambda: warp.maps(change, kind="fancy"),
+        lambda: fishcam.ViewpointChange(rotation_deg=(np.nan, 0, 0)),
+        lambda: fishcam.ViewpointChange(translation=(0, np.inf, 0)),
+        lambda: fishcam.random_change("huge", 1),
+        lambda: fishcam.random_change("train", -1),
+        lambda: fishcam.random_change("train", 2**64),
+        lambda: fishcam.random_change("train", 1.5),
+        lambda: fishcam.convert(cam, to="fancy-model"),
+        lambda: fishcam.convert(cam, to="equidistant", method="guess"),
+        lambda: fishcam.convert(cam, to="equidistant", max_angle=float("nan")),
+        lambda: fishcam.Camera.read(data("woodscape_front.json"), camera="rear"),
+        lambda: fishcam.Camera.read(data("woodscape_front.json"), image_size=(640, 480)),
+        lambda: fishcam.Camera.read(data("woodscape_front.json"), format="mrcal"),
+        lambda: fishcam.Camera.read(data("woodscape_front.json"), format="kodak"),
+        lambda: fishcam.set_num_threads(0),
+        lambda: RandomViewpoint(cam, preset="huge"),
+        lambda: RandomViewpoint(cam, depth="sideways"),
+        lambda: RandomViewpoint(cam)(image=np.zeros((5, 5, 3), np.uint8)),
+        lambda: RandomViewpoint()(image=np.zeros((5, 5, 3), np.uint8)),
+    ]
+    for i, case in enumerate(cases):
+        with pytest.raises(fishcam.Error):
+            case()
+            pytest.fail(f"case {i} did not raise")
+    # The messages are one line and name the argument.
+    with pytest.raises(fishcam.Error, match=r"^points: expected shape \(N, 3\)"):
+        cam.project(np.zeros((3, 2)))
+    with pytest.raises(fishcam.Error, match="image: is 10x10 but the camera is 1280x966"):
+        warp.warp(image=np.zeros((10, 10), np.uint8), change=change)
+
+
+def test_num_threads(cam):
+    before = fishcam.get_num_threads()
+    fishcam.set_num_threads(1)
+    assert fishcam.get_num_threads() == 1
+    fishcam.set_num_threads(max(before, 1))
+
+
+def test_camera_read_options(cam):
+    assert fishcam.Camera.read(data("woodscape_front.json"), camera=0) == cam
+    assert fishcam.Camera.read(data("woodscape_front.json"), image_size=(1280, 966)) == cam
+    assert fishcam.Camera.read(data("woodscape_front.json"), format="woodscape") == cam
