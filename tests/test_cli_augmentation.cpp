@@ -4,6 +4,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <map>
+#include <set>
+#include <sstream>
+
 #include "fishcam/npy.hpp"
 #include "test_support.hpp"
 
@@ -167,6 +171,84 @@ TEST(CliAugmentation, DemoAndBench) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   for (const char* key : {"total_ms", "map_ms", "remap_only_ms", "threads"}) EXPECT_TRUE(j.contains(key)) << key;
+}
+
+}  // namespace
+}  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// The files of a folder tree, relative path -> content.
+std::map<std::string, std::string> tree(const std::filesystem::path& root) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(root)) {
+    if (e.is_regular_file()) out[std::filesystem::relative(e.path(), root).string()] = test::read_file(e.path());
+  }
+  return out;
+}
+
+std::set<std::string> lines(const std::string& text) {
+  std::set<std::string> out;
+  std::stringstream in(text);
+  for (std::string line; std::getline(in, line);) out.insert(line);
+  return out;
+}
+
+// sample-dataset makes a WoodScape-layout set; 3 shards of augment-dataset
+// together give exactly the unsharded run's files and manifest lines.
+TEST(CliAugmentation, ShardsTogetherEqualOneRun) {
+  const auto dir = test::scratch_dir("shards");
+  auto r = run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 7 --seed 3 --size 160x121");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(tree(dir / "root").size(), 21u);
+  r = run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 7 --seed 3 --size 160x121");
+  EXPECT_NE(r.exit_code, 0) << "never replaces samples";
+
+  const std::string common = "augment-dataset " + quoted(dir / "root") + " --preset small --seed 9 --copies 2";
+  r = run_fishcam(common + " --out " + quoted(dir / "whole"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (int k = 0; k < 3; ++k) {
+    r = run_fishcam(common + " --shard " + std::to_string(k) + "/3 --out " + quoted(dir / "sharded"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  auto whole = tree(dir / "whole"), sharded = tree(dir / "sharded");
+  const std::set<std::string> whole_lines = lines(whole["manifest.jsonl"]);
+  std::set<std::string> shard_lines;
+  for (int k = 0; k < 3; ++k) {
+    const std::string name = "manifest-" + std::to_string(k) + "-of-3.jsonl";
+    ASSERT_TRUE(sharded.count(name)) << name;
+    for (const auto& line : lines(sharded[name])) EXPECT_TRUE(shard_lines.insert(line).second) << "twice: " << line;
+    sharded.erase(name);
+  }
+  whole.erase("manifest.jsonl");
+  EXPECT_EQ(whole_lines.size(), 14u);
+  EXPECT_TRUE(shard_lines == whole_lines);
+  EXPECT_TRUE(sharded == whole) << "the shards' files differ from the unsharded run's";
+
+  for (const char* bad : {"3/3", "-1/3", "1/0", "a/b", "1/3/4"}) {
+    r = run_fishcam(common + " --shard " + bad + " --out " + quoted(dir / "bad"));
+    EXPECT_NE(r.exit_code, 0) << bad;
+  }
+}
+
+// A run killed while writing its manifest leaves a cut last line: the next run
+// drops it (and says so) and completes the manifest; temporaries are cleaned.
+TEST(CliAugmentation, ResumeAfterACutManifestLine) {
+  const auto dir = test::scratch_dir("cut_manifest");
+  ASSERT_EQ(run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 2 --seed 1 --size 160x121").exit_code, 0);
+  const std::string command = "augment-dataset " + quoted(dir / "root") + " --preset small --seed 2 --out " +
+                              quoted(dir / "out");
+  ASSERT_EQ(run_fishcam(command).exit_code, 0);
+  const auto manifest_path = dir / "out" / "manifest.jsonl";
+  const std::string full = test::read_file(manifest_path);
+  test::write_file(manifest_path, full.substr(0, full.size() - 20));  // power loss mid-line
+  test::write_file(dir / "out/rgb_images/00000_FV_small0.png.fishcam-tmp", "half an image");
+  const auto r = run_fishcam(command);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("dropped an incomplete last line"), std::string::npos) << r.err;
+  EXPECT_EQ(test::read_file(manifest_path), full);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/rgb_images/00000_FV_small0.png.fishcam-tmp"));
 }
 
 }  // namespace

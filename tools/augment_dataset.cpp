@@ -5,12 +5,14 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fishcam/atomic_file.hpp"
 #include "fishcam/camera_io.hpp"
 
 namespace fishcam::cli {
@@ -57,7 +59,7 @@ class Progress {
 };
 
 struct Options {
-  std::string root, out, presets = "train", depth = "source-sphere";
+  std::string root, out, presets = "train", depth = "source-sphere", shard;
   std::uint64_t seed = 0;
   int copies = 1, threads = 0, label_fill = 0;
 };
@@ -83,7 +85,21 @@ void register_augment_dataset(CLI::App& app) {
       ->check(CLI::IsMember({"source-sphere", "target-sphere", "infinity"}))
       ->capture_default_str();
   cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source")->capture_default_str();
+  cmd->add_option("--shard", o->shard,
+                  "K/N: only images K, K+N, K+2N, ... (in name order, K in [0, N)), manifest-K-of-N.jsonl; the N "
+                  "shards together equal one unsharded run");
   cmd->callback([o] {
+    int shard = 0, shards = 1;
+    if (!o->shard.empty()) {
+      char slash = 0, extra = 0;
+      if (std::sscanf(o->shard.c_str(), "%d%c%d%c", &shard, &slash, &shards, &extra) != 3 || slash != '/' ||
+          shards < 1 || shards > 100000 || shard < 0 || shard >= shards) {
+        throw Error("--shard: expected K/N with 0 <= K < N (e.g. 0/4), got '" + o->shard + "'");
+      }
+    }
+    const std::string manifest_name =
+        o->shard.empty() ? "manifest.jsonl"
+                         : "manifest-" + std::to_string(shard) + "-of-" + std::to_string(shards) + ".jsonl";
     const fs::path root = o->root, out = o->out;
     if (inside(out, root)) throw Error(out.string() + ": is inside the dataset " + root.string() + " (never written)");
     std::vector<PosePreset> presets;
@@ -103,6 +119,15 @@ void register_augment_dataset(CLI::App& app) {
     }
     std::sort(images.begin(), images.end());
     if (images.empty()) throw Error(images_dir.string() + ": no images");
+    if (shards > 1) {
+      std::vector<fs::path> mine;
+      for (size_t i = size_t(shard); i < images.size(); i += size_t(shards)) mine.push_back(images[i]);
+      images = std::move(mine);
+      if (images.empty()) {
+        std::printf("shard %d/%d: no images (the dataset has fewer than %d)\n", shard, shards, shard + 1);
+        return;
+      }
+    }
 
     Progress progress(images.size() * presets.size());
     long written = 0, skipped = 0;
@@ -111,21 +136,38 @@ void register_augment_dataset(CLI::App& app) {
       const fs::path dir = presets.size() > 1 ? out / std::string(preset.name) : out;
       for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
         fs::create_directories(dir / sub);
-      }
-      // Lines already in the manifest (a resumed run appends only what is new).
-      std::set<std::string> listed;
-      {
-        std::ifstream manifest(dir / "manifest.jsonl");
-        for (std::string line; std::getline(manifest, line);) {
-          try {
-            listed.insert(nlohmann::json::parse(line).at("output").get<std::string>());
-          } catch (const std::exception&) {
-            throw Error((dir / "manifest.jsonl").string() + ": unreadable line (not written by fishcam?)");
-          }
+        // Temporaries of an interrupted run (never read as data: no reader takes the extension).
+        for (const auto& entry : fs::directory_iterator(dir / sub)) {
+          if (entry.path().extension() == ".fishcam-tmp") fs::remove(entry.path());
         }
       }
-      std::ofstream manifest(dir / "manifest.jsonl", std::ios::app);
-      if (!manifest) throw Error((dir / "manifest.jsonl").string() + ": cannot write");
+      // Lines already in the manifest (a resumed run appends only what is new). A
+      // last line cut short (a crash or power loss mid-write) is dropped, and said.
+      const fs::path manifest_path = dir / manifest_name;
+      std::set<std::string> listed;
+      {
+        std::ifstream in(manifest_path, std::ios::binary);
+        const std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        size_t start = 0, complete = 0;
+        while (start < content.size()) {
+          const size_t end = content.find('\n', start);
+          const std::string line = content.substr(start, end == std::string::npos ? std::string::npos : end - start);
+          try {
+            if (end == std::string::npos) throw std::runtime_error("cut");
+            listed.insert(nlohmann::json::parse(line).at("output").get<std::string>());
+          } catch (const std::exception&) {
+            if (end != std::string::npos) {
+              throw Error(manifest_path.string() + ": unreadable line (not written by fishcam?)");
+            }
+            progress.report(manifest_path.string() + ": dropped an incomplete last line (an interrupted run)");
+            fs::resize_file(manifest_path, complete);
+            break;
+          }
+          start = complete = end + 1;
+        }
+      }
+      std::ofstream manifest(manifest_path, std::ios::app);
+      if (!manifest) throw Error(manifest_path.string() + ": cannot write");
       for (const fs::path& image_path : images) {
         const std::string stem = image_path.stem().string();
         progress.step(stem);
@@ -160,9 +202,11 @@ void register_augment_dataset(CLI::App& app) {
               // unit-sphere units, written as metres).
               CameraParameters moved = camera->parameters();
               if (moved.pose) moved.pose = moved_camera(*moved.pose, pose.change());
-              write_image(out_image, out_pixels, true);
-              write_image(out_label, out_labels, true);
-              write_camera(moved, out_calibration, CameraFormat::woodscape, true);
+              // The three files land together (a killed run leaves none of them).
+              write_files_atomically({{out_image, encode_image(out_image, out_pixels)},
+                                      {out_label, encode_image(out_label, out_labels)},
+                                      {out_calibration, format_camera(moved, CameraFormat::woodscape)}},
+                                     true);
               ++written;
             } else {
               ++skipped;

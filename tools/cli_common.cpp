@@ -54,6 +54,8 @@ bool lossless_label_format(const std::filesystem::path& path) {
   return ext == ".png" || ext == ".tif" || ext == ".tiff" || ext == ".pgm";
 }
 
+}  // namespace
+
 std::string encode_image(const std::filesystem::path& path, const cv::Mat& image) {
   std::vector<uchar> bytes;
   bool ok = false;
@@ -65,8 +67,6 @@ std::string encode_image(const std::filesystem::path& path, const cv::Mat& image
   if (!ok) throw Error(path.string() + ": cannot encode the image in this format");
   return std::string(bytes.begin(), bytes.end());
 }
-
-}  // namespace
 
 void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std::string>& inputs, bool overwrite) {
   std::error_code ec;

@@ -42,6 +42,8 @@ struct OutputFile {
 // or given twice, label files are lossless, folders exist, and nothing is
 // replaced unless overwrite.
 void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std::string>& inputs, bool overwrite);
+// The file content of an image in the format of path's extension; throws Error naming the file.
+std::string encode_image(const std::filesystem::path& path, const cv::Mat& image);
 // Encodes all images first, then commits them together (fishcam/atomic_file.hpp).
 void write_images(const std::vector<std::pair<std::filesystem::path, cv::Mat>>& images, bool overwrite);
 void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite);

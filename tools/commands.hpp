@@ -21,5 +21,6 @@ void register_diff(CLI::App& app);
 void register_detect_corners(CLI::App& app);
 void register_synth_corners(CLI::App& app);
 void register_calibrate(CLI::App& app);
+void register_sample_dataset(CLI::App& app);
 
 }  // namespace fishcam::cli

@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
   fishcam::cli::register_synth_corners(app);
   fishcam::cli::register_calibrate(app);
   fishcam::cli::register_diff(app);
+  fishcam::cli::register_sample_dataset(app);
   guard_number_options(&app);
   try {
     app.parse(argc, argv);

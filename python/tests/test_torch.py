@@ -123,3 +123,29 @@ def test_cuda_tensors_and_wrong_types_are_refused(small_camera):
     fake = torch.zeros(3, 121, 160, dtype=torch.uint8, device="meta")
     with pytest.raises(fishcam.Error, match="CPU"):
         module(fake)
+
+
+def test_no_hang_after_fork(tmp_path):
+    """The parent has run fishcam (its thread pool is up); forked DataLoader workers
+    still compute. Run in a subprocess so a hang fails the test instead of CI."""
+    import subprocess
+    import sys
+    import textwrap
+    script = textwrap.dedent(f"""
+        import fishcam, fishcam.torch as ft, torch
+        cam = fishcam.Camera.read({os.path.join(DATA, 'woodscape_front.json')!r}).resized(320, 242)
+        t = ft.RandomViewpoint(cam)
+        img = torch.full((3, 242, 320), 9, dtype=torch.uint8)
+        for s in range(3):
+            t(img, seed=s)
+        class D(torch.utils.data.Dataset):
+            def __len__(self): return 8
+            def __getitem__(self, i): return t(img)[0].float().max()
+        for init in [None, ft.worker_init_fn]:
+            loader = torch.utils.data.DataLoader(D(), batch_size=2, num_workers=2, worker_init_fn=init,
+                                                 multiprocessing_context="fork")
+            assert all(float(b.max()) == 9 for b in loader)
+        print("ok")
+    """)
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr
