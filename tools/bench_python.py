@@ -1,0 +1,154 @@
+#!/usr/bin/python3
+"""The Python package's costs, measured in one run (docs/performance.md):
+
+1. per-sample augmentation (1280x966 RGB bilinear + labels nearest, a new `train`
+   pose each) through fishcam.ViewpointWarp.warp against the C++ `fishcam bench
+   augment` total, interleaved in rounds (a Python block, then a C++ block), 1 and
+   2 threads; target <= 1.05x;
+2. a DataLoader over WoodScape-sized samples (PNG files from `fishcam
+   sample-dataset`) with 0 and 2 workers, with and without RandomViewpoint;
+3. the augmentation's share of a CPU training step of a small segmentation network.
+
+Usage: PYTHONPATH=build/python /usr/bin/python3 tools/bench_python.py [--fishcam build/tools/fishcam] [--json]
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+
+def median_ms(fn, samples):
+    times = []
+    for i in range(samples):
+        start = time.perf_counter()
+        fn(i)
+        times.append(time.perf_counter() - start)
+    return 1e3 * statistics.median(times)
+
+
+def per_sample(fishcam, binary, data, samples, rounds):
+    import cv2
+    with tempfile.TemporaryDirectory() as tmp:
+        # The same sample as `fishcam bench augment`: the scene at the camera's pose.
+        subprocess.run([binary, "render", data, "--out-image", f"{tmp}/i.png", "--out-label", f"{tmp}/l.png"],
+                       check=True, capture_output=True)
+        image = cv2.imread(f"{tmp}/i.png", cv2.IMREAD_UNCHANGED)
+        labels = cv2.imread(f"{tmp}/l.png", cv2.IMREAD_UNCHANGED)
+    camera = fishcam.Camera.read(data)
+    warp = fishcam.ViewpointWarp(camera)
+    rows = []
+    for threads in (1, 2):
+        python_ms, cpp_ms = [], []
+        for r in range(rounds):
+            fishcam.set_num_threads(threads)
+            python_ms.append(median_ms(lambda i: warp.warp(image=image, labels=labels,
+                                                           change=fishcam.random_change("train", 1000 * r + i)),
+                                       samples))
+            out = json.loads(subprocess.run([binary, "bench", "augment", data, "--json", "--samples", str(samples)],
+                                            check=True, capture_output=True, text=True).stdout)
+            cpp_ms.append(next(x["total_ms"] for x in out["results"] if x["threads"] == threads))
+        p, c = statistics.median(python_ms), statistics.median(cpp_ms)
+        rows.append({"threads": threads, "python_ms": p, "cpp_ms": c, "python_over_cpp": p / c})
+    return rows
+
+
+def loader_throughput(fishcam, binary, samples):
+    import torch
+    import fishcam.torch as ft
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([binary, "sample-dataset", f"{tmp}/ws", "--images", str(samples), "--seed", "1"],
+                       check=True, capture_output=True)
+        rows = []
+        for workers in (0, 2):
+            for augment in (False, True):
+                ds = ft.WoodScapeDataset(f"{tmp}/ws", transform=ft.RandomViewpoint(preset="train") if augment else None,
+                                         seed=1)
+                loader = torch.utils.data.DataLoader(ds, batch_size=4, num_workers=workers,
+                                                     worker_init_fn=ft.worker_init_fn if workers else None)
+                fishcam.set_num_threads(2 if workers == 0 else 1)
+                next(iter(loader))  # warm up (workers, caches)
+                start = time.perf_counter()
+                n = sum(len(batch["name"]) for _ in range(2) for batch in loader)
+                rows.append({"workers": workers, "augment": augment, "samples_per_s": n / (time.perf_counter() - start)})
+    return rows
+
+
+def training_share(fishcam, data, steps):
+    """A small encoder-decoder (about 0.3 M parameters) on 640x483 batches of 4."""
+    import torch
+    import fishcam.torch as ft
+    torch.manual_seed(0)
+    camera = fishcam.Camera.read(data).resized(640, 483)
+    net = torch.nn.Sequential(
+        torch.nn.Conv2d(3, 32, 3, stride=2, padding=1), torch.nn.ReLU(),
+        torch.nn.Conv2d(32, 64, 3, stride=2, padding=1), torch.nn.ReLU(),
+        torch.nn.Conv2d(64, 64, 3, padding=1), torch.nn.ReLU(),
+        torch.nn.ConvTranspose2d(64, 32, 4, stride=2, padding=1), torch.nn.ReLU(),
+        torch.nn.ConvTranspose2d(32, 10, 4, stride=2, padding=1))
+    optimiser = torch.optim.SGD(net.parameters(), lr=1e-3)
+    transform = ft.RandomViewpoint(camera, preset="train")
+    rng = np.random.default_rng(0)
+    images = [rng.integers(0, 256, (483, 640, 3), dtype=np.uint8) for _ in range(4)]
+    masks = [rng.integers(0, 10, (483, 640), dtype=np.uint8) for _ in range(4)]
+    fishcam.set_num_threads(torch.get_num_threads())
+    augment_s, step_s = [], []
+    for step in range(steps):
+        start = time.perf_counter()
+        batch = [transform(image, mask, seed=4 * step + k) for k, (image, mask) in enumerate(zip(images, masks))]
+        middle = time.perf_counter()
+        x = torch.stack([torch.from_numpy(b[0]).permute(2, 0, 1) for b in batch]).float() / 255
+        y = torch.stack([torch.from_numpy(b[1].astype(np.int64)) for b in batch])
+        out = net(x)[:, :, :483, :640]
+        loss = torch.nn.functional.cross_entropy(out, y)
+        optimiser.zero_grad()
+        loss.backward()
+        optimiser.step()
+        end = time.perf_counter()
+        augment_s.append(middle - start)
+        step_s.append(end - middle)
+    a, s = statistics.median(augment_s), statistics.median(step_s)
+    return {"batch": 4, "size": "640x483", "torch_threads": torch.get_num_threads(), "augment_ms": 1e3 * a,
+            "train_step_ms": 1e3 * s, "augment_share": a / (a + s)}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    here = os.path.dirname(os.path.abspath(__file__))
+    parser.add_argument("--fishcam", default=os.path.join(here, "..", "build", "tools", "fishcam"))
+    parser.add_argument("--camera", default=os.path.join(here, "..", "data", "woodscape_front.json"))
+    parser.add_argument("--samples", type=int, default=41)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    import fishcam
+    result = {
+        "per_sample": per_sample(fishcam, args.fishcam, args.camera, args.samples, args.rounds),
+        "dataloader": loader_throughput(fishcam, args.fishcam, 16),
+        "training": training_share(fishcam, args.camera, 12),
+    }
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return
+    print("per-sample augmentation 1280x966 (median of %d, median over %d interleaved rounds)" %
+          (args.samples, args.rounds))
+    for r in result["per_sample"]:
+        print("  %d thread(s): python %.2f ms, C++ bench %.2f ms, ratio %.3f" %
+              (r["threads"], r["python_ms"], r["cpp_ms"], r["python_over_cpp"]))
+    print("DataLoader over 1280x966 PNG samples, batch 4:")
+    for r in result["dataloader"]:
+        print("  %d workers, %-16s %6.1f samples/s" %
+              (r["workers"], "RandomViewpoint" if r["augment"] else "no augmentation", r["samples_per_s"]))
+    t = result["training"]
+    print("CPU training step, batch 4 at 640x483 (%d torch threads): augmentation %.1f ms, step %.1f ms, share %.1f %%"
+          % (t["torch_threads"], t["augment_ms"], t["train_step_ms"], 100 * t["augment_share"]))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
