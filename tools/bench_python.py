@@ -81,7 +81,7 @@ def loader_throughput(fishcam, binary, samples):
 
 
 def training_share(fishcam, data, steps):
-    """A small encoder-decoder (about 0.3 M parameters) on 640x483 batches of 4."""
+    """A small encoder-decoder (about 0.1 M parameters) on 640x483 batches of 4."""
     import torch
     import fishcam.torch as ft
     torch.manual_seed(0)

@@ -286,10 +286,12 @@ def test_bad_input_raises_fishcam_error(cam):
         warp.warp(image=np.zeros((10, 10), np.uint8), change=change)
 
 
-def test_num_threads(cam):
+def test_num_threads_are_opencvs(cam):
+    import cv2
     before = fishcam.get_num_threads()
     fishcam.set_num_threads(1)
     assert fishcam.get_num_threads() == 1
+    assert cv2.getNumThreads() == 1, "one OpenCV in the process: the pool is shared with cv2 (as documented)"
     fishcam.set_num_threads(max(before, 1))
 
 
