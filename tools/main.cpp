@@ -1,6 +1,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <string>
+#include <utility>
 #include <exception>
 #include <opencv2/core.hpp>
 
@@ -31,6 +34,20 @@ void guard_number_options(CLI::App* app) {
     if (type.starts_with("UINT")) option->check(non_negative);
   }
   for (CLI::App* sub : app->get_subcommands({})) guard_number_options(sub);
+}
+
+// Library messages name library concepts; the program says which of its options
+// set them.
+std::string in_cli_terms(std::string message) {
+  static const std::pair<const char*, const char*> kOptions[] = {
+      {"max_angle", "--max-angle"}, {"fit_center", "--fit-center"}, {"fit_aspect", "--fit-aspect"}};
+  for (const auto& [concept_name, option] : kOptions) {
+    for (size_t at = message.find(concept_name); at != std::string::npos;
+         at = message.find(concept_name, at + std::strlen(option))) {
+      message.replace(at, std::strlen(concept_name), option);
+    }
+  }
+  return message;
 }
 
 }  // namespace
@@ -65,7 +82,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const fishcam::Error& e) {
-    std::fprintf(stderr, "fishcam: error: %s\n", e.what());
+    std::fprintf(stderr, "fishcam: error: %s\n", in_cli_terms(e.what()).c_str());
     return 1;
   } catch (const cv::Exception& e) {
     std::fprintf(stderr, "fishcam: error: OpenCV: %s\n", e.err.c_str());

@@ -140,7 +140,7 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
   }
   if (spec.name == "pinhole") {
     for (const auto& s : samples) {
-      if (!(s.ray.z() > 0)) throw Error("fit: a pinhole model cannot see rays at or past 90 deg (use --max-angle)");
+      if (!(s.ray.z() > 0)) throw Error("fit: a pinhole model cannot see rays at or past 90 deg (limit max_angle below 90)");
     }
   }
   // Linear start (exact for fixed centre and scale): with e the ray's azimuth

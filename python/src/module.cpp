@@ -384,6 +384,16 @@ void bind_augmentation(py::module_& m) {
     cv::setNumThreads(n);
   });
   m.def("get_num_threads", [] { return cv::getNumThreads(); });
+
+  // For the zero-copy tests: the address of the memory the bindings compute on
+  // for an input (points with k columns, or an image / labels).
+  m.def("_input_address", [](py::object input, const std::string& as) -> std::uintptr_t {
+    if (as == "points3" || as == "points2") {
+      return reinterpret_cast<std::uintptr_t>(rows_of(input, as == "points3" ? 3 : 2, "points").data());
+    }
+    py::array array = py::array::ensure(input);
+    return reinterpret_cast<std::uintptr_t>(as_mat(array, as.c_str(), as == "labels").data);
+  });
 }
 
 }  // namespace

@@ -178,15 +178,28 @@ def test_inputs_are_not_copied_when_contiguous(cam, monkeypatch):
 
 
 def test_zero_copy_is_measured_by_the_data_pointer(cam):
-    # float64 C-contiguous points are used in place: pybind11's ensure() returns the same object.
-    points = np.zeros((4, 3))
-    points[:, 2] = 1
-    before = points.__array_interface__["data"][0]
-    cam.project(points)
-    assert points.__array_interface__["data"][0] == before
-    # A float32 input is converted (a copy), and still gives float64 results.
-    px32, _ = cam.project(points.astype(np.float32))
-    assert px32.dtype == np.float64
+    """The bindings compute on the caller's memory when it is C-contiguous (the same
+    code path as project/unproject/warp: rows_of and as_mat), and on a copy otherwise."""
+    address = fishcam._fishcam._input_address
+
+    def pointer(a):
+        return a.__array_interface__["data"][0]
+    points = np.zeros((7, 3))
+    assert address(points, "points3") == pointer(points)
+    pixels = np.zeros((7, 2))
+    assert address(pixels, "points2") == pointer(pixels)
+    for dtype in [np.uint8, np.uint16, np.float32]:
+        image = np.zeros((cam.height, cam.width, 3), dtype)
+        assert address(image, "image") == pointer(image)
+    labels = np.zeros((cam.height, cam.width), np.uint8)
+    assert address(labels, "labels") == pointer(labels)
+    # Not contiguous or not float64: a copy (a different address), never strided reads.
+    strided = np.zeros((7, 6))[:, ::2]
+    assert address(strided, "points3") != pointer(strided)
+    sliced = np.zeros((cam.height, 2 * cam.width, 3), np.uint8)[:, ::2]
+    assert address(sliced, "image") != pointer(sliced)
+    as_float32 = np.zeros((7, 3), np.float32)
+    assert address(as_float32, "points3") != pointer(as_float32)
 
 
 def test_resized_follows_the_pixel_centre_convention(cam):
