@@ -8,6 +8,7 @@
 #include <random>
 
 #include "fishcam/augmentation.hpp"
+#include "fishcam/npy.hpp"
 #include "test_support.hpp"
 
 namespace fishcam {
@@ -552,6 +553,46 @@ TEST(Augmentation, RealWoodScapeImageStaysInsideTheImageCircle) {
           ASSERT_EQ(out.at<cv::Vec3b>(v, u), cv::Vec3b(0, 0, 0));
         }
       }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// .npy files: a round trip, and headers that lie about their size are refused
+// before anything is allocated.
+TEST(Npy, RoundTripAndLyingHeaders) {
+  const auto dir = test::scratch_dir("npy");
+  NpyArray a;
+  a.shape = {2, 3};
+  a.data = {1, 2, 3, 4, 5, 6};
+  write_npy(dir / "a.npy", a);
+  const NpyArray b = read_npy(dir / "a.npy");
+  EXPECT_EQ(b.shape, a.shape);
+  EXPECT_EQ(b.data, a.data);
+  // A version-1.0 file with this shape in its header and six floats of data.
+  auto with_shape = [&](const std::string& shape) {
+    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape + ", }";
+    header.append(64 - (10 + header.size() + 1) % 64, ' ');
+    header += '\n';
+    std::string text = std::string("\x93NUMPY\x01\x00", 8);
+    text += char(header.size() & 0xff);
+    text += char(header.size() >> 8);
+    text += header + std::string(6 * sizeof(float), '\0');
+    return test::write_file(dir / "bad.npy", text);
+  };
+  ASSERT_EQ(read_npy(with_shape("(3, 2)")).shape, (std::vector<std::size_t>{3, 2}));
+  for (const char* shape : {"(4000000000, 4)", "(99999999999999999999, 1)", "(2, 4)", "(1, 3)",
+                            "(4294967296, 4294967296, 4294967296)"}) {
+    try {
+      read_npy(with_shape(shape));
+      ADD_FAILURE() << shape << " accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("shape"), std::string::npos) << e.what();
     }
   }
 }

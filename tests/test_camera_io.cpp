@@ -1,5 +1,7 @@
 // Camera files: every format round-trips, mrcal's Python module reads what we
 // write, and malformed input gives a one-line error naming file and field.
+#include <opencv2/core.hpp>
+
 #include "test_support.hpp"
 
 namespace fishcam {
@@ -204,10 +206,15 @@ const Malformed kMalformed[] = {
     // OpenCV
     {"cv_missing_D", replaced(kOpenCV, "D: !!opencv-matrix", "E: !!opencv-matrix"), "D: missing"},
     {"cv_skew", replaced(kOpenCV, "6.4344200000000001e+02, 0.,", "6.4344200000000001e+02, 0.5,"), "K: expected"},
-    {"cv_nan", replaced(kOpenCV, "3.4651399999999999e-02", ".nan"), "D: must be finite"},
+    {"cv_nan", replaced(kOpenCV, "3.4651399999999999e-02", ".nan"), "D.data[0]: must be finite"},
     {"cv_width", replaced(kOpenCV, "image_width: 1280", "image_width: wide"), "image_width: expected an integer"},
     {"cv_missing_height", replaced(kOpenCV, "image_height: 966", ""), "image_height: missing"},
-    {"cv_truncated", kOpenCV.substr(0, kOpenCV.size() - 60), "not a readable OpenCV YAML/XML file"},
+    {"cv_truncated", kOpenCV.substr(0, kOpenCV.size() - 60), "not a readable YAML file"},
+    {"cv_xml_truncated", "<?xml version=", "not a readable XML file"},
+    {"cv_xml_not_opencv", "<?xml version=\"1.0\"?><a>1</a>", "not an OpenCV YAML/XML file"},
+    {"cv_yaml_deep", "%YAML:1.0\n---\nK: " + std::string(100000, '['), "nested deeper than"},
+    {"cv_newline_in_value", replaced(kOpenCV, "image_width: 1280", "image_width: \"12\\n80\\r\\x01\""),
+     "image_width: expected an integer, got '12\\n80\\r\\x01'"},
     {"cv_model", replaced(kOpenCV, "distortion_model: fisheye", "distortion_model: plumb_bob"), "distortion_model"},
     // anything else
     {"empty", "", "empty file"},
@@ -254,10 +261,65 @@ TEST(CameraIo, TruncatedAndCorruptedFilesNeverCrash) {
   EXPECT_GT(parsed, 10);  // some corruptions only touch comments or digits
 }
 
+// The same camera as OpenCV XML (written by cv::FileStorage, whose writer is safe):
+// it reads back, and none of its prefixes or one-byte corruptions crash the reader
+// (cv::FileStorage's own XML parser segfaulted on 5 of its 885 prefixes).
+TEST(CameraIo, OpenCvXmlReadsAndItsPrefixesNeverCrash) {
+  const Camera yaml = read_camera(data_path("kannala_brandt.yaml"));
+  cv::FileStorage fs(".xml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
+  const auto p = yaml.parameters();
+  const auto kb = model_params(p.model);
+  fs << "distortion_model" << "fisheye" << "image_width" << p.width << "image_height" << p.height;
+  fs << "K" << cv::Mat(cv::Matx33d(kb[0], 0, p.principal_point.x(), 0, kb[0] * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1));
+  fs << "D" << cv::Mat(cv::Matx41d(kb[1], kb[2], kb[3], kb[4]));
+  const std::string xml = fs.releaseAndGetString();
+  ASSERT_EQ(xml.rfind("<?xml", 0), 0u);
+  const CameraParameters back = parse_camera(xml, "k.xml");
+  EXPECT_EQ(model_params(back.model), kb);
+  EXPECT_EQ(back.principal_point, p.principal_point);
+  long errors = 0;
+  for (size_t cut = 0; cut < xml.size(); ++cut) {
+    for (const std::string& variant : {xml.substr(0, cut), xml.substr(0, cut) + "<" + xml.substr(cut + 1)}) {
+      try {
+        parse_camera(variant, "k.xml");
+      } catch (const Error& e) {
+        ASSERT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+        ++errors;
+      }
+    }
+  }
+  EXPECT_GT(errors, long(xml.size()));
+}
+
 TEST(CameraIo, MissingFilesAndDirectories) {
   const auto dir = test::scratch_dir("missing");
   EXPECT_THROW(read_camera(dir / "nope.json"), Error);
   EXPECT_THROW(read_camera(dir), Error);
+}
+
+}  // namespace
+}  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// A camera that reads fine but whose rescaled parameters overflow in a format
+// (WoodScape and OpenCV store a_x = 1): refused at write time, not written as a
+// file that no reader takes.
+TEST(CameraIo, WritersRefuseWhatTheReadersWouldRefuse) {
+  CameraParameters p = test::woodscape_front();
+  p.model = Equidistant<double>(1e300);
+  p.pixel_scale = {1e10, 1e10};
+  ASSERT_NO_THROW(Camera{p});
+  for (CameraFormat format : {CameraFormat::woodscape, CameraFormat::opencv}) {
+    try {
+      format_camera(p, format);
+      ADD_FAILURE() << to_string(format) << ": wrote it";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("format cannot hold this camera"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(parse_camera(format_camera(p, CameraFormat::fishcam), "p.json"));
 }
 
 }  // namespace

@@ -10,6 +10,8 @@
 #include <sstream>
 
 #include "fishcam/atomic_file.hpp"
+#include "document.hpp"
+#include "message.hpp"
 #include "python_literal.hpp"
 
 namespace fishcam {
@@ -290,55 +292,87 @@ std::string write_mrcal(const CameraParameters& p) {
 }
 
 // ---------------------------------------------------------------- OpenCV fisheye
+std::string_view trimmed_start(std::string_view s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+  return s;
+}
+
+// OpenCV's FileStorage files (YAML or XML), read with yaml-cpp / pugixml
+// (document.hpp), never with cv::FileStorage: its parser crashes on bad input.
 CameraParameters read_opencv(std::string_view content, const std::string& source) {
-  auto fail = [&](std::string_view field, std::string_view problem) {
+  auto fail = [&](std::string_view field, std::string_view problem) -> void {
     throw Error(source + ": " + std::string(field) + ": " + std::string(problem));
   };
-  cv::FileStorage fs;
-  try {
-    fs.open(std::string(content), cv::FileStorage::READ | cv::FileStorage::MEMORY);
-  } catch (const cv::Exception& e) {
-    std::string why = e.err;
-    for (char& c : why) c = c == '\n' ? ' ' : c;
-    throw Error(source + ": not a readable OpenCV YAML/XML file (" + why + ")");
-  }
-  if (!fs.isOpened()) throw Error(source + ": not a readable OpenCV YAML/XML file");
+  const std::string_view start = trimmed_start(content);
+  const detail::DocNode root =
+      start.starts_with("<") ? detail::parse_xml(content, source) : detail::parse_yaml(content, source);
+  if (root.kind != detail::DocNode::Kind::map) throw Error(source + ": not an OpenCV YAML/XML file (no top-level map)");
   auto node = [&](const char* name, const char* alias) {
-    cv::FileNode n = fs[name];
-    return n.empty() && alias ? fs[alias] : n;
+    const detail::DocNode* n = root.find(name);
+    return !n && alias ? root.find(alias) : n;
+  };
+  auto number = [&](const std::string& text, const std::string& field) {
+    const std::string trimmed(trimmed_start(text));
+    // YAML's own spellings of the non-finite numbers (OpenCV writes them).
+    for (const char* special : {".nan", ".NaN", ".NAN", ".inf", ".Inf", ".INF", "-.inf", "-.Inf", "-.INF", "+.inf"}) {
+      if (trimmed == special) fail(field, "must be finite");
+    }
+    char* end = nullptr;
+    const double v = std::strtod(trimmed.c_str(), &end);
+    if (trimmed.empty() || end == trimmed.c_str() || !trimmed_start(end).empty()) {
+      fail(field, "expected a number, got " + detail::quoted_for_message(text));
+    }
+    if (!std::isfinite(v)) fail(field, "must be finite");
+    return v;
   };
   auto matrix = [&](const char* name, const char* alias, int count) {
-    const cv::FileNode n = node(name, alias);
-    if (n.empty()) fail(name, "missing");
-    cv::Mat m;
-    try {
-      n >> m;
-    } catch (const cv::Exception&) {
-      fail(name, "expected an opencv-matrix");
+    const detail::DocNode* n = node(name, alias);
+    if (!n) fail(name, "missing");
+    if (n->kind != detail::DocNode::Kind::map || !n->find("rows") || !n->find("cols") || !n->find("data")) {
+      fail(name, "expected an opencv-matrix (rows, cols, dt, data)");
     }
-    if (m.empty() || !n.isMap()) fail(name, "expected an opencv-matrix");
-    if (static_cast<int>(m.total()) != count || m.channels() != 1) {
-      fail(name, "expected " + std::to_string(count) + " elements, got " + std::to_string(m.total() * m.channels()));
+    const double rows = number(n->find("rows")->scalar, std::string(name) + ".rows");
+    const double cols = number(n->find("cols")->scalar, std::string(name) + ".cols");
+    if (rows < 1 || cols < 1 || rows * cols != count) {
+      fail(name, "expected " + std::to_string(count) + " elements (rows x cols)");
     }
-    m.convertTo(m, CV_64F);
-    std::vector<double> v(m.begin<double>(), m.end<double>());
-    for (double x : v) {
-      if (!std::isfinite(x)) fail(name, "must be finite");
+    std::vector<std::string> texts;
+    const detail::DocNode& data = *n->find("data");
+    if (data.kind == detail::DocNode::Kind::sequence) {
+      for (const auto& item : data.items) {
+        if (item.kind != detail::DocNode::Kind::scalar) fail(std::string(name) + ".data", "expected numbers");
+        texts.push_back(item.scalar);
+      }
+    } else if (data.kind == detail::DocNode::Kind::scalar) {  // XML: whitespace-separated
+      std::istringstream words(data.scalar);
+      for (std::string word; words >> word && texts.size() <= size_t(count);) texts.push_back(word);
+    }
+    if (texts.size() != size_t(count)) {
+      fail(std::string(name) + ".data", "expected " + std::to_string(count) + " numbers");
+    }
+    std::vector<double> v;
+    for (size_t i = 0; i < texts.size(); ++i) {
+      v.push_back(number(texts[i], std::string(name) + ".data[" + std::to_string(i) + "]"));
     }
     return v;
   };
   auto integer = [&](const char* name) {
-    const cv::FileNode n = fs[name];
-    if (n.empty()) fail(name, "missing");
-    if (!n.isInt()) fail(name, "expected an integer");
-    const int v = static_cast<int>(n);
-    if (v < 1 || v > (1 << 16)) fail(name, "expected a positive integer <= 65536");
-    return v;
-  };
-  if (const cv::FileNode model = fs["distortion_model"]; !model.empty()) {
-    if (!model.isString() || static_cast<std::string>(model) != "fisheye") {
-      fail("distortion_model", "only 'fisheye' is supported");
+    const detail::DocNode* n = root.find(name);
+    if (!n) fail(name, "missing");
+    if (n->kind != detail::DocNode::Kind::scalar) fail(name, "expected an integer");
+    char* end = nullptr;
+    const std::string text(trimmed_start(n->scalar));
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || !trimmed_start(end).empty()) {
+      fail(name, "expected an integer, got " + detail::quoted_for_message(n->scalar));
     }
+    if (!(v >= 1 && v <= (1 << 16)) || v != std::floor(v)) fail(name, "expected a positive integer <= 65536");
+    return static_cast<int>(v);
+  };
+  if (const detail::DocNode* model = root.find("distortion_model")) {
+    std::string name = model->kind == detail::DocNode::Kind::scalar ? model->scalar : "";
+    if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = name.substr(1, name.size() - 2);
+    if (name != "fisheye") fail("distortion_model", "only 'fisheye' is supported, got " + detail::quoted_for_message(name));
   }
   const auto k = matrix("K", "camera_matrix", 9);
   const auto d = matrix("D", "distortion_coefficients", 4);
@@ -351,7 +385,7 @@ CameraParameters read_opencv(std::string_view content, const std::string& source
   p.principal_point = {k[2], k[5]};
   p.pixel_scale = {1.0, k[4] / k[0]};
   p.model = KannalaBrandt<double>(k[0], d[0], d[1], d[2], d[3]);
-  const bool has_r = !fs["rvec_cam_ref"].empty(), has_t = !fs["tvec_cam_ref"].empty();
+  const bool has_r = root.find("rvec_cam_ref") != nullptr, has_t = root.find("tvec_cam_ref") != nullptr;
   if (has_r != has_t) fail(has_r ? "tvec_cam_ref" : "rvec_cam_ref", "missing (the pose needs both)");
   if (has_r) {
     auto rt = matrix("rvec_cam_ref", nullptr, 3);
@@ -390,10 +424,6 @@ std::string write_opencv(const CameraParameters& original) {
   return fs.releaseAndGetString();
 }
 
-std::string_view trimmed_start(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-  return s;
-}
 
 json parse_json(std::string_view content, const std::string& source) {
   try {
@@ -446,13 +476,7 @@ CameraParameters parse_camera(std::string_view content, std::string_view source_
   CameraParameters p;
   switch (format ? *format : detect_camera_format(content, source_name)) {
     case CameraFormat::opencv:
-      try {
-        p = read_opencv(content, source);
-      } catch (const cv::Exception& e) {  // e.g. a top level that is not a map
-        std::string why = e.err;
-        for (char& c : why) c = c == '\n' ? ' ' : c;
-        throw Error(source + ": not a readable OpenCV YAML/XML file (" + why + ")");
-      }
+      p = read_opencv(content, source);
       break;
     case CameraFormat::mrcal: {
       json root;
@@ -535,8 +559,9 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
   return j.dump();
 }
 
-std::string format_camera(const CameraParameters& camera, CameraFormat format) {
-  Camera check(camera);  // never write a camera we would refuse to read
+namespace {
+
+std::string formatted(const CameraParameters& camera, CameraFormat format) {
   switch (format) {
     case CameraFormat::woodscape: return write_woodscape(camera).dump(2) + "\n";
     case CameraFormat::fishcam: return write_fishcam(camera).dump(2) + "\n";
@@ -544,6 +569,23 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
     case CameraFormat::opencv: return write_opencv(camera);
   }
   throw Error("unknown camera format");
+}
+
+}  // namespace
+
+std::string format_camera(const CameraParameters& camera, CameraFormat format) {
+  Camera check(camera);  // never write a camera we would refuse to read
+  std::string content = formatted(camera, format);
+  // Nor a file our own reader refuses (a value that overflows in the format's
+  // parameterisation, say): read it back before anyone can write it.
+  try {
+    parse_camera(content, "", format);
+  } catch (const Error& e) {
+    std::string why = e.what();
+    if (why.rfind(": ", 0) == 0) why = why.substr(2);
+    throw Error("the " + std::string(to_string(format)) + " format cannot hold this camera (" + why + ")");
+  }
+  return content;
 }
 
 void write_camera(const CameraParameters& camera, const std::filesystem::path& path, CameraFormat format,

@@ -1,5 +1,6 @@
 #include "fishcam/npy.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
 #include <fstream>
@@ -52,12 +53,28 @@ NpyArray read_npy(const std::filesystem::path& path) {
   std::smatch match;
   if (!std::regex_search(header, match, std::regex(R"('shape': \(([0-9, ]*)\))"))) throw Error(path.string() + ": shape: missing");
   NpyArray array;
+  // The element count is checked against the file's size before anything is
+  // allocated (a 128-byte header must not make us zero-fill gigabytes).
+  std::error_code ec;
+  const auto file_size = std::filesystem::file_size(path, ec);
+  if (ec) throw Error(path.string() + ": cannot tell its size");
+  const size_t data_bytes = size_t(file_size) - std::min<size_t>(size_t(file_size), 10 + header.size());
   size_t count = 1;
   const std::string dims = match[1];
   const std::regex number("[0-9]+");
   for (std::sregex_iterator it(dims.begin(), dims.end(), number), end; it != end; ++it) {
-    array.shape.push_back(std::stoul(it->str()));
-    count *= array.shape.back();
+    const std::string digits = it->str();
+    if (digits.size() > 12) throw Error(path.string() + ": shape: dimension too large");
+    const size_t dim = std::stoull(digits);
+    array.shape.push_back(dim);
+    if (dim != 0 && count > data_bytes / sizeof(float) / dim) {
+      throw Error(path.string() + ": shape: more elements than the file holds (truncated or corrupt)");
+    }
+    count *= dim;
+  }
+  if (count * sizeof(float) != data_bytes) {
+    throw Error(path.string() + ": shape: " + std::to_string(count) + " elements, but the file holds " +
+                std::to_string(data_bytes) + " data bytes");
   }
   array.data.resize(count);
   if (!in.read(reinterpret_cast<char*>(array.data.data()), static_cast<std::streamsize>(count * sizeof(float)))) {

@@ -1,0 +1,34 @@
+// YAML and XML camera files as one small tree, parsed by well-kept libraries
+// (yaml-cpp, pugixml) with bounds checked before anything is built: untrusted
+// text never reaches cv::FileStorage, whose parser crashes on truncated XML.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace fishcam::detail {
+
+struct DocNode {
+  enum class Kind { null, scalar, sequence, map };
+  Kind kind = Kind::null;
+  std::string tag;     // YAML tag or XML type_id, without "!!" / "tag:yaml.org,2002:" ("opencv-matrix")
+  std::string scalar;  // the text of a scalar (XML: the element's text)
+  std::vector<DocNode> items;                          // a sequence
+  std::vector<std::pair<std::string, DocNode>> fields;  // a map, in file order
+
+  // The field `key` of a map (nullptr if absent or not a map).
+  const DocNode* find(std::string_view key) const;
+};
+
+// Limits on what a camera file may hold (errors, not allocations, past them).
+constexpr size_t kMaxDocumentBytes = 16 << 20;
+constexpr int kMaxDocumentDepth = 64;
+constexpr size_t kMaxDocumentNodes = 1 << 20;
+
+// Throw Error("SOURCE: not a readable YAML file (why)") etc. on any problem.
+DocNode parse_yaml(std::string_view content, const std::string& source);
+DocNode parse_xml(std::string_view content, const std::string& source);
+
+}  // namespace fishcam::detail
