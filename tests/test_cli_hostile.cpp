@@ -123,5 +123,20 @@ TEST_F(CliHostile, DegenerateCalibrationDataIsRefused) {
                  "1000 corners per side");
 }
 
+TEST_F(CliHostile, FailedWritesToStandardOutputFail) {
+  const std::string command = std::string("'") + FISHCAM_BINARY + "' info " + q("camera.json") + " > /dev/full 2> " +
+                              q("err.txt");
+  const int status = std::system(command.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0);
+  EXPECT_NE(test::read_file(dir_ / "err.txt").find("cannot write to standard output"), std::string::npos);
+}
+
+TEST_F(CliHostile, LibraryExceptionsNeverLeakWithoutTheFileName) {
+  test::write_file(dir_ / "overflow.json", "{\"intrinsic\": {\"k1\": 1e400}}");
+  expect_refused("info " + q("overflow.json"), "overflow.json: not valid JSON");
+  test::write_file(dir_ / "newlines.json", "{\"intrinsic\": {\"model\": \"a\\nb\\u0001\"}}");
+  expect_refused("info " + q("newlines.json"), "newlines.json");
+}
+
 }  // namespace
 }  // namespace fishcam

@@ -1,3 +1,4 @@
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -6,6 +7,7 @@
 #include <utility>
 #include <exception>
 #include <opencv2/core.hpp>
+#include <opencv2/core/utils/logger.hpp>
 
 #include "commands.hpp"
 #include "fishcam/error.hpp"
@@ -77,6 +79,8 @@ int main(int argc, char** argv) {
   fishcam::cli::register_diff(app);
   fishcam::cli::register_sample_dataset(app);
   guard_number_options(&app);
+  // Our one line is the message: no OpenCV warnings around it.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -89,6 +93,11 @@ int main(int argc, char** argv) {
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "fishcam: error: %s\n", e.what());
+    return 1;
+  }
+  // Output that never arrived is a failure too (`fishcam info cam.json > /dev/full`).
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    std::fprintf(stderr, "fishcam: error: cannot write to standard output (%s)\n", std::strerror(errno));
     return 1;
   }
   return 0;

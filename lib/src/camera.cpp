@@ -1,5 +1,7 @@
 #include "fishcam/camera.hpp"
 
+#include "message.hpp"
+
 #include <opencv2/core.hpp>
 
 #include <algorithm>
@@ -134,7 +136,7 @@ std::vector<double> model_params(const RadialModel& model) {
 
 RadialModel make_model(std::string_view name, std::span<const double> params) {
   auto expect = [&](size_t n) {
-    if (params.size() != n) fail(name, ": expected ", n, " parameter(s), got ", params.size());
+    if (params.size() != n) fail(name, ": expected ", n, " parameter(s), got ", params.size());  // a known name
   };
   for (size_t i = 0; i < params.size(); ++i) {
     if (!std::isfinite(params[i])) fail(name, ": parameter ", i + 1, " is not finite");
@@ -153,7 +155,7 @@ RadialModel make_model(std::string_view name, std::span<const double> params) {
     if (name == Stereographic<double>::kName) return Stereographic<double>(params[0]);
     return Pinhole<double>(params[0]);
   }
-  fail("unknown model '", name, "' (expected polynomial, equidistant, stereographic, pinhole or kannala-brandt)");
+  fail("unknown model ", detail::quoted_for_message(name), " (expected polynomial, equidistant, stereographic, pinhole or kannala-brandt)");
 }
 
 CameraParameters resized(const CameraParameters& camera, int width, int height) {

@@ -151,7 +151,7 @@ CameraParameters read_woodscape(const json& root, const std::string& source) {
   const Fields top(root, source);
   const Fields in = top.object("intrinsic");
   const std::string model = in.string("model");
-  if (model != "radial_poly") in.fail("model", "unsupported WoodScape model '" + model + "' (expected radial_poly)");
+  if (model != "radial_poly") in.fail("model", "unsupported WoodScape model " + detail::quoted_for_message(model) + " (expected radial_poly)");
   const double poly_order = in.number("poly_order");
   if (!(poly_order >= 1 && poly_order <= 16) || poly_order != std::floor(poly_order)) {
     in.fail("poly_order", "expected an integer in [1, 16]");
@@ -428,10 +428,10 @@ std::string write_opencv(const CameraParameters& original) {
 json parse_json(std::string_view content, const std::string& source) {
   try {
     return json::parse(content);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse errors, and number overflow ('1e400')
     std::string what = e.what();
     if (const auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
-    throw Error(source + ": not valid JSON (" + what + ")");
+    throw Error(source + ": not valid JSON (" + detail::quoted_for_message(what, 120) + ")");
   }
 }
 
@@ -517,7 +517,7 @@ Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& o
   // Every format read today holds exactly one camera and its image size.
   if (options.camera && *options.camera != "0") {
     throw Error(path.string() + ": camera: a " + std::string(to_string(detected)) +
-                " file holds one camera (index 0), got '" + *options.camera + "'");
+                " file holds one camera (index 0), got " + detail::quoted_for_message(*options.camera) );
   }
   CameraParameters p = parse_camera(content.str(), path.string(), detected);
   if (options.image_size && (options.image_size->first != p.width || options.image_size->second != p.height)) {

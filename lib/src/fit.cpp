@@ -1,4 +1,5 @@
 #include "fishcam/fit.hpp"
+#include "message.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -99,7 +100,7 @@ ModelSpec parse_model_spec(std::string_view text) {
   const auto colon = text.find(':');
   spec.name = std::string(text.substr(0, colon));
   if (colon != std::string_view::npos) {
-    if (spec.name != "polynomial") throw Error("model '" + std::string(text) + "': only polynomial takes an order");
+    if (spec.name != "polynomial") throw Error("model " + detail::quoted_for_message(std::string(text)) + ": only polynomial takes an order");
     const std::string order(text.substr(colon + 1));
     size_t used = 0;
     int n = 0;
@@ -108,18 +109,23 @@ ModelSpec parse_model_spec(std::string_view text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used != order.size() || n < 1 || n > 12) throw Error("model '" + std::string(text) + "': order must be 1..12");
+    if (used != order.size() || n < 1 || n > 12) throw Error("model " + detail::quoted_for_message(std::string(text)) + ": order must be 1..12");
     spec.order = n;
   }
   for (const char* known : {"polynomial", "equidistant", "stereographic", "pinhole", "kannala-brandt"}) {
     if (spec.name == known) return spec;
   }
-  throw Error("unknown model '" + std::string(text) +
-              "' (expected polynomial[:N], equidistant, stereographic, pinhole or kannala-brandt)");
+  throw Error("unknown model " + detail::quoted_for_message(text) +
+              " (expected polynomial[:N], equidistant, stereographic, pinhole or kannala-brandt)");
 }
 
 std::vector<Correspondence> sample_image(const Camera& camera, int step, int offset, std::optional<double> max_theta) {
   if (step < 1 || offset < 0) throw Error("sample_image: step must be >= 1 and offset >= 0");
+  // Huge images: a coarser grid, so at most kMaxSamples are held (65536^2 px at
+  // step 4 would be 10 GB of samples).
+  constexpr double kMaxSamples = 1 << 22;
+  const double grid = (double(camera.width()) / step) * (double(camera.height()) / step);
+  if (grid > kMaxSamples) step = int(std::ceil(step * std::sqrt(grid / kMaxSamples)));
   std::vector<Correspondence> out;
   for (int v = offset; v < camera.height(); v += step) {
     for (int u = offset; u < camera.width(); u += step) {
@@ -303,7 +309,7 @@ Conversion convert_camera(const Camera& source, const ModelSpec& model, std::str
     // Every 4th pixel, weighted as images are (per pixel).
     out.camera = fit_camera(sample_image(source, 4, 1, max_theta), model, source.parameters(), options);
   } else {
-    throw Error("method: expected lsq or paper, got '" + std::string(method) + "'");
+    throw Error("method: expected lsq or paper, got " + detail::quoted_for_message(std::string(method)) );
   }
   const Camera result(out.camera);
   const auto evaluation = sample_image(source, 2, 0, max_theta);  // denser than the fit saw

@@ -45,6 +45,7 @@ ValidDomain compute_domain(const Model& model, std::optional<double> user_limit)
     const bool in_range = Model::kLimitIsOpen ? limit < Model::kThetaLimit : limit <= Model::kThetaLimit;
     if (!(limit > 0) || !in_range) {
       std::ostringstream msg;
+      msg.precision(15);  // 180.0000001 must not print as 180
       msg << "theta_limit: must be in (0, " << Model::kThetaLimit * kDeg << "] degrees"
           << (Model::kLimitIsOpen ? " (exclusive)" : "") << " for " << Model::kName << ", got " << limit * kDeg;
       throw Error(msg.str());

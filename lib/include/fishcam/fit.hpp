@@ -27,6 +27,7 @@ struct Correspondence {
 
 // Pixels of the camera's image inside its valid domain, every `step` pixels in u and
 // v (offset by `offset`), with their unit rays; only rays up to max_theta when given.
+// For images past 4 M grid points the step grows so that at most about 4 M are taken.
 std::vector<Correspondence> sample_image(const Camera& camera, int step, int offset = 0,
                                          std::optional<double> max_theta = std::nullopt);
 
