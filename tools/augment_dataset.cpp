@@ -94,7 +94,7 @@ void register_augment_dataset(CLI::App& app) {
       char slash = 0, extra = 0;
       if (std::sscanf(o->shard.c_str(), "%d%c%d%c", &shard, &slash, &shards, &extra) != 3 || slash != '/' ||
           shards < 1 || shards > 100000 || shard < 0 || shard >= shards) {
-        throw Error("--shard: expected K/N with 0 <= K < N (e.g. 0/4), got '" + o->shard + "'");
+        throw Error("--shard: expected K/N with 0 <= K < N (e.g. 0/4), got " + quoted_for_message(o->shard));
       }
     }
     const std::string manifest_name =
@@ -106,7 +106,7 @@ void register_augment_dataset(CLI::App& app) {
     std::stringstream list(o->presets);
     for (std::string name; std::getline(list, name, ',');) {
       const auto preset = find_pose_preset(name);
-      if (!preset) throw Error("--preset: unknown preset '" + name + "' (small, medium, large, train)");
+      if (!preset) throw Error("--preset: unknown preset " + quoted_for_message(name) + " (small, medium, large, train)");
       presets.push_back(*preset);
     }
     const DepthPrior prior = *parse_depth_prior(o->depth);

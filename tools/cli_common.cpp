@@ -169,7 +169,7 @@ BoardSpec parse_board(const std::string& text, double spacing) {
   int cols = 0, rows = 0;
   char x = 0, extra = 0;
   if (std::sscanf(text.c_str(), "%d%c%d%c", &cols, &x, &rows, &extra) != 3 || x != 'x' || cols < 2 || rows < 2) {
-    throw Error("--board: expected WxH inner corners (e.g. 10x10), got '" + text + "'");
+    throw Error("--board: expected WxH inner corners (e.g. 10x10), got " + quoted_for_message(text));
   }
   const BoardSpec board{cols, rows, spacing};
   try {

@@ -37,7 +37,7 @@ CorrespondenceFile read_csv(const std::string& path) {
         file.kind = CorrespondenceFile::Kind::ray_pixel, columns = 5;
       } else {
         throw Error(path + ":" + std::to_string(number) + ": expected a header 'theta,rho', 'theta_deg,rho' or "
-                    "'x,y,z,u,v', got '" + line.substr(0, 60) + "'");
+                    "'x,y,z,u,v', got " + quoted_for_message(line));
       }
       continue;
     }

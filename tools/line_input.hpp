@@ -30,15 +30,14 @@ void for_each_record(std::istream& in, const char* what, const OnRecord& on_reco
       skip_space();
       const auto [next, ec] = std::from_chars(p, end, values[i]);
       if (ec != std::errc() || (next < end && *next != ' ' && *next != '\t' && *next != '\r')) {
-        throw Error("stdin line " + std::to_string(number) + ": expected " + what + ", got '" + line.substr(0, 60) +
-                    "'");
+        throw Error("stdin line " + std::to_string(number) + ": expected " + what + ", got " + quoted_for_message(line));
       }
       p = next;
     }
     skip_space();
     if (p != end) {
-      throw Error("stdin line " + std::to_string(number) + ": expected " + what + " (too many values), got '" +
-                  line.substr(0, 60) + "'");
+      throw Error("stdin line " + std::to_string(number) + ": expected " + what + " (too many values), got " +
+                  quoted_for_message(line));
     }
     on_record(values);
   }

@@ -22,12 +22,12 @@ void guard_number_options(CLI::App* app) {
       [](std::string& text) -> std::string {
         char* end = nullptr;
         const double value = std::strtod(text.c_str(), &end);
-        return std::isfinite(value) ? "" : "must be a finite number, got '" + text + "'";
+        return std::isfinite(value) ? "" : "must be a finite number, got " + fishcam::quoted_for_message(text);
       },
       "", "finite");
   static const CLI::Validator non_negative(
       [](std::string& text) -> std::string {
-        return text.find('-') == std::string::npos ? "" : "must not be negative, got '" + text + "'";
+        return text.find('-') == std::string::npos ? "" : "must not be negative, got " + fishcam::quoted_for_message(text);
       },
       "", "non-negative");
   for (CLI::Option* option : app->get_options()) {

@@ -1,6 +1,6 @@
+#include "fishcam/error.hpp"
 #include "fishcam/camera.hpp"
 
-#include "message.hpp"
 
 #include <opencv2/core.hpp>
 
@@ -155,7 +155,7 @@ RadialModel make_model(std::string_view name, std::span<const double> params) {
     if (name == Stereographic<double>::kName) return Stereographic<double>(params[0]);
     return Pinhole<double>(params[0]);
   }
-  fail("unknown model ", detail::quoted_for_message(name), " (expected polynomial, equidistant, stereographic, pinhole or kannala-brandt)");
+  fail("unknown model ", quoted_for_message(name), " (expected polynomial, equidistant, stereographic, pinhole or kannala-brandt)");
 }
 
 CameraParameters resized(const CameraParameters& camera, int width, int height) {

@@ -1,3 +1,4 @@
+#include "fishcam/error.hpp"
 #include "fishcam/camera_io.hpp"
 
 #include <nlohmann/json.hpp>
@@ -11,7 +12,6 @@
 
 #include "fishcam/atomic_file.hpp"
 #include "document.hpp"
-#include "message.hpp"
 #include "python_literal.hpp"
 
 namespace fishcam {
@@ -151,7 +151,7 @@ CameraParameters read_woodscape(const json& root, const std::string& source) {
   const Fields top(root, source);
   const Fields in = top.object("intrinsic");
   const std::string model = in.string("model");
-  if (model != "radial_poly") in.fail("model", "unsupported WoodScape model " + detail::quoted_for_message(model) + " (expected radial_poly)");
+  if (model != "radial_poly") in.fail("model", "unsupported WoodScape model " + quoted_for_message(model) + " (expected radial_poly)");
   const double poly_order = in.number("poly_order");
   if (!(poly_order >= 1 && poly_order <= 16) || poly_order != std::floor(poly_order)) {
     in.fail("poly_order", "expected an integer in [1, 16]");
@@ -320,7 +320,7 @@ CameraParameters read_opencv(std::string_view content, const std::string& source
     char* end = nullptr;
     const double v = std::strtod(trimmed.c_str(), &end);
     if (trimmed.empty() || end == trimmed.c_str() || !trimmed_start(end).empty()) {
-      fail(field, "expected a number, got " + detail::quoted_for_message(text));
+      fail(field, "expected a number, got " + quoted_for_message(text));
     }
     if (!std::isfinite(v)) fail(field, "must be finite");
     return v;
@@ -364,7 +364,7 @@ CameraParameters read_opencv(std::string_view content, const std::string& source
     const std::string text(trimmed_start(n->scalar));
     const double v = std::strtod(text.c_str(), &end);
     if (text.empty() || !trimmed_start(end).empty()) {
-      fail(name, "expected an integer, got " + detail::quoted_for_message(n->scalar));
+      fail(name, "expected an integer, got " + quoted_for_message(n->scalar));
     }
     if (!(v >= 1 && v <= (1 << 16)) || v != std::floor(v)) fail(name, "expected a positive integer <= 65536");
     return static_cast<int>(v);
@@ -372,7 +372,7 @@ CameraParameters read_opencv(std::string_view content, const std::string& source
   if (const detail::DocNode* model = root.find("distortion_model")) {
     std::string name = model->kind == detail::DocNode::Kind::scalar ? model->scalar : "";
     if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = name.substr(1, name.size() - 2);
-    if (name != "fisheye") fail("distortion_model", "only 'fisheye' is supported, got " + detail::quoted_for_message(name));
+    if (name != "fisheye") fail("distortion_model", "only 'fisheye' is supported, got " + quoted_for_message(name));
   }
   const auto k = matrix("K", "camera_matrix", 9);
   const auto d = matrix("D", "distortion_coefficients", 4);
@@ -431,7 +431,7 @@ json parse_json(std::string_view content, const std::string& source) {
   } catch (const json::exception& e) {  // parse errors, and number overflow ('1e400')
     std::string what = e.what();
     if (const auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
-    throw Error(source + ": not valid JSON (" + detail::quoted_for_message(what, 120) + ")");
+    throw Error(source + ": not valid JSON (" + quoted_for_message(what, 120) + ")");
   }
 }
 
@@ -517,7 +517,7 @@ Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& o
   // Every format read today holds exactly one camera and its image size.
   if (options.camera && *options.camera != "0") {
     throw Error(path.string() + ": camera: a " + std::string(to_string(detected)) +
-                " file holds one camera (index 0), got " + detail::quoted_for_message(*options.camera) );
+                " file holds one camera (index 0), got " + quoted_for_message(*options.camera) );
   }
   CameraParameters p = parse_camera(content.str(), path.string(), detected);
   if (options.image_size && (options.image_size->first != p.width || options.image_size->second != p.height)) {

@@ -6,7 +6,6 @@
 #include <algorithm>
 
 #include "fishcam/error.hpp"
-#include "message.hpp"
 
 namespace fishcam::detail {
 namespace {

@@ -1,5 +1,5 @@
+#include "fishcam/error.hpp"
 #include "fishcam/fit.hpp"
-#include "message.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -100,7 +100,7 @@ ModelSpec parse_model_spec(std::string_view text) {
   const auto colon = text.find(':');
   spec.name = std::string(text.substr(0, colon));
   if (colon != std::string_view::npos) {
-    if (spec.name != "polynomial") throw Error("model " + detail::quoted_for_message(std::string(text)) + ": only polynomial takes an order");
+    if (spec.name != "polynomial") throw Error("model " + quoted_for_message(std::string(text)) + ": only polynomial takes an order");
     const std::string order(text.substr(colon + 1));
     size_t used = 0;
     int n = 0;
@@ -109,13 +109,13 @@ ModelSpec parse_model_spec(std::string_view text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used != order.size() || n < 1 || n > 12) throw Error("model " + detail::quoted_for_message(std::string(text)) + ": order must be 1..12");
+    if (used != order.size() || n < 1 || n > 12) throw Error("model " + quoted_for_message(std::string(text)) + ": order must be 1..12");
     spec.order = n;
   }
   for (const char* known : {"polynomial", "equidistant", "stereographic", "pinhole", "kannala-brandt"}) {
     if (spec.name == known) return spec;
   }
-  throw Error("unknown model " + detail::quoted_for_message(text) +
+  throw Error("unknown model " + quoted_for_message(text) +
               " (expected polynomial[:N], equidistant, stereographic, pinhole or kannala-brandt)");
 }
 
@@ -309,7 +309,7 @@ Conversion convert_camera(const Camera& source, const ModelSpec& model, std::str
     // Every 4th pixel, weighted as images are (per pixel).
     out.camera = fit_camera(sample_image(source, 4, 1, max_theta), model, source.parameters(), options);
   } else {
-    throw Error("method: expected lsq or paper, got " + detail::quoted_for_message(std::string(method)) );
+    throw Error("method: expected lsq or paper, got " + quoted_for_message(std::string(method)) );
   }
   const Camera result(out.camera);
   const auto evaluation = sample_image(source, 2, 0, max_theta);  // denser than the fit saw

@@ -1,8 +1,8 @@
-#include "message.hpp"
+#include "fishcam/error.hpp"
 
 #include <cstdio>
 
-namespace fishcam::detail {
+namespace fishcam {
 
 std::string quoted_for_message(std::string_view text, size_t limit) {
   std::string out = "'";
@@ -32,4 +32,4 @@ std::string quoted_for_message(std::string_view text, size_t limit) {
   return out + "'";
 }
 
-}  // namespace fishcam::detail
+}  // namespace fishcam
