@@ -76,7 +76,8 @@ DocNode from_yaml(const YAML::Node& node, int depth, Budget& budget, const std::
       out.kind = DocNode::Kind::map;
       for (const auto& field : node) {
         if (!field.first.IsScalar()) fail(source, "YAML", "a map key that is not text");
-        out.fields.emplace_back(field.first.Scalar(), from_yaml(field.second, depth + 1, budget, source));
+        out.keys.push_back(field.first.Scalar());
+        out.items.push_back(from_yaml(field.second, depth + 1, budget, source));
       }
       break;
     default:
@@ -94,7 +95,8 @@ DocNode from_xml(const pugi::xml_node& node, int depth, Budget& budget, const st
   for (const pugi::xml_node& child : node.children()) {
     if (child.type() == pugi::node_element) {
       has_elements = true;
-      out.fields.emplace_back(child.name(), from_xml(child, depth + 1, budget, source));
+      out.keys.push_back(child.name());
+      out.items.push_back(from_xml(child, depth + 1, budget, source));
     }
   }
   if (has_elements) {
@@ -110,8 +112,8 @@ DocNode from_xml(const pugi::xml_node& node, int depth, Budget& budget, const st
 
 const DocNode* DocNode::find(std::string_view key) const {
   if (kind != Kind::map) return nullptr;
-  for (const auto& [name, value] : fields) {
-    if (name == key) return &value;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    if (keys[i] == key) return &items[i];
   }
   return nullptr;
 }

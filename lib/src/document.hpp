@@ -15,8 +15,9 @@ struct DocNode {
   Kind kind = Kind::null;
   std::string tag;     // YAML tag or XML type_id, without "!!" / "tag:yaml.org,2002:" ("opencv-matrix")
   std::string scalar;  // the text of a scalar (XML: the element's text)
-  std::vector<DocNode> items;                          // a sequence
-  std::vector<std::pair<std::string, DocNode>> fields;  // a map, in file order
+  std::vector<DocNode> items;  // a sequence, or a map's values (in file order)
+  std::vector<std::string> keys;  // a map's keys, one per item (vector<pair<string, DocNode>>
+                                  // would need DocNode complete here)
 
   // The field `key` of a map (nullptr if absent or not a map).
   const DocNode* find(std::string_view key) const;

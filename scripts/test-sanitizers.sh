@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The C++ test suite under AddressSanitizer + UndefinedBehaviorSanitizer (g++),
+# in build-asan/. Left out, and why: the Python tests (the interpreter itself is
+# not instrumented; they run in the normal build) and install_and_find_package
+# (it installs and builds a consumer: nothing of ours runs under the sanitizers
+# there). Leak detection is off: Debian's OpenCV/TBB/Ceres keep allocations until
+# exit; memory errors and undefined behaviour abort the test.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/install-deps.sh
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFISHCAM_BUILD_PYTHON=OFF \
+  -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -O1" \
+  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
+  >/dev/null
+cmake --build build-asan -j "$(nproc)"
+ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -E '^(install_and_find_package|python_tests)$'
