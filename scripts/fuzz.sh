@@ -5,14 +5,14 @@
 # to build-fuzz/findings/HARNESS/; turn each into a regression reproducer under
 # tests/fuzz/regressions/ (CTest replays those on every run).
 #   scripts/fuzz.sh [SECONDS] [HARNESS ...]   harnesses: camera camera_woodscape
-#   camera_fishcam camera_mrcal camera_opencv corners npy stdin_records
+#   camera_fishcam camera_mrcal camera_opencv corners npy stdin_records correspondence_csv
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 seconds=${1:-60}
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -eq 0 ] && harnesses=(camera camera_woodscape camera_fishcam camera_mrcal camera_opencv corners npy stdin_records)
+[ ${#harnesses[@]} -eq 0 ] && harnesses=(camera camera_woodscape camera_fishcam camera_mrcal camera_opencv corners npy stdin_records correspondence_csv)
 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DFISHCAM_FUZZ=ON -DFISHCAM_BUILD_PYTHON=OFF -DFISHCAM_BUILD_TOOLS=OFF \
   -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer" >/dev/null

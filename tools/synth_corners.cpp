@@ -3,6 +3,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fishcam/atomic_file.hpp"
 #include "fishcam/calibration.hpp"
 
 namespace fishcam::cli {
@@ -32,8 +33,10 @@ void register_synth_corners(CLI::App& app) {
     const Camera camera = read_camera(o->camera);
     const BoardSpec board = parse_board(o->board, o->spacing);
     const SyntheticBoards synthetic = synthesize_boards(camera, board, o->boards, o->noise, o->seed);
-    write_corners(o->out, synthetic.observations, o->force);
-    if (!o->truth.empty()) write_camera(camera.parameters(), o->truth, CameraFormat::fishcam, o->force);
+    // Corners and truth land together (or neither).
+    std::vector<std::pair<std::filesystem::path, std::string>> files{{o->out, format_corners(synthetic.observations)}};
+    if (!o->truth.empty()) files.emplace_back(o->truth, format_camera(camera.parameters(), CameraFormat::fishcam));
+    write_files_atomically(files, o->force);
     std::printf("wrote %d boards of %dx%d corners (noise %.3g px) to %s\n", o->boards, board.cols, board.rows, o->noise,
                 o->out.c_str());
   });

@@ -409,19 +409,23 @@ std::vector<BoardObservation> read_corners(const std::filesystem::path& path, co
   return out;
 }
 
-void write_corners(const std::filesystem::path& path, const std::vector<BoardObservation>& observations,
-                   bool overwrite) {
+std::string format_corners(const std::vector<BoardObservation>& observations) {
   std::string out = "# filename x y level\n";
   char buffer[128];
   for (const auto& o : observations) {
     if (o.corners.empty()) out += o.filename + " - - -\n";
     for (const auto& c : o.corners) {
-      if (!c.allFinite()) throw Error(path.string() + ": image " + o.filename + ": corners must be finite");
+      if (!c.allFinite()) throw Error("corners: image " + o.filename + ": corners must be finite");
       std::snprintf(buffer, sizeof buffer, " %.17g %.17g 0\n", c.x(), c.y());
       out += o.filename + buffer;
     }
   }
-  write_file_atomically(path, out, overwrite);
+  return out;
+}
+
+void write_corners(const std::filesystem::path& path, const std::vector<BoardObservation>& observations,
+                   bool overwrite) {
+  write_file_atomically(path, format_corners(observations), overwrite);
 }
 
 SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, int count, double noise_px,

@@ -34,6 +34,8 @@ struct BoardObservation {
 // board order, "filename - - -" for an image without a board. Throws Error naming
 // the file, line and problem (e.g. a wrong number of corners for an image).
 std::vector<BoardObservation> read_corners(const std::filesystem::path& path, const BoardSpec& board);
+// The content of a corners file (throws Error for non-finite corners).
+std::string format_corners(const std::vector<BoardObservation>& observations);
 void write_corners(const std::filesystem::path& path, const std::vector<BoardObservation>& observations,
                    bool overwrite = false);
 
