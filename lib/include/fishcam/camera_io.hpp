@@ -1,5 +1,5 @@
 // Camera files: WoodScape calibration JSON, mrcal .cameramodel (pinhole and
-// stereographic), OpenCV fisheye YAML/XML (cv::FileStorage) and fishcam JSON.
+// stereographic), OpenCV fisheye YAML/XML (read with yaml-cpp / pugixml) and fishcam JSON.
 // Field by field in docs/formats.md. Every error is one line naming the file and
 // the field: "front.json: intrinsic.k1: expected a number, got string".
 #pragma once
