@@ -38,6 +38,17 @@ def _camera_eq(self, other):
     return isinstance(other, Camera) and self.to_json() == other.to_json()
 
 
+def _warp_call(self, image=None, labels=None, change=None, depth="source-sphere", fill=0, label_fill=0,
+               return_valid=False):
+    """``warp(image=..., labels=..., change=...)``: the augmented image and labels as
+    ``fishcam augment`` writes them (a dict: image, labels, and valid when asked)."""
+    if change is None:
+        raise Error("change: required (a fishcam.ViewpointChange)")
+    return self.warp(image=image, labels=labels, change=change, depth=depth, fill=fill, label_fill=label_fill,
+                     return_valid=return_valid)
+
+
+ViewpointWarp.__call__ = _warp_call
 Camera.info = _info
 Camera.__eq__ = _camera_eq
 Camera.__hash__ = lambda self: hash(self.to_json())

@@ -130,7 +130,7 @@ def test_augmented_images_and_labels_are_byte_identical_to_fishcam_augment(cam, 
         run_cli("augment", data("woodscape_front.json"), "--image", image_path, "--label", tmp_path / "labels.png",
                 "--out-image", tmp_path / f"a{seed}.png", "--out-label", tmp_path / f"l{seed}.png",
                 "--preset", "train", "--seed", seed, "--label-fill", 255)
-        out = warp.warp(image=image, labels=labels, change=fishcam.random_change("train", seed), label_fill=255)
+        out = warp(image=image, labels=labels, change=fishcam.random_change("train", seed), label_fill=255)
         np.testing.assert_array_equal(out["image"], cv2.imread(str(tmp_path / f"a{seed}.png"), cv2.IMREAD_UNCHANGED))
         np.testing.assert_array_equal(out["labels"], cv2.imread(str(tmp_path / f"l{seed}.png"), cv2.IMREAD_UNCHANGED))
         # The transform with the same seed gives the same bytes.
@@ -241,6 +241,16 @@ def test_write_refuses_to_replace_unless_overwrite(cam, tmp_path):
         assert fishcam.Camera.read(str(tmp_path / f"c.{fmt}"), format=fmt).info()["cx"] == cam.info()["cx"]
     with pytest.raises(fishcam.Error, match="extension"):
         cam.write(str(tmp_path / "c.txt"))
+
+
+def test_warp_is_callable_and_needs_a_change(cam):
+    warp = fishcam.ViewpointWarp(cam)
+    image = np.full((cam.height, cam.width), 5, np.uint8)
+    change = fishcam.random_change("small", 2)
+    np.testing.assert_array_equal(warp(image=image, change=change)["image"],
+                                  warp.warp(image=image, change=change)["image"])
+    with pytest.raises(fishcam.Error, match="change"):
+        warp(image=image)
 
 
 def test_pickling_round_trips(cam):
