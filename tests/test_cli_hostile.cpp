@@ -123,6 +123,11 @@ TEST_F(CliHostile, DegenerateCalibrationDataIsRefused) {
                  "1000 corners per side");
 }
 
+TEST_F(CliHostile, UnknownSubcommandsAreNamed) {
+  expect_refused("frobnicate", "unknown subcommand 'frobnicate'");
+  expect_refused("bench frobnicate", "unknown subcommand 'frobnicate'");
+}
+
 TEST_F(CliHostile, FailedWritesToStandardOutputFail) {
   const std::string command = std::string("'") + FISHCAM_BINARY + "' info " + q("camera.json") + " > /dev/full 2> " +
                               q("err.txt");

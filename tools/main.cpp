@@ -58,8 +58,14 @@ int main(int argc, char** argv) {
   CLI::App app{"fishcam: calibration-aware fisheye projection models"};
   app.require_subcommand(1);
   // One line on stderr for a usage error; --help shows the rest.
-  app.failure_message([](const CLI::App*, const CLI::Error& e) {
-    return std::string("fishcam: error: ") + e.what() + " (see --help)\n";
+  app.failure_message([](const CLI::App* failed, const CLI::Error& e) {
+    std::string what = e.what();
+    // CLI11 reports a misspelt subcommand as a missing one: name the word instead.
+    const std::vector<std::string> extra = failed->remaining(true);
+    if (what.find("subcommand is required") != std::string::npos && !extra.empty()) {
+      what = "unknown subcommand " + fishcam::quoted_for_message(extra.front());
+    }
+    return "fishcam: error: " + what + " (see --help)\n";
   });
   fishcam::cli::register_info(app);
   fishcam::cli::register_project(app);
