@@ -196,8 +196,8 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
     }
   }
   const std::optional<SourceParams> src = float_source_params(source_);
-  float_kernel_ = src && float_kernel_agrees(source_, *src);
-  if (!float_kernel_) return;  // the exact path needs no cached rays
+  if (!src || !float_kernel_agrees(source_, *src)) return;  // the exact path needs no cached rays
+  kernel_source_ = std::make_shared<const SourceParams>(*src);
   const size_t n = size_t(target_.width()) * size_t(target_.height());
   const size_t padded = (n + 63) / 64 * 64;
   std::vector<float> interleaved(3 * n);
@@ -212,9 +212,9 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
 
 void ViewpointWarp::compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const {
   check_change(change);
-  if (!float_kernel_) return compute_double(change, prior, maps, kind);
+  if (!kernel_source_) return compute_double(change, prior, maps, kind);
   allocate(source_, target_, kind, maps);
-  const SourceParams src = *float_source_params(source_);
+  const SourceParams& src = *kernel_source_;
   const PoseParams pose = pose_params(change);
   const bool sampling = kind == MapKind::sampling;
   const detail::RangeKernel kernel = select_kernel(prior, change.translation.squaredNorm() < 1, src.kind, sampling);

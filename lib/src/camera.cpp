@@ -30,11 +30,16 @@ bool finite(const Eigen::Vector2d& v) { return v.allFinite(); }
 template <bool kWithJacobian, class Model>
 bool project_one(const Model& model, const double* mapping, const ValidDomain& domain, const Eigen::Vector3d& point,
                  Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* jacobian) {
-  // Only the direction matters: scale by a power of two (exact) to magnitude ~1, so
-  // squares neither overflow (1e160) nor underflow (1e-170).
-  int exponent = 0;
-  std::frexp(point.cwiseAbs().maxCoeff(), &exponent);
-  const double to_unit = std::ldexp(1.0, -exponent);
+  // Only the direction matters: a point whose squares would overflow (1e160) or
+  // underflow (1e-170) is scaled by a power of two (exact) to magnitude ~1 first;
+  // ordinary points skip that (one comparison on the hot path).
+  const double magnitude = point.cwiseAbs().maxCoeff();
+  double to_unit = 1;
+  if (!(magnitude >= 0x1p-400 && magnitude <= 0x1p400) && std::isfinite(magnitude) && magnitude > 0) {
+    int exponent = 0;
+    std::frexp(magnitude, &exponent);
+    to_unit = std::ldexp(1.0, -exponent);
+  }
   const Eigen::Vector3d p = point * to_unit;
   const double chi2 = p.x() * p.x() + p.y() * p.y();
   bool ok = p.allFinite() && (chi2 > 0 || p.z() > 0);  // the -z axis has no pixel direction

@@ -39,6 +39,25 @@ PointArray rows_of(const py::handle& input, py::ssize_t k, const char* what) {
   return array;
 }
 
+// A batch call of the library on (N, kIn) rows: (N, kOut) float64 results and
+// (N,) bool validity, computed in place on numpy memory with the GIL released.
+template <int kIn, int kOut, class Compute>
+py::tuple batch(const py::handle& input, const char* what, const Compute& compute) {
+  using In = Eigen::Matrix<double, kIn, 1>;
+  using Out = Eigen::Matrix<double, kOut, 1>;
+  const PointArray rows = rows_of(input, kIn, what);
+  const size_t n = static_cast<size_t>(rows.shape(0));
+  py::array_t<double> results({py::ssize_t(n), py::ssize_t(kOut)});
+  py::array_t<bool> ok{py::ssize_t(n)};
+  {
+    py::gil_scoped_release release;
+    compute(std::span<const In>(reinterpret_cast<const In*>(rows.data()), n),
+            std::span<Out>(reinterpret_cast<Out*>(results.mutable_data()), n),
+            std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(ok.mutable_data()), n));
+  }
+  return py::make_tuple(results, ok);
+}
+
 // A numpy image as a cv::Mat header on its memory (no copy). HxW or HxWxC, C <= 4,
 // C-contiguous (else copied), dtype among `depths`.
 cv::Mat as_mat(py::array& array, const char* what, bool labels) {
@@ -153,34 +172,14 @@ void bind_camera(py::module_& m) {
       .def_property_readonly("pixel_scale", [](const Camera& c) { return Eigen::Vector2d(c.pixel_scale()); })
       .def(
           "project",
-          [](const Camera& camera, const py::handle& points_in) {
-            const PointArray points = rows_of(points_in, 3, "points");
-            const size_t n = static_cast<size_t>(points.shape(0));
-            py::array_t<double> pixels({py::ssize_t(n), py::ssize_t(2)});
-            py::array_t<bool> ok{py::ssize_t(n)};
-            {
-              py::gil_scoped_release release;
-              camera.project(std::span<const Eigen::Vector3d>(reinterpret_cast<const Eigen::Vector3d*>(points.data()), n),
-                             std::span<Eigen::Vector2d>(reinterpret_cast<Eigen::Vector2d*>(pixels.mutable_data()), n),
-                             std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(ok.mutable_data()), n));
-            }
-            return py::make_tuple(pixels, ok);
+          [](const Camera& camera, const py::handle& points) {
+            return batch<3, 2>(points, "points", [&](auto in, auto out, auto ok) { camera.project(in, out, ok); });
           },
           py::arg("points"))
       .def(
           "unproject",
-          [](const Camera& camera, const py::handle& pixels_in) {
-            const PointArray pixels = rows_of(pixels_in, 2, "pixels");
-            const size_t n = static_cast<size_t>(pixels.shape(0));
-            py::array_t<double> rays({py::ssize_t(n), py::ssize_t(3)});
-            py::array_t<bool> ok{py::ssize_t(n)};
-            {
-              py::gil_scoped_release release;
-              camera.unproject(std::span<const Eigen::Vector2d>(reinterpret_cast<const Eigen::Vector2d*>(pixels.data()), n),
-                               std::span<Eigen::Vector3d>(reinterpret_cast<Eigen::Vector3d*>(rays.mutable_data()), n),
-                               std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(ok.mutable_data()), n));
-            }
-            return py::make_tuple(rays, ok);
+          [](const Camera& camera, const py::handle& pixels) {
+            return batch<2, 3>(pixels, "pixels", [&](auto in, auto out, auto ok) { camera.unproject(in, out, ok); });
           },
           py::arg("pixels"))
       .def(
@@ -341,7 +340,6 @@ void bind_augmentation(py::module_& m) {
             }
             {
               py::gil_scoped_release release;
-              check_change(change.change());
               const cv::Size source(warp.source().width(), warp.source().height());
               if (image && image_in.size() != source) {
                 throw Error("image: is " + std::to_string(image_in.cols) + "x" + std::to_string(image_in.rows) +

@@ -5,12 +5,16 @@
 
 #include <opencv2/core.hpp>
 
+#include <memory>
 #include <optional>
 
 #include "fishcam/camera.hpp"
 #include "fishcam/viewpoint.hpp"
 
 namespace fishcam {
+namespace detail {
+struct SourceParams;
+}  // namespace detail
 
 // What the maps hold.
 enum class MapKind {
@@ -70,13 +74,15 @@ class ViewpointWarp {
   // Geometric maps in double through Camera::project, pixel by pixel: the reference.
   void compute_exact(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
   // Whether compute() uses the float kernel (decided once, at construction).
-  bool float_kernel() const { return float_kernel_; }
+  bool float_kernel() const { return kernel_source_ != nullptr; }
 
  private:
   void compute_double(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const;
 
   Camera source_, target_;
-  bool float_kernel_ = false;
+  // The source camera in the float kernel's form, decided once at construction;
+  // null: the exact path. Immutable, so copies of the warp share it.
+  std::shared_ptr<const detail::SourceParams> kernel_source_;
   cv::Mat rays_;  // 3 x (W*H) CV_32F planes x, y, z of the target's unit rays; NaN where invalid
 };
 
