@@ -21,7 +21,7 @@ void register_calibrate(CLI::App& app) {
   cmd->add_option("--board", o->board, "Inner corners WxH")->required();
   cmd->add_option("--spacing", o->spacing, "Corner spacing (m)")->required()->check(CLI::PositiveNumber);
   cmd->add_option("--imagersize", o->imagersize, "Image size WxH")->required()->delimiter('x')->expected(2);
-  cmd->add_option("--model", o->model, "polynomial[:N], equidistant, stereographic, pinhole, kannala-brandt")
+  cmd->add_option("--model", o->model, "Model: " + fishcam::model_names_text())
       ->required();
   add_camera_output_options(cmd, &o->output);
   cmd->callback([o] {

@@ -26,7 +26,7 @@ void register_convert(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("SOURCE", o->source, "Camera file")->required();
-  cmd->add_option("--to", o->to, "Target model: polynomial[:N], equidistant, stereographic, pinhole, kannala-brandt")
+  cmd->add_option("--to", o->to, "Target model: " + fishcam::model_names_text())
       ->required();
   cmd->add_option("--method", o->method, "lsq: least squares over the image's pixels; paper: eqs. 13-14")
       ->check(CLI::IsMember({"lsq", "paper"}))

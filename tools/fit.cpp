@@ -23,7 +23,7 @@ void register_fit(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("DATA", o->data, "CSV with a header: theta,rho | theta_deg,rho | x,y,z,u,v")->required();
-  cmd->add_option("--to", o->to, "Model: polynomial[:N], equidistant, stereographic, pinhole, kannala-brandt")
+  cmd->add_option("--to", o->to, "Model: " + fishcam::model_names_text())
       ->required();
   cmd->add_option("--imagersize", o->imagersize, "Image size W,H")->delimiter(',')->expected(2)->required();
   cmd->add_option("--center", o->center, "Principal point cx,cy (px; the start when --fit-center)")

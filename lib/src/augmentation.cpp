@@ -26,6 +26,13 @@ constexpr double kFloatCoordinateLimit = 8192;
 constexpr int kRemapSizeLimit = 32767;
 
 
+// A double that survives the conversion to float: finite, and not flushed into
+// the subnormal range (where float keeps too few digits).
+bool float_exact_enough(double x) {
+  const double a = std::abs(x);
+  return a == 0 || (a >= double(std::numeric_limits<float>::min()) && a <= double(std::numeric_limits<float>::max()));
+}
+
 // The float kernel's form of each model; nullopt for a model it has no form for
 // (such a camera takes the exact path: never another model's formula).
 template <class Model>
@@ -38,23 +45,18 @@ std::optional<SourceParams> kernel_model(const Model& m) {
     p.kind = SourceParams::Kind::polynomial;
     p.n = static_cast<int>(c.size()) - 1;
     for (size_t i = 0; i < c.size(); ++i) p.c[i] = static_cast<float>(c[i]);
-  } else if constexpr (std::is_same_v<Model, Stereographic<double>>) {
-    p.kind = SourceParams::Kind::stereographic;
-    p.f = static_cast<float>(m.f());
-  } else if constexpr (std::is_same_v<Model, Pinhole<double>>) {
-    p.kind = SourceParams::Kind::pinhole;
-    p.f = static_cast<float>(m.f());
+  } else if constexpr (HasUnifiedForm<Model>) {
+    const UnifiedForm u = m.unified_form();
+    for (double x : {u.f, u.xi, u.alpha, u.beta, u.k1, u.k2}) {
+      if (!float_exact_enough(x)) return std::nullopt;
+    }
+    p.kind = SourceParams::Kind::unified;
+    p.f = float(u.f), p.xi = float(u.xi), p.alpha = float(u.alpha), p.beta = float(u.beta);
+    p.k1 = float(u.k1), p.k2 = float(u.k2);
   } else {
     return std::nullopt;
   }
   return p;
-}
-
-// A double that survives the conversion to float: finite, and not flushed into
-// the subnormal range (where float keeps too few digits).
-bool float_exact_enough(double x) {
-  const double a = std::abs(x);
-  return a == 0 || (a >= double(std::numeric_limits<float>::min()) && a <= double(std::numeric_limits<float>::max()));
 }
 
 // The source camera for the float kernel, or nullopt where float arithmetic
@@ -66,7 +68,7 @@ std::optional<SourceParams> float_source_params(const Camera& camera) {
   // Every coordinate the kernel adds up must have float spacing well below the tolerance.
   const double magnitude = std::max({std::abs(cx), std::abs(cy), double(camera.width()), double(camera.height())});
   if (magnitude > kFloatCoordinateLimit) return std::nullopt;
-  for (double x : {cx, cy, camera.pixel_scale().x(), camera.pixel_scale().y(), double(p->f)}) {
+  for (double x : {cx, cy, camera.pixel_scale().x(), camera.pixel_scale().y()}) {
     if (!float_exact_enough(x)) return std::nullopt;
   }
   for (int i = 0; i <= p->n; ++i) {
@@ -74,7 +76,6 @@ std::optional<SourceParams> float_source_params(const Camera& camera) {
       return std::nullopt;
     }
   }
-  if (!std::isfinite(p->f)) return std::nullopt;
   p->cx = float(cx), p->cy = float(cy);
   p->ax = float(camera.pixel_scale().x()), p->ay = float(camera.pixel_scale().y());
   // A domain up to pi needs no angle test (the kernel excludes the -z axis itself):

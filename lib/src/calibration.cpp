@@ -150,6 +150,7 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
       problem.AddResidualBlock(cost, loss, s->model.data(), s->center.data(), &s->ay, s->poses[b].data());
     }
   }
+  detail::bound_model_block<Model>(&problem, s->model.data(), n);
   if (intrinsics_fixed) {
     problem.SetParameterBlockConstant(s->model.data());
     problem.SetParameterBlockConstant(s->center.data());
@@ -180,17 +181,6 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
     }
   }
   return summary;
-}
-
-// The model's parameters starting from an equidistant focal length f.
-std::vector<double> initial_model(const ModelSpec& spec, double f) {
-  if (spec.name == "polynomial") {
-    std::vector<double> k(size_t(spec.order), 0.0);
-    k[0] = f;
-    return k;
-  }
-  if (spec.name == "kannala-brandt") return {f, 0, 0, 0, 0};
-  return {f};
 }
 
 template <template <typename> class Model>
@@ -242,7 +232,7 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
   // Joint solve of the target model from the best start: robust first, then plain
   // least squares without the outliers.
   Solve s = best;
-  s.model = initial_model(spec, best.model[0]);
+  s.model = Model<double>::initial_params(best.model[0], spec.order);
   {
     ceres::CauchyLoss loss(1.0);
     solve<Model>(&s, all_points, corners, false, &loss, nullptr);
@@ -320,18 +310,8 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
     result.per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max<size_t>(1, kept_points[b].size()))));
   }
   result.rms_px = std::sqrt(sum2 / double(std::max(1L, result.observations)));
-  const auto names = [&] {
-    std::vector<std::string> out;
-    if (spec.name == "polynomial") {
-      for (int i = 1; i <= spec.order; ++i) out.push_back(std::string("k") + std::to_string(i));
-    } else if (spec.name == "kannala-brandt") {
-      out = {"f", "k1", "k2", "k3", "k4"};
-    } else {
-      out = {"f"};
-    }
-    out.insert(out.end(), {"cx", "cy", "a_y"});
-    return out;
-  }();
+  std::vector<std::string> names = model_param_names(spec.name, int(s.model.size()));
+  names.insert(names.end(), {"cx", "cy", "a_y"});
   result.parameter_names = names;
   result.parameters = s.model;
   result.parameters.insert(result.parameters.end(), {s.center.x(), s.center.y(), s.ay});
@@ -493,7 +473,7 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
     throw Error("calibrate: " + std::to_string(boards.size()) + " image(s) with a board; at least 3 are needed (" +
                 "more, spread over the whole image, for a good calibration)");
   }
-  CalibrationResult result = detail::with_model_class(spec.name, [&]<template <typename> class Model>() {
+  CalibrationResult result = with_model_class(spec.name, [&]<template <typename> class Model>() {
     return calibrate_with<Model>(boards, board, width, height, spec);
   });
   // Coverage: the share of an 8 x 6 grid over the image that holds corners. A lens

@@ -126,43 +126,6 @@ void parallel_chunks(size_t n, const Body& body) {
 
 }  // namespace
 
-std::string_view model_name(const RadialModel& model) {
-  return std::visit([](const auto& m) { return std::decay_t<decltype(m)>::kName; }, model);
-}
-
-std::vector<double> model_params(const RadialModel& model) {
-  return std::visit(
-      [](const auto& m) {
-        const auto params = m.params();
-        return std::vector<double>(params.begin(), params.end());
-      },
-      model);
-}
-
-RadialModel make_model(std::string_view name, std::span<const double> params) {
-  auto expect = [&](size_t n) {
-    if (params.size() != n) fail(name, ": expected ", n, " parameter(s), got ", params.size());  // a known name
-  };
-  for (size_t i = 0; i < params.size(); ++i) {
-    if (!std::isfinite(params[i])) fail(name, ": parameter ", i + 1, " is not finite");
-  }
-  if (name == Polynomial<double>::kName) {
-    if (params.empty()) fail(name, ": needs at least one coefficient (k1)");
-    return Polynomial<double>(std::vector<double>(params.begin(), params.end()));
-  }
-  if (name == KannalaBrandt<double>::kName) {
-    expect(5);
-    return KannalaBrandt<double>(params.data());
-  }
-  if (name == Equidistant<double>::kName || name == Stereographic<double>::kName || name == Pinhole<double>::kName) {
-    expect(1);
-    if (name == Equidistant<double>::kName) return Equidistant<double>(params[0]);
-    if (name == Stereographic<double>::kName) return Stereographic<double>(params[0]);
-    return Pinhole<double>(params[0]);
-  }
-  fail("unknown model ", quoted_for_message(name), " (expected polynomial, equidistant, stereographic, pinhole or kannala-brandt)");
-}
-
 CameraParameters resized(const CameraParameters& camera, int width, int height) {
   if (width < 1 || height < 1) fail("resized: width and height must be >= 1, got ", width, "x", height);
   const Eigen::Vector2d s(double(width) / camera.width, double(height) / camera.height);
@@ -184,6 +147,10 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   }
   for (double p : model_params(params_.model)) {
     if (!std::isfinite(p)) fail(model_name(params_.model), ": parameters must be finite");
+  }
+  if (const std::string problem = std::visit([](const auto& m) { return m.invalid(); }, params_.model);
+      !problem.empty()) {
+    fail(model_name(params_.model), ": ", problem);
   }
   if (params_.pose) {
     Pose& pose = *params_.pose;

@@ -11,15 +11,22 @@
 
 namespace fishcam::detail {
 
-// The model of parameter block p (params values: the polynomial's order).
+// The model of parameter block p (params values: their count).
 template <template <typename> class Model, typename T>
 Model<T> model_from_block(const T* p, int params) {
-  if constexpr (std::is_same_v<Model<T>, Polynomial<T>>) {
-    return Polynomial<T>(p, params);
-  } else if constexpr (std::is_same_v<Model<T>, KannalaBrandt<T>>) {
-    return KannalaBrandt<T>(p);
-  } else {
-    return Model<T>(p[0]);
+  return Model<T>(p, params);
+}
+
+// The bounds of the non-linear models' parameters (alpha in [0, 1], ...), so the
+// solver never leaves the model's valid range.
+template <template <typename> class Model>
+void bound_model_block(ceres::Problem* problem, double* block, int params) {
+  if constexpr (requires { Model<double>::param_bounds(0); }) {
+    for (int i = 0; i < params; ++i) {
+      const auto [lo, hi] = Model<double>::param_bounds(i);
+      if (std::isfinite(lo)) problem->SetParameterLowerBound(block, i, lo);
+      if (std::isfinite(hi)) problem->SetParameterUpperBound(block, i, hi);
+    }
   }
 }
 
@@ -34,18 +41,6 @@ inline ceres::Solver::Options solver_options(ceres::LinearSolverType linear_solv
   options.num_threads = 2;
   options.logging_type = ceres::SILENT;
   return options;
-}
-
-// Calls f.template operator()<Model>() for the model class named `name`
-// (a name parse_model_spec accepted); throws Error for any other name.
-template <class F>
-decltype(auto) with_model_class(const std::string& name, F&& f) {
-  if (name == "polynomial") return f.template operator()<Polynomial>();
-  if (name == "kannala-brandt") return f.template operator()<KannalaBrandt>();
-  if (name == "equidistant") return f.template operator()<Equidistant>();
-  if (name == "stereographic") return f.template operator()<Stereographic>();
-  if (name == "pinhole") return f.template operator()<Pinhole>();
-  throw Error("unknown model '" + name + "'");  // never another model's formula
 }
 
 }  // namespace fishcam::detail

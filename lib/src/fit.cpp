@@ -17,38 +17,6 @@ constexpr double kDeg = 180 / std::numbers::pi;
 
 double theta_of(const Eigen::Vector3d& ray) { return std::atan2(ray.head<2>().norm(), ray.z()); }
 
-// The linear basis of each model's rho(theta): rho = sum_j p_j g_j(theta).
-int basis_size(const ModelSpec& m) {
-  if (m.name == "polynomial") return m.order;
-  if (m.name == "kannala-brandt") return 5;
-  return 1;
-}
-
-void basis(const ModelSpec& m, double theta, double* g) {
-  if (m.name == "polynomial") {
-    double power = theta;
-    for (int j = 0; j < m.order; ++j, power *= theta) g[j] = power;
-  } else if (m.name == "kannala-brandt") {
-    double power = theta;
-    for (int j = 0; j < 5; ++j, power *= theta * theta) g[j] = power;
-  } else if (m.name == "equidistant") {
-    g[0] = theta;
-  } else if (m.name == "stereographic") {
-    g[0] = 2 * std::tan(theta / 2);
-  } else {
-    g[0] = std::tan(theta);
-  }
-}
-
-// The model's parameters (docs/conventions.md order) from the basis coefficients.
-std::vector<double> params_from_basis(const ModelSpec& m, const Eigen::VectorXd& p) {
-  std::vector<double> out(p.data(), p.data() + p.size());
-  if (m.name == "kannala-brandt") {
-    for (int j = 1; j < 5; ++j) out[j] = p[j] / p[0];  // rho = f theta (1 + k1 theta^2 + ...)
-  }
-  return out;
-}
-
 // Residuals of a chunk of samples, for Ceres: projected minus observed pixel.
 template <template <typename> class Model>
 struct ChunkResidual {
@@ -71,9 +39,11 @@ struct ChunkResidual {
   }
 };
 
+// Ceres on the full pixel error: the model's parameters and the freed ones.
+// Returns the final cost.
 template <template <typename> class Model>
-void refine(std::span<const Correspondence> samples, int params, double ax, std::vector<double>* model,
-            Eigen::Vector2d* center, double* ay, const FitOptions& options) {
+double refine(std::span<const Correspondence> samples, int params, double ax, std::vector<double>* model,
+              Eigen::Vector2d* center, double* ay, const FitOptions& options) {
   ceres::Problem problem;
   constexpr size_t kChunk = 512;
   for (size_t begin = 0; begin < samples.size(); begin += kChunk) {
@@ -86,11 +56,75 @@ void refine(std::span<const Correspondence> samples, int params, double ax, std:
     cost->SetNumResiduals(static_cast<int>(2 * chunk.size()));
     problem.AddResidualBlock(cost, nullptr, model->data(), center->data(), ay);
   }
+  detail::bound_model_block<Model>(&problem, model->data(), params);
   if (!options.fit_center) problem.SetParameterBlockConstant(center->data());
   if (!options.fit_aspect) problem.SetParameterBlockConstant(ay);
   ceres::Solver::Summary summary;
   ceres::Solve(detail::solver_options(ceres::DENSE_NORMAL_CHOLESKY), &problem, &summary);
   if (!summary.IsSolutionUsable()) throw Error("fit: the least-squares solve failed: " + summary.message);
+  return summary.final_cost;
+}
+
+// Linear least squares of rho(theta) = sum_j p_j g_j(theta) for a fixed principal
+// point and pixel scale (exact for that case). With e the ray's azimuth direction
+// and a = (a_x, a_y), the pixel error |c + a.(rho e) - q|^2 is w (rho - t)^2 + const
+// with w = |a.e|^2 and t = (q - c).(a.e) / w.
+template <template <typename> class Model>
+std::vector<double> linear_fit(std::span<const Correspondence> samples, int k, const CameraParameters& start,
+                               std::string_view name) {
+  const Eigen::Vector2d c = start.principal_point, a = start.pixel_scale;
+  Eigen::MatrixXd design(samples.size(), k);
+  Eigen::VectorXd target(samples.size());
+  std::vector<double> g(k);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Eigen::Vector3d& ray = samples[i].ray;
+    const double chi = ray.head<2>().norm();
+    Model<double>::basis(theta_of(ray), k, g.data());
+    if (chi == 0) {  // on the axis: rho = 0 carries no information about the shape
+      design.row(i).setZero();
+      target[i] = 0;
+      continue;
+    }
+    const Eigen::Vector2d ae = a.cwiseProduct(ray.head<2>() / chi);
+    const double w = ae.squaredNorm(), sw = std::sqrt(w);
+    for (int j = 0; j < k; ++j) design(i, j) = sw * g[j];
+    target[i] = sw * (samples[i].pixel - c).dot(ae) / w;
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
+  if (qr.rank() < k) throw Error("fit: the samples do not determine the " + std::string(name) + " model (degenerate data)");
+  const Eigen::VectorXd p = qr.solve(target);
+  return Model<double>::from_basis(p.data(), k);
+}
+
+template <template <typename> class Model>
+std::vector<double> fit_params(std::span<const Correspondence> samples, const ModelSpec& spec,
+                               const CameraParameters& start, const FitOptions& options, Eigen::Vector2d* center,
+                               double* ay) {
+  const double ax = start.pixel_scale.x();
+  if constexpr (LinearInParams<Model<double>>) {
+    const int k = Model<double>::kParamNames.empty() ? spec.order : int(Model<double>::kParamNames.size());
+    std::vector<double> params = linear_fit<Model>(samples, k, start, spec.name);
+    if (options.fit_center || options.fit_aspect) refine<Model>(samples, k, ax, &params, center, ay, options);
+    return params;
+  } else {
+    // Non-linear in its shape parameters: Ceres from each of the model's starts
+    // (scaled by the best equidistant focal length), the lowest cost wins.
+    const int k = int(Model<double>::kParamNames.size());
+    const double f = linear_fit<Equidistant>(samples, 1, start, spec.name)[0];
+    double best_cost = std::numeric_limits<double>::infinity();
+    std::vector<double> best;
+    Eigen::Vector2d best_center = *center;
+    double best_ay = *ay;
+    for (std::vector<double> params : Model<double>::fit_starts(f)) {
+      Eigen::Vector2d c = *center;
+      double a = *ay;
+      const double cost = refine<Model>(samples, k, ax, &params, &c, &a, options);
+      if (cost < best_cost) best_cost = cost, best = params, best_center = c, best_ay = a;
+    }
+    if (best.empty()) throw Error("fit: no start of the " + spec.name + " model converged");
+    *center = best_center, *ay = best_ay;
+    return best;
+  }
 }
 
 }  // namespace
@@ -112,11 +146,8 @@ ModelSpec parse_model_spec(std::string_view text) {
     if (used != order.size() || n < 1 || n > 12) throw Error("model " + quoted_for_message(std::string(text)) + ": order must be 1..12");
     spec.order = n;
   }
-  for (const char* known : {"polynomial", "equidistant", "stereographic", "pinhole", "kannala-brandt"}) {
-    if (spec.name == known) return spec;
-  }
-  throw Error("unknown model " + quoted_for_message(text) +
-              " (expected polynomial[:N], equidistant, stereographic, pinhole or kannala-brandt)");
+  check_model_name(spec.name);
+  return spec;
 }
 
 std::vector<Correspondence> sample_image(const Camera& camera, int step, int offset, std::optional<double> max_theta) {
@@ -140,7 +171,9 @@ std::vector<Correspondence> sample_image(const Camera& camera, int step, int off
 
 CameraParameters fit_camera(std::span<const Correspondence> samples, const ModelSpec& spec,
                             const CameraParameters& start, const FitOptions& options) {
-  const int k = basis_size(spec);
+  const int k = with_model_class(spec.name, [&]<template <typename> class Model>() {
+    return Model<double>::kParamNames.empty() ? spec.order : int(Model<double>::kParamNames.size());
+  });
   if (samples.size() < size_t(2 * k + 3)) {
     throw Error("fit: " + std::to_string(samples.size()) + " samples cannot determine a " + spec.name + " model");
   }
@@ -149,41 +182,14 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
       if (!(s.ray.z() > 0)) throw Error("fit: a pinhole model cannot see rays at or past 90 deg (limit max_angle below 90)");
     }
   }
-  // Linear start (exact for fixed centre and scale): with e the ray's azimuth
-  // direction and a = (a_x, a_y), the pixel error |c + a.(rho e) - q|^2 is
-  // w (rho - t)^2 + const with w = |a.e|^2 and t = (q - c).(a.e) / w.
-  const Eigen::Vector2d c = start.principal_point, a = start.pixel_scale;
-  Eigen::MatrixXd design(samples.size(), k);
-  Eigen::VectorXd target(samples.size());
-  std::vector<double> g(k);
-  for (size_t i = 0; i < samples.size(); ++i) {
-    const Eigen::Vector3d& ray = samples[i].ray;
-    const double chi = ray.head<2>().norm();
-    basis(spec, theta_of(ray), g.data());
-    if (chi == 0) {  // on the axis: rho = 0 carries no information about the shape
-      design.row(i).setZero();
-      target[i] = 0;
-      continue;
-    }
-    const Eigen::Vector2d ae = a.cwiseProduct(ray.head<2>() / chi);
-    const double w = ae.squaredNorm(), sw = std::sqrt(w);
-    for (int j = 0; j < k; ++j) design(i, j) = sw * g[j];
-    target[i] = sw * (samples[i].pixel - c).dot(ae) / w;
-  }
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
-  if (qr.rank() < k) throw Error("fit: the samples do not determine the " + spec.name + " model (degenerate data)");
-  const Eigen::VectorXd p = qr.solve(target);
+  Eigen::Vector2d center = start.principal_point;
+  double ay = start.pixel_scale.y();
+  std::vector<double> params = with_model_class(spec.name, [&]<template <typename> class Model>() {
+    return fit_params<Model>(samples, spec, start, options, &center, &ay);
+  });
   CameraParameters fitted = start;
-  std::vector<double> params = params_from_basis(spec, p);
-  if (options.fit_center || options.fit_aspect) {
-    Eigen::Vector2d center = c;
-    double ay = a.y();
-    detail::with_model_class(spec.name, [&]<template <typename> class Model>() {
-      refine<Model>(samples, k, a.x(), &params, &center, &ay, options);
-    });
-    fitted.principal_point = center;
-    fitted.pixel_scale.y() = ay;
-  }
+  fitted.principal_point = center;
+  fitted.pixel_scale.y() = ay;
   fitted.model = make_model(spec.name, params);
   fitted.theta_limit.reset();
   try {

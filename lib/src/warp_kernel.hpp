@@ -14,12 +14,15 @@ namespace fishcam::detail {
 // evaluate accurately is decided in one place, float_source_params() in
 // augmentation.cpp; the others take the exact path.
 struct SourceParams {
-  enum class Kind { polynomial, stereographic, pinhole };
+  // polynomial: rho(theta) as a polynomial; unified: the unified-camera form
+  // (fishcam::UnifiedForm: pinhole, stereographic, unified, extended-unified,
+  // double-sphere, mei).
+  enum class Kind { polynomial, unified };
   static constexpr int kMaxDegree = 15;
   Kind kind = Kind::polynomial;
   float c[kMaxDegree + 1] = {};  // rho = c[1] theta + ... + c[n] theta^n, 1 <= n <= kMaxDegree
   int n = 0;
-  float f = 0;  // stereographic, pinhole
+  float f = 0, xi = 0, alpha = 0, beta = 1, k1 = 0, k2 = 0;  // unified
   float cx = 0, cy = 0, ax = 1, ay = 1;
   float cos_theta_max = -1;
   bool closed = true;

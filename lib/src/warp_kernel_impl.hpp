@@ -69,12 +69,28 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
   const v_float32 cos_limit = cv::vx_setall_f32(src.cos_theta_max) * norm;
   valid = valid & (src.closed ? pz >= cos_limit : pz > cos_limit) & ((chi2 > zero) | (pz > zero));
   v_float32 scale;  // rho(theta) / chi
-  if constexpr (kKind == SourceParams::Kind::stereographic) {
-    // 2 f tan(theta/2) / chi = 2 f / (|P| + Pz); for Pz < 0 the same as chi^2 / (|P| - Pz).
-    const v_float32 denominator = cv::v_select(pz >= zero, norm + pz, chi2 / (norm - pz));
-    scale = cv::vx_setall_f32(2 * src.f) / denominator;
-  } else if constexpr (kKind == SourceParams::Kind::pinhole) {
-    scale = cv::vx_setall_f32(src.f) / pz;
+  if constexpr (kKind == SourceParams::Kind::unified) {
+    // w = xi |P| + Pz; behind the camera (Pz < 0, xi > 0) as
+    // (xi^2 chi^2 + (xi^2 - 1) Pz^2) / (xi |P| - Pz), without the cancellation
+    // (stereographic, xi = 1: chi^2 / (|P| - Pz)).
+    const v_float32 xi = cv::vx_setall_f32(src.xi);
+    v_float32 w = cv::v_fma(xi, norm, pz);
+    if (src.xi > 0) {
+      const v_float32 xi2 = cv::vx_setall_f32(src.xi * src.xi), xi2m1 = cv::vx_setall_f32(src.xi * src.xi - 1);
+      w = cv::v_select(pz >= zero, w, cv::v_fma(xi2, chi2, xi2m1 * pz * pz) / cv::v_fma(xi, norm, zero - pz));
+    }
+    v_float32 d = w;
+    if (src.alpha != 0) {
+      const v_float32 alpha = cv::vx_setall_f32(src.alpha);
+      const v_float32 root = cv::v_sqrt(cv::v_fma(cv::vx_setall_f32(src.beta), chi2, w * w));
+      d = cv::v_fma(alpha, root, (cv::vx_setall_f32(1.0f) - alpha) * w);
+    }
+    scale = cv::vx_setall_f32(src.f) / d;
+    if (src.k1 != 0 || src.k2 != 0) {  // mei: radial distortion of r = chi / D
+      const v_float32 r2 = chi2 / (d * d);
+      scale = scale * cv::v_fma(r2, cv::v_fma(r2, cv::vx_setall_f32(src.k2), cv::vx_setall_f32(src.k1)),
+                                cv::vx_setall_f32(1.0f));
+    }
   } else {
     const v_float32 chi = cv::v_sqrt(chi2);
     const v_float32 theta = atan2_nonnegative_y(chi, pz);
@@ -140,10 +156,8 @@ RangeKernel kernel_for_kind(SourceParams::Kind kind) {
   switch (kind) {
     case SourceParams::Kind::polynomial:
       return warp_range<kPrior, kInsideSphere, SourceParams::Kind::polynomial, kSampling>;
-    case SourceParams::Kind::stereographic:
-      return warp_range<kPrior, kInsideSphere, SourceParams::Kind::stereographic, kSampling>;
-    case SourceParams::Kind::pinhole:
-      return warp_range<kPrior, kInsideSphere, SourceParams::Kind::pinhole, kSampling>;
+    case SourceParams::Kind::unified:
+      return warp_range<kPrior, kInsideSphere, SourceParams::Kind::unified, kSampling>;
   }
   return nullptr;
 }

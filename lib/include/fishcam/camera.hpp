@@ -17,6 +17,7 @@
 
 #include "fishcam/error.hpp"
 #include "fishcam/radial_inverse.hpp"
+#include "fishcam/model_registry.hpp"
 #include "fishcam/radial_models.hpp"
 
 namespace fishcam {
@@ -44,14 +45,6 @@ T project_radial(const Model& model, const T* pixel_mapping, const T* point, T* 
   return theta;
 }
 
-using RadialModel =
-    std::variant<Polynomial<double>, Equidistant<double>, Stereographic<double>, Pinhole<double>, KannalaBrandt<double>>;
-
-std::string_view model_name(const RadialModel& model);
-std::vector<double> model_params(const RadialModel& model);
-// Parses a model name ("polynomial", "equidistant", ...) and its parameters (in the
-// order params() documents); throws Error naming what is wrong.
-RadialModel make_model(std::string_view name, std::span<const double> params);
 
 // Rigid transform camera -> reference: p_ref = rotation * p_cam + translation.
 struct Pose {

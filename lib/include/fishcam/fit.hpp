@@ -12,8 +12,8 @@
 
 namespace fishcam {
 
-// A model to fit: "polynomial[:N]" (default N = 4), "equidistant", "stereographic",
-// "pinhole", "kannala-brandt".
+// A model to fit: a registry name (model_names_text()); "polynomial:N" gives the
+// polynomial's order (default 4).
 struct ModelSpec {
   std::string name;
   int order = 4;  // polynomial only

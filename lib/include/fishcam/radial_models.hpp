@@ -1,39 +1,76 @@
 // Radial projection models rho(theta): image distance from the principal point
 // (in pixel-scale units, see docs/conventions.md) as a function of the angle of
-// incidence theta.
+// incidence theta. The list of models is in fishcam/model_registry.hpp, which
+// says how to add one.
 //
 // One small class per model, templated on the scalar type so that Ceres can
 // differentiate through them (ceres::Jet). Math calls are unqualified after a
 // `using std::...` so that ADL picks the Jet overloads.
 //
 // Each model provides
+//   kName, kParamNames               its name (CLI, files, Python) and parameters, in order
+//   Model(const Scalar* p, int n)    from its parameters (n: their count; checked by the registry)
+//   params()                         the parameters in that order
+//   invalid()                        what is wrong with the parameters ("" if nothing); the
+//                                    registry and Camera refuse a model with a problem
 //   rho(theta), drho(theta)          the model and its analytic derivative
 //   (optionally rho(theta, &drho)    both at once, where that is cheaper)
-//   kThetaLimit, kLimitIsOpen        where the model itself stops (pinhole: theta < pi/2)
+//   theta_limit(), limit_is_open()   where the model itself stops: theta < limit (open) or
+//                                    <= limit (closed). Closed-form models include their own
+//                                    folds here; compute_domain() also searches for folds
 //   scaled(s)                        the model for s * rho(theta), exactly
-//   params()                         parameters in the documented order
-// and the closed-form models also theta_from_rho(rho).
+//   initial_params(f)                a start whose rho'(0) = f (fitting, calibration)
+// and optionally
+//   theta_from_rho(rho)              a closed-form inverse on the valid domain
+//   power_coefficients()             rho as a polynomial in theta (exact fold search)
+//   basis(theta, n, g), from_basis   rho linear in the parameters: exact linear fits
+//   fit_starts(f), param_bounds(i)   otherwise: where the non-linear fit starts, and its bounds
+//   unified_form()                   the float warp kernel's unified-camera form (below)
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace fishcam {
+
+// The unified-camera family in one form (the float warp kernel's): for a point P
+// with chi = |P_xy|, n = |P| and w = xi n + P_z,
+//   D = alpha sqrt(beta chi^2 + w^2) + (1 - alpha) w,   r = chi / D,
+//   rho / chi = f (1 + k1 r^2 + k2 r^4) / D.
+// Pinhole, stereographic, unified, extended-unified, double-sphere and mei are all
+// special cases (docs/conventions.md).
+struct UnifiedForm {
+  double f = 1, xi = 0, alpha = 0, beta = 1, k1 = 0, k2 = 0;
+};
+
+namespace detail {
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+// "" or "NAME: must be ..." (the registry prefixes the model name).
+inline std::string require(bool ok, std::string_view message) { return ok ? "" : std::string(message); }
+}  // namespace detail
 
 // rho = k1*theta + k2*theta^2 + ... + kN*theta^N (no constant term). WoodScape: N = 4.
 template <typename Scalar>
 class Polynomial {
  public:
   static constexpr std::string_view kName = "polynomial";
-  static constexpr double kThetaLimit = std::numbers::pi;
-  static constexpr bool kLimitIsOpen = false;
+  static constexpr std::array<std::string_view, 0> kParamNames{};  // k1..kN: any count
+  static constexpr int kMaxOrder = 64;
 
   Polynomial() = default;
   explicit Polynomial(std::vector<Scalar> k) : k_(std::move(k)) {}
   Polynomial(const Scalar* k, int n) : k_(k, k + n) {}
 
+  std::string invalid() const {
+    return detail::require(!k_.empty() && k_.size() <= size_t(kMaxOrder), "expected 1 to 64 coefficients (k1..kN)");
+  }
   Scalar rho(const Scalar& theta) const {
     // Horner on k1 + k2*t + ... + kN*t^(N-1), then times theta.
     Scalar r = k_.back();
@@ -57,6 +94,8 @@ class Polynomial {
     *drho = p + theta * dp;
     return p * theta;
   }
+  static constexpr double theta_limit() { return std::numbers::pi; }
+  static constexpr bool limit_is_open() { return false; }
   Polynomial scaled(const Scalar& s) const {
     Polynomial out = *this;
     for (auto& k : out.k_) k = k * s;
@@ -71,6 +110,17 @@ class Polynomial {
   const std::vector<Scalar>& params() const { return k_; }
   int order() const { return static_cast<int>(k_.size()); }
 
+  static std::vector<double> initial_params(double f, int order) {
+    std::vector<double> k(size_t(std::max(order, 1)), 0.0);
+    k[0] = f;
+    return k;
+  }
+  static void basis(double theta, int n, double* g) {
+    double power = theta;
+    for (int j = 0; j < n; ++j, power *= theta) g[j] = power;
+  }
+  static std::vector<double> from_basis(const double* p, int n) { return {p, p + n}; }
+
  private:
   std::vector<Scalar> k_{Scalar(1)};
 };
@@ -80,19 +130,26 @@ template <typename Scalar>
 class Equidistant {
  public:
   static constexpr std::string_view kName = "equidistant";
-  static constexpr double kThetaLimit = std::numbers::pi;
-  static constexpr bool kLimitIsOpen = false;
+  static constexpr std::array<std::string_view, 1> kParamNames{"f"};
 
   Equidistant() = default;
   explicit Equidistant(Scalar f) : f_(f) {}
+  Equidistant(const Scalar* p, int) : f_(p[0]) {}
 
+  std::string invalid() const { return ""; }  // f > 0: compute_domain's slope check
   Scalar rho(const Scalar& theta) const { return f_ * theta; }
   Scalar drho(const Scalar&) const { return f_; }
   Scalar theta_from_rho(const Scalar& rho) const { return rho / f_; }
+  static constexpr double theta_limit() { return std::numbers::pi; }
+  static constexpr bool limit_is_open() { return false; }
   Equidistant scaled(const Scalar& s) const { return Equidistant(f_ * s); }
   std::vector<Scalar> power_coefficients() const { return {Scalar(0), f_}; }
   std::vector<Scalar> params() const { return {f_}; }
   const Scalar& f() const { return f_; }
+
+  static std::vector<double> initial_params(double f, int) { return {f}; }
+  static void basis(double theta, int, double* g) { g[0] = theta; }
+  static std::vector<double> from_basis(const double* p, int) { return {p[0]}; }
 
  private:
   Scalar f_{1};
@@ -103,12 +160,13 @@ template <typename Scalar>
 class Stereographic {
  public:
   static constexpr std::string_view kName = "stereographic";
-  static constexpr double kThetaLimit = std::numbers::pi;
-  static constexpr bool kLimitIsOpen = true;
+  static constexpr std::array<std::string_view, 1> kParamNames{"f"};
 
   Stereographic() = default;
   explicit Stereographic(Scalar f) : f_(f) {}
+  Stereographic(const Scalar* p, int) : f_(p[0]) {}
 
+  std::string invalid() const { return ""; }
   Scalar rho(const Scalar& theta) const {
     using std::tan;
     return Scalar(2) * f_ * tan(theta / Scalar(2));
@@ -122,9 +180,16 @@ class Stereographic {
     using std::atan;
     return Scalar(2) * atan(rho / (Scalar(2) * f_));
   }
+  static constexpr double theta_limit() { return std::numbers::pi; }
+  static constexpr bool limit_is_open() { return true; }
   Stereographic scaled(const Scalar& s) const { return Stereographic(f_ * s); }
   std::vector<Scalar> params() const { return {f_}; }
   const Scalar& f() const { return f_; }
+  UnifiedForm unified_form() const { return {2 * double(f_), 1, 0, 1, 0, 0}; }
+
+  static std::vector<double> initial_params(double f, int) { return {f}; }
+  static void basis(double theta, int, double* g) { g[0] = 2 * std::tan(theta / 2); }
+  static std::vector<double> from_basis(const double* p, int) { return {p[0]}; }
 
  private:
   Scalar f_{1};
@@ -135,12 +200,13 @@ template <typename Scalar>
 class Pinhole {
  public:
   static constexpr std::string_view kName = "pinhole";
-  static constexpr double kThetaLimit = std::numbers::pi / 2;
-  static constexpr bool kLimitIsOpen = true;
+  static constexpr std::array<std::string_view, 1> kParamNames{"f"};
 
   Pinhole() = default;
   explicit Pinhole(Scalar f) : f_(f) {}
+  Pinhole(const Scalar* p, int) : f_(p[0]) {}
 
+  std::string invalid() const { return ""; }
   Scalar rho(const Scalar& theta) const {
     using std::tan;
     return f_ * tan(theta);
@@ -154,9 +220,16 @@ class Pinhole {
     using std::atan;
     return atan(rho / f_);
   }
+  static constexpr double theta_limit() { return std::numbers::pi / 2; }
+  static constexpr bool limit_is_open() { return true; }
   Pinhole scaled(const Scalar& s) const { return Pinhole(f_ * s); }
   std::vector<Scalar> params() const { return {f_}; }
   const Scalar& f() const { return f_; }
+  UnifiedForm unified_form() const { return {double(f_), 0, 0, 1, 0, 0}; }
+
+  static std::vector<double> initial_params(double f, int) { return {f}; }
+  static void basis(double theta, int, double* g) { g[0] = std::tan(theta); }
+  static std::vector<double> from_basis(const double* p, int) { return {p[0]}; }
 
  private:
   Scalar f_{1};
@@ -168,14 +241,13 @@ template <typename Scalar>
 class KannalaBrandt {
  public:
   static constexpr std::string_view kName = "kannala-brandt";
-  static constexpr double kThetaLimit = std::numbers::pi;
-  static constexpr bool kLimitIsOpen = false;
-  static constexpr int kNumParams = 5;
+  static constexpr std::array<std::string_view, 5> kParamNames{"f", "k1", "k2", "k3", "k4"};
 
   KannalaBrandt() = default;
   KannalaBrandt(Scalar f, Scalar k1, Scalar k2, Scalar k3, Scalar k4) : p_{f, k1, k2, k3, k4} {}
-  explicit KannalaBrandt(const Scalar* p) : p_{p[0], p[1], p[2], p[3], p[4]} {}
+  explicit KannalaBrandt(const Scalar* p, int = 5) : p_{p[0], p[1], p[2], p[3], p[4]} {}
 
+  std::string invalid() const { return ""; }
   Scalar rho(const Scalar& theta) const {
     const Scalar t2 = theta * theta;
     const Scalar poly = Scalar(1) + t2 * (p_[1] + t2 * (p_[2] + t2 * (p_[3] + t2 * p_[4])));
@@ -195,6 +267,8 @@ class KannalaBrandt {
     *drho = p_[0] * d;
     return p_[0] * theta * poly;
   }
+  static constexpr double theta_limit() { return std::numbers::pi; }
+  static constexpr bool limit_is_open() { return false; }
   KannalaBrandt scaled(const Scalar& s) const {
     KannalaBrandt out = *this;
     out.p_[0] = out.p_[0] * s;
@@ -209,8 +283,311 @@ class KannalaBrandt {
   }
   std::vector<Scalar> params() const { return {p_[0], p_[1], p_[2], p_[3], p_[4]}; }
 
+  static std::vector<double> initial_params(double f, int) { return {f, 0, 0, 0, 0}; }
+  // Linear after reparametrization: rho = f theta + (f k1) theta^3 + ...
+  static void basis(double theta, int, double* g) {
+    double power = theta;
+    for (int j = 0; j < 5; ++j, power *= theta * theta) g[j] = power;
+  }
+  static std::vector<double> from_basis(const double* p, int) {
+    return {p[0], p[1] / p[0], p[2] / p[0], p[3] / p[0], p[4] / p[0]};
+  }
+
  private:
   Scalar p_[5]{Scalar(1), Scalar(0), Scalar(0), Scalar(0), Scalar(0)};
+};
+
+// ---------------------------------------------------------------------------
+// The unified-camera family (Geyer & Daniilidis, Mei & Rives, Khomenko et al.,
+// Usenko et al. 2018). On a unit ray (sin(theta), 0, cos(theta)) each is
+// rho = f sin(theta) / D(theta); the valid domains below are where that is
+// defined and strictly increasing, in closed form (docs/conventions.md derives them).
+
+namespace detail {
+// theta where the direction of q = (sin(theta), cos(theta) + xi) has cos = -w, for
+// |xi| < 1 or xi >= 0 up to the fold (the double sphere's shift; xi = 0: acos(-w)).
+inline double theta_of_shifted_direction(double xi, double w) {
+  const double cos_phi = -w, sin_phi = std::sqrt(std::max(0.0, 1 - w * w));
+  const double t = xi * cos_phi + std::sqrt(std::max(0.0, xi * xi * cos_phi * cos_phi - xi * xi + 1));
+  return std::atan2(t * sin_phi, t * cos_phi - xi);
+}
+// The alpha form's limit on cos of q's direction: -w1 (a pole for alpha <= 1/2, else a fold).
+inline double alpha_w1(double alpha) { return alpha <= 0.5 ? alpha / (1 - alpha) : (1 - alpha) / alpha; }
+}  // namespace detail
+
+// Unified camera model (UCM) in the xi form Kalibr's `omni` uses:
+//   rho = f sin(theta) / (xi + cos(theta)),  parameters f, xi (xi >= 0).
+// xi = 0 is the pinhole, xi = 1 the stereographic model with f = 2 f_stereographic.
+// Valid: theta < acos(-xi) for xi <= 1 (a pole); theta <= acos(-1/xi) for xi > 1 (a fold).
+// basalt's alpha form (fx x / (alpha d + (1 - alpha) z)): xi = alpha / (1 - alpha),
+// f = f_alpha / (1 - alpha).
+template <typename Scalar>
+class Unified {
+ public:
+  static constexpr std::string_view kName = "unified";
+  static constexpr std::array<std::string_view, 2> kParamNames{"f", "xi"};
+
+  Unified() = default;
+  Unified(Scalar f, Scalar xi) : f_(f), xi_(xi) {}
+  Unified(const Scalar* p, int) : f_(p[0]), xi_(p[1]) {}
+
+  std::string invalid() const { return detail::require(double(xi_) >= 0, "xi must be >= 0"); }
+  // xi + cos(theta) written as (xi - 1) + 2 cos^2(theta/2): exact near pi for xi = 1.
+  Scalar denominator(const Scalar& theta) const {
+    using std::cos;
+    const Scalar h = cos(theta / Scalar(2));
+    return (xi_ - Scalar(1)) + Scalar(2) * h * h;
+  }
+  Scalar rho(const Scalar& theta) const {
+    using std::sin;
+    return f_ * sin(theta) / denominator(theta);
+  }
+  Scalar drho(const Scalar& theta) const {
+    using std::cos;
+    const Scalar d = denominator(theta);
+    return f_ * (Scalar(1) + xi_ * cos(theta)) / (d * d);
+  }
+  // The normalised radius r = rho / f back to the unit ray's angle (Mei's lifting).
+  static Scalar theta_from_radius(const Scalar& r, const Scalar& xi) {
+    using std::atan2;
+    using std::sqrt;
+    const Scalar r2 = r * r;
+    const Scalar k = (xi + sqrt(Scalar(1) + (Scalar(1) - xi * xi) * r2)) / (Scalar(1) + r2);
+    return atan2(k * r, k - xi);
+  }
+  Scalar theta_from_rho(const Scalar& rho) const { return theta_from_radius(rho / f_, xi_); }
+  double theta_limit() const {
+    const double xi = double(xi_);
+    return xi <= 1 ? std::acos(-xi) : std::acos(-1 / xi);
+  }
+  bool limit_is_open() const { return double(xi_) <= 1; }
+  Unified scaled(const Scalar& s) const { return Unified(f_ * s, xi_); }
+  std::vector<Scalar> params() const { return {f_, xi_}; }
+  UnifiedForm unified_form() const { return {double(f_), double(xi_), 0, 1, 0, 0}; }
+
+  // rho'(0) = f / (1 + xi).
+  static std::vector<double> initial_params(double f, int) { return {2 * f, 1}; }
+  static std::vector<std::vector<double>> fit_starts(double f) {
+    return {{1.5 * f, 0.5}, {2 * f, 1}, {3 * f, 2}};
+  }
+  static std::pair<double, double> param_bounds(int i) { return i == 1 ? std::pair{0.0, 1e3} : std::pair{0.0, detail::kInf}; }
+
+ private:
+  Scalar f_{1}, xi_{0};
+};
+
+// Extended unified camera model (EUCM, Khomenko et al. 2016):
+//   rho = f sin(theta) / (alpha sqrt(beta sin^2(theta) + cos^2(theta)) + (1 - alpha) cos(theta)),
+// parameters f, alpha in [0, 1], beta > 0. beta = 1 is the unified model in basalt's alpha form.
+// With w = alpha / (1 - alpha) (alpha <= 1/2: a pole, open) or (1 - alpha) / alpha
+// (alpha > 1/2: a fold, closed), valid for cos(theta) > -w sqrt(beta sin^2 + cos^2), i.e.
+// cos^2(theta_max) = w^2 beta / (1 - w^2 + w^2 beta).
+template <typename Scalar>
+class ExtendedUnified {
+ public:
+  static constexpr std::string_view kName = "extended-unified";
+  static constexpr std::array<std::string_view, 3> kParamNames{"f", "alpha", "beta"};
+
+  ExtendedUnified() = default;
+  ExtendedUnified(Scalar f, Scalar alpha, Scalar beta) : f_(f), alpha_(alpha), beta_(beta) {}
+  ExtendedUnified(const Scalar* p, int) : f_(p[0]), alpha_(p[1]), beta_(p[2]) {}
+
+  std::string invalid() const {
+    const std::string a = detail::require(double(alpha_) >= 0 && double(alpha_) <= 1, "alpha must be in [0, 1]");
+    return !a.empty() ? a : detail::require(double(beta_) > 0, "beta must be > 0");
+  }
+  Scalar rho(const Scalar& theta) const {
+    using std::cos;
+    using std::sin;
+    using std::sqrt;
+    const Scalar s = sin(theta), c = cos(theta);
+    return f_ * s / (alpha_ * sqrt(beta_ * s * s + c * c) + (Scalar(1) - alpha_) * c);
+  }
+  // rho' = f ((1 - alpha) + alpha cos / d) / D^2 with d = sqrt(beta sin^2 + cos^2).
+  Scalar drho(const Scalar& theta) const {
+    using std::cos;
+    using std::sin;
+    using std::sqrt;
+    const Scalar s = sin(theta), c = cos(theta);
+    const Scalar d = sqrt(beta_ * s * s + c * c);
+    const Scalar den = alpha_ * d + (Scalar(1) - alpha_) * c;
+    return f_ * ((Scalar(1) - alpha_) + alpha_ * c / d) / (den * den);
+  }
+  // Usenko et al. 2018, eq. (the EUCM unprojection): m_z from r = rho / f.
+  Scalar theta_from_rho(const Scalar& rho) const {
+    using std::atan2;
+    using std::sqrt;
+    const Scalar r = rho / f_, r2 = r * r;
+    const Scalar mz = (Scalar(1) - beta_ * alpha_ * alpha_ * r2) /
+                      (alpha_ * sqrt(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * beta_ * r2) + (Scalar(1) - alpha_));
+    return atan2(r, mz);
+  }
+  double theta_limit() const {
+    const double alpha = double(alpha_), beta = double(beta_);
+    if (alpha == 0.5) return std::numbers::pi;
+    const double w = detail::alpha_w1(alpha), w2 = w * w;
+    return std::acos(-std::sqrt(w2 * beta / (1 - w2 + w2 * beta)));
+  }
+  bool limit_is_open() const { return double(alpha_) <= 0.5; }
+  ExtendedUnified scaled(const Scalar& s) const { return ExtendedUnified(f_ * s, alpha_, beta_); }
+  std::vector<Scalar> params() const { return {f_, alpha_, beta_}; }
+  UnifiedForm unified_form() const { return {double(f_), 0, double(alpha_), double(beta_), 0, 0}; }
+
+  static std::vector<double> initial_params(double f, int) { return {f, 0.5, 1}; }
+  static std::vector<std::vector<double>> fit_starts(double f) {
+    return {{f, 0.5, 1}, {f, 0.6, 1.2}, {f, 0.4, 0.8}};
+  }
+  static std::pair<double, double> param_bounds(int i) {
+    if (i == 1) return {0.0, 1.0};
+    if (i == 2) return {1e-6, 1e3};
+    return {0.0, detail::kInf};
+  }
+
+ private:
+  Scalar f_{1}, alpha_{0}, beta_{1};
+};
+
+// Double sphere model (Usenko et al. 2018): the ray is moved by xi along z and
+// projected with the unified model in the alpha form:
+//   rho = f sin(theta) / (alpha d + (1 - alpha) (xi + cos(theta))),
+//   d = sqrt(sin^2(theta) + (xi + cos(theta))^2), parameters f, xi in (-1, 1), alpha in [0, 1].
+// Valid while the moved ray's direction q satisfies cos(q) > -w (w as in the EUCM):
+// the moved direction grows with theta for |xi| < 1, so theta_max is where cos(q) = -w
+// (a pole for alpha <= 1/2, open; a fold beyond, closed). basalt's check
+// z > -w2 |P| is the same bound for alpha >= 1/2 and a stricter one below.
+template <typename Scalar>
+class DoubleSphere {
+ public:
+  static constexpr std::string_view kName = "double-sphere";
+  static constexpr std::array<std::string_view, 3> kParamNames{"f", "xi", "alpha"};
+
+  DoubleSphere() = default;
+  DoubleSphere(Scalar f, Scalar xi, Scalar alpha) : f_(f), xi_(xi), alpha_(alpha) {}
+  DoubleSphere(const Scalar* p, int) : f_(p[0]), xi_(p[1]), alpha_(p[2]) {}
+
+  std::string invalid() const {
+    const std::string x = detail::require(double(xi_) > -1 && double(xi_) < 1, "xi must be in (-1, 1)");
+    return !x.empty() ? x : detail::require(double(alpha_) >= 0 && double(alpha_) <= 1, "alpha must be in [0, 1]");
+  }
+  Scalar rho(const Scalar& theta) const {
+    using std::cos;
+    using std::sin;
+    using std::sqrt;
+    const Scalar s = sin(theta), a = xi_ + cos(theta);
+    return f_ * s / (alpha_ * sqrt(s * s + a * a) + (Scalar(1) - alpha_) * a);
+  }
+  Scalar drho(const Scalar& theta) const {
+    using std::cos;
+    using std::sin;
+    using std::sqrt;
+    const Scalar s = sin(theta), c = cos(theta), a = xi_ + c;
+    const Scalar d = sqrt(s * s + a * a);
+    const Scalar den = alpha_ * d + (Scalar(1) - alpha_) * a;
+    // (c D - s D') / D^2 with D' = -s (alpha xi / d + 1 - alpha).
+    return f_ * (c * den + s * s * (alpha_ * xi_ / d + Scalar(1) - alpha_)) / (den * den);
+  }
+  Scalar theta_from_rho(const Scalar& rho) const {
+    using std::atan2;
+    using std::sqrt;
+    const Scalar r = rho / f_, r2 = r * r;
+    const Scalar mz = (Scalar(1) - alpha_ * alpha_ * r2) /
+                      (alpha_ * sqrt(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * r2) + Scalar(1) - alpha_);
+    const Scalar k = (mz * xi_ + sqrt(mz * mz + (Scalar(1) - xi_ * xi_) * r2)) / (mz * mz + r2);
+    return atan2(k * r, k * mz - xi_);
+  }
+  double theta_limit() const {
+    return double(alpha_) == 0.5 ? std::numbers::pi
+                                 : detail::theta_of_shifted_direction(double(xi_), detail::alpha_w1(double(alpha_)));
+  }
+  bool limit_is_open() const { return double(alpha_) <= 0.5; }
+  DoubleSphere scaled(const Scalar& s) const { return DoubleSphere(f_ * s, xi_, alpha_); }
+  std::vector<Scalar> params() const { return {f_, xi_, alpha_}; }
+  UnifiedForm unified_form() const { return {double(f_), double(xi_), double(alpha_), 1, 0, 0}; }
+
+  // rho'(0) = f / (1 + xi).
+  static std::vector<double> initial_params(double f, int) { return {f, 0, 0.5}; }
+  static std::vector<std::vector<double>> fit_starts(double f) {
+    return {{f, 0, 0.5}, {0.8 * f, -0.2, 0.6}, {1.2 * f, 0.2, 0.55}};
+  }
+  static std::pair<double, double> param_bounds(int i) {
+    if (i == 1) return {-0.999, 0.999};
+    if (i == 2) return {0.0, 1.0};
+    return {0.0, detail::kInf};
+  }
+
+ private:
+  Scalar f_{1}, xi_{0}, alpha_{0};
+};
+
+// Mei's model (camodocal MEI, OpenCV omnidir) with zero tangential terms: the
+// unified model's normalised radius r = sin(theta) / (xi + cos(theta)), distorted
+// radially: rho = f r (1 + k1 r^2 + k2 r^4); parameters f, xi (>= 0), k1, k2.
+// Valid: the unified model's domain, up to the first fold of the distortion
+// (1 + 3 k1 r^2 + 5 k2 r^4 = 0), closed there.
+template <typename Scalar>
+class Mei {
+ public:
+  static constexpr std::string_view kName = "mei";
+  static constexpr std::array<std::string_view, 4> kParamNames{"f", "xi", "k1", "k2"};
+
+  Mei() = default;
+  Mei(Scalar f, Scalar xi, Scalar k1, Scalar k2) : f_(f), xi_(xi), k1_(k1), k2_(k2) {}
+  Mei(const Scalar* p, int) : f_(p[0]), xi_(p[1]), k1_(p[2]), k2_(p[3]) {}
+
+  std::string invalid() const { return detail::require(double(xi_) >= 0, "xi must be >= 0"); }
+  Scalar radius(const Scalar& theta) const { return Unified<Scalar>(Scalar(1), xi_).rho(theta); }
+  Scalar rho(const Scalar& theta) const {
+    const Scalar r = radius(theta), r2 = r * r;
+    return f_ * r * (Scalar(1) + r2 * (k1_ + r2 * k2_));
+  }
+  Scalar drho(const Scalar& theta) const {
+    const Scalar r = radius(theta), r2 = r * r;
+    return f_ * (Scalar(1) + r2 * (Scalar(3) * k1_ + r2 * Scalar(5) * k2_)) *
+           Unified<Scalar>(Scalar(1), xi_).drho(theta);
+  }
+  double theta_limit() const {
+    const Unified<double> ucm(1.0, double(xi_));
+    double limit = ucm.theta_limit();
+    // The distortion's fold: the smallest x = r^2 > 0 with 1 + 3 k1 x + 5 k2 x^2 = 0.
+    const double a = 5 * double(k2_), b = 3 * double(k1_);
+    double x = detail::kInf;
+    if (a == 0) {
+      if (b < 0) x = -1 / b;
+    } else {
+      const double disc = b * b - 4 * a;
+      if (disc >= 0) {
+        const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+        for (double root : {q / a, 1 / q}) {  // 1 / q = c / q with c = 1
+          if (root > 0 && std::isfinite(root)) x = std::min(x, root);
+        }
+      }
+    }
+    if (std::isfinite(x)) {
+      const double r_max = limit_is_open_ucm() ? detail::kInf : ucm.rho(limit);
+      if (std::sqrt(x) < r_max) limit = Unified<double>::theta_from_radius(std::sqrt(x), double(xi_));
+    }
+    return limit;
+  }
+  bool limit_is_open() const {
+    return limit_is_open_ucm() && theta_limit() == Unified<double>(1.0, double(xi_)).theta_limit();
+  }
+  Mei scaled(const Scalar& s) const { return Mei(f_ * s, xi_, k1_, k2_); }
+  std::vector<Scalar> params() const { return {f_, xi_, k1_, k2_}; }
+  UnifiedForm unified_form() const { return {double(f_), double(xi_), 0, 1, double(k1_), double(k2_)}; }
+
+  static std::vector<double> initial_params(double f, int) { return {2 * f, 1, 0, 0}; }
+  static std::vector<std::vector<double>> fit_starts(double f) {
+    return {{1.5 * f, 0.5, 0, 0}, {2 * f, 1, 0, 0}, {3 * f, 2, 0, 0}};
+  }
+  static std::pair<double, double> param_bounds(int i) {
+    if (i == 1) return {0.0, 1e3};
+    if (i == 0) return {0.0, detail::kInf};
+    return {-detail::kInf, detail::kInf};
+  }
+
+ private:
+  bool limit_is_open_ucm() const { return double(xi_) <= 1; }
+  Scalar f_{1}, xi_{0}, k1_{0}, k2_{0};
 };
 
 template <class Model>
@@ -232,5 +609,15 @@ Scalar rho_and_drho(const Model& model, const Scalar& theta, Scalar* drho) {
 
 template <class Model>
 concept PolynomialInTheta = requires(const Model& m) { m.power_coefficients(); };
+
+// rho = sum_j p_j g_j(theta): fitted exactly by linear least squares.
+template <class Model>
+concept LinearInParams = requires(double t, double* g, const double* p) {
+  Model::basis(t, 1, g);
+  Model::from_basis(p, 1);
+};
+
+template <class Model>
+concept HasUnifiedForm = requires(const Model& m) { m.unified_form(); };
 
 }  // namespace fishcam
