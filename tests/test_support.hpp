@@ -59,18 +59,50 @@ inline CameraParameters with_model(CameraParameters p, RadialModel model, Eigen:
   return p;
 }
 
-// One camera of every model (a_x != a_y where the model allows), all 1280x966.
+struct ModelExample {
+  std::string label;
+  RadialModel model;
+  Eigen::Vector2d pixel_scale;
+};
+
+// Example lenses of each registry model, all about the WoodScape front camera's
+// field of view on its 1280x966 image (a_x != a_y where the model allows); models
+// whose valid domain ends at a pole or at a fold depending on their parameters
+// have one of each. Step 3 of adding a model (lib/include/fishcam/model_registry.hpp).
+inline std::vector<ModelExample> model_examples() {
+  return {
+      {"woodscape_polynomial", Polynomial<double>({339.749, -31.988, 48.275, -7.201}), {1.0, 1.0}},
+      {"polynomial_aspect", Polynomial<double>({339.749, -31.988, 48.275, -7.201}), {1.0, 1.02}},
+      {"equidistant", Equidistant<double>(340.0), {1.0, 0.99}},
+      {"stereographic", Stereographic<double>(330.0), {1.0, 1.0045}},
+      {"pinhole", Pinhole<double>(640.0), {1.0, 1.003}},
+      {"kannala_brandt", KannalaBrandt<double>(331.5526, 0.0346514, 0.0241055, -0.0074981, 0.0007767), {1.0, 1.001}},
+      {"unified_pole", Unified<double>(640.0, 0.9), {1.0, 1.002}},
+      {"unified_fold", Unified<double>(1100.0, 1.6), {1.0, 0.998}},
+      {"extended_unified_fold", ExtendedUnified<double>(400.0, 0.6, 1.1), {1.0, 1.001}},
+      {"extended_unified_pole", ExtendedUnified<double>(340.0, 0.45, 0.9), {1.0, 1.0}},
+      {"double_sphere_fold", DoubleSphere<double>(370.0, -0.18, 0.6), {1.0, 1.002}},
+      {"double_sphere_pole", DoubleSphere<double>(370.0, 0.1, 0.4), {1.0, 0.999}},
+      {"mei", Mei<double>(640.0, 0.9, -0.05, 0.01), {1.0, 1.001}},
+  };
+}
+
+// One camera per example, for every model of the registry: a model without an
+// example fails the test that asks (so a new model cannot skip the every-model tests).
 inline std::vector<std::pair<std::string, CameraParameters>> every_model() {
   const CameraParameters ws = woodscape_front();
-  return {
-      {"woodscape_polynomial", ws},
-      {"polynomial_aspect", with_model(ws, Polynomial<double>({339.749, -31.988, 48.275, -7.201}), {1.0, 1.02})},
-      {"equidistant", with_model(ws, Equidistant<double>(340.0), {1.0, 0.99})},
-      {"stereographic", with_model(ws, Stereographic<double>(330.0), {1.0, 1.0045})},
-      {"pinhole", with_model(ws, Pinhole<double>(640.0), {1.0, 1.003})},
-      {"kannala_brandt",
-       with_model(ws, KannalaBrandt<double>(331.5526, 0.0346514, 0.0241055, -0.0074981, 0.0007767), {1.0, 1.001})},
-  };
+  const auto examples = model_examples();
+  std::vector<std::pair<std::string, CameraParameters>> out;
+  for (std::string_view name : model_names()) {
+    bool found = false;
+    for (const auto& e : examples) {
+      if (model_name(e.model) != name) continue;
+      out.emplace_back(e.label, with_model(ws, e.model, e.pixel_scale));
+      found = true;
+    }
+    if (!found) ADD_FAILURE() << "model " << name << " has no example in tests/test_support.hpp (model_examples)";
+  }
+  return out;
 }
 
 // Uniformly distributed unit vectors with theta in [0, theta_max].

@@ -1,4 +1,5 @@
 #include "fishcam/calibration.hpp"
+#include "fishcam/fit.hpp"
 
 #include "fishcam/atomic_file.hpp"
 
@@ -231,11 +232,36 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
 
   // Joint solve of the target model from the best start: robust first, then plain
   // least squares without the outliers.
-  Solve s = best;
-  s.model = Model<double>::initial_params(best.model[0], spec.order);
-  {
+  // Models non-linear in their shape parameters: a polynomial is calibrated first
+  // (linear in its parameters, so robust from the equidistant start); the model's
+  // own starts scaled by its k1, and that polynomial converted to the model (the
+  // multi-start fit of fishcam convert), each solved; the lowest cost wins.
+  std::vector<std::vector<double>> starts = {Model<double>::initial_params(best.model[0], spec.order)};
+  if constexpr (!LinearInParams<Model<double>>) {
+    Solve poly = best;
+    poly.model = Polynomial<double>::initial_params(best.model[0], 4);
     ceres::CauchyLoss loss(1.0);
-    solve<Model>(&s, all_points, corners, false, &loss, nullptr);
+    solve<Polynomial>(&poly, all_points, corners, false, &loss, nullptr);
+    try {
+      CameraParameters p;
+      p.width = width, p.height = height, p.principal_point = poly.center, p.pixel_scale = {1.0, poly.ay};
+      p.model = Polynomial<double>(poly.model);
+      const Camera polynomial(p);
+      starts = Model<double>::fit_starts(poly.model[0]);
+      starts.push_back(model_params(fit_camera(sample_image(polynomial, 8, 4), spec, p).model));
+      best = poly;
+    } catch (const Error&) {  // no valid polynomial camera: the model's own starts
+      starts = Model<double>::fit_starts(best.model[0]);
+    }
+  }
+  Solve s;
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const auto& start : starts) {
+    Solve candidate = best;
+    candidate.model = start;
+    ceres::CauchyLoss loss(1.0);
+    const double cost = solve<Model>(&candidate, all_points, corners, false, &loss, nullptr).final_cost;
+    if (cost < lowest) lowest = cost, s = std::move(candidate);
   }
   CalibrationResult result;
   CameraParameters camera;

@@ -71,6 +71,7 @@ double solve_theta(const Model& model, double rho, const ValidDomain& domain,
                    double initial_guess = std::numeric_limits<double>::quiet_NaN()) {
   if (!domain.contains_rho(rho)) return std::numeric_limits<double>::quiet_NaN();
   if constexpr (ClosedFormInverse<Model>) {
+    if (domain.closed && rho == domain.rho_max) return domain.theta_max;  // a fold: the formula's sqrt(0 - ulps)
     return std::min(model.theta_from_rho(rho), domain.theta_max);  // min: rounding at rho_max
   } else {
     if (rho == 0) return 0;
@@ -210,6 +211,8 @@ ValidDomain compute_domain(const Model& model, std::optional<double> user_limit)
   const double model_limit = model.theta_limit();
   const bool model_open = model.limit_is_open();
   ValidDomain domain{model_limit, 0, !model_open, ValidDomain::Limit::model};
+  // A closed limit where rho' vanishes is a fold the model located in closed form.
+  if (!model_open && std::abs(model.drho(model_limit)) <= 1e-6 * slope0) domain.limited_by = ValidDomain::Limit::fold;
   std::optional<double> fold;
   if constexpr (PolynomialInTheta<Model>) {
     const std::vector<double> c = model.power_coefficients();

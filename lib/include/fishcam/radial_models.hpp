@@ -311,6 +311,20 @@ inline double theta_of_shifted_direction(double xi, double w) {
   const double t = xi * cos_phi + std::sqrt(std::max(0.0, xi * xi * cos_phi * cos_phi - xi * xi + 1));
   return std::atan2(t * sin_phi, t * cos_phi - xi);
 }
+// sqrt of a difference that rounding may push a few ulps below 0 at a fold.
+template <typename Scalar>
+Scalar sqrt_nonnegative(const Scalar& x) {
+  using std::sqrt;
+  return x > Scalar(0) ? sqrt(x) : Scalar(0);
+}
+// One Newton step on rho(theta) = rho from a closed-form theta: the unified family's
+// formulas lose digits next to a fold (a square root of a small difference).
+template <class Model, typename Scalar>
+Scalar newton_polish(const Model& model, const Scalar& theta, const Scalar& rho) {
+  const Scalar slope = model.drho(theta);
+  const Scalar next = theta - (model.rho(theta) - rho) / slope;
+  return next == next && slope > Scalar(0) ? next : theta;  // NaN or a fold: keep the formula's value
+}
 // The alpha form's limit on cos of q's direction: -w1 (a pole for alpha <= 1/2, else a fold).
 inline double alpha_w1(double alpha) { return alpha <= 0.5 ? alpha / (1 - alpha) : (1 - alpha) / alpha; }
 }  // namespace detail
@@ -352,10 +366,12 @@ class Unified {
     using std::atan2;
     using std::sqrt;
     const Scalar r2 = r * r;
-    const Scalar k = (xi + sqrt(Scalar(1) + (Scalar(1) - xi * xi) * r2)) / (Scalar(1) + r2);
+    const Scalar k = (xi + detail::sqrt_nonnegative(Scalar(1) + (Scalar(1) - xi * xi) * r2)) / (Scalar(1) + r2);
     return atan2(k * r, k - xi);
   }
-  Scalar theta_from_rho(const Scalar& rho) const { return theta_from_radius(rho / f_, xi_); }
+  Scalar theta_from_rho(const Scalar& rho) const {
+    return detail::newton_polish(*this, theta_from_radius(rho / f_, xi_), rho);
+  }
   double theta_limit() const {
     const double xi = double(xi_);
     return xi <= 1 ? std::acos(-xi) : std::acos(-1 / xi);
@@ -419,8 +435,8 @@ class ExtendedUnified {
     using std::sqrt;
     const Scalar r = rho / f_, r2 = r * r;
     const Scalar mz = (Scalar(1) - beta_ * alpha_ * alpha_ * r2) /
-                      (alpha_ * sqrt(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * beta_ * r2) + (Scalar(1) - alpha_));
-    return atan2(r, mz);
+                      (alpha_ * detail::sqrt_nonnegative(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * beta_ * r2) + (Scalar(1) - alpha_));
+    return detail::newton_polish(*this, atan2(r, mz), rho);
   }
   double theta_limit() const {
     const double alpha = double(alpha_), beta = double(beta_);
@@ -491,9 +507,9 @@ class DoubleSphere {
     using std::sqrt;
     const Scalar r = rho / f_, r2 = r * r;
     const Scalar mz = (Scalar(1) - alpha_ * alpha_ * r2) /
-                      (alpha_ * sqrt(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * r2) + Scalar(1) - alpha_);
-    const Scalar k = (mz * xi_ + sqrt(mz * mz + (Scalar(1) - xi_ * xi_) * r2)) / (mz * mz + r2);
-    return atan2(k * r, k * mz - xi_);
+                      (alpha_ * detail::sqrt_nonnegative(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * r2) + Scalar(1) - alpha_);
+    const Scalar k = (mz * xi_ + detail::sqrt_nonnegative(mz * mz + (Scalar(1) - xi_ * xi_) * r2)) / (mz * mz + r2);
+    return detail::newton_polish(*this, atan2(k * r, k * mz - xi_), rho);
   }
   double theta_limit() const {
     return double(alpha_) == 0.5 ? std::numbers::pi
@@ -507,7 +523,7 @@ class DoubleSphere {
   // rho'(0) = f / (1 + xi).
   static std::vector<double> initial_params(double f, int) { return {f, 0, 0.5}; }
   static std::vector<std::vector<double>> fit_starts(double f) {
-    return {{f, 0, 0.5}, {0.8 * f, -0.2, 0.6}, {1.2 * f, 0.2, 0.55}};
+    return {{0.8 * f, -0.2, 0.6}, {1.2 * f, 0.2, 0.6}, {0.8 * f, -0.2, 0.4}, {1.2 * f, 0.2, 0.4}};
   }
   static std::pair<double, double> param_bounds(int i) {
     if (i == 1) return {-0.999, 0.999};
