@@ -201,6 +201,36 @@ TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
   }
 }
 
+// Every registry model as the source (the kernel evaluates the source's
+// projection): the float kernel against the double reference.
+TEST(Augmentation, FastMapsOfEveryModelAgreeWithTheExactReference) {
+  const Camera target = woodscape();
+  for (const auto& [name, p] : test::every_model()) {
+    const ViewpointWarp warp(Camera(p), target);
+    ASSERT_TRUE(warp.float_kernel()) << name;
+    const ViewpointChange change = random_pose(*find_pose_preset("train"), 4).change();
+    for (DepthPrior prior : kPriors) {
+      WarpMaps fast, exact;
+      warp.compute(change, prior, &fast, MapKind::geometric);
+      warp.compute_exact(change, prior, &exact);
+      double worst = 0;
+      long disagree = 0, both = 0;
+      for (int v = 0; v < target.height(); ++v) {
+        for (int u = 0; u < target.width(); ++u) {
+          disagree += fast.valid.at<uchar>(v, u) != exact.valid.at<uchar>(v, u);
+          if (!exact.valid.at<uchar>(v, u) || !fast.valid.at<uchar>(v, u)) continue;
+          ++both;
+          worst = std::max<double>(worst, std::hypot(fast.map_x.at<float>(v, u) - exact.map_x.at<float>(v, u),
+                                                     fast.map_y.at<float>(v, u) - exact.map_y.at<float>(v, u)));
+        }
+      }
+      EXPECT_LE(worst, 1e-3) << name << " " << to_string(prior);
+      EXPECT_LE(disagree, 20) << name << " " << to_string(prior) << ": validity differs (only on the image border)";
+      EXPECT_GT(both, 50000) << name;
+    }
+  }
+}
+
 // The same lens written three ways (order 4, order 16 with k5..k16 = 0; f theta as
 // equidistant, polynomial and Kannala-Brandt with zero k) gives bit-identical maps:
 // the kernel sees one input. Run on both kernels (FISHCAM_NO_AVX2).
