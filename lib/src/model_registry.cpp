@@ -45,7 +45,11 @@ std::vector<std::string> model_param_names(std::string_view name, int count) {
   return with_model_class(name, [&]<template <typename> class Model>() {
     std::vector<std::string> names;
     if constexpr (Model<double>::kParamNames.empty()) {  // k1..kN
-      for (int i = 1; i <= count; ++i) names.push_back("k" + std::to_string(i));
+      for (int i = 1; i <= count; ++i) {
+        std::string name = "k";  // appended: GCC 12 warns falsely on "k" + to_string(i)
+        name += std::to_string(i);
+        names.push_back(name);
+      }
     } else {
       for (std::string_view n : Model<double>::kParamNames) names.emplace_back(n);
     }

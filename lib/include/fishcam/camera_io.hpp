@@ -1,7 +1,8 @@
-// Camera files: WoodScape calibration JSON, mrcal .cameramodel (pinhole and
-// stereographic), OpenCV fisheye YAML/XML (read with yaml-cpp / pugixml) and fishcam JSON.
-// Field by field in docs/formats.md. Every error is one line naming the file and
-// the field: "front.json: intrinsic.k1: expected a number, got string".
+// Camera files in the formats people have (lib/src/formats/, one file each; the
+// table is lib/src/formats/table.cpp): WoodScape, mrcal, OpenCV, fishcam, Kalibr,
+// basalt, COLMAP, ROS, camodocal, ORB-SLAM3. Field by field in docs/formats.md.
+// Every error is one line naming the file and the field:
+// "front.json: intrinsic.k1: expected a number, got string".
 #pragma once
 
 #include <filesystem>
@@ -9,34 +10,53 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include "fishcam/camera.hpp"
 
 namespace fishcam {
 
-enum class CameraFormat { woodscape, mrcal, opencv, fishcam };
+enum class CameraFormat { woodscape, mrcal, opencv, fishcam, kalibr, basalt, colmap, ros, camodocal, orbslam3 };
 
 std::string_view to_string(CameraFormat format);
-// "woodscape", "mrcal", "opencv", "fishcam"; nullopt for anything else.
+// The format's name ("kalibr", ...); nullopt for anything else.
 std::optional<CameraFormat> parse_camera_format(std::string_view name);
+// "woodscape, mrcal, ..." for help texts and messages.
+std::string camera_format_names();
+// The format a file name's extension suggests for writing (.cameramodel: mrcal,
+// .yaml/.yml/.xml: opencv, .json: fishcam, .txt: colmap); nullopt if none.
+std::optional<CameraFormat> camera_format_for_extension(const std::filesystem::path& path);
 
 // The format of a file's content (not its name). Throws Error if none fits.
 CameraFormat detect_camera_format(std::string_view content, std::string_view source_name);
-
-// Parses and validates a camera (in `format`, or the detected one); source_name
-// prefixes every error message.
-CameraParameters parse_camera(std::string_view content, std::string_view source_name,
-                              std::optional<CameraFormat> format = std::nullopt);
 
 struct CameraReadOptions {
   std::optional<CameraFormat> format;             // read as this format instead of detecting it
   std::optional<std::string> camera;              // which camera of a file (name or index; default the first)
   std::optional<std::pair<int, int>> image_size;  // width, height for files without one; must agree otherwise
 };
+
+// What reading told besides the camera.
+struct CameraFileInfo {
+  CameraFormat format = CameraFormat::fishcam;
+  std::string camera_name;  // as the file names it ("cam0"), or its index
+  int camera_index = 0;
+  int camera_count = 1;
+  std::vector<std::string> notes;  // what was not read, which camera was chosen (the CLI prints them)
+};
+
+// Parses and validates a camera (in `format`, or the detected one); source_name
+// prefixes every error message.
+CameraParameters parse_camera(std::string_view content, std::string_view source_name,
+                              std::optional<CameraFormat> format = std::nullopt);
+CameraParameters parse_camera(std::string_view content, std::string_view source_name,
+                              const CameraReadOptions& options, CameraFileInfo* info = nullptr);
+
 // Reads, detects the format (reported in *format when given) and validates.
 Camera read_camera(const std::filesystem::path& path, CameraFormat* format = nullptr);
 Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& options,
                    CameraFormat* format = nullptr);
+Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& options, CameraFileInfo* info);
 
 // What `fishcam info --json` prints: one JSON object (model, parameters, width,
 // height, cx, cy, pixel_scale, theta_max_deg, rho_max_px, fov_deg, pose, ...).

@@ -1,0 +1,115 @@
+// basalt calibration JSON (cereal's "value0"): kb4, ds, eucm, ucm, pinhole; one
+// entry per camera in intrinsics, resolution and T_imu_cam (camera -> IMU).
+#include <cmath>
+
+#include "format.hpp"
+
+namespace fishcam::detail {
+namespace {
+
+int score(const Content& c) {
+  const auto* j = c.json();
+  if (!j || !j->is_object() || !j->contains("value0")) return 0;
+  const auto& v = (*j)["value0"];
+  return v.is_object() && v.contains("intrinsics") ? 100 : 0;
+}
+
+std::vector<NamedCamera> read(const Content& c) {
+  const JsonFields top(c.json_or_throw(), c.source());
+  const JsonFields v = top.object("value0");
+  const size_t count = v.size("intrinsics");
+  if (count == 0) v.fail("intrinsics", "no camera");
+  std::vector<NamedCamera> out;
+  for (size_t i = 0; i < count; ++i) {
+    const JsonFields cam = v.item("intrinsics", i);
+    const std::string type = cam.string("camera_type");
+    const JsonFields k = cam.object("intrinsics");
+    NamedCamera named{std::to_string(i), {}, {}};
+    CameraParameters& p = named.camera;
+    const double fx = k.number("fx"), fy = k.number("fy");
+    set_focal(&p, fx, fy, [&](std::string_view problem) { k.fail("fx", problem); });
+    p.principal_point = {k.number("cx"), k.number("cy")};
+    if (type == "kb4") {
+      p.model = KannalaBrandt<double>(fx, k.number("k1"), k.number("k2"), k.number("k3"), k.number("k4"));
+    } else if (type == "ds") {
+      p.model = DoubleSphere<double>(fx, k.number("xi"), k.number("alpha"));
+    } else if (type == "eucm") {
+      p.model = ExtendedUnified<double>(fx, k.number("alpha"), k.number("beta"));
+    } else if (type == "ucm") {
+      // basalt's alpha form: xi = alpha / (1 - alpha), f = fx / (1 - alpha) (docs/conventions.md).
+      const double alpha = k.number("alpha");
+      if (!(alpha >= 0 && alpha < 1)) k.fail("alpha", "must be in [0, 1) for the unified model");
+      p.model = Unified<double>(fx / (1 - alpha), alpha / (1 - alpha));
+      p.pixel_scale = {1.0, fy / fx};
+    } else if (type == "pinhole") {
+      p.model = Pinhole<double>(fx);
+    } else {
+      cam.fail("camera_type", "unsupported basalt camera type " + quoted_for_message(type) +
+                                  (type == "fov" || type == "bal" || type == "pinhole-radtan8"
+                                       ? " (fishcam reads kb4, ds, eucm, ucm and pinhole)"
+                                       : " (expected kb4, ds, eucm, ucm or pinhole)"));
+    }
+    if (v.has("resolution") && i < v.size("resolution")) {
+      const auto& r = v.get("resolution")[i];
+      const JsonFields size(nlohmann::json{{"resolution", r}}, c.source(), "value0.");
+      const auto wh = size.numbers("resolution", 2, 2);
+      for (double x : wh) {
+        if (!(x >= 1 && x <= (1 << 16)) || x != std::floor(x)) v.fail("resolution", "expected positive integers");
+      }
+      p.width = int(wh[0]), p.height = int(wh[1]);
+    }
+    if (v.has("T_imu_cam") && i < v.size("T_imu_cam")) {
+      const JsonFields t = v.item("T_imu_cam", i);
+      const Eigen::Quaterniond q(t.number("qw"), t.number("qx"), t.number("qy"), t.number("qz"));
+      if (std::abs(q.norm() - 1) > 1e-6) t.fail("qw", "the quaternion must have unit norm");
+      p.pose = Pose{q.normalized(), {t.number("px"), t.number("py"), t.number("pz")}};
+    }
+    out.push_back(std::move(named));
+  }
+  return out;
+}
+
+std::string write(const CameraParameters& original) {
+  reject_theta_limit(original, "basalt");
+  const CameraParameters p = with_unit_ax(original);
+  const double cx = p.principal_point.x(), cy = p.principal_point.y(), ay = p.pixel_scale.y();
+  nlohmann::json k;
+  std::string type;
+  const auto focal = [&](double f) { k["fx"] = f, k["fy"] = f * ay, k["cx"] = cx, k["cy"] = cy; };
+  const KannalaBrandtLike kb = kannala_brandt_of(p);
+  if (kb.ok) {
+    type = "kb4", focal(kb.f);
+    k["k1"] = kb.k[0], k["k2"] = kb.k[1], k["k3"] = kb.k[2], k["k4"] = kb.k[3];
+  } else if (const auto* m = std::get_if<DoubleSphere<double>>(&p.model)) {
+    const auto q = m->params();
+    type = "ds", focal(q[0]), k["xi"] = q[1], k["alpha"] = q[2];
+  } else if (const auto* m = std::get_if<ExtendedUnified<double>>(&p.model)) {
+    const auto q = m->params();
+    type = "eucm", focal(q[0]), k["alpha"] = q[1], k["beta"] = q[2];
+  } else if (const auto* m = std::get_if<Unified<double>>(&p.model)) {
+    const auto q = m->params();  // f, xi -> the alpha form
+    type = "ucm", focal(q[0] / (1 + q[1])), k["alpha"] = q[1] / (1 + q[1]);
+  } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
+    type = "pinhole", focal(m->f());
+  } else {
+    cannot_hold(p, "basalt", "kannala-brandt (and equidistant), double-sphere, extended-unified, unified and pinhole");
+  }
+  const Pose pose = p.pose.value_or(Pose{});
+  const auto& q = pose.rotation;
+  const auto& t = pose.translation;
+  nlohmann::json v = {
+      {"T_imu_cam", {{{"px", t.x()}, {"py", t.y()}, {"pz", t.z()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()}, {"qw", q.w()}}}},
+      {"intrinsics", {{{"camera_type", type}, {"intrinsics", k}}}},
+      {"resolution", {{p.width, p.height}}},
+  };
+  return nlohmann::json{{"value0", v}}.dump(4) + "\n";
+}
+
+}  // namespace
+
+extern const FormatSpec kBasaltFormat{CameraFormat::basalt, "basalt", "basalt calibration JSON", {".json"},
+                                      "kannala-brandt (and equidistant), double-sphere, extended-unified, unified and "
+                                      "pinhole",
+                                      score, read, write};
+
+}  // namespace fishcam::detail

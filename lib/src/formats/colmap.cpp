@@ -1,0 +1,125 @@
+// COLMAP cameras.txt: one camera per line, "CAMERA_ID MODEL WIDTH HEIGHT PARAMS...".
+// COLMAP puts the centre of the top-left pixel at (0.5, 0.5): cx, cy - 0.5 on read,
+// + 0.5 on write (docs/formats.md).
+#include <cmath>
+#include <sstream>
+
+#include "format.hpp"
+
+namespace fishcam::detail {
+namespace {
+
+struct ColmapModel {
+  const char* name;
+  int params;
+};
+// Every COLMAP model, so that the ones fishcam cannot hold are named in the refusal.
+constexpr ColmapModel kModels[] = {
+    {"SIMPLE_PINHOLE", 3}, {"PINHOLE", 4}, {"SIMPLE_RADIAL", 4}, {"RADIAL", 5}, {"OPENCV", 8},
+    {"OPENCV_FISHEYE", 8}, {"FULL_OPENCV", 12}, {"FOV", 5}, {"SIMPLE_RADIAL_FISHEYE", 4},
+    {"RADIAL_FISHEYE", 5}, {"THIN_PRISM_FISHEYE", 12}, {"RAD_TAN_THIN_PRISM_FISHEYE", 16}};
+
+const ColmapModel* find_model(const std::string& name) {
+  for (const auto& m : kModels) {
+    if (name == m.name) return &m;
+  }
+  return nullptr;
+}
+
+std::vector<std::vector<std::string>> data_lines(std::string_view text) {
+  std::vector<std::vector<std::string>> out;
+  std::istringstream in{std::string(text)};
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream words(line);
+    std::vector<std::string> tokens;
+    for (std::string w; words >> w;) tokens.push_back(w);
+    if (!tokens.empty() && tokens[0][0] != '#') out.push_back(tokens);
+  }
+  return out;
+}
+
+int score(const Content& c) {
+  if (c.text().size() > (1 << 20)) return 0;
+  const auto lines = data_lines(c.text());
+  if (lines.empty()) return 0;
+  for (const auto& t : lines) {
+    if (t.size() < 4 || !find_model(t[1])) return 0;
+  }
+  return 90;
+}
+
+std::vector<NamedCamera> read(const Content& c) {
+  std::vector<NamedCamera> out;
+  for (const auto& t : data_lines(c.text())) {
+    const std::string where = c.source() + ": camera " + t[0] + ": ";
+    auto fail = [&](std::string_view problem) -> void { throw Error(where + std::string(problem)); };
+    if (t.size() < 4) fail("expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS...");
+    const ColmapModel* model = find_model(t[1]);
+    if (!model) fail("unknown COLMAP model " + quoted_for_message(t[1]));
+    if (int(t.size()) != 4 + model->params) {
+      fail(t[1] + " has " + std::to_string(model->params) + " parameters, got " + std::to_string(t.size() - 4));
+    }
+    std::vector<double> v;
+    for (size_t i = 2; i < t.size(); ++i) {
+      v.push_back(DocFields::parse_number(t[i], [&](std::string_view problem) { fail("value " + t[i] + ": " + std::string(problem)); }));
+    }
+    NamedCamera named{t[0], {}, {}};
+    CameraParameters& p = named.camera;
+    for (int i = 0; i < 2; ++i) {
+      if (!(v[i] >= 1 && v[i] <= (1 << 16)) || v[i] != std::floor(v[i])) fail("WIDTH and HEIGHT must be positive integers");
+    }
+    p.width = int(v[0]), p.height = int(v[1]);
+    const std::vector<double> q(v.begin() + 2, v.end());
+    const std::string name = t[1];
+    auto focal = [&](double fx, double fy, double cx, double cy) {
+      set_focal(&p, fx, fy, fail);
+      p.principal_point = {cx - 0.5, cy - 0.5};
+    };
+    if (name == "SIMPLE_PINHOLE") {
+      focal(q[0], q[0], q[1], q[2]), p.model = Pinhole<double>(q[0]);
+    } else if (name == "PINHOLE") {
+      focal(q[0], q[1], q[2], q[3]), p.model = Pinhole<double>(q[0]);
+    } else if (name == "OPENCV_FISHEYE") {
+      focal(q[0], q[1], q[2], q[3]), p.model = KannalaBrandt<double>(q[0], q[4], q[5], q[6], q[7]);
+    } else if (name == "SIMPLE_RADIAL_FISHEYE") {
+      focal(q[0], q[0], q[1], q[2]), p.model = KannalaBrandt<double>(q[0], q[3], 0, 0, 0);
+    } else if (name == "RADIAL_FISHEYE") {
+      focal(q[0], q[0], q[1], q[2]), p.model = KannalaBrandt<double>(q[0], q[3], q[4], 0, 0);
+    } else if (name == "SIMPLE_RADIAL" || name == "RADIAL" || name == "FOV") {
+      fail(name + " is radially symmetric but fishcam has no such model");
+    } else {
+      fail(name + " is not radially symmetric (fishcam reads radially symmetric models only)");
+    }
+    out.push_back(std::move(named));
+  }
+  if (out.empty()) throw Error(c.source() + ": no camera line");
+  return out;
+}
+
+std::string write(const CameraParameters& original) {
+  reject_theta_limit(original, "COLMAP");
+  const CameraParameters p = with_unit_ax(original);
+  const KannalaBrandtLike kb = kannala_brandt_of(p);
+  const bool pinhole = std::holds_alternative<Pinhole<double>>(p.model);
+  if (!kb.ok && !pinhole) cannot_hold(p, "COLMAP", "kannala-brandt (and equidistant) and pinhole");
+  const double f = pinhole ? std::get<Pinhole<double>>(p.model).f() : kb.f;
+  std::vector<double> params = {f, f * p.pixel_scale.y(), p.principal_point.x() + 0.5, p.principal_point.y() + 0.5};
+  if (!pinhole) params.insert(params.end(), kb.k.begin(), kb.k.end());
+  std::string out = "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n";
+  out += pinhole ? "1 PINHOLE " : "1 OPENCV_FISHEYE ";
+  out += std::to_string(p.width);
+  out += " ";
+  out += std::to_string(p.height);
+  for (double x : params) {
+    out += ' ';
+    out += yaml_number(x);
+  }
+  return out + "\n";
+}
+
+}  // namespace
+
+extern const FormatSpec kColmapFormat{CameraFormat::colmap, "colmap", "COLMAP cameras.txt", {".txt"},
+                                      "kannala-brandt (and equidistant) and pinhole", score, read, write};
+
+}  // namespace fishcam::detail

@@ -1,0 +1,336 @@
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "../python_literal.hpp"
+#include "format.hpp"
+
+namespace fishcam::detail {
+namespace {
+
+std::string type_name(const nlohmann::json& j) { return j.is_number() ? "number" : j.type_name(); }
+
+std::string_view trimmed(std::string_view s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+  return s;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------ Content
+const nlohmann::json* Content::json() const {
+  if (!json_tried_) {
+    json_tried_ = true;
+    try {
+      json_ = nlohmann::json::parse(text_);
+    } catch (const nlohmann::json::exception& e) {  // parse errors, and number overflow ('1e400')
+      json_error_ = e.what();
+      if (const auto pos = json_error_.find("] "); pos != std::string::npos) json_error_ = json_error_.substr(pos + 2);
+    }
+  }
+  return json_ ? &*json_ : nullptr;
+}
+
+const nlohmann::json& Content::json_or_throw() const {
+  if (const auto* j = json()) return *j;
+  throw Error(source_ + ": not valid JSON (" + quoted_for_message(json_error_, 120) + ")");
+}
+
+const DocNode* Content::yaml() const {
+  if (!yaml_tried_) {
+    yaml_tried_ = true;
+    try {
+      std::string_view start = text_;
+      while (!start.empty() && std::isspace(static_cast<unsigned char>(start.front()))) start.remove_prefix(1);
+      yaml_ = start.starts_with("<") ? parse_xml(text_, source_) : parse_yaml(text_, source_);
+    } catch (const Error& e) {
+      yaml_error_ = e.what();
+    }
+  }
+  return yaml_ ? &*yaml_ : nullptr;
+}
+
+const DocNode& Content::yaml_or_throw() const {
+  if (const auto* y = yaml()) return *y;
+  throw Error(yaml_error_);
+}
+
+const nlohmann::json* Content::python_literal() const {
+  if (!literal_tried_) {
+    literal_tried_ = true;
+    try {
+      literal_ = parse_python_literal(text_);
+    } catch (const Error& e) {
+      literal_error_ = e.what();
+    }
+  }
+  return literal_ ? &*literal_ : nullptr;
+}
+
+// ------------------------------------------------------------ JsonFields
+void JsonFields::fail(std::string_view key, std::string_view problem) const {
+  throw Error(source_ + ": " + prefix_ + std::string(key) + ": " + std::string(problem));
+}
+
+const nlohmann::json& JsonFields::get(std::string_view key) const {
+  if (!j_.is_object()) fail(key, "missing (not inside an object)");
+  const auto it = j_.find(key);
+  if (it == j_.end()) fail(key, "missing");
+  return *it;
+}
+
+double JsonFields::as_number(const nlohmann::json& v, std::string_view key) const {
+  if (!v.is_number()) fail(key, "expected a number, got " + type_name(v));
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) fail(key, "must be finite");
+  return x;
+}
+
+double JsonFields::number(std::string_view key) const { return as_number(get(key), key); }
+
+int JsonFields::positive_integer(std::string_view key) const {
+  const double v = number(key);
+  if (!(v >= 1 && v <= (1 << 16)) || v != std::floor(v)) fail(key, "expected a positive integer <= 65536");
+  return static_cast<int>(v);
+}
+
+std::string JsonFields::string(std::string_view key) const {
+  const auto& v = get(key);
+  if (!v.is_string()) fail(key, "expected a string, got " + type_name(v));
+  return v.get<std::string>();
+}
+
+std::vector<double> JsonFields::numbers(std::string_view key, size_t min_size, size_t max_size) const {
+  const auto& v = get(key);
+  if (!v.is_array()) fail(key, "expected a list of numbers, got " + type_name(v));
+  if (v.size() < min_size || v.size() > max_size) {
+    fail(key, min_size == max_size ? "expected " + std::to_string(min_size) + " numbers, got " + std::to_string(v.size())
+                                   : "expected " + std::to_string(min_size) + " to " + std::to_string(max_size) +
+                                         " numbers, got " + std::to_string(v.size()));
+  }
+  std::vector<double> out;
+  for (size_t i = 0; i < v.size(); ++i) out.push_back(as_number(v[i], std::string(key) + "[" + std::to_string(i) + "]"));
+  return out;
+}
+
+JsonFields JsonFields::object(std::string_view key) const {
+  const auto& v = get(key);
+  if (!v.is_object()) fail(key, "expected an object, got " + type_name(v));
+  return JsonFields(v, source_, prefix_ + std::string(key) + ".");
+}
+
+size_t JsonFields::size(std::string_view key) const {
+  const auto& v = get(key);
+  if (!v.is_array()) fail(key, "expected a list, got " + type_name(v));
+  return v.size();
+}
+
+JsonFields JsonFields::item(std::string_view key, size_t index) const {
+  const auto& v = get(key);
+  const std::string name = std::string(key) + "[" + std::to_string(index) + "]";
+  if (!v.is_array() || index >= v.size()) fail(name, "missing");
+  if (!v[index].is_object()) fail(name, "expected an object, got " + type_name(v[index]));
+  return JsonFields(v[index], source_, prefix_ + name + ".");
+}
+
+// ------------------------------------------------------------ DocFields
+void DocFields::fail(std::string_view key, std::string_view problem) const {
+  throw Error(source_ + ": " + prefix_ + std::string(key) + ": " + std::string(problem));
+}
+
+const DocNode& DocFields::get(std::string_view key) const {
+  const DocNode* n = node_.find(key);
+  if (!n) fail(key, "missing");
+  return *n;
+}
+
+double DocFields::parse_number(const std::string& text, const std::function<void(std::string_view)>& fail) {
+  const std::string t(trimmed(text));
+  // YAML's own spellings of the non-finite numbers (OpenCV writes them).
+  for (const char* special : {".nan", ".NaN", ".NAN", ".inf", ".Inf", ".INF", "-.inf", "-.Inf", "-.INF", "+.inf"}) {
+    if (t == special) fail("must be finite");
+  }
+  char* end = nullptr;
+  const double v = std::strtod(t.c_str(), &end);
+  if (t.empty() || end == t.c_str() || !trimmed(end).empty()) fail("expected a number, got " + quoted_for_message(text));
+  if (!std::isfinite(v)) fail("must be finite");
+  return v;
+}
+
+double DocFields::number(std::string_view key) const {
+  const DocNode& n = get(key);
+  if (n.kind != DocNode::Kind::scalar) fail(key, "expected a number");
+  return parse_number(n.scalar, [&](std::string_view problem) { fail(key, problem); });
+}
+
+int DocFields::positive_integer(std::string_view key) const {
+  const DocNode& n = get(key);
+  if (n.kind != DocNode::Kind::scalar) fail(key, "expected an integer");
+  const double v = parse_number(n.scalar, [&](std::string_view problem) {
+    fail(key, problem.starts_with("expected a number") ? "expected an integer" + std::string(problem.substr(17)) : problem);
+  });
+  if (!(v >= 1 && v <= (1 << 16)) || v != std::floor(v)) fail(key, "expected a positive integer <= 65536");
+  return static_cast<int>(v);
+}
+
+std::string DocFields::string(std::string_view key) const {
+  const DocNode& n = get(key);
+  if (n.kind != DocNode::Kind::scalar) fail(key, "expected text");
+  std::string s(trimmed(n.scalar));
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);  // XML keeps quotes
+  return s;
+}
+
+std::vector<double> DocFields::numbers(std::string_view key, size_t min_size, size_t max_size) const {
+  const DocNode& n = get(key);
+  std::vector<std::string> texts;
+  const DocNode* data = &n;
+  std::string item_prefix(key);
+  if (n.kind == DocNode::Kind::map && n.find("data")) data = n.find("data"), item_prefix += ".data";  // an opencv-matrix
+  if (data->kind == DocNode::Kind::sequence) {
+    for (const auto& item : data->items) {
+      if (item.kind != DocNode::Kind::scalar) fail(key, "expected a list of numbers");
+      texts.push_back(item.scalar);
+      if (texts.size() > max_size) break;
+    }
+  } else if (data->kind == DocNode::Kind::scalar) {  // XML: whitespace-separated
+    std::istringstream words(data->scalar);
+    for (std::string word; words >> word && texts.size() <= max_size;) texts.push_back(word);
+  } else {
+    fail(key, "expected a list of numbers");
+  }
+  if (texts.size() < min_size || texts.size() > max_size) {
+    fail(key, min_size == max_size ? "expected " + std::to_string(min_size) + " numbers"
+                                   : "expected " + std::to_string(min_size) + " to " + std::to_string(max_size) + " numbers");
+  }
+  std::vector<double> out;
+  for (size_t i = 0; i < texts.size(); ++i) {
+    out.push_back(parse_number(texts[i], [&](std::string_view p) { fail(item_prefix + "[" + std::to_string(i) + "]", p); }));
+  }
+  return out;
+}
+
+std::vector<double> DocFields::matrix(std::string_view key, int count) const {
+  const DocNode& n = get(key);
+  if (n.kind != DocNode::Kind::map || !n.find("rows") || !n.find("cols") || !n.find("data")) {
+    fail(key, "expected an opencv-matrix (rows, cols, dt, data)");
+  }
+  const DocFields m(n, source_, prefix_ + std::string(key) + ".");
+  const double rows = m.number("rows"), cols = m.number("cols");
+  if (rows < 1 || cols < 1 || rows * cols != count) fail(key, "expected " + std::to_string(count) + " elements (rows x cols)");
+  return m.numbers("data", size_t(count), size_t(count));
+}
+
+DocFields DocFields::object(std::string_view key) const {
+  const DocNode& n = get(key);
+  if (n.kind != DocNode::Kind::map) fail(key, "expected a map");
+  return DocFields(n, source_, prefix_ + std::string(key) + ".");
+}
+
+// ------------------------------------------------------------ models, poses, text
+void cannot_hold(const CameraParameters& camera, std::string_view format, std::string_view holds) {
+  throw Error("model: the " + std::string(format) + " format holds " + std::string(holds) + " models only, not " +
+              std::string(model_name(camera.model)));
+}
+
+void reject_theta_limit(const CameraParameters& p, std::string_view format) {
+  if (p.theta_limit) {
+    throw Error("theta_limit: the " + std::string(format) + " format cannot store a user field-of-view limit");
+  }
+}
+
+CameraParameters with_unit_ax(CameraParameters p) {
+  const double ax = p.pixel_scale.x();
+  p.model = std::visit([&](const auto& m) { return RadialModel(m.scaled(ax)); }, p.model);
+  p.pixel_scale = {1.0, p.pixel_scale.y() / ax};
+  return p;
+}
+
+void set_focal(CameraParameters* p, double fx, double fy, const std::function<void(std::string_view)>& fail) {
+  if (!(fx > 0) || !(fy > 0)) fail("fx and fy must be > 0");
+  p->pixel_scale = {1.0, fy / fx};
+}
+
+KannalaBrandtLike kannala_brandt_of(const CameraParameters& p) {
+  KannalaBrandtLike out;
+  if (const auto* m = std::get_if<KannalaBrandt<double>>(&p.model)) {
+    const auto params = m->params();
+    out = {true, params[0], {params[1], params[2], params[3], params[4]}};
+  } else if (const auto* m = std::get_if<Equidistant<double>>(&p.model)) {
+    out = {true, m->f(), {0, 0, 0, 0}};
+  }
+  return out;
+}
+
+RadialModel pinhole_from_radial_tangential(const std::vector<double>& d, double f,
+                                           const std::function<void(std::string_view)>& fail) {
+  const bool tangential = d.size() >= 4 && (d[2] != 0 || d[3] != 0);
+  bool radial = false;
+  for (size_t i = 0; i < d.size(); ++i) radial = radial || (i != 2 && i != 3 && d[i] != 0);
+  if (tangential) fail("radial-tangential distortion with p1, p2 != 0 is not radially symmetric (fishcam reads radially symmetric models only)");
+  if (radial) fail("radial-tangential distortion (k1, k2, k3 != 0) is radially symmetric but fishcam has no such model (it reads the pinhole case, all coefficients 0)");
+  return Pinhole<double>(f);
+}
+
+Pose pose_from_rt_cam_ref(const std::vector<double>& rt) {
+  const Eigen::Vector3d r(rt[0], rt[1], rt[2]), t(rt[3], rt[4], rt[5]);
+  const double angle = r.norm();
+  const Eigen::Matrix3d r_cam_ref =
+      angle > 0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  Pose pose;
+  pose.rotation = Eigen::Quaterniond(r_cam_ref.transpose());
+  pose.translation = -(r_cam_ref.transpose() * t);
+  return pose;
+}
+
+std::array<double, 6> rt_cam_ref_from_pose(const Pose& pose) {
+  const Eigen::Quaterniond q_cam_ref = pose.rotation.conjugate();
+  const Eigen::AngleAxisd aa(q_cam_ref);
+  const Eigen::Vector3d r = aa.axis() * aa.angle();
+  const Eigen::Vector3d t = -(q_cam_ref * pose.translation);
+  return {r.x(), r.y(), r.z(), t.x(), t.y(), t.z()};
+}
+
+std::optional<Pose> pose_from_matrix(const std::vector<double>& m, std::string* problem) {
+  if (m.size() != 16) return *problem = "expected a 4x4 matrix", std::nullopt;
+  if (m[12] != 0 || m[13] != 0 || m[14] != 0 || m[15] != 1) return *problem = "the last row must be 0 0 0 1", std::nullopt;
+  Eigen::Matrix3d r;
+  r << m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10];
+  if (!((r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= 1e-6) || !(r.determinant() > 0)) {
+    return *problem = "the rotation is not orthonormal (to 1e-6)", std::nullopt;
+  }
+  Pose pose;
+  pose.rotation = Eigen::Quaterniond(r).normalized();
+  pose.translation = {m[3], m[7], m[11]};
+  return pose;
+}
+
+std::array<double, 16> matrix_from_pose(const Pose& pose) {
+  const Eigen::Matrix3d r = pose.rotation.toRotationMatrix();
+  const Eigen::Vector3d& t = pose.translation;
+  return {r(0, 0), r(0, 1), r(0, 2), t.x(), r(1, 0), r(1, 1), r(1, 2), t.y(), r(2, 0), r(2, 1), r(2, 2), t.z(), 0, 0, 0, 1};
+}
+
+Pose inverse(const Pose& pose) {
+  Pose out;
+  out.rotation = pose.rotation.conjugate();
+  out.translation = -(out.rotation * pose.translation);
+  return out;
+}
+
+std::string yaml_number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", x);
+  std::string s = buffer;
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // stays a float in every reader
+  return s;
+}
+
+std::string yaml_list(const std::vector<double>& values) {
+  std::string s = "[";
+  for (size_t i = 0; i < values.size(); ++i) s += (i ? ", " : "") + yaml_number(values[i]);
+  return s + "]";
+}
+
+}  // namespace fishcam::detail

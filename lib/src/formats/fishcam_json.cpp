@@ -1,0 +1,69 @@
+// fishcam's own JSON: every model of the registry, as it is.
+#include <cmath>
+#include <numbers>
+
+#include "format.hpp"
+
+namespace fishcam::detail {
+namespace {
+
+constexpr double kDeg = 180 / std::numbers::pi;
+
+int score(const Content& c) {
+  const auto* j = c.json();
+  return j && j->is_object() && j->contains("fishcam_camera") ? 100 : 0;
+}
+
+std::vector<NamedCamera> read(const Content& c) {
+  const JsonFields f(c.json_or_throw(), c.source());
+  const double version = f.number("fishcam_camera");
+  if (version != 1) f.fail("fishcam_camera", "unsupported format version (this build reads version 1)");
+  CameraParameters p;
+  p.width = f.positive_integer("width");
+  p.height = f.positive_integer("height");
+  const auto pp = f.numbers("principal_point", 2, 2);
+  const auto scale = f.numbers("pixel_scale", 2, 2);
+  p.principal_point = {pp[0], pp[1]};
+  p.pixel_scale = {scale[0], scale[1]};
+  const std::string name = f.string("model");
+  const auto params = f.numbers("parameters", 1, 64);
+  try {
+    p.model = make_model(name, params);
+  } catch (const Error& e) {
+    f.fail("model", e.what());
+  }
+  if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
+  if (f.has("pose")) {
+    const JsonFields pose = f.object("pose");
+    const std::vector<double> q = pose.numbers("quaternion_xyzw", 4, 4);
+    const std::vector<double> t = pose.numbers("translation", 3, 3);
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (std::abs(norm - 1) > 1e-6) pose.fail("quaternion_xyzw", "must have unit norm, got " + std::to_string(norm));
+    p.pose = Pose{Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
+  }
+  return {{"0", p, {}}};
+}
+
+std::string write(const CameraParameters& p) {
+  nlohmann::json root = {{"fishcam_camera", 1},
+                         {"width", p.width},
+                         {"height", p.height},
+                         {"principal_point", {p.principal_point.x(), p.principal_point.y()}},
+                         {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
+                         {"model", model_name(p.model)},
+                         {"parameters", model_params(p.model)}};
+  if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
+  if (p.pose) {
+    const auto& q = p.pose->rotation;
+    const auto& t = p.pose->translation;
+    root["pose"] = {{"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
+  }
+  return root.dump(2) + "\n";
+}
+
+}  // namespace
+
+extern const FormatSpec kFishcamFormat{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
+                                       "every", score, read, write};
+
+}  // namespace fishcam::detail

@@ -1,0 +1,157 @@
+// The table of camera file formats and what their readers and writers share.
+//
+// How to add a format: write lib/src/formats/NAME.cpp defining a FormatSpec
+// (name, extensions, score, read, write, which models it holds), add its value to
+// CameraFormat (fishcam/camera_io.hpp) and its line to format_table() in
+// lib/src/formats/table.cpp, document it in docs/formats.md, and give it a fuzz
+// harness (tests/fuzz/) and a round-trip example (tests/test_formats.cpp).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "../document.hpp"
+#include "fishcam/camera_io.hpp"
+
+namespace fishcam::detail {
+
+// A file's text with its parsed views, each parsed at most once (detection asks
+// every format; readers reuse the parse).
+class Content {
+ public:
+  Content(std::string_view text, std::string source) : text_(text), source_(std::move(source)) {}
+  std::string_view text() const { return text_; }
+  const std::string& source() const { return source_; }
+  // nullptr when the text is not that (the parse error is kept for readers).
+  const nlohmann::json* json() const;
+  const DocNode* yaml() const;  // YAML, or XML for text starting with '<'
+  const nlohmann::json* python_literal() const;
+  const std::string& python_literal_error() const { return literal_error_; }
+  // The parsed views or a one-line error naming the file.
+  const nlohmann::json& json_or_throw() const;
+  const DocNode& yaml_or_throw() const;
+
+ private:
+  std::string_view text_;
+  std::string source_;
+  mutable std::optional<nlohmann::json> json_, literal_;
+  mutable std::optional<DocNode> yaml_;
+  mutable bool json_tried_ = false, yaml_tried_ = false, literal_tried_ = false;
+  mutable std::string json_error_, yaml_error_, literal_error_;
+};
+
+struct NamedCamera {
+  std::string name;        // as the file names it ("cam0"), or its index
+  CameraParameters camera;  // width = height = 0 when the file has no image size
+  std::vector<std::string> notes;  // what the reader did not take (said on stderr by the CLI)
+};
+
+struct FormatSpec {
+  CameraFormat id;
+  std::string_view name;
+  std::string_view description;              // "Kalibr camchain YAML"
+  std::vector<std::string_view> extensions;  // for choosing a writer from a file name
+  std::string_view holds;                    // the models it can hold, for messages
+  // How surely the content is this format: 0 = not it; higher = surer (by parsing
+  // and looking for the format's own keys, never by substring order).
+  int (*score)(const Content&);
+  std::vector<NamedCamera> (*read)(const Content&);
+  std::string (*write)(const CameraParameters&);  // throws Error when it cannot hold the camera
+};
+
+const std::vector<const FormatSpec*>& format_table();
+const FormatSpec& format_spec(CameraFormat format);
+
+// ------------------------------------------------------------ shared helpers
+
+// Typed, named access to a JSON object: every failure says file, field and problem.
+class JsonFields {
+ public:
+  JsonFields(const nlohmann::json& object, std::string source, std::string prefix = "")
+      : j_(object), source_(std::move(source)), prefix_(std::move(prefix)) {}
+  [[noreturn]] void fail(std::string_view key, std::string_view problem) const;
+  bool has(std::string_view key) const { return j_.is_object() && j_.contains(key); }
+  const nlohmann::json& get(std::string_view key) const;
+  double number(std::string_view key) const;
+  int positive_integer(std::string_view key) const;
+  std::string string(std::string_view key) const;
+  std::vector<double> numbers(std::string_view key, size_t min_size, size_t max_size) const;
+  JsonFields object(std::string_view key) const;
+  JsonFields item(std::string_view key, size_t index) const;  // key[index], an object
+  size_t size(std::string_view key) const;                    // length of the list `key`
+  const std::string& source() const { return source_; }
+
+ private:
+  double as_number(const nlohmann::json& v, std::string_view key) const;
+  const nlohmann::json& j_;
+  std::string source_, prefix_;
+};
+
+// The same for YAML/XML documents (scalars are text: numbers are parsed here).
+class DocFields {
+ public:
+  DocFields(const DocNode& node, std::string source, std::string prefix = "")
+      : node_(node), source_(std::move(source)), prefix_(std::move(prefix)) {}
+  [[noreturn]] void fail(std::string_view key, std::string_view problem) const;
+  bool has(std::string_view key) const { return node_.find(key) != nullptr; }
+  const DocNode& get(std::string_view key) const;
+  double number(std::string_view key) const;
+  int positive_integer(std::string_view key) const;
+  std::string string(std::string_view key) const;
+  // A list of numbers: a YAML sequence, or an opencv-matrix's data.
+  std::vector<double> numbers(std::string_view key, size_t min_size, size_t max_size) const;
+  // An opencv-matrix (rows, cols, data) with `count` elements.
+  std::vector<double> matrix(std::string_view key, int count) const;
+  DocFields object(std::string_view key) const;
+  const DocNode& node() const { return node_; }
+  const std::string& source() const { return source_; }
+
+  static double parse_number(const std::string& text, const std::function<void(std::string_view)>& fail);
+
+ private:
+  const DocNode& node_;
+  std::string source_, prefix_;
+};
+
+// A format's error about the model it was given: "model: the Kalibr format holds
+// kannala-brandt, ... not polynomial".
+[[noreturn]] void cannot_hold(const CameraParameters& camera, std::string_view format, std::string_view holds);
+void reject_theta_limit(const CameraParameters& p, std::string_view format);
+// The model rescaled so that a_x = 1 (formats with fx, fy store f = fx, a_y = fy / fx).
+CameraParameters with_unit_ax(CameraParameters p);
+// K = [fx 0 cx; 0 fy cy] from fx, fy: f = fx, a_y = fy / fx. Throws unless fx, fy > 0.
+void set_focal(CameraParameters* p, double fx, double fy, const std::function<void(std::string_view)>& fail);
+
+// Kannala-Brandt's f and k1..k4 of a camera whose model is kannala-brandt or
+// equidistant (k = 0); ok = false for any other model.
+struct KannalaBrandtLike {
+  bool ok = false;
+  double f = 0;
+  std::array<double, 4> k{};
+};
+KannalaBrandtLike kannala_brandt_of(const CameraParameters& p);
+// Radial-tangential coefficients (k1, k2, p1, p2[, k3, ...]) that are all zero are
+// a pinhole with focal length f; anything else is refused naming why (tangential
+// terms: not radially symmetric; radial terms only: a model fishcam lacks).
+RadialModel pinhole_from_radial_tangential(const std::vector<double>& d, double f,
+                                           const std::function<void(std::string_view)>& fail);
+
+// Poses: rt_cam_ref (mrcal, OpenCV YAML) and 4x4 row-major transforms.
+Pose pose_from_rt_cam_ref(const std::vector<double>& rt);
+std::array<double, 6> rt_cam_ref_from_pose(const Pose& pose);
+// A 4x4 row-major rigid transform (last row 0 0 0 1, rotation orthonormal to 1e-6).
+std::optional<Pose> pose_from_matrix(const std::vector<double>& m16, std::string* problem);
+std::array<double, 16> matrix_from_pose(const Pose& pose);
+Pose inverse(const Pose& pose);
+
+// YAML text helpers for writers (numbers with 17 significant digits).
+std::string yaml_number(double x);
+std::string yaml_list(const std::vector<double>& values);
+
+}  // namespace fishcam::detail

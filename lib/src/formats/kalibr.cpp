@@ -1,0 +1,163 @@
+// Kalibr camchain YAML (also as OpenVINS and VINS-Fusion keep it): one map per
+// camera (cam0, cam1, ...) with camera_model, intrinsics, distortion_model,
+// distortion_coeffs, resolution and T_cam_imu (IMU -> camera).
+#include <cmath>
+
+#include "format.hpp"
+
+namespace fishcam::detail {
+namespace {
+
+bool is_camera(const DocNode& n) { return n.kind == DocNode::Kind::map && n.find("camera_model") && n.find("intrinsics"); }
+
+int score(const Content& c) {
+  const DocNode* root = c.yaml();
+  if (!root || root->kind != DocNode::Kind::map) return 0;
+  for (const auto& item : root->items) {
+    if (is_camera(item)) return 100;
+  }
+  return 0;
+}
+
+Pose pose_of(const DocFields& f, const char* key) {
+  std::vector<double> m;
+  const DocNode& rows = f.get(key);
+  if (rows.kind != DocNode::Kind::sequence || rows.items.size() != 4) f.fail(key, "expected 4 rows of 4 numbers");
+  for (size_t r = 0; r < 4; ++r) {
+    const DocNode wrapper{DocNode::Kind::map, "", "", {rows.items[r]}, {"row"}};
+    const auto row = DocFields(wrapper, f.source()).numbers("row", 4, 4);
+    m.insert(m.end(), row.begin(), row.end());
+  }
+  std::string problem;
+  const auto pose = pose_from_matrix(m, &problem);
+  if (!pose) f.fail(key, problem);
+  return *pose;
+}
+
+std::vector<NamedCamera> read(const Content& c) {
+  const DocNode& root = c.yaml_or_throw();
+  std::vector<NamedCamera> out;
+  for (size_t i = 0; i < root.items.size(); ++i) {
+    if (!is_camera(root.items[i])) continue;
+    const DocFields f(root.items[i], c.source(), root.keys[i] + ".");
+    NamedCamera named{root.keys[i], {}, {}};
+    CameraParameters& p = named.camera;
+    const std::string model = f.string("camera_model");
+    const std::string distortion = f.has("distortion_model") ? f.string("distortion_model") : "none";
+    const std::vector<double> d = f.has("distortion_coeffs") ? f.numbers("distortion_coeffs", 0, 8) : std::vector<double>{};
+    auto fail_d = [&](std::string_view problem) { f.fail("distortion_coeffs", problem); };
+    auto focal = [&](const std::vector<double>& k, size_t at) {
+      set_focal(&p, k[at], k[at + 1], [&](std::string_view problem) { f.fail("intrinsics", problem); });
+      p.principal_point = {k[at + 2], k[at + 3]};
+      return k[at];
+    };
+    auto no_distortion = [&] {
+      if (distortion != "none") f.fail("distortion_model", "expected none for camera_model " + model + ", got " + distortion);
+    };
+    if (model == "pinhole") {
+      const auto k = f.numbers("intrinsics", 4, 4);
+      const double fx = focal(k, 0);
+      if (distortion == "equidistant") {
+        if (d.size() != 4) fail_d("equidistant (Kannala-Brandt) has 4 coefficients");
+        p.model = KannalaBrandt<double>(fx, d[0], d[1], d[2], d[3]);
+      } else if (distortion == "none") {
+        p.model = Pinhole<double>(fx);
+      } else if (distortion == "radtan") {
+        p.model = pinhole_from_radial_tangential(d, fx, fail_d);
+      } else {
+        f.fail("distortion_model", "unsupported " + quoted_for_message(distortion) + " (expected equidistant, radtan or none)");
+      }
+    } else if (model == "omni") {
+      const auto k = f.numbers("intrinsics", 5, 5);  // xi, fu, fv, pu, pv
+      const double fx = focal(k, 1);
+      if (distortion == "none") {
+        p.model = Unified<double>(fx, k[0]);
+      } else if (distortion == "radtan") {
+        if (d.size() != 4) fail_d("radtan has 4 coefficients (k1, k2, p1, p2)");
+        if (d[2] != 0 || d[3] != 0) {
+          fail_d("omni-radtan with p1, p2 != 0 is not radially symmetric (fishcam reads mei: k1, k2 with p1 = p2 = 0)");
+        }
+        p.model = Mei<double>(fx, k[0], d[0], d[1]);
+      } else {
+        f.fail("distortion_model", "omni-" + distortion + " is radially symmetric but fishcam has no such model (it reads omni-none and omni-radtan)");
+      }
+    } else if (model == "ds") {
+      no_distortion();
+      const auto k = f.numbers("intrinsics", 6, 6);  // xi, alpha, fu, fv, pu, pv
+      p.model = DoubleSphere<double>(focal(k, 2), k[0], k[1]);
+    } else if (model == "eucm") {
+      no_distortion();
+      const auto k = f.numbers("intrinsics", 6, 6);  // alpha, beta, fu, fv, pu, pv
+      p.model = ExtendedUnified<double>(focal(k, 2), k[0], k[1]);
+    } else {
+      f.fail("camera_model", "unsupported " + quoted_for_message(model) + " (expected pinhole, omni, ds or eucm)");
+    }
+    if (f.has("resolution")) {
+      const auto r = f.numbers("resolution", 2, 2);
+      for (double x : r) {
+        if (!(x >= 1 && x <= (1 << 16)) || x != std::floor(x)) f.fail("resolution", "expected two positive integers");
+      }
+      p.width = int(r[0]), p.height = int(r[1]);
+    }
+    if (f.has("T_cam_imu")) {
+      p.pose = inverse(pose_of(f, "T_cam_imu"));  // fishcam's pose is camera -> reference (the IMU)
+    } else if (f.has("T_imu_cam")) {
+      p.pose = pose_of(f, "T_imu_cam");
+    }
+    if (f.has("T_cn_cnm1")) named.notes.push_back(root.keys[i] + ".T_cn_cnm1 (relative to the previous camera) is not read");
+    out.push_back(std::move(named));
+  }
+  if (out.empty()) throw Error(c.source() + ": no camera (a Kalibr camchain has cam0: camera_model, intrinsics, ...)");
+  return out;
+}
+
+std::string write(const CameraParameters& original) {
+  reject_theta_limit(original, "Kalibr");
+  const CameraParameters p = with_unit_ax(original);
+  const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
+  const auto focal = [&](double f) { return std::vector<double>{f, f * ay, cx, cy}; };
+  std::string model, distortion = "none";
+  std::vector<double> intrinsics, coeffs;
+  const KannalaBrandtLike kb = kannala_brandt_of(p);
+  if (kb.ok) {
+    model = "pinhole", distortion = "equidistant", intrinsics = focal(kb.f), coeffs = {kb.k.begin(), kb.k.end()};
+  } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
+    model = "pinhole", intrinsics = focal(m->f());
+  } else if (const auto* m = std::get_if<Unified<double>>(&p.model)) {
+    const auto q = m->params();
+    model = "omni", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), q[1]);
+  } else if (const auto* m = std::get_if<Mei<double>>(&p.model)) {
+    const auto q = m->params();
+    model = "omni", distortion = "radtan", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), q[1]);
+    coeffs = {q[2], q[3], 0, 0};
+  } else if (const auto* m = std::get_if<DoubleSphere<double>>(&p.model)) {
+    const auto q = m->params();
+    model = "ds", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), {q[1], q[2]});
+  } else if (const auto* m = std::get_if<ExtendedUnified<double>>(&p.model)) {
+    const auto q = m->params();
+    model = "eucm", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), {q[1], q[2]});
+  } else {
+    cannot_hold(p, "Kalibr", "kannala-brandt (and equidistant), pinhole, unified, mei, double-sphere and extended-unified");
+  }
+  std::string out = "cam0:\n";
+  out += "  camera_model: " + model + "\n";
+  out += "  intrinsics: " + yaml_list(intrinsics) + "\n";
+  out += "  distortion_model: " + distortion + "\n";
+  out += "  distortion_coeffs: " + yaml_list(coeffs) + "\n";
+  out += "  resolution: [" + std::to_string(p.width) + ", " + std::to_string(p.height) + "]\n";
+  if (p.pose) {
+    const auto m = matrix_from_pose(inverse(*p.pose));
+    out += "  T_cam_imu:\n";
+    for (int r = 0; r < 4; ++r) out += "  - " + yaml_list({m[4 * r], m[4 * r + 1], m[4 * r + 2], m[4 * r + 3]}) + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
+extern const FormatSpec kKalibrFormat{CameraFormat::kalibr, "kalibr", "Kalibr camchain YAML", {".yaml", ".yml"},
+                                      "kannala-brandt (and equidistant), pinhole, unified, mei, double-sphere and "
+                                      "extended-unified",
+                                      score, read, write};
+
+}  // namespace fishcam::detail

@@ -1,0 +1,82 @@
+// mrcal .cameramodel (a Python literal): LENSMODEL_PINHOLE and LENSMODEL_STEREOGRAPHIC.
+#include <cmath>
+#include <cstdio>
+
+#include "format.hpp"
+
+namespace fishcam::detail {
+namespace {
+
+int score(const Content& c) {
+  // Cheap first: only text that mentions the key is parsed.
+  if (c.text().find("lensmodel") == std::string_view::npos) return 0;
+  const auto* j = c.python_literal();
+  return j && j->is_object() && j->contains("lensmodel") ? 100 : 0;
+}
+
+std::vector<NamedCamera> read(const Content& c) {
+  const auto* root = c.python_literal();
+  if (!root) throw Error(c.source() + ": not a valid mrcal .cameramodel (" + c.python_literal_error() + ")");
+  if (!root->is_object()) throw Error(c.source() + ": not a valid mrcal .cameramodel (expected a dict)");
+  const JsonFields f(*root, c.source());
+  const std::string lensmodel = f.string("lensmodel");
+  const bool pinhole = lensmodel == "LENSMODEL_PINHOLE";
+  if (!pinhole && lensmodel != "LENSMODEL_STEREOGRAPHIC") {
+    const bool asymmetric = lensmodel.rfind("LENSMODEL_OPENCV", 0) == 0 || lensmodel.rfind("LENSMODEL_SPLINED", 0) == 0 ||
+                            lensmodel.rfind("LENSMODEL_CAHVOR", 0) == 0;
+    f.fail("lensmodel", "unsupported lens model " + lensmodel +
+                            (asymmetric ? " (not radially symmetric: fishcam reads radially symmetric models only; "
+                                          "mrcal files: LENSMODEL_PINHOLE and LENSMODEL_STEREOGRAPHIC)"
+                                        : " (fishcam reads LENSMODEL_PINHOLE and LENSMODEL_STEREOGRAPHIC)"));
+  }
+  const auto k = f.numbers("intrinsics", 4, 4);  // fx, fy, cx, cy
+  const auto size = f.numbers("imagersize", 2, 2);
+  for (int i = 0; i < 2; ++i) {
+    if (!(size[i] >= 1 && size[i] <= (1 << 16)) || size[i] != std::floor(size[i])) {
+      f.fail("imagersize", "expected two positive integers");
+    }
+  }
+  CameraParameters p;
+  set_focal(&p, k[0], k[1], [&](std::string_view problem) { f.fail("intrinsics", problem); });
+  p.width = static_cast<int>(size[0]);
+  p.height = static_cast<int>(size[1]);
+  p.principal_point = {k[2], k[3]};
+  p.model = pinhole ? RadialModel(Pinhole<double>(k[0])) : RadialModel(Stereographic<double>(k[0]));
+  if (f.has("extrinsics")) p.pose = pose_from_rt_cam_ref(f.numbers("extrinsics", 6, 6));
+  return {{"0", p, {}}};
+}
+
+std::string write(const CameraParameters& p) {
+  reject_theta_limit(p, "mrcal");
+  double f = 0;
+  std::string lensmodel;
+  if (const auto* m = std::get_if<Stereographic<double>>(&p.model)) {
+    f = m->f(), lensmodel = "LENSMODEL_STEREOGRAPHIC";
+  } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
+    f = m->f(), lensmodel = "LENSMODEL_PINHOLE";
+  } else {
+    throw Error("model: mrcal's format holds pinhole and stereographic models only, not " +
+                std::string(model_name(p.model)));
+  }
+  const std::array<double, 6> rt = p.pose ? rt_cam_ref_from_pose(*p.pose) : std::array<double, 6>{};
+  char buffer[1024];
+  std::snprintf(buffer, sizeof buffer,
+                "{\n"
+                "    'lensmodel':  '%s',\n\n"
+                "    # intrinsics are fx,fy,cx,cy\n"
+                "    'intrinsics': [ %.17g, %.17g, %.17g, %.17g,],\n\n"
+                "    # extrinsics are rt_fromref (rt_cam_ref)\n"
+                "    'extrinsics': [ %.17g, %.17g, %.17g, %.17g, %.17g, %.17g,],\n\n"
+                "    'imagersize': [ %d, %d,],\n"
+                "}\n",
+                lensmodel.c_str(), f * p.pixel_scale.x(), f * p.pixel_scale.y(), p.principal_point.x(),
+                p.principal_point.y(), rt[0], rt[1], rt[2], rt[3], rt[4], rt[5], p.width, p.height);
+  return buffer;
+}
+
+}  // namespace
+
+extern const FormatSpec kMrcalFormat{CameraFormat::mrcal, "mrcal", "mrcal .cameramodel", {".cameramodel"},
+                                     "pinhole and stereographic", score, read, write};
+
+}  // namespace fishcam::detail

@@ -1,0 +1,66 @@
+// ROS camera_info YAML (camera_calibration_parsers), with or without a %YAML
+// header. ROS's distortion_model "equidistant" is Kannala-Brandt (OpenCV's
+// fisheye), not fishcam's equidistant model rho = f theta (docs/formats.md).
+#include "format.hpp"
+
+namespace fishcam::detail {
+namespace {
+
+int score(const Content& c) {
+  const DocNode* root = c.yaml();
+  return root && root->find("camera_matrix") && root->find("distortion_coefficients") ? 90 : 0;
+}
+
+std::vector<NamedCamera> read(const Content& c) {
+  const DocNode& root = c.yaml_or_throw();
+  const DocFields f(root, c.source());
+  NamedCamera named{f.has("camera_name") ? f.string("camera_name") : "0", {}, {}};
+  CameraParameters& p = named.camera;
+  const auto k = f.matrix("camera_matrix", 9);
+  if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1) f.fail("camera_matrix", "expected [fx 0 cx; 0 fy cy; 0 0 1]");
+  set_focal(&p, k[0], k[4], [&](std::string_view problem) { f.fail("camera_matrix", problem); });
+  p.principal_point = {k[2], k[5]};
+  const std::vector<double> d = f.numbers("distortion_coefficients", 0, 14);
+  const std::string model = f.string("distortion_model");
+  if (model == "equidistant" || model == "fisheye") {
+    if (d.size() != 4) f.fail("distortion_coefficients", "equidistant (Kannala-Brandt) has 4 coefficients");
+    p.model = KannalaBrandt<double>(k[0], d[0], d[1], d[2], d[3]);
+  } else if (model == "plumb_bob" || model == "rational_polynomial") {
+    p.model = pinhole_from_radial_tangential(d, k[0], [&](std::string_view problem) { f.fail("distortion_coefficients", problem); });
+  } else {
+    f.fail("distortion_model", "unsupported " + quoted_for_message(model) + " (expected equidistant or plumb_bob)");
+  }
+  p.width = f.positive_integer("image_width");
+  p.height = f.positive_integer("image_height");
+  return {named};
+}
+
+std::string write(const CameraParameters& original) {
+  reject_theta_limit(original, "ROS");
+  const CameraParameters p = with_unit_ax(original);
+  const KannalaBrandtLike kb = kannala_brandt_of(p);
+  const bool pinhole = std::holds_alternative<Pinhole<double>>(p.model);
+  if (!kb.ok && !pinhole) cannot_hold(p, "ROS camera_info", "kannala-brandt (and equidistant) and pinhole");
+  const double fx = pinhole ? std::get<Pinhole<double>>(p.model).f() : kb.f, fy = fx * p.pixel_scale.y();
+  const double cx = p.principal_point.x(), cy = p.principal_point.y();
+  auto matrix = [](int rows, int cols, const std::vector<double>& data) {
+    return "\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: " + yaml_list(data) + "\n";
+  };
+  std::string out;
+  out += "image_width: " + std::to_string(p.width) + "\nimage_height: " + std::to_string(p.height) + "\n";
+  out += "camera_name: camera\n";
+  out += "camera_matrix:" + matrix(3, 3, {fx, 0, cx, 0, fy, cy, 0, 0, 1});
+  out += std::string("distortion_model: ") + (pinhole ? "plumb_bob" : "equidistant") + "\n";
+  out += "distortion_coefficients:" +
+         (pinhole ? matrix(1, 5, {0, 0, 0, 0, 0}) : matrix(1, 4, {kb.k[0], kb.k[1], kb.k[2], kb.k[3]}));
+  out += "rectification_matrix:" + matrix(3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
+  out += "projection_matrix:" + matrix(3, 4, {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0});
+  return out;
+}
+
+}  // namespace
+
+extern const FormatSpec kRosFormat{CameraFormat::ros, "ros", "ROS camera_info YAML", {".yaml", ".yml"},
+                                   "kannala-brandt (and equidistant) and pinhole", score, read, write};
+
+}  // namespace fishcam::detail

@@ -1,0 +1,104 @@
+// WoodScape calibration JSON (valeoai/WoodScape), also as SynWoodScape writes it.
+#include <cmath>
+
+#include "format.hpp"
+
+namespace fishcam::detail {
+namespace {
+
+constexpr char kSynWoodScapeTranslation[] = "translation used in CARLA (CARLA reference)";
+
+// "k1", "k2", ... (appended, not `"k" + to_string(i)`: GCC 12 warns falsely on that).
+std::string coefficient_key(int i) {
+  std::string key = "k";
+  key += std::to_string(i);
+  return key;
+}
+
+Pose pose_from_json(const JsonFields& f) {
+  const std::vector<double> q = f.numbers("quaternion", 4, 4);
+  const std::vector<double> t = f.numbers("translation", 3, 3);
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (std::abs(norm - 1) > 1e-6) f.fail("quaternion", "must have unit norm, got " + std::to_string(norm));
+  return Pose{Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
+}
+
+int score(const Content& c) {
+  const auto* j = c.json();
+  return j && j->is_object() && j->contains("intrinsic") ? 50 : 0;
+}
+
+std::vector<NamedCamera> read(const Content& c) {
+  const nlohmann::json& root = c.json_or_throw();
+  if (!root.is_object()) throw Error(c.source() + ": expected a JSON object at the top level");
+  const JsonFields top(root, c.source());
+  const JsonFields in = top.object("intrinsic");
+  const std::string model = in.string("model");
+  if (model != "radial_poly") in.fail("model", "unsupported WoodScape model " + quoted_for_message(model) + " (expected radial_poly)");
+  const double poly_order = in.number("poly_order");
+  if (!(poly_order >= 1 && poly_order <= 16) || poly_order != std::floor(poly_order)) {
+    in.fail("poly_order", "expected an integer in [1, 16]");
+  }
+  std::vector<double> k;
+  for (int i = 1; i <= int(poly_order); ++i) k.push_back(in.number(coefficient_key(i)));
+  NamedCamera out{"0", {}, {}};
+  CameraParameters& p = out.camera;
+  p.width = in.positive_integer("width");
+  p.height = in.positive_integer("height");
+  // WoodScape's offsets are from the image centre in a frame whose pixel centres
+  // sit at half-integers; ours sit at integers, hence the -0.5.
+  p.principal_point = {p.width / 2.0 + in.number("cx_offset") - 0.5, p.height / 2.0 + in.number("cy_offset") - 0.5};
+  const double aspect = in.number("aspect_ratio");
+  if (!(aspect > 0)) in.fail("aspect_ratio", "must be > 0");
+  p.pixel_scale = {1.0, aspect};
+  p.model = Polynomial<double>(k);
+  if (top.has("extrinsic")) {
+    const JsonFields ex = top.object("extrinsic");
+    if (!ex.has("translation") && ex.has(kSynWoodScapeTranslation)) {
+      // SynWoodScape: the translation is in CARLA's frame, which its files do not
+      // document against WoodScape's vehicle frame: no pose rather than a wrong one.
+      out.notes.push_back("extrinsic: SynWoodScape's '" + std::string(kSynWoodScapeTranslation) +
+                          "' is in CARLA's frame; the camera is read without its pose");
+    } else {
+      p.pose = pose_from_json(ex);
+    }
+  }
+  return {out};
+}
+
+std::string write(const CameraParameters& original) {
+  reject_theta_limit(original, "WoodScape");
+  const CameraParameters p = with_unit_ax(original);
+  std::vector<double> k;
+  if (const auto* poly = std::get_if<Polynomial<double>>(&p.model)) {
+    k = poly->params();
+  } else if (const auto* eq = std::get_if<Equidistant<double>>(&p.model)) {
+    k = {eq->f()};
+  } else {
+    cannot_hold(p, "WoodScape", "polynomial (and equidistant)");
+  }
+  if (k.size() > 16) throw Error("model: the WoodScape format holds polynomials up to order 16, not " + std::to_string(k.size()));
+  while (k.size() < 4) k.push_back(0.0);
+  nlohmann::json in = {{"model", "radial_poly"},
+                       {"poly_order", k.size()},
+                       {"width", p.width},
+                       {"height", p.height},
+                       {"cx_offset", p.principal_point.x() - p.width / 2.0 + 0.5},
+                       {"cy_offset", p.principal_point.y() - p.height / 2.0 + 0.5},
+                       {"aspect_ratio", p.pixel_scale.y()}};
+  for (size_t i = 0; i < k.size(); ++i) in[coefficient_key(int(i) + 1)] = k[i];
+  nlohmann::json root = {{"intrinsic", in}};
+  if (p.pose) {
+    const auto& q = p.pose->rotation;
+    const auto& t = p.pose->translation;
+    root["extrinsic"] = {{"quaternion", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
+  }
+  return root.dump(2) + "\n";
+}
+
+}  // namespace
+
+extern const FormatSpec kWoodScapeFormat{CameraFormat::woodscape, "woodscape", "WoodScape / SynWoodScape calibration JSON",
+                                         {".json"}, "polynomial (and equidistant)", score, read, write};
+
+}  // namespace fishcam::detail
