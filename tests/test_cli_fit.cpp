@@ -36,7 +36,7 @@ TEST(CliFit, ConvertReportsAndWritesEveryFormat) {
       {"--to fisheye --out " + quoted(dir / "x.json"), "unknown model 'fisheye'"},
       {"--to pinhole --out " + quoted(dir / "x.json"), "--max-angle"},
       {"--to kannala-brandt --method paper --out " + quoted(dir / "x.json"), "eqs. 13-14"},
-      {"--to equidistant --out " + quoted(dir / "x.txt"), "cannot tell the format"},
+      {"--to equidistant --out " + quoted(dir / "x.dat"), "cannot tell the format"},
       {"--to kannala-brandt --out " + quoted(dir / "kb.yaml"), "refusing to overwrite"},
   };
   for (const auto& c : bad) {

@@ -34,8 +34,8 @@ void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth) {
 }
 
 ViewpointWarp make_warp(const std::string& source, const std::string& target) {
-  const Camera source_camera = read_camera(source);
-  return target.empty() ? ViewpointWarp(source_camera) : ViewpointWarp(source_camera, read_camera(target));
+  const Camera source_camera = read_input_camera(source);
+  return target.empty() ? ViewpointWarp(source_camera) : ViewpointWarp(source_camera, read_input_camera(target));
 }
 
 cv::Mat read_image(const std::string& path, int flags) {
@@ -136,17 +136,76 @@ std::string describe(const Eigen::Vector3d& r, const Eigen::Vector3d& t) {
 
 CameraFormat output_format(const std::string& format, const std::filesystem::path& out) {
   if (!format.empty()) return *parse_camera_format(format);
-  const std::string ext = out.extension().string();
-  if (ext == ".cameramodel") return CameraFormat::mrcal;
-  if (ext == ".yaml" || ext == ".yml" || ext == ".xml") return CameraFormat::opencv;
-  if (ext == ".json") return CameraFormat::fishcam;
+  if (const auto f = camera_format_for_extension(out)) return *f;
   throw Error(out.string() + ": cannot tell the format from the extension; pass --format");
 }
+
+namespace {
+// The library's format names (its one table), for CLI11's checks.
+std::vector<std::string> format_names() {
+  std::vector<std::string> names;
+  std::string all = camera_format_names() + ", ";
+  for (size_t at = 0, next; (next = all.find(", ", at)) != std::string::npos; at = next + 2) names.push_back(all.substr(at, next - at));
+  return names;
+}
+
+struct CameraInputOptions {
+  std::string camera, imagersize, format;
+};
+CameraInputOptions& camera_input_options() {
+  static CameraInputOptions options;
+  return options;
+}
+}  // namespace
+
+std::pair<int, int> parse_image_size(const std::string& text, const std::string& option) {
+  const size_t at = text.find_first_of(",x");
+  int w = 0, h = 0;
+  size_t used_w = 0, used_h = 0;
+  try {
+    if (at != std::string::npos) {
+      w = std::stoi(text.substr(0, at), &used_w);
+      h = std::stoi(text.substr(at + 1), &used_h);
+    }
+  } catch (const std::exception&) {
+    used_w = 0;
+  }
+  if (at == std::string::npos || used_w != at || used_h != text.size() - at - 1 || w < 1 || h < 1 || w > 65536 ||
+      h > 65536) {
+    throw Error(option + ": expected W,H or WxH (positive integers), got " + quoted_for_message(text));
+  }
+  return {w, h};
+}
+
+void add_camera_input_options(CLI::App* cmd) {
+  CameraInputOptions& o = camera_input_options();
+  cmd->add_option("--camera", o.camera, "Which camera of a file with several (name or index; default: the first)");
+  cmd->add_option("--imagersize", o.imagersize, "Image size W,H (or WxH) for camera files without one");
+  const bool format_taken = cmd->get_option_no_throw("--format") != nullptr;
+  cmd->add_option(format_taken ? "--input-format" : "--format", o.format,
+                  "Read camera files as this format (default: detected): " + camera_format_names())
+      ->check(CLI::IsMember(format_names()));
+}
+
+Camera read_input_camera(const std::filesystem::path& path, CameraFileInfo* info_out) {
+  const CameraInputOptions& o = camera_input_options();
+  CameraReadOptions options;
+  if (!o.camera.empty()) options.camera = o.camera;
+  if (!o.imagersize.empty()) options.image_size = parse_image_size(o.imagersize, "--imagersize");
+  if (!o.format.empty()) options.format = parse_camera_format(o.format);
+  CameraFileInfo info;
+  Camera camera = read_camera(path, options, &info);
+  for (const std::string& note : info.notes) std::fprintf(stderr, "fishcam: note: %s: %s\n", path.string().c_str(), note.c_str());
+  if (info_out) *info_out = info;
+  return camera;
+}
+
+
 
 void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options) {
   cmd->add_option("--out", options->out, "Output camera file")->required();
   cmd->add_option("--format", options->format, "Output format (default: from the extension; .json = fishcam)")
-      ->check(CLI::IsMember({"woodscape", "fishcam", "mrcal", "opencv"}));
+      ->check(CLI::IsMember(format_names()));
   cmd->add_flag("--json", options->json, "Print the report as one JSON object");
   cmd->add_flag("--force", options->force, "Replace an existing output file");
 }

@@ -28,6 +28,14 @@ struct PoseOptions {
 };
 void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth = true);
 
+// How subcommands read their camera files: --camera NAME|INDEX, --imagersize W,H
+// (or WxH) and --format (--input-format where --format names the output), set on
+// the subcommands main.cpp lists; notes (which camera, what was not read) go to stderr.
+void add_camera_input_options(CLI::App* cmd);
+Camera read_input_camera(const std::filesystem::path& path, CameraFileInfo* info = nullptr);
+// "W,H" or "WxH" as positive integers; throws Error naming the option.
+std::pair<int, int> parse_image_size(const std::string& text, const std::string& option);
+
 // The warp from SOURCE to TARGET (TARGET empty: the source camera again).
 ViewpointWarp make_warp(const std::string& source, const std::string& target);
 

@@ -39,7 +39,7 @@ void register_convert(CLI::App& app) {
   cmd->callback([o, fit_center, fit_aspect] {
     check_outputs({{o->output.out}}, {o->source}, o->output.force);
     const auto started = std::chrono::steady_clock::now();
-    const Camera source = read_camera(o->source);
+    const Camera source = read_input_camera(o->source);
     const ModelSpec spec = parse_model_spec(o->to);
     const CameraFormat format = o->output.resolved_format();
     const std::optional<double> max_theta = o->max_angle > 0 ? std::optional(o->max_angle / kDeg) : std::nullopt;

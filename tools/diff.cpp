@@ -23,7 +23,7 @@ void register_diff(CLI::App& app) {
   cmd->add_flag("--no-rotation", o->no_rotation, "Do not fit a rotation between the frames");
   cmd->add_flag("--json", o->json, "Print one JSON object");
   cmd->callback([o] {
-    const Camera a = read_camera(o->a), b = read_camera(o->b);
+    const Camera a = read_input_camera(o->a), b = read_input_camera(o->b);
     const ProjectionDiff diff = projection_diff(a, b, o->step, !o->no_rotation);
     const double angle_deg = Eigen::AngleAxisd(diff.rotation).angle() * 180 / std::numbers::pi;
     if (o->json) {

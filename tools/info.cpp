@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/camera_io.hpp"
 
@@ -52,13 +53,14 @@ void register_info(CLI::App& app) {
   auto* cmd = app.add_subcommand("info", "Print a camera's model, parameters, valid domain and field of view");
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  cmd->add_option("CAMERA", *path, "Camera file (WoodScape JSON, fishcam JSON, mrcal .cameramodel, OpenCV YAML)")
+  cmd->add_option("CAMERA", *path, "Camera file (" + camera_format_names() + ")")
       ->required();
   cmd->add_flag("--json", *json, "Print one JSON object");
   cmd->callback([path, json] {
-    CameraFormat format{};
-    const Camera camera = read_camera(*path, &format);
-    const nlohmann::json j = nlohmann::json::parse(camera_info_json(camera, format));
+    CameraFileInfo info;
+    const Camera camera = read_input_camera(*path, &info);
+    nlohmann::json j = nlohmann::json::parse(camera_info_json(camera, info.format));
+    j["camera"] = {{"name", info.camera_name}, {"index", info.camera_index}, {"count", info.camera_count}};
     if (*json) {
       std::printf("%s\n", j.dump(2).c_str());
     } else {

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/utils/logger.hpp>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/error.hpp"
 
@@ -42,7 +43,8 @@ void guard_number_options(CLI::App* app) {
 // set them.
 std::string in_cli_terms(std::string message) {
   static const std::pair<const char*, const char*> kOptions[] = {
-      {"max_angle", "--max-angle"}, {"fit_center", "--fit-center"}, {"fit_aspect", "--fit-aspect"}};
+      {"max_angle", "--max-angle"}, {"fit_center", "--fit-center"}, {"fit_aspect", "--fit-aspect"},
+      {"image_size", "--imagersize"}};
   for (const auto& [concept_name, option] : kOptions) {
     for (size_t at = message.find(concept_name); at != std::string::npos;
          at = message.find(concept_name, at + std::strlen(option))) {
@@ -84,6 +86,10 @@ int main(int argc, char** argv) {
   fishcam::cli::register_calibrate(app);
   fishcam::cli::register_diff(app);
   fishcam::cli::register_sample_dataset(app);
+  // Subcommands that read camera files share how (--camera, --imagersize, --format).
+  for (const char* name : {"info", "project", "unproject", "render", "map", "augment", "convert", "diff", "synth-corners"}) {
+    fishcam::cli::add_camera_input_options(app.get_subcommand(name));
+  }
   guard_number_options(&app);
   // Our one line is the message: no OpenCV warnings around it.
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);

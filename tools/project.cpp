@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/camera_io.hpp"
 #include "line_input.hpp"
@@ -16,7 +17,7 @@ void register_project(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   cmd->add_option("CAMERA", *path, "Camera file")->required();
   cmd->callback([path] {
-    const Camera camera = read_camera(*path);
+    const Camera camera = read_input_camera(*path);
     for_each_record<3>(std::cin, "three numbers 'x y z'", [&](const std::array<double, 3>& p) {
       Eigen::Vector2d pixel;
       if (camera.project({p[0], p[1], p[2]}, &pixel)) {

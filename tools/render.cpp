@@ -26,8 +26,8 @@ void register_render(CLI::App& app) {
   cmd->add_flag("--force", o->force, "Replace existing output files");
   cmd->callback([o] {
     check_outputs({{o->out_image}, {o->out_label, true}}, {o->camera, o->mount}, o->force);
-    const Camera camera = read_camera(o->camera);
-    const std::optional<Pose> mount_pose = o->mount.empty() ? camera.parameters().pose : read_camera(o->mount).parameters().pose;
+    const Camera camera = read_input_camera(o->camera);
+    const std::optional<Pose> mount_pose = o->mount.empty() ? camera.parameters().pose : read_input_camera(o->mount).parameters().pose;
     if (!mount_pose) {
       throw Error(o->camera + ": has no pose to place it in the scene (give one with --mount, e.g. "
                               "data/woodscape_front.json)");

@@ -30,7 +30,7 @@ void register_synth_corners(CLI::App& app) {
   cmd->add_flag("--force", o->force, "Replace existing output files");
   cmd->callback([o] {
     check_outputs({{o->out}, {o->truth}}, {o->camera}, o->force);
-    const Camera camera = read_camera(o->camera);
+    const Camera camera = read_input_camera(o->camera);
     const BoardSpec board = parse_board(o->board, o->spacing);
     const SyntheticBoards synthetic = synthesize_boards(camera, board, o->boards, o->noise, o->seed);
     // Corners and truth land together (or neither).

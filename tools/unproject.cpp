@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/camera_io.hpp"
 #include "line_input.hpp"
@@ -15,7 +16,7 @@ void register_unproject(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   cmd->add_option("CAMERA", *path, "Camera file")->required();
   cmd->callback([path] {
-    const Camera camera = read_camera(*path);
+    const Camera camera = read_input_camera(*path);
     for_each_record<2>(std::cin, "two numbers 'u v'", [&](const std::array<double, 2>& q) {
       Eigen::Vector3d ray;
       if (camera.unproject({q[0], q[1]}, &ray)) {

@@ -112,7 +112,7 @@ MapKind map_kind(const std::string& name) {
 std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
   if (!name) return std::nullopt;
   const auto format = parse_camera_format(*name);
-  if (!format) throw Error("format: unknown camera format '" + *name + "' (woodscape, fishcam, mrcal, opencv)");
+  if (!format) throw Error("format: unknown camera format '" + *name + "' (expected one of: " + camera_format_names() + ")");
   return format;
 }
 
@@ -149,17 +149,10 @@ void bind_camera(py::module_& m) {
             CameraFormat resolved;
             if (format) {
               resolved = *format_of(format);
+            } else if (const auto by_extension = camera_format_for_extension(path)) {
+              resolved = *by_extension;
             } else {
-              const std::string ext = std::filesystem::path(path).extension().string();
-              if (ext == ".cameramodel") {
-                resolved = CameraFormat::mrcal;
-              } else if (ext == ".yaml" || ext == ".yml" || ext == ".xml") {
-                resolved = CameraFormat::opencv;
-              } else if (ext == ".json") {
-                resolved = CameraFormat::fishcam;
-              } else {
-                throw Error(path + ": cannot tell the format from the extension; pass format=");
-              }
+              throw Error(path + ": cannot tell the format from the extension; pass format=");
             }
             write_camera(camera.parameters(), path, resolved, overwrite);
           },

@@ -49,7 +49,7 @@ def test_info_has_the_cli_fields(cam, tmp_path):
     info = cam.info()
     cli = json.loads(run_cli("info", data("woodscape_front.json"), "--json"))
     for key in cli:
-        if key != "format":
+        if key not in ("format", "camera"):  # what the file said, not the camera
             assert info[key] == cli[key], key
 
 
@@ -240,7 +240,7 @@ def test_write_refuses_to_replace_unless_overwrite(cam, tmp_path):
         cam.write(str(tmp_path / f"c.{fmt}"), format=fmt)
         assert fishcam.Camera.read(str(tmp_path / f"c.{fmt}"), format=fmt).info()["cx"] == cam.info()["cx"]
     with pytest.raises(fishcam.Error, match="extension"):
-        cam.write(str(tmp_path / "c.txt"))
+        cam.write(str(tmp_path / "c.dat"))
 
 
 def test_warp_is_callable_and_needs_a_change(cam):

@@ -50,13 +50,14 @@ std::vector<NamedCamera> read(const Content& c) {
                                        : " (expected kb4, ds, eucm, ucm or pinhole)"));
     }
     if (v.has("resolution") && i < v.size("resolution")) {
-      const auto& r = v.get("resolution")[i];
-      const JsonFields size(nlohmann::json{{"resolution", r}}, c.source(), "value0.");
-      const auto wh = size.numbers("resolution", 2, 2);
-      for (double x : wh) {
-        if (!(x >= 1 && x <= (1 << 16)) || x != std::floor(x)) v.fail("resolution", "expected positive integers");
+      const nlohmann::json& r = v.get("resolution")[i];
+      const std::string key = "resolution[" + std::to_string(i) + "]";
+      if (!r.is_array() || r.size() != 2 || !r[0].is_number() || !r[1].is_number()) v.fail(key, "expected [width, height]");
+      const double w = r[0].get<double>(), h = r[1].get<double>();
+      for (double x : {w, h}) {
+        if (!(x >= 1 && x <= (1 << 16)) || x != std::floor(x)) v.fail(key, "expected positive integers <= 65536");
       }
-      p.width = int(wh[0]), p.height = int(wh[1]);
+      p.width = int(w), p.height = int(h);
     }
     if (v.has("T_imu_cam") && i < v.size("T_imu_cam")) {
       const JsonFields t = v.item("T_imu_cam", i);
