@@ -5,37 +5,17 @@
 // fold search and the poles of the formulas.
 #include <functional>
 
+#include "reference_models.hpp"
 #include "test_support.hpp"
 
 namespace fishcam {
 namespace {
 
-struct Intrinsics {
-  double fx, fy, cx, cy;
-};
-
-// Published projections of a 3D point (x, y, z), no radial model involved.
-Eigen::Vector2d ucm_xi(const Intrinsics& k, double xi, const Eigen::Vector3d& p) {
-  const double den = xi * p.norm() + p.z();
-  return {k.fx * p.x() / den + k.cx, k.fy * p.y() / den + k.cy};
-}
-Eigen::Vector2d eucm(const Intrinsics& k, double alpha, double beta, const Eigen::Vector3d& p) {
-  const double d = std::sqrt(beta * (p.x() * p.x() + p.y() * p.y()) + p.z() * p.z());
-  const double den = alpha * d + (1 - alpha) * p.z();
-  return {k.fx * p.x() / den + k.cx, k.fy * p.y() / den + k.cy};
-}
-Eigen::Vector2d double_sphere(const Intrinsics& k, double xi, double alpha, const Eigen::Vector3d& p) {
-  const double d1 = p.norm(), shifted = xi * d1 + p.z();
-  const double d2 = std::sqrt(p.x() * p.x() + p.y() * p.y() + shifted * shifted);
-  const double den = alpha * d2 + (1 - alpha) * shifted;
-  return {k.fx * p.x() / den + k.cx, k.fy * p.y() / den + k.cy};
-}
-Eigen::Vector2d mei(const Intrinsics& k, double xi, double k1, double k2, const Eigen::Vector3d& p) {
-  const double den = p.z() + xi * p.norm();
-  const double mx = p.x() / den, my = p.y() / den, r2 = mx * mx + my * my;
-  const double g = 1 + k1 * r2 + k2 * r2 * r2;
-  return {k.fx * mx * g + k.cx, k.fy * my * g + k.cy};
-}
+using test::double_sphere;
+using test::eucm;
+using test::Intrinsics;
+using test::mei;
+using test::ucm_xi;
 
 struct Case {
   std::string name;

@@ -1,0 +1,57 @@
+// Independent references written from the published formulas, in 3D (no radial
+// model, no fishcam code): what the readers' cameras are checked against.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace fishcam::test {
+
+struct Intrinsics {
+  double fx, fy, cx, cy;
+};
+
+// Kannala-Brandt as OpenCV's fisheye model writes it: theta_d = theta (1 + k1 theta^2 + ...).
+inline Eigen::Vector2d kannala_brandt(const Intrinsics& k, const std::array<double, 4>& d, const Eigen::Vector3d& p) {
+  const double chi = std::hypot(p.x(), p.y()), theta = std::atan2(chi, p.z()), t2 = theta * theta;
+  const double theta_d = theta * (1 + t2 * (d[0] + t2 * (d[1] + t2 * (d[2] + t2 * d[3]))));
+  const double s = chi > 0 ? theta_d / chi : 1 / p.z();
+  return {k.fx * s * p.x() + k.cx, k.fy * s * p.y() + k.cy};
+}
+// Usenko et al. 2018.
+inline Eigen::Vector2d ucm_xi(const Intrinsics& k, double xi, const Eigen::Vector3d& p) {
+  const double den = xi * p.norm() + p.z();
+  return {k.fx * p.x() / den + k.cx, k.fy * p.y() / den + k.cy};
+}
+inline Eigen::Vector2d eucm(const Intrinsics& k, double alpha, double beta, const Eigen::Vector3d& p) {
+  const double d = std::sqrt(beta * (p.x() * p.x() + p.y() * p.y()) + p.z() * p.z());
+  const double den = alpha * d + (1 - alpha) * p.z();
+  return {k.fx * p.x() / den + k.cx, k.fy * p.y() / den + k.cy};
+}
+inline Eigen::Vector2d double_sphere(const Intrinsics& k, double xi, double alpha, const Eigen::Vector3d& p) {
+  const double d1 = p.norm(), shifted = xi * d1 + p.z();
+  const double d2 = std::sqrt(p.x() * p.x() + p.y() * p.y() + shifted * shifted);
+  const double den = alpha * d2 + (1 - alpha) * shifted;
+  return {k.fx * p.x() / den + k.cx, k.fy * p.y() / den + k.cy};
+}
+// Mei & Rives 2007 without tangential terms.
+inline Eigen::Vector2d mei(const Intrinsics& k, double xi, double k1, double k2, const Eigen::Vector3d& p) {
+  const double den = p.z() + xi * p.norm();
+  const double mx = p.x() / den, my = p.y() / den, r2 = mx * mx + my * my;
+  const double g = 1 + k1 * r2 + k2 * r2 * r2;
+  return {k.fx * mx * g + k.cx, k.fy * my * g + k.cy};
+}
+// valeoai/WoodScape scripts/calibration/projection.py.
+inline Eigen::Vector2d woodscape(const std::vector<double>& k, double width, double height, double cx_offset,
+                                 double cy_offset, double aspect, const Eigen::Vector3d& p) {
+  const double chi = std::hypot(p.x(), p.y()), theta = std::atan2(chi, p.z());
+  double rho = 0, power = theta;
+  for (double c : k) rho += c * power, power *= theta;
+  const double cx = width / 2 + cx_offset - 0.5, cy = height / 2 + cy_offset - 0.5;
+  return {cx + rho * p.x() / chi, cy + rho * p.y() / chi * aspect};
+}
+
+}  // namespace fishcam::test

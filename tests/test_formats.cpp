@@ -1,0 +1,291 @@
+// Camera file formats: the 28 real third-party files of ../shared/data/external
+// read (against the published formulas, with the numbers copied from the files by
+// hand) or refused naming why; write -> read round trips for every format and
+// every registry model it can hold; camera selection and image sizes.
+#include <opencv2/calib3d.hpp>
+
+#include <functional>
+
+#include "reference_models.hpp"
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+using test::Intrinsics;
+
+std::filesystem::path external(const std::string& name) {
+  return std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external" / name;
+}
+
+using Reference = std::function<Eigen::Vector2d(const Eigen::Vector3d&)>;
+
+// The camera against the reference over random rays up to max_theta (and the
+// camera's domain), at distances 0.3 to 50: the worst pixel difference.
+double worst_difference(const Camera& camera, const Reference& reference, double max_theta) {
+  const double limit = std::min(max_theta, camera.domain().closed ? camera.domain().theta_max : camera.domain().theta_max - 1e-3);
+  double worst = 0;
+  int n = 0;
+  for (const Eigen::Vector3d& ray : test::random_rays(5000, limit, 17)) {
+    const Eigen::Vector3d p = ray * (0.3 + 49.7 * (n++ % 31) / 30.0);
+    Eigen::Vector2d pixel;
+    EXPECT_TRUE(camera.project(p, &pixel));
+    worst = std::max(worst, (pixel - reference(p)).norm());
+  }
+  return worst;
+}
+
+// cv::fisheye::projectPoints (OpenCV's own code) for rays below 90 deg.
+double worst_against_opencv(const Camera& camera, const Intrinsics& k, const std::array<double, 4>& d) {
+  std::vector<cv::Point3d> points;
+  const double limit = std::min(89 * M_PI / 180, camera.domain().theta_max);  // some lenses fold before 90 deg
+  for (const Eigen::Vector3d& ray : test::random_rays(3000, limit, 23)) points.emplace_back(ray.x(), ray.y(), ray.z());
+  std::vector<cv::Point2d> pixels;
+  const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+  cv::fisheye::projectPoints(points, pixels, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, cv::Vec4d(d[0], d[1], d[2], d[3]));
+  double worst = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    Eigen::Vector2d pixel;
+    if (!camera.project(Eigen::Vector3d(points[i].x, points[i].y, points[i].z), &pixel)) {
+      ADD_FAILURE() << "a ray at " << std::acos(points[i].z) << " rad does not project";
+      continue;
+    }
+    worst = std::max(worst, (pixel - Eigen::Vector2d(pixels[i].x, pixels[i].y)).norm());
+  }
+  return worst;
+}
+
+struct Readable {
+  std::string file;
+  std::string camera;  // empty: the default (first)
+  std::string format, model;
+  int width, height;
+  Reference reference;
+  double max_theta;
+  // Kannala-Brandt files are also checked against OpenCV below 90 deg.
+  std::optional<std::pair<Intrinsics, std::array<double, 4>>> opencv;
+};
+
+std::vector<Readable> readable_files() {
+  const double kFull = M_PI;
+  auto kb = [](Intrinsics k, std::array<double, 4> d) { return [=](const Eigen::Vector3d& p) { return test::kannala_brandt(k, d, p); }; };
+  const Intrinsics tumvi{190.97847715128717, 190.9733070521226, 254.93170605935475, 256.8974428996504};
+  const std::array<double, 4> tumvi_d{0.0034823894022493434, 0.0007150348452162257, -0.0020532361418706202, 0.00020293673591811182};
+  const Intrinsics t265_cam1{281.49219856329046, 280.3289056204996, 414.09933409091184, 406.02198481912353};
+  const std::array<double, 4> t265_cam1_d{-0.0028480208540388407, 0.05429895807264252, -0.0516469474707301, 0.010954064142332987};
+  const Intrinsics basalt_kb{286.60144163375528, 286.4617087423328, 422.2765876951761, 395.2246466040553};
+  const std::array<double, 4> basalt_kb_d{-0.006762412326815424, 0.045170283325720008, -0.043515167278210638, 0.008374959821591333};
+  const Intrinsics camodocal{286.2373962402344, 286.4901123046875, 421.489990234375, 400.760986328125};
+  const std::array<double, 4> camodocal_d{-0.00703547615557909, 0.042284730821847916, -0.03999178111553192, 0.006651225965470076};
+  const Intrinsics orb2{285.284, 285.469, 423.582, 412.376};
+  const std::array<double, 4> orb2_d{-0.0011336730094626546, 0.02848909981548786, -0.02476550079882145, 0.0018412149511277676};
+  const Intrinsics panyu{991, 991, 1612, 1617};
+  const Intrinsics panyu_colmap{991, 991, 1612 - 0.5, 1617 - 0.5};  // COLMAP's pixel centres at +0.5
+  const std::array<double, 4> panyu_d{0.024943212941115993, 0.0049984956352712093, -0.017541641442409061, 0.0045520708951808514};
+  const Intrinsics modalai{4.6089521210754816e+02, 4.6131778898262439e+02, 6.7449558584818692e+02, 3.9842248409866886e+02};
+  const std::array<double, 4> modalai_d{5.1711564126224734e-02, 2.6006282671421282e-02, -1.3105287746560544e-02, 1.3645308211349091e-03};
+  const Intrinsics ds{158.28600034966977, 158.2743455478755, 254.96116578191653, 256.8894394501779};
+  const Intrinsics eucm{460.76484651566468, 459.4051018049483, 365.8937161309615, 249.33499869752445};
+  return {
+      {"openvins_tum_vi_kalibr_imucam_chain.yaml", "", "kalibr", "kannala-brandt", 512, 512, kb(tumvi, tumvi_d), kFull, {{tumvi, tumvi_d}}},
+      {"openvins_rs_t265_kalibr_imucam_chain.yaml", "cam1", "kalibr", "kannala-brandt", 848, 800, kb(t265_cam1, t265_cam1_d), kFull, {{t265_cam1, t265_cam1_d}}},
+      {"basalt_t265_kb4_calib.json", "", "basalt", "kannala-brandt", 848, 800, kb(basalt_kb, basalt_kb_d), kFull, {{basalt_kb, basalt_kb_d}}},
+      {"vinsfusion_t265_left_KANNALA_BRANDT.yaml", "", "camodocal", "kannala-brandt", 848, 800, kb(camodocal, camodocal_d), kFull, {{camodocal, camodocal_d}}},
+      {"orbslam3_fisheye_KannalaBrandt8.yaml", "Camera2", "orbslam3", "kannala-brandt", 848, 800, kb(orb2, orb2_d), kFull, {{orb2, orb2_d}}},
+      {"panyu_ros_style_fisheye_camera_intrinsics.yaml", "", "ros", "kannala-brandt", 3264, 3264, kb(panyu, panyu_d), kFull, {{panyu, panyu_d}}},
+      {"colmap_opencv_fisheye_cameras.txt", "2", "colmap", "kannala-brandt", 3264, 3264, kb(panyu_colmap, panyu_d), kFull, {{panyu_colmap, panyu_d}}},
+      {"modalai_opencv_tracking_down_intrinsics.yml", "", "opencv", "kannala-brandt", 1280, 800, kb(modalai, modalai_d), kFull, {{modalai, modalai_d}}},
+      {"basalt_tumvi_512_ds_calib.json", "", "basalt", "double-sphere", 512, 512,
+       [=](const Eigen::Vector3d& p) { return test::double_sphere(ds, -0.17213086034353243, 0.5931177593944744, p); }, kFull, {}},
+      {"basalt_euroc_eucm_calib.json", "0", "basalt", "extended-unified", 752, 480,
+       [=](const Eigen::Vector3d& p) { return test::eucm(eucm, 0.5903365915227143, 1.127468196965374, p); }, kFull, {}},
+      {"synwoodscape_FV.json", "", "woodscape", "polynomial", 1280, 966,
+       [](const Eigen::Vector3d& p) {
+         return test::woodscape({341.725, -26.4448, 32.7864, 0.50499}, 1280, 966, 0.329055, -3.5506, 1.00021, p);
+       },
+       kFull, {}},
+  };
+}
+
+TEST(Formats, RealThirdPartyFilesAgreeWithThePublishedFormulas) {
+  if (!std::filesystem::exists(external("README.md"))) GTEST_SKIP() << "no ../shared checkout";
+  for (const auto& r : readable_files()) {
+    CameraReadOptions options;
+    if (!r.camera.empty()) options.camera = r.camera;
+    CameraFileInfo info;
+    const Camera camera = read_camera(external(r.file), options, &info);
+    EXPECT_EQ(to_string(info.format), r.format) << r.file;
+    EXPECT_EQ(model_name(camera.model()), r.model) << r.file;
+    EXPECT_EQ(camera.width(), r.width) << r.file;
+    EXPECT_EQ(camera.height(), r.height) << r.file;
+    // 1e-9 px up to the model's limit (KB: 180 deg, where the formula is still defined).
+    EXPECT_LE(worst_difference(camera, r.reference, r.max_theta), 1e-9) << r.file;
+    if (r.opencv) {
+      EXPECT_LE(worst_against_opencv(camera, r.opencv->first, r.opencv->second), 1e-9) << r.file;
+    }
+  }
+}
+
+TEST(Formats, PosesAreReadInFishcamsConvention) {
+  if (!std::filesystem::exists(external("README.md"))) GTEST_SKIP() << "no ../shared checkout";
+  // Kalibr's T_cam_imu maps IMU points into the camera: fishcam's pose (camera ->
+  // reference) is its inverse, so R_pose = R^T and t_pose = -R^T t.
+  const Camera kalibr = read_camera(external("openvins_tum_vi_kalibr_imucam_chain.yaml"));
+  ASSERT_TRUE(kalibr.parameters().pose.has_value());
+  Eigen::Matrix3d r;
+  r << -0.9995250378696743, 0.029615343885863205, -0.008522328211654736, 0.0075019185074052044, -0.03439736061393144,
+      -0.9993800792498829, -0.02989013031643309, -0.998969345370175, 0.03415885127385616;
+  const Eigen::Vector3d t(0.04727988224914392, -0.047443232143367084, -0.0681999605066297);
+  const Pose& pose = *kalibr.parameters().pose;
+  EXPECT_LT((pose.rotation.toRotationMatrix() - r.transpose()).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LT((pose.translation - (-r.transpose() * t)).norm(), 1e-6);
+  // basalt's T_imu_cam is camera -> IMU already.
+  const Camera basalt = read_camera(external("basalt_tumvi_512_ds_calib.json"));
+  const Eigen::Quaterniond q(0.007639340823570553, -0.013392900690257393, -0.6945866755293793, 0.7192437840259219);
+  EXPECT_LT(basalt.parameters().pose->rotation.angularDistance(q.normalized()), 1e-12);
+  EXPECT_LT((basalt.parameters().pose->translation - Eigen::Vector3d(0.04548094812071685, -0.07145370002838907,
+                                                                     -0.046315428444919249)).norm(), 1e-15);
+}
+
+TEST(Formats, FilesFishcamCannotHoldAreRefusedNamingWhy) {
+  if (!std::filesystem::exists(external("README.md"))) GTEST_SKIP() << "no ../shared checkout";
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"mrcal_cam0.opencv8.cameramodel", "LENSMODEL_OPENCV8 (not radially symmetric"},
+      {"mrcal_cam0.splined.cameramodel", "LENSMODEL_SPLINED_STEREOGRAPHIC"},
+      {"mrcal_figueroa_opencv8-0.cameramodel", "not radially symmetric"},
+      {"photonvision_camera-0.cameramodel", "not radially symmetric"},
+      {"openvins_euroc_mav_kalibr_imucam_chain.yaml", "p1, p2 != 0 is not radially symmetric (fishcam reads radially"},
+      {"vinsfusion_t265_omni_radtan_camchain.yaml", "omni-radtan with p1, p2 != 0 is not radially symmetric"},
+      {"vinsfusion_t265_fisheye1_MEI.yaml", "MEI with tangential terms p1, p2 != 0 is not radially symmetric"},
+      {"vinsfisheye_dsta_cam0_mei.yaml", "MEI with tangential terms"},
+      {"ocamcalib_calib_results.txt", "OCamCalib calib_results.txt: Scaramuzza's model has an affine term"},
+      {"mei_omnidir_universal_fisheye.yaml", "omnidirectional_universal"},
+      {"opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml", "distortion_model: missing: 4 distortion coefficients could be"},
+  };
+  for (const auto& [file, expected] : refused) {
+    try {
+      read_camera(external(file));
+      ADD_FAILURE() << file << " was read";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(expected), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+      EXPECT_EQ(what.rfind(external(file).string(), 0), 0u) << what;  // names the file first
+    }
+  }
+  // Told it is a fisheye file and given the size, the last one reads.
+  std::string text = test::read_file(external("opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml"));
+  text += "distortion_model: fisheye\n";
+  CameraReadOptions options;
+  options.image_size = std::pair{1920, 1080};
+  const CameraParameters p = parse_camera(text, "fisheye.yml", options);
+  EXPECT_EQ(model_name(p.model), "kannala-brandt");
+  EXPECT_THROW(parse_camera(text, "fisheye.yml"), Error);  // no size: refused, not guessed
+}
+
+// Every format with every registry model it can hold: written, read back, the same
+// projection (to 1e-9 px over the valid domain); models it cannot hold refused in
+// one line naming the model. Every format holds some model.
+TEST(Formats, EveryFormatRoundTripsEveryModelItCanHold) {
+  const std::string names = camera_format_names();
+  for (size_t at = 0, next; at < names.size(); at = next + 2) {
+    next = names.find(", ", at);
+    if (next == std::string::npos) next = names.size();
+    const CameraFormat format = *parse_camera_format(names.substr(at, next - at));
+    int held = 0;
+    for (auto [label, p] : test::every_model()) {
+      p.pose = Pose{Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())), {0.1, -0.2, 1.5}};
+      std::string text;
+      try {
+        text = format_camera(p, format);
+      } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_TRUE(what.find("holds") != std::string::npos || what.find("cannot") != std::string::npos) << what;
+        continue;
+      }
+      ++held;
+      CameraReadOptions options;
+      options.format = format;
+      options.image_size = std::pair{p.width, p.height};
+      const Camera back(parse_camera(text, label, options));
+      const Camera original(p);
+      EXPECT_EQ(back.width(), p.width);
+      EXPECT_EQ(back.height(), p.height);
+      const double limit = original.domain().closed ? original.domain().theta_max : original.domain().theta_max - 1e-3;
+      double worst = 0;
+      for (const Eigen::Vector3d& ray : test::random_rays(2000, limit, 3)) {
+        Eigen::Vector2d a, b;
+        ASSERT_TRUE(original.project(ray, &a));
+        ASSERT_TRUE(back.project(ray, &b)) << to_string(format) << " " << label;
+        worst = std::max(worst, (a - b).norm() / (1 + 1e-3 * (a - original.principal_point()).norm()));
+      }
+      EXPECT_LE(worst, 1e-9) << to_string(format) << " " << label;
+      if (back.parameters().pose) {  // formats with poses keep them
+        EXPECT_LT(back.parameters().pose->rotation.angularDistance(p.pose->rotation), 1e-12) << to_string(format);
+        EXPECT_LT((back.parameters().pose->translation - p.pose->translation).norm(), 1e-12) << to_string(format);
+      }
+      if (model_name(back.model()) == model_name(original.model()) && p.pixel_scale.x() == 1 &&
+          (format == CameraFormat::fishcam || format == CameraFormat::kalibr || format == CameraFormat::basalt)) {
+        // Stored as they are (basalt's unified model: the alpha form, exact to rounding).
+        const auto a = model_params(original.model()), b = model_params(back.model());
+        for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 4e-16 * std::abs(a[i])) << to_string(format) << " " << label;
+      }
+    }
+    EXPECT_GT(held, 0) << to_string(format);
+  }
+}
+
+TEST(Formats, CamerasAreChosenByNameOrIndexAndSizesChecked) {
+  CameraParameters p = test::woodscape_front();
+  p.model = KannalaBrandt<double>(331.5526, 0.0346514, 0.0241055, -0.0074981, 0.0007767);
+  std::string chain = format_camera(p, CameraFormat::kalibr);
+  CameraParameters other = p;
+  other.model = KannalaBrandt<double>(300, 0.0346514, 0.0241055, -0.0074981, 0.0007767);
+  std::string second = format_camera(other, CameraFormat::kalibr);
+  second.replace(0, 5, "cam1:");
+  const std::string both = chain + second;
+  CameraFileInfo info;
+  CameraReadOptions options;
+  EXPECT_EQ(model_params(parse_camera(both, "chain.yaml", options, &info).model)[0], 331.5526);
+  EXPECT_EQ(info.camera_count, 2);
+  EXPECT_EQ(info.camera_name, "cam0");
+  ASSERT_FALSE(info.notes.empty());  // the default is said
+  for (const char* which : {"cam1", "1"}) {
+    options.camera = which;
+    EXPECT_EQ(model_params(parse_camera(both, "chain.yaml", options, &info).model)[0], 300.0) << which;
+    EXPECT_EQ(info.camera_index, 1);
+  }
+  options.camera = "cam7";
+  try {
+    parse_camera(both, "chain.yaml", options);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no camera 'cam7' (the file has 0 = cam0, 1 = cam1)"), std::string::npos) << e.what();
+  }
+  options.camera.reset();
+  options.image_size = std::pair{640, 480};
+  EXPECT_THROW(parse_camera(both, "chain.yaml", options), Error);  // the file says 1280x966
+  // A file without a size: refused without one, read with one.
+  std::string orb = format_camera(p, CameraFormat::orbslam3);
+  orb = orb.substr(0, orb.find("\nCamera.width"));
+  try {
+    parse_camera(orb, "orb.yaml");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("image_size: the ORB-SLAM3 settings YAML file has no image size"), std::string::npos)
+        << e.what();
+  }
+  options.image_size = std::pair{1280, 966};
+  EXPECT_EQ(parse_camera(orb, "orb.yaml", options).width, 1280);
+}
+
+TEST(Formats, DetectionScoresTheFormatsOwnKeys) {
+  const CameraParameters p = test::every_model()[5].second;  // kannala-brandt
+  for (CameraFormat f : {CameraFormat::opencv, CameraFormat::kalibr, CameraFormat::basalt, CameraFormat::colmap,
+                         CameraFormat::ros, CameraFormat::camodocal, CameraFormat::orbslam3, CameraFormat::fishcam}) {
+    EXPECT_EQ(detect_camera_format(format_camera(p, f), "x"), f) << to_string(f);
+  }
+}
+
+}  // namespace
+}  // namespace fishcam
