@@ -76,8 +76,10 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     const v_float32 xi = cv::vx_setall_f32(src.xi);
     v_float32 w = cv::v_fma(xi, norm, pz);
     if (src.xi > 0) {
-      const v_float32 xi2 = cv::vx_setall_f32(src.xi * src.xi), xi2m1 = cv::vx_setall_f32(src.xi * src.xi - 1);
-      w = cv::v_select(pz >= zero, w, cv::v_fma(xi2, chi2, xi2m1 * pz * pz) / cv::v_fma(xi, norm, zero - pz));
+      const v_float32 numerator =
+          src.xi == 1 ? chi2
+                      : cv::v_fma(cv::vx_setall_f32(src.xi * src.xi), chi2, cv::vx_setall_f32(src.xi * src.xi - 1) * pz * pz);
+      w = cv::v_select(pz >= zero, w, numerator / cv::v_fma(xi, norm, zero - pz));
     }
     v_float32 d = w;
     if (src.alpha != 0) {
