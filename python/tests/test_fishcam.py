@@ -322,3 +322,31 @@ def test_camera_read_options(cam):
     assert fishcam.Camera.read(data("woodscape_front.json"), camera=0) == cam
     assert fishcam.Camera.read(data("woodscape_front.json"), image_size=(1280, 966)) == cam
     assert fishcam.Camera.read(data("woodscape_front.json"), format="woodscape") == cam
+
+
+@pytest.mark.parametrize("model,fmt,ext", [("double-sphere", "basalt", "json"), ("extended-unified", "kalibr", "yaml"),
+                                           ("unified", "kalibr", "yaml"), ("mei", "camodocal", "yaml"),
+                                           ("kannala-brandt", "colmap", "txt"), ("kannala-brandt", "ros", "yaml"),
+                                           ("kannala-brandt", "orbslam3", "yaml")])
+def test_every_model_and_format_reaches_python(cam, tmp_path, model, fmt, ext):
+    fitted, report = fishcam.convert(cam, model)
+    assert fitted.model == model and report["rms_px"] < 1.0
+    path = tmp_path / f"c.{ext}"
+    fitted.write(str(path), format=fmt)
+    back = fishcam.Camera.read(str(path), format=fmt)
+    rays, ok = cam.unproject(np.array([[640.0, 480.0], [300.0, 200.0], [1000.0, 800.0]]))
+    assert ok.all()
+    (a, a_ok), (b, b_ok) = back.project(rays), fitted.project(rays)
+    assert a_ok.all() and b_ok.all()
+    np.testing.assert_allclose(a, b, atol=1e-9)
+    assert back.model == model
+
+
+def test_cameras_of_a_multi_camera_file(cam, tmp_path):
+    fitted, _ = fishcam.convert(cam, "kannala-brandt")
+    fitted.write(str(tmp_path / "a.yaml"), format="kalibr")
+    text = (tmp_path / "a.yaml").read_text()
+    (tmp_path / "chain.yaml").write_text(text + text.replace("cam0:", "cam1:"))
+    assert fishcam.Camera.read(str(tmp_path / "chain.yaml"), camera="cam1") == fishcam.Camera.read(str(tmp_path / "chain.yaml"))
+    with pytest.raises(fishcam.Error, match="no camera 'cam9'"):
+        fishcam.Camera.read(str(tmp_path / "chain.yaml"), camera="cam9")
