@@ -12,7 +12,7 @@ void register_calibrate(CLI::App& app) {
                                               "of intrinsics and board poses, robust, with uncertainties");
   struct Options {
     std::string corners, board, model;
-    std::vector<int> imagersize;
+    std::string imagersize;
     double spacing = 0;
     CameraOutputOptions output;
   };
@@ -20,7 +20,7 @@ void register_calibrate(CLI::App& app) {
   cmd->add_option("--corners", o->corners, "corners.vnl (mrcal's format)")->required();
   cmd->add_option("--board", o->board, "Inner corners WxH")->required();
   cmd->add_option("--spacing", o->spacing, "Corner spacing (m)")->required()->check(CLI::PositiveNumber);
-  cmd->add_option("--imagersize", o->imagersize, "Image size WxH")->required()->delimiter('x')->expected(2);
+  cmd->add_option("--imagersize", o->imagersize, "Image size W,H (or WxH)")->required();
   cmd->add_option("--model", o->model, "Model: " + fishcam::model_names_text())
       ->required();
   add_camera_output_options(cmd, &o->output);
@@ -29,9 +29,9 @@ void register_calibrate(CLI::App& app) {
     const BoardSpec board = parse_board(o->board, o->spacing);
     const ModelSpec spec = parse_model_spec(o->model);
     const CameraFormat format = o->output.resolved_format();
-    if (o->imagersize[0] < 1 || o->imagersize[1] < 1) throw Error("--imagersize: expected positive WxH");
+    const auto [width, height] = parse_image_size(o->imagersize, "--imagersize");
     const auto observations = read_corners(o->corners, board);
-    const CalibrationResult result = calibrate(observations, board, o->imagersize[0], o->imagersize[1], spec);
+    const CalibrationResult result = calibrate(observations, board, width, height, spec);
     write_camera(result.camera, o->output.out, format, o->output.force);
     for (const auto& warning : result.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
     nlohmann::json j = {{"model", model_name(result.camera.model)},

@@ -1,5 +1,6 @@
 // fishcam fit DATA.csv --to MODEL: a camera model from measured correspondences.
 #include <charconv>
+#include <tuple>
 #include <cstdio>
 #include <fstream>
 #include <numbers>
@@ -15,7 +16,7 @@ void register_fit(CLI::App& app) {
                                         "x,y,z,u,v) and report the pixel error");
   struct Options {
     std::string data, to;
-    std::vector<int> imagersize;
+    std::string imagersize;
     std::vector<double> center;
     double aspect = 1;
     bool fit_center = false, fit_aspect = false;
@@ -25,7 +26,7 @@ void register_fit(CLI::App& app) {
   cmd->add_option("DATA", o->data, "CSV with a header: theta,rho | theta_deg,rho | x,y,z,u,v")->required();
   cmd->add_option("--to", o->to, "Model: " + fishcam::model_names_text())
       ->required();
-  cmd->add_option("--imagersize", o->imagersize, "Image size W,H")->delimiter(',')->expected(2)->required();
+  cmd->add_option("--imagersize", o->imagersize, "Image size W,H (or WxH)")->required();
   cmd->add_option("--center", o->center, "Principal point cx,cy (px; the start when --fit-center)")
       ->delimiter(',')
       ->expected(2)
@@ -40,7 +41,7 @@ void register_fit(CLI::App& app) {
     const CameraFormat format = o->output.resolved_format();
     const CorrespondenceFile file = read_csv(o->data);
     CameraParameters start;
-    start.width = o->imagersize[0], start.height = o->imagersize[1];
+    std::tie(start.width, start.height) = parse_image_size(o->imagersize, "--imagersize");
     start.principal_point = {o->center[0], o->center[1]};
     start.pixel_scale = {1.0, o->aspect};
     std::vector<Correspondence> samples;

@@ -19,25 +19,24 @@ void register_sample_dataset(CLI::App& app) {
     std::string out, camera;
     int images = 8;
     std::uint64_t seed = 0;
-    std::vector<int> size;
+    std::string size;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("OUT", o->out, "Output folder (created; existing samples are never replaced)")->required();
   cmd->add_option("--images", o->images, "Number of samples")->check(CLI::Range(1, 100000))->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the mount perturbations")->required();
   cmd->add_option("--camera", o->camera, "Camera file with a pose (default: the bundled WoodScape front camera)");
-  cmd->add_option("--size", o->size, "Render at WxH (the same lens, resized; default: the camera's size)")
-      ->delimiter('x')
-      ->expected(2);
+  cmd->add_option("--size", o->size, "Render at WxH or W,H (the same lens, resized; default: the camera's size)");
   cmd->callback([o] {
     const std::filesystem::path camera_path = o->camera.empty() ? bundled_data("woodscape_front.json") : std::filesystem::path(o->camera);
     Camera camera = read_camera(camera_path);
     if (!camera.parameters().pose) throw Error(camera_path.string() + ": has no pose to place it in the scene");
     if (!o->size.empty()) {
-      if (o->size[0] < 16 || o->size[1] < 16 || o->size[0] > 8192 || o->size[1] > 8192) {
+      const auto [width, height] = parse_image_size(o->size, "--size");
+      if (width < 16 || height < 16 || width > 8192 || height > 8192) {
         throw Error("--size: expected 16 to 8192 pixels per side");
       }
-      camera = Camera(resized(camera.parameters(), o->size[0], o->size[1]));
+      camera = Camera(resized(camera.parameters(), width, height));
     }
     const std::filesystem::path out = o->out;
     for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
