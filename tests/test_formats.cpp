@@ -5,6 +5,8 @@
 #include <opencv2/calib3d.hpp>
 
 #include <functional>
+#include <nlohmann/json.hpp>
+#include <set>
 
 #include "reference_models.hpp"
 #include "fishcam/fit.hpp"
@@ -127,6 +129,53 @@ TEST(Formats, RealThirdPartyFilesAgreeWithThePublishedFormulas) {
   }
 }
 
+// Every file of the collection is accounted for: read by one of the checks above or
+// below, or refused with a reason; a file added to it without a check fails here.
+TEST(Formats, EveryExternalFileIsReadAgainstAReferenceOrRefused) {
+  if (!std::filesystem::exists(external("README.md"))) GTEST_SKIP() << "no ../shared checkout";
+  std::set<std::string> checked;
+  for (const auto& r : readable_files()) checked.insert(r.file);
+  for (const char* refused : {"mrcal_cam0.opencv8.cameramodel", "mrcal_cam0.splined.cameramodel",
+                              "mrcal_figueroa_opencv8-0.cameramodel", "photonvision_camera-0.cameramodel",
+                              "openvins_euroc_mav_kalibr_imucam_chain.yaml", "vinsfusion_t265_omni_radtan_camchain.yaml",
+                              "vinsfusion_t265_fisheye1_MEI.yaml", "vinsfisheye_dsta_cam0_mei.yaml",
+                              "ocamcalib_calib_results.txt", "mei_omnidir_universal_fisheye.yaml",
+                              "opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml"}) {
+    checked.insert(refused);  // FilesFishcamCannotHoldAreRefusedNamingWhy
+  }
+  // WoodScape-layout JSON: the WoodScape formula with the numbers as the file has them.
+  for (const char* file : {"woodscape_valeoai_front.json", "synwoodscape_FV.json", "synwoodscape_MVL.json",
+                           "synwoodscape_MVR.json", "synwoodscape_RV.json"}) {
+    const auto in = nlohmann::json::parse(test::read_file(external(file)))["intrinsic"];
+    std::vector<double> k;
+    for (const char* key : {"k1", "k2", "k3", "k4"}) k.push_back(in[key].get<double>());
+    const Camera camera = read_camera(external(file));
+    const Reference reference = [&](const Eigen::Vector3d& p) {
+      return test::woodscape(k, in["width"].get<double>(), in["height"].get<double>(), in["cx_offset"].get<double>(),
+                             in["cy_offset"].get<double>(), in["aspect_ratio"].get<double>(), p);
+    };
+    EXPECT_LE(worst_difference(camera, reference, M_PI), 1e-9) << file;
+    checked.insert(file);
+  }
+  // mrcal's pinhole files: the pinhole formula (mrcal.project itself: test_mrcal).
+  for (const char* file : {"mrcal_pinhole-narrow-yawed-left.cameramodel", "mrcal_pinhole-narrow-yawed-right.cameramodel"}) {
+    const Camera camera = read_camera(external(file));
+    const Reference pinhole = [](const Eigen::Vector3d& p) {
+      return Eigen::Vector2d(2405.678127 * p.x() / p.z() + 1508.569804, 2453.362582 * p.y() / p.z() + 978.395964);
+    };
+    EXPECT_LE(worst_difference(camera, pinhole, 60 * M_PI / 180), 1e-9) << file;
+    EXPECT_EQ(camera.width(), 3008);
+    checked.insert(file);
+  }
+  for (const auto& entry : std::filesystem::directory_iterator(external(""))) {
+    const std::string name = entry.path().filename().string();
+    if (name != "README.md") {
+      EXPECT_TRUE(checked.count(name)) << name << " is not checked by any test";
+    }
+  }
+  EXPECT_EQ(checked.size(), 28u);
+}
+
 TEST(Formats, PosesAreReadInFishcamsConvention) {
   if (!std::filesystem::exists(external("README.md"))) GTEST_SKIP() << "no ../shared checkout";
   // Kalibr's T_cam_imu maps IMU points into the camera: fishcam's pose (camera ->
@@ -174,14 +223,22 @@ TEST(Formats, FilesFishcamCannotHoldAreRefusedNamingWhy) {
       EXPECT_EQ(what.rfind(external(file).string(), 0), 0u) << what;  // names the file first
     }
   }
-  // Told it is a fisheye file and given the size, the last one reads.
-  std::string text = test::read_file(external("opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml"));
-  text += "distortion_model: fisheye\n";
+  // Told it is a fisheye file (by the caller, or by the file) and given the size,
+  // the last one reads.
+  const std::string text = test::read_file(external("opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml"));
   CameraReadOptions options;
   options.image_size = std::pair{1920, 1080};
+  options.distortion_model = "fisheye";
   const CameraParameters p = parse_camera(text, "fisheye.yml", options);
   EXPECT_EQ(model_name(p.model), "kannala-brandt");
-  EXPECT_THROW(parse_camera(text, "fisheye.yml"), Error);  // no size: refused, not guessed
+  EXPECT_EQ(model_params(p.model)[0], 3.5858622506170752e+02);
+  options.distortion_model.reset();
+  EXPECT_EQ(model_params(parse_camera(text + "distortion_model: fisheye\n", "f.yml", options).model)[1], -6.0217213307700412e-02);
+  options.distortion_model = "plumb_bob";  // the caller contradicts the file
+  EXPECT_THROW(parse_camera(text + "distortion_model: fisheye\n", "f.yml", options), Error);
+  options.distortion_model = "fisheye";
+  options.image_size.reset();
+  EXPECT_THROW(parse_camera(text, "fisheye.yml", options), Error);  // no size: refused, not guessed
 }
 
 // Every format with every registry model it can hold: written, read back, the same

@@ -150,7 +150,7 @@ std::vector<std::string> format_names() {
 }
 
 struct CameraInputOptions {
-  std::string camera, imagersize, format;
+  std::string camera, imagersize, format, distortion_model;
 };
 CameraInputOptions& camera_input_options() {
   static CameraInputOptions options;
@@ -185,6 +185,9 @@ void add_camera_input_options(CLI::App* cmd) {
   cmd->add_option(format_taken ? "--input-format" : "--format", o.format,
                   "Read camera files as this format (default: detected): " + camera_format_names())
       ->check(CLI::IsMember(format_names()));
+  cmd->add_option("--distortion-model", o.distortion_model,
+                  "For OpenCV files that do not say: fisheye (Kannala-Brandt) or plumb_bob (radial-tangential)")
+      ->check(CLI::IsMember({"fisheye", "plumb_bob"}));
 }
 
 Camera read_input_camera(const std::filesystem::path& path, CameraFileInfo* info_out) {
@@ -193,6 +196,7 @@ Camera read_input_camera(const std::filesystem::path& path, CameraFileInfo* info
   if (!o.camera.empty()) options.camera = o.camera;
   if (!o.imagersize.empty()) options.image_size = parse_image_size(o.imagersize, "--imagersize");
   if (!o.format.empty()) options.format = parse_camera_format(o.format);
+  if (!o.distortion_model.empty()) options.distortion_model = o.distortion_model;
   CameraFileInfo info;
   Camera camera = read_camera(path, options, &info);
   for (const std::string& note : info.notes) std::fprintf(stderr, "fishcam: note: %s: %s\n", path.string().c_str(), note.c_str());

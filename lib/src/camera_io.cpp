@@ -113,7 +113,7 @@ std::vector<detail::NamedCamera> read_all(const detail::Content& c, CameraFormat
 CameraParameters parse_camera(std::string_view content, std::string_view source_name,
                               const CameraReadOptions& options, CameraFileInfo* info) {
   const std::string source(source_name);
-  const detail::Content c(content, source);
+  const detail::Content c(content, source, &options);
   const CameraFormat format = options.format ? *options.format : detect_camera_format(content, source_name);
   std::vector<detail::NamedCamera> cameras = read_all(c, format);
   size_t index = 0;

@@ -133,16 +133,17 @@ void bind_camera(py::module_& m) {
       .def_static(
           "read",
           [](const std::string& path, std::optional<py::object> camera, std::optional<std::pair<int, int>> image_size,
-             std::optional<std::string> format) {
+             std::optional<std::string> format, std::optional<std::string> distortion_model) {
             CameraReadOptions options;
             options.format = format_of(format);
+            options.distortion_model = distortion_model;
             if (camera && !camera->is_none()) options.camera = py::str(*camera);
             options.image_size = image_size;
             py::gil_scoped_release release;
             return read_camera(path, options);
           },
           py::arg("path"), py::arg("camera") = py::none(), py::arg("image_size") = py::none(),
-          py::arg("format") = py::none())
+          py::arg("format") = py::none(), py::arg("distortion_model") = py::none())
       .def(
           "write",
           [](const Camera& camera, const std::string& path, std::optional<std::string> format, bool overwrite) {

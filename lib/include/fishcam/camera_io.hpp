@@ -34,6 +34,9 @@ struct CameraReadOptions {
   std::optional<CameraFormat> format;             // read as this format instead of detecting it
   std::optional<std::string> camera;              // which camera of a file (name or index; default the first)
   std::optional<std::pair<int, int>> image_size;  // width, height for files without one; must agree otherwise
+  // For OpenCV files whose coefficients do not say which model they are: "fisheye"
+  // or "plumb_bob" (never guessed); must agree with the file's distortion_model.
+  std::optional<std::string> distortion_model;
 };
 
 // What reading told besides the camera.

@@ -25,7 +25,10 @@ namespace fishcam::detail {
 // every format; readers reuse the parse).
 class Content {
  public:
-  Content(std::string_view text, std::string source) : text_(text), source_(std::move(source)) {}
+  Content(std::string_view text, std::string source, const CameraReadOptions* options = nullptr)
+      : text_(text), source_(std::move(source)), options_(options) {}
+  // What the caller said about the file (nullptr: nothing).
+  const CameraReadOptions* options() const { return options_; }
   std::string_view text() const { return text_; }
   const std::string& source() const { return source_; }
   // nullptr when the text is not that (the parse error is kept for readers).
@@ -40,6 +43,7 @@ class Content {
  private:
   std::string_view text_;
   std::string source_;
+  const CameraReadOptions* options_;
   mutable std::optional<nlohmann::json> json_, literal_;
   mutable std::optional<DocNode> yaml_;
   mutable bool json_tried_ = false, yaml_tried_ = false, literal_tried_ = false;

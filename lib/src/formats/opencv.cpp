@@ -45,12 +45,14 @@ std::vector<NamedCamera> read(const Content& c) {
   CameraParameters& p = out.camera;
   set_focal(&p, k[0], k[4], [&](std::string_view problem) { f.fail(keys->matrix, problem); });
   p.principal_point = {k[2], k[5]};
-  if (!f.has("distortion_model")) {
+  const std::optional<std::string> said = c.options() ? c.options()->distortion_model : std::nullopt;
+  if (!f.has("distortion_model") && !said) {
     f.fail("distortion_model", "missing: " + std::to_string(d.size()) +
                                    " distortion coefficients could be fisheye (Kannala-Brandt) or radial-tangential; "
-                                   "add 'distortion_model: fisheye' (or plumb_bob) to the file");
+                                   "say which (distortion_model fisheye or plumb_bob)");
   }
-  const std::string model = f.string("distortion_model");
+  const std::string model = f.has("distortion_model") ? f.string("distortion_model") : *said;
+  if (said && *said != model) f.fail("distortion_model", "the file says " + model + ", the caller " + *said);
   if (model == "fisheye" || model == "equidistant") {
     if (d.size() != 4) f.fail(keys->distortion, "a fisheye model has 4 coefficients, got " + std::to_string(d.size()));
     p.model = KannalaBrandt<double>(k[0], d[0], d[1], d[2], d[3]);
