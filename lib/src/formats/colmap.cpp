@@ -99,10 +99,9 @@ std::vector<NamedCamera> read(const Content& c) {
 std::string write(const CameraParameters& original) {
   reject_theta_limit(original, "COLMAP");
   const CameraParameters p = with_unit_ax(original);
-  const KannalaBrandtLike kb = kannala_brandt_of(p);
-  const bool pinhole = std::holds_alternative<Pinhole<double>>(p.model);
-  if (!kb.ok && !pinhole) cannot_hold(p, "COLMAP", "kannala-brandt (and equidistant) and pinhole");
-  const double f = pinhole ? std::get<Pinhole<double>>(p.model).f() : kb.f;
+  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, "COLMAP");
+  const bool pinhole = kb.pinhole;
+  const double f = kb.f;
   std::vector<double> params = {f, f * p.pixel_scale.y(), p.principal_point.x() + 0.5, p.principal_point.y() + 0.5};
   if (!pinhole) params.insert(params.end(), kb.k.begin(), kb.k.end());
   std::string out = "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n";

@@ -263,6 +263,13 @@ KannalaBrandtLike kannala_brandt_of(const CameraParameters& p) {
   return out;
 }
 
+KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, std::string_view format) {
+  if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) return {true, m->f(), {}};
+  const KannalaBrandtLike kb = kannala_brandt_of(p);
+  if (!kb.ok) cannot_hold(p, format, "kannala-brandt (and equidistant) and pinhole");
+  return {false, kb.f, kb.k};
+}
+
 RadialModel pinhole_from_radial_tangential(const std::vector<double>& d, double f,
                                            const std::function<void(std::string_view)>& fail) {
   const bool tangential = d.size() >= 4 && (d[2] != 0 || d[3] != 0);

@@ -140,6 +140,14 @@ struct KannalaBrandtLike {
   std::array<double, 4> k{};
 };
 KannalaBrandtLike kannala_brandt_of(const CameraParameters& p);
+// For the formats that hold kannala-brandt (and equidistant) and pinhole models: f
+// and k1..k4 (0 for a pinhole), or Error naming the model the format cannot hold.
+struct KannalaBrandtOrPinhole {
+  bool pinhole = false;
+  double f = 0;
+  std::array<double, 4> k{};
+};
+KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, std::string_view format);
 // Radial-tangential coefficients (k1, k2, p1, p2[, k3, ...]) that are all zero are
 // a pinhole with focal length f; anything else is refused naming why (tangential
 // terms: not radially symmetric; radial terms only: a model fishcam lacks).

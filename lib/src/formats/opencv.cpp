@@ -82,10 +82,9 @@ std::vector<NamedCamera> read(const Content& c) {
 std::string write(const CameraParameters& original) {
   reject_theta_limit(original, "OpenCV");
   const CameraParameters p = with_unit_ax(original);
-  const KannalaBrandtLike kb = kannala_brandt_of(p);
-  const bool pinhole = std::holds_alternative<Pinhole<double>>(p.model);
-  if (!kb.ok && !pinhole) cannot_hold(p, "OpenCV", "kannala-brandt (and equidistant) and pinhole");
-  const double f = pinhole ? std::get<Pinhole<double>>(p.model).f() : kb.f;
+  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, "OpenCV");
+  const bool pinhole = kb.pinhole;
+  const double f = kb.f;
   const cv::Matx33d K(f, 0, p.principal_point.x(), 0, f * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1);
   cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
   fs << "distortion_model" << (pinhole ? "plumb_bob" : "fisheye");

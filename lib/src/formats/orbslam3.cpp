@@ -49,10 +49,9 @@ std::vector<NamedCamera> read(const Content& c) {
 std::string write(const CameraParameters& original) {
   reject_theta_limit(original, "ORB-SLAM3");
   const CameraParameters p = with_unit_ax(original);
-  const KannalaBrandtLike kb = kannala_brandt_of(p);
-  const bool pinhole = std::holds_alternative<Pinhole<double>>(p.model);
-  if (!kb.ok && !pinhole) cannot_hold(p, "ORB-SLAM3", "kannala-brandt (and equidistant) and pinhole");
-  const double f = pinhole ? std::get<Pinhole<double>>(p.model).f() : kb.f;
+  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, "ORB-SLAM3");
+  const bool pinhole = kb.pinhole;
+  const double f = kb.f;
   std::string out = "%YAML:1.0\n\n";
   out += std::string("Camera.type: \"") + (pinhole ? "PinHole" : "KannalaBrandt8") + "\"\n\n";
   auto line = [&](const std::string& key, double v) { out += "Camera." + key + ": " + yaml_number(v) + "\n"; };

@@ -38,10 +38,9 @@ std::vector<NamedCamera> read(const Content& c) {
 std::string write(const CameraParameters& original) {
   reject_theta_limit(original, "ROS");
   const CameraParameters p = with_unit_ax(original);
-  const KannalaBrandtLike kb = kannala_brandt_of(p);
-  const bool pinhole = std::holds_alternative<Pinhole<double>>(p.model);
-  if (!kb.ok && !pinhole) cannot_hold(p, "ROS camera_info", "kannala-brandt (and equidistant) and pinhole");
-  const double fx = pinhole ? std::get<Pinhole<double>>(p.model).f() : kb.f, fy = fx * p.pixel_scale.y();
+  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, "ROS camera_info");
+  const bool pinhole = kb.pinhole;
+  const double fx = kb.f, fy = fx * p.pixel_scale.y();
   const double cx = p.principal_point.x(), cy = p.principal_point.y();
   auto matrix = [](int rows, int cols, const std::vector<double>& data) {
     return "\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: " + yaml_list(data) + "\n";
