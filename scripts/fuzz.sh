@@ -4,15 +4,17 @@
 # readers were fuzzed ~3 minutes each for the reliability issue). New findings go
 # to build-fuzz/findings/HARNESS/; turn each into a regression reproducer under
 # tests/fuzz/regressions/ (CTest replays those on every run).
-#   scripts/fuzz.sh [SECONDS] [HARNESS ...]   harnesses: camera camera_woodscape
-#   camera_fishcam camera_mrcal camera_opencv corners npy stdin_records correspondence_csv
+#   scripts/fuzz.sh [SECONDS] [HARNESS ...]   harnesses: camera, camera_FORMAT for every
+#   format (woodscape fishcam mrcal opencv kalibr basalt colmap ros camodocal orbslam3),
+#   corners npy stdin_records correspondence_csv
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 seconds=${1:-60}
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -eq 0 ] && harnesses=(camera camera_woodscape camera_fishcam camera_mrcal camera_opencv corners npy stdin_records correspondence_csv)
+formats=(woodscape fishcam mrcal opencv kalibr basalt colmap ros camodocal orbslam3)
+[ ${#harnesses[@]} -eq 0 ] && harnesses=(camera "${formats[@]/#/camera_}" corners npy stdin_records correspondence_csv)
 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DFISHCAM_FUZZ=ON -DFISHCAM_BUILD_PYTHON=OFF -DFISHCAM_BUILD_TOOLS=OFF \
   -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer" >/dev/null
@@ -21,7 +23,7 @@ for h in "${harnesses[@]}"; do
   corpus=build-fuzz/corpus/$h findings=build-fuzz/findings/$h
   mkdir -p "$corpus" "$findings"
   case $h in
-    camera*) seeds=(data tests/fuzz/regressions/camera) ;;
+    camera*) seeds=(data tests/fuzz/seeds/camera tests/fuzz/regressions/camera) ;;
     *) seeds=(tests/fuzz/seeds/$h tests/fuzz/regressions/$h) ;;
   esac
   echo "fuzz: $h for ${seconds}s"
