@@ -163,6 +163,29 @@ TEST(Augmentation, RandomPosesAreReproducibleAndInRange) {
   EXPECT_NE(derive_seed(7, "a", 0), derive_seed(7, "a", 1));
 }
 
+// compute() (float kernel) against compute_exact: the worst distance where both
+// are valid, the pixels whose validity differs, and the pixels valid in both.
+struct MapAgreement {
+  double worst_px;
+  long validity_differs, both_valid;
+};
+MapAgreement fast_against_exact(const ViewpointWarp& warp, const ViewpointChange& change, DepthPrior prior) {
+  WarpMaps fast, exact;
+  warp.compute(change, prior, &fast, MapKind::geometric);
+  warp.compute_exact(change, prior, &exact);
+  MapAgreement a{0, 0, 0};
+  for (int v = 0; v < exact.map_x.rows; ++v) {
+    for (int u = 0; u < exact.map_x.cols; ++u) {
+      a.validity_differs += fast.valid.at<uchar>(v, u) != exact.valid.at<uchar>(v, u);
+      if (!exact.valid.at<uchar>(v, u) || !fast.valid.at<uchar>(v, u)) continue;
+      ++a.both_valid;
+      a.worst_px = std::max<double>(a.worst_px, std::hypot(fast.map_x.at<float>(v, u) - exact.map_x.at<float>(v, u),
+                                                           fast.map_y.at<float>(v, u) - exact.map_y.at<float>(v, u)));
+    }
+  }
+  return a;
+}
+
 // The float SIMD kernel against the double reference, every prior, every source model kind.
 TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
   const Camera ws = woodscape();
@@ -178,20 +201,7 @@ TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
       for (std::uint64_t seed = 0; seed < 3; ++seed) {
         const ViewpointChange change = random_pose(*find_pose_preset("train"), seed).change();
         for (DepthPrior prior : kPriors) {
-          WarpMaps fast, exact;
-          warp.compute(change, prior, &fast, MapKind::geometric);
-          warp.compute_exact(change, prior, &exact);
-          double worst = 0;
-          long disagree = 0, both = 0;
-          for (int v = 0; v < target.height(); ++v) {
-            for (int u = 0; u < target.width(); ++u) {
-              const float fx = fast.map_x.at<float>(v, u), ex = exact.map_x.at<float>(v, u);
-              disagree += fast.valid.at<uchar>(v, u) != exact.valid.at<uchar>(v, u);
-              if (!exact.valid.at<uchar>(v, u) || !fast.valid.at<uchar>(v, u)) continue;
-              ++both;
-              worst = std::max<double>(worst, std::hypot(fx - ex, fast.map_y.at<float>(v, u) - exact.map_y.at<float>(v, u)));
-            }
-          }
+          const auto [worst, disagree, both] = fast_against_exact(warp, change, prior);
           EXPECT_LE(worst, 1e-3) << name << " " << to_string(prior);
           EXPECT_LE(disagree, 20) << name << " " << to_string(prior) << ": validity differs (only on the image border)";
           EXPECT_GT(both, 50000);
@@ -210,20 +220,7 @@ TEST(Augmentation, FastMapsOfEveryModelAgreeWithTheExactReference) {
     ASSERT_TRUE(warp.float_kernel()) << name;
     const ViewpointChange change = random_pose(*find_pose_preset("train"), 4).change();
     for (DepthPrior prior : kPriors) {
-      WarpMaps fast, exact;
-      warp.compute(change, prior, &fast, MapKind::geometric);
-      warp.compute_exact(change, prior, &exact);
-      double worst = 0;
-      long disagree = 0, both = 0;
-      for (int v = 0; v < target.height(); ++v) {
-        for (int u = 0; u < target.width(); ++u) {
-          disagree += fast.valid.at<uchar>(v, u) != exact.valid.at<uchar>(v, u);
-          if (!exact.valid.at<uchar>(v, u) || !fast.valid.at<uchar>(v, u)) continue;
-          ++both;
-          worst = std::max<double>(worst, std::hypot(fast.map_x.at<float>(v, u) - exact.map_x.at<float>(v, u),
-                                                     fast.map_y.at<float>(v, u) - exact.map_y.at<float>(v, u)));
-        }
-      }
+      const auto [worst, disagree, both] = fast_against_exact(warp, change, prior);
       EXPECT_LE(worst, 1e-3) << name << " " << to_string(prior);
       EXPECT_LE(disagree, 20) << name << " " << to_string(prior) << ": validity differs (only on the image border)";
       EXPECT_GT(both, 50000) << name;

@@ -245,11 +245,7 @@ TEST(Formats, FilesFishcamCannotHoldAreRefusedNamingWhy) {
 // projection (to 1e-9 px over the valid domain); models it cannot hold refused in
 // one line naming the model. Every format holds some model.
 TEST(Formats, EveryFormatRoundTripsEveryModelItCanHold) {
-  const std::string names = camera_format_names();
-  for (size_t at = 0, next; at < names.size(); at = next + 2) {
-    next = names.find(", ", at);
-    if (next == std::string::npos) next = names.size();
-    const CameraFormat format = *parse_camera_format(names.substr(at, next - at));
+  for (const CameraFormat format : camera_formats()) {
     int held = 0;
     for (auto [label, p] : test::every_model()) {
       p.pose = Pose{Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())), {0.1, -0.2, 1.5}};

@@ -144,8 +144,7 @@ namespace {
 // The library's format names (its one table), for CLI11's checks.
 std::vector<std::string> format_names() {
   std::vector<std::string> names;
-  std::string all = camera_format_names() + ", ";
-  for (size_t at = 0, next; (next = all.find(", ", at)) != std::string::npos; at = next + 2) names.push_back(all.substr(at, next - at));
+  for (CameraFormat f : camera_formats()) names.emplace_back(to_string(f));
   return names;
 }
 

@@ -27,9 +27,10 @@ CameraParameters validated(CameraParameters p, std::string_view source) {
   return p;
 }
 
-std::string list_of_formats() {
+// "A, B, C" of one field of every format.
+std::string joined(std::string_view detail::FormatSpec::*field) {
   std::string text;
-  for (const auto* spec : format_table()) text += (text.empty() ? "" : ", ") + std::string(spec->description);
+  for (const auto* spec : format_table()) text += (text.empty() ? "" : ", ") + std::string(spec->*field);
   return text;
 }
 
@@ -44,11 +45,13 @@ std::optional<CameraFormat> parse_camera_format(std::string_view name) {
   return std::nullopt;
 }
 
-std::string camera_format_names() {
-  std::string text;
-  for (const auto* spec : format_table()) text += (text.empty() ? "" : ", ") + std::string(spec->name);
-  return text;
+std::vector<CameraFormat> camera_formats() {
+  std::vector<CameraFormat> formats;
+  for (const auto* spec : format_table()) formats.push_back(spec->id);
+  return formats;
 }
+
+std::string camera_format_names() { return joined(&detail::FormatSpec::name); }
 
 std::optional<CameraFormat> camera_format_for_extension(const std::filesystem::path& path) {
   const std::string ext = path.extension().string();
@@ -90,7 +93,8 @@ CameraFormat detect_camera_format(std::string_view content, std::string_view sou
   }
   const bool binary = content.find('\0') != std::string_view::npos;
   if (!binary && (start.starts_with("<") || start.starts_with("%YAML") || !c.yaml())) return CameraFormat::opencv;
-  throw Error(std::string(source_name) + ": unrecognised camera file (expected one of: " + list_of_formats() + ")");
+  throw Error(std::string(source_name) + ": unrecognised camera file (expected one of: " +
+              joined(&detail::FormatSpec::description) + ")");
 }
 
 namespace {

@@ -21,6 +21,8 @@ enum class CameraFormat { woodscape, mrcal, opencv, fishcam, kalibr, basalt, col
 std::string_view to_string(CameraFormat format);
 // The format's name ("kalibr", ...); nullopt for anything else.
 std::optional<CameraFormat> parse_camera_format(std::string_view name);
+// Every format, in the table's order.
+std::vector<CameraFormat> camera_formats();
 // "woodscape, mrcal, ..." for help texts and messages.
 std::string camera_format_names();
 // The format a file name's extension suggests for writing (.cameramodel: mrcal,

@@ -326,6 +326,20 @@ Pose inverse(const Pose& pose) {
   return out;
 }
 
+Pose pose_from_json(const JsonFields& f, const char* quaternion_key) {
+  const std::vector<double> q = f.numbers(quaternion_key, 4, 4);
+  const std::vector<double> t = f.numbers("translation", 3, 3);
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (std::abs(norm - 1) > 1e-6) f.fail(quaternion_key, "must have unit norm, got " + std::to_string(norm));
+  return Pose{Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
+}
+
+nlohmann::json pose_to_json(const Pose& pose, const char* quaternion_key) {
+  const auto& q = pose.rotation;
+  const auto& t = pose.translation;
+  return {{quaternion_key, {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
+}
+
 std::string yaml_number(double x) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.17g", x);

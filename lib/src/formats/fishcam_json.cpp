@@ -33,14 +33,7 @@ std::vector<NamedCamera> read(const Content& c) {
     f.fail("model", e.what());
   }
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
-  if (f.has("pose")) {
-    const JsonFields pose = f.object("pose");
-    const std::vector<double> q = pose.numbers("quaternion_xyzw", 4, 4);
-    const std::vector<double> t = pose.numbers("translation", 3, 3);
-    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (std::abs(norm - 1) > 1e-6) pose.fail("quaternion_xyzw", "must have unit norm, got " + std::to_string(norm));
-    p.pose = Pose{Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
-  }
+  if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
   return {{"0", p, {}}};
 }
 
@@ -53,11 +46,7 @@ std::string write(const CameraParameters& p) {
                          {"model", model_name(p.model)},
                          {"parameters", model_params(p.model)}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
-  if (p.pose) {
-    const auto& q = p.pose->rotation;
-    const auto& t = p.pose->translation;
-    root["pose"] = {{"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
-  }
+  if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
   return root.dump(2) + "\n";
 }
 

@@ -161,6 +161,10 @@ std::array<double, 6> rt_cam_ref_from_pose(const Pose& pose);
 std::optional<Pose> pose_from_matrix(const std::vector<double>& m16, std::string* problem);
 std::array<double, 16> matrix_from_pose(const Pose& pose);
 Pose inverse(const Pose& pose);
+// A pose as JSON: quaternion (x, y, z, w: scalar last, unit norm to 1e-6) under
+// quaternion_key, and "translation".
+Pose pose_from_json(const JsonFields& f, const char* quaternion_key);
+nlohmann::json pose_to_json(const Pose& pose, const char* quaternion_key);
 
 // YAML text helpers for writers (numbers with 17 significant digits).
 std::string yaml_number(double x);

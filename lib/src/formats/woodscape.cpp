@@ -15,14 +15,6 @@ std::string coefficient_key(int i) {
   return key;
 }
 
-Pose pose_from_json(const JsonFields& f) {
-  const std::vector<double> q = f.numbers("quaternion", 4, 4);
-  const std::vector<double> t = f.numbers("translation", 3, 3);
-  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  if (std::abs(norm - 1) > 1e-6) f.fail("quaternion", "must have unit norm, got " + std::to_string(norm));
-  return Pose{Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
-}
-
 int score(const Content& c) {
   const auto* j = c.json();
   return j && j->is_object() && j->contains("intrinsic") ? 50 : 0;
@@ -60,7 +52,7 @@ std::vector<NamedCamera> read(const Content& c) {
       out.notes.push_back("extrinsic: SynWoodScape's '" + std::string(kSynWoodScapeTranslation) +
                           "' is in CARLA's frame; the camera is read without its pose");
     } else {
-      p.pose = pose_from_json(ex);
+      p.pose = pose_from_json(ex, "quaternion");
     }
   }
   return {out};
@@ -88,11 +80,7 @@ std::string write(const CameraParameters& original) {
                        {"aspect_ratio", p.pixel_scale.y()}};
   for (size_t i = 0; i < k.size(); ++i) in[coefficient_key(int(i) + 1)] = k[i];
   nlohmann::json root = {{"intrinsic", in}};
-  if (p.pose) {
-    const auto& q = p.pose->rotation;
-    const auto& t = p.pose->translation;
-    root["extrinsic"] = {{"quaternion", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
-  }
+  if (p.pose) root["extrinsic"] = pose_to_json(*p.pose, "quaternion");
   return root.dump(2) + "\n";
 }
 
