@@ -46,15 +46,11 @@ cv::Mat read_image(const std::string& path, int flags) {
   return image;
 }
 
-namespace {
-
 bool lossless_label_format(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   return ext == ".png" || ext == ".tif" || ext == ".tiff" || ext == ".pgm";
 }
-
-}  // namespace
 
 std::string encode_image(const std::filesystem::path& path, const cv::Mat& image) {
   std::vector<uchar> bytes;

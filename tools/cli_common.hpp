@@ -41,6 +41,8 @@ ViewpointWarp make_warp(const std::string& source, const std::string& target);
 
 // Reads an image or fails with "PATH: cannot read image".
 cv::Mat read_image(const std::string& path, int flags);
+// Whether labels survive the format of path's extension (PNG, TIFF, PGM; not JPEG).
+bool lossless_label_format(const std::filesystem::path& path);
 // A file a command will write (empty path: not requested); labels need a lossless format.
 struct OutputFile {
   std::filesystem::path path;

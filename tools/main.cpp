@@ -86,6 +86,7 @@ int main(int argc, char** argv) {
   fishcam::cli::register_calibrate(app);
   fishcam::cli::register_diff(app);
   fishcam::cli::register_sample_dataset(app);
+  fishcam::cli::register_evaluate(app);
   // Subcommands that read camera files share how (--camera, --imagersize, --format).
   for (const char* name : {"info", "project", "unproject", "render", "map", "augment", "convert", "diff", "synth-corners"}) {
     fishcam::cli::add_camera_input_options(app.get_subcommand(name));

@@ -107,3 +107,7 @@ def change_to_dict(change, seed=None, depth="source-sphere"):
         "translation": [float(x) for x in change.translation],
         "depth": depth,
     }
+
+
+# Submodules that need the names above (``fishcam.metrics`` without a separate import).
+from . import metrics  # noqa: E402,F401

@@ -17,6 +17,7 @@
 #include "fishcam/augmentation.hpp"
 #include "fishcam/camera_io.hpp"
 #include "fishcam/fit.hpp"
+#include "fishcam/metrics.hpp"
 #include "fishcam/viewpoint.hpp"
 
 namespace py = pybind11;
@@ -388,6 +389,71 @@ void bind_augmentation(py::module_& m) {
   });
 }
 
+// Integer labels of any shape as a LabelSpan over the array's own memory (a
+// C-contiguous copy only when it is strided); `keep` holds that memory.
+LabelSpan labels_of(const py::handle& input, const char* what, py::array* keep) {
+  *keep = py::array::ensure(input, py::array::c_style);
+  if (!*keep) throw Error(std::string(what) + ": expected an array of integer labels");
+  const py::array& a = *keep;
+  const auto n = static_cast<std::size_t>(a.size());
+  if (py::isinstance<py::array_t<std::uint8_t>>(a)) return std::span(static_cast<const std::uint8_t*>(a.data()), n);
+  if (py::isinstance<py::array_t<std::uint16_t>>(a)) return std::span(static_cast<const std::uint16_t*>(a.data()), n);
+  if (py::isinstance<py::array_t<std::int32_t>>(a)) return std::span(static_cast<const std::int32_t*>(a.data()), n);
+  if (py::isinstance<py::array_t<std::int64_t>>(a)) return std::span(static_cast<const std::int64_t*>(a.data()), n);
+  throw Error(std::string(what) + ": expected dtype uint8, uint16, int32 or int64, got " + std::string(py::str(a.dtype())));
+}
+
+std::string shape_text(const py::array& a) {
+  std::string out = "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) out += (i ? ", " : "") + std::to_string(a.shape(i));
+  return out + (a.ndim() == 1 ? ",)" : ")");
+}
+
+void bind_metrics(py::module_& m) {
+  py::class_<ConfusionMatrix>(m, "ConfusionMatrix")
+      .def(py::init<int, std::optional<std::int64_t>>(), py::arg("num_classes"), py::arg("ignore") = py::none())
+      .def(
+          "update",
+          [](ConfusionMatrix& matrix, const py::handle& prediction, const py::handle& ground_truth,
+             const py::handle& valid) {
+            py::array pred_array, gt_array;
+            const LabelSpan pred = labels_of(prediction, "prediction", &pred_array);
+            const LabelSpan gt = labels_of(ground_truth, "ground_truth", &gt_array);
+            if (pred_array.ndim() != gt_array.ndim() ||
+                !std::equal(pred_array.shape(), pred_array.shape() + pred_array.ndim(), gt_array.shape())) {
+              throw Error("prediction: shape " + shape_text(pred_array) + " differs from the ground truth's " +
+                          shape_text(gt_array));
+            }
+            py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast> mask;
+            std::span<const std::uint8_t> mask_span;
+            if (!valid.is_none()) {
+              mask = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(valid);
+              if (!mask || mask.ndim() != gt_array.ndim() ||
+                  !std::equal(mask.shape(), mask.shape() + mask.ndim(), gt_array.shape())) {
+                throw Error("valid: expected an array of the ground truth's shape " + shape_text(gt_array));
+              }
+              mask_span = std::span(mask.data(), static_cast<std::size_t>(mask.size()));
+            }
+            const int width = gt_array.ndim() >= 2 ? static_cast<int>(gt_array.shape(gt_array.ndim() - 1)) : 0;
+            py::gil_scoped_release release;
+            matrix.update(pred, gt, mask_span, width);
+          },
+          py::arg("prediction"), py::arg("ground_truth"), py::arg("valid") = py::none())
+      .def("merge", &ConfusionMatrix::merge, py::arg("other"))
+      .def_property_readonly("num_classes", &ConfusionMatrix::num_classes)
+      .def_property_readonly("ignore", &ConfusionMatrix::ignore)
+      .def_property_readonly("scored_pixels", &ConfusionMatrix::scored_pixels)
+      .def_property_readonly("counts",
+                             [](const ConfusionMatrix& matrix) {
+                               const py::ssize_t n = matrix.num_classes();
+                               py::array_t<std::int64_t> out({n, n});
+                               std::copy(matrix.counts().begin(), matrix.counts().end(), out.mutable_data());
+                               return out;
+                             })
+      .def("_iou", &ConfusionMatrix::iou)
+      .def("_miou", &ConfusionMatrix::miou);
+}
+
 }  // namespace
 }  // namespace fishcam::python
 
@@ -407,4 +473,5 @@ PYBIND11_MODULE(_fishcam, m) {
   m.attr("__version__") = FISHCAM_VERSION;
   fishcam::python::bind_camera(m);
   fishcam::python::bind_augmentation(m);
+  fishcam::python::bind_metrics(m);
 }
