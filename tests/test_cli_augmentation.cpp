@@ -232,6 +232,46 @@ TEST(CliAugmentation, ShardsTogetherEqualOneRun) {
   }
 }
 
+// The affine baseline through augment-dataset: images and labels only (no camera
+// model describes the result), the method in the manifest, no mixing of methods.
+TEST(CliAugmentation, AffineDatasetAndOptions) {
+  const auto dir = test::scratch_dir("affine_dataset");
+  auto r = run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 2 --seed 1 --size 160x121");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string common = "augment-dataset " + quoted(dir / "root") + " --preset train --seed 4 --out ";
+  r = run_fishcam(common + quoted(dir / "affine") + " --method affine");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto files = tree(dir / "affine");
+  EXPECT_EQ(files.size(), 5u);  // 2 images, 2 labels, the manifest
+  for (const auto& line : lines(files.at("manifest.jsonl"))) {
+    const auto j = nlohmann::json::parse(line);
+    EXPECT_EQ(j["method"], "affine");
+    EXPECT_TRUE(j.contains("scale") && j["translation"].size() == 2) << line;
+  }
+  r = run_fishcam(common + quoted(dir / "affine"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("written with --method 'affine', not viewpoint"), std::string::npos) << r.err;
+  r = run_fishcam(common + quoted(dir / "viewpoint"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(test::read_file(dir / "viewpoint/manifest.jsonl").find("\"method\":\"viewpoint\""), std::string::npos);
+
+  const std::string image = quoted(dir / "root/rgb_images/" / tree(dir / "root/rgb_images").begin()->first);
+  const std::string camera = quoted(dir / "root/calibration/" / tree(dir / "root/calibration").begin()->first);
+  const std::string augment = "augment " + camera + " --image " + image + " --out-image " + quoted(dir / "a.png");
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {" --affine 1,0,0,1", "--affine needs --method affine"},
+           {" --method affine --rotate 1,0,0", "--rotate: not used by --method affine"},
+           {" --method affine --affine 1,0,0,0", "scale must be positive"},
+           {" --method affine --affine 1,0,0", "--affine"},
+           {" --method shear", "--method"},
+       }) {
+    r = run_fishcam(augment + args);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << " -> " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "a.png")) << args;
+  }
+}
+
 // A run killed while writing its manifest leaves a cut last line: the next run
 // drops it (and says so) and completes the manifest; temporaries are cleaned.
 TEST(CliAugmentation, ResumeAfterACutManifestLine) {

@@ -9,9 +9,11 @@
 namespace fishcam::cli {
 
 void register_augment(CLI::App& app) {
-  auto* cmd = app.add_subcommand("augment", "Augment one image (and its labels) with a viewpoint change");
+  auto* cmd = app.add_subcommand("augment", "Augment one image (and its labels) with a viewpoint change (or the "
+                                            "affine baseline)");
   struct Options {
-    std::string source, target, image, label, out_image, out_label, out_mask, preset;
+    std::string source, target, image, label, out_image, out_label, out_mask, preset, method = "viewpoint";
+    std::vector<double> affine;
     PoseOptions pose;
     std::uint64_t seed = 0;
     int label_fill = 0;
@@ -25,25 +27,50 @@ void register_augment(CLI::App& app) {
   auto* out_label = cmd->add_option("--out-label", o->out_label, "Output label image (needs --label)");
   cmd->add_option("--out-mask", o->out_mask, "Output validity mask (255 = has a source inside the source image)");
   add_pose_options(cmd, &o->pose);
-  auto* preset = cmd->add_option("--preset", o->preset, "Random pose preset")
+  cmd->add_option("--method", o->method,
+                  "viewpoint: the camera-aware augmentation; affine: the paper's baseline (rotation about the image "
+                  "centre, translation, scale; no camera model)")
+      ->check(CLI::IsMember({"viewpoint", "affine"}))
+      ->capture_default_str();
+  auto* affine = cmd->add_option("--affine", o->affine,
+                                 "Affine change ROT,TX,TY,SCALE (degrees counter-clockwise, fractions of the image "
+                                 "width and height, scale > 0) for --method affine")
+                     ->delimiter(',')
+                     ->expected(4);
+  auto* preset = cmd->add_option("--preset", o->preset, "Random change preset (the viewpoint or affine ranges of that name)")
                      ->check(CLI::IsMember({"small", "medium", "large", "train"}));
   auto* seed = cmd->add_option("--seed", o->seed, "Seed of the random pose");
   preset->needs(seed);
   seed->needs(preset);
-  preset->excludes("--rotate")->excludes("--translate");
+  preset->excludes("--rotate")->excludes("--translate")->excludes(affine);
   cmd->add_option("--target", o->target, "Output camera file (default: the source camera)");
   cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source (0 = WoodScape background)")
       ->capture_default_str();
   cmd->add_flag("--force", o->force, "Replace existing output files");
   cmd->add_flag("--json", o->json, "Print the applied change as one JSON object (full precision)");
-  cmd->callback([o, out_label] {
+  cmd->callback([o, out_label, cmd] {
     if (out_label->count() && o->label.empty()) throw Error("--out-label needs --label");
+    const bool affine = o->method == "affine";
+    if (affine) {
+      for (const char* option : {"--rotate", "--translate", "--depth", "--target"}) {
+        if (cmd->count(option)) throw Error(std::string(option) + ": not used by --method affine (see --affine)");
+      }
+    } else if (!o->affine.empty()) {
+      throw Error("--affine needs --method affine");
+    }
     check_outputs({{o->out_image}, {o->out_label, true}, {o->out_mask}}, {o->source, o->target, o->image, o->label},
                   o->force);
     const ViewpointWarp warp = make_warp(o->source, o->target);
     const RandomPose pose = o->preset.empty() ? RandomPose{{o->pose.rotate[0], o->pose.rotate[1], o->pose.rotate[2]},
                                                            {o->pose.translate[0], o->pose.translate[1], o->pose.translate[2]}}
                                               : random_pose(*find_pose_preset(o->preset), o->seed);
+    AffineChange affine_change;
+    if (affine && !o->preset.empty()) {
+      affine_change = random_affine(*find_affine_preset(o->preset), o->seed);
+    } else if (!o->affine.empty()) {
+      affine_change = AffineChange{o->affine[0], {o->affine[1], o->affine[2]}, o->affine[3]};
+      check_affine(affine_change);
+    }
     const cv::Mat image = read_image(o->image, cv::IMREAD_UNCHANGED);
     cv::Mat labels;
     if (!o->label.empty()) {
@@ -51,7 +78,11 @@ void register_augment(CLI::App& app) {
       if (labels.channels() != 1) throw Error(o->label + ": expected a single-channel label image");
     }
     WarpMaps maps;
-    warp.compute(pose.change(), o->pose.prior(), &maps);
+    if (affine) {
+      affine_maps(affine_change, cv::Size(warp.source().width(), warp.source().height()), &maps);
+    } else {
+      warp.compute(pose.change(), o->pose.prior(), &maps);
+    }
     cv::Mat out;
     try {
       warp_image(image, maps, &out);
@@ -70,14 +101,27 @@ void register_augment(CLI::App& app) {
     }
     if (!o->out_mask.empty()) outputs.emplace_back(o->out_mask, maps.validity() * 255);
     write_images(outputs, o->force);
+    const nlohmann::json seed_json = o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->seed);
+    const nlohmann::json preset_json = o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->preset);
+    if (affine) {
+      const nlohmann::json j = affine_to_json(affine_change);
+      if (o->json) {
+        nlohmann::json out = j;
+        out["seed"] = seed_json, out["preset"] = preset_json;
+        std::printf("%s\n", out.dump().c_str());
+      } else {
+        std::printf("affine: %s\n", j.dump().c_str());
+      }
+      return;
+    }
     if (o->json) {
       const auto& r = pose.rotation_deg;
       const auto& t = pose.translation;
       nlohmann::json j{{"rotation_deg", {r.x(), r.y(), r.z()}},
                        {"translation", {t.x(), t.y(), t.z()}},
                        {"depth", o->pose.depth},
-                       {"seed", o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->seed)},
-                       {"preset", o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->preset)}};
+                       {"seed", seed_json},
+                       {"preset", preset_json}};
       std::printf("%s\n", j.dump().c_str());  // nlohmann writes doubles round-trip exact
       return;
     }

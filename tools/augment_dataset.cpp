@@ -59,7 +59,7 @@ class Progress {
 };
 
 struct Options {
-  std::string root, out, presets = "train", depth = "source-sphere", shard;
+  std::string root, out, presets = "train", depth = "source-sphere", shard, method = "viewpoint";
   std::uint64_t seed = 0;
   int copies = 1, threads = 0, label_fill = 0;
 };
@@ -83,6 +83,11 @@ void register_augment_dataset(CLI::App& app) {
   cmd->add_option("-j,--threads", o->threads, "Threads (0: all cores)")->check(CLI::Range(0, 256))->capture_default_str();
   cmd->add_option("--depth", o->depth, "Depth prior")
       ->check(CLI::IsMember({"source-sphere", "target-sphere", "infinity"}))
+      ->capture_default_str();
+  cmd->add_option("--method", o->method,
+                  "viewpoint, or affine: the paper's baseline (no camera model; no calibration files are written, "
+                  "since no camera model describes the result)")
+      ->check(CLI::IsMember({"viewpoint", "affine"}))
       ->capture_default_str();
   cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source")->capture_default_str();
   cmd->add_option("--shard", o->shard,
@@ -110,6 +115,7 @@ void register_augment_dataset(CLI::App& app) {
       presets.push_back(*preset);
     }
     const DepthPrior prior = *parse_depth_prior(o->depth);
+    const bool affine = o->method == "affine";
     if (o->threads > 0) cv::setNumThreads(o->threads);
     const fs::path images_dir = root / "rgb_images";
     if (!fs::is_directory(images_dir)) throw Error(images_dir.string() + ": missing (expected WoodScape layout)");
@@ -152,9 +158,12 @@ void register_augment_dataset(CLI::App& app) {
         while (start < content.size()) {
           const size_t end = content.find('\n', start);
           const std::string line = content.substr(start, end == std::string::npos ? std::string::npos : end - start);
+          std::string method;
           try {
             if (end == std::string::npos) throw std::runtime_error("cut");
-            listed.insert(nlohmann::json::parse(line).at("output").get<std::string>());
+            const nlohmann::json entry = nlohmann::json::parse(line);
+            listed.insert(entry.at("output").get<std::string>());
+            method = entry.value("method", "viewpoint");  // manifests before the affine baseline: viewpoint
           } catch (const std::exception&) {
             if (end != std::string::npos) {
               throw Error(manifest_path.string() + ": unreadable line (not written by fishcam?)");
@@ -162,6 +171,10 @@ void register_augment_dataset(CLI::App& app) {
             progress.report(manifest_path.string() + ": dropped an incomplete last line (an interrupted run)");
             fs::resize_file(manifest_path, complete);
             break;
+          }
+          if (method != o->method) {
+            throw Error(manifest_path.string() + ": written with --method " + quoted_for_message(method) +
+                        ", not " + o->method + " (use another --out)");
           }
           start = complete = end + 1;
         }
@@ -184,7 +197,10 @@ void register_augment_dataset(CLI::App& app) {
             const fs::path out_calibration = dir / "calibration" / (name + ".json");
             const std::uint64_t seed = derive_seed(o->seed, stem + "/" + std::string(preset.name), copy);
             const RandomPose pose = random_pose(preset, seed);
-            const bool done = fs::exists(out_image) && fs::exists(out_label) && fs::exists(out_calibration);
+            const AffineChange affine_change =
+                affine ? random_affine(*find_affine_preset(preset.name), seed) : AffineChange{};
+            const bool done =
+                fs::exists(out_image) && fs::exists(out_label) && (affine || fs::exists(out_calibration));
             if (!done) {
               if (!warp) {  // load once per image, only when there is work
                 camera = read_camera(calibration_path);
@@ -194,19 +210,25 @@ void register_augment_dataset(CLI::App& app) {
                 if (labels.channels() != 1) throw Error(label_path.string() + ": expected a single-channel label image");
               }
               WarpMaps maps;
-              warp->compute(pose.change(), prior, &maps);
+              if (affine) {
+                affine_maps(affine_change, cv::Size(camera->width(), camera->height()), &maps);
+              } else {
+                warp->compute(pose.change(), prior, &maps);
+              }
               cv::Mat out_pixels, out_labels;
               warp_image(image, maps, &out_pixels);
               warp_labels(labels, maps, o->label_fill, &out_labels);
-              // The output camera: same intrinsics, the moved pose (translation in
-              // unit-sphere units, written as metres).
-              CameraParameters moved = camera->parameters();
-              if (moved.pose) moved.pose = moved_camera(*moved.pose, pose.change());
-              // The three files land together (a killed run leaves none of them).
-              write_files_atomically({{out_image, encode_image(out_image, out_pixels)},
-                                      {out_label, encode_image(out_label, out_labels)},
-                                      {out_calibration, format_camera(moved, CameraFormat::woodscape)}},
-                                     true);
+              std::vector<std::pair<fs::path, std::string>> files{{out_image, encode_image(out_image, out_pixels)},
+                                                                   {out_label, encode_image(out_label, out_labels)}};
+              if (!affine) {
+                // The output camera: same intrinsics, the moved pose (translation in
+                // unit-sphere units, written as metres).
+                CameraParameters moved = camera->parameters();
+                if (moved.pose) moved.pose = moved_camera(*moved.pose, pose.change());
+                files.emplace_back(out_calibration, format_camera(moved, CameraFormat::woodscape));
+              }
+              // The files land together (a killed run leaves none of them).
+              write_files_atomically(files, true);
               ++written;
             } else {
               ++skipped;
@@ -215,16 +237,20 @@ void register_augment_dataset(CLI::App& app) {
             if (!listed.count(output)) {
               const auto& r = pose.rotation_deg;
               const auto& t = pose.translation;
-              manifest << nlohmann::json{{"image", image_path.filename().string()},
-                                         {"output", output},
-                                         {"copy", copy},
-                                         {"preset", preset.name},
-                                         {"seed", seed},
-                                         {"rotation_deg", {r.x(), r.y(), r.z()}},
-                                         {"translation", {t.x(), t.y(), t.z()}},
-                                         {"depth", to_string(prior)}}
-                              .dump()
-                       << "\n";
+              nlohmann::json line{{"image", image_path.filename().string()},
+                                  {"output", output},
+                                  {"copy", copy},
+                                  {"preset", preset.name},
+                                  {"seed", seed}};
+              if (affine) {
+                line.update(affine_to_json(affine_change));
+              } else {
+                line.update({{"method", "viewpoint"},
+                             {"rotation_deg", {r.x(), r.y(), r.z()}},
+                             {"translation", {t.x(), t.y(), t.z()}},
+                             {"depth", to_string(prior)}});
+              }
+              manifest << line.dump() << "\n";
               manifest.flush();
               listed.insert(output);
             }

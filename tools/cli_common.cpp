@@ -38,6 +38,13 @@ ViewpointWarp make_warp(const std::string& source, const std::string& target) {
   return target.empty() ? ViewpointWarp(source_camera) : ViewpointWarp(source_camera, read_input_camera(target));
 }
 
+nlohmann::json affine_to_json(const AffineChange& change) {
+  return {{"method", "affine"},
+          {"rotation_deg", change.rotation_deg},
+          {"translation", {change.translation.x(), change.translation.y()}},
+          {"scale", change.scale}};
+}
+
 cv::Mat read_image(const std::string& path, int flags) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file");

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fishcam/affine.hpp"
 #include "fishcam/augmentation.hpp"
 #include "fishcam/camera.hpp"
 #include "fishcam/camera_io.hpp"
@@ -61,6 +62,10 @@ void write_image(const std::filesystem::path& path, const cv::Mat& image, bool o
 // A bundled file (data/NAME, or a helper script of tools/): next to an installed
 // binary (../share/fishcam) or in the source tree this binary was built from.
 std::filesystem::path bundled_data(const std::string& name);
+
+// An affine change as augment --json and the manifest record it: method "affine",
+// rotation_deg, translation [tx, ty] (fractions of the image size), scale.
+nlohmann::json affine_to_json(const AffineChange& change);
 
 // "rotation [rx, ry, rz] deg, translation [tx, ty, tz]".
 std::string describe(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3d& translation);

@@ -23,5 +23,6 @@ void register_synth_corners(CLI::App& app);
 void register_calibrate(CLI::App& app);
 void register_sample_dataset(CLI::App& app);
 void register_evaluate(CLI::App& app);
+void register_compare(CLI::App& app);
 
 }  // namespace fishcam::cli

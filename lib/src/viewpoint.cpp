@@ -98,14 +98,10 @@ std::optional<PosePreset> find_pose_preset(std::string_view name) {
 }
 
 RandomPose random_pose(const PosePreset& preset, std::uint64_t seed) {
-  std::mt19937_64 engine(seed);
-  auto uniform = [&](double half_range) {
-    const double u = double(engine() >> 11) * 0x1.0p-53;  // [0, 1), 53 random bits
-    return (2 * u - 1) * half_range;
-  };
+  SeededUniform uniform(seed);
   RandomPose pose;
-  for (int i = 0; i < 3; ++i) pose.rotation_deg[i] = uniform(preset.max_rotation_deg);
-  for (int i = 0; i < 3; ++i) pose.translation[i] = uniform(preset.max_translation);
+  for (int i = 0; i < 3; ++i) pose.rotation_deg[i] = uniform.symmetric(preset.max_rotation_deg);
+  for (int i = 0; i < 3; ++i) pose.translation[i] = uniform.symmetric(preset.max_translation);
   return pose;
 }
 

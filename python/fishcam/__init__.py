@@ -22,7 +22,7 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
 from . import _fishcam
 
 __all__ = [
-    "Camera", "Error", "ViewpointChange", "ViewpointWarp", "convert", "derive_seed", "get_num_threads",
+    "Camera", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
     "random_change", "set_num_threads", "presets", "change_to_dict", "__version__",
 ]
 
@@ -68,6 +68,26 @@ def convert(camera, to, method="lsq", max_angle=None, fit_center=False, fit_aspe
     return fitted, report
 
 
+def compare(camera, models=("equidistant", "stereographic", "kannala-brandt"), method="lsq", preset="train",
+            samples=8, seed=0, depth="source-sphere", labels=None):
+    """What ``fishcam compare`` measures, as a dict (the keys of its ``--json``).
+
+    models: model names (fitted to ``camera`` as ``convert`` does; ``method="paper"``
+    uses eqs. 13-14 for equidistant and stereographic), camera files, fishcam.Camera
+    objects or ``(name, Camera)`` pairs. labels: ``{name: HxW uint8/uint16 array}``
+    of the camera's size, compared under both augmentations (the CLI adds its
+    rendered scene as "scene"). See docs/comparison.md.
+    """
+    if isinstance(models, (str, Camera)):
+        models = [models]
+    if method not in ("lsq", "paper"):
+        raise Error(f"method: expected lsq or paper, got {method!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, _np.integer)) or seed < 0:
+        raise Error(f"seed: expected a non-negative integer, got {seed!r}")
+    return _json.loads(_fishcam.compare(camera, list(models), method, preset, int(samples), int(seed), depth,
+                                        dict(labels or {})))
+
+
 def random_change(preset, seed):
     """The viewpoint change of the CLI's ``--preset PRESET --seed SEED``."""
     seed = _check_seed(seed)
@@ -100,8 +120,9 @@ def set_num_threads(n):
 
 
 def change_to_dict(change, seed=None, depth="source-sphere"):
-    """A change as the manifest records it: seed, rotation_deg, translation, depth (JSON-able)."""
+    """A change as the manifest records it: method, seed, rotation_deg, translation, depth (JSON-able)."""
     return {
+        "method": "viewpoint",
         "seed": seed,
         "rotation_deg": [float(x) for x in change.rotation_deg],
         "translation": [float(x) for x in change.translation],

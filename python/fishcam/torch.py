@@ -1,4 +1,4 @@
-"""fishcam for PyTorch: the viewpoint transform as an nn.Module, a WoodScape dataset,
+"""fishcam for PyTorch: the viewpoint transform (and the affine baseline) as nn.Modules, a WoodScape dataset,
 and the DataLoader worker set-up.
 
     dataset = fishcam.torch.WoodScapeDataset(root, transform=fishcam.torch.RandomViewpoint(preset="train"))
@@ -62,17 +62,15 @@ def _from_numpy(array, as_tensor):
     return tensor.permute(2, 0, 1) if tensor.ndim == 3 else tensor
 
 
-class RandomViewpoint(torch.nn.Module):
-    """fishcam.transforms.RandomViewpoint as a module: ``forward(image, mask=None,
+class _Transform(torch.nn.Module):
+    """A numpy transform of fishcam.transforms as a module: ``forward(image, mask=None,
     camera=None, seed=None)`` -> ``(image, mask, change)``. Images HWC numpy or CHW
-    tensors (returned the same way), masks HW; the change is the manifest dict."""
+    tensors (returned the same way), masks HW; the change is the manifest dict.
+    Without ``seed``, one is drawn from torch's (per-worker) generator."""
 
-    def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
-                 depth="source-sphere", p=1.0, fill=0, fill_mask=0):
+    def __init__(self, transform):
         super().__init__()
-        self.transform = _transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
-                                                     max_translation=max_translation, depth=depth, p=p, fill=fill,
-                                                     fill_mask=fill_mask)
+        self.transform = transform
 
     def forward(self, image, mask=None, camera=None, seed=None):
         image_np, image_tensor = _to_numpy(image, "image")
@@ -82,6 +80,26 @@ class RandomViewpoint(torch.nn.Module):
         out = self.transform(image=image_np, mask=mask_np, camera=camera, seed=seed)
         new_mask = _from_numpy(out["mask"], mask_tensor) if mask is not None else None
         return _from_numpy(out["image"], image_tensor), new_mask, out["change"]
+
+
+class RandomViewpoint(_Transform):
+    """fishcam.transforms.RandomViewpoint as a module (see _Transform)."""
+
+    def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
+                 depth="source-sphere", p=1.0, fill=0, fill_mask=0):
+        super().__init__(_transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
+                                                     max_translation=max_translation, depth=depth, p=p, fill=fill,
+                                                     fill_mask=fill_mask))
+
+
+class RandomAffine(_Transform):
+    """fishcam.transforms.RandomAffine (the paper's affine baseline) as a module (see _Transform)."""
+
+    def __init__(self, preset="train", max_rotation_deg=None, max_translation=None, scale_range=None, p=1.0,
+                 fill=0, fill_mask=0):
+        super().__init__(_transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
+                                                  max_translation=max_translation, scale_range=scale_range, p=p,
+                                                  fill=fill, fill_mask=fill_mask))
 
 
 class WoodScapeDataset(torch.utils.data.Dataset):
@@ -148,7 +166,7 @@ class WoodScapeDataset(torch.utils.data.Dataset):
         if self.transform is not None:
             seed = None if self.seed is None else derive_seed(self.seed, f"epoch{self.epoch}", index)
             camera = self.camera(name)
-            if isinstance(self.transform, RandomViewpoint):
+            if isinstance(self.transform, _Transform):
                 image, mask, item["change"] = self.transform(image, mask, camera=camera, seed=seed)
             else:
                 out = self.transform(image=image, mask=mask, camera=camera, seed=seed)

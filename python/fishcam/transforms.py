@@ -1,4 +1,5 @@
-"""Viewpoint augmentation as a numpy transform with albumentations' call convention.
+"""Viewpoint augmentation (and the affine baseline, RandomAffine) as numpy transforms
+with albumentations' call convention.
 
     t = RandomViewpoint(camera, preset="train")
     out = t(image=image, mask=labels)            # dict: image, mask, change
@@ -130,3 +131,89 @@ class RandomViewpoint:
         what = (f"preset={self.preset!r}" if self.preset is not None else
                 f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}")
         return f"RandomViewpoint({what}, depth={self.depth!r}, p={self.p})"
+
+
+class RandomAffine:
+    """The paper's affine baseline (§V.C.2): rotation about the image centre,
+    translation, isotropic scale; no camera model (``camera=`` is accepted and
+    ignored, so it can stand where RandomViewpoint does).
+
+    preset: "train" (default; the paper's ranges: 30 deg, 0.3 of the image size,
+        scale [0.5, 1.5]), "large" (the same), "medium" and "small" (2/3 and 1/3 of
+        them); or give max_rotation_deg, max_translation and scale_range=(lo, hi).
+    p, fill, fill_mask, rng: as RandomViewpoint. Resampled as RandomViewpoint does
+    (bilinear images, nearest labels, fill where there is no source); the same
+    seed gives the same change as ``fishcam augment --method affine --seed``.
+    """
+
+    def __init__(self, preset="train", max_rotation_deg=None, max_translation=None, scale_range=None, p=1.0,
+                 fill=0, fill_mask=0, rng=None):
+        custom = (max_rotation_deg, max_translation, scale_range)
+        if any(v is not None for v in custom) and not all(v is not None for v in custom):
+            raise Error("max_rotation_deg, max_translation and scale_range go together")
+        if max_rotation_deg is not None:
+            preset = None
+            try:
+                low, high = (float(v) for v in scale_range)
+            except (TypeError, ValueError):
+                raise Error(f"scale_range: expected (low, high), got {scale_range!r}") from None
+            # The library checks the ranges (one message for every binding).
+            _fishcam.random_affine_in(max_rotation_deg, max_translation, low, high, 0)
+            self.scale_range = (low, high)
+        elif preset not in _fishcam.affine_presets():
+            raise Error(f"preset: unknown preset {preset!r} (small, medium, large, train)")
+        else:
+            self.scale_range = None
+        if not (0 <= p <= 1):
+            raise Error(f"p: must be in [0, 1], got {p}")
+        if not np.isfinite(fill):
+            raise Error("fill: must be finite")
+        self.preset = preset
+        self.max_rotation_deg = max_rotation_deg
+        self.max_translation = max_translation
+        self.p = float(p)
+        self.fill = fill
+        self.fill_mask = int(fill_mask)
+        self.rng = rng
+
+    def change_for(self, seed):
+        """The change this transform applies for ``seed`` (what the CLI's --seed gives)."""
+        seed = _check_seed(seed)
+        if self.preset is not None:
+            return _fishcam.random_affine(self.preset, seed)
+        return _fishcam.random_affine_in(self.max_rotation_deg, self.max_translation, *self.scale_range, seed)
+
+    def __call__(self, image=None, mask=None, camera=None, seed=None):
+        del camera  # no camera model: the baseline treats the image as flat
+        if image is None and mask is None:
+            raise Error("nothing to transform: pass image= and/or mask=")
+        if seed is None:
+            seed = draw_seed(self.rng)
+        seed = _check_seed(seed)
+        apply = self.p >= 1 or np.random.default_rng(seed).random() < self.p
+        change = self.change_for(seed) if apply else _fishcam.AffineChange()
+        out = _fishcam.affine_warp(image=image, labels=mask, change=change, fill=self.fill,
+                                   label_fill=self.fill_mask)
+        result = {"change": affine_to_dict(change, seed)}
+        if image is not None:
+            result["image"] = out["image"]
+        if mask is not None:
+            result["mask"] = out["labels"]
+        return result
+
+    def __repr__(self):
+        what = (f"preset={self.preset!r}" if self.preset is not None else
+                f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}, "
+                f"scale_range={self.scale_range}")
+        return f"RandomAffine({what}, p={self.p})"
+
+
+def affine_to_dict(change, seed=None):
+    """An affine change as the manifest records it (``augment-dataset --method affine``)."""
+    return {
+        "method": "affine",
+        "seed": seed,
+        "rotation_deg": float(change.rotation_deg),
+        "translation": [float(x) for x in change.translation],
+        "scale": float(change.scale),
+    }

@@ -14,8 +14,10 @@
 #include <cstring>
 #include <string>
 
+#include "fishcam/affine.hpp"
 #include "fishcam/augmentation.hpp"
 #include "fishcam/camera_io.hpp"
+#include "fishcam/comparison.hpp"
 #include "fishcam/fit.hpp"
 #include "fishcam/metrics.hpp"
 #include "fishcam/viewpoint.hpp"
@@ -225,6 +227,53 @@ void bind_camera(py::module_& m) {
       py::arg("fit_center") = false, py::arg("fit_aspect") = false);
 }
 
+// What `fishcam augment` writes, into new numpy arrays: the image resampled
+// bilinearly and the labels by nearest neighbour with the maps `compute` gives
+// (maps from `source` to `target` size), optionally the validity; the GIL is
+// released around the compute.
+template <class ComputeMaps>
+py::dict resample(std::optional<py::array> image, std::optional<py::array> labels, cv::Size source, cv::Size target,
+                  double fill, int label_fill, bool return_valid, const ComputeMaps& compute) {
+  py::dict out;
+  cv::Mat image_in, labels_in, image_out, labels_out, valid_out;
+  if (image) {
+    image_in = as_mat(*image, "image", false);
+    out["image"] = new_image(*image, target.height, target.width, &image_out);
+  }
+  if (labels) {
+    labels_in = as_mat(*labels, "labels", true);
+    out["labels"] = new_image(*labels, target.height, target.width, &labels_out);
+  }
+  if (return_valid) {
+    py::array_t<bool> valid({target.height, target.width});
+    valid_out = cv::Mat(target.height, target.width, CV_8UC1, valid.mutable_data());
+    out["valid"] = valid;
+  }
+  py::gil_scoped_release release;
+  for (const auto& [mat, what, given] : {std::tuple(&image_in, "image", bool(image)),
+                                         std::tuple(&labels_in, "labels", bool(labels))}) {
+    if (given && mat->size() != source) {
+      throw Error(std::string(what) + ": is " + std::to_string(mat->cols) + "x" + std::to_string(mat->rows) +
+                  " but the camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
+    }
+  }
+  WarpMaps maps;
+  compute(&maps);
+  // The library writes into the numpy buffers (same size and type).
+  if (image) {
+    const uchar* before = image_out.data;
+    warp_image(image_in, maps, &image_out, fill);
+    if (image_out.data != before) throw Error("internal: warp_image reallocated its output");
+  }
+  if (labels) {
+    const uchar* before = labels_out.data;
+    warp_labels(labels_in, maps, label_fill, &labels_out);
+    if (labels_out.data != before) throw Error("internal: warp_labels reallocated its output");
+  }
+  if (return_valid) maps.validity().copyTo(valid_out);
+  return out;
+}
+
 void bind_augmentation(py::module_& m) {
   py::class_<RandomPose>(m, "ViewpointChange")
       .def(py::init(&change_from), py::arg("rotation_deg") = Eigen::Vector3d::Zero(),
@@ -315,52 +364,11 @@ void bind_augmentation(py::module_& m) {
           [](const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
              const RandomPose& change, const std::string& depth, double fill, int label_fill, bool return_valid) {
             const DepthPrior prior = depth_prior(depth);
-            py::dict out;
-            const int h = warp.target().height(), w = warp.target().width();
-            cv::Mat image_in, labels_in, image_out, labels_out;
-            if (image) {
-              image_in = as_mat(*image, "image", false);
-              out["image"] = new_image(*image, h, w, &image_out);
-            }
-            if (labels) {
-              labels_in = as_mat(*labels, "labels", true);
-              out["labels"] = new_image(*labels, h, w, &labels_out);
-            }
-            py::array_t<bool> valid;
-            cv::Mat valid_out;
-            if (return_valid) {
-              valid = py::array_t<bool>({warp.target().height(), warp.target().width()});
-              valid_out = cv::Mat(warp.target().height(), warp.target().width(), CV_8UC1, valid.mutable_data());
-              out["valid"] = valid;
-            }
-            {
-              py::gil_scoped_release release;
-              const cv::Size source(warp.source().width(), warp.source().height());
-              if (image && image_in.size() != source) {
-                throw Error("image: is " + std::to_string(image_in.cols) + "x" + std::to_string(image_in.rows) +
-                            " but the camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
-              }
-              if (labels && labels_in.size() != source) {
-                throw Error("labels: is " + std::to_string(labels_in.cols) + "x" + std::to_string(labels_in.rows) +
-                            " but the camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
-              }
-              WarpMaps maps;
-              warp.compute(change.change(), prior, &maps);
-              if (image) {
-                // The same maps and calls as `fishcam augment`; the library writes
-                // into the numpy buffer (same size and type).
-                const uchar* before = image_out.data;
-                warp_image(image_in, maps, &image_out, fill);
-                if (image_out.data != before) throw Error("internal: warp_image reallocated its output");
-              }
-              if (labels) {
-                const uchar* before = labels_out.data;
-                warp_labels(labels_in, maps, label_fill, &labels_out);
-                if (labels_out.data != before) throw Error("internal: warp_labels reallocated its output");
-              }
-              if (return_valid) maps.validity().copyTo(valid_out);
-            }
-            return out;
+            const cv::Size source(warp.source().width(), warp.source().height());
+            const cv::Size target(warp.target().width(), warp.target().height());
+            // The same maps and calls as `fishcam augment`.
+            return resample(image, labels, source, target, fill, label_fill, return_valid,
+                            [&](WarpMaps* maps) { warp.compute(change.change(), prior, maps); });
           },
           py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
@@ -371,6 +379,70 @@ void bind_augmentation(py::module_& m) {
             return ViewpointWarp(camera_from_state(t[0].cast<std::string>()),
                                  camera_from_state(t[1].cast<std::string>()));
           }));
+
+  py::class_<AffineChange>(m, "AffineChange")
+      .def(py::init([](double rotation_deg, const Eigen::Vector2d& translation, double scale) {
+             AffineChange change{rotation_deg, translation, scale};
+             check_affine(change);
+             return change;
+           }),
+           py::arg("rotation_deg") = 0.0, py::arg("translation") = Eigen::Vector2d::Zero(), py::arg("scale") = 1.0)
+      .def_readonly("rotation_deg", &AffineChange::rotation_deg)
+      .def_readonly("translation", &AffineChange::translation)
+      .def_readonly("scale", &AffineChange::scale)
+      .def(py::pickle([](const AffineChange& c) { return py::make_tuple(c.rotation_deg, c.translation, c.scale); },
+                      [](const py::tuple& t) {
+                        AffineChange c{t[0].cast<double>(), t[1].cast<Eigen::Vector2d>(), t[2].cast<double>()};
+                        check_affine(c);
+                        return c;
+                      }))
+      .def("__repr__", [](const AffineChange& c) {
+        char buffer[200];
+        std::snprintf(buffer, sizeof buffer, "AffineChange(rotation_deg=%.17g, translation=(%.17g, %.17g), scale=%.17g)",
+                      c.rotation_deg, c.translation.x(), c.translation.y(), c.scale);
+        return std::string(buffer);
+      });
+  m.def(
+      "random_affine",
+      [](const std::string& preset, std::uint64_t seed) {
+        const auto found = find_affine_preset(preset);
+        if (!found) throw Error("preset: unknown preset '" + preset + "' (small, medium, large, train)");
+        return random_affine(*found, seed);
+      },
+      py::arg("preset"), py::arg("seed"));
+  m.def(
+      "random_affine_in",
+      [](double max_rotation_deg, double max_translation, double min_scale, double max_scale, std::uint64_t seed) {
+        if (!(max_rotation_deg >= 0 && max_rotation_deg <= 180) || !(max_translation >= 0) ||
+            !std::isfinite(max_translation) || !(min_scale > 0) || !(max_scale >= min_scale) ||
+            !std::isfinite(max_scale)) {
+          throw Error("max_rotation_deg must be in [0, 180], max_translation finite and >= 0, and "
+                      "0 < min_scale <= max_scale finite");
+        }
+        return random_affine(AffinePreset{"custom", max_rotation_deg, max_translation, min_scale, max_scale}, seed);
+      },
+      py::arg("max_rotation_deg"), py::arg("max_translation"), py::arg("min_scale"), py::arg("max_scale"),
+      py::arg("seed"));
+  m.def("affine_presets", [] {
+    py::dict out;
+    for (const AffinePreset& p : affine_presets()) {
+      out[py::str(std::string(p.name))] = py::make_tuple(p.max_rotation_deg, p.max_translation, p.min_scale, p.max_scale);
+    }
+    return out;
+  });
+  m.def(
+      "affine_warp",
+      [](std::optional<py::array> image, std::optional<py::array> labels, const AffineChange& change, double fill,
+         int label_fill, bool return_valid) {
+        if (!image && !labels) throw Error("nothing to transform: pass image= and/or labels=");
+        const py::array& given = image ? *image : *labels;
+        if (given.ndim() < 2) throw Error(std::string(image ? "image" : "labels") + ": expected an HxW array");
+        const cv::Size size(static_cast<int>(given.shape(1)), static_cast<int>(given.shape(0)));
+        return resample(image, labels, size, size, fill, label_fill, return_valid,
+                        [&](WarpMaps* maps) { affine_maps(change, size, maps); });
+      },
+      py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"), py::arg("fill") = 0.0,
+      py::arg("label_fill") = 0, py::arg("return_valid") = false);
 
   m.def("set_num_threads", [](int n) {
     if (n < 1 || n > 1024) throw Error("set_num_threads: expected 1 to 1024, got " + std::to_string(n));
@@ -407,6 +479,49 @@ std::string shape_text(const py::array& a) {
   std::string out = "(";
   for (py::ssize_t i = 0; i < a.ndim(); ++i) out += (i ? ", " : "") + std::to_string(a.shape(i));
   return out + (a.ndim() == 1 ? ",)" : ")");
+}
+
+void bind_comparison(py::module_& m) {
+  m.def(
+      "compare",
+      [](const Camera& camera, const py::list& models, const std::string& method, const std::string& preset,
+         int samples, std::uint64_t seed, const std::string& depth, const py::dict& labels) {
+        ComparisonOptions options;
+        const auto found = find_pose_preset(preset);
+        if (!found) throw Error("preset: unknown preset '" + preset + "' (small, medium, large, train)");
+        options.preset = *found;
+        options.samples = samples;
+        options.seed = seed;
+        options.prior = depth_prior(depth);
+        std::vector<AlternativeModel> alternatives;
+        for (const py::handle& item : models) {
+          if (py::isinstance<Camera>(item)) {
+            const Camera& given = item.cast<const Camera&>();
+            alternatives.push_back({std::string(model_name(given.model())), "given", given, std::nullopt});
+          } else if (py::isinstance<py::tuple>(item) && py::len(item) == 2 && py::isinstance<Camera>(item[py::int_(1)])) {
+            alternatives.push_back({py::str(item[py::int_(0)]), "given", item[py::int_(1)].cast<Camera>(), std::nullopt});
+          } else if (py::isinstance<py::str>(item)) {
+            alternatives.push_back({item.cast<std::string>(), "", camera, std::nullopt});  // resolved below
+          } else {
+            throw Error("models: expected model names, camera files, fishcam.Camera or (name, Camera), got " +
+                        std::string(py::str(py::type::of(item).attr("__name__"))));
+          }
+        }
+        NamedLabels named;
+        std::vector<py::array> keep;
+        for (const auto& [key, value] : labels) {
+          keep.push_back(py::array::ensure(value));
+          if (!keep.back()) throw Error("labels: expected arrays");
+          named.emplace_back(py::str(key), as_mat(keep.back(), "labels", true));
+        }
+        py::gil_scoped_release release;
+        for (AlternativeModel& a : alternatives) {
+          if (a.how.empty()) a = alternative_model(camera, a.name, method);  // fitted, or read from a file
+        }
+        return comparison_json(compare_models(camera, alternatives, options, named));
+      },
+      py::arg("camera"), py::arg("models"), py::arg("method"), py::arg("preset"), py::arg("samples"), py::arg("seed"),
+      py::arg("depth"), py::arg("labels"));
 }
 
 void bind_metrics(py::module_& m) {
@@ -474,4 +589,5 @@ PYBIND11_MODULE(_fishcam, m) {
   fishcam::python::bind_camera(m);
   fishcam::python::bind_augmentation(m);
   fishcam::python::bind_metrics(m);
+  fishcam::python::bind_comparison(m);
 }

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <random>
 #include <string_view>
 
 #include "fishcam/camera.hpp"
@@ -59,9 +60,21 @@ struct RandomPose {
   Eigen::Vector3d translation;
   ViewpointChange change() const { return ViewpointChange::from_euler_deg(rotation_deg, translation); }
 };
-// Reproducible on any platform: std::mt19937_64 (its output is fixed by the
-// standard) mapped to [0, 1) by our own code, not by a standard distribution.
-// Draw order: rx, ry, rz, tx, ty, tz.
+// Uniform numbers in [0, 1) reproducible on any platform: std::mt19937_64 (its
+// output is fixed by the standard) mapped by our own code, not by a standard
+// distribution (whose algorithm the standard leaves open). Every seeded draw uses it.
+class SeededUniform {
+ public:
+  explicit SeededUniform(std::uint64_t seed) : engine_(seed) {}
+  double next() { return double(engine_() >> 11) * 0x1.0p-53; }  // 53 random bits
+  // Uniform in [-half_range, half_range).
+  double symmetric(double half_range) { return (2 * next() - 1) * half_range; }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+// Draw order: rx, ry, rz, tx, ty, tz (SeededUniform::symmetric each).
 RandomPose random_pose(const PosePreset& preset, std::uint64_t seed);
 // A seed per (key, index) from one user seed (SplitMix64 over FNV-1a of the key).
 std::uint64_t derive_seed(std::uint64_t seed, std::string_view key, std::uint64_t index);
