@@ -9,6 +9,7 @@
 
 #include "fishcam/augmentation.hpp"
 #include "fishcam/npy.hpp"
+#include "fishcam/scene.hpp"
 #include "test_support.hpp"
 
 namespace fishcam {
@@ -622,6 +623,103 @@ TEST(Npy, RoundTripAndLyingHeaders) {
       EXPECT_NE(std::string(e.what()).find("shape"), std::string::npos) << e.what();
     }
   }
+}
+
+}  // namespace
+}  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+struct GridAgreement {
+  double worst_px;
+  long validity_differs, valid;
+};
+
+GridAgreement grid_against_exact(const ViewpointWarp& warp, const ViewpointChange& change, DepthPrior prior) {
+  WarpMaps grid, exact;
+  warp.compute_grid(change, prior, &grid);
+  warp.compute_exact(change, prior, &exact);
+  GridAgreement a{0, 0, 0};
+  for (int v = 0; v < exact.map_x.rows; ++v) {
+    for (int u = 0; u < exact.map_x.cols; ++u) {
+      const bool e = exact.valid.at<uchar>(v, u), g = grid.valid.at<uchar>(v, u);
+      a.valid += e;
+      a.validity_differs += e != g;
+      if (!(e && g)) continue;
+      a.worst_px = std::max<double>(a.worst_px, std::hypot(grid.map_x.at<float>(v, u) - exact.map_x.at<float>(v, u),
+                                                           grid.map_y.at<float>(v, u) - exact.map_y.at<float>(v, u)));
+    }
+  }
+  return a;
+}
+
+// Every registry model as the source (fold variants included): the grid's float map
+// against the exact reference, within cv::remap's fixed-point step.
+TEST(Augmentation, GridMapsOfEveryModelAgreeWithTheExactReference) {
+  const Camera target = woodscape();
+  for (const auto& [name, p] : test::every_model()) {
+    const ViewpointWarp warp(Camera(p), target);
+    EXPECT_GT(warp.grid_spacing(), 0) << name;
+    for (std::uint64_t seed = 0; seed < 2; ++seed) {
+      const ViewpointChange change = random_pose(*find_pose_preset("large"), seed).change();
+      for (DepthPrior prior : kPriors) {
+        const auto [worst, differs, valid] = grid_against_exact(warp, change, prior);
+        EXPECT_LE(worst, 1.0 / 32) << name << " " << to_string(prior);
+        // As the per-pixel float kernel (FastMaps... above): only pixels on the image border.
+        EXPECT_LE(differs, 20) << name << " " << to_string(prior);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// augment() through the grid against the exact path, on the rendered scene: the
+// labels differ on at most 1e-4 of the valid pixels (nearest-source ties), the
+// image by the 1/32 px the maps may differ, and changes beyond the measured range
+// take the exact path (bit-identical outputs).
+TEST(Augmentation, GridSamplingMatchesTheExactPath) {
+  const Camera camera = woodscape();
+  const SceneRender scene = render_street_scene(camera, *camera.parameters().pose);
+  const ViewpointWarp warp(camera);
+  ASSERT_EQ(warp.grid_spacing(), 4);
+  EXPECT_LE(warp.grid_error_px(), 1.0 / 32);
+  for (std::uint64_t seed = 0; seed < 4; ++seed) {
+    const ViewpointChange change = random_pose(*find_pose_preset("train"), seed).change();
+    cv::Mat grid_image, grid_labels, grid_valid, exact_image, exact_labels, exact_valid;
+    warp.augment(change, DepthPrior::source_sphere,
+                 {&scene.image, &grid_image, 7, &scene.labels, &grid_labels, 255, &grid_valid}, Sampling::grid);
+    warp.augment(change, DepthPrior::source_sphere,
+                 {&scene.image, &exact_image, 7, &scene.labels, &exact_labels, 255, &exact_valid}, Sampling::exact);
+    const long valid = cv::countNonZero(exact_valid);
+    EXPECT_LE(cv::countNonZero(grid_valid != exact_valid), std::max(2L, valid / 100000)) << seed;
+    EXPECT_LE(cv::countNonZero(grid_labels != exact_labels), std::max(2L, valid / 10000)) << seed;
+    cv::Mat difference;
+    cv::absdiff(grid_image, exact_image, difference);
+    EXPECT_LT(cv::mean(difference)[0], 0.05) << seed;
+  }
+  // Past the measured changes: the exact path, exactly.
+  const ViewpointChange wide = ViewpointChange::from_euler_deg({60, 0, 0});
+  cv::Mat a, b;
+  warp.augment(wide, DepthPrior::source_sphere, {&scene.image, &a, 0, nullptr, nullptr, 0, nullptr}, Sampling::grid);
+  warp.augment(wide, DepthPrior::source_sphere, {&scene.image, &b, 0, nullptr, nullptr, 0, nullptr}, Sampling::exact);
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0);
+  // The identity through the grid copies the image (every map point is a pixel centre to 1/32 px).
+  cv::Mat same;
+  warp.augment(ViewpointChange{}, DepthPrior::source_sphere, {&scene.image, &same, 0, nullptr, nullptr, 0, nullptr});
+  EXPECT_LT(cv::norm(same, scene.image, cv::NORM_L1) / double(scene.image.total() * 3), 0.05);
+  // Bad inputs as warp_image / warp_labels.
+  cv::Mat small(10, 10, CV_8UC3), out;
+  EXPECT_THROW(warp.augment(ViewpointChange{}, DepthPrior::source_sphere, {&small, &out, 0, nullptr, nullptr, 0, nullptr}),
+               Error);
+  EXPECT_THROW(warp.augment(ViewpointChange{}, DepthPrior::source_sphere,
+                            {nullptr, nullptr, 0, &scene.labels, &out, 300, nullptr}),
+               Error);
 }
 
 }  // namespace

@@ -12,7 +12,8 @@ void register_augment(CLI::App& app) {
   auto* cmd = app.add_subcommand("augment", "Augment one image (and its labels) with a viewpoint change (or the "
                                             "affine baseline)");
   struct Options {
-    std::string source, target, image, label, out_image, out_label, out_mask, preset, method = "viewpoint";
+    std::string source, target, image, label, out_image, out_label, out_mask, preset, method = "viewpoint",
+                                                                                 sampling = "grid";
     std::vector<double> affine;
     PoseOptions pose;
     std::uint64_t seed = 0;
@@ -31,6 +32,10 @@ void register_augment(CLI::App& app) {
                   "viewpoint: the camera-aware augmentation; affine: the paper's baseline (rotation about the image "
                   "centre, translation, scale; no camera model)")
       ->check(CLI::IsMember({"viewpoint", "affine"}))
+      ->capture_default_str();
+  cmd->add_option("--sampling", o->sampling,
+                  "grid: the map at grid nodes, interpolated to within 1/32 px (fast); exact: the per-pixel map")
+      ->check(CLI::IsMember({"grid", "exact"}))
       ->capture_default_str();
   auto* affine = cmd->add_option("--affine", o->affine,
                                  "Affine change ROT,TX,TY,SCALE (degrees counter-clockwise, fractions of the image "
@@ -52,7 +57,7 @@ void register_augment(CLI::App& app) {
     if (out_label->count() && o->label.empty()) throw Error("--out-label needs --label");
     const bool affine = o->method == "affine";
     if (affine) {
-      for (const char* option : {"--rotate", "--translate", "--depth", "--target"}) {
+      for (const char* option : {"--rotate", "--translate", "--depth", "--target", "--sampling"}) {
         if (cmd->count(option)) throw Error(std::string(option) + ": not used by --method affine (see --affine)");
       }
     } else if (!o->affine.empty()) {
@@ -77,29 +82,28 @@ void register_augment(CLI::App& app) {
       labels = read_image(o->label, cv::IMREAD_UNCHANGED);
       if (labels.channels() != 1) throw Error(o->label + ": expected a single-channel label image");
     }
-    WarpMaps maps;
-    if (affine) {
-      affine_maps(affine_change, cv::Size(warp.source().width(), warp.source().height()), &maps);
-    } else {
-      warp.compute(pose.change(), o->pose.prior(), &maps);
-    }
-    cv::Mat out;
+    cv::Mat out, out_labels, valid;
+    AugmentIO io{&image, &out, 0, nullptr, nullptr, o->label_fill, o->out_mask.empty() ? nullptr : &valid};
+    if (!o->out_label.empty()) io.labels = &labels, io.out_labels = &out_labels;
     try {
-      warp_image(image, maps, &out);
+      if (affine) {
+        WarpMaps maps;
+        affine_maps(affine_change, cv::Size(warp.source().width(), warp.source().height()), &maps);
+        warp_image(image, maps, &out);
+        if (io.labels) warp_labels(labels, maps, o->label_fill, &out_labels);
+        if (io.valid) valid = maps.validity();
+      } else {
+        warp.augment(pose.change(), o->pose.prior(), io, *parse_sampling(o->sampling));
+      }
     } catch (const Error& e) {
-      throw Error(o->image + ": " + e.what());
+      // Which input was wrong: the library names the argument ("image: ...", "labels: ...").
+      const std::string what = e.what();
+      throw Error((what.rfind("labels", 0) == 0 || what.rfind("warp_labels", 0) == 0 ? o->label : o->image) + ": " +
+                  what);
     }
     std::vector<std::pair<std::filesystem::path, cv::Mat>> outputs{{o->out_image, out}};
-    if (!o->out_label.empty()) {
-      cv::Mat out_labels;
-      try {
-        warp_labels(labels, maps, o->label_fill, &out_labels);
-      } catch (const Error& e) {
-        throw Error(o->label + ": " + e.what());
-      }
-      outputs.emplace_back(o->out_label, out_labels);
-    }
-    if (!o->out_mask.empty()) outputs.emplace_back(o->out_mask, maps.validity() * 255);
+    if (!o->out_label.empty()) outputs.emplace_back(o->out_label, out_labels);
+    if (!o->out_mask.empty()) outputs.emplace_back(o->out_mask, valid * 255);
     write_images(outputs, o->force);
     const nlohmann::json seed_json = o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->seed);
     const nlohmann::json preset_json = o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->preset);

@@ -59,7 +59,7 @@ class Progress {
 };
 
 struct Options {
-  std::string root, out, presets = "train", depth = "source-sphere", shard, method = "viewpoint";
+  std::string root, out, presets = "train", depth = "source-sphere", shard, method = "viewpoint", sampling = "grid";
   std::uint64_t seed = 0;
   int copies = 1, threads = 0, label_fill = 0;
 };
@@ -89,6 +89,11 @@ void register_augment_dataset(CLI::App& app) {
                   "since no camera model describes the result)")
       ->check(CLI::IsMember({"viewpoint", "affine"}))
       ->capture_default_str();
+  cmd->add_option("--sampling", o->sampling,
+                  "Viewpoint maps: grid (interpolated to within 1/32 px, fast) or exact (per pixel); recorded in the "
+                  "manifest")
+      ->check(CLI::IsMember({"grid", "exact"}))
+      ->capture_default_str();
   cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source")->capture_default_str();
   cmd->add_option("--shard", o->shard,
                   "K/N: only images K, K+N, K+2N, ... (in name order, K in [0, N)), manifest-K-of-N.jsonl; the N "
@@ -116,6 +121,7 @@ void register_augment_dataset(CLI::App& app) {
     }
     const DepthPrior prior = *parse_depth_prior(o->depth);
     const bool affine = o->method == "affine";
+    const Sampling sampling = *parse_sampling(o->sampling);
     if (o->threads > 0) cv::setNumThreads(o->threads);
     const fs::path images_dir = root / "rgb_images";
     if (!fs::is_directory(images_dir)) throw Error(images_dir.string() + ": missing (expected WoodScape layout)");
@@ -209,15 +215,16 @@ void register_augment_dataset(CLI::App& app) {
                 labels = read_image(label_path.string(), cv::IMREAD_UNCHANGED);
                 if (labels.channels() != 1) throw Error(label_path.string() + ": expected a single-channel label image");
               }
-              WarpMaps maps;
-              if (affine) {
-                affine_maps(affine_change, cv::Size(camera->width(), camera->height()), &maps);
-              } else {
-                warp->compute(pose.change(), prior, &maps);
-              }
               cv::Mat out_pixels, out_labels;
-              warp_image(image, maps, &out_pixels);
-              warp_labels(labels, maps, o->label_fill, &out_labels);
+              if (affine) {
+                WarpMaps maps;
+                affine_maps(affine_change, cv::Size(camera->width(), camera->height()), &maps);
+                warp_image(image, maps, &out_pixels);
+                warp_labels(labels, maps, o->label_fill, &out_labels);
+              } else {
+                warp->augment(pose.change(), prior, {&image, &out_pixels, 0, &labels, &out_labels, o->label_fill, nullptr},
+                              sampling);
+              }
               std::vector<std::pair<fs::path, std::string>> files{{out_image, encode_image(out_image, out_pixels)},
                                                                    {out_label, encode_image(out_label, out_labels)}};
               if (!affine) {
@@ -246,6 +253,7 @@ void register_augment_dataset(CLI::App& app) {
                 line.update(affine_to_json(affine_change));
               } else {
                 line.update({{"method", "viewpoint"},
+                             {"sampling", o->sampling},
                              {"rotation_deg", {r.x(), r.y(), r.z()}},
                              {"translation", {t.x(), t.y(), t.z()}},
                              {"depth", to_string(prior)}});

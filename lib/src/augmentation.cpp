@@ -9,11 +9,35 @@
 #include <cstdlib>
 #include <cmath>
 
+#include "grid_warp.hpp"
 #include "warp_kernel.hpp"
 
 namespace fishcam {
+namespace detail {
+
+PoseParams pose_params(const ViewpointChange& change) {
+  PoseParams p;
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) p.rt[3 * r + k] = float(change.rotation(k, r));
+  }
+  for (int k = 0; k < 3; ++k) p.t[k] = float(change.translation[k]);
+  p.c = float(change.translation.squaredNorm() - 1);
+  return p;
+}
+
+// The kernel for this CPU: AVX2 + FMA where available, else the build's baseline.
+// FISHCAM_NO_AVX2 (set to anything) forces the baseline: how the tests cover it.
+RangeKernel select_kernel_for_cpu(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling) {
+  static const bool avx2 = !std::getenv("FISHCAM_NO_AVX2") && cv::checkHardwareSupport(CV_CPU_AVX2) &&
+                           cv::checkHardwareSupport(CV_CPU_FMA3);
+  return avx2 ? select_kernel_avx2(prior, inside_sphere, kind, sampling)
+              : select_kernel_baseline(prior, inside_sphere, kind, sampling);
+}
+
+}  // namespace detail
 namespace {
 
+using detail::pose_params;
 using detail::PoseParams;
 using detail::SourceParams;
 static_assert(detail::kOutside == kOutsideSource);
@@ -87,16 +111,6 @@ std::optional<SourceParams> float_source_params(const Camera& camera) {
   return p;
 }
 
-PoseParams pose_params(const ViewpointChange& change) {
-  PoseParams p;
-  for (int r = 0; r < 3; ++r) {
-    for (int k = 0; k < 3; ++k) p.rt[3 * r + k] = float(change.rotation(k, r));
-  }
-  for (int k = 0; k < 3; ++k) p.t[k] = float(change.translation[k]);
-  p.c = float(change.translation.squaredNorm() - 1);
-  return p;
-}
-
 void allocate(const Camera& source, const Camera& target, MapKind kind, WarpMaps* maps) {
   maps->kind = kind;
   maps->source_size = cv::Size(source.width(), source.height());
@@ -109,13 +123,8 @@ void allocate(const Camera& source, const Camera& target, MapKind kind, WarpMaps
   }
 }
 
-// The kernel for this CPU: AVX2 + FMA where available, else the build's baseline.
-// FISHCAM_NO_AVX2 (set to anything) forces the baseline: how the tests cover it.
 detail::RangeKernel select_kernel(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling) {
-  static const bool avx2 = !std::getenv("FISHCAM_NO_AVX2") && cv::checkHardwareSupport(CV_CPU_AVX2) &&
-                           cv::checkHardwareSupport(CV_CPU_FMA3);
-  return avx2 ? detail::select_kernel_avx2(prior, inside_sphere, kind, sampling)
-              : detail::select_kernel_baseline(prior, inside_sphere, kind, sampling);
+  return detail::select_kernel_for_cpu(prior, inside_sphere, kind, sampling);
 }
 
 }  // namespace
@@ -189,6 +198,40 @@ bool float_kernel_agrees(const Camera& camera, const SourceParams& src) {
 
 }  // namespace
 
+namespace {
+
+void check_size(const cv::Mat& image, cv::Size source, const char* what) {
+  if (image.empty()) throw Error(std::string(what) + ": empty image");
+  if (image.size() != source) {
+    throw Error(std::string(what) + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                " but the source camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
+  }
+}
+
+void check_maps(const WarpMaps& maps, const char* what) {
+  if (maps.map_x.empty()) throw Error(std::string(what) + ": no maps computed");
+}
+
+void check_image_input(const cv::Mat& image, cv::Size source, double fill, const char* what) {
+  check_size(image, source, what);
+  if (image.depth() != CV_8U && image.depth() != CV_16U && image.depth() != CV_32F) {
+    throw Error(std::string(what) + ": expected an 8- or 16-bit or float32 image");
+  }
+  if (image.channels() < 1 || image.channels() > 4) throw Error(std::string(what) + ": expected 1 to 4 channels");
+  if (!std::isfinite(fill)) throw Error(std::string(what) + ": fill must be finite");
+}
+
+void check_label_input(const cv::Mat& labels, cv::Size source, int fill, const char* what) {
+  check_size(labels, source, what);
+  if (labels.channels() != 1 || (labels.depth() != CV_8U && labels.depth() != CV_16U)) {
+    throw Error(std::string(what) + ": expected a single-channel 8- or 16-bit label image");
+  }
+  const int max_label = labels.depth() == CV_8U ? 255 : 65535;
+  if (fill < 0 || fill > max_label) throw Error(std::string(what) + ": fill value does not fit the label image");
+}
+
+}  // namespace
+
 ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(source)), target_(std::move(target)) {
   for (const Camera* c : {&source_, &target_}) {
     if (c->width() > kRemapSizeLimit || c->height() > kRemapSizeLimit) {
@@ -200,7 +243,7 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
   if (!src || !float_kernel_agrees(source_, *src)) return;  // the exact path needs no cached rays
   kernel_source_ = std::make_shared<const SourceParams>(*src);
   const size_t n = size_t(target_.width()) * size_t(target_.height());
-  const size_t padded = (n + 63) / 64 * 64;
+  const size_t padded = (n + 63) / 64 * 64 + 64;  // whole vectors, and one more for kernels started mid-row
   std::vector<float> interleaved(3 * n);
   target_.unproject_image(interleaved, InversePath::table);
   rays_.create(3, static_cast<int>(padded), CV_32FC1);
@@ -209,6 +252,42 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) planes[k][i] = interleaved[3 * i + k];
   }
+  grid_ = detail::make_grid_plan(source_, target_, *kernel_source_, rays_);
+}
+
+void ViewpointWarp::compute_grid(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const {
+  check_change(change);
+  if (grid_ && detail::grid_maps(*grid_, *kernel_source_, rays_, target_, change, prior, maps)) return;
+  compute(change, prior, maps, MapKind::geometric);
+}
+
+int ViewpointWarp::grid_spacing() const { return grid_ ? grid_->spacing : 0; }
+double ViewpointWarp::grid_error_px() const { return grid_ ? grid_->measured_error_px : 0; }
+
+std::optional<Sampling> parse_sampling(std::string_view name) {
+  if (name == "grid") return Sampling::grid;
+  if (name == "exact") return Sampling::exact;
+  return std::nullopt;
+}
+
+std::string_view to_string(Sampling sampling) { return sampling == Sampling::grid ? "grid" : "exact"; }
+
+void ViewpointWarp::augment(const ViewpointChange& change, DepthPrior prior, const AugmentIO& io,
+                            Sampling sampling) const {
+  check_change(change);
+  const cv::Size source(source_.width(), source_.height());
+  if (io.image) check_image_input(*io.image, source, io.fill, "image");
+  if (io.labels) check_label_input(*io.labels, source, io.label_fill, "labels");
+  if ((io.image && !io.out_image) || (io.labels && !io.out_labels)) throw Error("augment: an input without its output");
+  if (sampling == Sampling::grid && grid_ &&
+      detail::grid_augment(*grid_, *kernel_source_, rays_, target_, change, prior, io)) {
+    return;
+  }
+  WarpMaps maps;
+  compute(change, prior, &maps);
+  if (io.image) warp_image(*io.image, maps, io.out_image, io.fill);
+  if (io.labels) warp_labels(*io.labels, maps, io.label_fill, io.out_labels);
+  if (io.valid) maps.validity().copyTo(*io.valid);
 }
 
 void ViewpointWarp::compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const {
@@ -271,20 +350,6 @@ void ViewpointWarp::compute_double(const ViewpointChange& change, DepthPrior pri
 }
 
 
-namespace {
-
-void check_input(const cv::Mat& image, const WarpMaps& maps, const char* what) {
-  if (maps.map_x.empty()) throw Error(std::string(what) + ": no maps computed");
-  if (image.empty()) throw Error(std::string(what) + ": empty image");
-  if (image.size() != maps.source_size) {
-    throw Error(std::string(what) + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                " but the source camera is " + std::to_string(maps.source_size.width) + "x" +
-                std::to_string(maps.source_size.height));
-  }
-}
-
-}  // namespace
-
 cv::Mat WarpMaps::validity() const {
   if (kind == MapKind::geometric) return valid;
   cv::Mat inside = map_x != kOutsideSource;  // 0 or 255
@@ -292,12 +357,8 @@ cv::Mat WarpMaps::validity() const {
 }
 
 void warp_image(const cv::Mat& image, const WarpMaps& maps, cv::Mat* out, double fill) {
-  check_input(image, maps, "warp_image");
-  if (image.depth() != CV_8U && image.depth() != CV_16U && image.depth() != CV_32F) {
-    throw Error("warp_image: expected an 8- or 16-bit or float32 image");
-  }
-  if (image.channels() < 1 || image.channels() > 4) throw Error("warp_image: expected 1 to 4 channels");
-  if (!std::isfinite(fill)) throw Error("warp_image: fill must be finite");
+  check_maps(maps, "warp_image");
+  check_image_input(image, maps.source_size, fill, "warp_image");
   if (maps.kind == MapKind::sampling) {
     // Sources inside the image were clamped onto it; the rest are far outside.
     cv::remap(image, *out, maps.map_x, maps.map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(fill));
@@ -311,12 +372,8 @@ void warp_image(const cv::Mat& image, const WarpMaps& maps, cv::Mat* out, double
 }
 
 void warp_labels(const cv::Mat& labels, const WarpMaps& maps, int fill, cv::Mat* out) {
-  check_input(labels, maps, "warp_labels");
-  if (labels.channels() != 1 || (labels.depth() != CV_8U && labels.depth() != CV_16U)) {
-    throw Error("warp_labels: expected a single-channel 8- or 16-bit label image");
-  }
-  const int max_label = labels.depth() == CV_8U ? 255 : 65535;
-  if (fill < 0 || fill > max_label) throw Error("warp_labels: fill value does not fit the label image");
+  check_maps(maps, "warp_labels");
+  check_label_input(labels, maps.source_size, fill, "warp_labels");
   cv::remap(labels, *out, maps.map_x, maps.map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(fill));
   if (maps.kind == MapKind::geometric && maps.invalid_count > 0) out->setTo(cv::Scalar(fill), maps.valid == 0);
 }

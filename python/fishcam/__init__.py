@@ -39,13 +39,14 @@ def _camera_eq(self, other):
 
 
 def _warp_call(self, image=None, labels=None, change=None, depth="source-sphere", fill=0, label_fill=0,
-               return_valid=False):
+               return_valid=False, sampling="grid"):
     """``warp(image=..., labels=..., change=...)``: the augmented image and labels as
-    ``fishcam augment`` writes them (a dict: image, labels, and valid when asked)."""
+    ``fishcam augment`` writes them (a dict: image, labels, and valid when asked).
+    sampling: "grid" (maps interpolated from grid nodes, within 1/32 px) or "exact"."""
     if change is None:
         raise Error("change: required (a fishcam.ViewpointChange)")
     return self.warp(image=image, labels=labels, change=change, depth=depth, fill=fill, label_fill=label_fill,
-                     return_valid=return_valid)
+                     return_valid=return_valid, sampling=sampling)
 
 
 ViewpointWarp.__call__ = _warp_call

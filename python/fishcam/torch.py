@@ -86,10 +86,10 @@ class RandomViewpoint(_Transform):
     """fishcam.transforms.RandomViewpoint as a module (see _Transform)."""
 
     def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
-                 depth="source-sphere", p=1.0, fill=0, fill_mask=0):
+                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, sampling="grid"):
         super().__init__(_transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
                                                      max_translation=max_translation, depth=depth, p=p, fill=fill,
-                                                     fill_mask=fill_mask))
+                                                     fill_mask=fill_mask, sampling=sampling))
 
 
 class RandomAffine(_Transform):

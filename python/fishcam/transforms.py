@@ -62,10 +62,14 @@ class RandomViewpoint:
     p: probability of applying a change (else the identity, still reported).
     fill: image value where the new view has no source; fill_mask: the label there.
     rng: a numpy Generator to draw seeds from (default: numpy's global generator).
+    sampling: "grid" (default: maps interpolated from grid nodes, within 1/32 px of
+        the per-pixel map, as ``fishcam augment``) or "exact".
     """
 
     def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
-                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, rng=None):
+                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, rng=None, sampling="grid"):
+        if sampling not in ("grid", "exact"):
+            raise Error(f"sampling: expected grid or exact, got {sampling!r}")
         if camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
         if (max_rotation_deg is None) != (max_translation is None):
@@ -93,6 +97,7 @@ class RandomViewpoint:
         self.fill = fill
         self.fill_mask = int(fill_mask)
         self.rng = rng
+        self.sampling = sampling
         self._warps = _WarpCache()
 
     def change_for(self, seed):
@@ -119,7 +124,7 @@ class RandomViewpoint:
         change = self.change_for(seed) if apply else _fishcam.ViewpointChange()
         warp = self._warps.get(camera)
         out = warp.warp(image=image, labels=mask, change=change, depth=self.depth, fill=self.fill,
-                        label_fill=self.fill_mask)
+                        label_fill=self.fill_mask, sampling=self.sampling)
         result = {"change": change_to_dict(change, seed, self.depth)}
         if image is not None:
             result["image"] = out["image"]

@@ -10,6 +10,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -227,13 +228,12 @@ void bind_camera(py::module_& m) {
       py::arg("fit_center") = false, py::arg("fit_aspect") = false);
 }
 
-// What `fishcam augment` writes, into new numpy arrays: the image resampled
-// bilinearly and the labels by nearest neighbour with the maps `compute` gives
-// (maps from `source` to `target` size), optionally the validity; the GIL is
-// released around the compute.
-template <class ComputeMaps>
+// What `fishcam augment` writes, into new numpy arrays: the image and labels (and
+// optionally the validity) resampled by `apply` (an AugmentIO -> outputs written in
+// place) from `source` to `target` size, the GIL released around the compute.
+template <class Apply>
 py::dict resample(std::optional<py::array> image, std::optional<py::array> labels, cv::Size source, cv::Size target,
-                  double fill, int label_fill, bool return_valid, const ComputeMaps& compute) {
+                  double fill, int label_fill, bool return_valid, const Apply& apply) {
   py::dict out;
   cv::Mat image_in, labels_in, image_out, labels_out, valid_out;
   if (image) {
@@ -257,21 +257,29 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
                   " but the camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
     }
   }
-  WarpMaps maps;
-  compute(&maps);
-  // The library writes into the numpy buffers (same size and type).
-  if (image) {
-    const uchar* before = image_out.data;
-    warp_image(image_in, maps, &image_out, fill);
-    if (image_out.data != before) throw Error("internal: warp_image reallocated its output");
+  const std::array<const uchar*, 3> before{image_out.data, labels_out.data, valid_out.data};
+  apply(AugmentIO{image ? &image_in : nullptr, &image_out, fill, labels ? &labels_in : nullptr, &labels_out, label_fill,
+                  return_valid ? &valid_out : nullptr});
+  // The library wrote into the numpy buffers (same size and type).
+  if (before != std::array<const uchar*, 3>{image_out.data, labels_out.data, valid_out.data}) {
+    throw Error("internal: an output was reallocated");
   }
-  if (labels) {
-    const uchar* before = labels_out.data;
-    warp_labels(labels_in, maps, label_fill, &labels_out);
-    if (labels_out.data != before) throw Error("internal: warp_labels reallocated its output");
-  }
-  if (return_valid) maps.validity().copyTo(valid_out);
   return out;
+}
+
+// The affine baseline's AugmentIO, through the same maps and calls as `fishcam augment --method affine`.
+void apply_affine(const AffineChange& change, cv::Size size, const AugmentIO& io) {
+  WarpMaps maps;
+  affine_maps(change, size, &maps);
+  if (io.image) warp_image(*io.image, maps, io.out_image, io.fill);
+  if (io.labels) warp_labels(*io.labels, maps, io.label_fill, io.out_labels);
+  if (io.valid) maps.validity().copyTo(*io.valid);
+}
+
+Sampling sampling_of(const std::string& name) {
+  const auto sampling = parse_sampling(name);
+  if (!sampling) throw Error("sampling: expected grid or exact, got '" + name + "'");
+  return *sampling;
 }
 
 void bind_augmentation(py::module_& m) {
@@ -362,17 +370,21 @@ void bind_augmentation(py::module_& m) {
       .def(
           "warp",
           [](const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
-             const RandomPose& change, const std::string& depth, double fill, int label_fill, bool return_valid) {
+             const RandomPose& change, const std::string& depth, double fill, int label_fill, bool return_valid,
+             const std::string& sampling) {
             const DepthPrior prior = depth_prior(depth);
+            const Sampling how = sampling_of(sampling);
             const cv::Size source(warp.source().width(), warp.source().height());
             const cv::Size target(warp.target().width(), warp.target().height());
-            // The same maps and calls as `fishcam augment`.
+            // The same calls as `fishcam augment`.
             return resample(image, labels, source, target, fill, label_fill, return_valid,
-                            [&](WarpMaps* maps) { warp.compute(change.change(), prior, maps); });
+                            [&](const AugmentIO& io) { warp.augment(change.change(), prior, io, how); });
           },
           py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
-          py::arg("return_valid") = false)
+          py::arg("return_valid") = false, py::arg("sampling") = "grid")
+      .def_property_readonly("grid_spacing", &ViewpointWarp::grid_spacing)
+      .def_property_readonly("grid_error_px", &ViewpointWarp::grid_error_px)
       .def(py::pickle(
           [](const ViewpointWarp& w) { return py::make_tuple(camera_state(w.source()), camera_state(w.target())); },
           [](const py::tuple& t) {
@@ -439,7 +451,7 @@ void bind_augmentation(py::module_& m) {
         if (given.ndim() < 2) throw Error(std::string(image ? "image" : "labels") + ": expected an HxW array");
         const cv::Size size(static_cast<int>(given.shape(1)), static_cast<int>(given.shape(0)));
         return resample(image, labels, size, size, fill, label_fill, return_valid,
-                        [&](WarpMaps* maps) { affine_maps(change, size, maps); });
+                        [&](const AugmentIO& io) { apply_affine(change, size, io); });
       },
       py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"), py::arg("fill") = 0.0,
       py::arg("label_fill") = 0, py::arg("return_valid") = false);

@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <optional>
+#include <string_view>
 
 #include "fishcam/camera.hpp"
 #include "fishcam/viewpoint.hpp"
@@ -14,6 +15,7 @@
 namespace fishcam {
 namespace detail {
 struct SourceParams;
+struct GridPlan;
 }  // namespace detail
 
 // What the maps hold.
@@ -43,6 +45,33 @@ struct WarpMaps {
 
   // 1 where the output pixel has a source inside the source image (either kind).
   cv::Mat validity() const;
+};
+
+// How ViewpointWarp::augment resamples.
+enum class Sampling {
+  // The map at grid nodes every grid_spacing() px (float kernel), interpolated per
+  // tile of rows straight into cv::remap's fixed-point maps, remapped per tile: at
+  // most 1/32 px (cv::remap's own fixed-point step) from the per-pixel map, measured
+  // when the warp is built. Cells without a source at every corner, or next to a
+  // fold, are computed per pixel; the inside/outside decision is per pixel. Changes
+  // wider than the measured ones (the `large` preset's extremes) take the exact path.
+  grid,
+  // compute()'s per-pixel maps, then warp_image / warp_labels.
+  exact,
+};
+std::optional<Sampling> parse_sampling(std::string_view name);  // "grid" | "exact"
+std::string_view to_string(Sampling sampling);
+
+// One sample to augment: any of the image and the labels (with their outputs),
+// and optionally where the output has a source.
+struct AugmentIO {
+  const cv::Mat* image = nullptr;  // source size; 8/16-bit or float32, 1-4 channels; bilinear
+  cv::Mat* out_image = nullptr;
+  double fill = 0;                 // where there is no source (saturated to the image's type)
+  const cv::Mat* labels = nullptr; // source size; CV_8UC1 or CV_16UC1; nearest neighbour
+  cv::Mat* out_labels = nullptr;
+  int label_fill = 0;
+  cv::Mat* valid = nullptr;        // CV_8UC1, 1 where the output pixel has a source inside the source image
 };
 
 // The source point on the unit sphere (source camera frame) seen along the output
@@ -76,6 +105,23 @@ class ViewpointWarp {
   // Whether compute() uses the float kernel (decided once, at construction).
   bool float_kernel() const { return kernel_source_ != nullptr; }
 
+  // One augmented sample (what `fishcam augment` writes): Sampling::grid by default,
+  // Sampling::exact for compute()'s maps. Outputs are written in place when they
+  // already have the output size and the input's type. Throws Error for bad inputs
+  // (as warp_image / warp_labels) and non-finite changes.
+  void augment(const ViewpointChange& change, DepthPrior prior, const AugmentIO& io,
+               Sampling sampling = Sampling::grid) const;
+  // The grid's node spacing (px) and its measured worst interpolation error (px)
+  // against the per-pixel float map; 0 and 0 where there is no grid (no float
+  // kernel, or no spacing from 16 down to 2 px met 1/32 px): augment() then
+  // samples per pixel whatever it is asked.
+  int grid_spacing() const;
+  double grid_error_px() const;
+  // The grid path's source coordinates as geometric maps (float, before cv::remap's
+  // fixed-point quantisation; for inspection and tests). Where augment() would not
+  // use the grid, compute()'s geometric maps.
+  void compute_grid(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
+
  private:
   void compute_double(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const;
 
@@ -83,6 +129,7 @@ class ViewpointWarp {
   // The source camera in the float kernel's form, decided once at construction;
   // null: the exact path. Immutable, so copies of the warp share it.
   std::shared_ptr<const detail::SourceParams> kernel_source_;
+  std::shared_ptr<const detail::GridPlan> grid_;  // null: no grid
   cv::Mat rays_;  // 3 x (W*H) CV_32F planes x, y, z of the target's unit rays; NaN where invalid
 };
 

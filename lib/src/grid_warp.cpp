@@ -1,0 +1,424 @@
+#include "grid_warp.hpp"
+
+#include <opencv2/core/hal/intrin.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+namespace fishcam::detail {
+namespace {
+
+// cv::remap's fixed-point step: INTER_BITS fractional bits per coordinate.
+constexpr int kFractionBits = cv::INTER_BITS;
+constexpr int kFractions = 1 << kFractionBits;  // 32
+// The interpolation error allowed at construction: one fixed-point step less the
+// float kernel's own tolerance against the exact maps.
+constexpr double kGridTolerancePx = 1.0 / kFractions - 1e-3;
+// Where pixels without a source inside the source image point: far enough outside
+// for all four bilinear taps to read the border value, inside int16.
+constexpr short kOutsideFixed = -16384;
+// A spacing is taken only if the measurement interpolates at least this share of
+// the pixels with a source (else a finer one, whose cells bend less, is faster).
+constexpr double kMinInterpolatedShare = 0.8;
+// Floats past a row's end in the row buffers: interpolation writes whole cells.
+constexpr std::size_t kRowPadding = 16;
+// Output rows per tile: a multiple of every spacing, the maps of a tile stay in cache.
+constexpr int kTileRows = 16;
+
+std::size_t padded(std::size_t n) { return (n + 63) / 64 * 64 + 64; }  // whole vectors, and one more to read past
+
+// The source coordinates at the nodes of one change (NaN where a node has no source).
+struct NodeMaps {
+  std::vector<float> x, y;
+  std::vector<unsigned char> valid;
+};
+
+void node_maps(const GridPlan& plan, const SourceParams& src, const PoseParams& pose, RangeKernel kernel,
+               NodeMaps* out) {
+  const std::size_t n = std::size_t(plan.nodes_u) * std::size_t(plan.nodes_v);
+  out->x.resize(n);
+  out->y.resize(n);
+  out->valid.resize(n);
+  kernel(plan.node_rays.ptr<float>(0), plan.node_rays.ptr<float>(1), plan.node_rays.ptr<float>(2), 0, n, pose, src,
+         KernelOutput{out->x.data(), out->y.data(), out->valid.data()});
+}
+
+// Whether a cell is interpolated: every corner has a source (finite coordinates)
+// away from a fold.
+bool corner_ok(const GridPlan& plan, const SourceParams& src, const NodeMaps& nodes, std::size_t k) {
+  const float x = nodes.x[k], y = nodes.y[k];
+  if (!(std::isfinite(x) && std::isfinite(y))) return false;
+  if (plan.fold_guard_radius == std::numeric_limits<float>::infinity()) return true;
+  const float scale = std::max(src.ax, src.ay);
+  const float dx = (x - src.cx) / src.ax * scale, dy = (y - src.cy) / src.ay * scale;
+  return dx * dx + dy * dy < plan.fold_guard_radius * plan.fold_guard_radius;
+}
+
+// Scratch space of one thread for a row: the node columns interpolated to the row.
+struct RowScratch {
+  std::vector<float> column_x, column_y;
+  explicit RowScratch(const GridPlan& plan)
+      : column_x(std::size_t(plan.nodes_u) + 8), column_y(std::size_t(plan.nodes_u) + 8) {}
+};
+
+// One output row v, interpolated from the nodes in every cell (cells that are not
+// interpolated get whatever the nodes give, NaN included: grid_row overwrites them).
+// x and y hold kRowPadding floats past the row: whole cells are written.
+void interpolate_row(const GridPlan& plan, const NodeMaps& nodes, int v, int width, float* x, float* y,
+                     RowScratch* scratch) {
+  const int s = plan.spacing, j = v / s, n = plan.nodes_u;
+  const float b = float(v - j * s) / float(s);
+  const std::size_t row0 = std::size_t(j) * std::size_t(n), row1 = row0 + std::size_t(n);
+  float* cx = scratch->column_x.data();
+  float* cy = scratch->column_y.data();
+  // Down the node columns first (contiguous: vectorised by the compiler), then across.
+  for (int i = 0; i < n; ++i) {
+    cx[i] = nodes.x[row0 + std::size_t(i)] + b * (nodes.x[row1 + std::size_t(i)] - nodes.x[row0 + std::size_t(i)]);
+    cy[i] = nodes.y[row0 + std::size_t(i)] + b * (nodes.y[row1 + std::size_t(i)] - nodes.y[row0 + std::size_t(i)]);
+  }
+  const int cells = (width + s - 1) / s;
+  int i = 0;
+  if (s == 4) {
+    // Four cells at a time: the values at offsets 0..3 of four cells, transposed into
+    // the 16 consecutive pixels of those cells.
+    const cv::v_float32x4 quarter = cv::v_setall_f32(0.25f);
+    for (; i + 4 <= cells; i += 4) {
+      for (auto [column, out] : {std::pair{cx, x}, std::pair{cy, y}}) {
+        const cv::v_float32x4 c = cv::v_load(column + i), d = (cv::v_load(column + i + 1) - c) * quarter;
+        const cv::v_float32x4 r0 = c, r1 = c + d, r2 = r1 + d, r3 = r2 + d;
+        cv::v_float32x4 t0, t1, t2, t3;
+        cv::v_transpose4x4(r0, r1, r2, r3, t0, t1, t2, t3);
+        cv::v_store(out + 4 * i, t0);
+        cv::v_store(out + 4 * i + 4, t1);
+        cv::v_store(out + 4 * i + 8, t2);
+        cv::v_store(out + 4 * i + 12, t3);
+      }
+    }
+  }
+  const float step = 1.0f / float(s);
+  for (; i < cells; ++i) {
+    const float dx = (cx[i + 1] - cx[i]) * step, dy = (cy[i + 1] - cy[i]) * step;
+    for (int a = 0; a < s; ++a) {
+      x[i * s + a] = cx[i] + float(a) * dx;
+      y[i * s + a] = cy[i] + float(a) * dy;
+    }
+  }
+}
+
+// The source coordinates of output row v: interpolated in interpolated cells, by
+// the kernel per pixel elsewhere.
+void grid_row(const GridPlan& plan, const NodeMaps& nodes, const std::vector<unsigned char>& ok, const SourceParams& src,
+              const PoseParams& pose, RangeKernel geometric, const cv::Mat& pixel_rays, int v, int w, float* x,
+              float* y, unsigned char* in, RowScratch* scratch) {
+  interpolate_row(plan, nodes, v, w, x, y, scratch);
+  const int s = plan.spacing, cells = (w + s - 1) / s;
+  const unsigned char* ok_row = ok.data() + std::size_t(v / s) * std::size_t(plan.nodes_u - 1);
+  const std::size_t row = std::size_t(v) * std::size_t(w);
+  for (int i = 0; i < cells;) {
+    if (ok_row[i]) {
+      ++i;
+      continue;
+    }
+    int end = i;
+    while (end < cells && !ok_row[end]) ++end;
+    // The row's rays from its first pixel on, so the kernel writes the row's buffers.
+    geometric(pixel_rays.ptr<float>(0) + row, pixel_rays.ptr<float>(1) + row, pixel_rays.ptr<float>(2) + row,
+              std::size_t(i * s), std::size_t(std::min(w, end * s)), pose, src, KernelOutput{x, y, in});
+    i = end;
+  }
+}
+
+// Which cells are interpolated: every corner has a source (finite coordinates,
+// away from a fold), all four or none inside the source image (cells across its
+// border are decided per pixel), and the map bends little enough there.
+// Bilinear interpolation over a cell of side S errs by at most S^2/8 (|f_uu| +
+// |f_vv|) (the cross term it reproduces); the second differences of the nodes,
+// (|D2u f| + |D2v f|) / 8, estimate that at each node, and a cell is interpolated
+// only where its corners' estimates stay within kCurvatureBudgetPx (the measurement
+// at construction checks the result).
+constexpr float kCurvatureBudgetPx = float(kGridTolerancePx);
+
+std::vector<unsigned char> cells_ok(const GridPlan& plan, const SourceParams& src, const NodeMaps& nodes) {
+  const int nu = plan.nodes_u, nv = plan.nodes_v, cu = nu - 1, cv_ = nv - 1;
+  std::vector<unsigned char> corner(nodes.x.size());
+  for (std::size_t k = 0; k < corner.size(); ++k) corner[k] = corner_ok(plan, src, nodes, k);
+  // The curvature estimate per node (infinite where a neighbour has no source); the
+  // outer nodes take their inner neighbour's.
+  std::vector<float> bend(nodes.x.size(), std::numeric_limits<float>::infinity());
+  auto at = [&](int i, int j) { return std::size_t(j) * std::size_t(nu) + std::size_t(i); };
+  for (int j = 0; j < nv; ++j) {
+    for (int i = 0; i < nu; ++i) {
+      const int ic = std::clamp(i, 1, nu - 2), jc = std::clamp(j, 1, nv - 2);
+      const std::size_t c = at(ic, jc), l = at(ic - 1, jc), r = at(ic + 1, jc), d = at(ic, jc - 1), e = at(ic, jc + 1);
+      const float ex = std::abs(nodes.x[l] + nodes.x[r] - 2 * nodes.x[c]) + std::abs(nodes.x[d] + nodes.x[e] - 2 * nodes.x[c]);
+      const float ey = std::abs(nodes.y[l] + nodes.y[r] - 2 * nodes.y[c]) + std::abs(nodes.y[d] + nodes.y[e] - 2 * nodes.y[c]);
+      const float estimate_squared = (ex * ex + ey * ey) / 64;  // squared: no hypot in the per-pose loop
+      if (std::isfinite(estimate_squared)) bend[at(i, j)] = estimate_squared;
+    }
+  }
+  std::vector<unsigned char> ok(std::size_t(cu) * std::size_t(cv_));
+  for (int j = 0; j < cv_; ++j) {
+    for (int i = 0; i < cu; ++i) {
+      const std::size_t a = at(i, j), b = at(i, j + 1);
+      // Corners on both sides of the source image's border: the decision is made per pixel by the kernel.
+      const int inside = nodes.valid[a] + nodes.valid[a + 1] + nodes.valid[b] + nodes.valid[b + 1];
+      const bool corners = corner[a] && corner[a + 1] && corner[b] && corner[b + 1] && (inside == 0 || inside == 4);
+      const float worst = std::max({bend[a], bend[a + 1], bend[b], bend[b + 1]});
+      ok[std::size_t(j) * std::size_t(cu) + std::size_t(i)] = corners && worst <= kCurvatureBudgetPx * kCurvatureBudgetPx;
+    }
+  }
+  return ok;
+}
+
+// One row of source coordinates in cv::remap's fixed-point form, as cv::remap
+// converts float maps itself: clamped onto the outer pixel centres, rounded to
+// 1/32 px (integer part and the interpolation table's index), and rounded to the
+// nearest pixel for labels; pixels whose source is outside the image (or NaN) point
+// far outside. valid (optional): 1 where the source is inside.
+void to_fixed_point(const float* x, const float* y, int w, float limit_x, float limit_y, float max_x, float max_y,
+                    short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid) {
+  int u = 0;
+  const cv::v_float32x4 low = cv::v_setall_f32(-0.5f), lx = cv::v_setall_f32(limit_x), ly = cv::v_setall_f32(limit_y);
+  const cv::v_float32x4 zero = cv::v_setzero_f32(), mx = cv::v_setall_f32(max_x), my = cv::v_setall_f32(max_y);
+  const cv::v_float32x4 scale = cv::v_setall_f32(float(kFractions));
+  const cv::v_int32x4 outside = cv::v_setall_s32(kOutsideFixed), mask = cv::v_setall_s32(kFractions - 1);
+  for (; u + 8 <= w; u += 8) {
+    cv::v_int32x4 fx[2], fy[2], fr[2], nx[2], ny[2], in[2];
+    for (int h = 0; h < 2; ++h) {
+      const cv::v_float32x4 sx = cv::v_load(x + u + 4 * h), sy = cv::v_load(y + u + 4 * h);
+      in[h] = cv::v_reinterpret_as_s32((sx >= low) & (sx < lx) & (sy >= low) & (sy < ly));  // NaN: false
+      const cv::v_float32x4 cx = cv::v_min(cv::v_max(sx, zero), mx), cy = cv::v_min(cv::v_max(sy, zero), my);
+      const cv::v_int32x4 ix = cv::v_round(cx * scale), iy = cv::v_round(cy * scale);
+      fx[h] = cv::v_select(in[h], ix >> kFractionBits, outside);
+      fy[h] = cv::v_select(in[h], iy >> kFractionBits, outside);
+      fr[h] = cv::v_select(in[h], ((iy & mask) << kFractionBits) | (ix & mask), cv::v_setzero_s32());
+      nx[h] = cv::v_select(in[h], cv::v_round(cx), outside);
+      ny[h] = cv::v_select(in[h], cv::v_round(cy), outside);
+    }
+    cv::v_store_interleave(fixed + 2 * u, cv::v_pack(fx[0], fx[1]), cv::v_pack(fy[0], fy[1]));
+    cv::v_store_interleave(nearest + 2 * u, cv::v_pack(nx[0], nx[1]), cv::v_pack(ny[0], ny[1]));
+    cv::v_store(fractions + u, cv::v_pack_u(fr[0], fr[1]));
+    if (valid) {
+      const cv::v_int16x8 both = cv::v_pack(in[0], in[1]);  // -1 or 0
+      cv::v_store_low(valid + u, cv::v_pack_u(both & cv::v_setall_s16(1), cv::v_setzero_s16()));
+    }
+  }
+  for (; u < w; ++u) {
+    const float sx = x[u], sy = y[u];
+    const bool inside = sx >= -0.5f && sx < limit_x && sy >= -0.5f && sy < limit_y;
+    if (valid) valid[u] = inside;
+    if (!inside) {
+      fixed[2 * u] = fixed[2 * u + 1] = nearest[2 * u] = nearest[2 * u + 1] = kOutsideFixed;
+      fractions[u] = 0;
+      continue;
+    }
+    const float cx = std::min(std::max(sx, 0.0f), max_x), cy = std::min(std::max(sy, 0.0f), max_y);
+    const int ix = cvRound(cx * kFractions), iy = cvRound(cy * kFractions);
+    fixed[2 * u] = short(ix >> kFractionBits);
+    fixed[2 * u + 1] = short(iy >> kFractionBits);
+    fractions[u] = static_cast<unsigned short>((iy & (kFractions - 1)) * kFractions + (ix & (kFractions - 1)));
+    nearest[2 * u] = short(cvRound(cx));
+    nearest[2 * u + 1] = short(cvRound(cy));
+  }
+}
+
+// The nodes' rays for spacing s (the target's unprojection of each node pixel).
+cv::Mat node_rays_for(const Camera& target, int s, int* nodes_u, int* nodes_v) {
+  *nodes_u = (target.width() - 1 + s - 1) / s + 1 + 1;  // past the last pixel: every row lies inside a cell
+  *nodes_v = (target.height() - 1 + s - 1) / s + 1 + 1;
+  const std::size_t n = std::size_t(*nodes_u) * std::size_t(*nodes_v);
+  std::vector<Eigen::Vector2d> pixels(n);
+  for (int j = 0; j < *nodes_v; ++j) {
+    for (int i = 0; i < *nodes_u; ++i) pixels[std::size_t(j) * std::size_t(*nodes_u) + std::size_t(i)] = {i * s, j * s};
+  }
+  std::vector<Eigen::Vector3d> rays(n);
+  std::vector<std::uint8_t> valid(n);
+  target.unproject(pixels, rays, valid, InversePath::table);
+  cv::Mat planes(3, int(padded(n)), CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!valid[k]) continue;
+    for (int c = 0; c < 3; ++c) planes.ptr<float>(c)[k] = float(rays[k][c]);
+  }
+  return planes;
+}
+
+double rotation_angle(const Eigen::Matrix3d& r) {
+  return std::acos(std::clamp((r.trace() - 1) / 2, -1.0, 1.0));
+}
+
+}  // namespace
+
+std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camera& target, const SourceParams& src,
+                                               const cv::Mat& pixel_rays) {
+  const int w = target.width(), h = target.height();
+  if (w < 2 || h < 2) return nullptr;
+  // The measurement: the corners of the `large` preset's box (the widest changes the
+  // presets draw), half with each depth prior that moves the view, on every third row.
+  std::vector<std::pair<ViewpointChange, DepthPrior>> changes;
+  double max_angle = 0, max_translation = 0;
+  for (int k = 0; k < 8; ++k) {
+    const double sx = k & 1 ? 1 : -1, sy = k & 2 ? 1 : -1, sz = k & 4 ? 1 : -1;
+    const ViewpointChange change = ViewpointChange::from_euler_deg({30 * sx, 30 * sy, 30 * sz}, {0.5 * sy, 0.5 * sz, 0.5 * sx});
+    changes.emplace_back(change, k % 2 ? DepthPrior::source_sphere : DepthPrior::target_sphere);
+    max_angle = std::max(max_angle, rotation_angle(change.rotation));
+    max_translation = std::max(max_translation, change.translation.norm());
+  }
+  constexpr int kRowStep = 3;
+  // The per-pixel float maps of the measured rows, once for every candidate spacing.
+  std::vector<std::vector<float>> ref_x(changes.size()), ref_y(changes.size());
+  std::vector<std::vector<unsigned char>> ref_in(changes.size());
+  const std::size_t stride = std::size_t(w);
+  for (std::size_t c = 0; c < changes.size(); ++c) {
+    const auto& [change, prior] = changes[c];
+    const RangeKernel kernel = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false);
+    const PoseParams pose = pose_params(change);
+    ref_x[c].resize(stride * std::size_t(h));
+    ref_y[c].resize(stride * std::size_t(h));
+    ref_in[c].resize(stride * std::size_t(h));
+    for (int v = 0; v < h; v += kRowStep) {
+      const std::size_t begin = std::size_t(v) * stride;
+      kernel(pixel_rays.ptr<float>(0), pixel_rays.ptr<float>(1), pixel_rays.ptr<float>(2), begin, begin + stride, pose,
+             src, KernelOutput{ref_x[c].data(), ref_y[c].data(), ref_in[c].data()});
+    }
+  }
+  float fold_guard = std::numeric_limits<float>::infinity();
+  if (source.domain().closed && std::isfinite(source.domain().rho_max)) {
+    fold_guard = float(0.95 * source.domain().rho_max * std::max(source.pixel_scale().x(), source.pixel_scale().y()));
+  }
+  for (const int s : {16, 8, 4, 2}) {
+    auto plan = std::make_shared<GridPlan>();
+    plan->spacing = s;
+    plan->node_rays = node_rays_for(target, s, &plan->nodes_u, &plan->nodes_v);
+    plan->max_rotation_rad = max_angle + 1e-9;
+    plan->max_translation = max_translation + 1e-9;
+    plan->fold_guard_radius = fold_guard;
+    double worst = 0, interpolated = 0, with_source = 0;
+    std::vector<float> x(stride + kRowPadding), y(stride + kRowPadding);
+    RowScratch scratch(*plan);
+    NodeMaps nodes;
+    for (std::size_t c = 0; c < changes.size() && worst <= kGridTolerancePx; ++c) {
+      const auto& [change, prior] = changes[c];
+      node_maps(*plan, src, pose_params(change),
+                select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false), &nodes);
+      const std::vector<unsigned char> ok = cells_ok(*plan, src, nodes);
+      for (int v = 0; v < h; v += kRowStep) {
+        interpolate_row(*plan, nodes, v, w, x.data(), y.data(), &scratch);
+        const unsigned char* ok_row = ok.data() + std::size_t(v / s) * std::size_t(plan->nodes_u - 1);
+        const std::size_t row = std::size_t(v) * stride;
+        for (int u = 0; u < w; ++u) {
+          if (!ref_in[c][row + std::size_t(u)]) continue;
+          with_source += 1;
+          if (!ok_row[u / s]) continue;  // computed per pixel
+          interpolated += 1;
+          worst = std::max(worst, double(std::hypot(x[std::size_t(u)] - ref_x[c][row + std::size_t(u)],
+                                                    y[std::size_t(u)] - ref_y[c][row + std::size_t(u)])));
+        }
+      }
+    }
+    // The largest spacing that keeps the error and leaves most pixels to the interpolation.
+    if (worst <= kGridTolerancePx && interpolated >= kMinInterpolatedShare * with_source) {
+      plan->measured_error_px = worst;
+      return plan;
+    }
+  }
+  return nullptr;
+}
+
+bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
+                  const ViewpointChange& change, DepthPrior prior, const AugmentIO& io) {
+  if (rotation_angle(change.rotation) > plan.max_rotation_rad || change.translation.norm() > plan.max_translation) {
+    return false;
+  }
+  const int w = target.width(), h = target.height();
+  const bool inside_sphere = change.translation.squaredNorm() < 1;
+  const PoseParams pose = pose_params(change);
+  const RangeKernel geometric = select_kernel_for_cpu(prior, inside_sphere, src.kind, false);
+  NodeMaps nodes;
+  node_maps(plan, src, pose, geometric, &nodes);
+  const std::vector<unsigned char> ok = cells_ok(plan, src, nodes);
+  if (io.image) io.out_image->create(h, w, io.image->type());
+  if (io.labels) io.out_labels->create(h, w, io.labels->type());
+  if (io.valid) io.valid->create(h, w, CV_8UC1);
+  const float limit_x = src.width - 0.5f, limit_y = src.height - 0.5f;
+  const float max_x = src.width - 1, max_y = src.height - 1;
+  const int tiles = (h + kTileRows - 1) / kTileRows;
+  // A few stripes per thread (each allocates its tile buffers once; several balance the load).
+  cv::parallel_for_(cv::Range(0, tiles), [&](const cv::Range& range) {
+    const std::size_t row_length = static_cast<std::size_t>(w) + kRowPadding;
+    std::vector<float> x(row_length), y(row_length);
+    std::vector<unsigned char> in(row_length);
+    RowScratch scratch(plan);
+    cv::Mat fixed(kTileRows, w, CV_16SC2), fractions(kTileRows, w, CV_16UC1), nearest(kTileRows, w, CV_16SC2);
+    for (int tile = range.start; tile < range.end; ++tile) {
+      const int r0 = tile * kTileRows, r1 = std::min(h, r0 + kTileRows);
+      for (int v = r0; v < r1; ++v) {
+        grid_row(plan, nodes, ok, src, pose, geometric, pixel_rays, v, w, x.data(), y.data(), in.data(), &scratch);
+        to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
+                       fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
+                       io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
+      }
+      const int rows = r1 - r0;
+      if (io.image) {
+        cv::Mat out = io.out_image->rowRange(r0, r1);
+        cv::remap(*io.image, out, fixed.rowRange(0, rows), fractions.rowRange(0, rows), cv::INTER_LINEAR,
+                  cv::BORDER_CONSTANT, cv::Scalar::all(io.fill));
+      }
+      if (io.labels) {
+        cv::Mat out = io.out_labels->rowRange(r0, r1);
+        cv::remap(*io.labels, out, nearest.rowRange(0, rows), cv::noArray(), cv::INTER_NEAREST, cv::BORDER_CONSTANT,
+                  cv::Scalar(io.label_fill));
+      }
+    }
+  }, 4.0 * std::max(1, cv::getNumThreads()));
+  return true;
+}
+
+bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
+               const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) {
+  if (rotation_angle(change.rotation) > plan.max_rotation_rad || change.translation.norm() > plan.max_translation) {
+    return false;
+  }
+  const int w = target.width(), h = target.height();
+  const PoseParams pose = pose_params(change);
+  const RangeKernel geometric = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false);
+  NodeMaps nodes;
+  node_maps(plan, src, pose, geometric, &nodes);
+  const std::vector<unsigned char> ok = cells_ok(plan, src, nodes);
+  maps->kind = MapKind::geometric;
+  maps->source_size = cv::Size(int(src.width), int(src.height));
+  maps->map_x.create(h, w, CV_32FC1);
+  maps->map_y.create(h, w, CV_32FC1);
+  maps->valid.create(h, w, CV_8UC1);
+  const float limit_x = src.width - 0.5f, limit_y = src.height - 0.5f;
+  std::atomic<long> invalid{0};
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& range) {
+    const std::size_t row_length = static_cast<std::size_t>(w) + kRowPadding;
+    std::vector<float> row_x(row_length), row_y(row_length);
+    std::vector<unsigned char> in(row_length);
+    RowScratch scratch(plan);
+    long local = 0;
+    for (int v = range.start; v < range.end; ++v) {
+      grid_row(plan, nodes, ok, src, pose, geometric, pixel_rays, v, w, row_x.data(), row_y.data(), in.data(),
+               &scratch);
+      float* x = maps->map_x.ptr<float>(v);
+      float* y = maps->map_y.ptr<float>(v);
+      std::copy(row_x.begin(), row_x.begin() + w, x);
+      std::copy(row_y.begin(), row_y.begin() + w, y);
+      unsigned char* valid = maps->valid.ptr<unsigned char>(v);
+      for (int u = 0; u < w; ++u) {
+        valid[u] = x[u] >= -0.5f && x[u] < limit_x && y[u] >= -0.5f && y[u] < limit_y;
+        local += !valid[u];
+      }
+    }
+    invalid += local;
+  });
+  maps->invalid_count = invalid;
+  return true;
+}
+
+}  // namespace fishcam::detail
