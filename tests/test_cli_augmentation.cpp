@@ -253,7 +253,12 @@ TEST(CliAugmentation, AffineDatasetAndOptions) {
   EXPECT_NE(r.err.find("written with --method 'affine', not viewpoint"), std::string::npos) << r.err;
   r = run_fishcam(common + quoted(dir / "viewpoint"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(test::read_file(dir / "viewpoint/manifest.jsonl").find("\"method\":\"viewpoint\""), std::string::npos);
+  const std::string viewpoint_manifest = test::read_file(dir / "viewpoint/manifest.jsonl");
+  EXPECT_NE(viewpoint_manifest.find("\"method\":\"viewpoint\""), std::string::npos);
+  EXPECT_NE(viewpoint_manifest.find("\"sampling\":\"grid\""), std::string::npos);
+  r = run_fishcam(common + quoted(dir / "exact") + " --sampling exact");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(test::read_file(dir / "exact/manifest.jsonl").find("\"sampling\":\"exact\""), std::string::npos);
 
   const std::string image = quoted(dir / "root/rgb_images/" / tree(dir / "root/rgb_images").begin()->first);
   const std::string camera = quoted(dir / "root/calibration/" / tree(dir / "root/calibration").begin()->first);
@@ -261,6 +266,8 @@ TEST(CliAugmentation, AffineDatasetAndOptions) {
   for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
            {" --affine 1,0,0,1", "--affine needs --method affine"},
            {" --method affine --rotate 1,0,0", "--rotate: not used by --method affine"},
+           {" --method affine --sampling exact", "--sampling: not used by --method affine"},
+           {" --sampling nearest", "--sampling"},
            {" --method affine --affine 1,0,0,0", "scale must be positive"},
            {" --method affine --affine 1,0,0", "--affine"},
            {" --method shear", "--method"},

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -56,6 +58,25 @@ class Progress {
  private:
   size_t total_, done_ = 0;
   bool terminal_;
+};
+
+// One warp per distinct calibration: building one unprojects every pixel and
+// measures the grid, while a WoodScape set has a handful of cameras behind
+// thousands of per-image calibration files.
+class WarpCache {
+ public:
+  std::shared_ptr<const ViewpointWarp> get(const Camera& camera) {
+    CameraParameters intrinsics = camera.parameters();
+    intrinsics.pose.reset();  // the warp depends on the intrinsics and the size only
+    const std::string key = format_camera(intrinsics, CameraFormat::fishcam);
+    if (const auto found = warps_.find(key); found != warps_.end()) return found->second;
+    if (warps_.size() >= kLimit) warps_.clear();  // a dataset with very many cameras: start over
+    return warps_[key] = std::make_shared<const ViewpointWarp>(camera);
+  }
+
+ private:
+  static constexpr std::size_t kLimit = 64;
+  std::map<std::string, std::shared_ptr<const ViewpointWarp>> warps_;
 };
 
 struct Options {
@@ -142,6 +163,7 @@ void register_augment_dataset(CLI::App& app) {
     }
 
     Progress progress(images.size() * presets.size());
+    WarpCache warps;
     long written = 0, skipped = 0;
     std::vector<std::string> failures;
     for (const PosePreset& preset : presets) {
@@ -194,7 +216,7 @@ void register_augment_dataset(CLI::App& app) {
           const fs::path label_path = root / "semantic_annotations" / "gtLabels" / (stem + ".png");
           const fs::path calibration_path = root / "calibration" / (stem + ".json");
           std::optional<Camera> camera;
-          std::optional<ViewpointWarp> warp;
+          std::shared_ptr<const ViewpointWarp> warp;
           cv::Mat image, labels;
           for (int copy = 0; copy < o->copies; ++copy) {
             const std::string name = stem + "_" + std::string(preset.name) + std::to_string(copy);
@@ -210,7 +232,7 @@ void register_augment_dataset(CLI::App& app) {
             if (!done) {
               if (!warp) {  // load once per image, only when there is work
                 camera = read_camera(calibration_path);
-                warp.emplace(*camera);
+                warp = warps.get(*camera);
                 image = read_image(image_path.string(), cv::IMREAD_UNCHANGED);
                 labels = read_image(label_path.string(), cv::IMREAD_UNCHANGED);
                 if (labels.channels() != 1) throw Error(label_path.string() + ": expected a single-channel label image");

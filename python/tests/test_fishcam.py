@@ -350,3 +350,24 @@ def test_cameras_of_a_multi_camera_file(cam, tmp_path):
     assert fishcam.Camera.read(str(tmp_path / "chain.yaml"), camera="cam1") == fishcam.Camera.read(str(tmp_path / "chain.yaml"))
     with pytest.raises(fishcam.Error, match="no camera 'cam9'"):
         fishcam.Camera.read(str(tmp_path / "chain.yaml"), camera="cam9")
+
+
+def test_sampling_exact_and_grid_equal_the_cli(cam, tmp_path):
+    import cv2
+    image_path = make_image(tmp_path, cam)
+    image = cv2.imread(str(image_path), cv2.IMREAD_UNCHANGED)
+    warp = fishcam.ViewpointWarp(cam)
+    assert warp.grid_spacing == 4 and 0 < warp.grid_error_px <= 1 / 32
+    change = fishcam.random_change("train", 5)
+    for sampling in ("grid", "exact"):
+        run_cli("augment", data("woodscape_front.json"), "--image", image_path, "--out-image",
+                tmp_path / f"{sampling}.png", "--preset", "train", "--seed", 5, "--sampling", sampling)
+        out = warp(image=image, change=change, sampling=sampling)
+        np.testing.assert_array_equal(out["image"], cv2.imread(str(tmp_path / f"{sampling}.png"), cv2.IMREAD_UNCHANGED))
+    grid = warp(image=image, change=change)["image"].astype(float)
+    exact = warp(image=image, change=change, sampling="exact")["image"].astype(float)
+    assert 0 < np.abs(grid - exact).mean() < 1  # within 1/32 px of each other on a random-noise image
+    with pytest.raises(fishcam.Error, match="sampling"):
+        warp(image=image, change=change, sampling="nearest")
+    with pytest.raises(fishcam.Error, match="sampling"):
+        RandomViewpoint(cam, sampling="nearest")
