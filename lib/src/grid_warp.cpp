@@ -44,8 +44,12 @@ void node_maps(const GridPlan& plan, const SourceParams& src, const PoseParams& 
   out->x.resize(n);
   out->y.resize(n);
   out->valid.resize(n);
-  kernel(plan.node_rays.ptr<float>(0), plan.node_rays.ptr<float>(1), plan.node_rays.ptr<float>(2), 0, n, pose, src,
-         KernelOutput{out->x.data(), out->y.data(), out->valid.data()});
+  constexpr std::size_t kChunk = 4096;  // a multiple of every SIMD width
+  cv::parallel_for_(cv::Range(0, int((n + kChunk - 1) / kChunk)), [&](const cv::Range& r) {
+    kernel(plan.node_rays.ptr<float>(0), plan.node_rays.ptr<float>(1), plan.node_rays.ptr<float>(2),
+           std::size_t(r.start) * kChunk, std::min(n, std::size_t(r.end) * kChunk), pose, src,
+           KernelOutput{out->x.data(), out->y.data(), out->valid.data()});
+  });
 }
 
 // Whether a cell is interpolated: every corner has a source (finite coordinates)
@@ -145,31 +149,42 @@ constexpr float kCurvatureBudgetPx = float(kGridTolerancePx);
 
 std::vector<unsigned char> cells_ok(const GridPlan& plan, const SourceParams& src, const NodeMaps& nodes) {
   const int nu = plan.nodes_u, nv = plan.nodes_v, cu = nu - 1, cv_ = nv - 1;
-  std::vector<unsigned char> corner(nodes.x.size());
-  for (std::size_t k = 0; k < corner.size(); ++k) corner[k] = corner_ok(plan, src, nodes, k);
-  // The curvature estimate per node (infinite where a neighbour has no source); the
-  // outer nodes take their inner neighbour's.
-  std::vector<float> bend(nodes.x.size(), std::numeric_limits<float>::infinity());
-  auto at = [&](int i, int j) { return std::size_t(j) * std::size_t(nu) + std::size_t(i); };
-  for (int j = 0; j < nv; ++j) {
-    for (int i = 0; i < nu; ++i) {
-      const int ic = std::clamp(i, 1, nu - 2), jc = std::clamp(j, 1, nv - 2);
-      const std::size_t c = at(ic, jc), l = at(ic - 1, jc), r = at(ic + 1, jc), d = at(ic, jc - 1), e = at(ic, jc + 1);
-      const float ex = std::abs(nodes.x[l] + nodes.x[r] - 2 * nodes.x[c]) + std::abs(nodes.x[d] + nodes.x[e] - 2 * nodes.x[c]);
-      const float ey = std::abs(nodes.y[l] + nodes.y[r] - 2 * nodes.y[c]) + std::abs(nodes.y[d] + nodes.y[e] - 2 * nodes.y[c]);
-      const float estimate_squared = (ex * ex + ey * ey) / 64;  // squared: no hypot in the per-pose loop
-      if (std::isfinite(estimate_squared)) bend[at(i, j)] = estimate_squared;
+  const float* x = nodes.x.data();
+  const float* y = nodes.y.data();
+  // The curvature estimate per node, squared (NaN where the node or a neighbour has
+  // no source: such cells fail the comparison below); the outer nodes take their
+  // inner neighbour's.
+  std::vector<float> bend(nodes.x.size());
+  cv::parallel_for_(cv::Range(1, nv - 1), [&](const cv::Range& rows) {
+    for (int j = rows.start; j < rows.end; ++j) {
+      const std::size_t row = std::size_t(j) * std::size_t(nu);
+      for (std::size_t k = row + 1; k + 1 < row + std::size_t(nu); ++k) {
+        const float ex = std::abs(x[k - 1] + x[k + 1] - 2 * x[k]) + std::abs(x[k - nu] + x[k + nu] - 2 * x[k]);
+        const float ey = std::abs(y[k - 1] + y[k + 1] - 2 * y[k]) + std::abs(y[k - nu] + y[k + nu] - 2 * y[k]);
+        bend[k] = (ex * ex + ey * ey) * (1.0f / 64);
+      }
+      bend[row] = bend[row + 1];
+      bend[row + std::size_t(nu) - 1] = bend[row + std::size_t(nu) - 2];
+    }
+  });
+  std::copy_n(bend.begin() + nu, nu, bend.begin());
+  std::copy_n(bend.begin() + std::ptrdiff_t(nv - 2) * nu, nu, bend.begin() + std::ptrdiff_t(nv - 1) * nu);
+  if (plan.fold_guard_radius != std::numeric_limits<float>::infinity()) {
+    for (std::size_t k = 0; k < bend.size(); ++k) {
+      if (!corner_ok(plan, src, nodes, k)) bend[k] = std::numeric_limits<float>::infinity();
     }
   }
+  constexpr float budget = kCurvatureBudgetPx * kCurvatureBudgetPx;
   std::vector<unsigned char> ok(std::size_t(cu) * std::size_t(cv_));
   for (int j = 0; j < cv_; ++j) {
+    const std::size_t a0 = std::size_t(j) * std::size_t(nu);
     for (int i = 0; i < cu; ++i) {
-      const std::size_t a = at(i, j), b = at(i, j + 1);
+      const std::size_t a = a0 + std::size_t(i), b = a + std::size_t(nu);
       // Corners on both sides of the source image's border: the decision is made per pixel by the kernel.
       const int inside = nodes.valid[a] + nodes.valid[a + 1] + nodes.valid[b] + nodes.valid[b + 1];
-      const bool corners = corner[a] && corner[a + 1] && corner[b] && corner[b + 1] && (inside == 0 || inside == 4);
-      const float worst = std::max({bend[a], bend[a + 1], bend[b], bend[b + 1]});
-      ok[std::size_t(j) * std::size_t(cu) + std::size_t(i)] = corners && worst <= kCurvatureBudgetPx * kCurvatureBudgetPx;
+      ok[std::size_t(j) * std::size_t(cu) + std::size_t(i)] = (inside == 0 || inside == 4) && bend[a] <= budget &&
+                                                              bend[a + 1] <= budget && bend[b] <= budget &&
+                                                              bend[b + 1] <= budget;
     }
   }
   return ok;
@@ -224,6 +239,19 @@ void to_fixed_point(const float* x, const float* y, int w, float limit_x, float 
     fractions[u] = static_cast<unsigned short>((iy & (kFractions - 1)) * kFractions + (ix & (kFractions - 1)));
     nearest[2 * u] = short(cvRound(cx));
     nearest[2 * u + 1] = short(cvRound(cy));
+  }
+}
+
+// Labels of one output row by their rounded source pixels (kOutsideFixed: the fill),
+// what cv::remap with INTER_NEAREST and BORDER_CONSTANT gives for the same map.
+template <class Label>
+void gather_labels(const cv::Mat& labels, const short* nearest, int w, int fill, Label* out) {
+  const Label filled = static_cast<Label>(fill);
+  const auto* base = labels.ptr<Label>(0);
+  const std::size_t step = labels.step1();
+  for (int u = 0; u < w; ++u) {
+    const short sx = nearest[2 * u], sy = nearest[2 * u + 1];
+    out[u] = sx == kOutsideFixed ? filled : base[std::size_t(sy) * step + std::size_t(sx)];
   }
 }
 
@@ -369,9 +397,16 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
                   cv::BORDER_CONSTANT, cv::Scalar::all(io.fill));
       }
       if (io.labels) {
-        cv::Mat out = io.out_labels->rowRange(r0, r1);
-        cv::remap(*io.labels, out, nearest.rowRange(0, rows), cv::noArray(), cv::INTER_NEAREST, cv::BORDER_CONSTANT,
-                  cv::Scalar(io.label_fill));
+        // Nearest neighbour is a lookup: done here, from the rounded map, without a remap call.
+        for (int v = r0; v < r1; ++v) {
+          if (io.labels->depth() == CV_8U) {
+            gather_labels<unsigned char>(*io.labels, nearest.ptr<short>(v - r0), w, io.label_fill,
+                                         io.out_labels->ptr<unsigned char>(v));
+          } else {
+            gather_labels<unsigned short>(*io.labels, nearest.ptr<short>(v - r0), w, io.label_fill,
+                                          io.out_labels->ptr<unsigned short>(v));
+          }
+        }
       }
     }
   }, 4.0 * std::max(1, cv::getNumThreads()));
