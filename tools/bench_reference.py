@@ -11,6 +11,12 @@
   pixel (what the WoodScape tooling and the paper's look-up table are built from),
   timed on a random subsample of pixels and extrapolated to the whole image; the
   rest of that pipeline (rotate, project, remap) is not even counted.
+- PyTorch (CPU, same thread counts), WoodScape camera: torch's grid_sample with a
+  grid computed beforehand (what a PyTorch/kornia user does with a fixed map; the
+  image already float), and the kornia-style per-sample grid: the change applied to
+  cached rays and the WoodScape polynomial projected in torch ops, then grid_sample.
+- OpenCV's fisheye model: cv2.fisheye.initUndistortRectifyMap (the Kannala-Brandt fit
+  of the WoodScape camera, the change as R, a pinhole output) + cv2.remap, per sample.
 Run with Debian's /usr/bin/python3 (python3-mrcal, python3-numpy, python3-opencv).
 """
 import argparse
@@ -84,6 +90,84 @@ def np_roots_ms(subsample):
     return 1e3 * per_pixel * w * h
 
 
+def woodscape_scene(fishcam, tmp):
+    source = os.path.join(DATA, "woodscape_front.json")
+    image, labels = os.path.join(tmp, "ws.png"), os.path.join(tmp, "ws_labels.png")
+    subprocess.run([fishcam, "render", source, "--out-image", image, "--out-label", labels],
+                   check=True, capture_output=True)
+    return cv2.imread(image), cv2.imread(labels, cv2.IMREAD_UNCHANGED)
+
+
+def torch_paths_ms(fishcam, repeats, threads):
+    """grid_sample with a precomputed grid, and the per-sample torch grid (kornia style)."""
+    import torch
+    import torch.nn.functional as F
+    import fishcam as fc
+
+    torch.set_num_threads(threads)
+    cam = fc.Camera.read(os.path.join(DATA, "woodscape_front.json"))
+    w, h = cam.width, cam.height
+    with tempfile.TemporaryDirectory() as tmp:
+        rgb, lab = woodscape_scene(fishcam, tmp)
+    image = torch.from_numpy(rgb).permute(2, 0, 1)[None].float()
+    labels = torch.from_numpy(lab)[None, None].float()
+    map_x, map_y, _ = fc.ViewpointWarp(cam).maps(fc.random_change("train", 1))
+    grid = torch.from_numpy(np.stack([map_x / (w - 1) * 2 - 1, map_y / (h - 1) * 2 - 1], -1))[None].float()
+
+    def precomputed():
+        F.grid_sample(image, grid, mode="bilinear", align_corners=True)
+        F.grid_sample(labels, grid, mode="nearest", align_corners=True)
+
+    u, v = np.meshgrid(np.arange(w, dtype=float), np.arange(h, dtype=float))
+    rays, _ = cam.unproject(np.stack([u.ravel(), v.ravel()], -1))
+    rays = torch.from_numpy(rays).float()
+    k = torch.tensor(cam.parameters, dtype=torch.float32)
+    (cx, cy), (ax, ay) = cam.principal_point, cam.pixel_scale
+    rng = np.random.default_rng(3)
+
+    def per_sample():
+        change = fc.random_change("train", int(rng.integers(1 << 62)))
+        r = torch.from_numpy(change.rotation).float()
+        t = torch.from_numpy(np.array(change.translation)).float()
+        b = rays @ t
+        s = b + torch.sqrt(b * b - (t @ t - 1))  # the source-sphere prior
+        q = (s[:, None] * rays - t) @ r  # R^T q for row vectors
+        x, y, z = q.unbind(-1)
+        rxy = torch.sqrt(x * x + y * y).clamp_min(1e-12)
+        theta = torch.atan2(rxy, z)
+        rho = theta * (k[0] + theta * (k[1] + theta * (k[2] + theta * k[3])))
+        gx = (cx + ax * rho * x / rxy) / (w - 1) * 2 - 1
+        gy = (cy + ay * rho * y / rxy) / (h - 1) * 2 - 1
+        g = torch.stack([gx, gy], -1).reshape(1, h, w, 2)
+        F.grid_sample(image, g, mode="bilinear", align_corners=True)
+        F.grid_sample(labels, g, mode="nearest", align_corners=True)
+
+    return median_ms(precomputed, repeats), median_ms(per_sample, repeats)
+
+
+def opencv_fisheye_ms(fishcam, repeats):
+    import fishcam as fc
+
+    cam = fc.Camera.read(os.path.join(DATA, "woodscape_front.json"))
+    kb, _ = fc.convert(cam, "kannala-brandt")
+    f, k1, k2, k3, k4 = kb.parameters
+    (cx, cy), (ax, ay) = kb.principal_point, kb.pixel_scale
+    K = np.array([[f * ax, 0, cx], [0, f * ay, cy], [0, 0, 1]])
+    D = np.array([k1, k2, k3, k4])
+    with tempfile.TemporaryDirectory() as tmp:
+        rgb, lab = woodscape_scene(fishcam, tmp)
+    size = (cam.width, cam.height)
+    rng = np.random.default_rng(4)
+
+    def one_sample():
+        change = fc.random_change("train", int(rng.integers(1 << 62)))
+        m1, m2 = cv2.fisheye.initUndistortRectifyMap(K, D, change.rotation, K, size, cv2.CV_16SC2)
+        cv2.remap(rgb, m1, m2, cv2.INTER_LINEAR)
+        cv2.remap(lab, m1, m2, cv2.INTER_NEAREST)
+
+    return median_ms(one_sample, repeats)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--fishcam", default=os.path.join(os.path.dirname(HERE), "build", "tools", "fishcam"))
@@ -95,6 +179,9 @@ def main():
     woodscape = fishcam_bench(args.fishcam, os.path.join(DATA, "woodscape_front.json"), args.samples)
     mrcal_ms = mrcal_path_ms(args.fishcam, max(3, args.samples // 4))
     roots_ms = np_roots_ms(args.subsample)
+    torch_ms = {t: torch_paths_ms(args.fishcam, args.samples, t) for t in (1, 2)}
+    cv2.setNumThreads(2)
+    fisheye_ms = opencv_fisheye_ms(args.fishcam, args.samples)
     result = {
         "fishcam_total_ms": {"stereographic": {t: r["total_ms"] for t, r in stereo.items()},
                              "woodscape": {t: r["total_ms"] for t, r in woodscape.items()}},
@@ -104,6 +191,12 @@ def main():
         "mrcal_over_fishcam_2_threads": mrcal_ms / stereo[2]["total_ms"],
         "np_roots_over_fishcam_1_thread": roots_ms / woodscape[1]["total_ms"],
         "np_roots_over_fishcam_2_threads": roots_ms / woodscape[2]["total_ms"],
+        "torch_precomputed_grid_ms": {t: v[0] for t, v in torch_ms.items()},
+        "torch_per_sample_grid_ms": {t: v[1] for t, v in torch_ms.items()},
+        "torch_precomputed_over_fishcam": {t: torch_ms[t][0] / woodscape[t]["total_ms"] for t in (1, 2)},
+        "torch_per_sample_over_fishcam": {t: torch_ms[t][1] / woodscape[t]["total_ms"] for t in (1, 2)},
+        "opencv_fisheye_ms_2_threads": fisheye_ms,
+        "opencv_fisheye_over_fishcam_2_threads": fisheye_ms / woodscape[2]["total_ms"],
     }
     print(json.dumps(result, indent=2))
 
