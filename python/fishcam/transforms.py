@@ -26,6 +26,19 @@ def draw_seed(rng=None):
     return (hi << 32) | lo
 
 
+def _check_p_and_fill(p, fill):
+    if not (0 <= p <= 1):
+        raise Error(f"p: must be in [0, 1], got {p}")
+    if not np.isfinite(fill):
+        raise Error("fill: must be finite")
+
+
+def _applies(p, seed):
+    """Whether a transform with probability p changes the sample of this seed: the
+    decision follows from the seed too, so seed= reproduces it."""
+    return p >= 1 or np.random.default_rng(seed).random() < p
+
+
 class _WarpCache:
     """One ViewpointWarp per distinct calibration (intrinsics + size): building one
     unprojects every pixel, so it is kept, not rebuilt per sample."""
@@ -84,10 +97,7 @@ class RandomViewpoint:
             raise Error(f"preset: unknown preset {preset!r} (small, medium, large, train)")
         if depth not in DEPTH_PRIORS:
             raise Error(f"depth: expected one of {', '.join(DEPTH_PRIORS)}, got {depth!r}")
-        if not (0 <= p <= 1):
-            raise Error(f"p: must be in [0, 1], got {p}")
-        if not np.isfinite(fill):
-            raise Error("fill: must be finite")
+        _check_p_and_fill(p, fill)
         self.camera = camera
         self.preset = preset
         self.max_rotation_deg = max_rotation_deg
@@ -116,12 +126,7 @@ class RandomViewpoint:
         if seed is None:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
-        if self.p < 1:
-            # The apply/skip decision follows from the seed too, so seed= reproduces it.
-            apply = np.random.default_rng(seed).random() < self.p
-        else:
-            apply = True
-        change = self.change_for(seed) if apply else _fishcam.ViewpointChange()
+        change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.ViewpointChange()
         warp = self._warps.get(camera)
         out = warp.warp(image=image, labels=mask, change=change, depth=self.depth, fill=self.fill,
                         label_fill=self.fill_mask, sampling=self.sampling)
@@ -169,10 +174,7 @@ class RandomAffine:
             raise Error(f"preset: unknown preset {preset!r} (small, medium, large, train)")
         else:
             self.scale_range = None
-        if not (0 <= p <= 1):
-            raise Error(f"p: must be in [0, 1], got {p}")
-        if not np.isfinite(fill):
-            raise Error("fill: must be finite")
+        _check_p_and_fill(p, fill)
         self.preset = preset
         self.max_rotation_deg = max_rotation_deg
         self.max_translation = max_translation
@@ -195,8 +197,7 @@ class RandomAffine:
         if seed is None:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
-        apply = self.p >= 1 or np.random.default_rng(seed).random() < self.p
-        change = self.change_for(seed) if apply else _fishcam.AffineChange()
+        change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.AffineChange()
         out = _fishcam.affine_warp(image=image, labels=mask, change=change, fill=self.fill,
                                    label_fill=self.fill_mask)
         result = {"change": affine_to_dict(change, seed)}
