@@ -145,3 +145,18 @@ TEST_F(CliHostile, LibraryExceptionsNeverLeakWithoutTheFileName) {
 
 }  // namespace
 }  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// A cut PNG: libpng's own complaint ("libpng error: Read Error") stays off stderr,
+// our one line is the message.
+TEST_F(CliHostile, CorruptImagesGiveOurOneLineOnly) {
+  const std::string png = test::read_file(image_);
+  test::write_file(dir_ / "cut.png", png.substr(0, png.size() / 3));
+  expect_refused("augment " + q("camera.json") + " --image " + q("cut.png") + " --out-image " + q("o.png"),
+                 "cut.png: cannot read image");
+}
+
+}  // namespace
+}  // namespace fishcam

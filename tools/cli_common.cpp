@@ -3,6 +3,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <cstdio>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include "fishcam/atomic_file.hpp"
@@ -45,10 +46,41 @@ nlohmann::json affine_to_json(const AffineChange& change) {
           {"scale", change.scale}};
 }
 
+namespace {
+
+// Standard error closed for a scope: the image codecs under OpenCV (libpng, libjpeg)
+// print their own complaints about a corrupt file there, around our one-line message.
+class SilencedStderr {
+ public:
+  SilencedStderr() : saved_(dup(STDERR_FILENO)) {
+    std::fflush(stderr);
+    const int null = open("/dev/null", O_WRONLY);
+    if (saved_ >= 0 && null >= 0) dup2(null, STDERR_FILENO);
+    if (null >= 0) close(null);
+  }
+  ~SilencedStderr() {
+    if (saved_ < 0) return;
+    std::fflush(stderr);
+    dup2(saved_, STDERR_FILENO);
+    close(saved_);
+  }
+  SilencedStderr(const SilencedStderr&) = delete;
+  SilencedStderr& operator=(const SilencedStderr&) = delete;
+
+ private:
+  int saved_;
+};
+
+}  // namespace
+
 cv::Mat read_image(const std::string& path, int flags) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file");
-  cv::Mat image = cv::imread(path, flags);
+  cv::Mat image;
+  {
+    const SilencedStderr quiet;
+    image = cv::imread(path, flags);
+  }
   if (image.empty()) throw Error(path + ": cannot read image (unsupported or corrupt file)");
   return image;
 }
