@@ -68,6 +68,14 @@ TEST(Comparison, BadInputsAreRefused) {
   ComparisonOptions none;
   none.samples = 0;
   EXPECT_THROW(compare_models(camera, {}, none), Error);
+  ComparisonOptions many;
+  many.samples = 60;  // 60 x 1280 x 966 > 64 million displacements
+  try {
+    compare_models(camera, {}, many);
+    ADD_FAILURE() << "60 samples accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 51 changes here"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(alternative_model(camera, "no-such-model"), Error);
   EXPECT_THROW(alternative_model(camera, "equidistant", "guess"), Error);
 }

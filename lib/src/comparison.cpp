@@ -16,6 +16,9 @@
 namespace fishcam {
 namespace {
 
+// Displacements kept per model: 8 bytes each, so at most 512 MB.
+constexpr double kMaxDisplacements = 64e6;
+
 // numpy.percentile's default: linear between the order statistics around q (n - 1).
 double percentile(std::vector<float>& values, double q) {
   if (values.empty()) return 0;
@@ -98,6 +101,15 @@ Comparison compare_models(const Camera& reference, const std::vector<Alternative
     throw Error("samples: expected 1 to 1000, got " + std::to_string(options.samples));
   }
   const int w = reference.width(), h = reference.height();
+  // Every displacement is kept for the exact 95th percentile (twice: overall and by
+  // band, 8 bytes each): bounded rather than growing with --samples.
+  const double values = double(options.samples) * double(w) * double(h);
+  if (values > kMaxDisplacements) {
+    throw Error("samples: " + std::to_string(options.samples) + " changes of " + std::to_string(w) + "x" +
+                std::to_string(h) + " pixels exceed the " + std::to_string(long(kMaxDisplacements / 1e6)) +
+                " million displacements a comparison keeps (at most " +
+                std::to_string(std::max(1L, long(kMaxDisplacements / (double(w) * double(h))))) + " changes here)");
+  }
   for (const AlternativeModel& a : alternatives) {
     const Camera& alternative = a.camera;
     if (alternative.width() != w || alternative.height() != h) {

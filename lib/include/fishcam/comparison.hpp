@@ -78,7 +78,8 @@ struct Comparison {
 };
 
 // Compares each alternative (same image size as the reference) with the
-// reference. Throws Error for a size mismatch or samples outside 1..1000.
+// reference. Throws Error for a size mismatch, samples outside 1..1000, or more
+// than 64 million (change, pixel) pairs (the exact percentiles keep them all).
 Comparison compare_models(const Camera& reference, const std::vector<AlternativeModel>& alternatives,
                           const ComparisonOptions& options, const NamedLabels& labels = {});
 
