@@ -44,7 +44,8 @@ void guard_number_options(CLI::App* app) {
 std::string in_cli_terms(std::string message) {
   static const std::pair<const char*, const char*> kOptions[] = {
       {"max_angle", "--max-angle"}, {"fit_center", "--fit-center"}, {"fit_aspect", "--fit-aspect"},
-      {"image_size", "--imagersize"}, {"say which (distortion_model", "say which (--distortion-model"}};
+      {"image_size", "--imagersize"}, {"say which (distortion_model", "say which (--distortion-model"},
+      {"samples: ", "--samples: "}};
   for (const auto& [concept_name, option] : kOptions) {
     for (size_t at = message.find(concept_name); at != std::string::npos;
          at = message.find(concept_name, at + std::strlen(option))) {
