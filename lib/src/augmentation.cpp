@@ -27,12 +27,18 @@ PoseParams pose_params(const ViewpointChange& change) {
 
 // The kernel for this CPU: AVX2 + FMA where available, else the build's baseline.
 // FISHCAM_NO_AVX2 (set to anything) forces the baseline: how the tests cover it.
-RangeKernel select_kernel_for_cpu(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling) {
+bool use_avx2() {
   static const bool avx2 = !std::getenv("FISHCAM_NO_AVX2") && cv::checkHardwareSupport(CV_CPU_AVX2) &&
                            cv::checkHardwareSupport(CV_CPU_FMA3);
-  return avx2 ? select_kernel_avx2(prior, inside_sphere, kind, sampling)
-              : select_kernel_baseline(prior, inside_sphere, kind, sampling);
+  return avx2;
 }
+
+RangeKernel select_kernel_for_cpu(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling) {
+  return use_avx2() ? select_kernel_avx2(prior, inside_sphere, kind, sampling)
+                    : select_kernel_baseline(prior, inside_sphere, kind, sampling);
+}
+
+GridRowLoops grid_row_loops_for_cpu() { return use_avx2() ? grid_row_loops_avx2() : grid_row_loops_baseline(); }
 
 }  // namespace detail
 namespace {

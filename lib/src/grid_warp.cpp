@@ -1,6 +1,5 @@
 #include "grid_warp.hpp"
 
-#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -19,14 +18,12 @@ constexpr int kFractions = 1 << kFractionBits;  // 32
 // The interpolation error allowed at construction: one fixed-point step less the
 // float kernel's own tolerance against the exact maps.
 constexpr double kGridTolerancePx = 1.0 / kFractions - 1e-3;
-// Where pixels without a source inside the source image point: far enough outside
-// for all four bilinear taps to read the border value, inside int16.
-constexpr short kOutsideFixed = -16384;
 // A spacing is taken only if the measurement interpolates at least this share of
 // the pixels with a source (else a finer one, whose cells bend less, is faster).
 constexpr double kMinInterpolatedShare = 0.8;
-// Floats past a row's end in the row buffers: interpolation writes whole cells.
-constexpr std::size_t kRowPadding = 16;
+// Floats past a row's end in the row buffers: interpolation writes whole cells,
+// and the spacing-4 loop whole vectors of them.
+constexpr std::size_t kRowPadding = 64;
 // Output rows per tile: a multiple of every spacing, the maps of a tile stay in cache.
 constexpr int kTileRows = 16;
 
@@ -66,8 +63,8 @@ bool corner_ok(const GridPlan& plan, const SourceParams& src, const NodeMaps& no
 // Scratch space of one thread for a row: the node columns interpolated to the row.
 struct RowScratch {
   std::vector<float> column_x, column_y;
-  explicit RowScratch(const GridPlan& plan)
-      : column_x(std::size_t(plan.nodes_u) + 8), column_y(std::size_t(plan.nodes_u) + 8) {}
+  explicit RowScratch(const GridPlan& plan)  // vectors may read past the last node
+      : column_x(std::size_t(plan.nodes_u) + 16), column_y(std::size_t(plan.nodes_u) + 16) {}
 };
 
 // One output row v, interpolated from the nodes in every cell (cells that are not
@@ -88,21 +85,9 @@ void interpolate_row(const GridPlan& plan, const NodeMaps& nodes, int v, int wid
   const int cells = (width + s - 1) / s;
   int i = 0;
   if (s == 4) {
-    // Four cells at a time: the values at offsets 0..3 of four cells, transposed into
-    // the 16 consecutive pixels of those cells.
-    const cv::v_float32x4 quarter = cv::v_setall_f32(0.25f);
-    for (; i + 4 <= cells; i += 4) {
-      for (auto [column, out] : {std::pair{cx, x}, std::pair{cy, y}}) {
-        const cv::v_float32x4 c = cv::v_load(column + i), d = (cv::v_load(column + i + 1) - c) * quarter;
-        const cv::v_float32x4 r0 = c, r1 = c + d, r2 = r1 + d, r3 = r2 + d;
-        cv::v_float32x4 t0, t1, t2, t3;
-        cv::v_transpose4x4(r0, r1, r2, r3, t0, t1, t2, t3);
-        cv::v_store(out + 4 * i, t0);
-        cv::v_store(out + 4 * i + 4, t1);
-        cv::v_store(out + 4 * i + 8, t2);
-        cv::v_store(out + 4 * i + 12, t3);
-      }
-    }
+    static const GridRowLoops loops = grid_row_loops_for_cpu();
+    loops.interpolate4(cx, cy, cells, x, y);
+    return;
   }
   const float step = 1.0f / float(s);
   for (; i < cells; ++i) {
@@ -188,58 +173,6 @@ std::vector<unsigned char> cells_ok(const GridPlan& plan, const SourceParams& sr
     }
   }
   return ok;
-}
-
-// One row of source coordinates in cv::remap's fixed-point form, as cv::remap
-// converts float maps itself: clamped onto the outer pixel centres, rounded to
-// 1/32 px (integer part and the interpolation table's index), and rounded to the
-// nearest pixel for labels; pixels whose source is outside the image (or NaN) point
-// far outside. valid (optional): 1 where the source is inside.
-void to_fixed_point(const float* x, const float* y, int w, float limit_x, float limit_y, float max_x, float max_y,
-                    short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid) {
-  int u = 0;
-  const cv::v_float32x4 low = cv::v_setall_f32(-0.5f), lx = cv::v_setall_f32(limit_x), ly = cv::v_setall_f32(limit_y);
-  const cv::v_float32x4 zero = cv::v_setzero_f32(), mx = cv::v_setall_f32(max_x), my = cv::v_setall_f32(max_y);
-  const cv::v_float32x4 scale = cv::v_setall_f32(float(kFractions));
-  const cv::v_int32x4 outside = cv::v_setall_s32(kOutsideFixed), mask = cv::v_setall_s32(kFractions - 1);
-  for (; u + 8 <= w; u += 8) {
-    cv::v_int32x4 fx[2], fy[2], fr[2], nx[2], ny[2], in[2];
-    for (int h = 0; h < 2; ++h) {
-      const cv::v_float32x4 sx = cv::v_load(x + u + 4 * h), sy = cv::v_load(y + u + 4 * h);
-      in[h] = cv::v_reinterpret_as_s32((sx >= low) & (sx < lx) & (sy >= low) & (sy < ly));  // NaN: false
-      const cv::v_float32x4 cx = cv::v_min(cv::v_max(sx, zero), mx), cy = cv::v_min(cv::v_max(sy, zero), my);
-      const cv::v_int32x4 ix = cv::v_round(cx * scale), iy = cv::v_round(cy * scale);
-      fx[h] = cv::v_select(in[h], ix >> kFractionBits, outside);
-      fy[h] = cv::v_select(in[h], iy >> kFractionBits, outside);
-      fr[h] = cv::v_select(in[h], ((iy & mask) << kFractionBits) | (ix & mask), cv::v_setzero_s32());
-      nx[h] = cv::v_select(in[h], cv::v_round(cx), outside);
-      ny[h] = cv::v_select(in[h], cv::v_round(cy), outside);
-    }
-    cv::v_store_interleave(fixed + 2 * u, cv::v_pack(fx[0], fx[1]), cv::v_pack(fy[0], fy[1]));
-    cv::v_store_interleave(nearest + 2 * u, cv::v_pack(nx[0], nx[1]), cv::v_pack(ny[0], ny[1]));
-    cv::v_store(fractions + u, cv::v_pack_u(fr[0], fr[1]));
-    if (valid) {
-      const cv::v_int16x8 both = cv::v_pack(in[0], in[1]);  // -1 or 0
-      cv::v_store_low(valid + u, cv::v_pack_u(both & cv::v_setall_s16(1), cv::v_setzero_s16()));
-    }
-  }
-  for (; u < w; ++u) {
-    const float sx = x[u], sy = y[u];
-    const bool inside = sx >= -0.5f && sx < limit_x && sy >= -0.5f && sy < limit_y;
-    if (valid) valid[u] = inside;
-    if (!inside) {
-      fixed[2 * u] = fixed[2 * u + 1] = nearest[2 * u] = nearest[2 * u + 1] = kOutsideFixed;
-      fractions[u] = 0;
-      continue;
-    }
-    const float cx = std::min(std::max(sx, 0.0f), max_x), cy = std::min(std::max(sy, 0.0f), max_y);
-    const int ix = cvRound(cx * kFractions), iy = cvRound(cy * kFractions);
-    fixed[2 * u] = short(ix >> kFractionBits);
-    fixed[2 * u + 1] = short(iy >> kFractionBits);
-    fractions[u] = static_cast<unsigned short>((iy & (kFractions - 1)) * kFractions + (ix & (kFractions - 1)));
-    nearest[2 * u] = short(cvRound(cx));
-    nearest[2 * u + 1] = short(cvRound(cy));
-  }
 }
 
 // Labels of one output row by their rounded source pixels (kOutsideFixed: the fill),
@@ -374,6 +307,7 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
   if (io.valid) io.valid->create(h, w, CV_8UC1);
   const float limit_x = src.width - 0.5f, limit_y = src.height - 0.5f;
   const float max_x = src.width - 1, max_y = src.height - 1;
+  const GridRowLoops loops = grid_row_loops_for_cpu();
   const int tiles = (h + kTileRows - 1) / kTileRows;
   // A few stripes per thread (each allocates its tile buffers once; several balance the load).
   cv::parallel_for_(cv::Range(0, tiles), [&](const cv::Range& range) {
@@ -386,7 +320,7 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
       const int r0 = tile * kTileRows, r1 = std::min(h, r0 + kTileRows);
       for (int v = r0; v < r1; ++v) {
         grid_row(plan, nodes, ok, src, pose, geometric, pixel_rays, v, w, x.data(), y.data(), in.data(), &scratch);
-        to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
+        loops.to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
                        fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
                        io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
       }

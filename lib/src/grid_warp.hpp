@@ -14,6 +14,7 @@ namespace fishcam::detail {
 
 // The float kernel for this CPU (AVX2 + FMA where available; FISHCAM_NO_AVX2 forces the baseline).
 RangeKernel select_kernel_for_cpu(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling);
+GridRowLoops grid_row_loops_for_cpu();
 PoseParams pose_params(const ViewpointChange& change);
 
 struct GridPlan {

@@ -55,4 +55,21 @@ using RangeKernel = long (*)(const float* rx, const float* ry, const float* rz, 
 RangeKernel select_kernel_baseline(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling);
 RangeKernel select_kernel_avx2(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling);
 
+// The grid path's row loops (grid_warp.cpp), per instruction set like the kernel.
+// Where pixels without a source inside the source image point in the fixed-point
+// maps: far enough outside for all four bilinear taps to read the border value.
+constexpr short kOutsideFixed = -16384;
+struct GridRowLoops {
+  // Spacing 4: pixels 4i .. 4i+3 from the node columns interpolated to the row,
+  // column[i] + a (column[i+1] - column[i]) / 4 for a = 0..3, cells [0, cells)
+  // rounded up to whole vectors (the outputs have room past the row).
+  void (*interpolate4)(const float* column_x, const float* column_y, int cells, float* x, float* y);
+  // A row of source coordinates in cv::remap's fixed-point form (see grid_warp.cpp);
+  // valid may be null.
+  void (*to_fixed_point)(const float* x, const float* y, int w, float limit_x, float limit_y, float max_x,
+                         float max_y, short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid);
+};
+GridRowLoops grid_row_loops_baseline();
+GridRowLoops grid_row_loops_avx2();
+
 }  // namespace fishcam::detail

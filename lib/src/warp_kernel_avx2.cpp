@@ -23,4 +23,6 @@ RangeKernel select_kernel_avx2(DepthPrior prior, bool inside_sphere, SourceParam
   return avx2::select_kernel(prior, inside_sphere, kind, sampling);
 }
 
+GridRowLoops grid_row_loops_avx2() { return {avx2::interpolate4, avx2::to_fixed_point}; }
+
 }  // namespace fishcam::detail

@@ -8,4 +8,6 @@ RangeKernel select_kernel_baseline(DepthPrior prior, bool inside_sphere, SourceP
   return baseline::select_kernel(prior, inside_sphere, kind, sampling);
 }
 
+GridRowLoops grid_row_loops_baseline() { return {baseline::interpolate4, baseline::to_fixed_point}; }
+
 }  // namespace fishcam::detail

@@ -176,6 +176,74 @@ RangeKernel kernel_for(DepthPrior prior, bool inside_sphere, SourceParams::Kind 
   return nullptr;
 }
 
+// Spacing 4: the four offsets of each cell interleaved, so 4 vectors of cells
+// become the 4 x nlanes consecutive pixels of those cells.
+inline void interpolate4(const float* column_x, const float* column_y, int cells, float* x, float* y) {
+  constexpr int kLanes = v_float32::nlanes;
+  const v_float32 quarter = cv::vx_setall_f32(0.25f);
+  for (int i = 0; i < cells; i += kLanes) {
+    for (int k = 0; k < 2; ++k) {
+      const float* column = k == 0 ? column_x : column_y;
+      float* out = k == 0 ? x : y;
+      const v_float32 c = cv::vx_load(column + i), d = (cv::vx_load(column + i + 1) - c) * quarter;
+      const v_float32 r1 = c + d, r2 = r1 + d, r3 = r2 + d;
+      cv::v_store_interleave(out + 4 * i, c, r1, r2, r3);
+    }
+  }
+}
+
+// As cv::remap converts float maps itself: clamped onto the outer pixel centres,
+// rounded to 1/32 px (integer part and the interpolation table's index), and
+// rounded to the nearest pixel for labels; outside the image (or NaN): far outside.
+inline void to_fixed_point(const float* x, const float* y, int w, float limit_x, float limit_y, float max_x,
+                           float max_y, short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid) {
+  constexpr int kLanes = v_float32::nlanes;
+  constexpr int kBits = 5, kSteps = 1 << kBits;  // cv::INTER_BITS
+  int u = 0;
+  const v_float32 low = cv::vx_setall_f32(-0.5f), lx = cv::vx_setall_f32(limit_x), ly = cv::vx_setall_f32(limit_y);
+  const v_float32 zero = cv::vx_setzero_f32(), mx = cv::vx_setall_f32(max_x), my = cv::vx_setall_f32(max_y);
+  const v_float32 scale = cv::vx_setall_f32(float(kSteps));
+  const cv::v_int32 outside = cv::vx_setall_s32(kOutsideFixed), mask = cv::vx_setall_s32(kSteps - 1);
+  for (; u + 2 * kLanes <= w; u += 2 * kLanes) {
+    cv::v_int32 fx[2], fy[2], fr[2], nx[2], ny[2], in[2];
+    for (int h = 0; h < 2; ++h) {
+      const v_float32 sx = cv::vx_load(x + u + kLanes * h), sy = cv::vx_load(y + u + kLanes * h);
+      in[h] = cv::v_reinterpret_as_s32((sx >= low) & (sx < lx) & (sy >= low) & (sy < ly));  // NaN: false
+      const v_float32 cx = cv::v_min(cv::v_max(sx, zero), mx), cy = cv::v_min(cv::v_max(sy, zero), my);
+      const cv::v_int32 ix = cv::v_round(cx * scale), iy = cv::v_round(cy * scale);
+      fx[h] = cv::v_select(in[h], ix >> kBits, outside);
+      fy[h] = cv::v_select(in[h], iy >> kBits, outside);
+      fr[h] = cv::v_select(in[h], ((iy & mask) << kBits) | (ix & mask), cv::vx_setzero_s32());
+      nx[h] = cv::v_select(in[h], cv::v_round(cx), outside);
+      ny[h] = cv::v_select(in[h], cv::v_round(cy), outside);
+    }
+    cv::v_store_interleave(fixed + 2 * u, cv::v_pack(fx[0], fx[1]), cv::v_pack(fy[0], fy[1]));
+    cv::v_store_interleave(nearest + 2 * u, cv::v_pack(nx[0], nx[1]), cv::v_pack(ny[0], ny[1]));
+    cv::v_store(fractions + u, cv::v_pack_u(fr[0], fr[1]));
+    if (valid) {
+      const cv::v_int16 both = cv::v_pack(in[0], in[1]);  // -1 or 0
+      cv::v_pack_store(valid + u, cv::v_reinterpret_as_u16(both & cv::vx_setall_s16(1)));
+    }
+  }
+  for (; u < w; ++u) {
+    const float sx = x[u], sy = y[u];
+    const bool inside = sx >= -0.5f && sx < limit_x && sy >= -0.5f && sy < limit_y;
+    if (valid) valid[u] = inside;
+    if (!inside) {
+      fixed[2 * u] = fixed[2 * u + 1] = nearest[2 * u] = nearest[2 * u + 1] = kOutsideFixed;
+      fractions[u] = 0;
+      continue;
+    }
+    const float cx = sx < 0 ? 0.0f : sx > max_x ? max_x : sx, cy = sy < 0 ? 0.0f : sy > max_y ? max_y : sy;
+    const int ix = cvRound(cx * kSteps), iy = cvRound(cy * kSteps);
+    fixed[2 * u] = short(ix >> kBits);
+    fixed[2 * u + 1] = short(iy >> kBits);
+    fractions[u] = static_cast<unsigned short>((iy & (kSteps - 1)) * kSteps + (ix & (kSteps - 1)));
+    nearest[2 * u] = short(cvRound(cx));
+    nearest[2 * u + 1] = short(cvRound(cy));
+  }
+}
+
 // One dispatch per map: prior x (inside the sphere or not) x source model kind x output.
 inline RangeKernel select_kernel(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling) {
   return sampling ? kernel_for<true>(prior, inside_sphere, kind) : kernel_for<false>(prior, inside_sphere, kind);
