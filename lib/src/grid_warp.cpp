@@ -49,8 +49,8 @@ void node_maps(const GridPlan& plan, const SourceParams& src, const PoseParams& 
   });
 }
 
-// Whether a cell is interpolated: every corner has a source (finite coordinates)
-// away from a fold.
+// Whether a node has a source away from a fold (cells_ok asks only when the source
+// camera has a fold).
 bool corner_ok(const GridPlan& plan, const SourceParams& src, const NodeMaps& nodes, std::size_t k) {
   const float x = nodes.x[k], y = nodes.y[k];
   if (!(std::isfinite(x) && std::isfinite(y))) return false;
@@ -83,14 +83,13 @@ void interpolate_row(const GridPlan& plan, const NodeMaps& nodes, int v, int wid
     cy[i] = nodes.y[row0 + std::size_t(i)] + b * (nodes.y[row1 + std::size_t(i)] - nodes.y[row0 + std::size_t(i)]);
   }
   const int cells = (width + s - 1) / s;
-  int i = 0;
   if (s == 4) {
     static const GridRowLoops loops = grid_row_loops_for_cpu();
     loops.interpolate4(cx, cy, cells, x, y);
     return;
   }
   const float step = 1.0f / float(s);
-  for (; i < cells; ++i) {
+  for (int i = 0; i < cells; ++i) {
     const float dx = (cx[i + 1] - cx[i]) * step, dy = (cy[i + 1] - cy[i]) * step;
     for (int a = 0; a < s; ++a) {
       x[i * s + a] = cx[i] + float(a) * dx;
