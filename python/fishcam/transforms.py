@@ -39,6 +39,16 @@ def _applies(p, seed):
     return p >= 1 or np.random.default_rng(seed).random() < p
 
 
+def _result(out, change):
+    """A transform's return value (albumentations' keys) from a warp's output dict."""
+    result = {"change": change}
+    if "image" in out:
+        result["image"] = out["image"]
+    if "labels" in out:
+        result["mask"] = out["labels"]
+    return result
+
+
 class _WarpCache:
     """One ViewpointWarp per distinct calibration (intrinsics + size): building one
     unprojects every pixel, so it is kept, not rebuilt per sample."""
@@ -130,12 +140,7 @@ class RandomViewpoint:
         warp = self._warps.get(camera)
         out = warp.warp(image=image, labels=mask, change=change, depth=self.depth, fill=self.fill,
                         label_fill=self.fill_mask, sampling=self.sampling)
-        result = {"change": change_to_dict(change, seed, self.depth)}
-        if image is not None:
-            result["image"] = out["image"]
-        if mask is not None:
-            result["mask"] = out["labels"]
-        return result
+        return _result(out, change_to_dict(change, seed, self.depth))
 
     def __repr__(self):
         what = (f"preset={self.preset!r}" if self.preset is not None else
@@ -200,12 +205,7 @@ class RandomAffine:
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.AffineChange()
         out = _fishcam.affine_warp(image=image, labels=mask, change=change, fill=self.fill,
                                    label_fill=self.fill_mask)
-        result = {"change": affine_to_dict(change, seed)}
-        if image is not None:
-            result["image"] = out["image"]
-        if mask is not None:
-            result["mask"] = out["labels"]
-        return result
+        return _result(out, affine_to_dict(change, seed))
 
     def __repr__(self):
         what = (f"preset={self.preset!r}" if self.preset is not None else
