@@ -44,6 +44,7 @@ GridRowLoops grid_row_loops_for_cpu() { return use_avx2() ? grid_row_loops_avx2(
 namespace {
 
 using detail::pose_params;
+using detail::select_kernel_for_cpu;
 using detail::PoseParams;
 using detail::SourceParams;
 static_assert(detail::kOutside == kOutsideSource);
@@ -129,9 +130,6 @@ void allocate(const Camera& source, const Camera& target, MapKind kind, WarpMaps
   }
 }
 
-detail::RangeKernel select_kernel(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling) {
-  return detail::select_kernel_for_cpu(prior, inside_sphere, kind, sampling);
-}
 
 }  // namespace
 
@@ -181,7 +179,7 @@ bool float_kernel_agrees(const Camera& camera, const SourceParams& src) {
     }
   }
   PoseParams identity{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}, -1};
-  const detail::RangeKernel kernel = select_kernel(DepthPrior::infinity, true, src.kind, false);
+  const detail::RangeKernel kernel = select_kernel_for_cpu(DepthPrior::infinity, true, src.kind, false);
   kernel(rx.data(), ry.data(), rz.data(), 0, kCount, identity, src,
          detail::KernelOutput{map_x.data(), map_y.data(), valid.data()});
   const double w = camera.width() - 0.5, h = camera.height() - 0.5;
@@ -303,7 +301,7 @@ void ViewpointWarp::compute(const ViewpointChange& change, DepthPrior prior, War
   const SourceParams& src = *kernel_source_;
   const PoseParams pose = pose_params(change);
   const bool sampling = kind == MapKind::sampling;
-  const detail::RangeKernel kernel = select_kernel(prior, change.translation.squaredNorm() < 1, src.kind, sampling);
+  const detail::RangeKernel kernel = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, sampling);
   const detail::KernelOutput out{maps->map_x.ptr<float>(), maps->map_y.ptr<float>(),
                                  sampling ? nullptr : maps->valid.ptr<uchar>()};
   const size_t n = size_t(target_.width()) * size_t(target_.height());

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 namespace fishcam::detail {
@@ -211,6 +212,28 @@ double rotation_angle(const Eigen::Matrix3d& r) {
   return std::acos(std::clamp((r.trace() - 1) / 2, -1.0, 1.0));
 }
 
+// What one change needs before any row: its pose, the kernel, the nodes and which
+// cells are interpolated; nullopt when the change lies outside what the plan measured.
+struct GridChange {
+  PoseParams pose;
+  RangeKernel geometric;
+  NodeMaps nodes;
+  std::vector<unsigned char> ok;
+};
+
+std::optional<GridChange> prepare(const GridPlan& plan, const SourceParams& src, const ViewpointChange& change,
+                                  DepthPrior prior) {
+  if (rotation_angle(change.rotation) > plan.max_rotation_rad || change.translation.norm() > plan.max_translation) {
+    return std::nullopt;
+  }
+  GridChange out;
+  out.pose = pose_params(change);
+  out.geometric = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false);
+  node_maps(plan, src, out.pose, out.geometric, &out.nodes);
+  out.ok = cells_ok(plan, src, out.nodes);
+  return out;
+}
+
 }  // namespace
 
 std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camera& target, const SourceParams& src,
@@ -291,16 +314,10 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
 
 bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
                   const ViewpointChange& change, DepthPrior prior, const AugmentIO& io) {
-  if (rotation_angle(change.rotation) > plan.max_rotation_rad || change.translation.norm() > plan.max_translation) {
-    return false;
-  }
+  const std::optional<GridChange> prepared = prepare(plan, src, change, prior);
+  if (!prepared) return false;
+  const auto& [pose, geometric, nodes, ok] = *prepared;
   const int w = target.width(), h = target.height();
-  const bool inside_sphere = change.translation.squaredNorm() < 1;
-  const PoseParams pose = pose_params(change);
-  const RangeKernel geometric = select_kernel_for_cpu(prior, inside_sphere, src.kind, false);
-  NodeMaps nodes;
-  node_maps(plan, src, pose, geometric, &nodes);
-  const std::vector<unsigned char> ok = cells_ok(plan, src, nodes);
   if (io.image) io.out_image->create(h, w, io.image->type());
   if (io.labels) io.out_labels->create(h, w, io.labels->type());
   if (io.valid) io.valid->create(h, w, CV_8UC1);
@@ -348,15 +365,10 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
 
 bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
                const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) {
-  if (rotation_angle(change.rotation) > plan.max_rotation_rad || change.translation.norm() > plan.max_translation) {
-    return false;
-  }
+  const std::optional<GridChange> prepared = prepare(plan, src, change, prior);
+  if (!prepared) return false;
+  const auto& [pose, geometric, nodes, ok] = *prepared;
   const int w = target.width(), h = target.height();
-  const PoseParams pose = pose_params(change);
-  const RangeKernel geometric = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false);
-  NodeMaps nodes;
-  node_maps(plan, src, pose, geometric, &nodes);
-  const std::vector<unsigned char> ok = cells_ok(plan, src, nodes);
   maps->kind = MapKind::geometric;
   maps->source_size = cv::Size(int(src.width), int(src.height));
   maps->map_x.create(h, w, CV_32FC1);
