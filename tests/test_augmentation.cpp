@@ -4,6 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cstring>
 #include <random>
 
@@ -733,6 +734,76 @@ TEST(Augmentation, GridSamplingMatchesTheExactPath) {
   EXPECT_THROW(warp.augment(ViewpointChange{}, DepthPrior::source_sphere,
                             {nullptr, nullptr, 0, &scene.labels, &out, 300, nullptr}),
                Error);
+}
+
+// The grid path's image is cv::remap (INTER_LINEAR, BORDER_CONSTANT) of its own map
+// in fixed point, byte for byte, whichever samples it: the fused 8-bit bilinear
+// (AVX2) or cv::remap per tile (other types, and the SSE2 run of this test).
+// The map converted here independently of the row loops: clamped onto the outer
+// pixel centres inside the image, far outside elsewhere, then cv::convertMaps.
+TEST(Augmentation, GridImagesAreCvRemapOfTheGridMapByteForByte) {
+  const Camera camera(resized(woodscape().parameters(), 640, 483));
+  const ViewpointWarp warp(camera);
+  ASSERT_GT(warp.grid_spacing(), 0);
+  std::mt19937 random(5);
+  auto noise = [&](int type) {  // every byte matters: a wrong weight shows
+    cv::Mat m(camera.height(), camera.width(), type);
+    cv::randu(m, cv::Scalar::all(0), cv::Scalar::all(CV_MAT_DEPTH(type) == CV_32F ? 1.0 : 256.0));
+    return m;
+  };
+  // A view into a larger image: rows with a stride and the source's last byte not the buffer's.
+  cv::Mat wide_buffer = noise(CV_8UC3);
+  cv::copyMakeBorder(wide_buffer, wide_buffer, 3, 5, 7, 11, cv::BORDER_REFLECT);
+  const cv::Mat view = wide_buffer(cv::Rect(7, 3, camera.width(), camera.height()));
+  const std::vector<cv::Mat> images = {noise(CV_8UC1), noise(CV_8UC3), noise(CV_8UC4), view, noise(CV_16UC3),
+                                       noise(CV_32FC1)};
+  const float max_x = float(camera.width() - 1), max_y = float(camera.height() - 1);
+  for (std::uint64_t seed = 0; seed < 3; ++seed) {
+    const ViewpointChange change = random_pose(*find_pose_preset("large"), seed).change();
+    const DepthPrior prior = seed == 0 ? DepthPrior::infinity : DepthPrior::source_sphere;
+    WarpMaps maps;
+    warp.compute_grid(change, prior, &maps);
+    cv::Mat x = maps.map_x.clone(), y = maps.map_y.clone();
+    for (int v = 0; v < x.rows; ++v) {
+      for (int u = 0; u < x.cols; ++u) {
+        float& sx = x.at<float>(v, u);
+        float& sy = y.at<float>(v, u);
+        if (maps.valid.at<unsigned char>(v, u)) {
+          sx = std::clamp(sx, 0.0f, max_x);
+          sy = std::clamp(sy, 0.0f, max_y);
+        } else {
+          sx = sy = -16384;
+        }
+      }
+    }
+    cv::Mat fixed, fractions;
+    cv::convertMaps(x, y, fixed, fractions, CV_16SC2, false);
+    for (const cv::Mat& image : images) {
+      const double fill = image.depth() == CV_32F ? 0.25 : 200;
+      cv::Mat expected, actual;
+      cv::remap(image, expected, fixed, fractions, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(fill));
+      warp.augment(change, prior, {&image, &actual, fill, nullptr, nullptr, 0, nullptr}, Sampling::grid);
+      EXPECT_EQ(cv::norm(actual, expected, cv::NORM_INF), 0) << seed << " type " << image.type();
+    }
+  }
+}
+
+// An output given in its own input's memory gives what a separate output gives.
+TEST(Augmentation, AnOutputInItsInputsMemoryGivesTheSameResult) {
+  const Camera camera(resized(woodscape().parameters(), 640, 483));
+  const SceneRender scene = render_street_scene(camera, *camera.parameters().pose);
+  const ViewpointWarp warp(camera);
+  const ViewpointChange change = random_pose(*find_pose_preset("train"), 3).change();
+  for (const Sampling sampling : {Sampling::grid, Sampling::exact}) {
+    cv::Mat image, labels;
+    warp.augment(change, DepthPrior::source_sphere, {&scene.image, &image, 0, &scene.labels, &labels, 0, nullptr},
+                 sampling);
+    cv::Mat image_in_place = scene.image.clone(), labels_in_place = scene.labels.clone();
+    warp.augment(change, DepthPrior::source_sphere,
+                 {&image_in_place, &image_in_place, 0, &labels_in_place, &labels_in_place, 0, nullptr}, sampling);
+    EXPECT_EQ(cv::norm(image_in_place, image, cv::NORM_INF), 0);
+    EXPECT_EQ(cv::norm(labels_in_place, labels, cv::NORM_INF), 0);
+  }
 }
 
 }  // namespace

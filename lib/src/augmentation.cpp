@@ -43,6 +43,11 @@ GridRowLoops grid_row_loops_for_cpu() { return use_avx2() ? grid_row_loops_avx2(
 }  // namespace detail
 namespace {
 
+// Whether two matrices' buffers overlap (an output given its own input).
+bool shares_memory(const cv::Mat& a, const cv::Mat& b) {
+  return !a.empty() && !b.empty() && a.datastart < b.dataend && b.datastart < a.dataend;
+}
+
 using detail::pose_params;
 using detail::select_kernel_for_cpu;
 using detail::PoseParams;
@@ -283,15 +288,20 @@ void ViewpointWarp::augment(const ViewpointChange& change, DepthPrior prior, con
   if (io.image) check_image_input(*io.image, source, io.fill, "image");
   if (io.labels) check_label_input(*io.labels, source, io.label_fill, "labels");
   if ((io.image && !io.out_image) || (io.labels && !io.out_labels)) throw Error("augment: an input without its output");
+  // An output in the memory of its input would be read while it is written: sample a copy.
+  AugmentIO safe = io;
+  cv::Mat image_copy, labels_copy;
+  if (io.image && shares_memory(*io.image, *io.out_image)) safe.image = &(image_copy = io.image->clone());
+  if (io.labels && shares_memory(*io.labels, *io.out_labels)) safe.labels = &(labels_copy = io.labels->clone());
   if (sampling == Sampling::grid && grid_ &&
-      detail::grid_augment(*grid_, *kernel_source_, rays_, target_, change, prior, io)) {
+      detail::grid_augment(*grid_, *kernel_source_, rays_, target_, change, prior, safe)) {
     return;
   }
   WarpMaps maps;
   compute(change, prior, &maps);
-  if (io.image) warp_image(*io.image, maps, io.out_image, io.fill);
-  if (io.labels) warp_labels(*io.labels, maps, io.label_fill, io.out_labels);
-  if (io.valid) maps.validity().copyTo(*io.valid);
+  if (safe.image) warp_image(*safe.image, maps, safe.out_image, safe.fill);
+  if (safe.labels) warp_labels(*safe.labels, maps, safe.label_fill, safe.out_labels);
+  if (safe.valid) maps.validity().copyTo(*safe.valid);
 }
 
 void ViewpointWarp::compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const {

@@ -50,16 +50,19 @@ void node_maps(const GridPlan& plan, const SourceParams& src, const PoseParams& 
   });
 }
 
-// Whether a node has a source away from a fold (cells_ok asks only when the source
-// camera has a fold).
-bool corner_ok(const GridPlan& plan, const SourceParams& src, const NodeMaps& nodes, std::size_t k) {
-  const float x = nodes.x[k], y = nodes.y[k];
-  if (!(std::isfinite(x) && std::isfinite(y))) return false;
-  if (plan.fold_guard_radius == std::numeric_limits<float>::infinity()) return true;
-  const float scale = std::max(src.ax, src.ay);
-  const float dx = (x - src.cx) / src.ax * scale, dy = (y - src.cy) / src.ay * scale;
-  return dx * dx + dy * dy < plan.fold_guard_radius * plan.fold_guard_radius;
-}
+// Whether nodes lie away from a fold (cells_ok asks only when the source camera has
+// one): inside the guard radius in the source's normalised coordinates times its
+// largest pixel scale. False for NaN.
+struct FoldGuard {
+  float cx, cy, kx, ky, radius2;
+  FoldGuard(const GridPlan& plan, const SourceParams& src)
+      : cx(src.cx), cy(src.cy), kx(std::max(src.ax, src.ay) / src.ax), ky(std::max(src.ax, src.ay) / src.ay),
+        radius2(plan.fold_guard_radius * plan.fold_guard_radius) {}
+  bool operator()(float x, float y) const {
+    const float dx = (x - cx) * kx, dy = (y - cy) * ky;
+    return dx * dx + dy * dy < radius2;
+  }
+};
 
 // Scratch space of one thread for a row: the node columns interpolated to the row.
 struct RowScratch {
@@ -136,42 +139,48 @@ std::vector<unsigned char> cells_ok(const GridPlan& plan, const SourceParams& sr
   const int nu = plan.nodes_u, nv = plan.nodes_v, cu = nu - 1, cv_ = nv - 1;
   const float* x = nodes.x.data();
   const float* y = nodes.y.data();
+  const bool fold = plan.fold_guard_radius != std::numeric_limits<float>::infinity();
+  const FoldGuard guard(plan, src);
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
   // The curvature estimate per node, squared (NaN where the node or a neighbour has
   // no source: such cells fail the comparison below); the outer nodes take their
-  // inner neighbour's.
+  // inner neighbour's; infinite next to a fold.
   std::vector<float> bend(nodes.x.size());
-  cv::parallel_for_(cv::Range(1, nv - 1), [&](const cv::Range& rows) {
+  cv::parallel_for_(cv::Range(0, nv), [&](const cv::Range& rows) {
     for (int j = rows.start; j < rows.end; ++j) {
       const std::size_t row = std::size_t(j) * std::size_t(nu);
-      for (std::size_t k = row + 1; k + 1 < row + std::size_t(nu); ++k) {
+      const std::size_t centre = std::size_t(std::clamp(j, 1, nv - 2)) * std::size_t(nu);
+      float* out = bend.data() + row;
+      for (int i = 1; i + 1 < nu; ++i) {
+        const std::size_t k = centre + std::size_t(i);
         const float ex = std::abs(x[k - 1] + x[k + 1] - 2 * x[k]) + std::abs(x[k - nu] + x[k + nu] - 2 * x[k]);
         const float ey = std::abs(y[k - 1] + y[k + 1] - 2 * y[k]) + std::abs(y[k - nu] + y[k + nu] - 2 * y[k]);
-        bend[k] = (ex * ex + ey * ey) * (1.0f / 64);
+        out[i] = (ex * ex + ey * ey) * (1.0f / 64);
       }
-      bend[row] = bend[row + 1];
-      bend[row + std::size_t(nu) - 1] = bend[row + std::size_t(nu) - 2];
+      out[0] = out[1];
+      out[nu - 1] = out[nu - 2];
+      if (fold) {
+        const float* node_x = x + row;
+        const float* node_y = y + row;
+        for (int i = 0; i < nu; ++i) out[i] = guard(node_x[i], node_y[i]) ? out[i] : kInfinity;
+      }
     }
   });
-  std::copy_n(bend.begin() + nu, nu, bend.begin());
-  std::copy_n(bend.begin() + std::ptrdiff_t(nv - 2) * nu, nu, bend.begin() + std::ptrdiff_t(nv - 1) * nu);
-  if (plan.fold_guard_radius != std::numeric_limits<float>::infinity()) {
-    for (std::size_t k = 0; k < bend.size(); ++k) {
-      if (!corner_ok(plan, src, nodes, k)) bend[k] = std::numeric_limits<float>::infinity();
-    }
-  }
   constexpr float budget = kCurvatureBudgetPx * kCurvatureBudgetPx;
   std::vector<unsigned char> ok(std::size_t(cu) * std::size_t(cv_));
-  for (int j = 0; j < cv_; ++j) {
-    const std::size_t a0 = std::size_t(j) * std::size_t(nu);
-    for (int i = 0; i < cu; ++i) {
-      const std::size_t a = a0 + std::size_t(i), b = a + std::size_t(nu);
-      // Corners on both sides of the source image's border: the decision is made per pixel by the kernel.
-      const int inside = nodes.valid[a] + nodes.valid[a + 1] + nodes.valid[b] + nodes.valid[b + 1];
-      ok[std::size_t(j) * std::size_t(cu) + std::size_t(i)] = (inside == 0 || inside == 4) && bend[a] <= budget &&
-                                                              bend[a + 1] <= budget && bend[b] <= budget &&
-                                                              bend[b + 1] <= budget;
+  cv::parallel_for_(cv::Range(0, cv_), [&](const cv::Range& rows) {
+    for (int j = rows.start; j < rows.end; ++j) {
+      const std::size_t a0 = std::size_t(j) * std::size_t(nu);
+      for (int i = 0; i < cu; ++i) {
+        const std::size_t a = a0 + std::size_t(i), b = a + std::size_t(nu);
+        // Corners on both sides of the source image's border: the decision is made per pixel by the kernel.
+        const int inside = nodes.valid[a] + nodes.valid[a + 1] + nodes.valid[b] + nodes.valid[b + 1];
+        ok[std::size_t(j) * std::size_t(cu) + std::size_t(i)] = (inside == 0 || inside == 4) && bend[a] <= budget &&
+                                                                bend[a + 1] <= budget && bend[b] <= budget &&
+                                                                bend[b + 1] <= budget;
+      }
     }
-  }
+  });
   return ok;
 }
 
@@ -324,6 +333,16 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
   const float limit_x = src.width - 0.5f, limit_y = src.height - 0.5f;
   const float max_x = src.width - 1, max_y = src.height - 1;
   const GridRowLoops loops = grid_row_loops_for_cpu();
+  // 8-bit images with 1, 3 or 4 channels are interpolated row by row while the row's
+  // maps are in L1 (byte for byte what cv::remap gives); others by cv::remap per tile.
+  std::optional<BilinearSource> fused;
+  if (io.image && loops.bilinear_8u && io.image->depth() == CV_8U &&
+      (io.image->channels() == 1 || io.image->channels() == 3 || io.image->channels() == 4)) {
+    const cv::Mat& image = *io.image;
+    const unsigned char fill = cv::saturate_cast<unsigned char>(io.fill);
+    fused = BilinearSource{image.data, image.dataend, image.step[0], image.cols, image.rows, image.channels(),
+                           {fill, fill, fill, fill}};
+  }
   const int tiles = (h + kTileRows - 1) / kTileRows;
   // A few stripes per thread (each allocates its tile buffers once; several balance the load).
   cv::parallel_for_(cv::Range(0, tiles), [&](const cv::Range& range) {
@@ -339,9 +358,13 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
         loops.to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
                        fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
                        io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
+        if (fused) {
+          loops.bilinear_8u(*fused, fixed.ptr<short>(v - r0), fractions.ptr<unsigned short>(v - r0), w,
+                            io.out_image->ptr<unsigned char>(v));
+        }
       }
       const int rows = r1 - r0;
-      if (io.image) {
+      if (io.image && !fused) {
         cv::Mat out = io.out_image->rowRange(r0, r1);
         cv::remap(*io.image, out, fixed.rowRange(0, rows), fractions.rowRange(0, rows), cv::INTER_LINEAR,
                   cv::BORDER_CONSTANT, cv::Scalar::all(io.fill));

@@ -59,6 +59,14 @@ RangeKernel select_kernel_avx2(DepthPrior prior, bool inside_sphere, SourceParam
 // Where pixels without a source inside the source image point in the fixed-point
 // maps: far enough outside for all four bilinear taps to read the border value.
 constexpr short kOutsideFixed = -16384;
+// An 8-bit source image for GridRowLoops::bilinear_8u.
+struct BilinearSource {
+  const unsigned char* data;  // first row
+  const unsigned char* end;   // one past the last byte of the last row (reads stay before it)
+  std::size_t step;           // bytes per row
+  int width, height, channels;
+  unsigned char fill[4];      // the border value per channel
+};
 struct GridRowLoops {
   // Spacing 4: pixels 4i .. 4i+3 from the node columns interpolated to the row,
   // column[i] + a (column[i+1] - column[i]) / 4 for a = 0..3, cells [0, cells)
@@ -68,6 +76,11 @@ struct GridRowLoops {
   // valid may be null.
   void (*to_fixed_point)(const float* x, const float* y, int w, float limit_x, float limit_y, float max_x,
                          float max_y, short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid);
+  // cv::remap's INTER_LINEAR + BORDER_CONSTANT of an 8-bit image with 1, 3 or 4
+  // channels from one row of those maps, byte for byte; null where the instruction
+  // set has no fast form (the caller then calls cv::remap).
+  void (*bilinear_8u)(const BilinearSource& source, const short* fixed, const unsigned short* fractions, int w,
+                      unsigned char* out);
 };
 GridRowLoops grid_row_loops_baseline();
 GridRowLoops grid_row_loops_avx2();

@@ -8,6 +8,7 @@ RangeKernel select_kernel_baseline(DepthPrior prior, bool inside_sphere, SourceP
   return baseline::select_kernel(prior, inside_sphere, kind, sampling);
 }
 
-GridRowLoops grid_row_loops_baseline() { return {baseline::interpolate4, baseline::to_fixed_point}; }
+// No fused bilinear: SSE2 has no pshufb / pmaddubsw (cv::remap then samples the image).
+GridRowLoops grid_row_loops_baseline() { return {baseline::interpolate4, baseline::to_fixed_point, nullptr}; }
 
 }  // namespace fishcam::detail
