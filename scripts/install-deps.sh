@@ -10,6 +10,7 @@ packages=(
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   pybind11-dev python3-pybind11 python3-pytest python3-torch
   libyaml-cpp-dev libpugixml-dev
+  clang libclang-rt-14-dev  # the sanitizer and fuzzing builds
 )
 
 missing=()

@@ -174,11 +174,11 @@ TEST(Inverse, RobustSolverResidualAndAlgebraicCrossCheck) {
       ASSERT_TRUE(camera.domain().contains_theta(theta)) << name << " rho " << rho;
       ASSERT_LE(residual_px(camera, rho, theta), 1e-9) << name << " rho " << rho;
       std::visit(
-          [&](const auto& m) {
+          [&, model_name = name](const auto& m) {
             if constexpr (PolynomialInTheta<std::decay_t<decltype(m)>>) {
               if (i % 10 == 0) {
                 const double algebraic = algebraic_theta(m.power_coefficients(), rho, camera.domain());
-                ASSERT_NEAR(algebraic, theta, 1e-9) << name << " rho " << rho;
+                ASSERT_NEAR(algebraic, theta, 1e-9) << model_name << " rho " << rho;
               }
             }
           },

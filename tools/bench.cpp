@@ -107,7 +107,7 @@ void run_roots(const std::string& path, bool json, int repeats) {
     cv::setNumThreads(threads);
     for (auto [name, path_kind] : {std::pair{"robust", InversePath::robust}, std::pair{"table", InversePath::table}}) {
       out["unproject_image_ms"][name][std::to_string(threads)] =
-          1e3 * median_seconds(repeats, [&] { camera.unproject_image(rays, path_kind); });
+          1e3 * median_seconds(repeats, [&, path = path_kind] { camera.unproject_image(rays, path); });
     }
   }
   cv::setNumThreads(threads_before);

@@ -325,7 +325,12 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
                   const ViewpointChange& change, DepthPrior prior, const AugmentIO& io) {
   const std::optional<GridChange> prepared = prepare(plan, src, change, prior);
   if (!prepared) return false;
-  const auto& [pose, geometric, nodes, ok] = *prepared;
+  // Named references, not a structured binding: lambdas below use them (clang 14,
+  // the sanitizer build's compiler, cannot capture bindings).
+  const PoseParams& pose = prepared->pose;
+  const RangeKernel geometric = prepared->geometric;
+  const NodeMaps& nodes = prepared->nodes;
+  const std::vector<unsigned char>& ok = prepared->ok;
   const int w = target.width(), h = target.height();
   if (io.image) io.out_image->create(h, w, io.image->type());
   if (io.labels) io.out_labels->create(h, w, io.labels->type());
@@ -392,7 +397,12 @@ bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pix
                const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) {
   const std::optional<GridChange> prepared = prepare(plan, src, change, prior);
   if (!prepared) return false;
-  const auto& [pose, geometric, nodes, ok] = *prepared;
+  // Named references, not a structured binding: lambdas below use them (clang 14,
+  // the sanitizer build's compiler, cannot capture bindings).
+  const PoseParams& pose = prepared->pose;
+  const RangeKernel geometric = prepared->geometric;
+  const NodeMaps& nodes = prepared->nodes;
+  const std::vector<unsigned char>& ok = prepared->ok;
   const int w = target.width(), h = target.height();
   maps->kind = MapKind::geometric;
   maps->source_size = cv::Size(int(src.width), int(src.height));

@@ -36,10 +36,12 @@ template <int kChannels>
 [[gnu::always_inline]] inline __m128i bilinear_pixel(const BilinearSource& src, int x0, int y0, unsigned fraction) {
   static_assert(kChannels == 1 || kChannels == 3 || kChannels == 4);
   const int fx = int(fraction & 31), fy = int(fraction >> 5);
-  const unsigned char* top = src.data + std::size_t(y0) * src.step + std::size_t(x0) * kChannels;
-  const unsigned char* bottom = y0 + 1 < src.height ? top + src.step : top;
+  const std::size_t top_offset = std::size_t(y0) * src.step + std::size_t(x0) * kChannels;
+  const std::size_t bottom_offset = y0 + 1 < src.height ? top_offset + src.step : top_offset;
+  const unsigned char* top = src.data + top_offset;
+  const unsigned char* bottom = src.data + bottom_offset;
   __m128i rows;
-  if (bottom + 8 <= src.end) {
+  if (bottom_offset + 8 <= std::size_t(src.end - src.data)) {
     rows = _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(top)),
                               _mm_loadl_epi64(reinterpret_cast<const __m128i*>(bottom)));
   } else {  // the last pixels of the last row: copy what lies inside the image
