@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Augmentation speed against the reference implementations, as ratios in one run.
 
-    /usr/bin/python3 tools/bench_reference.py [--fishcam build/tools/fishcam] [--samples N]
+    /usr/bin/python3 tools/bench_reference.py [--fishcam build/tools/fishcam] [--python-dir build/python]
+                                              [--samples N]
 
 - fishcam: `fishcam bench augment --json` (1 and 2 threads), on the bundled
   stereographic camera (which mrcal can represent) and the WoodScape front camera.
@@ -23,6 +24,7 @@ import argparse
 import json
 import os
 import subprocess
+import sys
 import tempfile
 import time
 
@@ -171,9 +173,12 @@ def opencv_fisheye_ms(fishcam, repeats):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--fishcam", default=os.path.join(os.path.dirname(HERE), "build", "tools", "fishcam"))
+    parser.add_argument("--python-dir", default=os.path.join(os.path.dirname(HERE), "build", "python"),
+                        help="where the fishcam Python package was built (for the torch paths)")
     parser.add_argument("--samples", type=int, default=20)
     parser.add_argument("--subsample", type=int, default=20000, help="pixels for the np.roots timing")
     args = parser.parse_args()
+    sys.path.insert(0, args.python_dir)
 
     stereo = fishcam_bench(args.fishcam, os.path.join(DATA, "stereographic.cameramodel"), args.samples)
     woodscape = fishcam_bench(args.fishcam, os.path.join(DATA, "woodscape_front.json"), args.samples)
