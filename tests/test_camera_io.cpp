@@ -195,7 +195,7 @@ const Malformed kMalformed[] = {
     {"fc_pp_type", replaced(kFishcam, "[643.442, 479.407]", "\"centre\""), "principal_point: expected a list"},
     // mrcal
     {"mr_lensmodel", replaced(kMrcal, "'LENSMODEL_STEREOGRAPHIC'", "'LENSMODEL_OPENCV8'"),
-     "lensmodel: unsupported lens model LENSMODEL_OPENCV8"},
+     "lensmodel: unsupported lens model 'LENSMODEL_OPENCV8'"},
     {"mr_intrinsics_short", replaced(kMrcal, "330, ", ""), "intrinsics: expected 4 numbers, got 3"},
     {"mr_nan", replaced(kMrcal, "330", "nan"), "intrinsics[0]: must be finite"},
     {"mr_truncated", kMrcal.substr(0, kMrcal.size() - 40), "not a valid mrcal .cameramodel"},

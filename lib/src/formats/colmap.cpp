@@ -61,7 +61,7 @@ std::vector<NamedCamera> read(const Content& c) {
     }
     std::vector<double> v;
     for (size_t i = 2; i < t.size(); ++i) {
-      v.push_back(DocFields::parse_number(t[i], [&](std::string_view problem) { fail("value " + t[i] + ": " + std::string(problem)); }));
+      v.push_back(DocFields::parse_number(t[i], [&](std::string_view problem) { fail("value " + quoted_for_message(t[i]) + ": " + std::string(problem)); }));
     }
     NamedCamera named{t[0], {}, {}};
     CameraParameters& p = named.camera;

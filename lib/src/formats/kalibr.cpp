@@ -52,7 +52,7 @@ std::vector<NamedCamera> read(const Content& c) {
       return k[at];
     };
     auto no_distortion = [&] {
-      if (distortion != "none") f.fail("distortion_model", "expected none for camera_model " + model + ", got " + distortion);
+      if (distortion != "none") f.fail("distortion_model", "expected none for camera_model " + model + ", got " + quoted_for_message(distortion));
     };
     if (model == "pinhole") {
       const auto k = f.numbers("intrinsics", 4, 4);
@@ -79,7 +79,8 @@ std::vector<NamedCamera> read(const Content& c) {
         }
         p.model = Mei<double>(fx, k[0], d[0], d[1]);
       } else {
-        f.fail("distortion_model", "omni-" + distortion + " is radially symmetric but fishcam has no such model (it reads omni-none and omni-radtan)");
+        f.fail("distortion_model", "omni with " + quoted_for_message(distortion) +
+                                   " is radially symmetric but fishcam has no such model (it reads omni-none and omni-radtan)");
       }
     } else if (model == "ds") {
       no_distortion();

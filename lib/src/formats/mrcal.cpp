@@ -24,7 +24,7 @@ std::vector<NamedCamera> read(const Content& c) {
   if (!pinhole && lensmodel != "LENSMODEL_STEREOGRAPHIC") {
     const bool asymmetric = lensmodel.rfind("LENSMODEL_OPENCV", 0) == 0 || lensmodel.rfind("LENSMODEL_SPLINED", 0) == 0 ||
                             lensmodel.rfind("LENSMODEL_CAHVOR", 0) == 0;
-    f.fail("lensmodel", "unsupported lens model " + lensmodel +
+    f.fail("lensmodel", "unsupported lens model " + quoted_for_message(lensmodel) +
                             (asymmetric ? " (not radially symmetric: fishcam reads radially symmetric models only; "
                                           "mrcal files: LENSMODEL_PINHOLE and LENSMODEL_STEREOGRAPHIC)"
                                         : " (fishcam reads LENSMODEL_PINHOLE and LENSMODEL_STEREOGRAPHIC)"));

@@ -52,7 +52,7 @@ std::vector<NamedCamera> read(const Content& c) {
                                    "say which (distortion_model fisheye or plumb_bob)");
   }
   const std::string model = f.has("distortion_model") ? f.string("distortion_model") : *said;
-  if (said && *said != model) f.fail("distortion_model", "the file says " + model + ", the caller " + *said);
+  if (said && *said != model) f.fail("distortion_model", "the file says " + quoted_for_message(model) + ", the caller " + quoted_for_message(*said));
   if (model == "fisheye" || model == "equidistant") {
     if (d.size() != 4) f.fail(keys->distortion, "a fisheye model has 4 coefficients, got " + std::to_string(d.size()));
     p.model = KannalaBrandt<double>(k[0], d[0], d[1], d[2], d[3]);
