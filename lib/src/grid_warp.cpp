@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <vector>
@@ -261,7 +262,8 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
     max_translation = std::max(max_translation, change.translation.norm());
   }
   constexpr int kRowStep = 3;
-  // The per-pixel float maps of the measured rows, once for every candidate spacing.
+  const int rows = (h + kRowStep - 1) / kRowStep;  // measured rows v = r kRowStep
+  // The per-pixel float maps of the measured rows (only those), once for every candidate spacing.
   std::vector<std::vector<float>> ref_x(changes.size()), ref_y(changes.size());
   std::vector<std::vector<unsigned char>> ref_in(changes.size());
   const std::size_t stride = std::size_t(w);
@@ -269,14 +271,17 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
     const auto& [change, prior] = changes[c];
     const RangeKernel kernel = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false);
     const PoseParams pose = pose_params(change);
-    ref_x[c].resize(stride * std::size_t(h));
-    ref_y[c].resize(stride * std::size_t(h));
-    ref_in[c].resize(stride * std::size_t(h));
-    for (int v = 0; v < h; v += kRowStep) {
-      const std::size_t begin = std::size_t(v) * stride;
-      kernel(pixel_rays.ptr<float>(0), pixel_rays.ptr<float>(1), pixel_rays.ptr<float>(2), begin, begin + stride, pose,
-             src, KernelOutput{ref_x[c].data(), ref_y[c].data(), ref_in[c].data()});
-    }
+    ref_x[c].resize(stride * std::size_t(rows));
+    ref_y[c].resize(stride * std::size_t(rows));
+    ref_in[c].resize(stride * std::size_t(rows));
+    cv::parallel_for_(cv::Range(0, rows), [&, c](const cv::Range& range) {
+      for (int r = range.start; r < range.end; ++r) {
+        // Row v's rays from its first pixel on, so the kernel writes measured row r.
+        const std::size_t ray = std::size_t(r * kRowStep) * stride, out = std::size_t(r) * stride;
+        kernel(pixel_rays.ptr<float>(0) + ray, pixel_rays.ptr<float>(1) + ray, pixel_rays.ptr<float>(2) + ray, 0,
+               stride, pose, src, KernelOutput{ref_x[c].data() + out, ref_y[c].data() + out, ref_in[c].data() + out});
+      }
+    });
   }
   float fold_guard = std::numeric_limits<float>::infinity();
   if (source.domain().closed && std::isfinite(source.domain().rho_max)) {
@@ -289,31 +294,49 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
     plan->max_rotation_rad = max_angle + 1e-9;
     plan->max_translation = max_translation + 1e-9;
     plan->fold_guard_radius = fold_guard;
-    double worst = 0, interpolated = 0, with_source = 0;
-    std::vector<float> x(stride + kRowPadding), y(stride + kRowPadding);
-    RowScratch scratch(*plan);
+    // Per change: the worst squared error over the interpolated pixels, and how many
+    // pixels have a source and how many of those were interpolated (over row stripes).
+    double worst2 = 0;
+    long interpolated = 0, with_source = 0;
     NodeMaps nodes;
-    for (std::size_t c = 0; c < changes.size() && worst <= kGridTolerancePx; ++c) {
+    std::mutex merge;
+    for (std::size_t c = 0; c < changes.size() && worst2 <= kGridTolerancePx * kGridTolerancePx; ++c) {
       const auto& [change, prior] = changes[c];
       node_maps(*plan, src, pose_params(change),
                 select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false), &nodes);
       const std::vector<unsigned char> ok = cells_ok(*plan, src, nodes);
-      for (int v = 0; v < h; v += kRowStep) {
-        interpolate_row(*plan, nodes, v, w, x.data(), y.data(), &scratch);
-        const unsigned char* ok_row = ok.data() + std::size_t(v / s) * std::size_t(plan->nodes_u - 1);
-        const std::size_t row = std::size_t(v) * stride;
-        for (int u = 0; u < w; ++u) {
-          if (!ref_in[c][row + std::size_t(u)]) continue;
-          with_source += 1;
-          if (!ok_row[u / s]) continue;  // computed per pixel
-          interpolated += 1;
-          worst = std::max(worst, double(std::hypot(x[std::size_t(u)] - ref_x[c][row + std::size_t(u)],
-                                                    y[std::size_t(u)] - ref_y[c][row + std::size_t(u)])));
+      cv::parallel_for_(cv::Range(0, rows), [&, c](const cv::Range& range) {
+        std::vector<float> x(stride + kRowPadding), y(stride + kRowPadding);
+        RowScratch scratch(*plan);
+        float stripe_worst2 = 0;
+        long stripe_interpolated = 0, stripe_with_source = 0;
+        for (int r = range.start; r < range.end; ++r) {
+          const int v = r * kRowStep;
+          interpolate_row(*plan, nodes, v, w, x.data(), y.data(), &scratch);
+          const unsigned char* ok_row = ok.data() + std::size_t(v / s) * std::size_t(plan->nodes_u - 1);
+          const std::size_t row = std::size_t(r) * stride;
+          for (int u = 0; u < w; ++u) {
+            if (!ref_in[c][row + std::size_t(u)]) continue;
+            ++stripe_with_source;
+            if (!ok_row[u / s]) continue;  // computed per pixel
+            ++stripe_interpolated;
+            const float dx = x[std::size_t(u)] - ref_x[c][row + std::size_t(u)];
+            const float dy = y[std::size_t(u)] - ref_y[c][row + std::size_t(u)];
+            // NaN (an interpolated pixel without a source) must fail: not max(), which drops it.
+            const float e2 = dx * dx + dy * dy;
+            stripe_worst2 = e2 <= stripe_worst2 ? stripe_worst2 : e2;
+          }
         }
-      }
+        const std::lock_guard lock(merge);
+        worst2 = std::isnan(worst2) || std::isnan(stripe_worst2) ? std::numeric_limits<double>::quiet_NaN()
+                                                                 : std::max(worst2, double(stripe_worst2));
+        interpolated += stripe_interpolated;
+        with_source += stripe_with_source;
+      });
     }
+    const double worst = std::sqrt(worst2);
     // The largest spacing that keeps the error and leaves most pixels to the interpolation.
-    if (worst <= kGridTolerancePx && interpolated >= kMinInterpolatedShare * with_source) {
+    if (worst <= kGridTolerancePx && double(interpolated) >= kMinInterpolatedShare * double(with_source)) {
       plan->measured_error_px = worst;
       return plan;
     }
