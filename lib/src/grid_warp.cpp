@@ -294,8 +294,9 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
     plan->max_rotation_rad = max_angle + 1e-9;
     plan->max_translation = max_translation + 1e-9;
     plan->fold_guard_radius = fold_guard;
-    // Per change: the worst squared error over the interpolated pixels, and how many
-    // pixels have a source and how many of those were interpolated (over row stripes).
+    // Over the changes measured so far: the worst squared error of the interpolated
+    // pixels, how many pixels have a source and how many of those were interpolated
+    // (each row stripe counts its own, merged under the lock).
     double worst2 = 0;
     long interpolated = 0, with_source = 0;
     NodeMaps nodes;
