@@ -13,6 +13,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 harnesses=("$@")
+failed=()
 formats=(woodscape fishcam mrcal opencv kalibr basalt colmap ros camodocal orbslam3)
 [ ${#harnesses[@]} -eq 0 ] && harnesses=(camera "${formats[@]/#/camera_}" corners npy stdin_records correspondence_csv)
 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
@@ -27,6 +28,15 @@ for h in "${harnesses[@]}"; do
     *) seeds=(tests/fuzz/seeds/$h tests/fuzz/regressions/$h) ;;
   esac
   echo "fuzz: $h for ${seconds}s"
-  build-fuzz/tests/fuzz/fuzz_"$h" "$corpus" "${seeds[@]}" -max_total_time="$seconds" -max_len=65536 \
-    -rss_limit_mb=4096 -artifact_prefix="$findings/" -print_final_stats=1 2>&1 | tail -3
+  # A finding stops that harness, not the run: the others still get their time.
+  if ! build-fuzz/tests/fuzz/fuzz_"$h" "$corpus" "${seeds[@]}" -max_total_time="$seconds" -max_len=65536 \
+    -rss_limit_mb=4096 -artifact_prefix="$findings/" -print_final_stats=1 >"build-fuzz/$h.log" 2>&1; then
+    failed+=("$h")
+    grep -m1 -E "^(multi-line|SUMMARY|==[0-9]+== ERROR)" "build-fuzz/$h.log" || true
+  fi
+  tail -3 "build-fuzz/$h.log"
 done
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "fuzz: findings in ${failed[*]} (build-fuzz/findings/HARNESS/, logs build-fuzz/HARNESS.log)" >&2
+  exit 1
+fi
