@@ -105,12 +105,20 @@ void interpolate_row(const GridPlan& plan, const NodeMaps& nodes, int v, int wid
 
 // The source coordinates of output row v: interpolated in interpolated cells, by
 // the kernel per pixel elsewhere.
-void grid_row(const GridPlan& plan, const NodeMaps& nodes, const std::vector<unsigned char>& ok, const SourceParams& src,
-              const PoseParams& pose, RangeKernel geometric, const cv::Mat& pixel_rays, int v, int w, float* x,
-              float* y, unsigned char* in, RowScratch* scratch) {
-  interpolate_row(plan, nodes, v, w, x, y, scratch);
+// What one change needs before any row (prepare() below): its pose, the kernel, the
+// nodes and which cells are interpolated.
+struct GridChange {
+  PoseParams pose;
+  RangeKernel geometric;
+  NodeMaps nodes;
+  std::vector<unsigned char> ok;
+};
+
+void grid_row(const GridPlan& plan, const GridChange& change, const SourceParams& src, const cv::Mat& pixel_rays,
+              int v, int w, float* x, float* y, unsigned char* in, RowScratch* scratch) {
+  interpolate_row(plan, change.nodes, v, w, x, y, scratch);
   const int s = plan.spacing, cells = (w + s - 1) / s;
-  const unsigned char* ok_row = ok.data() + std::size_t(v / s) * std::size_t(plan.nodes_u - 1);
+  const unsigned char* ok_row = change.ok.data() + std::size_t(v / s) * std::size_t(plan.nodes_u - 1);
   const std::size_t row = std::size_t(v) * std::size_t(w);
   for (int i = 0; i < cells;) {
     if (ok_row[i]) {
@@ -120,8 +128,8 @@ void grid_row(const GridPlan& plan, const NodeMaps& nodes, const std::vector<uns
     int end = i;
     while (end < cells && !ok_row[end]) ++end;
     // The row's rays from its first pixel on, so the kernel writes the row's buffers.
-    geometric(pixel_rays.ptr<float>(0) + row, pixel_rays.ptr<float>(1) + row, pixel_rays.ptr<float>(2) + row,
-              std::size_t(i * s), std::size_t(std::min(w, end * s)), pose, src, KernelOutput{x, y, in});
+    change.geometric(pixel_rays.ptr<float>(0) + row, pixel_rays.ptr<float>(1) + row, pixel_rays.ptr<float>(2) + row,
+                     std::size_t(i * s), std::size_t(std::min(w, end * s)), change.pose, src, KernelOutput{x, y, in});
     i = end;
   }
 }
@@ -222,15 +230,7 @@ double rotation_angle(const Eigen::Matrix3d& r) {
   return std::acos(std::clamp((r.trace() - 1) / 2, -1.0, 1.0));
 }
 
-// What one change needs before any row: its pose, the kernel, the nodes and which
-// cells are interpolated; nullopt when the change lies outside what the plan measured.
-struct GridChange {
-  PoseParams pose;
-  RangeKernel geometric;
-  NodeMaps nodes;
-  std::vector<unsigned char> ok;
-};
-
+// nullopt when the change lies outside what the plan measured.
 std::optional<GridChange> prepare(const GridPlan& plan, const SourceParams& src, const ViewpointChange& change,
                                   DepthPrior prior) {
   if (rotation_angle(change.rotation) > plan.max_rotation_rad || change.translation.norm() > plan.max_translation) {
@@ -349,12 +349,6 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
                   const ViewpointChange& change, DepthPrior prior, const AugmentIO& io) {
   const std::optional<GridChange> prepared = prepare(plan, src, change, prior);
   if (!prepared) return false;
-  // Named references, not a structured binding: lambdas below use them (clang 14,
-  // the sanitizer build's compiler, cannot capture bindings).
-  const PoseParams& pose = prepared->pose;
-  const RangeKernel geometric = prepared->geometric;
-  const NodeMaps& nodes = prepared->nodes;
-  const std::vector<unsigned char>& ok = prepared->ok;
   const int w = target.width(), h = target.height();
   if (io.image) io.out_image->create(h, w, io.image->type());
   if (io.labels) io.out_labels->create(h, w, io.labels->type());
@@ -385,7 +379,7 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
     for (int tile = range.start; tile < range.end; ++tile) {
       const int r0 = tile * kTileRows, r1 = std::min(h, r0 + kTileRows);
       for (int v = r0; v < r1; ++v) {
-        grid_row(plan, nodes, ok, src, pose, geometric, pixel_rays, v, w, x.data(), y.data(), in.data(), &scratch);
+        grid_row(plan, *prepared, src, pixel_rays, v, w, x.data(), y.data(), in.data(), &scratch);
         loops.to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
                        fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
                        io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
@@ -421,12 +415,6 @@ bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pix
                const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) {
   const std::optional<GridChange> prepared = prepare(plan, src, change, prior);
   if (!prepared) return false;
-  // Named references, not a structured binding: lambdas below use them (clang 14,
-  // the sanitizer build's compiler, cannot capture bindings).
-  const PoseParams& pose = prepared->pose;
-  const RangeKernel geometric = prepared->geometric;
-  const NodeMaps& nodes = prepared->nodes;
-  const std::vector<unsigned char>& ok = prepared->ok;
   const int w = target.width(), h = target.height();
   maps->kind = MapKind::geometric;
   maps->source_size = cv::Size(int(src.width), int(src.height));
@@ -442,8 +430,7 @@ bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pix
     RowScratch scratch(plan);
     long local = 0;
     for (int v = range.start; v < range.end; ++v) {
-      grid_row(plan, nodes, ok, src, pose, geometric, pixel_rays, v, w, row_x.data(), row_y.data(), in.data(),
-               &scratch);
+      grid_row(plan, *prepared, src, pixel_rays, v, w, row_x.data(), row_y.data(), in.data(), &scratch);
       float* x = maps->map_x.ptr<float>(v);
       float* y = maps->map_y.ptr<float>(v);
       std::copy(row_x.begin(), row_x.begin() + w, x);
