@@ -28,6 +28,8 @@ constexpr double kMinInterpolatedShare = 0.8;
 constexpr std::size_t kRowPadding = 64;
 // Output rows per tile: a multiple of every spacing, the maps of a tile stay in cache.
 constexpr int kTileRows = 16;
+// bilinear_8u's offsets are 32-bit: larger images are interpolated by cv::remap.
+constexpr std::ptrdiff_t kMaxFusedImageBytes = std::ptrdiff_t(1) << 31;
 
 std::size_t padded(std::size_t n) { return (n + 63) / 64 * 64 + 64; }  // whole vectors, and one more to read past
 
@@ -360,7 +362,8 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
   // maps are in L1 (byte for byte what cv::remap gives); others by cv::remap per tile.
   std::optional<BilinearSource> fused;
   if (io.image && loops.bilinear_8u && io.image->depth() == CV_8U &&
-      (io.image->channels() == 1 || io.image->channels() == 3 || io.image->channels() == 4)) {
+      (io.image->channels() == 1 || io.image->channels() == 3 || io.image->channels() == 4) &&
+      io.image->dataend - io.image->data < kMaxFusedImageBytes) {
     const cv::Mat& image = *io.image;
     const unsigned char fill = cv::saturate_cast<unsigned char>(io.fill);
     fused = BilinearSource{image.data, image.dataend, image.step[0], image.cols, image.rows, image.channels(),
@@ -375,7 +378,9 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
     std::vector<float> x(row_length), y(row_length);
     std::vector<unsigned char> in(row_length);
     RowScratch scratch(plan);
-    cv::Mat fixed(kTileRows, w, CV_16SC2), fractions(kTileRows, w, CV_16UC1), nearest(kTileRows, w, CV_16SC2);
+    // One row more than the tile's: bilinear_8u reads whole vectors past a row's end.
+    cv::Mat fixed(kTileRows + 1, w, CV_16SC2), fractions(kTileRows + 1, w, CV_16UC1);
+    cv::Mat nearest(kTileRows, w, CV_16SC2);
     for (int tile = range.start; tile < range.end; ++tile) {
       const int r0 = tile * kTileRows, r1 = std::min(h, r0 + kTileRows);
       for (int v = r0; v < r1; ++v) {

