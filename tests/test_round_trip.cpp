@@ -2,6 +2,9 @@
 // rays more than 90 deg off-axis, and unproject(project(ray)) on random rays.
 #include <opencv2/core.hpp>
 
+#include <cstring>
+#include <vector>
+
 #include "test_support.hpp"
 
 namespace fishcam {
@@ -93,6 +96,17 @@ TEST(RoundTrip, BatchesEqualSinglePointsAndThreadCountDoesNotMatter) {
   camera.unproject_image(image_one_thread);
   cv::setNumThreads(-1);
   EXPECT_EQ(image, image_one_thread);
+  // The planar form holds the same floats, and leaves what lies past W*H alone.
+  const size_t n = pixels.size();
+  std::vector<float> x(n + 5, 7.0f), y(n + 5, 7.0f), z(n + 5, 7.0f);
+  camera.unproject_image(x, y, z);
+  for (size_t i = 0; i < n; ++i) {
+    ASSERT_EQ(std::memcmp(&x[i], &image[3 * i], sizeof(float)), 0) << i;
+    ASSERT_EQ(std::memcmp(&y[i], &image[3 * i + 1], sizeof(float)), 0) << i;
+    ASSERT_EQ(std::memcmp(&z[i], &image[3 * i + 2], sizeof(float)), 0) << i;
+  }
+  EXPECT_EQ(x[n + 4], 7.0f);
+  EXPECT_EQ(z[n], 7.0f);
   // The table path agrees with the exact rays to float precision.
   for (size_t i = 0; i < pixels.size(); i += 13) {
     const Eigen::Vector3d from_table(image[3 * i], image[3 * i + 1], image[3 * i + 2]);
@@ -107,6 +121,9 @@ TEST(RoundTrip, BatchSizeMismatchIsAnError) {
   EXPECT_THROW(camera.unproject(pixels, rays), Error);
   std::vector<float> image(5);
   EXPECT_THROW(camera.unproject_image(image), Error);
+  const size_t n = size_t(camera.width()) * size_t(camera.height());
+  std::vector<float> plane(n), short_plane(n - 1);
+  EXPECT_THROW(camera.unproject_image(plane, plane, short_plane), Error);
 }
 
 }  // namespace

@@ -253,14 +253,11 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
   kernel_source_ = std::make_shared<const SourceParams>(*src);
   const size_t n = size_t(target_.width()) * size_t(target_.height());
   const size_t padded = (n + 63) / 64 * 64 + 64;  // whole vectors, and one more for kernels started mid-row
-  std::vector<float> interleaved(3 * n);
-  target_.unproject_image(interleaved, InversePath::table);
   rays_.create(3, static_cast<int>(padded), CV_32FC1);
-  rays_.setTo(std::numeric_limits<float>::quiet_NaN());
   float* planes[3] = {rays_.ptr<float>(0), rays_.ptr<float>(1), rays_.ptr<float>(2)};
-  for (size_t i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) planes[k][i] = interleaved[3 * i + k];
-  }
+  target_.unproject_image(std::span<float>(planes[0], padded), std::span<float>(planes[1], padded),
+                          std::span<float>(planes[2], padded), InversePath::table);
+  for (float* plane : planes) std::fill(plane + n, plane + padded, std::numeric_limits<float>::quiet_NaN());
   grid_ = detail::make_grid_plan(source_, target_, *kernel_source_, rays_);
 }
 

@@ -247,20 +247,33 @@ void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen:
 }
 
 void Camera::unproject_image(std::span<float> rays_xyz, InversePath path) const {
+  const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
+  if (rays_xyz.size() != 3 * n) throw Error("unproject_image: output must hold 3 * width * height floats");
+  unproject_pixels(rays_xyz.data(), rays_xyz.data() + 1, rays_xyz.data() + 2, 3, path);
+}
+
+void Camera::unproject_image(std::span<float> x, std::span<float> y, std::span<float> z, InversePath path) const {
+  const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
+  if (x.size() < n || y.size() < n || z.size() < n) {
+    throw Error("unproject_image: each output plane must hold width * height floats");
+  }
+  unproject_pixels(x.data(), y.data(), z.data(), 1, path);
+}
+
+// Pixel i's ray goes to x[i * stride], y[i * stride], z[i * stride].
+void Camera::unproject_pixels(float* x, float* y, float* z, size_t stride, InversePath path) const {
   const size_t w = static_cast<size_t>(params_.width), h = static_cast<size_t>(params_.height);
-  if (rays_xyz.size() != 3 * w * h) throw Error("unproject_image: output must hold 3 * width * height floats");
   const Eigen::Vector2d c = params_.principal_point, inv_scale = params_.pixel_scale.cwiseInverse();
   std::visit(
       [&](const auto& m) {
         cv::parallel_for_(cv::Range(0, static_cast<int>(h)), [&](const cv::Range& rows) {
           for (int row = rows.start; row < rows.end; ++row) {
-            const double y = (row - c.y()) * inv_scale.y();
-            float* out = &rays_xyz[3 * w * static_cast<size_t>(row)];
-            for (size_t col = 0; col < w; ++col, out += 3) {
-              const double x = (double(col) - c.x()) * inv_scale.x();
+            const double v = (row - c.y()) * inv_scale.y();
+            for (size_t col = 0, i = w * static_cast<size_t>(row) * stride; col < w; ++col, i += stride) {
+              const double u = (double(col) - c.x()) * inv_scale.x();
               double ray[3] = {kNaN, kNaN, kNaN};
-              ray_of(m, domain_, table_, x, y, path, ray);
-              out[0] = float(ray[0]), out[1] = float(ray[1]), out[2] = float(ray[2]);
+              ray_of(m, domain_, table_, u, v, path, ray);
+              x[i] = float(ray[0]), y[i] = float(ray[1]), z[i] = float(ray[2]);
             }
           }
         });

@@ -20,8 +20,8 @@ constexpr int kFractions = 1 << kFractionBits;  // 32
 // The interpolation error allowed at construction: one fixed-point step less the
 // float kernel's own tolerance against the exact maps.
 constexpr double kGridTolerancePx = 1.0 / kFractions - 1e-3;
-// A spacing is taken only if the measurement interpolates at least this share of
-// the pixels with a source (else a finer one, whose cells bend less, is faster).
+// A spacing is taken only if it interpolates at least this share of the cells with
+// a source over the measured changes (else a finer one, whose cells bend less, is faster).
 constexpr double kMinInterpolatedShare = 0.8;
 // Floats past a row's end in the row buffers: interpolation writes whole cells,
 // and the spacing-4 loop whole vectors of them.
@@ -265,30 +265,12 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
   }
   constexpr int kRowStep = 3;
   const int rows = (h + kRowStep - 1) / kRowStep;  // measured rows v = r kRowStep
-  // The per-pixel float maps of the measured rows (only those), once for every candidate spacing.
-  std::vector<std::vector<float>> ref_x(changes.size()), ref_y(changes.size());
-  std::vector<std::vector<unsigned char>> ref_in(changes.size());
-  const std::size_t stride = std::size_t(w);
-  for (std::size_t c = 0; c < changes.size(); ++c) {
-    const auto& [change, prior] = changes[c];
-    const RangeKernel kernel = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false);
-    const PoseParams pose = pose_params(change);
-    ref_x[c].resize(stride * std::size_t(rows));
-    ref_y[c].resize(stride * std::size_t(rows));
-    ref_in[c].resize(stride * std::size_t(rows));
-    cv::parallel_for_(cv::Range(0, rows), [&, c](const cv::Range& range) {
-      for (int r = range.start; r < range.end; ++r) {
-        // Row v's rays from its first pixel on, so the kernel writes measured row r.
-        const std::size_t ray = std::size_t(r * kRowStep) * stride, out = std::size_t(r) * stride;
-        kernel(pixel_rays.ptr<float>(0) + ray, pixel_rays.ptr<float>(1) + ray, pixel_rays.ptr<float>(2) + ray, 0,
-               stride, pose, src, KernelOutput{ref_x[c].data() + out, ref_y[c].data() + out, ref_in[c].data() + out});
-      }
-    });
-  }
   float fold_guard = std::numeric_limits<float>::infinity();
   if (source.domain().closed && std::isfinite(source.domain().rho_max)) {
     fold_guard = float(0.95 * source.domain().rho_max * std::max(source.pixel_scale().x(), source.pixel_scale().y()));
   }
+  const std::size_t row_length = std::size_t(w) + kRowPadding;
+  constexpr double kTolerance2 = kGridTolerancePx * kGridTolerancePx;
   for (const int s : {16, 8, 4, 2}) {
     auto plan = std::make_shared<GridPlan>();
     plan->spacing = s;
@@ -296,51 +278,69 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
     plan->max_rotation_rad = max_angle + 1e-9;
     plan->max_translation = max_translation + 1e-9;
     plan->fold_guard_radius = fold_guard;
-    // Over the changes measured so far: the worst squared error of the interpolated
-    // pixels, how many pixels have a source and how many of those were interpolated
-    // (each row stripe counts its own, merged under the lock).
+    // First the share of interpolated cells, from the nodes alone: of the cells with a
+    // corner inside the source image, over all the changes.
+    std::vector<GridChange> prepared;
+    long cells_interpolated = 0, cells_with_source = 0;
+    const std::size_t nu = std::size_t(plan->nodes_u), cells_u = nu - 1;
+    for (const auto& [change, prior] : changes) {
+      std::optional<GridChange> measured = prepare(*plan, src, change, prior);
+      if (!measured) return nullptr;  // not reached: the plan's range covers its own changes
+      const GridChange& p = prepared.emplace_back(std::move(*measured));
+      for (std::size_t j = 0; j + 1 < std::size_t(plan->nodes_v); ++j) {
+        for (std::size_t i = 0; i < cells_u; ++i) {
+          const std::size_t a = j * nu + i, b = a + nu;
+          const int inside = p.nodes.valid[a] + p.nodes.valid[a + 1] + p.nodes.valid[b] + p.nodes.valid[b + 1];
+          cells_with_source += inside > 0;
+          cells_interpolated += p.ok[j * cells_u + i] && inside == 4;
+        }
+      }
+    }
+    if (double(cells_interpolated) < kMinInterpolatedShare * double(cells_with_source)) continue;
+    // Then the error: the worst squared error of the interpolated pixels (NaN: one
+    // without a source) against the per-pixel float map of the measured rows, which
+    // is computed where it is compared (8 changes' maps would be 40 MB at 1280 x 966).
+    // Each row stripe keeps its own worst, merged under the lock; stripes stop once
+    // the spacing has failed.
+    const int cells = (w + s - 1) / s;
     double worst2 = 0;
-    long interpolated = 0, with_source = 0;
-    NodeMaps nodes;
+    std::atomic<bool> failed{false};
     std::mutex merge;
-    for (std::size_t c = 0; c < changes.size() && worst2 <= kGridTolerancePx * kGridTolerancePx; ++c) {
-      const auto& [change, prior] = changes[c];
-      node_maps(*plan, src, pose_params(change),
-                select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false), &nodes);
-      const std::vector<unsigned char> ok = cells_ok(*plan, src, nodes);
-      cv::parallel_for_(cv::Range(0, rows), [&, c](const cv::Range& range) {
-        std::vector<float> x(stride + kRowPadding), y(stride + kRowPadding);
+    for (std::size_t c = 0; c < prepared.size() && !failed; ++c) {
+      const GridChange& change = prepared[c];
+      cv::parallel_for_(cv::Range(0, rows), [&](const cv::Range& range) {
+        std::vector<float> x(row_length), y(row_length), exact_x(row_length), exact_y(row_length);
+        std::vector<unsigned char> exact_in(row_length);
         RowScratch scratch(*plan);
         float stripe_worst2 = 0;
-        long stripe_interpolated = 0, stripe_with_source = 0;
-        for (int r = range.start; r < range.end; ++r) {
+        for (int r = range.start; r < range.end && !failed.load(std::memory_order_relaxed); ++r) {
           const int v = r * kRowStep;
-          interpolate_row(*plan, nodes, v, w, x.data(), y.data(), &scratch);
-          const unsigned char* ok_row = ok.data() + std::size_t(v / s) * std::size_t(plan->nodes_u - 1);
-          const std::size_t row = std::size_t(r) * stride;
-          for (int u = 0; u < w; ++u) {
-            if (!ref_in[c][row + std::size_t(u)]) continue;
-            ++stripe_with_source;
-            if (!ok_row[u / s]) continue;  // computed per pixel
-            ++stripe_interpolated;
-            const float dx = x[std::size_t(u)] - ref_x[c][row + std::size_t(u)];
-            const float dy = y[std::size_t(u)] - ref_y[c][row + std::size_t(u)];
-            // NaN (an interpolated pixel without a source) must fail: not max(), which drops it.
-            const float e2 = dx * dx + dy * dy;
-            stripe_worst2 = e2 <= stripe_worst2 ? stripe_worst2 : e2;
+          const std::size_t ray = std::size_t(v) * std::size_t(w);
+          change.geometric(pixel_rays.ptr<float>(0) + ray, pixel_rays.ptr<float>(1) + ray,
+                           pixel_rays.ptr<float>(2) + ray, 0, std::size_t(w), change.pose, src,
+                           KernelOutput{exact_x.data(), exact_y.data(), exact_in.data()});
+          interpolate_row(*plan, change.nodes, v, w, x.data(), y.data(), &scratch);
+          const unsigned char* ok_row = change.ok.data() + std::size_t(v / s) * cells_u;
+          for (int i = 0; i < cells; ++i) {
+            if (!ok_row[i]) continue;  // computed per pixel
+            for (int u = i * s, end = std::min(w, (i + 1) * s); u < end; ++u) {
+              const float dx = x[std::size_t(u)] - exact_x[std::size_t(u)];
+              const float dy = y[std::size_t(u)] - exact_y[std::size_t(u)];
+              // NaN must fail: not max(), which drops it.
+              const float e2 = exact_in[std::size_t(u)] ? dx * dx + dy * dy : 0.0f;
+              stripe_worst2 = e2 <= stripe_worst2 ? stripe_worst2 : e2;
+            }
           }
+          if (!(stripe_worst2 <= kTolerance2)) failed = true;
         }
         const std::lock_guard lock(merge);
         worst2 = std::isnan(worst2) || std::isnan(stripe_worst2) ? std::numeric_limits<double>::quiet_NaN()
                                                                  : std::max(worst2, double(stripe_worst2));
-        interpolated += stripe_interpolated;
-        with_source += stripe_with_source;
       });
     }
-    const double worst = std::sqrt(worst2);
-    // The largest spacing that keeps the error and leaves most pixels to the interpolation.
-    if (worst <= kGridTolerancePx && double(interpolated) >= kMinInterpolatedShare * double(with_source)) {
-      plan->measured_error_px = worst;
+    // The largest spacing that keeps the error and leaves most cells to the interpolation.
+    if (!failed && worst2 <= kTolerance2) {
+      plan->measured_error_px = std::sqrt(worst2);
       return plan;
     }
   }

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -114,6 +115,10 @@ class Camera {
                  std::span<std::uint8_t> valid = {}, InversePath path = InversePath::robust) const;
   // Unit rays of every pixel centre, row-major, W*H*3 floats (x, y, z); NaN where invalid.
   void unproject_image(std::span<float> rays_xyz, InversePath path = InversePath::table) const;
+  // The same as three planes (x, y and z of every pixel centre, row-major), each of
+  // at least W*H floats; what lies past W*H is left as it is.
+  void unproject_image(std::span<float> x, std::span<float> y, std::span<float> z,
+                       InversePath path = InversePath::table) const;
 
   // Angular coverage of the image (degrees) through the principal point: theta of
   // the two opposite image borders added (borders at -0.5 and W - 0.5 / H - 0.5),
@@ -124,6 +129,8 @@ class Camera {
   FieldOfView field_of_view_deg() const;
 
  private:
+  void unproject_pixels(float* x, float* y, float* z, std::size_t stride, InversePath path) const;
+
   CameraParameters params_;
   ValidDomain domain_;
   InverseTable table_;
