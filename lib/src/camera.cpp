@@ -124,6 +124,32 @@ void parallel_chunks(size_t n, const Body& body) {
   });
 }
 
+// Every pixel centre's ray, pixel i's to x[i * kStride], y[i * kStride], z[i * kStride]:
+// interleaved (kStride 3) or in planes (1).
+template <std::size_t kStride>
+void unproject_pixels(const CameraParameters& params, const ValidDomain& domain, const InverseTable& table, float* x,
+                      float* y, float* z, InversePath path) {
+  const size_t w = static_cast<size_t>(params.width), h = static_cast<size_t>(params.height);
+  const Eigen::Vector2d c = params.principal_point, inv_scale = params.pixel_scale.cwiseInverse();
+  std::visit(
+      [&](const auto& m) {
+        cv::parallel_for_(cv::Range(0, static_cast<int>(h)), [&](const cv::Range& rows) {
+          for (int row = rows.start; row < rows.end; ++row) {
+            const double v = (row - c.y()) * inv_scale.y();
+            const size_t first = w * static_cast<size_t>(row);
+            for (size_t col = 0; col < w; ++col) {
+              const double u = (double(col) - c.x()) * inv_scale.x();
+              double ray[3] = {kNaN, kNaN, kNaN};
+              ray_of(m, domain, table, u, v, path, ray);
+              const size_t i = (first + col) * kStride;
+              x[i] = float(ray[0]), y[i] = float(ray[1]), z[i] = float(ray[2]);
+            }
+          }
+        });
+      },
+      params.model);
+}
+
 }  // namespace
 
 CameraParameters resized(const CameraParameters& camera, int width, int height) {
@@ -249,7 +275,7 @@ void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen:
 void Camera::unproject_image(std::span<float> rays_xyz, InversePath path) const {
   const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
   if (rays_xyz.size() != 3 * n) throw Error("unproject_image: output must hold 3 * width * height floats");
-  unproject_pixels(rays_xyz.data(), rays_xyz.data() + 1, rays_xyz.data() + 2, 3, path);
+  unproject_pixels<3>(params_, domain_, table_, rays_xyz.data(), rays_xyz.data() + 1, rays_xyz.data() + 2, path);
 }
 
 void Camera::unproject_image(std::span<float> x, std::span<float> y, std::span<float> z, InversePath path) const {
@@ -257,28 +283,7 @@ void Camera::unproject_image(std::span<float> x, std::span<float> y, std::span<f
   if (x.size() < n || y.size() < n || z.size() < n) {
     throw Error("unproject_image: each output plane must hold width * height floats");
   }
-  unproject_pixels(x.data(), y.data(), z.data(), 1, path);
-}
-
-// Pixel i's ray goes to x[i * stride], y[i * stride], z[i * stride].
-void Camera::unproject_pixels(float* x, float* y, float* z, size_t stride, InversePath path) const {
-  const size_t w = static_cast<size_t>(params_.width), h = static_cast<size_t>(params_.height);
-  const Eigen::Vector2d c = params_.principal_point, inv_scale = params_.pixel_scale.cwiseInverse();
-  std::visit(
-      [&](const auto& m) {
-        cv::parallel_for_(cv::Range(0, static_cast<int>(h)), [&](const cv::Range& rows) {
-          for (int row = rows.start; row < rows.end; ++row) {
-            const double v = (row - c.y()) * inv_scale.y();
-            for (size_t col = 0, i = w * static_cast<size_t>(row) * stride; col < w; ++col, i += stride) {
-              const double u = (double(col) - c.x()) * inv_scale.x();
-              double ray[3] = {kNaN, kNaN, kNaN};
-              ray_of(m, domain_, table_, u, v, path, ray);
-              x[i] = float(ray[0]), y[i] = float(ray[1]), z[i] = float(ray[2]);
-            }
-          }
-        });
-      },
-      params_.model);
+  unproject_pixels<1>(params_, domain_, table_, x.data(), y.data(), z.data(), path);
 }
 
 Camera::FieldOfView Camera::field_of_view_deg() const {

@@ -7,7 +7,6 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -129,8 +128,6 @@ class Camera {
   FieldOfView field_of_view_deg() const;
 
  private:
-  void unproject_pixels(float* x, float* y, float* z, std::size_t stride, InversePath path) const;
-
   CameraParameters params_;
   ValidDomain domain_;
   InverseTable table_;
