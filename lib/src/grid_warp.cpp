@@ -378,8 +378,9 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
     std::vector<float> x(row_length), y(row_length);
     std::vector<unsigned char> in(row_length);
     RowScratch scratch(plan);
-    // One row more than the tile's: bilinear_8u reads whole vectors past a row's end.
-    cv::Mat fixed(kTileRows + 1, w, CV_16SC2), fractions(kTileRows + 1, w, CV_16UC1);
+    // Rows past the tile's for 8 pixels: bilinear_8u reads whole vectors past a row's end.
+    const int spare_rows = (8 + w - 1) / w;
+    cv::Mat fixed(kTileRows + spare_rows, w, CV_16SC2), fractions(kTileRows + spare_rows, w, CV_16UC1);
     cv::Mat nearest(kTileRows, w, CV_16SC2);
     for (int tile = range.start; tile < range.end; ++tile) {
       const int r0 = tile * kTileRows, r1 = std::min(h, r0 + kTileRows);
