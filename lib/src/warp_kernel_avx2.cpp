@@ -34,7 +34,7 @@ namespace {
 // A row is done in chunks, in two passes: first, 8 pixels per step, each pixel's
 // two row pointers and its weights; then the taps, without a branch (a loop doing
 // both per pixel spent most of its instructions on scalar address arithmetic,
-// branches and weight broadcasts: 14 % slower per sample in all). Pixels without a
+// branches and weight broadcasts; two passes are 14 % faster per sample). Pixels without a
 // source point at a block of the fill value, which any weights reproduce. One
 // pixel per 128-bit lane: pshufb pairs the two columns of each channel, pmaddubsw
 // weighs them across (at most 255 * 32 per 16 bits), pmaddwd weighs the two rows
