@@ -113,8 +113,9 @@ class ViewpointWarp {
                Sampling sampling = Sampling::grid) const;
   // The grid's node spacing (px) and its measured worst interpolation error (px)
   // against the per-pixel float map; 0 and 0 where there is no grid (no float
-  // kernel, or no spacing from 16 down to 2 px met 1/32 px): augment() then
-  // samples per pixel whatever it is asked.
+  // kernel, or no spacing from 16 down to 2 px interpolates 80 % of the cells within
+  // 1/32 px; docs/augmentation.md): augment() then samples per pixel whatever it is
+  // asked, as it does for changes past the measured ones.
   int grid_spacing() const;
   double grid_error_px() const;
   // The grid path's source coordinates as geometric maps (float, before cv::remap's
