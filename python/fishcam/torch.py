@@ -4,6 +4,7 @@ and the DataLoader worker set-up.
     dataset = fishcam.torch.WoodScapeDataset(root, transform=fishcam.torch.RandomViewpoint(preset="train"))
     loader = torch.utils.data.DataLoader(dataset, batch_size=8, num_workers=2,
                                          worker_init_fn=fishcam.torch.worker_init_fn,
+                                         persistent_workers=True,  # workers keep their warps
                                          generator=torch.Generator().manual_seed(0))
 
 Seeding: without a dataset seed, each sample's change comes from torch's generator
