@@ -94,6 +94,13 @@ void bilinear_8u_row(const BilinearSource& src, const short* fixed, const unsign
         _mm256_store_si256(reinterpret_cast<__m256i*>(bottoms + j),
                            _mm256_blendv_epi8(_mm256_add_epi64(base, _mm256_cvtepu32_epi64(b)), fill_pointer, to_fill));
       }
+      // The taps are waited for in the second pass (the loop is bound by their
+      // latency there): ask for them now. Every other pixel's rows suffice, as
+      // neighbours mostly share cache lines; all eight cost more than they saved.
+      for (int lane = 0; lane < 8; lane += 2) {
+        _mm_prefetch(reinterpret_cast<const char*>(tops[8 * k + lane]), _MM_HINT_T0);
+        _mm_prefetch(reinterpret_cast<const char*>(bottoms[8 * k + lane]), _MM_HINT_T0);
+      }
       // The image's last pixels: their taps are copied from inside it.
       const int lanes = n - 8 * k < 8 ? n - 8 * k : 8;
       const int past_end = _mm256_movemask_ps(_mm256_castsi256_ps(
