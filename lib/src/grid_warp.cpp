@@ -105,8 +105,6 @@ void interpolate_row(const GridPlan& plan, const NodeMaps& nodes, int v, int wid
   }
 }
 
-// The source coordinates of output row v: interpolated in interpolated cells, by
-// the kernel per pixel elsewhere.
 // What one change needs before any row (prepare() below): its pose, the kernel, the
 // nodes and which cells are interpolated.
 struct GridChange {
@@ -116,6 +114,8 @@ struct GridChange {
   std::vector<unsigned char> ok;
 };
 
+// The source coordinates of output row v: interpolated in interpolated cells, by
+// the kernel per pixel elsewhere.
 void grid_row(const GridPlan& plan, const GridChange& change, const SourceParams& src, const cv::Mat& pixel_rays,
               int v, int w, float* x, float* y, unsigned char* in, RowScratch* scratch) {
   interpolate_row(plan, change.nodes, v, w, x, y, scratch);
@@ -232,12 +232,12 @@ double rotation_angle(const Eigen::Matrix3d& r) {
   return std::acos(std::clamp((r.trace() - 1) / 2, -1.0, 1.0));
 }
 
-// nullopt when the change lies outside what the plan measured.
-std::optional<GridChange> prepare(const GridPlan& plan, const SourceParams& src, const ViewpointChange& change,
-                                  DepthPrior prior) {
-  if (rotation_angle(change.rotation) > plan.max_rotation_rad || change.translation.norm() > plan.max_translation) {
-    return std::nullopt;
-  }
+// Whether the plan's measurement covers the change (else: the per-pixel path).
+bool measured(const GridPlan& plan, const ViewpointChange& change) {
+  return rotation_angle(change.rotation) <= plan.max_rotation_rad && change.translation.norm() <= plan.max_translation;
+}
+
+GridChange prepare(const GridPlan& plan, const SourceParams& src, const ViewpointChange& change, DepthPrior prior) {
   GridChange out;
   out.pose = pose_params(change);
   out.geometric = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false);
@@ -284,9 +284,7 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
     long cells_interpolated = 0, cells_with_source = 0;
     const std::size_t nu = std::size_t(plan->nodes_u), cells_u = nu - 1;
     for (const auto& [change, prior] : changes) {
-      std::optional<GridChange> measured = prepare(*plan, src, change, prior);
-      if (!measured) return nullptr;  // not reached: the plan's range covers its own changes
-      const GridChange& p = prepared.emplace_back(std::move(*measured));
+      const GridChange& p = prepared.emplace_back(prepare(*plan, src, change, prior));
       for (std::size_t j = 0; j + 1 < std::size_t(plan->nodes_v); ++j) {
         for (std::size_t i = 0; i < cells_u; ++i) {
           const std::size_t a = j * nu + i, b = a + nu;
@@ -349,8 +347,8 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
 
 bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
                   const ViewpointChange& change, DepthPrior prior, const AugmentIO& io) {
-  const std::optional<GridChange> prepared = prepare(plan, src, change, prior);
-  if (!prepared) return false;
+  if (!measured(plan, change)) return false;
+  const GridChange prepared = prepare(plan, src, change, prior);
   const int w = target.width(), h = target.height();
   if (io.image) io.out_image->create(h, w, io.image->type());
   if (io.labels) io.out_labels->create(h, w, io.labels->type());
@@ -385,7 +383,7 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
     for (int tile = range.start; tile < range.end; ++tile) {
       const int r0 = tile * kTileRows, r1 = std::min(h, r0 + kTileRows);
       for (int v = r0; v < r1; ++v) {
-        grid_row(plan, *prepared, src, pixel_rays, v, w, x.data(), y.data(), in.data(), &scratch);
+        grid_row(plan, prepared, src, pixel_rays, v, w, x.data(), y.data(), in.data(), &scratch);
         loops.to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
                        fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
                        io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
@@ -419,8 +417,8 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
 
 bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
                const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) {
-  const std::optional<GridChange> prepared = prepare(plan, src, change, prior);
-  if (!prepared) return false;
+  if (!measured(plan, change)) return false;
+  const GridChange prepared = prepare(plan, src, change, prior);
   const int w = target.width(), h = target.height();
   maps->kind = MapKind::geometric;
   maps->source_size = cv::Size(int(src.width), int(src.height));
@@ -436,7 +434,7 @@ bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pix
     RowScratch scratch(plan);
     long local = 0;
     for (int v = range.start; v < range.end; ++v) {
-      grid_row(plan, *prepared, src, pixel_rays, v, w, row_x.data(), row_y.data(), in.data(), &scratch);
+      grid_row(plan, prepared, src, pixel_rays, v, w, row_x.data(), row_y.data(), in.data(), &scratch);
       float* x = maps->map_x.ptr<float>(v);
       float* y = maps->map_y.ptr<float>(v);
       std::copy(row_x.begin(), row_x.begin() + w, x);
