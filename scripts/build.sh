@@ -3,5 +3,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)"
+/usr/bin/cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+/usr/bin/cmake --build build -j "$(nproc)"

@@ -16,10 +16,10 @@ harnesses=("$@")
 failed=()
 formats=(woodscape fishcam mrcal opencv kalibr basalt colmap ros camodocal orbslam3)
 [ ${#harnesses[@]} -eq 0 ] && harnesses=(camera "${formats[@]/#/camera_}" corners npy stdin_records correspondence_csv)
-cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+/usr/bin/cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DFISHCAM_FUZZ=ON -DFISHCAM_BUILD_PYTHON=OFF -DFISHCAM_BUILD_TOOLS=OFF \
   -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer" >/dev/null
-cmake --build build-fuzz -j "$(nproc)" --target $(printf 'fuzz_%s ' "${harnesses[@]}")
+/usr/bin/cmake --build build-fuzz -j "$(nproc)" --target $(printf 'fuzz_%s ' "${harnesses[@]}")
 for h in "${harnesses[@]}"; do
   corpus=build-fuzz/corpus/$h findings=build-fuzz/findings/$h
   mkdir -p "$corpus" "$findings"

@@ -37,11 +37,11 @@ build=build-asan
 # (Eigen's BDCSVD). Telling our objects what Ceres assumes makes both sides agree;
 # Eigen asserts the alignment it then relies on (this build keeps assertions on).
 sanitize="-fsanitize=address,undefined"
-cmake -S . -B "$build" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DFISHCAM_BUILD_PYTHON=OFF \
+/usr/bin/cmake -S . -B "$build" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DFISHCAM_BUILD_PYTHON=OFF \
   -DCMAKE_UNITY_BUILD=ON -DFISHCAM_TEST_TIMEOUT=1200 -DFISHCAM_TOOLS_CXX_FLAGS=-O0 \
   -DCMAKE_CXX_FLAGS="-O1 $sanitize -fno-sanitize-recover=undefined -fno-omit-frame-pointer -DEIGEN_MALLOC_ALREADY_ALIGNED=1" \
   -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" >/dev/null
-cmake --build "$build" -j "$(nproc)"
+/usr/bin/cmake --build "$build" -j "$(nproc)"
 excluded='install_and_find_package|python_tests'
 if [ "$mode" = ci ]; then
   # The numeric sweeps: every model or many poses against an exact reference or
@@ -54,4 +54,4 @@ if [ "$mode" = ci ]; then
   excluded+='|Scene\.TranslationShowsWhatEachDepthPriorCosts|augmentation_baseline_kernel_sweeps'
 fi
 ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ctest --test-dir "$build" --output-on-failure -j "$(nproc)" -E "^($excluded)\$"
+  /usr/bin/ctest --test-dir "$build" --output-on-failure -j "$(nproc)" -E "^($excluded)\$"

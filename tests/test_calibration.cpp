@@ -1,6 +1,7 @@
 // Chessboard calibration: exact recovery without noise, honest uncertainties with
 // noise, mrcal's corners format, detection, and bad input.
 #include <opencv2/imgcodecs.hpp>
+#include <algorithm>
 #include <opencv2/imgproc.hpp>
 
 #include "fishcam/calibration.hpp"
@@ -121,6 +122,77 @@ TEST(Calibration, DegenerateDataIsReported) {
   const auto result = calibrate(centre, kBoard, 1280, 966, {"polynomial", 4});
   ASSERT_FALSE(result.warnings.empty());
   EXPECT_NE(result.warnings[0].find("cover only"), std::string::npos);
+}
+
+// A 9x6 board given as --board 6x9 has the same corner count, so the corners file
+// reads; before this check the solve wrote a camera with cx = -1932 and exit 0.
+TEST(Calibration, ATransposedBoardIsRefusedNamingTheFix) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  const BoardSpec board{9, 6, 0.1}, transposed{6, 9, 0.1};
+  const auto boards = synthesize_boards(camera, board, 20, 0.3, 8).observations;
+  for (const char* model : {"polynomial", "equidistant", "kannala-brandt", "double-sphere"}) {
+    try {
+      calibrate(boards, transposed, 1280, 966, parse_model_spec(model));
+      ADD_FAILURE() << model << ": a transposed board was calibrated";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("ordered as a 9x6 board, not 6x9 (rows of 9): pass --board 9x6"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // Corners in no grid order at all.
+  auto scrambled = boards;
+  std::mt19937 random(1);
+  for (auto& o : scrambled) std::shuffle(o.corners.begin(), o.corners.end(), random);
+  try {
+    calibrate(scrambled, board, 1280, 966, {"polynomial", 4});
+    ADD_FAILURE() << "scrambled corners were calibrated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not in the board order of a 9x6 board"), std::string::npos) << e.what();
+  }
+  // The right board still calibrates.
+  EXPECT_LT(calibrate(boards, board, 1280, 966, {"polynomial", 4}).rms_px, 0.6);
+}
+
+// Through the program: refused in one line, exit non-zero, nothing written.
+TEST(Calibration, TheProgramWritesNothingForATransposedBoard) {
+  const auto dir = test::scratch_dir("transposed_cli");
+  auto r = test::run_fishcam("synth-corners " + test::quoted(test::data_path("woodscape_front.json")) +
+                             " --boards 20 --noise 0.2 --seed 3 --board 9x6 --out " + test::quoted(dir / "c.vnl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* model : {"polynomial", "equidistant"}) {
+    for (const char* json : {"", " --json"}) {
+      r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                            " --board 6x9 --spacing 0.1 --imagersize 1280x966 --model " + model + json + " --out " +
+                            test::quoted(dir / "cal.json"));
+      EXPECT_NE(r.exit_code, 0) << model;
+      EXPECT_NE(r.err.find("pass --board 9x6"), std::string::npos) << r.err;
+      EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+      EXPECT_TRUE(r.out.empty()) << r.out;
+      EXPECT_FALSE(std::filesystem::exists(dir / "cal.json"));
+    }
+  }
+  r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                        " --board 9x6 --spacing 0.1 --imagersize 1280x966 --model polynomial --out " +
+                        test::quoted(dir / "cal.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// The real photos (../shared): the detected corners, given transposed, are refused too.
+TEST(Calibration, ARealTransposedBoardIsRefused) {
+  const std::filesystem::path photos = std::filesystem::path(FISHCAM_SHARED_DIR) / "data" / "calibration";
+  if (!std::filesystem::exists(photos / "right1.jpg")) GTEST_SKIP() << "no ../shared/data/calibration";
+  const auto dir = test::scratch_dir("transposed_real");
+  std::string images;
+  for (int i = 1; i <= 8; ++i) images += " " + test::quoted(photos / ("right" + std::to_string(i) + ".jpg"));
+  auto r = test::run_fishcam("detect-corners" + images + " --board 9x6 --out " + test::quoted(dir / "c.vnl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                        " --board 6x9 --spacing 0.1 --imagersize 960x600 --model kannala-brandt --out " +
+                        test::quoted(dir / "cal.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("pass --board 9x6"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "cal.json"));
 }
 
 // The same corners through mrcal-calibrate-cameras (LENSMODEL_STEREOGRAPHIC, no board

@@ -3,6 +3,7 @@
 // Every case: a one-line error naming the option or file, non-zero exit, and no
 // file written or changed.
 #include <opencv2/imgcodecs.hpp>
+#include <sys/stat.h>
 
 #include "test_support.hpp"
 
@@ -121,6 +122,38 @@ TEST_F(CliHostile, DegenerateCalibrationDataIsRefused) {
                      " --board 100000x100000 --spacing 0.1 --imagersize 1280x966 --model equidistant --out " +
                      q("cal.json"),
                  "1000 corners per side");
+}
+
+// Camera files are bounded before they are read: no device, FIFO or huge file is
+// read whole (a FIFO without a writer once hung, /dev/zero grew until memory ran out).
+TEST_F(CliHostile, CameraFilesAreBoundedBeforeReading) {
+  expect_refused("info /dev/zero", "/dev/zero: not a regular file");
+  // Elsewhere: expect_refused reads every file in dir_.
+  const auto special = test::scratch_dir("bounded_reading_special_files");
+  std::filesystem::create_symlink("/dev/zero", special / "zero.json");
+  expect_refused("info " + test::quoted(special / "zero.json"), "not a regular file");
+  ASSERT_EQ(mkfifo((special / "fifo.json").c_str(), 0600), 0);
+  expect_refused("info " + test::quoted(special / "fifo.json"), "fifo.json: not a regular file");
+  test::write_file(dir_ / "huge.yaml", "zz: [" + std::string(17 << 20, ' ') + "]");
+  expect_refused("info " + q("huge.yaml"), "huge.yaml: larger than 16 MiB");
+}
+
+// Nothing is defaulted or chosen silently: a Kalibr camera without its distortion
+// model, coefficients for no model, and a key given twice (which one is meant?).
+TEST_F(CliHostile, AmbiguousCameraFilesAreRefusedNamingTheField) {
+  const std::string camera = "  camera_model: pinhole\n  intrinsics: [300, 300, 320, 240]\n  resolution: [640, 480]\n";
+  test::write_file(dir_ / "no_model.yaml", "cam0:\n" + camera + "  distortion_coeffs: [0.1, 0.05, 0.01, 0.002]\n");
+  expect_refused("info " + q("no_model.yaml"), "distortion_model");
+  test::write_file(dir_ / "none.yaml",
+                   "cam0:\n" + camera + "  distortion_model: none\n  distortion_coeffs: [0.1, 0.05, 0.01, 0.002]\n");
+  expect_refused("info " + q("none.yaml"), "non-zero coefficients with distortion_model none");
+  test::write_file(dir_ / "twice.yaml", "cam0:\n" + camera +
+                                            "  distortion_model: none\n  intrinsics: [600, 600, 320, 240]\n");
+  expect_refused("info " + q("twice.yaml"), "the key 'intrinsics' appears twice");
+  std::string json = test::read_file(test::data_path("equidistant.json"));
+  json.insert(json.find('{') + 1, "\"model\": \"pinhole\",");
+  test::write_file(dir_ / "twice.json", json);
+  expect_refused("info " + q("twice.json"), "the key 'model' appears twice");
 }
 
 TEST_F(CliHostile, UnknownSubcommandsAreNamed) {

@@ -1,11 +1,14 @@
 // fishcam augment-dataset ROOT: every image of a WoodScape-layout dataset, K copies
 // each, with seeded random poses; resumable, never writes inside ROOT.
+#include <fcntl.h>
 #include <opencv2/imgcodecs.hpp>
+#include <sys/file.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
+
 #include <cstdio>
-#include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 #include <map>
 #include <memory>
@@ -26,16 +29,6 @@ bool is_image(const fs::path& p) {
   std::string ext = p.extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
-}
-
-bool inside(const fs::path& path, const fs::path& root) {
-  const fs::path p = fs::weakly_canonical(path), r = fs::weakly_canonical(root);
-  auto pi = p.begin();
-  for (auto ri = r.begin(); ri != r.end(); ++ri, ++pi) {
-    if (ri->empty()) continue;  // a trailing separator
-    if (pi == p.end() || *pi != *ri) return false;
-  }
-  return true;
 }
 
 class Progress {
@@ -77,6 +70,78 @@ class WarpCache {
  private:
   static constexpr std::size_t kLimit = 64;
   std::map<std::string, std::shared_ptr<const ViewpointWarp>> warps_;
+};
+
+// A preset's manifest (manifest.jsonl, or manifest-K-of-N.jsonl for a shard),
+// locked for the whole run: a second run on the same manifest (the same --out and
+// --shard) is refused instead of interleaving duplicate lines; shards have their
+// own manifests and run in parallel. The lock goes with the process, killed or not.
+class Manifest {
+ public:
+  Manifest(const fs::path& path, const std::string& method, Progress& progress) : path_(path) {
+    fd_ = open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd_ < 0) throw Error(path_for_message(path) + ": cannot write (" + std::strerror(errno) + ")");
+    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      close(fd_);
+      throw Error(path_for_message(path) +
+                  ": another run is writing this manifest (wait for it; parallel runs into one --out need "
+                  "--shard K/N each)");
+    }
+    read_lines(method, progress);
+  }
+  ~Manifest() { close(fd_); }
+  Manifest(const Manifest&) = delete;
+  Manifest& operator=(const Manifest&) = delete;
+
+  bool lists(const std::string& output) const { return listed_.count(output) != 0; }
+  // Appends one line in one write (a kill leaves at most a cut last line, which the
+  // next run drops).
+  void append(const nlohmann::json& line) {
+    const std::string text = line.dump() + "\n";
+    if (write(fd_, text.data(), text.size()) != ssize_t(text.size())) {
+      throw Error(path_for_message(path_) + ": write failed (" + std::strerror(errno) + ")");
+    }
+    listed_.insert(line.at("output").get<std::string>());
+  }
+
+ private:
+  // The lines already there (a resumed run appends only what is new). A last line
+  // cut short (a crash or power loss mid-write) is dropped, and said.
+  void read_lines(const std::string& method, Progress& progress) {
+    std::string content;
+    char buffer[1 << 16];
+    for (ssize_t n; (n = pread(fd_, buffer, sizeof buffer, off_t(content.size()))) != 0;) {
+      if (n < 0) throw Error(path_for_message(path_) + ": cannot read (" + std::strerror(errno) + ")");
+      content.append(buffer, std::size_t(n));
+    }
+    size_t start = 0;
+    while (start < content.size()) {
+      const size_t end = content.find('\n', start);
+      std::string line_method;
+      try {
+        if (end == std::string::npos) throw std::runtime_error("cut");
+        const nlohmann::json entry = nlohmann::json::parse(content.substr(start, end - start));
+        listed_.insert(entry.at("output").get<std::string>());
+        line_method = entry.value("method", "viewpoint");  // manifests before the affine baseline: viewpoint
+      } catch (const std::exception&) {
+        if (end != std::string::npos) throw Error(path_for_message(path_) + ": unreadable line (not written by fishcam?)");
+        progress.report(path_for_message(path_) + ": dropped an incomplete last line (an interrupted run)");
+        if (ftruncate(fd_, off_t(start)) != 0) {
+          throw Error(path_for_message(path_) + ": cannot truncate (" + std::strerror(errno) + ")");
+        }
+        break;
+      }
+      if (line_method != method) {
+        throw Error(path_for_message(path_) + ": written with --method " + quoted_for_message(line_method) +
+                    ", not " + method + " (use another --out)");
+      }
+      start = end + 1;
+    }
+  }
+
+  fs::path path_;
+  int fd_ = -1;
+  std::set<std::string> listed_;
 };
 
 struct Options {
@@ -132,7 +197,7 @@ void register_augment_dataset(CLI::App& app) {
         o->shard.empty() ? "manifest.jsonl"
                          : "manifest-" + std::to_string(shard) + "-of-" + std::to_string(shards) + ".jsonl";
     const fs::path root = o->root, out = o->out;
-    if (inside(out, root)) throw Error(out.string() + ": is inside the dataset " + root.string() + " (never written)");
+    check_output_not_input(out, {root}, true);
     std::vector<PosePreset> presets;
     std::stringstream list(o->presets);
     for (std::string name; std::getline(list, name, ',');) {
@@ -163,56 +228,38 @@ void register_augment_dataset(CLI::App& app) {
     }
 
     Progress progress(images.size() * presets.size());
+    // Every output folder is checked (symlinks inside --out included) and every
+    // manifest locked before anything is written.
+    std::vector<fs::path> preset_dirs;
+    std::vector<std::unique_ptr<Manifest>> manifests;
+    for (const PosePreset& preset : presets) {
+      preset_dirs.push_back(presets.size() > 1 ? out / std::string(preset.name) : out);
+      for (const char* sub : {"", "rgb_images", "semantic_annotations", "semantic_annotations/gtLabels", "calibration"}) {
+        check_output_not_input(preset_dirs.back() / sub, {root}, true);
+      }
+    }
+    for (const fs::path& dir : preset_dirs) {
+      for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
+        fs::create_directories(dir / sub);
+        remove_stale_temporaries(dir / sub);  // of killed runs; parallel runs' stay
+      }
+      manifests.push_back(std::make_unique<Manifest>(dir / manifest_name, o->method, progress));
+    }
     WarpCache warps;
     long written = 0, skipped = 0;
     std::vector<std::string> failures;
-    for (const PosePreset& preset : presets) {
-      const fs::path dir = presets.size() > 1 ? out / std::string(preset.name) : out;
-      for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
-        fs::create_directories(dir / sub);
-        // Temporaries of an interrupted run (never read as data: no reader takes the extension).
-        for (const auto& entry : fs::directory_iterator(dir / sub)) {
-          if (entry.path().extension() == ".fishcam-tmp") fs::remove(entry.path());
-        }
-      }
-      // Lines already in the manifest (a resumed run appends only what is new). A
-      // last line cut short (a crash or power loss mid-write) is dropped, and said.
-      const fs::path manifest_path = dir / manifest_name;
-      std::set<std::string> listed;
-      {
-        std::ifstream in(manifest_path, std::ios::binary);
-        const std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        size_t start = 0, complete = 0;
-        while (start < content.size()) {
-          const size_t end = content.find('\n', start);
-          const std::string line = content.substr(start, end == std::string::npos ? std::string::npos : end - start);
-          std::string method;
-          try {
-            if (end == std::string::npos) throw std::runtime_error("cut");
-            const nlohmann::json entry = nlohmann::json::parse(line);
-            listed.insert(entry.at("output").get<std::string>());
-            method = entry.value("method", "viewpoint");  // manifests before the affine baseline: viewpoint
-          } catch (const std::exception&) {
-            if (end != std::string::npos) {
-              throw Error(manifest_path.string() + ": unreadable line (not written by fishcam?)");
-            }
-            progress.report(manifest_path.string() + ": dropped an incomplete last line (an interrupted run)");
-            fs::resize_file(manifest_path, complete);
-            break;
-          }
-          if (method != o->method) {
-            throw Error(manifest_path.string() + ": written with --method " + quoted_for_message(method) +
-                        ", not " + o->method + " (use another --out)");
-          }
-          start = complete = end + 1;
-        }
-      }
-      std::ofstream manifest(manifest_path, std::ios::app);
-      if (!manifest) throw Error(manifest_path.string() + ": cannot write");
+    for (size_t p = 0; p < presets.size(); ++p) {
+      const PosePreset& preset = presets[p];
+      const fs::path& dir = preset_dirs[p];
+      Manifest& manifest = *manifests[p];
       for (const fs::path& image_path : images) {
         const std::string stem = image_path.stem().string();
         progress.step(stem);
         try {
+          // The manifest is JSON: a name it cannot hold is refused before anything is written.
+          if (!is_valid_utf8(image_path.filename().native())) {
+            throw Error(path_for_message(image_path) + ": the file name is not valid UTF-8 (rename it)");
+          }
           const fs::path label_path = root / "semantic_annotations" / "gtLabels" / (stem + ".png");
           const fs::path calibration_path = root / "calibration" / (stem + ".json");
           std::optional<Camera> camera;
@@ -263,7 +310,7 @@ void register_augment_dataset(CLI::App& app) {
               ++skipped;
             }
             const std::string output = fs::relative(out_image, dir).string();
-            if (!listed.count(output)) {
+            if (!manifest.lists(output)) {
               const auto& r = pose.rotation_deg;
               const auto& t = pose.translation;
               nlohmann::json line{{"image", image_path.filename().string()},
@@ -280,13 +327,11 @@ void register_augment_dataset(CLI::App& app) {
                              {"translation", {t.x(), t.y(), t.z()}},
                              {"depth", to_string(prior)}});
               }
-              manifest << line.dump() << "\n";
-              manifest.flush();
-              listed.insert(output);
+              manifest.append(line);
             }
           }
         } catch (const std::exception& e) {
-          failures.push_back(stem + ": " + e.what());
+          failures.push_back(path_for_message(stem) + ": " + e.what());
           progress.report("skipped " + failures.back());
         }
       }

@@ -104,30 +104,24 @@ std::string encode_image(const std::filesystem::path& path, const cv::Mat& image
 }
 
 void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std::string>& inputs, bool overwrite) {
-  std::error_code ec;
+  std::vector<std::filesystem::path> input_paths(inputs.begin(), inputs.end());
   std::vector<std::filesystem::path> taken;
-  for (const std::string& input : inputs) {
-    if (!input.empty()) taken.push_back(std::filesystem::weakly_canonical(input, ec));
-  }
-  const size_t input_count = taken.size();
   for (const OutputFile& out : outputs) {
     if (out.path.empty()) continue;
-    const std::filesystem::path canonical = std::filesystem::weakly_canonical(out.path, ec);
-    for (size_t i = 0; i < taken.size(); ++i) {
-      if (taken[i] == canonical) {
-        throw Error(out.path.string() + (i < input_count ? ": is also an input (refusing to replace it)"
-                                                         : ": given as more than one output"));
-      }
+    check_output_not_input(out.path, input_paths, false);
+    for (const std::filesystem::path& earlier : taken) {
+      if (is_same_file(out.path, earlier)) throw Error(path_for_message(out.path) + ": given as more than one output");
     }
-    taken.push_back(canonical);
+    taken.push_back(out.path);
     if (out.labels && !lossless_label_format(out.path)) {
-      throw Error(out.path.string() + ": labels need a lossless format (.png, .tif, .pgm)");
+      throw Error(path_for_message(out.path) + ": labels need a lossless format (.png, .tif, .pgm)");
     }
+    std::error_code ec;
     if (!std::filesystem::is_directory(out.path.parent_path().empty() ? "." : out.path.parent_path(), ec)) {
-      throw Error(out.path.string() + ": its folder does not exist");
+      throw Error(path_for_message(out.path) + ": its folder does not exist");
     }
-    if (!overwrite && std::filesystem::exists(out.path, ec)) {
-      throw Error(out.path.string() + ": already exists (refusing to overwrite; use --force)");
+    if (!overwrite && std::filesystem::exists(std::filesystem::symlink_status(out.path, ec))) {
+      throw Error(path_for_message(out.path) + ": already exists (refusing to overwrite; use --force)");
     }
   }
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fishcam/affine.hpp"
+#include "fishcam/atomic_file.hpp"
 #include "fishcam/augmentation.hpp"
 #include "fishcam/camera.hpp"
 #include "fishcam/camera_io.hpp"

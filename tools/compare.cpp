@@ -136,7 +136,7 @@ void register_compare(CLI::App& app) {
   auto* label = cmd->add_option("--label", o->label, "Its label image: label differences are reported for it too");
   label->needs(image);
   cmd->add_option("--out", o->out,
-                  "Folder for the pictures (sphere.png: Fig. 8; displacement-MODEL.png; augmented.png) and the "
+                  "Folder (created) for the pictures (sphere.png: Fig. 8; displacement-MODEL.png; augmented.png) and the "
                   "alternatives as fishcam JSON (MODEL.json)");
   cmd->add_flag("--json", o->json, "Print the results as JSON");
   cmd->add_flag("--force", o->force, "Replace existing files in --out");
@@ -158,8 +158,16 @@ void register_compare(CLI::App& app) {
     }
     // Every output is known before anything is computed: checked first, written together last.
     std::vector<OutputFile> outputs;
+    // Inputs: the camera, the pictures, and the --models entries that are files.
+    std::vector<std::string> inputs{o->camera, o->image, o->label};
+    std::error_code ec;
+    for (const std::string& token : tokens) {
+      if (fs::exists(token, ec)) inputs.push_back(token);
+    }
     if (!o->out.empty()) {
-      if (!fs::is_directory(o->out)) throw Error(o->out + ": no such folder (--out)");
+      check_output_not_input(o->out, {inputs.begin(), inputs.end()}, true);
+      fs::create_directories(o->out, ec);
+      if (ec) throw Error(path_for_message(o->out) + ": cannot create the folder (" + ec.message() + ")");
       outputs.push_back({fs::path(o->out) / "sphere.png"});
       outputs.push_back({fs::path(o->out) / "augmented.png"});
       for (const std::string& name : names) {
@@ -167,7 +175,7 @@ void register_compare(CLI::App& app) {
         outputs.push_back({fs::path(o->out) / (name + ".json")});
       }
     }
-    check_outputs(outputs, {o->camera, o->image, o->label}, o->force);
+    check_outputs(outputs, inputs, o->force);
     std::vector<AlternativeModel> alternatives;
     for (const std::string& token : tokens) alternatives.push_back(alternative_model(camera, token, o->method));
 

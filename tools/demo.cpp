@@ -49,8 +49,9 @@ void register_demo(CLI::App& app) {
       ->capture_default_str();
   cmd->callback([out_dir] {
     const std::filesystem::path dir = *out_dir;
-    std::filesystem::create_directories(dir);
     const std::filesystem::path camera_path = bundled_data("woodscape_front.json");
+    check_output_not_input(dir, {camera_path}, true);
+    std::filesystem::create_directories(dir);
     const Camera camera = read_camera(camera_path);
     const SceneRender scene = render_street_scene(camera, *camera.parameters().pose);
     const ViewpointWarp warp(camera);

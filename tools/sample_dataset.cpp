@@ -39,6 +39,7 @@ void register_sample_dataset(CLI::App& app) {
       camera = Camera(resized(camera.parameters(), width, height));
     }
     const std::filesystem::path out = o->out;
+    check_output_not_input(out, {camera_path}, true);
     for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
       std::filesystem::create_directories(out / sub);
     }

@@ -184,6 +184,80 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
   return summary;
 }
 
+// How far corners, read as a cols x rows grid in board order, are from a grid: the
+// median over the corners of the larger of their second differences along the row
+// and along the column, over the mean step. A lens bends a board smoothly, so
+// neighbouring steps along a row or a column stay alike (well under 0.25 even at a
+// fisheye's rim); corners read with the wrong row length jump back and forth
+// between rows along the columns and give 1 or more.
+double grid_disorder(const std::vector<Eigen::Vector2d>& corners, int cols, int rows) {
+  const auto at = [&](int i, int j) { return corners[size_t(j * cols + i)]; };
+  const auto bend = [](const Eigen::Vector2d& before, const Eigen::Vector2d& here, const Eigen::Vector2d& after) {
+    const double step = ((here - before).norm() + (after - here).norm()) / 2;
+    return step > 0 ? (after - 2 * here + before).norm() / step : std::numeric_limits<double>::infinity();
+  };
+  std::vector<double> points;
+  for (int j = 0; j < rows; ++j) {
+    for (int i = 0; i < cols; ++i) {
+      double worst = -1;
+      if (i > 0 && i + 1 < cols) worst = std::max(worst, bend(at(i - 1, j), at(i, j), at(i + 1, j)));
+      if (j > 0 && j + 1 < rows) worst = std::max(worst, bend(at(i, j - 1), at(i, j), at(i, j + 1)));
+      if (worst >= 0) points.push_back(worst);
+    }
+  }
+  if (points.empty()) return 0;  // a 2 x 2 board: nothing to tell
+  std::nth_element(points.begin(), points.begin() + long(points.size() / 2), points.end());
+  return points[points.size() / 2];
+}
+
+double median_grid_disorder(const std::vector<const BoardObservation*>& boards, int cols, int rows) {
+  std::vector<double> disorder;
+  for (const auto* b : boards) disorder.push_back(grid_disorder(b->corners, cols, rows));
+  std::nth_element(disorder.begin(), disorder.begin() + long(disorder.size() / 2), disorder.end());
+  return disorder[disorder.size() / 2];
+}
+
+// Refuses corners whose order contradicts the board: most often a W x H board given
+// as --board HxW, which has the same corner count and so reads without complaint.
+void check_board_order(const std::vector<const BoardObservation*>& boards, const BoardSpec& board) {
+  constexpr double kOrdered = 0.25, kDisordered = 0.5;
+  const double given = median_grid_disorder(boards, board.cols, board.rows);
+  if (given <= kDisordered) return;
+  const std::string as_given = std::to_string(board.cols) + "x" + std::to_string(board.rows);
+  const std::string swapped = std::to_string(board.rows) + "x" + std::to_string(board.cols);
+  if (board.cols != board.rows && median_grid_disorder(boards, board.rows, board.cols) <= kOrdered) {
+    throw Error("calibrate: the corners are ordered as a " + swapped + " board, not " + as_given +
+                " (rows of " + std::to_string(board.rows) + "): pass --board " + swapped);
+  }
+  char measure[32];
+  std::snprintf(measure, sizeof measure, "%.2f", given);
+  throw Error("calibrate: the corners are not in the board order of a " + as_given +
+              " board (median cell distortion " + measure +
+              ", a grid gives < 0.25): check --board and that each image lists its corners row by row");
+}
+
+// A solve whose result cannot be right is an error, not a camera.
+void check_solution(const CalibrationResult& r, int width, int height, const std::string& model) {
+  const std::string what = "calibrate (" + model + "): ";
+  const auto& p = r.camera.principal_point;
+  if (!std::isfinite(r.rms_px) ||
+      !std::all_of(r.parameters.begin(), r.parameters.end(), [](double v) { return std::isfinite(v); })) {
+    throw Error(what + "the solve ended without a finite cost or parameters (check --board, --imagersize and the "
+                       "corners)");
+  }
+  char text[160];
+  if (!(p.x() >= 0 && p.x() <= width - 1 && p.y() >= 0 && p.y() <= height - 1)) {
+    std::snprintf(text, sizeof text, "the principal point (%.1f, %.1f) lies outside the %dx%d image", p.x(), p.y(),
+                  width, height);
+    throw Error(what + text + " (check --imagersize and --board; the data do not determine this model)");
+  }
+  const double ay = r.camera.pixel_scale.y();
+  if (!(ay >= 0.5 && ay <= 2.0)) {
+    std::snprintf(text, sizeof text, "the pixel aspect a_y = %.3g is outside [0.5, 2]", ay);
+    throw Error(what + text + " (check --imagersize and --board; the data do not determine this model)");
+  }
+}
+
 template <template <typename> class Model>
 CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boards, const BoardSpec& board, int width,
                                  int height, const ModelSpec& spec) {
@@ -499,9 +573,11 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
     throw Error("calibrate: " + std::to_string(boards.size()) + " image(s) with a board; at least 3 are needed (" +
                 "more, spread over the whole image, for a good calibration)");
   }
+  check_board_order(boards, board);
   CalibrationResult result = with_model_class(spec.name, [&]<template <typename> class Model>() {
     return calibrate_with<Model>(boards, board, width, height, spec);
   });
+  check_solution(result, width, height, spec.name);
   // Coverage: the share of an 8 x 6 grid over the image that holds corners. A lens
   // calibrated from its centre only is extrapolated at the rim.
   bool cell[6][8] = {};

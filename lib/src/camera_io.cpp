@@ -2,6 +2,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <numbers>
 #include <sstream>
@@ -16,6 +22,43 @@ namespace {
 using detail::format_spec;
 using detail::format_table;
 using nlohmann::json;
+
+// A camera file's bytes, bounded before anything is read: only regular files (a
+// device such as /dev/zero, a FIFO without a writer or a socket would grow or hang),
+// at most the documents' size limit. Opened without blocking (a FIFO's open waits
+// for a writer otherwise).
+std::string read_camera_file(const std::filesystem::path& path) {
+  const std::string name = path_for_message(path);
+  const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw Error(name + ": cannot open (" + std::strerror(errno) + ")");
+  struct Closer {
+    int fd;
+    ~Closer() { close(fd); }
+  } closer{fd};
+  struct stat info {};
+  if (fstat(fd, &info) != 0) throw Error(name + ": cannot open (" + std::strerror(errno) + ")");
+  if (S_ISDIR(info.st_mode)) throw Error(name + ": is a directory, not a camera file");
+  if (!S_ISREG(info.st_mode)) throw Error(name + ": not a regular file (devices, FIFOs and sockets are not read)");
+  constexpr auto limit = detail::kMaxDocumentBytes;
+  if (std::uintmax_t(info.st_size) > limit) {
+    throw Error(name + ": larger than " + std::to_string(limit >> 20) + " MiB, not a camera file");
+  }
+  std::string content(std::size_t(info.st_size), '\0');
+  std::size_t done = 0;
+  while (true) {  // the file may have grown since fstat: read to its end, up to the limit
+    if (done == content.size()) {
+      if (content.size() > limit) throw Error(name + ": larger than " + std::to_string(limit >> 20) + " MiB, not a camera file");
+      content.resize(std::min<std::size_t>(content.size() * 2 + 4096, limit + 1));
+    }
+    const ssize_t n = read(fd, content.data() + done, content.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw Error(name + ": read error (" + std::strerror(errno) + ")");
+    if (n == 0) break;
+    done += std::size_t(n);
+  }
+  content.resize(done);
+  return content;
+}
 
 // Builds the camera so its own validation errors also name the file.
 CameraParameters validated(CameraParameters p, std::string_view source) {
@@ -182,14 +225,7 @@ Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& o
 }
 
 Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& options, CameraFileInfo* info) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw Error(path.string() + ": is a directory, not a camera file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open (does it exist and is it readable?)");
-  std::ostringstream content;
-  content << in.rdbuf();
-  if (in.bad()) throw Error(path.string() + ": read error");
-  return Camera(parse_camera(content.str(), path.string(), options, info));
+  return Camera(parse_camera(read_camera_file(path), path.string(), options, info));
 }
 
 std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> format) {

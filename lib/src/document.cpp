@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <unordered_set>
 
 #include "fishcam/error.hpp"
 
@@ -57,6 +58,13 @@ struct Budget {
   }
 };
 
+// Which of two equal keys is meant differs between parsers (yaml-cpp keeps the
+// first, PyYAML the last): refused, naming the key.
+void reject_duplicate_key(std::unordered_set<std::string>& seen, const std::string& key, const std::string& source,
+                          const char* kind) {
+  if (!seen.insert(key).second) fail(source, kind, "the key " + quoted_for_message(key) + " appears twice in one map");
+}
+
 DocNode from_yaml(const YAML::Node& node, int depth, Budget& budget, const std::string& source) {
   budget.spend(source, "YAML");
   if (depth > kMaxDocumentDepth) fail(source, "YAML", "nested too deeply");
@@ -72,14 +80,17 @@ DocNode from_yaml(const YAML::Node& node, int depth, Budget& budget, const std::
       out.kind = DocNode::Kind::sequence;
       for (const auto& item : node) out.items.push_back(from_yaml(item, depth + 1, budget, source));
       break;
-    case YAML::NodeType::Map:
+    case YAML::NodeType::Map: {
       out.kind = DocNode::Kind::map;
+      std::unordered_set<std::string> seen;
       for (const auto& field : node) {
         if (!field.first.IsScalar()) fail(source, "YAML", "a map key that is not text");
+        reject_duplicate_key(seen, field.first.Scalar(), source, "YAML");
         out.keys.push_back(field.first.Scalar());
         out.items.push_back(from_yaml(field.second, depth + 1, budget, source));
       }
       break;
+    }
     default:
       out.kind = DocNode::Kind::null;
   }
@@ -92,9 +103,11 @@ DocNode from_xml(const pugi::xml_node& node, int depth, Budget& budget, const st
   DocNode out;
   out.tag = node.attribute("type_id").value();
   bool has_elements = false;
+  std::unordered_set<std::string> seen;
   for (const pugi::xml_node& child : node.children()) {
     if (child.type() == pugi::node_element) {
       has_elements = true;
+      if (std::string_view(child.name()) != "_") reject_duplicate_key(seen, child.name(), source, "XML");  // "_": OpenCV's sequence items
       out.keys.push_back(child.name());
       out.items.push_back(from_xml(child, depth + 1, budget, source));
     }

@@ -1,5 +1,6 @@
 #include "fishcam/error.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace fishcam {
@@ -30,6 +31,45 @@ std::string quoted_for_message(std::string_view text, size_t limit) {
     }
   }
   return out + "'";
+}
+
+bool is_valid_utf8(std::string_view text) {
+  size_t i = 0;
+  while (i < text.size()) {
+    const auto lead = static_cast<unsigned char>(text[i]);
+    size_t length = 0;
+    unsigned min = 0, code = 0;
+    if (lead < 0x80) {
+      ++i;
+      continue;
+    } else if ((lead & 0xe0) == 0xc0) {
+      length = 2, min = 0x80, code = lead & 0x1f;
+    } else if ((lead & 0xf0) == 0xe0) {
+      length = 3, min = 0x800, code = lead & 0x0f;
+    } else if ((lead & 0xf8) == 0xf0) {
+      length = 4, min = 0x10000, code = lead & 0x07;
+    } else {
+      return false;
+    }
+    if (i + length > text.size()) return false;
+    for (size_t k = 1; k < length; ++k) {
+      const auto byte = static_cast<unsigned char>(text[i + k]);
+      if ((byte & 0xc0) != 0x80) return false;
+      code = (code << 6) | (byte & 0x3f);
+    }
+    if (code < min || code > 0x10ffff || (code >= 0xd800 && code <= 0xdfff)) return false;
+    i += length;
+  }
+  return true;
+}
+
+std::string path_for_message(const std::filesystem::path& path) {
+  const std::string& text = path.native();
+  const bool plain = is_valid_utf8(text) && std::none_of(text.begin(), text.end(), [](char c) {
+                       const auto byte = static_cast<unsigned char>(c);
+                       return byte < 0x20 || byte == 0x7f;
+                     });
+  return plain ? text : quoted_for_message(text, 200);
 }
 
 }  // namespace fishcam

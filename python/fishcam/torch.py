@@ -1,8 +1,9 @@
 """fishcam for PyTorch: the viewpoint transform (and the affine baseline) as nn.Modules, a WoodScape dataset,
-and the DataLoader worker set-up.
+an epoch-carrying sampler, and the DataLoader worker set-up.
 
-    dataset = fishcam.torch.WoodScapeDataset(root, transform=fishcam.torch.RandomViewpoint(preset="train"))
+    dataset = fishcam.torch.WoodScapeDataset(root, transform=fishcam.torch.RandomViewpoint(preset="train"), seed=5)
     loader = torch.utils.data.DataLoader(dataset, batch_size=8, num_workers=2,
+                                         sampler=fishcam.torch.EpochSampler(torch.utils.data.RandomSampler(dataset)),
                                          worker_init_fn=fishcam.torch.worker_init_fn,
                                          persistent_workers=True,  # workers keep their warps
                                          generator=torch.Generator().manual_seed(0))
@@ -10,8 +11,12 @@ and the DataLoader worker set-up.
 Seeding: without a dataset seed, each sample's change comes from torch's generator
 (two 32-bit draws, since torch.randint cannot draw 64 bits), which the DataLoader
 seeds per worker from its own generator: workers differ, and the same generator
-seed reproduces a run. With ``WoodScapeDataset(seed=S)`` each sample's change is
-``derive_seed(S, "epoch/index", ...)``: independent of workers and processes.
+seed reproduces a run. With ``WoodScapeDataset(seed=S)``, sample ``i`` of epoch
+``e`` gets ``derive_seed(S, f"epoch{e}", i)`` whatever the workers and processes:
+the epoch travels with the index from ``EpochSampler``, which runs in the main
+process and counts the epochs itself. A seeded dataset indexed by a bare index
+inside a DataLoader worker raises instead of repeating one epoch's changes (a
+worker's copy of the dataset never sees ``set_epoch`` from the main process).
 """
 
 import json
@@ -103,6 +108,46 @@ class RandomAffine(_Transform):
                                                   fill=fill, fill_mask=fill_mask))
 
 
+class EpochSampler(torch.utils.data.Sampler):
+    """Yields ``(epoch, index)`` for every index of ``sampler``, one epoch per pass.
+
+    The DataLoader iterates its sampler in the main process, so the epoch reaches
+    ``WoodScapeDataset(seed=...)`` in every worker, persistent or not. Each
+    ``iter()`` starts the next epoch (0, 1, 2, ... from ``start_epoch``);
+    ``set_epoch(e)`` makes the next pass epoch ``e`` (resuming a training run).
+    A sampler with ``set_epoch`` (``DistributedSampler``) is told each epoch too,
+    so its shuffle changes with it.
+
+    Args:
+        sampler: any sampler or iterable of dataset indices with ``len()``
+            (``SequentialSampler``, ``RandomSampler``, ``DistributedSampler``, a list).
+        start_epoch: the first pass's epoch.
+    """
+
+    def __init__(self, sampler, start_epoch=0):
+        if isinstance(start_epoch, bool) or not isinstance(start_epoch, int) or start_epoch < 0:
+            raise Error(f"EpochSampler: start_epoch must be a non-negative integer, got {start_epoch!r}")
+        self.sampler = sampler
+        self.next_epoch = start_epoch
+
+    def set_epoch(self, epoch):
+        """Makes the next pass epoch ``epoch``."""
+        if isinstance(epoch, bool) or not isinstance(epoch, int) or epoch < 0:
+            raise Error(f"EpochSampler.set_epoch: expected a non-negative integer, got {epoch!r}")
+        self.next_epoch = epoch
+
+    def __len__(self):
+        return len(self.sampler)
+
+    def __iter__(self):
+        epoch = self.next_epoch
+        self.next_epoch = epoch + 1
+        if hasattr(self.sampler, "set_epoch"):
+            self.sampler.set_epoch(epoch)
+        for index in self.sampler:
+            yield (epoch, int(index))
+
+
 class WoodScapeDataset(torch.utils.data.Dataset):
     """Samples of a WoodScape-layout folder: ``rgb_images/NAME.png``,
     ``semantic_annotations/gtLabels/NAME.png`` and ``calibration/NAME.json`` (one
@@ -113,8 +158,11 @@ class WoodScapeDataset(torch.utils.data.Dataset):
     JSON string (seeds are 64-bit, past torch's int64, so the default collate
     could not batch them as numbers; ``json.loads`` gives the dict back). Cameras are read once per
     distinct calibration file content; the transform keeps one warp per calibration.
-    With ``seed``, sample ``index`` in epoch ``e`` (``set_epoch(e)``) gets the seed
-    ``derive_seed(seed, f"epoch{e}", index)``: the same whatever the workers.
+    With ``seed``, sample ``index`` in epoch ``e`` gets the seed
+    ``derive_seed(seed, f"epoch{e}", index)``: the same whatever the workers. The
+    epoch comes with the key: ``dataset[(e, index)]``, as ``EpochSampler`` yields
+    them; a bare ``dataset[index]`` uses ``set_epoch``'s epoch, in the main process
+    only (raises in a DataLoader worker, whose copy never sees ``set_epoch``).
     """
 
     def __init__(self, root, transform=None, seed=None):
@@ -133,7 +181,25 @@ class WoodScapeDataset(torch.utils.data.Dataset):
         self._cameras = {}
 
     def set_epoch(self, epoch):
+        """The epoch of bare-index items in this process (DataLoader workers: use EpochSampler)."""
         self.epoch = int(epoch)
+
+    def _epoch_and_index(self, key):
+        if isinstance(key, tuple):
+            if len(key) != 2:
+                raise Error(f"WoodScapeDataset: expected an index or (epoch, index), got {key!r}")
+            epoch, index = (int(k) for k in key)
+        else:
+            epoch, index = None, int(key)
+            if self.seed is not None and self.transform is not None:
+                if torch.utils.data.get_worker_info() is not None:
+                    raise Error("WoodScapeDataset(seed=...) in a DataLoader worker needs the epoch with each index "
+                                "(the worker's copy never sees set_epoch): pass "
+                                "sampler=fishcam.torch.EpochSampler(...) to the DataLoader")
+                epoch = self.epoch
+        if not -len(self.names) <= index < len(self.names):
+            raise IndexError(f"WoodScapeDataset: index {index} out of range for {len(self.names)} samples")
+        return epoch, index % len(self.names)
 
     def __len__(self):
         return len(self.names)
@@ -155,7 +221,8 @@ class WoodScapeDataset(torch.utils.data.Dataset):
             raise Error(f"{path}: cannot read image")
         return image
 
-    def __getitem__(self, index):
+    def __getitem__(self, key):
+        epoch, index = self._epoch_and_index(key)
         name = self.names[index]
         image = self._read(os.path.join(self.root, "rgb_images", self._files[name]), _cv2().IMREAD_COLOR)
         image = _cv2().cvtColor(image, _cv2().COLOR_BGR2RGB)
@@ -165,7 +232,7 @@ class WoodScapeDataset(torch.utils.data.Dataset):
             raise Error(f"{name}: expected a single-channel label image")
         item = {"name": name}
         if self.transform is not None:
-            seed = None if self.seed is None else derive_seed(self.seed, f"epoch{self.epoch}", index)
+            seed = None if self.seed is None else derive_seed(self.seed, f"epoch{epoch}", index)
             camera = self.camera(name)
             if isinstance(self.transform, _Transform):
                 image, mask, item["change"] = self.transform(image, mask, camera=camera, seed=seed)

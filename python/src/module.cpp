@@ -554,7 +554,22 @@ void bind_metrics(py::module_& m) {
             py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast> mask;
             std::span<const std::uint8_t> mask_span;
             if (!valid.is_none()) {
-              mask = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(valid);
+              // bool, or integers that are all 0 or 1: a cast to uint8 would turn 256
+              // (or 0.5) into 0 and leave those pixels silently unscored.
+              const py::array given = py::array::ensure(valid);
+              const char kind = given ? given.dtype().kind() : '?';
+              if (kind != 'b' && kind != 'i' && kind != 'u') {
+                throw Error("valid: expected a bool mask or integers 0 and 1, got " +
+                            (given ? "dtype " + std::string(py::str(given.dtype())) : std::string("no array")));
+              }
+              if (kind != 'b') {
+                const auto values = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(given);
+                const std::int64_t* v = values.data();
+                if (!std::all_of(v, v + values.size(), [](std::int64_t x) { return x == 0 || x == 1; })) {
+                  throw Error("valid: integer masks may hold only 0 and 1 (use a bool array, e.g. mask != 0)");
+                }
+              }
+              mask = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(given);
               if (!mask || mask.ndim() != gt_array.ndim() ||
                   !std::equal(mask.shape(), mask.shape() + mask.ndim(), gt_array.shape())) {
                 throw Error("valid: expected an array of the ground truth's shape " + shape_text(gt_array));

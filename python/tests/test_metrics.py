@@ -63,6 +63,24 @@ def test_torch_batches_and_validity_masks():
     assert matrix.scored_pixels == valid.sum()
 
 
+def test_validity_masks_are_bool_or_zero_one_integers():
+    """256 and 0.5 once cast to 0 and silently left pixels unscored."""
+    gt = np.array([[0, 1, 2, 1]], np.uint8)
+    for mask in [np.array([[True, True, False, True]]), np.array([[1, 1, 0, 1]], np.int64),
+                 np.array([[1, 1, 0, 1]], np.uint16)]:
+        matrix = fishcam.metrics.ConfusionMatrix(3)
+        matrix.update(gt, gt, valid=mask)
+        assert matrix.scored_pixels == 3, mask.dtype
+    matrix = fishcam.metrics.ConfusionMatrix(3)
+    for mask, message in [(np.array([[256, 256, 1, 1]]), "only 0 and 1"),
+                          (np.array([[-1, 1, 1, 1]], np.int8), "only 0 and 1"),
+                          (np.array([[0.5, 1, 1, 1]]), "got dtype float64"),
+                          (np.array([["a", "b", "c", "d"]]), "got dtype")]:
+        with pytest.raises(fishcam.Error, match=message):
+            matrix.update(gt, gt, valid=mask)
+    assert matrix.scored_pixels == 0
+
+
 def test_bad_input_raises_and_leaves_the_matrix_unchanged():
     matrix = fishcam.metrics.ConfusionMatrix(3, ignore=255)
     matrix.update(np.zeros((2, 2), np.uint8), np.zeros((2, 2), np.uint8))

@@ -72,22 +72,69 @@ def test_changes_differ_across_workers_and_epochs_and_reproduce(small_camera):
     assert not torch.equal(a[0], c[0])
 
 
-def test_seeded_dataset_is_independent_of_the_workers(dataset_root):
-    def run(workers):
-        ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="medium"), seed=11)
-        out = []
-        for epoch in range(2):
-            ds.set_epoch(epoch)
-            loader = torch.utils.data.DataLoader(ds, batch_size=3, num_workers=workers,
-                                                 worker_init_fn=ft.worker_init_fn if workers else None)
+def epoch_seeds(loader, dataset, epochs):
+    """Per epoch, {index: seed of its change} as the loader delivered them."""
+    out = []
+    for _ in range(epochs):
+        seeds = {}
+        for batch in loader:
+            for name, change in zip(batch["name"], batch["change"]):
+                index = dataset.names.index(name)
+                assert index not in seeds, "an index delivered twice in one epoch"
+                seeds[index] = json.loads(change)["seed"]
+        out.append(seeds)
+    return out
+
+
+@pytest.mark.parametrize("workers,persistent", [(0, False), (1, False), (1, True), (2, False), (2, True)])
+def test_every_epoch_reaches_every_worker(dataset_root, workers, persistent):
+    """Sample i of epoch e gets derive_seed(S, "epoch{e}", i): persistent workers
+    included, whatever the sampler's order (the silent repeat this replaced)."""
+    ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="medium"), seed=11)
+    sampler = ft.EpochSampler(torch.utils.data.RandomSampler(ds, generator=torch.Generator().manual_seed(3)))
+    loader = torch.utils.data.DataLoader(ds, batch_size=4, num_workers=workers, persistent_workers=persistent,
+                                         sampler=sampler, worker_init_fn=ft.worker_init_fn if workers else None)
+    epochs = epoch_seeds(loader, ds, 3)
+    assert len(epochs) == 3
+    for e, seeds in enumerate(epochs):
+        assert seeds == {i: fishcam.derive_seed(11, f"epoch{e}", i) for i in range(len(ds))}, e
+    assert len({s for seeds in epochs for s in seeds.values()}) == 3 * len(ds), "a change repeated across epochs"
+    sampler.set_epoch(7)  # resuming: the next pass is epoch 7
+    assert epoch_seeds(loader, ds, 1)[0] == {i: fishcam.derive_seed(11, "epoch7", i) for i in range(len(ds))}
+
+
+def test_distributed_ranks_share_the_epoch_seeds(dataset_root):
+    """Two DistributedSampler ranks: together every index once per epoch, with the
+    epoch's seed; the inner sampler is told the epoch (its shuffle changes)."""
+    ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"), seed=4)
+    ranks = [ft.EpochSampler(torch.utils.data.DistributedSampler(ds, num_replicas=2, rank=r, shuffle=True, seed=0))
+             for r in range(2)]
+    for e in range(2):
+        seeds = {}
+        for sampler in ranks:
+            loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=1, sampler=sampler)
             for batch in loader:
-                out.append((batch["image"], batch["mask"], [json.loads(c)["seed"] for c in batch["change"]]))
-        return out
-    zero, two = run(0), run(2)
-    assert len(zero) == len(two) == 4
-    for (i0, m0, s0), (i2, m2, s2) in zip(zero, two):
-        assert torch.equal(i0, i2) and torch.equal(m0, m2) and s0 == s2
-    assert zero[0][2] != zero[2][2], "epochs must get new changes"
+                for name, change in zip(batch["name"], batch["change"]):
+                    seeds[ds.names.index(name)] = json.loads(change)["seed"]
+        assert seeds == {i: fishcam.derive_seed(4, f"epoch{e}", i) for i in range(len(ds))}
+    assert ranks[0].sampler.epoch == 1
+
+
+def test_a_seeded_dataset_without_the_epoch_in_workers_is_refused(dataset_root):
+    ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"), seed=4)
+    loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=1, persistent_workers=True)
+    with pytest.raises(fishcam.Error, match="EpochSampler"):
+        next(iter(loader))
+    # In the main process a bare index uses set_epoch's epoch; unseeded datasets take bare indices anywhere.
+    ds.set_epoch(2)
+    assert json.loads(ds[1]["change"])["seed"] == fishcam.derive_seed(4, "epoch2", 1)
+    assert json.loads(ds[(5, 1)]["change"])["seed"] == fishcam.derive_seed(4, "epoch5", 1)
+    unseeded = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"))
+    assert len(list(torch.utils.data.DataLoader(unseeded, batch_size=3, num_workers=1))) == 2
+    with pytest.raises(IndexError):
+        ds[(0, len(ds))]
+    with pytest.raises(fishcam.Error, match="start_epoch"):
+        ft.EpochSampler(range(3), start_epoch=-1)
 
 
 def test_dataset_items(dataset_root, small_camera):

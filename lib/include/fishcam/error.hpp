@@ -1,5 +1,6 @@
 #pragma once
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -17,5 +18,12 @@ class Error : public std::runtime_error {
 // backslashes, control and non-ASCII bytes, cut after `limit` characters with
 // "..." (so every message stays one line).
 std::string quoted_for_message(std::string_view text, std::size_t limit = 60);
+
+// A path for a message: as it is when it is printable UTF-8 without control
+// characters (the common case stays readable), else quoted_for_message's form.
+std::string path_for_message(const std::filesystem::path& path);
+
+// Whether text is well-formed UTF-8 (no overlong forms, surrogates or bytes past U+10FFFF).
+bool is_valid_utf8(std::string_view text);
 
 }  // namespace fishcam

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <unordered_set>
 
 #include "../python_literal.hpp"
 #include "format.hpp"
@@ -34,7 +35,25 @@ const nlohmann::json* Content::json() const {
   if (!json_tried_) {
     json_tried_ = true;
     try {
-      json_ = nlohmann::json::parse(text_);
+      // Duplicate keys: nlohmann keeps the last, other parsers the first; which is
+      // meant cannot be known, so the file is refused naming the key.
+      std::vector<std::unordered_set<std::string>> keys;  // per open object
+      std::string duplicate;
+      const auto check_keys = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        using Event = nlohmann::json::parse_event_t;
+        if (event == Event::object_start) keys.emplace_back();
+        if (event == Event::object_end && !keys.empty()) keys.pop_back();
+        if (event == Event::key && !keys.empty()) {
+          const std::string& key = parsed.get_ref<const std::string&>();
+          if (!keys.back().insert(key).second && duplicate.empty()) duplicate = key;
+        }
+        return true;
+      };
+      nlohmann::json parsed = nlohmann::json::parse(text_, check_keys);
+      if (!duplicate.empty()) {
+        throw Error(source_ + ": the key " + quoted_for_message(duplicate) + " appears twice in one object");
+      }
+      json_ = std::move(parsed);
     } catch (const nlohmann::json::exception& e) {  // parse errors, and number overflow ('1e400')
       json_error_ = e.what();
       if (const auto pos = json_error_.find("] "); pos != std::string::npos) json_error_ = json_error_.substr(pos + 2);

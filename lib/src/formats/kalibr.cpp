@@ -1,6 +1,7 @@
 // Kalibr camchain YAML (also as OpenVINS and VINS-Fusion keep it): one map per
 // camera (cam0, cam1, ...) with camera_model, intrinsics, distortion_model,
 // distortion_coeffs, resolution and T_cam_imu (IMU -> camera).
+#include <algorithm>
 #include <cmath>
 
 #include "format.hpp"
@@ -43,9 +44,14 @@ std::vector<NamedCamera> read(const Content& c) {
     NamedCamera named{root.keys[i], {}, {}};
     CameraParameters& p = named.camera;
     const std::string model = f.string("camera_model");
-    const std::string distortion = f.has("distortion_model") ? f.string("distortion_model") : "none";
+    // Kalibr itself requires distortion_model: a missing one is never taken as none
+    // (coefficients would be dropped silently).
+    const std::string distortion = f.string("distortion_model");
     const std::vector<double> d = f.has("distortion_coeffs") ? f.numbers("distortion_coeffs", 0, 8) : std::vector<double>{};
     auto fail_d = [&](std::string_view problem) { f.fail("distortion_coeffs", problem); };
+    if (distortion == "none" && std::any_of(d.begin(), d.end(), [](double x) { return x != 0; })) {
+      fail_d("non-zero coefficients with distortion_model none (which model are they for?)");
+    }
     auto focal = [&](const std::vector<double>& k, size_t at) {
       set_focal(&p, k[at], k[at + 1], [&](std::string_view problem) { f.fail("intrinsics", problem); });
       p.principal_point = {k[at + 2], k[at + 3]};

@@ -1,0 +1,244 @@
+// Outputs against hostile file systems: a dataset or an input is never written,
+// whatever symlinks, hard links or flags say; temporaries never follow links;
+// parallel shards and concurrent runs into one --out lose and repeat nothing;
+// names the manifest cannot hold are refused before anything is written.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "fishcam/atomic_file.hpp"
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+namespace fs = std::filesystem;
+using test::quoted;
+using test::run_fishcam;
+
+// Every regular file below dir (symlinks not followed) with its bytes.
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
+    if (it->is_symlink()) {
+      files[fs::relative(it->path(), dir).string()] = "-> " + fs::read_symlink(it->path()).string();
+    } else if (it->is_regular_file()) {
+      files[fs::relative(it->path(), dir).string()] = test::read_file(it->path());
+    }
+  }
+  return files;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::stringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+class CliOutputs : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = test::scratch_dir(::testing::UnitTest::GetInstance()->current_test_info()->name());
+  }
+  // A small WoodScape-layout dataset at dir_/NAME.
+  fs::path dataset(const std::string& name, int images = 2) {
+    const auto root = dir_ / name;
+    const auto r = run_fishcam("sample-dataset " + quoted(root) + " --images " + std::to_string(images) +
+                               " --seed 1 --size 64x48");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return root;
+  }
+  std::string augment_dataset(const fs::path& root, const fs::path& out, const std::string& presets = "train,small") {
+    return "augment-dataset " + quoted(root) + " --preset " + presets + " --seed 1 --out " + quoted(out);
+  }
+  // Refused in one line containing `expected`; `watched` unchanged.
+  void expect_refused(const std::string& args, const std::string& expected, const fs::path& watched) {
+    const auto before = snapshot(watched);
+    const auto r = run_fishcam(args);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_TRUE(snapshot(watched) == before) << args << ": " << watched << " changed";
+  }
+  fs::path dir_;
+};
+
+TEST_F(CliOutputs, TheDatasetIsNeverWrittenWhereverOutLies) {
+  const auto root = dataset("ds");
+  expect_refused(augment_dataset(root, dir_), "contains the input", dir_ / "ds");  // ROOT inside OUT
+  expect_refused(augment_dataset(root, root), "is also an input", root);
+  expect_refused(augment_dataset(root, root / "rgb_images" / "out"), "lies inside the input", root);
+  // Through symlinks: a sub-folder of OUT, a preset folder of OUT, OUT itself.
+  fs::create_directories(dir_ / "outB");
+  fs::create_directory_symlink(root / "rgb_images", dir_ / "outB" / "rgb_images");
+  expect_refused(augment_dataset(root, dir_ / "outB", "small"), "lies inside the input", root);
+  fs::create_directories(dir_ / "outC");
+  fs::create_directory_symlink(root, dir_ / "outC" / "train");
+  expect_refused(augment_dataset(root, dir_ / "outC"), "is also an input", root);
+  fs::create_directory_symlink(root, dir_ / "outD");
+  expect_refused(augment_dataset(root, dir_ / "outD"), "is also an input", root);
+  EXPECT_FALSE(fs::exists(dir_ / "outC" / "small"));  // nothing created before the refusal
+}
+
+TEST_F(CliOutputs, InputsAreNeverReplacedThroughLinksOrFolders) {
+  const auto camera = dir_ / "m" / "front.json";
+  fs::create_directories(camera.parent_path());
+  fs::copy_file(test::data_path("woodscape_front.json"), camera);
+  // compare: files named by --models are inputs; --out may not contain an input.
+  expect_refused("compare " + quoted(test::data_path("woodscape_front.json")) + " --samples 1 --models " +
+                     quoted(camera) + " --out " + quoted(dir_ / "m") + " --force",
+                 "contains the input", dir_ / "m");
+  // A symlink or a hard link to an input as an output, even with --force.
+  fs::create_symlink(camera, dir_ / "link.json");
+  fs::create_hard_link(camera, dir_ / "hard.json");
+  for (const char* out : {"link.json", "hard.json"}) {
+    expect_refused("convert " + quoted(camera) + " --to equidistant --out " + quoted(dir_ / out) + " --force",
+                   "is also an input", dir_);
+    expect_refused("map " + quoted(camera) + " --rotate 1,0,0 --out " + quoted(dir_ / out) + " --force",
+                   "is also an input", dir_);
+  }
+}
+
+// An output that is a symlink is replaced (with --force), never written through;
+// a leftover temporary-looking symlink is never opened.
+TEST_F(CliOutputs, SymlinksAtOutputsAreReplacedNotFollowed) {
+  const auto victim = test::write_file(dir_ / "victim.json", "keep me");
+  fs::create_symlink(victim, dir_ / "out.json");
+  fs::create_symlink(victim, dir_ / "out.json.fishcam-tmp");
+  const auto r = run_fishcam("convert " + quoted(test::data_path("woodscape_front.json")) +
+                             " --to equidistant --out " + quoted(dir_ / "out.json") + " --force");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(test::read_file(victim), "keep me");
+  EXPECT_FALSE(fs::is_symlink(dir_ / "out.json"));
+  EXPECT_NE(test::read_file(dir_ / "out.json").find("equidistant"), std::string::npos);
+  // Without --force an existing symlink, even a dangling one, is not replaced.
+  fs::create_symlink(dir_ / "nowhere.json", dir_ / "dangling.json");
+  const auto refused = run_fishcam("convert " + quoted(test::data_path("woodscape_front.json")) +
+                                   " --to equidistant --out " + quoted(dir_ / "dangling.json"));
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("already exists"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(dir_ / "nowhere.json"));
+}
+
+TEST_F(CliOutputs, AFailedRenameNamesItsRealCause) {
+  fs::create_directories(dir_ / "existing.json" / "inside");
+  const auto r = run_fishcam("convert " + quoted(test::data_path("woodscape_front.json")) +
+                             " --to equidistant --out " + quoted(dir_ / "existing.json") + " --force");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(r.err.find("Success"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("existing.json"), std::string::npos) << r.err;
+  // No temporary left behind.
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_FALSE(is_temporary_name(entry.path().filename().string())) << entry.path();
+  }
+}
+
+// Four shards in parallel into one --out, three times: the union equals one
+// unsharded run, file for file and manifest line for manifest line.
+TEST_F(CliOutputs, ParallelShardsIntoOneOutEqualOneRun) {
+  const auto root = dataset("ds", 8);
+  ASSERT_EQ(run_fishcam(augment_dataset(root, dir_ / "single")).exit_code, 0);
+  const auto single = snapshot(dir_ / "single");
+  std::multiset<std::string> single_lines;
+  for (const char* preset : {"train", "small"}) {
+    for (const auto& line : lines_of(single.at(std::string(preset) + "/manifest.jsonl"))) single_lines.insert(line);
+  }
+  for (int repetition = 0; repetition < 3; ++repetition) {
+    const auto out = dir_ / ("sharded" + std::to_string(repetition));
+    std::string command;
+    for (int shard = 0; shard < 4; ++shard) {
+      command += "'" + std::string(FISHCAM_BINARY) + "' " + augment_dataset(root, out) + " -j 1 --shard " +
+                 std::to_string(shard) + "/4 > /dev/null 2> " + quoted(dir_ / ("err" + std::to_string(shard))) + " & ";
+    }
+    const int status = std::system(("bash -c \"" + command + "wait\"").c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    std::map<std::string, std::string> files;
+    std::multiset<std::string> lines;
+    for (const auto& [name, bytes] : snapshot(out)) {
+      if (name.find("manifest") != std::string::npos) {
+        for (const auto& line : lines_of(bytes)) lines.insert(line);
+      } else {
+        files[name] = bytes;
+      }
+    }
+    std::map<std::string, std::string> expected = single;
+    std::erase_if(expected, [](const auto& f) { return f.first.find("manifest") != std::string::npos; });
+    EXPECT_TRUE(files == expected) << "repetition " << repetition << ": " << files.size() << " files, expected "
+                                   << expected.size();
+    EXPECT_TRUE(lines == single_lines) << "repetition " << repetition;
+  }
+}
+
+// Two identical runs at once: the manifest is locked, so the second either waits
+// its turn (a resume) or is refused in one line; never duplicate or lost lines.
+TEST_F(CliOutputs, ConcurrentIdenticalRunsNeverDuplicateManifestLines) {
+  const auto root = dataset("ds", 6);
+  const auto out = dir_ / "out";
+  std::string command;
+  for (int run = 0; run < 2; ++run) {
+    command += "'" + std::string(FISHCAM_BINARY) + "' " + augment_dataset(root, out) + " -j 1 > /dev/null 2> " +
+               quoted(dir_ / ("err" + std::to_string(run))) + "; echo $? > " +
+               quoted(dir_ / ("rc" + std::to_string(run))) + " & ";
+  }
+  ASSERT_EQ(std::system(("bash -c \"" + command + "wait\"").c_str()), 0);
+  int succeeded = 0;
+  for (int run = 0; run < 2; ++run) {
+    const std::string rc = test::read_file(dir_ / ("rc" + std::to_string(run)));
+    if (rc == "0\n") {
+      ++succeeded;
+    } else {
+      EXPECT_NE(test::read_file(dir_ / ("err" + std::to_string(run))).find("another run is writing this manifest"),
+                std::string::npos);
+    }
+  }
+  EXPECT_GE(succeeded, 1);
+  for (const char* preset : {"train", "small"}) {
+    const auto lines = lines_of(test::read_file(out / preset / "manifest.jsonl"));
+    EXPECT_EQ(lines.size(), 6u) << preset;
+    EXPECT_EQ(std::set<std::string>(lines.begin(), lines.end()).size(), lines.size()) << preset;
+  }
+}
+
+// A temporary of a killed run (its process gone) is removed by the next run; one
+// of a running process (this test) stays.
+TEST_F(CliOutputs, OnlyTemporariesOfFinishedProcessesAreRemoved) {
+  const auto root = dataset("ds");
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  ASSERT_GT(child, 0);
+  waitpid(child, nullptr, 0);
+  const auto images = dir_ / "out" / "rgb_images";
+  fs::create_directories(images);
+  const auto stale = test::write_file(temporary_path(images / "00000_FV_train0.png", child, 1), "half");
+  const auto live = test::write_file(temporary_path(images / "00000_FV_train0.png", getpid(), 2), "in flight");
+  const auto r = run_fishcam("augment-dataset " + quoted(root) + " --preset train --seed 1 --out " + quoted(dir_ / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_EQ(test::read_file(live), "in flight");
+}
+
+// A file name the manifest (JSON, UTF-8) cannot hold is refused before anything
+// is written for it; the others are done; a resume says the same and orphans nothing.
+TEST_F(CliOutputs, NamesThatAreNotUtf8AreRefusedBeforeWriting) {
+  const auto root = dataset("ds");
+  const std::string bad = "lat\xe9n";
+  fs::copy_file(root / "rgb_images" / "00000_FV.png", root / "rgb_images" / (bad + ".png"));
+  fs::copy_file(root / "semantic_annotations" / "gtLabels" / "00000_FV.png",
+                root / "semantic_annotations" / "gtLabels" / (bad + ".png"));
+  fs::copy_file(root / "calibration" / "00000_FV.json", root / "calibration" / (bad + ".json"));
+  for (int run = 0; run < 2; ++run) {
+    const auto r = run_fishcam("augment-dataset " + quoted(root) + " --preset train --seed 1 --out " + quoted(dir_ / "out"));
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_NE(r.err.find("not valid UTF-8"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("lat\\xe9n"), std::string::npos) << r.err;  // escaped in the message
+    for (const auto& [name, bytes] : snapshot(dir_ / "out")) EXPECT_EQ(name.find(bad), std::string::npos) << name;
+    EXPECT_EQ(lines_of(test::read_file(dir_ / "out" / "manifest.jsonl")).size(), 2u);
+  }
+}
+
+}  // namespace
+}  // namespace fishcam
