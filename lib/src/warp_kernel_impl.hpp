@@ -14,6 +14,11 @@ namespace fishcam::detail::FISHCAM_KERNEL_ISA {
 using cv::v_float32;
 constexpr float kNaNf = std::numeric_limits<float>::quiet_NaN();
 
+// a * b + c rounded twice, on every instruction set: cv::v_fma fuses on AVX2 + FMA
+// and not on SSE2, so inside/outside decisions and maps differed between machines
+// (an augmented dataset then depended on the CPU). The kernel files are compiled
+// with -ffp-contract=off so that the compiler does not fuse it either.
+inline v_float32 mul_add(const v_float32& a, const v_float32& b, const v_float32& c) { return a * b + c; }
 
 // atan2(y, x) for y >= 0: an odd minimax polynomial for atan on [0, 1] (abs error
 // 4e-8 in exact arithmetic, 1.4e-7 rad in float) and the usual octant folding.
@@ -24,7 +29,7 @@ inline v_float32 atan2_nonnegative_y(const v_float32& y, const v_float32& x) {
   v_float32 p = cv::vx_setall_f32(-0.0040545590806092685f);
   for (float k : {0.02186293012890829f, -0.05591228945515758f, 0.09642194826292869f, -0.13908628681826157f,
                   0.19946565506173233f, -0.33329860775184583f, 0.9999993355776432f}) {
-    p = cv::v_fma(p, r2, cv::vx_setall_f32(k));
+    p = mul_add(p, r2, cv::vx_setall_f32(k));
   }
   v_float32 a = p * r;
   a = cv::v_select(y > ax, cv::vx_setall_f32(float(std::numbers::pi / 2)) - a, a);
@@ -45,7 +50,7 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
   } else if constexpr (kPrior == DepthPrior::source_sphere) {
     // |s d - t| = 1: s^2 - 2 b s + c = 0 with b = d.t, c = |t|^2 - 1 (docs/augmentation.md).
     const v_float32 c = cv::vx_setall_f32(pose.c);
-    const v_float32 b = cv::v_fma(dx, tx, cv::v_fma(dy, ty, dz * tz));
+    const v_float32 b = mul_add(dx, tx, mul_add(dy, ty, dz * tz));
     const v_float32 disc = b * b - c;
     v_float32 s;
     if constexpr (kInsideSphere) {  // c < 0: one positive root; the form without cancellation
@@ -56,16 +61,16 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
       s = c / (b + sq);
       valid = valid & (disc >= zero) & (b > zero) & (s > zero);
     }
-    qx = cv::v_fma(s, dx, zero - tx), qy = cv::v_fma(s, dy, zero - ty), qz = cv::v_fma(s, dz, zero - tz);
+    qx = mul_add(s, dx, zero - tx), qy = mul_add(s, dy, zero - ty), qz = mul_add(s, dz, zero - tz);
   }
   const float* r = pose.rt;
-  const v_float32 px = cv::v_fma(cv::vx_setall_f32(r[0]), qx, cv::v_fma(cv::vx_setall_f32(r[1]), qy, cv::vx_setall_f32(r[2]) * qz));
-  const v_float32 py = cv::v_fma(cv::vx_setall_f32(r[3]), qx, cv::v_fma(cv::vx_setall_f32(r[4]), qy, cv::vx_setall_f32(r[5]) * qz));
-  const v_float32 pz = cv::v_fma(cv::vx_setall_f32(r[6]), qx, cv::v_fma(cv::vx_setall_f32(r[7]), qy, cv::vx_setall_f32(r[8]) * qz));
+  const v_float32 px = mul_add(cv::vx_setall_f32(r[0]), qx, mul_add(cv::vx_setall_f32(r[1]), qy, cv::vx_setall_f32(r[2]) * qz));
+  const v_float32 py = mul_add(cv::vx_setall_f32(r[3]), qx, mul_add(cv::vx_setall_f32(r[4]), qy, cv::vx_setall_f32(r[5]) * qz));
+  const v_float32 pz = mul_add(cv::vx_setall_f32(r[6]), qx, mul_add(cv::vx_setall_f32(r[7]), qy, cv::vx_setall_f32(r[8]) * qz));
 
   // Projection by the source camera (the direction of P is all that matters).
-  const v_float32 chi2 = cv::v_fma(px, px, py * py);
-  const v_float32 norm = cv::v_sqrt(cv::v_fma(pz, pz, chi2));
+  const v_float32 chi2 = mul_add(px, px, py * py);
+  const v_float32 norm = cv::v_sqrt(mul_add(pz, pz, chi2));
   const v_float32 cos_limit = cv::vx_setall_f32(src.cos_theta_max) * norm;
   valid = valid & (src.closed ? pz >= cos_limit : pz > cos_limit) & ((chi2 > zero) | (pz > zero));
   v_float32 scale;  // rho(theta) / chi
@@ -74,37 +79,37 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     // (xi^2 chi^2 + (xi^2 - 1) Pz^2) / (xi |P| - Pz), without the cancellation
     // (stereographic, xi = 1: chi^2 / (|P| - Pz)).
     const v_float32 xi = cv::vx_setall_f32(src.xi);
-    v_float32 w = cv::v_fma(xi, norm, pz);
+    v_float32 w = mul_add(xi, norm, pz);
     if (src.xi > 0) {
       const v_float32 numerator =
           src.xi == 1 ? chi2
-                      : cv::v_fma(cv::vx_setall_f32(src.xi * src.xi), chi2, cv::vx_setall_f32(src.xi * src.xi - 1) * pz * pz);
-      w = cv::v_select(pz >= zero, w, numerator / cv::v_fma(xi, norm, zero - pz));
+                      : mul_add(cv::vx_setall_f32(src.xi * src.xi), chi2, cv::vx_setall_f32(src.xi * src.xi - 1) * pz * pz);
+      w = cv::v_select(pz >= zero, w, numerator / mul_add(xi, norm, zero - pz));
     }
     v_float32 d = w;
     if (src.alpha != 0) {
       const v_float32 alpha = cv::vx_setall_f32(src.alpha);
-      const v_float32 root = cv::v_sqrt(cv::v_fma(cv::vx_setall_f32(src.beta), chi2, w * w));
-      d = cv::v_fma(alpha, root, (cv::vx_setall_f32(1.0f) - alpha) * w);
+      const v_float32 root = cv::v_sqrt(mul_add(cv::vx_setall_f32(src.beta), chi2, w * w));
+      d = mul_add(alpha, root, (cv::vx_setall_f32(1.0f) - alpha) * w);
     }
     scale = cv::vx_setall_f32(src.f) / d;
     if (src.k1 != 0 || src.k2 != 0) {  // mei: radial distortion of r = chi / D
       const v_float32 r2 = chi2 / (d * d);
-      scale = scale * cv::v_fma(r2, cv::v_fma(r2, cv::vx_setall_f32(src.k2), cv::vx_setall_f32(src.k1)),
+      scale = scale * mul_add(r2, mul_add(r2, cv::vx_setall_f32(src.k2), cv::vx_setall_f32(src.k1)),
                                 cv::vx_setall_f32(1.0f));
     }
   } else {
     const v_float32 chi = cv::v_sqrt(chi2);
     const v_float32 theta = atan2_nonnegative_y(chi, pz);
     v_float32 rho = cv::vx_setall_f32(src.c[src.n]);
-    for (int i = src.n - 1; i >= 1; --i) rho = cv::v_fma(rho, theta, cv::vx_setall_f32(src.c[i]));
+    for (int i = src.n - 1; i >= 1; --i) rho = mul_add(rho, theta, cv::vx_setall_f32(src.c[i]));
     rho = rho * theta;
     // On the axis rho / chi -> rho'(0) / Pz.
     scale = cv::v_select(chi > zero, rho / chi, cv::vx_setall_f32(src.c[1]) / pz);
   }
   const v_float32 nan = cv::vx_setall_f32(kNaNf);
-  const v_float32 u = cv::v_fma(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
-  const v_float32 v = cv::v_fma(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
+  const v_float32 u = mul_add(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
+  const v_float32 v = mul_add(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
   valid = valid & (u == u) & (v == v);
   *out_x = cv::v_select(valid, u, nan);
   *out_y = cv::v_select(valid, v, nan);
