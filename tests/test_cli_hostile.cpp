@@ -3,6 +3,9 @@
 // Every case: a one-line error naming the option or file, non-zero exit, and no
 // file written or changed.
 #include <opencv2/imgcodecs.hpp>
+#include <sys/resource.h>
+
+#include <functional>
 #include <sys/stat.h>
 
 #include "test_support.hpp"
@@ -136,6 +139,54 @@ TEST_F(CliHostile, CameraFilesAreBoundedBeforeReading) {
   expect_refused("info " + test::quoted(special / "fifo.json"), "fifo.json: not a regular file");
   test::write_file(dir_ / "huge.yaml", "zz: [" + std::string(17 << 20, ' ') + "]");
   expect_refused("info " + q("huge.yaml"), "huge.yaml: larger than 16 MiB");
+}
+
+// Hostile camera files of the size limit: refused within 256 MB and 2 s of CPU each
+// (they took 4 GB and 53 s: the node budget was checked after yaml-cpp built its
+// whole tree, JSON had no limit, and yaml-cpp queues a flow mapping's every token).
+TEST_F(CliHostile, HostileCameraFilesAreRefusedWithinBoundedResources) {
+  const auto dir = test::scratch_dir("bounded_reading_hostile_files");
+  const size_t size = (16 << 20) - 64;
+  const auto repeated = [](const std::string& item, size_t bytes) {
+    std::string out;
+    out.reserve(bytes + item.size());
+    while (out.size() < bytes) out += item;
+    return out;
+  };
+  const std::string wide(250, '1');
+  // Made one at a time: a child's peak memory includes what this process held when it forked.
+  const std::vector<std::pair<std::string, std::function<std::string()>>> files = {
+      {"flow.yaml", [&] { return "zz: [" + repeated("1,", size - 10) + "1]\n"; }},
+      {"flow_mapping.yaml", [&] { return "{zz: [" + repeated("1,", size - 10) + "1]}"; }},
+      {"block.yaml", [&] { return "zz:\n" + repeated("- 1\n", size - 10); }},
+      {"array.json", [&] { return "[" + repeated("1,", size - 10) + "1]"; }},
+      {"object.json", [&] { return "{\"intrinsic\": [" + repeated("1,", size - 20) + "1]}"; }},
+      {"elements.xml",
+       [&] { return "<?xml version=\"1.0\"?><opencv_storage>" + repeated("<_>1</_>", size - 80) + "</opencv_storage>"; }},
+      {"literal.cameramodel",
+       [&] { return "{'lensmodel': 'LENSMODEL_STEREOGRAPHIC', 'intrinsics': [" + repeated("1,", size - 80) + "1]}"; }},
+      // Just under the node budget, each value as long as the size allows.
+      {"long_values.json", [&] { return "[" + repeated(wide + ",", size - 300) + "1]"; }},
+      {"long_values.yaml", [&] { return "{zz: [" + repeated(wide + ",", size - 300) + "1]}"; }},
+  };
+  for (const auto& [name, make] : files) {
+    test::write_file(dir / name, make());
+    rusage before{}, after{};
+    getrusage(RUSAGE_CHILDREN, &before);
+    const auto r = run_fishcam("info " + test::quoted(dir / name));
+    getrusage(RUSAGE_CHILDREN, &after);
+    std::filesystem::remove(dir / name);
+    EXPECT_NE(r.exit_code, 0) << name;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << name << ": " << r.err;
+    EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+#if !defined(__SANITIZE_ADDRESS__) && !(defined(__has_feature) && __has_feature(address_sanitizer))
+    const auto cpu = [](const rusage& u) {
+      return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+    };
+    EXPECT_LE(cpu(after) - cpu(before), 2.0) << name;
+    EXPECT_LE(after.ru_maxrss, 256 * 1024) << name << ": peak kB of the largest child so far";
+#endif
+  }
 }
 
 // Nothing is defaulted or chosen silently: a Kalibr camera without its distortion

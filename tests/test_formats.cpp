@@ -314,7 +314,7 @@ TEST(Formats, CamerasAreChosenByNameOrIndexAndSizesChecked) {
     parse_camera(both, "chain.yaml", options);
     ADD_FAILURE();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("no camera 'cam7' (the file has 0 = cam0, 1 = cam1)"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no camera 'cam7' (the file has 0 = 'cam0', 1 = 'cam1')"), std::string::npos) << e.what();
   }
   options.camera.reset();
   options.image_size = std::pair{640, 480};

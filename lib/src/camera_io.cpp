@@ -131,11 +131,14 @@ CameraFormat detect_camera_format(std::string_view content, std::string_view sou
   // Where the text does not even parse, the reader of the
   // syntax it tries to be says why (the parse error, with its line).
   if (content.find("lensmodel") != std::string_view::npos && !c.python_literal()) return CameraFormat::mrcal;
+  // A syntax error belongs to no format: said as it is, without "(read as ...)".
   if ((start.starts_with("{") || start.starts_with("[")) && (!c.json() || !c.json()->is_object())) {
+    if (!c.json()) c.json_or_throw();
     return CameraFormat::woodscape;
   }
   const bool binary = content.find('\0') != std::string_view::npos;
-  if (!binary && (start.starts_with("<") || start.starts_with("%YAML") || !c.yaml())) return CameraFormat::opencv;
+  if (!binary && !c.yaml()) c.yaml_or_throw();
+  if (!binary && (start.starts_with("<") || start.starts_with("%YAML"))) return CameraFormat::opencv;
   throw Error(std::string(source_name) + ": unrecognised camera file (expected one of: " +
               joined(&detail::FormatSpec::description) + ")");
 }
@@ -175,7 +178,9 @@ CameraParameters parse_camera(std::string_view content, std::string_view source_
     }
     if (!found) {
       std::string names;
-      for (size_t i = 0; i < cameras.size(); ++i) names += (i ? ", " : "") + std::to_string(i) + " = " + cameras[i].name;
+      for (size_t i = 0; i < cameras.size(); ++i) {
+        names += (i ? ", " : "") + std::to_string(i) + " = " + quoted_for_message(cameras[i].name);
+      }
       throw Error(source + ": camera: no camera " + quoted_for_message(wanted) + " (the file has " + names + ")");
     }
   }

@@ -1,9 +1,11 @@
 #include "document.hpp"
 
 #include <pugixml.hpp>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <sstream>
 #include <unordered_set>
 
 #include "fishcam/error.hpp"
@@ -22,8 +24,15 @@ void check_size(std::string_view content, const std::string& source, const char*
 }
 
 // yaml-cpp's parser recurses per nesting level (flow brackets and block
-// indentation): refuse deep nesting before handing the text over.
-void check_yaml_nesting(std::string_view content, const std::string& source) {
+// indentation), and its scanner queues every token of a flow mapping before the
+// first event (a 16 MiB "{a: [1, 1, ...]}" took 2.4 GB): refuse deep nesting and
+// more lines or flow separators than the node budget before handing the text over.
+void check_yaml_shape(std::string_view content, const std::string& source) {
+  const auto lines = std::count(content.begin(), content.end(), '\n');
+  const auto separators = std::count(content.begin(), content.end(), ',');
+  if (size_t(std::max(lines, separators)) > kMaxDocumentNodes) {
+    fail(source, "YAML", "more than " + std::to_string(kMaxDocumentNodes) + (lines > separators ? " lines" : " commas"));
+  }
   int depth = 0;
   size_t line_start = 0;
   for (size_t i = 0; i < content.size(); ++i) {
@@ -65,37 +74,89 @@ void reject_duplicate_key(std::unordered_set<std::string>& seen, const std::stri
   if (!seen.insert(key).second) fail(source, kind, "the key " + quoted_for_message(key) + " appears twice in one map");
 }
 
-DocNode from_yaml(const YAML::Node& node, int depth, Budget& budget, const std::string& source) {
-  budget.spend(source, "YAML");
-  if (depth > kMaxDocumentDepth) fail(source, "YAML", "nested too deeply");
-  DocNode out;
-  out.tag = short_tag(node.Tag());
-  if (out.tag == "?") out.tag.clear();  // yaml-cpp's "no tag"
-  switch (node.Type()) {
-    case YAML::NodeType::Scalar:
-      out.kind = DocNode::Kind::scalar;
-      out.scalar = node.Scalar();
-      break;
-    case YAML::NodeType::Sequence:
-      out.kind = DocNode::Kind::sequence;
-      for (const auto& item : node) out.items.push_back(from_yaml(item, depth + 1, budget, source));
-      break;
-    case YAML::NodeType::Map: {
-      out.kind = DocNode::Kind::map;
-      std::unordered_set<std::string> seen;
-      for (const auto& field : node) {
-        if (!field.first.IsScalar()) fail(source, "YAML", "a map key that is not text");
-        reject_duplicate_key(seen, field.first.Scalar(), source, "YAML");
-        out.keys.push_back(field.first.Scalar());
-        out.items.push_back(from_yaml(field.second, depth + 1, budget, source));
-      }
-      break;
-    }
-    default:
-      out.kind = DocNode::Kind::null;
+// Builds the tree from yaml-cpp's parser events, spending the node budget as
+// each node arrives: a hostile file fails after at most kMaxDocumentNodes nodes
+// (yaml-cpp's own tree of a 16 MiB list took 4 GB before a check on it could run).
+class YamlTreeBuilder : public YAML::EventHandler {
+ public:
+  explicit YamlTreeBuilder(const std::string& source) : source_(source) {}
+  DocNode take_root() { return std::move(root_); }
+
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override { add(DocNode{}); }
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {
+    fail(source_, "YAML", "aliases (*name) are not read in camera files");
   }
-  return out;
-}
+  void OnScalar(const YAML::Mark&, const std::string& tag, YAML::anchor_t, const std::string& value) override {
+    DocNode node;
+    node.kind = DocNode::Kind::scalar;
+    node.tag = tag_of(tag);
+    node.scalar = value;
+    add(std::move(node));
+  }
+  void OnSequenceStart(const YAML::Mark&, const std::string& tag, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    open(DocNode::Kind::sequence, tag);
+  }
+  void OnSequenceEnd() override { close(); }
+  void OnMapStart(const YAML::Mark&, const std::string& tag, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    open(DocNode::Kind::map, tag);
+  }
+  void OnMapEnd() override { close(); }
+
+ private:
+  struct Open {
+    DocNode node;
+    bool expect_key = true;  // maps: keys and values alternate
+    std::string key;
+    std::unordered_set<std::string> seen;
+  };
+
+  static std::string tag_of(const std::string& tag) {
+    std::string t = short_tag(tag);
+    return t == "?" ? std::string() : t;  // yaml-cpp's "no tag"
+  }
+  void open(DocNode::Kind kind, const std::string& tag) {
+    budget_.spend(source_, "YAML");
+    if (int(stack_.size()) >= kMaxDocumentDepth) fail(source_, "YAML", "nested too deeply");
+    stack_.emplace_back();
+    stack_.back().node.kind = kind;
+    stack_.back().node.tag = tag_of(tag);
+  }
+  void close() {
+    DocNode done = std::move(stack_.back().node);
+    stack_.pop_back();
+    place(std::move(done));
+  }
+  void add(DocNode node) {
+    budget_.spend(source_, "YAML");
+    place(std::move(node));
+  }
+  void place(DocNode node) {
+    if (stack_.empty()) {
+      root_ = std::move(node);
+      return;
+    }
+    Open& parent = stack_.back();
+    if (parent.node.kind == DocNode::Kind::sequence) {
+      parent.node.items.push_back(std::move(node));
+    } else if (parent.expect_key) {
+      if (node.kind != DocNode::Kind::scalar) fail(source_, "YAML", "a map key that is not text");
+      reject_duplicate_key(parent.seen, node.scalar, source_, "YAML");
+      parent.key = std::move(node.scalar);
+      parent.expect_key = false;
+    } else {
+      parent.node.keys.push_back(std::move(parent.key));
+      parent.node.items.push_back(std::move(node));
+      parent.expect_key = true;
+    }
+  }
+
+  const std::string& source_;
+  Budget budget_;
+  std::vector<Open> stack_;
+  DocNode root_;
+};
 
 DocNode from_xml(const pugi::xml_node& node, int depth, Budget& budget, const std::string& source) {
   budget.spend(source, "XML");
@@ -139,19 +200,24 @@ DocNode parse_yaml(std::string_view content, const std::string& source) {
     const size_t end = text.find('\n');
     std::fill(text.begin(), end == std::string::npos ? text.end() : text.begin() + long(end), ' ');
   }
-  check_yaml_nesting(text, source);
-  YAML::Node root;
+  check_yaml_shape(text, source);
+  std::istringstream stream(text);
+  YamlTreeBuilder builder(source);
   try {
-    root = YAML::Load(text);
+    YAML::Parser parser(stream);
+    parser.HandleNextDocument(builder);  // the first document, as YAML::Load reads
   } catch (const YAML::Exception& e) {
     fail(source, "YAML", "line " + std::to_string(e.mark.line + 1) + ": " + quoted_for_message(e.msg));
   }
-  Budget budget;
-  return from_yaml(root, 0, budget, source);
+  return builder.take_root();
 }
 
 DocNode parse_xml(std::string_view content, const std::string& source) {
   check_size(content, source, "XML");
+  // pugixml builds its whole tree first: bound the elements (each opens with '<') before.
+  if (size_t(std::count(content.begin(), content.end(), '<')) > 2 * kMaxDocumentNodes) {
+    fail(source, "XML", "more than " + std::to_string(kMaxDocumentNodes) + " elements");
+  }
   pugi::xml_document document;
   const pugi::xml_parse_result result = document.load_buffer(content.data(), content.size());
   if (!result) {

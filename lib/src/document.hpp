@@ -23,10 +23,12 @@ struct DocNode {
   const DocNode* find(std::string_view key) const;
 };
 
-// Limits on what a camera file may hold (errors, not allocations, past them).
+// Limits on what a camera file may hold (errors, not allocations, past them),
+// checked while parsing. The largest real camera files (mrcal's with its
+// optimization inputs) hold a few hundred kB; a splined model a few thousand values.
 constexpr size_t kMaxDocumentBytes = 16 << 20;
 constexpr int kMaxDocumentDepth = 64;
-constexpr size_t kMaxDocumentNodes = 1 << 20;
+constexpr size_t kMaxDocumentNodes = 1 << 16;
 
 // Throw Error("SOURCE: not a readable YAML file (why)") etc. on any problem.
 DocNode parse_yaml(std::string_view content, const std::string& source);

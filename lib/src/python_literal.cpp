@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "document.hpp"
 #include "fishcam/error.hpp"
 
 namespace fishcam::detail {
@@ -47,7 +48,8 @@ class Parser {
   }
 
   nlohmann::json parse_value() {
-    if (++depth_ > 64) fail("nesting too deep");
+    if (++depth_ > kMaxDocumentDepth) fail("nesting too deep");
+    if (++values_ > kMaxDocumentNodes) fail("more than " + std::to_string(kMaxDocumentNodes) + " values");
     nlohmann::json value;
     const char c = peek();
     if (c == '{') {
@@ -160,6 +162,7 @@ class Parser {
   std::string_view s_;
   size_t pos_ = 0;
   int depth_ = 0;
+  std::size_t values_ = 0;
 };
 
 }  // namespace

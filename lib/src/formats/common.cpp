@@ -39,8 +39,15 @@ const nlohmann::json* Content::json() const {
       // meant cannot be known, so the file is refused naming the key.
       std::vector<std::unordered_set<std::string>> keys;  // per open object
       std::string duplicate;
+      // The node budget is spent while parsing, as for YAML.
+      std::size_t nodes = 0;
       const auto check_keys = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
         using Event = nlohmann::json::parse_event_t;
+        if (event != Event::key && event != Event::object_end && event != Event::array_end &&
+            ++nodes > kMaxDocumentNodes) {
+          throw Error(source_ + ": not a readable JSON file (more than " + std::to_string(kMaxDocumentNodes) +
+                      " values)");
+        }
         if (event == Event::object_start) keys.emplace_back();
         if (event == Event::object_end && !keys.empty()) keys.pop_back();
         if (event == Event::key && !keys.empty()) {
