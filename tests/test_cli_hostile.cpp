@@ -189,6 +189,47 @@ TEST_F(CliHostile, HostileCameraFilesAreRefusedWithinBoundedResources) {
   }
 }
 
+// Commands check what they will need before doing the work, and say the limit:
+// compare rendered a 16384x16384 scene (5.3 GB) before refusing it as "at most 1
+// changes here"; an image of 32767 px passed the warp's check and failed in cv::remap.
+TEST_F(CliHostile, LimitsAreCheckedBeforeTheWork) {
+  std::string camera = test::read_file(test::data_path("equidistant.json"));
+  const auto sized = [&](const std::string& name, int w, int h) {
+    std::string text = camera;
+    text.replace(text.find("1280"), 4, std::to_string(w));
+    text.replace(text.find("966"), 3, std::to_string(h));
+    test::write_file(dir_ / name, text);
+  };
+  sized("huge.json", 16384, 16384);
+  sized("wide.json", 32767, 2);
+  rusage before{}, after{};
+  getrusage(RUSAGE_CHILDREN, &before);
+  expect_refused("compare " + q("huge.json") + " --samples 1", "at most 16 million (4096x4096)");
+  expect_refused("map " + q("wide.json") + " --rotate 1,0,0 --out " + q("m.npy"), "fewer than 32767 pixels per side");
+  expect_refused("compare " + q("camera.json") + " --samples 1 --models polynomial:64", "order must be 1..12");
+  getrusage(RUSAGE_CHILDREN, &after);
+  EXPECT_LT(double(after.ru_utime.tv_sec - before.ru_utime.tv_sec), 2.0);
+}
+
+// Label folders with a symlink loop or a device under a label's name: one line
+// naming the file (a loop aborted with a raw filesystem error; /dev/zero was "no
+// such file"); file names with a newline stay on that line.
+TEST_F(CliHostile, LabelFoldersWithLinksToNothingOrDevices) {
+  const auto root = test::scratch_dir("evaluate_links");
+  std::filesystem::create_directories(root / "gt"), std::filesystem::create_directories(root / "pred");
+  cv::imwrite((root / "gt" / "a.png").string(), cv::Mat(4, 4, CV_8UC1, cv::Scalar(1)));
+  std::filesystem::create_symlink("/dev/zero", root / "pred" / "a.png");
+  const std::string evaluate = "evaluate --pred " + test::quoted(root / "pred") + " --gt " + test::quoted(root / "gt");
+  expect_refused(evaluate, "a.png: not a regular file");
+  std::filesystem::remove(root / "pred" / "a.png");
+  cv::imwrite((root / "pred" / "a.png").string(), cv::Mat(4, 4, CV_8UC1, cv::Scalar(1)));
+  std::filesystem::create_symlink("loop.png", root / "gt" / "loop.png");
+  expect_refused(evaluate, "loop.png: not a regular file (Too many levels of symbolic links)");
+  std::filesystem::remove(root / "gt" / "loop.png");
+  cv::imwrite((root / "gt" / "new\nline.png").string(), cv::Mat(4, 4, CV_8UC1, cv::Scalar(1)));
+  expect_refused(evaluate, "new\\nline.png': no prediction named 'new\\nline'");
+}
+
 // Nothing is defaulted or chosen silently: a Kalibr camera without its distortion
 // model, coefficients for no model, and a key given twice (which one is meant?).
 TEST_F(CliHostile, AmbiguousCameraFilesAreRefusedNamingTheField) {

@@ -210,13 +210,13 @@ void register_augment_dataset(CLI::App& app) {
     const Sampling sampling = *parse_sampling(o->sampling);
     if (o->threads > 0) cv::setNumThreads(o->threads);
     const fs::path images_dir = root / "rgb_images";
-    if (!fs::is_directory(images_dir)) throw Error(images_dir.string() + ": missing (expected WoodScape layout)");
+    if (!fs::is_directory(images_dir)) throw Error(path_for_message(images_dir) + ": missing (expected WoodScape layout)");
     std::vector<fs::path> images;
     for (const auto& entry : fs::directory_iterator(images_dir)) {
       if (entry.is_regular_file() && is_image(entry.path())) images.push_back(entry.path());
     }
     std::sort(images.begin(), images.end());
-    if (images.empty()) throw Error(images_dir.string() + ": no images");
+    if (images.empty()) throw Error(path_for_message(images_dir) + ": no images");
     if (shards > 1) {
       std::vector<fs::path> mine;
       for (size_t i = size_t(shard); i < images.size(); i += size_t(shards)) mine.push_back(images[i]);
@@ -282,7 +282,7 @@ void register_augment_dataset(CLI::App& app) {
                 warp = warps.get(*camera);
                 image = read_image(image_path.string(), cv::IMREAD_UNCHANGED);
                 labels = read_image(label_path.string(), cv::IMREAD_UNCHANGED);
-                if (labels.channels() != 1) throw Error(label_path.string() + ": expected a single-channel label image");
+                if (labels.channels() != 1) throw Error(path_for_message(label_path) + ": expected a single-channel label image");
               }
               cv::Mat out_pixels, out_labels;
               if (affine) {

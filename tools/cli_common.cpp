@@ -75,13 +75,18 @@ class SilencedStderr {
 
 cv::Mat read_image(const std::string& path, int flags) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file");
+  const auto status = std::filesystem::status(path, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory) throw Error(path_for_message(path) + ": " + ec.message());
+  if (!std::filesystem::exists(status)) throw Error(path_for_message(path) + ": no such file");
+  if (!std::filesystem::is_regular_file(status)) {
+    throw Error(path_for_message(path) + ": not a regular file" + (ec ? " (" + ec.message() + ")" : std::string()));
+  }
   cv::Mat image;
   {
     const SilencedStderr quiet;
     image = cv::imread(path, flags);
   }
-  if (image.empty()) throw Error(path + ": cannot read image (unsupported or corrupt file)");
+  if (image.empty()) throw Error(path_for_message(path) + ": cannot read image (unsupported or corrupt file)");
   return image;
 }
 
@@ -97,9 +102,9 @@ std::string encode_image(const std::filesystem::path& path, const cv::Mat& image
   try {
     ok = cv::imencode(path.extension().string(), image, bytes);
   } catch (const cv::Exception& e) {
-    throw Error(path.string() + ": cannot encode the image in this format (" + e.err + ")");
+    throw Error(path_for_message(path) + ": cannot encode the image in this format (" + e.err + ")");
   }
-  if (!ok) throw Error(path.string() + ": cannot encode the image in this format");
+  if (!ok) throw Error(path_for_message(path) + ": cannot encode the image in this format");
   return std::string(bytes.begin(), bytes.end());
 }
 
@@ -166,7 +171,7 @@ std::string describe(const Eigen::Vector3d& r, const Eigen::Vector3d& t) {
 CameraFormat output_format(const std::string& format, const std::filesystem::path& out) {
   if (!format.empty()) return *parse_camera_format(format);
   if (const auto f = camera_format_for_extension(out)) return *f;
-  throw Error(out.string() + ": cannot tell the format from the extension; pass --format");
+  throw Error(path_for_message(out) + ": cannot tell the format from the extension; pass --format");
 }
 
 namespace {

@@ -142,6 +142,7 @@ void register_compare(CLI::App& app) {
   cmd->add_flag("--force", o->force, "Replace existing files in --out");
   cmd->callback([o] {
     const Camera camera = read_input_camera(o->camera);
+    check_comparison_size(camera.width(), camera.height(), o->samples);  // before rendering anything
     std::vector<std::string> tokens;
     std::stringstream list(o->models);
     for (std::string token; std::getline(list, token, ',');) {

@@ -28,20 +28,30 @@ fs::path label_folder(const fs::path& dir) {
 
 // Label files of a folder by stem; two files with one stem are ambiguous.
 std::map<std::string, fs::path> label_files(const fs::path& dir, const std::string& what) {
-  if (!fs::is_directory(dir)) throw Error(dir.string() + ": no such folder (" + what + ")");
+  if (!fs::is_directory(dir)) throw Error(path_for_message(dir) + ": no such folder (" + what + ")");
   std::map<std::string, fs::path> files;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (!entry.is_regular_file() || !lossless_label_format(entry.path())) continue;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; it != end; it.increment(ec)) {
+    if (ec) break;
+    const fs::directory_entry& entry = *it;
+    if (!lossless_label_format(entry.path())) continue;
+    // A label name that is not a readable regular file (a symlink loop, a device) is
+    // an error, not a file silently left out of the score.
+    const bool regular = entry.is_regular_file(ec);
+    if (ec || !regular) {
+      throw Error(path_for_message(entry.path()) + ": not a regular file" + (ec ? " (" + ec.message() + ")" : std::string()));
+    }
     const auto [at, inserted] = files.emplace(entry.path().stem().string(), entry.path());
-    if (!inserted) throw Error(entry.path().string() + ": two label files named " + at->second.stem().string());
+    if (!inserted) throw Error(path_for_message(entry.path()) + ": two label files named " + path_for_message(at->second.stem()));
   }
-  if (files.empty()) throw Error(dir.string() + ": no label images (PNG, TIFF or PGM) (" + what + ")");
+  if (ec) throw Error(path_for_message(dir) + ": cannot list (" + ec.message() + ")");
+  if (files.empty()) throw Error(path_for_message(dir) + ": no label images (PNG, TIFF or PGM) (" + what + ")");
   return files;
 }
 
 cv::Mat read_labels(const fs::path& path) {
   cv::Mat labels = read_image(path.string(), cv::IMREAD_UNCHANGED);
-  if (labels.channels() != 1) throw Error(path.string() + ": expected a single-channel label image");
+  if (labels.channels() != 1) throw Error(path_for_message(path) + ": expected a single-channel label image");
   return labels;
 }
 
@@ -51,39 +61,39 @@ ConfusionMatrix evaluate_set(const TestSet& set, int classes, std::optional<std:
   std::map<std::string, fs::path> masks;
   if (!set.valid.empty()) masks = label_files(set.valid, "validity masks of " + set.name);
   for (const auto& [stem, path] : predictions) {
-    if (!truths.count(stem)) throw Error(path.string() + ": no ground truth named " + stem + " in " + set.gt.string());
+    if (!truths.count(stem)) throw Error(path_for_message(path) + ": no ground truth named " + text_for_message(stem) + " in " + path_for_message(set.gt));
   }
   ConfusionMatrix matrix(classes, ignore);
   for (const auto& [stem, gt_path] : truths) {
     const auto pred = predictions.find(stem);
     if (pred == predictions.end()) {
-      throw Error(gt_path.string() + ": no prediction named " + stem + " in " + set.pred.string());
+      throw Error(path_for_message(gt_path) + ": no prediction named " + text_for_message(stem) + " in " + path_for_message(set.pred));
     }
     const cv::Mat truth = read_labels(gt_path), prediction = read_labels(pred->second);
     cv::Mat valid;
     if (!set.valid.empty()) {
       const auto mask = masks.find(stem);
-      if (mask == masks.end()) throw Error(gt_path.string() + ": no validity mask named " + stem + " in " + set.valid.string());
+      if (mask == masks.end()) throw Error(path_for_message(gt_path) + ": no validity mask named " + text_for_message(stem) + " in " + path_for_message(set.valid));
       valid = read_labels(mask->second);
       if (valid.type() != CV_8UC1 || valid.size() != truth.size()) {
-        throw Error(mask->second.string() + ": expected an 8-bit mask of the ground truth's size");
+        throw Error(path_for_message(mask->second) + ": expected an 8-bit mask of the ground truth's size");
       }
     }
     if (prediction.size() != truth.size()) {
-      throw Error(pred->second.string() + ": is " + std::to_string(prediction.cols) + "x" +
-                  std::to_string(prediction.rows) + " but its ground truth " + gt_path.string() + " is " +
+      throw Error(path_for_message(pred->second) + ": is " + std::to_string(prediction.cols) + "x" +
+                  std::to_string(prediction.rows) + " but its ground truth " + path_for_message(gt_path) + " is " +
                   std::to_string(truth.cols) + "x" + std::to_string(truth.rows));
     }
     // A value error names the file it is in: the ground truth's are checked first.
     try {
       ConfusionMatrix(classes, ignore).update(truth, truth, valid);
     } catch (const Error& e) {
-      throw Error(gt_path.string() + ": " + e.what());
+      throw Error(path_for_message(gt_path) + ": " + e.what());
     }
     try {
       matrix.update(prediction, truth, valid);
     } catch (const Error& e) {
-      throw Error(pred->second.string() + ": " + e.what());
+      throw Error(path_for_message(pred->second) + ": " + e.what());
     }
   }
   *images = long(truths.size());

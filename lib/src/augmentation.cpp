@@ -257,9 +257,10 @@ void check_label_input(const cv::Mat& labels, cv::Size source, int fill, const c
 
 ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(source)), target_(std::move(target)) {
   for (const Camera* c : {&source_, &target_}) {
-    if (c->width() > kRemapSizeLimit || c->height() > kRemapSizeLimit) {
+    if (c->width() >= kRemapSizeLimit || c->height() >= kRemapSizeLimit) {
       throw Error("ViewpointWarp: image size " + std::to_string(c->width()) + "x" + std::to_string(c->height()) +
-                  " exceeds the resampling limit of " + std::to_string(kRemapSizeLimit) + " pixels per side");
+                  " exceeds the resampling limit (cv::remap: fewer than " + std::to_string(kRemapSizeLimit) +
+                  " pixels per side)");
     }
   }
   const std::optional<SourceParams> src = float_source_params(source_);

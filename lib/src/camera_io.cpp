@@ -23,6 +23,12 @@ using detail::format_spec;
 using detail::format_table;
 using nlohmann::json;
 
+// Editors on Windows start text files with a UTF-8 byte order mark; no format means
+// anything by it.
+std::string_view without_byte_order_mark(std::string_view content) {
+  return content.starts_with("\xEF\xBB\xBF") ? content.substr(3) : content;
+}
+
 // A camera file's bytes, bounded before anything is read: only regular files (a
 // device such as /dev/zero, a FIFO without a writer or a socket would grow or hang),
 // at most the documents' size limit. Opened without blocking (a FIFO's open waits
@@ -108,6 +114,7 @@ std::optional<CameraFormat> camera_format_for_extension(const std::filesystem::p
 }
 
 CameraFormat detect_camera_format(std::string_view content, std::string_view source_name) {
+  content = without_byte_order_mark(content);
   const detail::Content c(content, std::string(source_name));
   std::string_view start = content;
   while (!start.empty() && std::isspace(static_cast<unsigned char>(start.front()))) start.remove_prefix(1);
@@ -162,6 +169,7 @@ std::vector<detail::NamedCamera> read_all(const detail::Content& c, CameraFormat
 
 CameraParameters parse_camera(std::string_view content, std::string_view source_name,
                               const CameraReadOptions& options, CameraFileInfo* info) {
+  content = without_byte_order_mark(content);
   const std::string source(source_name);
   const detail::Content c(content, source, &options);
   const CameraFormat format = options.format ? *options.format : detect_camera_format(content, source_name);
@@ -205,7 +213,7 @@ CameraParameters parse_camera(std::string_view content, std::string_view source_
     info->notes = chosen.notes;
     if (cameras.size() > 1 && !options.camera) {
       info->notes.push_back("the file has " + std::to_string(cameras.size()) + " cameras; read the first (" +
-                            chosen.name + "); choose another by name or index");
+                            text_for_message(chosen.name) + "); choose another by name or index");
     }
   }
   return p;
@@ -230,7 +238,7 @@ Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& o
 }
 
 Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& options, CameraFileInfo* info) {
-  return Camera(parse_camera(read_camera_file(path), path.string(), options, info));
+  return Camera(parse_camera(read_camera_file(path), path_for_message(path), options, info));
 }
 
 std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> format) {

@@ -18,6 +18,9 @@ namespace {
 
 // Displacements kept per model: 8 bytes each, so at most 512 MB.
 constexpr double kMaxDisplacements = 64e6;
+// Pixels of one comparison: the scene, the maps of every model and the per-pixel
+// statistics take about 80 bytes a pixel (an 8000x8000 camera took 5.1 GB).
+constexpr double kMaxComparisonPixels = 4096.0 * 4096.0;
 
 // numpy.percentile's default: linear between the order statistics around q (n - 1).
 double percentile(std::vector<float>& values, double q) {
@@ -83,7 +86,9 @@ AlternativeModel alternative_model(const Camera& camera, const std::string& toke
   ModelSpec spec;
   try {
     spec = parse_model_spec(token);
-  } catch (const Error&) {
+  } catch (const Error& e) {
+    // A model's name with a wrong argument ("polynomial:64") keeps its own reason.
+    if (token.find(':') != std::string::npos) throw Error(std::string("alternative model: ") + e.what());
     throw Error("alternative model " + quoted_for_message(token) + ": neither a camera file nor a model (" +
                 model_names_text() + ")");
   }
@@ -95,21 +100,31 @@ AlternativeModel alternative_model(const Camera& camera, const std::string& toke
   return {token, paper ? "the paper's eqs. 13-14" : "least-squares fit", Camera(c.camera), c.report.rms_px};
 }
 
+void check_comparison_size(int width, int height, int samples) {
+  if (samples < 1 || samples > 1000) throw Error("samples: expected 1 to 1000, got " + std::to_string(samples));
+  const double pixels = double(width) * double(height);
+  const std::string size = std::to_string(width) + "x" + std::to_string(height);
+  if (pixels > kMaxComparisonPixels) {
+    throw Error("compare: a " + size + " camera has " + std::to_string(long(pixels / 1e6)) +
+                " million pixels; a comparison renders, warps and measures at most " +
+                std::to_string(long(kMaxComparisonPixels / 1e6)) + " million (4096x4096): compare a resized camera");
+  }
+  // Every displacement is kept for the exact 95th percentile (twice: overall and by
+  // band, 8 bytes each): bounded rather than growing with --samples.
+  if (double(samples) * pixels > kMaxDisplacements) {
+    throw Error("samples: " + std::to_string(samples) + " changes of " + size + " pixels exceed the " +
+                std::to_string(long(kMaxDisplacements / 1e6)) + " million displacements a comparison keeps (at most " +
+                std::to_string(long(kMaxDisplacements / pixels)) + " changes here)");
+  }
+}
+
 Comparison compare_models(const Camera& reference, const std::vector<AlternativeModel>& alternatives,
                           const ComparisonOptions& options, const NamedLabels& named_labels) {
   if (options.samples < 1 || options.samples > 1000) {
     throw Error("samples: expected 1 to 1000, got " + std::to_string(options.samples));
   }
   const int w = reference.width(), h = reference.height();
-  // Every displacement is kept for the exact 95th percentile (twice: overall and by
-  // band, 8 bytes each): bounded rather than growing with --samples.
-  const double values = double(options.samples) * double(w) * double(h);
-  if (values > kMaxDisplacements) {
-    throw Error("samples: " + std::to_string(options.samples) + " changes of " + std::to_string(w) + "x" +
-                std::to_string(h) + " pixels exceed the " + std::to_string(long(kMaxDisplacements / 1e6)) +
-                " million displacements a comparison keeps (at most " +
-                std::to_string(std::max(1L, long(kMaxDisplacements / (double(w) * double(h))))) + " changes here)");
-  }
+  check_comparison_size(w, h, options.samples);
   for (const AlternativeModel& a : alternatives) {
     const Camera& alternative = a.camera;
     if (alternative.width() != w || alternative.height() != h) {

@@ -33,6 +33,14 @@ std::string quoted_for_message(std::string_view text, size_t limit) {
   return out + "'";
 }
 
+std::string text_for_message(std::string_view text) {
+  const bool plain = text.size() <= 80 && std::all_of(text.begin(), text.end(), [](char c) {
+                       const auto byte = static_cast<unsigned char>(c);
+                       return byte >= 0x20 && byte < 0x7f;
+                     });
+  return plain ? std::string(text) : quoted_for_message(text);
+}
+
 bool is_valid_utf8(std::string_view text) {
   size_t i = 0;
   while (i < text.size()) {

@@ -68,8 +68,8 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels) {
   if (!(array.flags() & py::array::c_style)) {
     array = py::array::ensure(array, py::array::c_style);  // a contiguous copy: never strided reads
   }
-  if (array.ndim() >= 2 && (array.shape(0) > 32767 || array.shape(1) > 32767)) {
-    throw Error(std::string(what) + ": larger than 32767 pixels per side");
+  if (array.ndim() >= 2 && (array.shape(0) >= 32767 || array.shape(1) >= 32767)) {
+    throw Error(std::string(what) + ": 32767 pixels or more per side (cv::remap takes fewer)");
   }
   const int ndim = static_cast<int>(array.ndim());
   if (ndim != 2 && !(ndim == 3 && !labels)) {
@@ -85,8 +85,10 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels) {
     throw Error(std::string(what) + ": expected dtype " + (labels ? "uint8 or uint16" : "uint8, uint16 or float32") +
                 ", got " + std::string(py::str(array.dtype())));
   }
+  // Inputs are only read: read-only arrays (np.asarray of a PIL image, a memory map
+  // opened with mode 'r') are taken as they are.
   return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_MAKETYPE(depth, channels),
-                 array.mutable_data());
+                 const_cast<void*>(array.data()));
 }
 
 // A new numpy array of height x width (x the channels of `like`), dtype of `like`,

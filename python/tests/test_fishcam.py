@@ -175,6 +175,14 @@ def test_inputs_are_not_copied_when_contiguous(cam, monkeypatch):
     change = fishcam.random_change("small", 1)
     np.testing.assert_array_equal(warp.warp(image=view, change=change)["image"],
                                   warp.warp(image=np.ascontiguousarray(view), change=change)["image"])
+    # Inputs need not be writeable (np.asarray of a PIL image, np.load(mmap_mode='r')).
+    frozen = np.ascontiguousarray(view)
+    labels = rng.integers(0, 10, size=(cam.height, cam.width), dtype=np.uint8)
+    expected = warp.warp(image=frozen, labels=labels, change=change)
+    frozen.setflags(write=False), labels.setflags(write=False)
+    out = warp.warp(image=frozen, labels=labels, change=change)
+    np.testing.assert_array_equal(out["image"], expected["image"])
+    np.testing.assert_array_equal(out["labels"], expected["labels"])
 
 
 def test_zero_copy_is_measured_by_the_data_pointer(cam):

@@ -84,7 +84,7 @@ class ViewpointWarp {
  public:
   // Caches the output camera's rays (all that depends on it alone): each pose then
   // costs only rotate / intersect / project per pixel. Throws Error for images
-  // wider or taller than cv::remap's limit (32767).
+  // 32767 px or more wide or tall (cv::remap takes fewer).
   ViewpointWarp(Camera source, Camera target);
   explicit ViewpointWarp(const Camera& camera) : ViewpointWarp(camera, camera) {}
 

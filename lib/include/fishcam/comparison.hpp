@@ -80,6 +80,12 @@ struct Comparison {
 // Compares each alternative (same image size as the reference) with the
 // reference. Throws Error for a size mismatch, samples outside 1..1000, or more
 // than 64 million (change, pixel) pairs (the exact percentiles keep them all).
+// What a comparison of a width x height camera over `samples` changes may take,
+// checked before any work (compare_models checks it too): samples 1..1000, at most
+// 4096 x 4096 pixels, and at most 64 million (change, pixel) pairs. Throws Error
+// naming the limit.
+void check_comparison_size(int width, int height, int samples);
+
 Comparison compare_models(const Camera& reference, const std::vector<AlternativeModel>& alternatives,
                           const ComparisonOptions& options, const NamedLabels& labels = {});
 

@@ -19,6 +19,11 @@ class Error : public std::runtime_error {
 // "..." (so every message stays one line).
 std::string quoted_for_message(std::string_view text, std::size_t limit = 60);
 
+// Text from a file or an argument for a message: as it is when it is printable
+// ASCII of at most 80 characters (names and numbers stay readable), else
+// quoted_for_message's form.
+std::string text_for_message(std::string_view text);
+
 // A path for a message: as it is when it is printable UTF-8 without control
 // characters (the common case stays readable), else quoted_for_message's form.
 std::string path_for_message(const std::filesystem::path& path);

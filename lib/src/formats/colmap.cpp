@@ -51,13 +51,13 @@ int score(const Content& c) {
 std::vector<NamedCamera> read(const Content& c) {
   std::vector<NamedCamera> out;
   for (const auto& t : data_lines(c.text())) {
-    const std::string where = c.source() + ": camera " + t[0] + ": ";
+    const std::string where = c.source() + ": camera " + text_for_message(t[0]) + ": ";
     auto fail = [&](std::string_view problem) -> void { throw Error(where + std::string(problem)); };
     if (t.size() < 4) fail("expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS...");
     const ColmapModel* model = find_model(t[1]);
     if (!model) fail("unknown COLMAP model " + quoted_for_message(t[1]));
     if (int(t.size()) != 4 + model->params) {
-      fail(t[1] + " has " + std::to_string(model->params) + " parameters, got " + std::to_string(t.size() - 4));
+      fail(text_for_message(t[1]) + " has " + std::to_string(model->params) + " parameters, got " + std::to_string(t.size() - 4));
     }
     std::vector<double> v;
     for (size_t i = 2; i < t.size(); ++i) {
@@ -86,9 +86,9 @@ std::vector<NamedCamera> read(const Content& c) {
     } else if (name == "RADIAL_FISHEYE") {
       focal(q[0], q[0], q[1], q[2]), p.model = KannalaBrandt<double>(q[0], q[3], q[4], 0, 0);
     } else if (name == "SIMPLE_RADIAL" || name == "RADIAL" || name == "FOV") {
-      fail(name + " is radially symmetric but fishcam has no such model");
+      fail(text_for_message(name) + " is radially symmetric but fishcam has no such model");
     } else {
-      fail(name + " is not radially symmetric (fishcam reads radially symmetric models only)");
+      fail(text_for_message(name) + " is not radially symmetric (fishcam reads radially symmetric models only)");
     }
     out.push_back(std::move(named));
   }

@@ -10,16 +10,6 @@
 namespace fishcam::detail {
 namespace {
 
-// A field's path for a message: as written when it is plain printable ASCII (the keys
-// the formats define), quoted and escaped when the file put anything else in a key
-// (a camera named with a carriage return made a two-line error).
-std::string field_for_message(const std::string& path) {
-  const bool plain = path.size() <= 80 && std::all_of(path.begin(), path.end(), [](unsigned char c) {
-                       return c >= 0x20 && c < 0x7f;
-                     });
-  return plain ? path : quoted_for_message(path);
-}
-
 std::string type_name(const nlohmann::json& j) { return j.is_number() ? "number" : j.type_name(); }
 
 std::string_view trimmed(std::string_view s) {
@@ -107,7 +97,7 @@ const nlohmann::json* Content::python_literal() const {
 
 // ------------------------------------------------------------ JsonFields
 void JsonFields::fail(std::string_view key, std::string_view problem) const {
-  throw Error(source_ + ": " + field_for_message(prefix_ + std::string(key)) + ": " + std::string(problem));
+  throw Error(source_ + ": " + text_for_message(prefix_ + std::string(key)) + ": " + std::string(problem));
 }
 
 const nlohmann::json& JsonFields::get(std::string_view key) const {
@@ -173,7 +163,7 @@ JsonFields JsonFields::item(std::string_view key, size_t index) const {
 
 // ------------------------------------------------------------ DocFields
 void DocFields::fail(std::string_view key, std::string_view problem) const {
-  throw Error(source_ + ": " + field_for_message(prefix_ + std::string(key)) + ": " + std::string(problem));
+  throw Error(source_ + ": " + text_for_message(prefix_ + std::string(key)) + ": " + std::string(problem));
 }
 
 const DocNode& DocFields::get(std::string_view key) const {

@@ -111,7 +111,7 @@ std::vector<NamedCamera> read(const Content& c) {
     } else if (f.has("T_imu_cam")) {
       p.pose = pose_of(f, "T_imu_cam");
     }
-    if (f.has("T_cn_cnm1")) named.notes.push_back(root.keys[i] + ".T_cn_cnm1 (relative to the previous camera) is not read");
+    if (f.has("T_cn_cnm1")) named.notes.push_back(text_for_message(root.keys[i]) + ".T_cn_cnm1 (relative to the previous camera) is not read");
     out.push_back(std::move(named));
   }
   if (out.empty()) throw Error(c.source() + ": no camera (a Kalibr camchain has cam0: camera_model, intrinsics, ...)");
