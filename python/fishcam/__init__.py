@@ -5,6 +5,7 @@ conveniences. Every error is a ``fishcam.Error`` (a ``ValueError``) carrying the
 library's one-line message. See docs/python.md.
 """
 
+import functools as _functools
 import json as _json
 
 import numpy as _np
@@ -48,6 +49,43 @@ def _warp_call(self, image=None, labels=None, change=None, depth="source-sphere"
     return self.warp(image=image, labels=labels, change=change, depth=depth, fill=fill, label_fill=label_fill,
                      return_valid=return_valid, sampling=sampling)
 
+
+def _one_line_argument_errors(function, name, bound=False):
+    """pybind11 reports arguments of the wrong type as a multi-line TypeError;
+    fishcam's errors are one-line fishcam.Error naming the call."""
+    @_functools.wraps(function)
+    def call(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except TypeError as e:
+            text = str(e)
+            if "incompatible function arguments" not in text and "incompatible constructor arguments" not in text:
+                raise
+            lines = [line.strip() for line in text.splitlines() if line.strip()]
+            expected = next((line.split(". ", 1)[1] for line in lines if line[:1].isdigit() and ". " in line), "")
+            given = ", ".join([type(a).__name__ for a in args[1 if bound else 0:]] +
+                              [f"{k}={type(v).__name__}" for k, v in kwargs.items()])
+            raise Error(f"{name}: arguments of the wrong type or range ({given}); expected {expected}") from None
+    return call
+
+
+def _wrap_public_callables(cls):
+    for attribute, value in list(vars(cls).items()):
+        if attribute.startswith("_") and attribute != "__init__":
+            continue
+        static = isinstance(value, staticmethod)
+        function = value.__func__ if static else value
+        if not callable(function) or isinstance(value, property):
+            continue
+        wrapped = _one_line_argument_errors(function, f"{cls.__name__}.{attribute.replace('__init__', '')}".rstrip("."),
+                                            bound=not static)
+        setattr(cls, attribute, staticmethod(wrapped) if static else wrapped)
+
+
+for _cls in (Camera, ViewpointWarp, ViewpointChange, _fishcam.ConfusionMatrix):
+    _wrap_public_callables(_cls)
+derive_seed = _one_line_argument_errors(derive_seed, "derive_seed")
+random_change_in = _one_line_argument_errors(random_change_in, "random_change_in")
 
 ViewpointWarp.__call__ = _warp_call
 Camera.info = _info

@@ -379,3 +379,22 @@ def test_sampling_exact_and_grid_equal_the_cli(cam, tmp_path):
         warp(image=image, change=change, sampling="nearest")
     with pytest.raises(fishcam.Error, match="sampling"):
         RandomViewpoint(cam, sampling="nearest")
+
+
+def test_arguments_of_the_wrong_type_are_one_line_fishcam_errors(cam):
+    """pybind11's multi-line TypeErrors become fishcam.Error naming the call."""
+    warp = fishcam.ViewpointWarp(cam)
+    change = fishcam.random_change("small", 1)
+    cases = [
+        (lambda: fishcam.Camera.read(None), "Camera.read: arguments of the wrong type or range (NoneType)"),
+        (lambda: cam.resized(1.5, 5), "Camera.resized"),
+        (lambda: warp.warp(image=[[1]], change=change), "ViewpointWarp.warp"),
+        (lambda: fishcam.derive_seed(-1, "a", 0), "derive_seed: arguments of the wrong type or range (int, str, int)"),
+        (lambda: cam.theta_from_rho("a"), "Camera.theta_from_rho"),
+        (lambda: fishcam.metrics.ConfusionMatrix(3, ignore="x"), "ConfusionMatrix"),
+        (lambda: fishcam.ViewpointWarp(None), "ViewpointWarp: arguments"),
+    ]
+    for call, message in cases:
+        with pytest.raises(fishcam.Error) as error:
+            call()
+        assert message in str(error.value) and "\n" not in str(error.value), str(error.value)
