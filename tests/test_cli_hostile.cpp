@@ -230,6 +230,27 @@ TEST_F(CliHostile, LabelFoldersWithLinksToNothingOrDevices) {
   expect_refused(evaluate, "new\\nline.png': no prediction named 'new\\nline'");
 }
 
+// Text from a file reaches messages and notes escaped, on one line: a COLMAP id with
+// an escape sequence (which cleared the screen), Kalibr camera keys with control
+// characters or bytes that are not UTF-8; a UTF-8 byte order mark is skipped.
+TEST_F(CliHostile, FileTextInMessagesIsEscaped) {
+  test::write_file(dir_ / "escape.txt", "1\x1b[2J OPENCV_FISHEYE 640 480 300 300 320 240 0.1 0.01 0 nan\n");
+  expect_refused("info " + q("escape.txt"), "camera '1\\x1b[2J': value 'nan'");
+  test::write_file(dir_ / "bom.txt", "\xEF\xBB\xBF" "1 OPENCV_FISHEYE 640 480 300 300 320 240 0.1 0.01 0 0\n");
+  const auto bom = run_fishcam("info " + q("bom.txt"));
+  EXPECT_EQ(bom.exit_code, 0) << bom.err;
+  const std::string camera = "  camera_model: pinhole\n  intrinsics: [300, 300, 320, 240]\n  resolution: [640, 480]\n"
+                             "  distortion_model: none\n  distortion_coeffs: []\n";
+  test::write_file(dir_ / "keys.yaml", "\"ca\\rm0\":\n" + camera + "\"cam\\xe9\":\n" + camera +
+                                           "  T_cn_cnm1: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n");
+  expect_refused("info " + q("keys.yaml") + " --camera 5", "(the file has 0 = 'ca\\rm0', 1 = 'cam\\xc3\\xa9')");
+  const auto note = run_fishcam("info " + q("keys.yaml") + " --camera 1 --json");
+  EXPECT_EQ(note.exit_code, 0) << note.err;
+  EXPECT_NE(note.err.find("note: " + (dir_ / "keys.yaml").string() + ": 'cam\\xc3\\xa9'.T_cn_cnm1"), std::string::npos)
+      << note.err;
+  EXPECT_EQ(std::count(note.err.begin(), note.err.end(), '\n'), 1) << note.err;
+}
+
 // Nothing is defaulted or chosen silently: a Kalibr camera without its distortion
 // model, coefficients for no model, and a key given twice (which one is meant?).
 TEST_F(CliHostile, AmbiguousCameraFilesAreRefusedNamingTheField) {

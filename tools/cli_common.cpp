@@ -232,7 +232,7 @@ Camera read_input_camera(const std::filesystem::path& path, CameraFileInfo* info
   if (!o.distortion_model.empty()) options.distortion_model = o.distortion_model;
   CameraFileInfo info;
   Camera camera = read_camera(path, options, &info);
-  for (const std::string& note : info.notes) std::fprintf(stderr, "fishcam: note: %s: %s\n", path.string().c_str(), note.c_str());
+  for (const std::string& note : info.notes) std::fprintf(stderr, "fishcam: note: %s: %s\n", path_for_message(path).c_str(), note.c_str());
   if (info_out) *info_out = info;
   return camera;
 }

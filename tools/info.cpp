@@ -60,7 +60,9 @@ void register_info(CLI::App& app) {
     CameraFileInfo info;
     const Camera camera = read_input_camera(*path, &info);
     nlohmann::json j = nlohmann::json::parse(camera_info_json(camera, info.format));
-    j["camera"] = {{"name", info.camera_name}, {"index", info.camera_index}, {"count", info.camera_count}};
+    // JSON holds UTF-8 only: a name that is not (a key from a hostile file) is given escaped.
+    const std::string name = is_valid_utf8(info.camera_name) ? info.camera_name : quoted_for_message(info.camera_name);
+    j["camera"] = {{"name", name}, {"index", info.camera_index}, {"count", info.camera_count}};
     if (*json) {
       std::printf("%s\n", j.dump(2).c_str());
     } else {
