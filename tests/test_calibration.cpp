@@ -178,6 +178,30 @@ TEST(Calibration, TheProgramWritesNothingForATransposedBoard) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// One board pose seen several times determines no camera: refused for every model,
+// nothing written (every model once wrote a camera with a coverage warning).
+TEST(Calibration, BoardsInOnePoseAreRefused) {
+  const auto one = synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 1, 0.2, 5);
+  std::vector<BoardObservation> same;
+  for (int i = 0; i < 5; ++i) same.push_back({"img" + std::to_string(i) + ".png", one.observations[0].corners});
+  for (const char* model : {"polynomial", "equidistant", "kannala-brandt", "double-sphere"}) {
+    try {
+      calibrate(same, kBoard, 1280, 966, parse_model_spec(model));
+      ADD_FAILURE() << model << ": one pose was calibrated";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("the 5 boards show 1 distinct pose(s)"), std::string::npos) << e.what();
+    }
+  }
+  const auto dir = test::scratch_dir("one_pose_cli");
+  write_corners(dir / "c.vnl", same);
+  const auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                                   " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model polynomial --out " +
+                                   test::quoted(dir / "cal.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("distinct pose"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "cal.json"));
+}
+
 // The real photos (../shared): the detected corners, given transposed, are refused too.
 TEST(Calibration, ARealTransposedBoardIsRefused) {
   const std::filesystem::path photos = std::filesystem::path(FISHCAM_SHARED_DIR) / "data" / "calibration";

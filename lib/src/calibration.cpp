@@ -236,6 +236,26 @@ void check_board_order(const std::vector<const BoardObservation*>& boards, const
               ", a grid gives < 0.25): check --board and that each image lists its corners row by row");
 }
 
+// Boards seen in one pose only (the same view several times) determine no camera:
+// the solve fits one view however the intrinsics trade against the pose. Poses
+// closer than 2 deg and 5 % of their distance count as one.
+void check_distinct_poses(const CalibrationResult& r) {
+  std::vector<const BoardPose*> distinct;
+  for (const BoardPose& pose : r.poses) {
+    const bool seen = std::any_of(distinct.begin(), distinct.end(), [&](const BoardPose* other) {
+      const double angle = pose.rotation.angularDistance(other->rotation);
+      const double shift = (pose.translation - other->translation).norm();
+      return angle < 2 * std::numbers::pi / 180 && shift < 0.05 * pose.translation.norm();
+    });
+    if (!seen) distinct.push_back(&pose);
+  }
+  if (distinct.size() < 3) {
+    throw Error("calibrate: the " + std::to_string(r.poses.size()) + " boards show " + std::to_string(distinct.size()) +
+                " distinct pose(s) (within 2 deg and 5 % of their distance); a calibration needs at least 3, tilted "
+                "differently and spread over the image");
+  }
+}
+
 // A solve whose result cannot be right is an error, not a camera.
 void check_solution(const CalibrationResult& r, int width, int height, const std::string& model) {
   const std::string what = "calibrate (" + model + "): ";
@@ -578,6 +598,7 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
     return calibrate_with<Model>(boards, board, width, height, spec);
   });
   check_solution(result, width, height, spec.name);
+  check_distinct_poses(result);
   // Coverage: the share of an 8 x 6 grid over the image that holds corners. A lens
   // calibrated from its centre only is extrapolated at the rim.
   bool cell[6][8] = {};
