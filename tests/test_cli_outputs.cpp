@@ -103,6 +103,52 @@ TEST_F(CliOutputs, InputsAreNeverReplacedThroughLinksOrFolders) {
   }
 }
 
+// Every subcommand that writes files, given a symlink and a hard link of one of
+// its inputs as an output (with --force): refused before anything is read or written.
+TEST_F(CliOutputs, EverySubcommandRefusesLinksToItsInputsAsOutputs) {
+  const auto input = dir_ / "input";
+  fs::create_directories(input);
+  fs::copy_file(test::data_path("woodscape_front.json"), input / "camera.json");
+  test::write_file(input / "data.csv", "theta,rho\n0.1,34\n");
+  test::write_file(input / "corners.vnl", "# filename x y level\n");
+  test::write_file(input / "image.png", "not read");
+  // {command with OUT for the output, the input it aliases}
+  const std::vector<std::pair<std::string, std::string>> commands = {
+      {"render CAM --out-image OUT --out-label " + quoted(dir_ / "l.png"), "camera.json"},
+      {"augment CAM --image IMG --out-image OUT --rotate 1,0,0", "image.png"},
+      {"map CAM --rotate 1,0,0 --out OUT", "camera.json"},
+      {"convert CAM --to equidistant --out OUT", "camera.json"},
+      {"fit CSV --to equidistant --imagersize 1280,966 --center 640,480 --out OUT", "data.csv"},
+      {"calibrate --corners VNL --board 10x10 --spacing 0.1 --imagersize 1280x966 --model equidistant --out OUT",
+       "corners.vnl"},
+      {"synth-corners CAM --boards 3 --noise 0 --seed 1 --out OUT", "camera.json"},
+      {"detect-corners IMG --board 10x10 --out OUT", "image.png"},
+  };
+  const auto substitute = [&](std::string command, const fs::path& out) {
+    for (const auto& [token, path] : std::vector<std::pair<std::string, fs::path>>{
+             {"CAM", input / "camera.json"}, {"IMG", input / "image.png"}, {"CSV", input / "data.csv"},
+             {"VNL", input / "corners.vnl"}, {"OUT", out}}) {
+      if (const size_t at = command.find(token); at != std::string::npos) command.replace(at, token.size(), quoted(path));
+    }
+    return command;
+  };
+  int refused = 0;
+  for (const auto& [command, aliased] : commands) {
+    for (const char* kind : {"symlink", "hardlink"}) {
+      const auto out = dir_ / (std::string(kind) + fs::path(aliased).extension().string());
+      fs::remove(out);
+      if (kind == std::string("symlink")) {
+        fs::create_symlink(input / aliased, out);
+      } else {
+        fs::create_hard_link(input / aliased, out);
+      }
+      expect_refused(substitute(command, out) + " --force", "is also an input", input);
+      ++refused;
+    }
+  }
+  EXPECT_EQ(refused, 16);
+}
+
 // An output that is a symlink is replaced (with --force), never written through;
 // a leftover temporary-looking symlink is never opened.
 TEST_F(CliOutputs, SymlinksAtOutputsAreReplacedNotFollowed) {
