@@ -13,6 +13,23 @@ run(${CMAKE_COMMAND} -S ${CONSUMER_DIR} -B ${WORK_DIR}/build -DCMAKE_PREFIX_PATH
     -DCMAKE_BUILD_TYPE=Release)
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/consumer)
+
+# The core layer alone: nothing but Eigen and fishcam_core on its compile and link lines.
+run(${CMAKE_COMMAND} -S ${CONSUMER_DIR}/../consumer_core -B ${WORK_DIR}/build_core -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
+    -DCMAKE_BUILD_TYPE=Release)
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/build_core)
+run(${WORK_DIR}/build_core/consumer_core)
+file(READ ${WORK_DIR}/build_core/compile_commands.json core_compile)
+file(READ ${WORK_DIR}/build_core/CMakeFiles/consumer_core.dir/link.txt core_link)
+foreach(forbidden opencv ceres yaml pugixml nlohmann fishcam_io fishcam_fit fishcam_augment fishcam_eval)
+  string(TOLOWER "${core_compile}${core_link}" core_lines)
+  if(core_lines MATCHES "${forbidden}")
+    message(FATAL_ERROR "a core-only consumer has ${forbidden} on its compile or link line:\n${core_compile}\n${core_link}")
+  endif()
+endforeach()
+if(NOT core_link MATCHES "fishcam_core")
+  message(FATAL_ERROR "the core consumer does not link fishcam_core: ${core_link}")
+endif()
 if(NOT EXISTS ${WORK_DIR}/prefix/bin/fishcam)
   message(FATAL_ERROR "the fishcam program was not installed")
 endif()

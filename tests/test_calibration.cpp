@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <opencv2/imgproc.hpp>
 
+#include "fishcam/corners.hpp"
+#include "fishcam/testing.hpp"
 #include "fishcam/calibration.hpp"
 #include "test_support.hpp"
 
@@ -28,7 +30,7 @@ TEST(Calibration, NoiseFreeBoardsRecoverEveryFisheyeModel) {
   for (const auto& [name, truth] : test::every_model()) {
     if (name == "pinhole") continue;  // pinhole below, with a narrower field of view
     const Camera camera(truth);
-    const auto boards = synthesize_boards(camera, kBoard, 25, 0.0, 11);
+    const auto boards = testing::synthesize_boards(camera, kBoard, 25, 0.0, 11);
     const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, spec_of(truth.model));
     const auto expected = truth_vector(truth);
     ASSERT_EQ(result.parameters.size(), expected.size()) << name;
@@ -41,7 +43,7 @@ TEST(Calibration, NoiseFreeBoardsRecoverEveryFisheyeModel) {
     EXPECT_TRUE(result.warnings.empty()) << name;
   }
   const CameraParameters pinhole = read_camera(test::data_path("pinhole.cameramodel")).parameters();
-  const auto boards = synthesize_boards(Camera(pinhole), kBoard, 25, 0.0, 12);
+  const auto boards = testing::synthesize_boards(Camera(pinhole), kBoard, 25, 0.0, 12);
   const auto result = calibrate(boards.observations, kBoard, pinhole.width, pinhole.height, spec_of(pinhole.model));
   EXPECT_NEAR(result.parameters[0], model_params(pinhole.model)[0], 1e-6 * 640);
 }
@@ -50,7 +52,7 @@ TEST(Calibration, WithNoiseTheErrorsSitWithinThreeSigma) {
   const CameraParameters truth = read_camera(test::data_path("woodscape_front.json")).parameters();
   const auto expected = truth_vector(truth);
   for (std::uint64_t seed : {2, 3}) {
-    const auto boards = synthesize_boards(Camera(truth), kBoard, 50, 0.3, seed);
+    const auto boards = testing::synthesize_boards(Camera(truth), kBoard, 50, 0.3, seed);
     const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, {"polynomial", 4});
     EXPECT_NEAR(result.rms_px, 0.3 * std::sqrt(2.0), 0.03);  // two noisy coordinates per corner
     for (size_t i = 0; i < expected.size(); ++i) {
@@ -63,7 +65,7 @@ TEST(Calibration, WithNoiseTheErrorsSitWithinThreeSigma) {
 
 TEST(Calibration, OutliersAreFoundAndDoNotBiasTheResult) {
   const CameraParameters truth = read_camera(test::data_path("stereographic.cameramodel")).parameters();
-  auto boards = synthesize_boards(Camera(truth), kBoard, 30, 0.1, 4);
+  auto boards = testing::synthesize_boards(Camera(truth), kBoard, 30, 0.1, 4);
   boards.observations[3].corners[17] += Eigen::Vector2d(25, -30);  // a wrong detection
   boards.observations[9].corners[50] += Eigen::Vector2d(-12, 8);
   const auto result = calibrate(boards.observations, kBoard, truth.width, truth.height, {"stereographic"});
@@ -76,7 +78,7 @@ TEST(Calibration, OutliersAreFoundAndDoNotBiasTheResult) {
 
 TEST(Calibration, CornersFileRoundTripAndErrors) {
   const auto dir = test::scratch_dir("corners");
-  auto boards = synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 3, 0.2, 5).observations;
+  auto boards = testing::synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 3, 0.2, 5).observations;
   boards.push_back({"empty.png", {}});
   write_corners(dir / "c.vnl", boards);
   const auto back = read_corners(dir / "c.vnl", kBoard);
@@ -109,13 +111,13 @@ TEST(Calibration, CornersFileRoundTripAndErrors) {
 
 TEST(Calibration, DegenerateDataIsReported) {
   const Camera camera = read_camera(test::data_path("woodscape_front.json"));
-  const auto one = synthesize_boards(camera, kBoard, 1, 0.0, 6);
+  const auto one = testing::synthesize_boards(camera, kBoard, 1, 0.0, 6);
   EXPECT_THROW(calibrate(one.observations, kBoard, 1280, 966, {"polynomial", 4}), Error);
   // Boards only near the centre: it solves, and says the rim is extrapolated.
   CameraParameters narrow = camera.parameters();
   narrow.width = 400, narrow.height = 300;
   narrow.principal_point = {199.5, 149.5};
-  auto centre = synthesize_boards(Camera(narrow), kBoard, 10, 0.0, 7).observations;
+  auto centre = testing::synthesize_boards(Camera(narrow), kBoard, 10, 0.0, 7).observations;
   for (auto& o : centre) {
     for (auto& c : o.corners) c += Eigen::Vector2d(640 - 199.5 + 3.942, 480 - 149.5 - 3.093);
   }
@@ -129,7 +131,7 @@ TEST(Calibration, DegenerateDataIsReported) {
 TEST(Calibration, ATransposedBoardIsRefusedNamingTheFix) {
   const Camera camera = read_camera(test::data_path("woodscape_front.json"));
   const BoardSpec board{9, 6, 0.1}, transposed{6, 9, 0.1};
-  const auto boards = synthesize_boards(camera, board, 20, 0.3, 8).observations;
+  const auto boards = testing::synthesize_boards(camera, board, 20, 0.3, 8).observations;
   for (const char* model : {"polynomial", "equidistant", "kannala-brandt", "double-sphere"}) {
     try {
       calibrate(boards, transposed, 1280, 966, parse_model_spec(model));
@@ -181,7 +183,7 @@ TEST(Calibration, TheProgramWritesNothingForATransposedBoard) {
 // One board pose seen several times determines no camera: refused for every model,
 // nothing written (every model once wrote a camera with a coverage warning).
 TEST(Calibration, BoardsInOnePoseAreRefused) {
-  const auto one = synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 1, 0.2, 5);
+  const auto one = testing::synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 1, 0.2, 5);
   std::vector<BoardObservation> same;
   for (int i = 0; i < 5; ++i) same.push_back({"img" + std::to_string(i) + ".png", one.observations[0].corners});
   for (const char* model : {"polynomial", "equidistant", "kannala-brandt", "double-sphere"}) {
@@ -225,7 +227,7 @@ TEST(Calibration, ARealTransposedBoardIsRefused) {
 TEST(Calibration, AgreesWithMrcalCalibrateCameras) {
   const auto dir = test::scratch_dir("mrcal_calibrate");
   const Camera truth = read_camera(test::data_path("stereographic.cameramodel"));
-  const auto boards = synthesize_boards(truth, kBoard, 30, 0.3, 9);
+  const auto boards = testing::synthesize_boards(truth, kBoard, 30, 0.3, 9);
   write_corners(dir / "corners.vnl", boards.observations);
   const std::string command = "cd '" + dir.string() + "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl "
                               "--lensmodel LENSMODEL_STEREOGRAPHIC --focal 300 --object-spacing 0.1 --object-width-n 10 "

@@ -2,6 +2,7 @@
 // independent algebraic cross-check, the inverse table, and adversarial models.
 #include <random>
 
+#include "fishcam/testing.hpp"
 #include "test_support.hpp"
 
 namespace fishcam {
@@ -177,7 +178,7 @@ TEST(Inverse, RobustSolverResidualAndAlgebraicCrossCheck) {
           [&, model_name = name](const auto& m) {
             if constexpr (PolynomialInTheta<std::decay_t<decltype(m)>>) {
               if (i % 10 == 0) {
-                const double algebraic = algebraic_theta(m.power_coefficients(), rho, camera.domain());
+                const double algebraic = testing::algebraic_theta(m.power_coefficients(), rho, camera.domain());
                 ASSERT_NEAR(algebraic, theta, 1e-9) << model_name << " rho " << rho;
               }
             }

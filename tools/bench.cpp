@@ -11,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "fishcam/testing.hpp"
 #include "commands.hpp"
 #include "cli_common.hpp"
 #include "fishcam/augmentation.hpp"
@@ -84,7 +85,7 @@ void run_roots(const std::string& path, bool json, int repeats) {
         if constexpr (PolynomialInTheta<std::decay_t<decltype(m)>>) {
           const auto c = m.power_coefficients();
           out["companion_ns"] = per_call_ns(kSamples / 64, [&](double r) {
-            return algebraic_theta(c, r, camera.domain());
+            return testing::algebraic_theta(c, r, camera.domain());
           });
         }
       },
@@ -297,7 +298,7 @@ void run_fit(bool json, int repeats) {
     });
   }
   const BoardSpec board{10, 10, 0.1};
-  const auto boards = synthesize_boards(source, board, 50, 0.3, 1);
+  const auto boards = testing::synthesize_boards(source, board, 50, 0.3, 1);
   out["calibrate_50_boards_ms"] = 1e3 * median_seconds(std::max(1, repeats / 2), [&] {
     g_sink = calibrate(boards.observations, board, source.width(), source.height(), {"polynomial", 4}).rms_px;
   });

@@ -1,6 +1,7 @@
 // fishcam calibrate: intrinsics and board poses from chessboard corners.
 #include <cstdio>
 
+#include "fishcam/corners.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/calibration.hpp"

@@ -178,7 +178,10 @@ void register_compare(CLI::App& app) {
     }
     check_outputs(outputs, inputs, o->force);
     std::vector<AlternativeModel> alternatives;
-    for (const std::string& token : tokens) alternatives.push_back(alternative_model(camera, token, o->method));
+    for (const std::string& token : tokens) {
+      alternatives.push_back(fs::is_regular_file(token, ec) ? alternative_from_file(token, read_input_camera(token))
+                                                            : alternative_model(camera, token, o->method));
+    }
 
     // The scene: rendered from the camera's mount (or the bundled WoodScape front camera's).
     std::optional<Pose> mount = camera.parameters().pose;

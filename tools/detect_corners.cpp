@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "fishcam/corners.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/calibration.hpp"

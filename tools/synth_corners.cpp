@@ -1,6 +1,8 @@
 // fishcam synth-corners CAMERA: chessboard observations from a known camera, in mrcal's corners format.
 #include <cstdio>
 
+#include "fishcam/corners.hpp"
+#include "fishcam/testing.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/atomic_file.hpp"
@@ -32,7 +34,7 @@ void register_synth_corners(CLI::App& app) {
     check_outputs({{o->out}, {o->truth}}, {o->camera}, o->force);
     const Camera camera = read_input_camera(o->camera);
     const BoardSpec board = parse_board(o->board, o->spacing);
-    const SyntheticBoards synthetic = synthesize_boards(camera, board, o->boards, o->noise, o->seed);
+    const testing::SyntheticBoards synthetic = testing::synthesize_boards(camera, board, o->boards, o->noise, o->seed);
     // Corners and truth land together (or neither).
     std::vector<std::pair<std::filesystem::path, std::string>> files{{o->out, format_corners(synthetic.observations)}};
     if (!o->truth.empty()) files.emplace_back(o->truth, format_camera(camera.parameters(), CameraFormat::fishcam));

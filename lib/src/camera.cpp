@@ -1,8 +1,6 @@
 #include "fishcam/error.hpp"
 #include "fishcam/camera.hpp"
-
-
-#include <opencv2/core.hpp>
+#include "fishcam/parallel.hpp"
 
 #include <algorithm>
 #include <array>
@@ -113,14 +111,14 @@ bool ray_of(const Model& model, const ValidDomain& domain, const InverseTable& t
   return true;
 }
 
-// Runs body(begin, end) over [0, n) on OpenCV's thread pool, in chunks worth a thread.
+// Runs body(begin, end) over [0, n) on the installed thread pool, in chunks worth a thread.
 template <class Body>
 void parallel_chunks(size_t n, const Body& body) {
   constexpr size_t kChunk = 8192;
   const int stripes = static_cast<int>((n + kChunk - 1) / kChunk);
   if (stripes <= 1) return body(size_t{0}, n);
-  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
-    body(static_cast<size_t>(r.start) * kChunk, std::min(n, static_cast<size_t>(r.end) * kChunk));
+  parallel_for(stripes, [&](int begin, int end) {
+    body(static_cast<size_t>(begin) * kChunk, std::min(n, static_cast<size_t>(end) * kChunk));
   });
 }
 
@@ -133,8 +131,8 @@ void unproject_pixels(const CameraParameters& params, const ValidDomain& domain,
   const Eigen::Vector2d c = params.principal_point, inv_scale = params.pixel_scale.cwiseInverse();
   std::visit(
       [&](const auto& m) {
-        cv::parallel_for_(cv::Range(0, static_cast<int>(h)), [&](const cv::Range& rows) {
-          for (int row = rows.start; row < rows.end; ++row) {
+        parallel_for(static_cast<int>(h), [&](int first_row, int end_row) {
+          for (int row = first_row; row < end_row; ++row) {
             const double v = (row - c.y()) * inv_scale.y();
             const size_t first = w * static_cast<size_t>(row);
             for (size_t col = 0; col < w; ++col) {

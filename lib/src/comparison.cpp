@@ -8,7 +8,6 @@
 #include <nlohmann/json.hpp>
 
 #include "fishcam/augmentation.hpp"
-#include "fishcam/camera_io.hpp"
 #include "fishcam/error.hpp"
 #include "fishcam/fit.hpp"
 #include "fishcam/model_registry.hpp"
@@ -80,9 +79,11 @@ double distance(const WarpMaps& a, const WarpMaps& b, int v, int u) {
 
 }  // namespace
 
+AlternativeModel alternative_from_file(const std::string& path, Camera camera) {
+  return {path, "read from " + path, std::move(camera), std::nullopt};
+}
+
 AlternativeModel alternative_model(const Camera& camera, const std::string& token, std::string_view method) {
-  std::error_code ec;
-  if (std::filesystem::is_regular_file(token, ec)) return {token, "read from " + token, read_camera(token), std::nullopt};
   ModelSpec spec;
   try {
     spec = parse_model_spec(token);

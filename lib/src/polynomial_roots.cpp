@@ -105,22 +105,4 @@ std::optional<double> first_positive_root(std::span<const double> c, double limi
   return best;
 }
 
-double algebraic_theta(std::span<const double> power_coefficients, double rho, const ValidDomain& domain) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  if (!domain.contains_rho(rho)) return nan;
-  std::vector<double> shifted(power_coefficients.begin(), power_coefficients.end());
-  shifted[0] -= rho;
-  // Tolerances: a double root at a fold splits into a complex pair of size ~sqrt(eps).
-  const double slack = 1e-6 * std::max(1.0, domain.theta_max);
-  double best = nan, best_residual = std::numeric_limits<double>::infinity();
-  for (const auto& z : polynomial_roots(shifted)) {
-    if (std::abs(z.imag()) > 1e-6 * std::max(1.0, std::abs(z))) continue;
-    if (z.real() < -slack || z.real() > domain.theta_max + slack) continue;
-    const double theta = std::clamp(z.real(), 0.0, domain.theta_max);
-    const double residual = std::abs(evaluate(shifted, theta)) / std::max(1.0, magnitude(power_coefficients, theta));
-    if (residual < best_residual) best = theta, best_residual = residual;
-  }
-  return best;
-}
-
 }  // namespace fishcam

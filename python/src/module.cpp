@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <string>
 
 #include "fishcam/affine.hpp"
@@ -530,7 +531,10 @@ void bind_comparison(py::module_& m) {
         }
         py::gil_scoped_release release;
         for (AlternativeModel& a : alternatives) {
-          if (a.how.empty()) a = alternative_model(camera, a.name, method);  // fitted, or read from a file
+          if (!a.how.empty()) continue;  // a Camera given as such
+          std::error_code ec;
+          a = std::filesystem::is_regular_file(a.name, ec) ? alternative_from_file(a.name, read_camera(a.name))
+                                                           : alternative_model(camera, a.name, method);
         }
         return comparison_json(compare_models(camera, alternatives, options, named));
       },

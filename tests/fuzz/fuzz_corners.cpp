@@ -1,4 +1,5 @@
 // mrcal corners files (calibration input).
+#include "fishcam/corners.hpp"
 #include "fishcam/calibration.hpp"
 #include "fuzz_harness.hpp"
 

@@ -1,5 +1,5 @@
-// Chessboard calibration: mrcal's corners file, synthetic observations, and a
-// joint Ceres solve of the intrinsics (any model) and one board pose per image.
+// Chessboard calibration: a joint Ceres solve of the intrinsics (any model) and one
+// board pose per image, from corners (fishcam/corners.hpp reads them).
 #pragma once
 
 #include <cstdint>
@@ -7,50 +7,11 @@
 #include <string>
 #include <vector>
 
+#include "fishcam/board.hpp"
 #include "fishcam/camera.hpp"
 #include "fishcam/fit.hpp"
 
 namespace fishcam {
-
-// A chessboard of cols x rows inner corners, `spacing` metres apart. Its points, in
-// board order (row-major: x = i * spacing for i < cols, y = j * spacing, z = 0), are
-// the order corner files list them in.
-struct BoardSpec {
-  int cols = 0, rows = 0;
-  double spacing = 0;
-  int corners() const { return cols * rows; }
-};
-// Throws Error unless the board has 2..1000 corners per side and a finite spacing > 0.
-void check_board(const BoardSpec& board);
-std::vector<Eigen::Vector3d> board_points(const BoardSpec& board);
-
-// One image's corners, in board order; empty when the image shows no board.
-struct BoardObservation {
-  std::string filename;
-  std::vector<Eigen::Vector2d> corners;
-};
-
-// mrcal's corners format (vnlog): "# filename x y level", one row per corner in
-// board order, "filename - - -" for an image without a board. Throws Error naming
-// the file, line and problem (e.g. a wrong number of corners for an image).
-std::vector<BoardObservation> read_corners(const std::filesystem::path& path, const BoardSpec& board);
-// The content of a corners file (throws Error for non-finite corners).
-std::string format_corners(const std::vector<BoardObservation>& observations);
-void write_corners(const std::filesystem::path& path, const std::vector<BoardObservation>& observations,
-                   bool overwrite = false);
-
-// Board poses: p_camera = rotation * p_board + translation.
-using BoardPose = Pose;
-
-struct SyntheticBoards {
-  std::vector<BoardObservation> observations;
-  std::vector<BoardPose> poses;
-};
-// Observations of `count` boards by a known camera, spread over the whole field of
-// view (the rim included), every corner inside the image; Gaussian pixel noise of
-// sigma noise_px. Reproducible from the seed on any platform.
-SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, int count, double noise_px,
-                                  std::uint64_t seed);
 
 struct CalibrationResult {
   CameraParameters camera;

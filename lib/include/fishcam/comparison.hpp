@@ -40,10 +40,14 @@ struct AlternativeModel {
   Camera camera;
   std::optional<double> fit_rms_px;  // the fit's error over the camera's image, when fitted
 };
-// `token` names a registry model (fitted to `camera` as convert_camera does; with
+// `token` names a registry model, fitted to `camera` as convert_camera does (with
 // method "paper", eqs. 13-14 for equidistant and stereographic, least squares for
-// the rest) or, when it is an existing file, a camera file. Throws Error otherwise.
+// the rest). Throws Error naming the token when it is not a model: the callers
+// read camera files themselves (the comparison layer reads no files) and say
+// "neither a camera file nor a model".
 AlternativeModel alternative_model(const Camera& camera, const std::string& token, std::string_view method = "lsq");
+// An alternative the caller read from a file.
+AlternativeModel alternative_from_file(const std::string& path, Camera camera);
 
 struct ModelComparison {
   AlternativeModel alternative;

@@ -45,11 +45,6 @@ std::vector<std::complex<double>> polynomial_roots(std::span<const double> coeff
 // polished by bracketed Newton, cross-checked by a sign scan); nullopt if none.
 std::optional<double> first_positive_root(std::span<const double> coefficients, double limit);
 
-// theta for rho from the companion-matrix roots of rho(theta) - rho (polynomial-type
-// models): an independent algebraic cross-check of the iterative solver. NaN when
-// no real root lies in the domain.
-double algebraic_theta(std::span<const double> power_coefficients, double rho, const ValidDomain& domain);
-
 // The first theta in (0, limit) where drho/dtheta stops being positive, found
 // numerically (a scan of 4096 steps, then bisection to adjacent doubles): the fold
 // search for models that are not polynomials in theta. nullopt if none.

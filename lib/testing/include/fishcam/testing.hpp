@@ -1,0 +1,30 @@
+// Test oracles and synthetic data for tests and benchmarks (fishcam_testing: built
+// with the project, never installed). Not part of the library's API.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "fishcam/board.hpp"
+#include "fishcam/camera.hpp"
+#include "fishcam/radial_inverse.hpp"
+
+namespace fishcam::testing {
+
+struct SyntheticBoards {
+  std::vector<BoardObservation> observations;
+  std::vector<BoardPose> poses;
+};
+// Observations of `count` boards by a known camera, spread over the whole field of
+// view (the rim included), every corner inside the image; Gaussian pixel noise of
+// sigma noise_px. Reproducible from the seed on any platform.
+SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, int count, double noise_px,
+                                  std::uint64_t seed);
+
+// theta for rho from the companion-matrix roots of rho(theta) - rho (polynomial-type
+// models): an independent algebraic cross-check of the iterative solver. NaN when
+// no real root lies in the domain.
+double algebraic_theta(std::span<const double> power_coefficients, double rho, const ValidDomain& domain);
+
+}  // namespace fishcam::testing
