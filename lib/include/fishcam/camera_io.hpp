@@ -12,11 +12,14 @@
 #include <utility>
 #include <vector>
 
+#include "fishcam/camera_format_list.hpp"
 #include "fishcam/camera.hpp"
 
 namespace fishcam {
 
-enum class CameraFormat { woodscape, mrcal, opencv, fishcam, kalibr, basalt, colmap, ros, camodocal, orbslam3 };
+#define FISHCAM_FORMAT_ENUMERATOR(name) name,
+enum class CameraFormat { FISHCAM_CAMERA_FORMATS(FISHCAM_FORMAT_ENUMERATOR) };
+#undef FISHCAM_FORMAT_ENUMERATOR
 
 std::string_view to_string(CameraFormat format);
 // The format's name ("kalibr", ...); nullopt for anything else.

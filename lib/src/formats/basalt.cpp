@@ -108,7 +108,7 @@ std::string write(const CameraParameters& original) {
 
 }  // namespace
 
-extern const FormatSpec kBasaltFormat{CameraFormat::basalt, "basalt", "basalt calibration JSON", {".json"},
+extern const FormatSpec basalt_format{CameraFormat::basalt, "basalt", "basalt calibration JSON", {".json"},
                                       "kannala-brandt (and equidistant), double-sphere, extended-unified, unified and "
                                       "pinhole",
                                       score, read, write};

@@ -91,7 +91,7 @@ std::string write(const CameraParameters& original) {
 
 }  // namespace
 
-extern const FormatSpec kCamodocalFormat{CameraFormat::camodocal, "camodocal", "camodocal YAML", {".yaml", ".yml"},
+extern const FormatSpec camodocal_format{CameraFormat::camodocal, "camodocal", "camodocal YAML", {".yaml", ".yml"},
                                          "kannala-brandt (and equidistant), mei (and unified) and pinhole", score, read,
                                          write};
 

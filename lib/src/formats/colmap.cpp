@@ -118,7 +118,7 @@ std::string write(const CameraParameters& original) {
 
 }  // namespace
 
-extern const FormatSpec kColmapFormat{CameraFormat::colmap, "colmap", "COLMAP cameras.txt", {".txt"},
+extern const FormatSpec colmap_format{CameraFormat::colmap, "colmap", "COLMAP cameras.txt", {".txt"},
                                       "kannala-brandt (and equidistant) and pinhole", score, read, write};
 
 }  // namespace fishcam::detail

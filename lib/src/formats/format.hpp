@@ -1,10 +1,8 @@
 // The table of camera file formats and what their readers and writers share.
 //
-// How to add a format: write lib/src/formats/NAME.cpp defining a FormatSpec
-// (name, extensions, score, read, write, which models it holds), add its value to
-// CameraFormat (fishcam/camera_io.hpp) and its line to format_table() in
-// lib/src/formats/table.cpp, document it in docs/formats.md, and give it a fuzz
-// harness (tests/fuzz/) and a round-trip example (tests/test_formats.cpp).
+// How to add a format: see fishcam/camera_format_list.hpp (its .cpp, one line
+// there, its section in docs/formats.md; the enum, this table and the fuzz
+// harnesses follow from the list).
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -162,7 +162,7 @@ std::string write(const CameraParameters& original) {
 
 }  // namespace
 
-extern const FormatSpec kKalibrFormat{CameraFormat::kalibr, "kalibr", "Kalibr camchain YAML", {".yaml", ".yml"},
+extern const FormatSpec kalibr_format{CameraFormat::kalibr, "kalibr", "Kalibr camchain YAML", {".yaml", ".yml"},
                                       "kannala-brandt (and equidistant), pinhole, unified, mei, double-sphere and "
                                       "extended-unified",
                                       score, read, write};

@@ -76,7 +76,7 @@ std::string write(const CameraParameters& p) {
 
 }  // namespace
 
-extern const FormatSpec kMrcalFormat{CameraFormat::mrcal, "mrcal", "mrcal .cameramodel", {".cameramodel"},
+extern const FormatSpec mrcal_format{CameraFormat::mrcal, "mrcal", "mrcal .cameramodel", {".cameramodel"},
                                      "pinhole and stereographic", score, read, write};
 
 }  // namespace fishcam::detail

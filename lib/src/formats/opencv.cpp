@@ -105,7 +105,7 @@ std::string write(const CameraParameters& original) {
 
 }  // namespace
 
-extern const FormatSpec kOpenCvFormat{CameraFormat::opencv, "opencv", "OpenCV FileStorage YAML/XML",
+extern const FormatSpec opencv_format{CameraFormat::opencv, "opencv", "OpenCV FileStorage YAML/XML",
                                       {".yaml", ".yml", ".xml"}, "kannala-brandt (and equidistant) and pinhole",
                                       score, read, write};
 

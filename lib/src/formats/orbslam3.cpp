@@ -67,7 +67,7 @@ std::string write(const CameraParameters& original) {
 
 }  // namespace
 
-extern const FormatSpec kOrbSlam3Format{CameraFormat::orbslam3, "orbslam3", "ORB-SLAM3 settings YAML", {".yaml", ".yml"},
+extern const FormatSpec orbslam3_format{CameraFormat::orbslam3, "orbslam3", "ORB-SLAM3 settings YAML", {".yaml", ".yml"},
                                         "kannala-brandt (and equidistant) and pinhole", score, read, write};
 
 }  // namespace fishcam::detail

@@ -59,7 +59,7 @@ std::string write(const CameraParameters& original) {
 
 }  // namespace
 
-extern const FormatSpec kRosFormat{CameraFormat::ros, "ros", "ROS camera_info YAML", {".yaml", ".yml"},
+extern const FormatSpec ros_format{CameraFormat::ros, "ros", "ROS camera_info YAML", {".yaml", ".yml"},
                                    "kannala-brandt (and equidistant) and pinhole", score, read, write};
 
 }  // namespace fishcam::detail

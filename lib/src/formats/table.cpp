@@ -2,15 +2,15 @@
 
 namespace fishcam::detail {
 
-extern const FormatSpec kWoodScapeFormat, kFishcamFormat, kMrcalFormat, kOpenCvFormat, kKalibrFormat, kBasaltFormat,
-    kColmapFormat, kRosFormat, kCamodocalFormat, kOrbSlam3Format;
+// Each format's FormatSpec, NAME_format in lib/src/formats/NAME.cpp.
+#define FISHCAM_DECLARE_FORMAT(name) extern const FormatSpec name##_format;
+FISHCAM_CAMERA_FORMATS(FISHCAM_DECLARE_FORMAT)
+#undef FISHCAM_DECLARE_FORMAT
 
-// The one table of formats: one line each.
 const std::vector<const FormatSpec*>& format_table() {
-  static const std::vector<const FormatSpec*> table = {
-      &kWoodScapeFormat, &kMrcalFormat, &kOpenCvFormat,    &kFishcamFormat,  &kKalibrFormat,
-      &kBasaltFormat,    &kColmapFormat, &kRosFormat,      &kCamodocalFormat, &kOrbSlam3Format,
-  };
+#define FISHCAM_FORMAT_ENTRY(name) &name##_format,
+  static const std::vector<const FormatSpec*> table = {FISHCAM_CAMERA_FORMATS(FISHCAM_FORMAT_ENTRY)};
+#undef FISHCAM_FORMAT_ENTRY
   return table;
 }
 

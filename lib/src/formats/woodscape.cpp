@@ -86,7 +86,7 @@ std::string write(const CameraParameters& original) {
 
 }  // namespace
 
-extern const FormatSpec kWoodScapeFormat{CameraFormat::woodscape, "woodscape", "WoodScape / SynWoodScape calibration JSON",
+extern const FormatSpec woodscape_format{CameraFormat::woodscape, "woodscape", "WoodScape / SynWoodScape calibration JSON",
                                          {".json"}, "polynomial (and equidistant)", score, read, write};
 
 }  // namespace fishcam::detail

@@ -52,7 +52,7 @@ std::string write(const CameraParameters& p) {
 
 }  // namespace
 
-extern const FormatSpec kFishcamFormat{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
+extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
                                        "every", score, read, write};
 
 }  // namespace fishcam::detail
