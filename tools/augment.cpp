@@ -35,7 +35,7 @@ void register_augment(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--sampling", o->sampling,
                   "grid: the map at grid nodes, interpolated to within 1/32 px (fast); exact: the per-pixel map")
-      ->check(CLI::IsMember({"grid", "exact"}))
+      ->check(CLI::IsMember(sampling_names()))
       ->capture_default_str();
   auto* affine = cmd->add_option("--affine", o->affine,
                                  "Affine change ROT,TX,TY,SCALE (degrees counter-clockwise, fractions of the image "
@@ -43,7 +43,7 @@ void register_augment(CLI::App& app) {
                      ->delimiter(',')
                      ->expected(4);
   auto* preset = cmd->add_option("--preset", o->preset, "Random change preset (the viewpoint or affine ranges of that name)")
-                     ->check(CLI::IsMember({"small", "medium", "large", "train"}));
+                     ->check(CLI::IsMember(pose_preset_names()));
   auto* seed = cmd->add_option("--seed", o->seed, "Seed of the random pose");
   preset->needs(seed);
   seed->needs(preset);
@@ -68,7 +68,7 @@ void register_augment(CLI::App& app) {
     const ViewpointWarp warp = make_warp(o->source, o->target);
     const RandomPose pose = o->preset.empty() ? RandomPose{{o->pose.rotate[0], o->pose.rotate[1], o->pose.rotate[2]},
                                                            {o->pose.translate[0], o->pose.translate[1], o->pose.translate[2]}}
-                                              : random_pose(*find_pose_preset(o->preset), o->seed);
+                                              : random_pose(pose_preset(o->preset, "--preset"), o->seed);
     AffineChange affine_change;
     if (affine && !o->preset.empty()) {
       affine_change = random_affine(*find_affine_preset(o->preset), o->seed);

@@ -168,7 +168,7 @@ void register_augment_dataset(CLI::App& app) {
   cmd->add_option("--copies", o->copies, "Augmented copies per image")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("-j,--threads", o->threads, "Threads (0: all cores)")->check(CLI::Range(0, 256))->capture_default_str();
   cmd->add_option("--depth", o->depth, "Depth prior")
-      ->check(CLI::IsMember({"source-sphere", "target-sphere", "infinity"}))
+      ->check(CLI::IsMember(depth_prior_names()))
       ->capture_default_str();
   cmd->add_option("--method", o->method,
                   "viewpoint, or affine: the paper's baseline (no camera model; no calibration files are written, "
@@ -178,7 +178,7 @@ void register_augment_dataset(CLI::App& app) {
   cmd->add_option("--sampling", o->sampling,
                   "Viewpoint maps: grid (interpolated to within 1/32 px, fast) or exact (per pixel); recorded in the "
                   "manifest")
-      ->check(CLI::IsMember({"grid", "exact"}))
+      ->check(CLI::IsMember(sampling_names()))
       ->capture_default_str();
   cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source")->capture_default_str();
   cmd->add_option("--shard", o->shard,
@@ -201,11 +201,9 @@ void register_augment_dataset(CLI::App& app) {
     std::vector<PosePreset> presets;
     std::stringstream list(o->presets);
     for (std::string name; std::getline(list, name, ',');) {
-      const auto preset = find_pose_preset(name);
-      if (!preset) throw Error("--preset: unknown preset " + quoted_for_message(name) + " (small, medium, large, train)");
-      presets.push_back(*preset);
+      presets.push_back(pose_preset(name, "--preset"));
     }
-    const DepthPrior prior = *parse_depth_prior(o->depth);
+    const DepthPrior prior = depth_prior(o->depth, "--depth");
     const bool affine = o->method == "affine";
     const Sampling sampling = *parse_sampling(o->sampling);
     if (o->threads > 0) cv::setNumThreads(o->threads);

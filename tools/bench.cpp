@@ -345,7 +345,7 @@ void register_bench(CLI::App& app) {
       ->check(CLI::Range(1, 10000))
       ->capture_default_str();
   augment->add_option("--sampling", *sampling, "grid or exact (ViewpointWarp::augment)")
-      ->check(CLI::IsMember({"grid", "exact"}))
+      ->check(CLI::IsMember(sampling_names()))
       ->capture_default_str();
   augment->add_option("--size", *bench_size, "Resize the camera (and the rendered sample) to WxH first");
   auto accuracy = std::make_shared<bool>(false);

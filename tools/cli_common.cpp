@@ -17,7 +17,7 @@ ViewpointChange PoseOptions::change() const {
   return ViewpointChange::from_euler_deg({rotate[0], rotate[1], rotate[2]}, {translate[0], translate[1], translate[2]});
 }
 
-DepthPrior PoseOptions::prior() const { return *parse_depth_prior(depth); }
+DepthPrior PoseOptions::prior() const { return depth_prior(depth, "--depth"); }
 
 void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth) {
   cmd->add_option("--rotate", options->rotate, "Rotation rx,ry,rz in degrees about the camera x, y, z axes "
@@ -29,7 +29,7 @@ void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth) {
       ->expected(3);
   if (with_depth) {
     cmd->add_option("--depth", options->depth, "Depth prior")
-        ->check(CLI::IsMember({"source-sphere", "target-sphere", "infinity"}))
+        ->check(CLI::IsMember(depth_prior_names()))
         ->capture_default_str();
   }
 }

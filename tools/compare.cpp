@@ -122,15 +122,15 @@ void register_compare(CLI::App& app) {
   cmd->add_option("--method", o->method,
                   "lsq: least-squares fits; paper: eqs. 13-14 for equidistant and stereographic (other models are "
                   "still fitted by least squares)")
-      ->check(CLI::IsMember({"lsq", "paper"}))
+      ->check(CLI::IsMember(conversion_method_names()))
       ->capture_default_str();
   cmd->add_option("--preset", o->preset, "Viewpoint-change preset")
-      ->check(CLI::IsMember({"small", "medium", "large", "train"}))
+      ->check(CLI::IsMember(pose_preset_names()))
       ->capture_default_str();
   cmd->add_option("--samples", o->samples, "Seeded viewpoint changes")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the changes")->capture_default_str();
   cmd->add_option("--depth", o->depth, "Depth prior")
-      ->check(CLI::IsMember({"source-sphere", "target-sphere", "infinity"}))
+      ->check(CLI::IsMember(depth_prior_names()))
       ->capture_default_str();
   auto* image = cmd->add_option("--image", o->image, "An image of CAMERA for the pictures (default: the rendered scene)");
   auto* label = cmd->add_option("--label", o->label, "Its label image: label differences are reported for it too");
@@ -206,10 +206,10 @@ void register_compare(CLI::App& app) {
     }
 
     ComparisonOptions options;
-    options.preset = *find_pose_preset(o->preset);
+    options.preset = pose_preset(o->preset, "--preset");
     options.samples = o->samples;
     options.seed = o->seed;
-    options.prior = *parse_depth_prior(o->depth);
+    options.prior = depth_prior(o->depth, "--depth");
     const Comparison comparison = compare_models(camera, alternatives, options, labels);
 
     if (!o->out.empty()) {

@@ -29,7 +29,7 @@ void register_convert(CLI::App& app) {
   cmd->add_option("--to", o->to, "Target model: " + fishcam::model_names_text())
       ->required();
   cmd->add_option("--method", o->method, "lsq: least squares over the image's pixels; paper: eqs. 13-14")
-      ->check(CLI::IsMember({"lsq", "paper"}))
+      ->check(CLI::IsMember(conversion_method_names()))
       ->capture_default_str();
   auto* fit_center = cmd->add_flag("--fit-center", o->fit_center, "Also fit the principal point");
   auto* fit_aspect = cmd->add_flag("--fit-aspect", o->fit_aspect, "Also fit a_y (the aspect)");

@@ -34,6 +34,14 @@ std::optional<AffinePreset> find_affine_preset(std::string_view name) {
   return std::nullopt;
 }
 
+AffinePreset affine_preset(std::string_view name, std::string_view what) {
+  if (const auto preset = find_affine_preset(name)) return *preset;
+  std::vector<std::string> names;
+  for (const auto& p : affine_presets()) names.emplace_back(p.name);
+  throw Error(std::string(what) + ": unknown preset " + quoted_for_message(name) + " (expected " +
+              choices_for_message(names) + ")");
+}
+
 AffineChange random_affine(const AffinePreset& preset, std::uint64_t seed) {
   SeededUniform uniform(seed);
   AffineChange change;

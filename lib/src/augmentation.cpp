@@ -293,6 +293,12 @@ std::optional<Sampling> parse_sampling(std::string_view name) {
 
 std::string_view to_string(Sampling sampling) { return sampling == Sampling::grid ? "grid" : "exact"; }
 
+const std::vector<std::string>& sampling_names() {
+  static const std::vector<std::string> names = {std::string(to_string(Sampling::grid)),
+                                                 std::string(to_string(Sampling::exact))};
+  return names;
+}
+
 void ViewpointWarp::augment(const ViewpointChange& change, DepthPrior prior, const AugmentIO& io,
                             Sampling sampling) const {
   check_change(change);

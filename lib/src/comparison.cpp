@@ -93,9 +93,7 @@ AlternativeModel alternative_model(const Camera& camera, const std::string& toke
     throw Error("alternative model " + quoted_for_message(token) + ": neither a camera file nor a model (" +
                 model_names_text() + ")");
   }
-  if (method != "lsq" && method != "paper") {
-    throw Error("method: expected lsq or paper, got " + quoted_for_message(std::string(method)));
-  }
+  check_conversion_method(method);
   const bool paper = method == "paper" && (spec.name == "equidistant" || spec.name == "stereographic");
   const Conversion c = convert_camera(camera, spec, paper ? "paper" : "lsq");
   return {token, paper ? "the paper's eqs. 13-14" : "least-squares fit", Camera(c.camera), c.report.rms_px};

@@ -302,8 +302,21 @@ ProjectionDiff projection_diff(const Camera& a, const Camera& b, int step, bool 
   return diff;
 }
 
+const std::vector<std::string>& conversion_method_names() {
+  static const std::vector<std::string> names = {"lsq", "paper"};
+  return names;
+}
+
+void check_conversion_method(std::string_view name) {
+  const auto& names = conversion_method_names();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    throw Error("method: expected " + choices_for_message(names) + ", got " + quoted_for_message(name));
+  }
+}
+
 Conversion convert_camera(const Camera& source, const ModelSpec& model, std::string_view method,
                           std::optional<double> max_theta, const FitOptions& options) {
+  check_conversion_method(method);
   if (max_theta && !(*max_theta > 0 && *max_theta <= std::numbers::pi)) {
     throw Error("max_angle: must be in (0, 180] degrees");
   }
@@ -311,11 +324,9 @@ Conversion convert_camera(const Camera& source, const ModelSpec& model, std::str
   if (method == "paper") {
     if (options.fit_center || options.fit_aspect) throw Error("fit_center/fit_aspect apply to the lsq method only");
     out.camera = paper_camera(source, model);
-  } else if (method == "lsq") {
+  } else {
     // Every 4th pixel, weighted as images are (per pixel).
     out.camera = fit_camera(sample_image(source, 4, 1, max_theta), model, source.parameters(), options);
-  } else {
-    throw Error("method: expected lsq or paper, got " + quoted_for_message(std::string(method)) );
   }
   const Camera result(out.camera);
   const auto evaluation = sample_image(source, 2, 0, max_theta);  // denser than the fit saw

@@ -41,6 +41,12 @@ std::string text_for_message(std::string_view text) {
   return plain ? std::string(text) : quoted_for_message(text);
 }
 
+std::string choices_for_message(const std::vector<std::string>& names) {
+  std::string out;
+  for (size_t i = 0; i < names.size(); ++i) out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  return out;
+}
+
 bool is_valid_utf8(std::string_view text) {
   size_t i = 0;
   while (i < text.size()) {

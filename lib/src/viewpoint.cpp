@@ -1,5 +1,7 @@
 #include "fishcam/viewpoint.hpp"
 
+#include "fishcam/error.hpp"
+
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -27,11 +29,45 @@ std::string_view to_string(DepthPrior prior) {
   return "?";
 }
 
+namespace {
+constexpr DepthPrior kDepthPriors[] = {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity};
+
+}  // namespace
+
 std::optional<DepthPrior> parse_depth_prior(std::string_view name) {
-  for (auto p : {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity}) {
+  for (auto p : kDepthPriors) {
     if (name == to_string(p)) return p;
   }
   return std::nullopt;
+}
+
+const std::vector<std::string>& depth_prior_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (auto p : kDepthPriors) out.emplace_back(to_string(p));
+    return out;
+  }();
+  return names;
+}
+
+DepthPrior depth_prior(std::string_view name, std::string_view what) {
+  if (const auto prior = parse_depth_prior(name)) return *prior;
+  throw Error(std::string(what) + ": expected " + choices_for_message(depth_prior_names()) + ", got " + quoted_for_message(name));
+}
+
+const std::vector<std::string>& pose_preset_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const auto& p : pose_presets()) out.emplace_back(p.name);
+    return out;
+  }();
+  return names;
+}
+
+PosePreset pose_preset(std::string_view name, std::string_view what) {
+  if (const auto preset = find_pose_preset(name)) return *preset;
+  throw Error(std::string(what) + ": unknown preset " + quoted_for_message(name) + " (expected " +
+              choices_for_message(pose_preset_names()) + ")");
 }
 
 ViewpointChange ViewpointChange::from_euler_deg(const Eigen::Vector3d& d, const Eigen::Vector3d& translation) {

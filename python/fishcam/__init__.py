@@ -27,7 +27,7 @@ __all__ = [
     "random_change", "set_num_threads", "presets", "change_to_dict", "__version__",
 ]
 
-DEPTH_PRIORS = ("source-sphere", "target-sphere", "infinity")
+DEPTH_PRIORS = tuple(_fishcam.depth_priors())  # the library's names
 
 
 def _info(self):
@@ -119,8 +119,6 @@ def compare(camera, models=("equidistant", "stereographic", "kannala-brandt"), m
     """
     if isinstance(models, (str, Camera)):
         models = [models]
-    if method not in ("lsq", "paper"):
-        raise Error(f"method: expected lsq or paper, got {method!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, _np.integer)) or seed < 0:
         raise Error(f"seed: expected a non-negative integer, got {seed!r}")
     return _json.loads(_fishcam.compare(camera, list(models), method, preset, int(samples), int(seed), depth,

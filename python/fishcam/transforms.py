@@ -14,7 +14,7 @@ that seed exactly as the CLI's ``--seed`` does.
 
 import numpy as np
 
-from . import Camera, Error, ViewpointWarp, _check_seed, _fishcam, change_to_dict, DEPTH_PRIORS
+from . import Camera, Error, ViewpointWarp, _check_seed, _fishcam, change_to_dict
 
 
 def draw_seed(rng=None):
@@ -91,8 +91,8 @@ class RandomViewpoint:
 
     def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
                  depth="source-sphere", p=1.0, fill=0, fill_mask=0, rng=None, sampling="grid"):
-        if sampling not in ("grid", "exact"):
-            raise Error(f"sampling: expected grid or exact, got {sampling!r}")
+        if sampling not in _fishcam.sampling_names():
+            raise Error(f"sampling: expected {' or '.join(_fishcam.sampling_names())}, got {sampling!r}")
         if camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
         if (max_rotation_deg is None) != (max_translation is None):
@@ -103,10 +103,9 @@ class RandomViewpoint:
                 raise Error(f"max_rotation_deg: must be in [0, 180], got {max_rotation_deg}")
             if not (np.isfinite(max_translation) and max_translation >= 0):
                 raise Error(f"max_translation: must be finite and >= 0, got {max_translation}")
-        elif preset not in _fishcam.presets():
-            raise Error(f"preset: unknown preset {preset!r} (small, medium, large, train)")
-        if depth not in DEPTH_PRIORS:
-            raise Error(f"depth: expected one of {', '.join(DEPTH_PRIORS)}, got {depth!r}")
+        else:
+            _fishcam.check_preset(preset)
+        _fishcam.check_depth_prior(depth)
         _check_p_and_fill(p, fill)
         self.camera = camera
         self.preset = preset
@@ -176,7 +175,7 @@ class RandomAffine:
             _fishcam.random_affine_in(max_rotation_deg, max_translation, low, high, 0)
             self.scale_range = (low, high)
         elif preset not in _fishcam.affine_presets():
-            raise Error(f"preset: unknown preset {preset!r} (small, medium, large, train)")
+            _fishcam.random_affine(preset, 0)  # raises naming the presets
         else:
             self.scale_range = None
         _check_p_and_fill(p, fill)

@@ -104,12 +104,6 @@ py::array new_image(const py::array& like, int height, int width, cv::Mat* heade
   return out;
 }
 
-DepthPrior depth_prior(const std::string& name) {
-  const auto prior = parse_depth_prior(name);
-  if (!prior) throw Error("depth: expected source-sphere, target-sphere or infinity, got '" + name + "'");
-  return *prior;
-}
-
 MapKind map_kind(const std::string& name) {
   if (name == "geometric") return MapKind::geometric;
   if (name == "sampling") return MapKind::sampling;
@@ -281,7 +275,9 @@ void apply_affine(const AffineChange& change, cv::Size size, const AugmentIO& io
 
 Sampling sampling_of(const std::string& name) {
   const auto sampling = parse_sampling(name);
-  if (!sampling) throw Error("sampling: expected grid or exact, got '" + name + "'");
+  if (!sampling) {
+    throw Error("sampling: expected " + choices_for_message(sampling_names()) + ", got " + quoted_for_message(name));
+  }
   return *sampling;
 }
 
@@ -306,9 +302,7 @@ void bind_augmentation(py::module_& m) {
   m.def(
       "random_change",
       [](const std::string& preset, std::uint64_t seed) {
-        const auto found = find_pose_preset(preset);
-        if (!found) throw Error("preset: unknown preset '" + preset + "' (small, medium, large, train)");
-        return random_pose(*found, seed);
+        return random_pose(pose_preset(preset), seed);
       },
       py::arg("preset"), py::arg("seed"));
   m.def(
@@ -328,6 +322,12 @@ void bind_augmentation(py::module_& m) {
     }
     return out;
   });
+  m.def("depth_priors", [] { return depth_prior_names(); }, "The depth priors' names.");
+  m.def("sampling_names", [] { return sampling_names(); }, "The sampling modes' names.");
+  m.def("check_depth_prior", [](const std::string& name) { depth_prior(name); },
+        "Raises fishcam.Error naming the choices unless name is a depth prior.");
+  m.def("check_preset", [](const std::string& name) { pose_preset(name); },
+        "Raises fishcam.Error naming the choices unless name is a pose preset.");
   m.def("derive_seed", &derive_seed, py::arg("seed"), py::arg("key"), py::arg("index"));
 
   py::class_<ViewpointWarp>(m, "ViewpointWarp")
@@ -420,9 +420,7 @@ void bind_augmentation(py::module_& m) {
   m.def(
       "random_affine",
       [](const std::string& preset, std::uint64_t seed) {
-        const auto found = find_affine_preset(preset);
-        if (!found) throw Error("preset: unknown preset '" + preset + "' (small, medium, large, train)");
-        return random_affine(*found, seed);
+        return random_affine(affine_preset(preset), seed);
       },
       py::arg("preset"), py::arg("seed"));
   m.def(
@@ -501,10 +499,9 @@ void bind_comparison(py::module_& m) {
       "compare",
       [](const Camera& camera, const py::list& models, const std::string& method, const std::string& preset,
          int samples, std::uint64_t seed, const std::string& depth, const py::dict& labels) {
+        check_conversion_method(method);
         ComparisonOptions options;
-        const auto found = find_pose_preset(preset);
-        if (!found) throw Error("preset: unknown preset '" + preset + "' (small, medium, large, train)");
-        options.preset = *found;
+        options.preset = pose_preset(preset);
         options.samples = samples;
         options.seed = seed;
         options.prior = depth_prior(depth);

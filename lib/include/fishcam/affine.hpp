@@ -43,6 +43,8 @@ struct AffinePreset {
 // paper trains with one range only; these are for comparing at matching strength).
 const std::array<AffinePreset, 4>& affine_presets();
 std::optional<AffinePreset> find_affine_preset(std::string_view name);
+// The preset called `name`, or Error "WHAT: unknown preset 'NAME' (expected ...)".
+AffinePreset affine_preset(std::string_view name, std::string_view what = "preset");
 // Seeded like random_pose (SeededUniform); draw order: rotation, tx, ty, scale.
 AffineChange random_affine(const AffinePreset& preset, std::uint64_t seed);
 

@@ -60,6 +60,7 @@ enum class Sampling {
   exact,
 };
 std::optional<Sampling> parse_sampling(std::string_view name);  // "grid" | "exact"
+const std::vector<std::string>& sampling_names();  // the CLI's choices, Python, messages
 std::string_view to_string(Sampling sampling);
 
 // One sample to augment: any of the image and the labels (with their outputs),

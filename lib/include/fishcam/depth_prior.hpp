@@ -1,7 +1,9 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <string_view>
+#include <vector>
 
 namespace fishcam {
 
@@ -13,5 +15,11 @@ enum class DepthPrior {
 };
 std::string_view to_string(DepthPrior prior);
 std::optional<DepthPrior> parse_depth_prior(std::string_view name);
+// The names, in the enum's order: the one list the CLI's choices, Python and
+// messages use.
+const std::vector<std::string>& depth_prior_names();
+// The prior called `name`, or Error "WHAT: expected source-sphere, target-sphere or
+// infinity, got 'NAME'".
+DepthPrior depth_prior(std::string_view name, std::string_view what = "depth");
 
 }  // namespace fishcam

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace fishcam {
 
@@ -27,6 +28,9 @@ std::string text_for_message(std::string_view text);
 // A path for a message: as it is when it is printable UTF-8 without control
 // characters (the common case stays readable), else quoted_for_message's form.
 std::string path_for_message(const std::filesystem::path& path);
+
+// "a, b or c": the names a value may take, for a message.
+std::string choices_for_message(const std::vector<std::string>& names);
 
 // Whether text is well-formed UTF-8 (no overlong forms, surrogates or bytes past U+10FFFF).
 bool is_valid_utf8(std::string_view text);

@@ -76,6 +76,10 @@ struct Conversion {
   ErrorReport report;
   double widest_theta = 0;  // radians: the widest ray of the evaluation grid
 };
+// The conversion methods' names ("lsq", "paper"): the CLI's choices and messages.
+const std::vector<std::string>& conversion_method_names();
+// Throws Error "method: expected lsq or paper, got 'NAME'" unless name is one.
+void check_conversion_method(std::string_view name);
 Conversion convert_camera(const Camera& source, const ModelSpec& model, std::string_view method = "lsq",
                           std::optional<double> max_theta = std::nullopt, const FitOptions& options = {});
 

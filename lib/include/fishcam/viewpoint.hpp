@@ -7,7 +7,9 @@
 #include <cstdint>
 #include <optional>
 #include <random>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "fishcam/camera.hpp"
 #include "fishcam/depth_prior.hpp"
@@ -54,6 +56,11 @@ struct PosePreset {
 // The paper's: small (10 deg, 0.1), medium (20, 0.3), large (30, 0.5), train (30, 0.5).
 const std::array<PosePreset, 4>& pose_presets();
 std::optional<PosePreset> find_pose_preset(std::string_view name);
+// The presets' names, in the table's order (CLI choices, Python, messages).
+const std::vector<std::string>& pose_preset_names();
+// The preset called `name`, or Error "WHAT: unknown preset 'NAME' (expected small,
+// medium, large or train)".
+PosePreset pose_preset(std::string_view name, std::string_view what = "preset");
 
 struct RandomPose {
   Eigen::Vector3d rotation_deg;  // about x, y, z
