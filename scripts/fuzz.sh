@@ -30,7 +30,7 @@ sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit
   -DCMAKE_CXX_FLAGS="$sanitize -fsanitize=fuzzer-no-link" >/dev/null
 /usr/bin/cmake --build build-fuzz -j "$(nproc)" --target $(printf 'fuzz_%s ' "${harnesses[@]}")
 # "#N DONE cov: C ft: F corp: K/..." -> "C edges, F features, K inputs"
-final_coverage() { grep -E "^#[0-9]+ +DONE" "$1" | tail -1 | sed -E 's/.*cov: ([0-9]+) ft: ([0-9]+) corp: ([0-9]+).*/\1 edges, \2 features, \3 inputs/'; }
+final_coverage() { grep -E "^#[0-9]+[[:space:]]+DONE" "$1" | tail -1 | sed -E 's/.*cov: ([0-9]+) ft: ([0-9]+) corp: ([0-9]+).*/\1 edges, \2 features, \3 inputs/'; }
 for h in "${harnesses[@]}"; do
   work=build-fuzz/corpus/$h findings=build-fuzz/findings/$h kept=tests/fuzz/corpus/$h
   mkdir -p "$work" "$findings" "$kept"
