@@ -84,8 +84,11 @@ def _wrap_public_callables(cls):
 
 for _cls in (Camera, ViewpointWarp, ViewpointChange, _fishcam.ConfusionMatrix):
     _wrap_public_callables(_cls)
-derive_seed = _one_line_argument_errors(derive_seed, "derive_seed")
-random_change_in = _one_line_argument_errors(random_change_in, "random_change_in")
+for _name, _function in list(vars(_fishcam).items()):
+    if not _name.startswith("_") and type(_function).__name__ == "builtin_function_or_method":
+        setattr(_fishcam, _name, _one_line_argument_errors(_function, _name))
+derive_seed = _fishcam.derive_seed
+random_change_in = _fishcam.random_change_in
 
 ViewpointWarp.__call__ = _warp_call
 Camera.info = _info
@@ -121,6 +124,8 @@ def compare(camera, models=("equidistant", "stereographic", "kannala-brandt"), m
         models = [models]
     if isinstance(seed, bool) or not isinstance(seed, (int, _np.integer)) or seed < 0:
         raise Error(f"seed: expected a non-negative integer, got {seed!r}")
+    if isinstance(samples, bool) or not isinstance(samples, (int, _np.integer)):
+        raise Error(f"samples: expected an integer, got {samples!r}")
     return _json.loads(_fishcam.compare(camera, list(models), method, preset, int(samples), int(seed), depth,
                                         dict(labels or {})))
 

@@ -26,10 +26,24 @@ def draw_seed(rng=None):
     return (hi << 32) | lo
 
 
+def _number(value, what):
+    """value as a float, or fishcam.Error naming the argument."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise Error(f"{what}: expected a number, got {type(value).__name__}")
+    return float(value)
+
+
+def _integer(value, what):
+    """value as an int, or fishcam.Error naming the argument."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise Error(f"{what}: expected an integer, got {type(value).__name__}")
+    return int(value)
+
+
 def _check_p_and_fill(p, fill):
-    if not (0 <= p <= 1):
+    if not (0 <= _number(p, "p") <= 1):
         raise Error(f"p: must be in [0, 1], got {p}")
-    if not np.isfinite(fill):
+    if not np.isfinite(_number(fill, "fill")):
         raise Error("fill: must be finite")
 
 
@@ -99,9 +113,9 @@ class RandomViewpoint:
             raise Error("max_rotation_deg and max_translation go together")
         if max_rotation_deg is not None:
             preset = None
-            if not (np.isfinite(max_rotation_deg) and 0 <= max_rotation_deg <= 180):
+            if not (np.isfinite(_number(max_rotation_deg, "max_rotation_deg")) and 0 <= max_rotation_deg <= 180):
                 raise Error(f"max_rotation_deg: must be in [0, 180], got {max_rotation_deg}")
-            if not (np.isfinite(max_translation) and max_translation >= 0):
+            if not (np.isfinite(_number(max_translation, "max_translation")) and max_translation >= 0):
                 raise Error(f"max_translation: must be finite and >= 0, got {max_translation}")
         else:
             _fishcam.check_preset(preset)
@@ -114,7 +128,7 @@ class RandomViewpoint:
         self.depth = depth
         self.p = float(p)
         self.fill = fill
-        self.fill_mask = int(fill_mask)
+        self.fill_mask = _integer(fill_mask, "fill_mask")
         self.rng = rng
         self.sampling = sampling
         self._warps = _WarpCache()
@@ -184,7 +198,7 @@ class RandomAffine:
         self.max_translation = max_translation
         self.p = float(p)
         self.fill = fill
-        self.fill_mask = int(fill_mask)
+        self.fill_mask = _integer(fill_mask, "fill_mask")
         self.rng = rng
 
     def change_for(self, seed):

@@ -393,6 +393,14 @@ def test_arguments_of_the_wrong_type_are_one_line_fishcam_errors(cam):
         (lambda: cam.theta_from_rho("a"), "Camera.theta_from_rho"),
         (lambda: fishcam.metrics.ConfusionMatrix(3, ignore="x"), "ConfusionMatrix"),
         (lambda: fishcam.ViewpointWarp(None), "ViewpointWarp: arguments"),
+        (lambda: fishcam.convert(cam, "equidistant", max_angle="x"), "convert: arguments"),
+        (lambda: fishcam.compare(cam, ["equidistant"], samples="x"), "samples: expected an integer"),
+        (lambda: fishcam.transforms.RandomViewpoint(cam, p="x"), "p: expected a number"),
+        (lambda: fishcam.transforms.RandomViewpoint(cam, fill="x"), "fill: expected a number"),
+        (lambda: fishcam.transforms.RandomViewpoint(cam, max_rotation_deg="x", max_translation=0.1),
+         "max_rotation_deg: expected a number"),
+        (lambda: fishcam.transforms.RandomViewpoint(cam, fill_mask="x"), "fill_mask: expected an integer"),
+        (lambda: fishcam.transforms.RandomAffine(fill_mask=1.5), "fill_mask: expected an integer"),
     ]
     for call, message in cases:
         with pytest.raises(fishcam.Error) as error:
