@@ -35,8 +35,12 @@ def inside(m, width, height):
 
 
 def test_figures_agree_with_fishcam_map(tmp_path):
+    # --out is created (it was refused as "no such folder"); the figures go into it.
     report = json.loads(cli("compare", CAMERA, "--models", "kannala-brandt,stereographic", "--samples", 2,
-                            "--seed", 3, "--out", tmp_path, "--json"))
+                            "--seed", 3, "--out", tmp_path / "figures" / "new", "--json"))
+    assert (tmp_path / "figures" / "new" / "sphere.png").is_file()
+    for name in ["kannala-brandt", "stereographic"]:
+        (tmp_path / f"{name}.json").write_bytes((tmp_path / "figures" / "new" / f"{name}.json").read_bytes())
     cam = fishcam.Camera.read(CAMERA)
     rays, ok = cam.unproject(np.stack(np.meshgrid(np.arange(cam.width), np.arange(cam.height)), -1)
                              .reshape(-1, 2).astype(float))
