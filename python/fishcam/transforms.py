@@ -47,6 +47,25 @@ def _check_p_and_fill(p, fill):
         raise Error("fill: must be finite")
 
 
+def _labels_for_warp(mask, fill_mask):
+    """The mask as the warp takes it (uint8 or uint16: labels are sampled, never
+    blended) and a function giving the warped mask its original dtype back. bool,
+    int32 and int64 masks (torch's default for class ids) with values in 0..65535
+    are taken as uint16 and returned in their dtype; other values are refused."""
+    if mask is None or not isinstance(mask, np.ndarray) or mask.dtype in (np.uint8, np.uint16):
+        return mask, lambda out: out
+    if mask.dtype == np.bool_:
+        return mask.view(np.uint8), lambda out: out.astype(np.bool_)
+    if mask.dtype.kind not in "iu":
+        raise Error(f"mask: expected an integer or bool label array, got dtype {mask.dtype}")
+    if mask.size and (mask.min() < 0 or mask.max() > 65535):
+        raise Error(f"mask: values {mask.min()}..{mask.max()} outside 0..65535 cannot be warped as labels")
+    if not 0 <= fill_mask <= 65535:
+        raise Error(f"fill_mask: {fill_mask} outside 0..65535")
+    dtype = mask.dtype
+    return mask.astype(np.uint16), lambda out: out.astype(dtype)
+
+
 def _applies(p, seed):
     """Whether a transform with probability p changes the sample of this seed: the
     decision follows from the seed too, so seed= reproduces it."""
@@ -151,8 +170,11 @@ class RandomViewpoint:
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.ViewpointChange()
         warp = self._warps.get(camera)
-        out = warp.warp(image=image, labels=mask, change=change, depth=self.depth, fill=self.fill,
+        labels, restore = _labels_for_warp(mask, self.fill_mask)
+        out = warp.warp(image=image, labels=labels, change=change, depth=self.depth, fill=self.fill,
                         label_fill=self.fill_mask, sampling=self.sampling)
+        if "labels" in out:
+            out["labels"] = restore(out["labels"])
         return _result(out, change_to_dict(change, seed, self.depth))
 
     def __repr__(self):
@@ -216,8 +238,11 @@ class RandomAffine:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.AffineChange()
-        out = _fishcam.affine_warp(image=image, labels=mask, change=change, fill=self.fill,
+        labels, restore = _labels_for_warp(mask, self.fill_mask)
+        out = _fishcam.affine_warp(image=image, labels=labels, change=change, fill=self.fill,
                                    label_fill=self.fill_mask)
+        if "labels" in out:
+            out["labels"] = restore(out["labels"])
         return _result(out, affine_to_dict(change, seed))
 
     def __repr__(self):

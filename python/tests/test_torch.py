@@ -196,3 +196,25 @@ def test_no_hang_after_fork(tmp_path):
     """)
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr
+
+
+def test_masks_keep_their_dtype(small_camera):
+    """int64 (the dataset's own and torch's default), int32, int16, uint16 and bool
+    masks go through one change as the uint8 labels do and come back in their dtype;
+    values a label image cannot hold are refused."""
+    rng = np.random.default_rng(0)
+    labels = rng.integers(0, 10, (121, 160)).astype(np.uint8)
+    transform = fishcam.transforms.RandomViewpoint(small_camera, preset="medium")
+    expected = transform(mask=labels, seed=3)["mask"]
+    for dtype in [np.int64, np.int32, np.int16, np.uint16]:
+        out = transform(mask=labels.astype(dtype), seed=3)["mask"]
+        assert out.dtype == dtype and np.array_equal(out, expected.astype(dtype)), dtype
+    flags = transform(mask=labels > 4, seed=3)["mask"]
+    assert flags.dtype == np.bool_ and np.array_equal(flags, expected > 4)
+    _, mask, _ = ft.RandomViewpoint(small_camera, preset="medium")(
+        torch.zeros(3, 121, 160, dtype=torch.uint8), torch.from_numpy(labels.astype(np.int64)), seed=3)
+    assert mask.dtype == torch.int64 and torch.equal(mask, torch.from_numpy(expected.astype(np.int64)))
+    with pytest.raises(fishcam.Error, match="outside 0..65535"):
+        transform(mask=np.full((121, 160), 70000, np.int64), seed=1)
+    with pytest.raises(fishcam.Error, match="dtype float32"):
+        transform(mask=np.zeros((121, 160), np.float32), seed=1)
