@@ -143,7 +143,10 @@ ModelSpec parse_model_spec(std::string_view text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used != order.size() || n < 1 || n > 12) throw Error("model " + quoted_for_message(std::string(text)) + ": order must be 1..12");
+    if (used != order.size() || n < 1 || n > kMaxFittedPolynomialOrder) {
+      throw Error("model " + quoted_for_message(std::string(text)) + ": order must be 1.." +
+                  std::to_string(kMaxFittedPolynomialOrder));
+    }
     spec.order = n;
   }
   check_model_name(spec.name);

@@ -18,6 +18,8 @@ struct SourceParams {
   // (fishcam::UnifiedForm: pinhole, stereographic, unified, extended-unified,
   // double-sphere, mei).
   enum class Kind { polynomial, unified };
+  // Polynomials up to this degree are evaluated in float (16 coefficients: its
+  // fixed array); higher ones take the exact path.
   static constexpr int kMaxDegree = 15;
   Kind kind = Kind::polynomial;
   float c[kMaxDegree + 1] = {};  // rho = c[1] theta + ... + c[n] theta^n, 1 <= n <= kMaxDegree

@@ -18,6 +18,10 @@ struct ModelSpec {
   std::string name;
   int order = 4;  // polynomial only
 };
+// The highest polynomial order fitted: past it the normal equations in theta^k
+// lose most of double's digits (a Polynomial itself holds up to
+// Polynomial::kMaxOrder coefficients, read from files).
+constexpr int kMaxFittedPolynomialOrder = 12;
 ModelSpec parse_model_spec(std::string_view text);  // throws Error on unknown names
 
 struct Correspondence {

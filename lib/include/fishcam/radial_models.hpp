@@ -62,7 +62,7 @@ class Polynomial {
  public:
   static constexpr std::string_view kName = "polynomial";
   static constexpr std::array<std::string_view, 0> kParamNames{};  // k1..kN: any count
-  static constexpr int kMaxOrder = 64;
+  static constexpr int kMaxOrder = 64;  // coefficients a file may give (fits stop at 12, fit.hpp)
 
   Polynomial() = default;
   explicit Polynomial(std::vector<Scalar> k) : k_(std::move(k)) {}

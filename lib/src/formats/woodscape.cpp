@@ -4,6 +4,9 @@
 #include "format.hpp"
 
 namespace fishcam::detail {
+
+// WoodScape's files name k1..k16 at most (their poly_order field's range).
+constexpr int kMaxWoodScapeOrder = 16;
 namespace {
 
 constexpr char kSynWoodScapeTranslation[] = "translation used in CARLA (CARLA reference)";
@@ -28,8 +31,8 @@ std::vector<NamedCamera> read(const Content& c) {
   const std::string model = in.string("model");
   if (model != "radial_poly") in.fail("model", "unsupported WoodScape model " + quoted_for_message(model) + " (expected radial_poly)");
   const double poly_order = in.number("poly_order");
-  if (!(poly_order >= 1 && poly_order <= 16) || poly_order != std::floor(poly_order)) {
-    in.fail("poly_order", "expected an integer in [1, 16]");
+  if (!(poly_order >= 1 && poly_order <= kMaxWoodScapeOrder) || poly_order != std::floor(poly_order)) {
+    in.fail("poly_order", "expected an integer in [1, " + std::to_string(kMaxWoodScapeOrder) + "]");
   }
   std::vector<double> k;
   for (int i = 1; i <= int(poly_order); ++i) k.push_back(in.number(coefficient_key(i)));
@@ -69,7 +72,10 @@ std::string write(const CameraParameters& original) {
   } else {
     cannot_hold(p, "WoodScape", "polynomial (and equidistant)");
   }
-  if (k.size() > 16) throw Error("model: the WoodScape format holds polynomials up to order 16, not " + std::to_string(k.size()));
+  if (k.size() > size_t(kMaxWoodScapeOrder)) {
+    throw Error("model: the WoodScape format holds polynomials up to order " + std::to_string(kMaxWoodScapeOrder) +
+                ", not " + std::to_string(k.size()));
+  }
   while (k.size() < 4) k.push_back(0.0);
   nlohmann::json in = {{"model", "radial_poly"},
                        {"poly_order", k.size()},
