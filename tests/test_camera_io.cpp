@@ -90,7 +90,7 @@ TEST(CameraIo, FormatsRefuseCamerasTheyCannotHold) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
   };
-  expect_error(CameraFormat::mrcal, "mrcal's format holds pinhole and stereographic");
+  expect_error(CameraFormat::mrcal, "the mrcal format holds pinhole and stereographic");
   expect_error(CameraFormat::opencv, "kannala-brandt");
   p.model = Stereographic<double>(300);
   expect_error(CameraFormat::woodscape, "polynomial");

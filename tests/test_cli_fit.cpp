@@ -32,7 +32,7 @@ TEST(CliFit, ConvertReportsAndWritesEveryFormat) {
   const struct {
     std::string args, expected;
   } bad[] = {
-      {"--to polynomial --out " + quoted(dir / "p.cameramodel"), "mrcal's format holds pinhole and stereographic"},
+      {"--to polynomial --out " + quoted(dir / "p.cameramodel"), "the mrcal format holds pinhole and stereographic"},
       {"--to fisheye --out " + quoted(dir / "x.json"), "unknown model 'fisheye'"},
       {"--to pinhole --out " + quoted(dir / "x.json"), "--max-angle"},
       {"--to kannala-brandt --method paper --out " + quoted(dir / "x.json"), "eqs. 13-14"},

@@ -241,52 +241,105 @@ TEST(Formats, FilesFishcamCannotHoldAreRefusedNamingWhy) {
   EXPECT_THROW(parse_camera(text, "fisheye.yml", options), Error);  // no size: refused, not guessed
 }
 
-// Every format with every registry model it can hold: written, read back, the same
-// projection (to 1e-9 px over the valid domain); models it cannot hold refused in
-// one line naming the model. Every format holds some model.
-TEST(Formats, EveryFormatRoundTripsEveryModelItCanHold) {
-  for (const CameraFormat format : camera_formats()) {
-    int held = 0;
-    for (auto [label, p] : test::every_model()) {
-      p.pose = Pose{Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())), {0.1, -0.2, 1.5}};
-      std::string text;
-      try {
-        text = format_camera(p, format);
-      } catch (const Error& e) {
-        const std::string what = e.what();
-        EXPECT_TRUE(what.find("holds") != std::string::npos || what.find("cannot") != std::string::npos) << what;
-        continue;
-      }
-      ++held;
-      CameraReadOptions options;
-      options.format = format;
-      options.image_size = std::pair{p.width, p.height};
-      const Camera back(parse_camera(text, label, options));
-      const Camera original(p);
-      EXPECT_EQ(back.width(), p.width);
-      EXPECT_EQ(back.height(), p.height);
-      const double limit = original.domain().closed ? original.domain().theta_max : original.domain().theta_max - 1e-3;
-      double worst = 0;
-      for (const Eigen::Vector3d& ray : test::random_rays(2000, limit, 3)) {
-        Eigen::Vector2d a, b;
-        ASSERT_TRUE(original.project(ray, &a));
-        ASSERT_TRUE(back.project(ray, &b)) << to_string(format) << " " << label;
-        worst = std::max(worst, (a - b).norm() / (1 + 1e-3 * (a - original.principal_point()).norm()));
-      }
-      EXPECT_LE(worst, 1e-9) << to_string(format) << " " << label;
-      if (back.parameters().pose) {  // formats with poses keep them
-        EXPECT_LT(back.parameters().pose->rotation.angularDistance(p.pose->rotation), 1e-12) << to_string(format);
-        EXPECT_LT((back.parameters().pose->translation - p.pose->translation).norm(), 1e-12) << to_string(format);
-      }
-      if (model_name(back.model()) == model_name(original.model()) && p.pixel_scale.x() == 1 &&
-          (format == CameraFormat::fishcam || format == CameraFormat::kalibr || format == CameraFormat::basalt)) {
-        // Stored as they are (basalt's unified model: the alpha form, exact to rounding).
-        const auto a = model_params(original.model()), b = model_params(back.model());
-        for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 4e-16 * std::abs(a[i])) << to_string(format) << " " << label;
-      }
+// Every format (one test per format, from the library's list) with every registry
+// model: the models of its list are written, read back and project the same (to
+// 1e-9 px over the valid domain); the others are refused in one line naming the
+// model. Which models a format holds comes from the list, so a writer that starts
+// refusing one of them, or takes one it should not, fails here.
+class EveryFormat : public ::testing::TestWithParam<CameraFormat> {};
+
+TEST_P(EveryFormat, RoundTripsTheModelsOfItsListAndRefusesTheOthers) {
+  const CameraFormat format = GetParam();
+  const std::vector<std::string> holds = camera_format_models(format);
+  ASSERT_FALSE(holds.empty());
+  int held = 0, refused = 0;
+  for (auto [label, p] : test::every_model()) {
+    p.pose = Pose{Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())), {0.1, -0.2, 1.5}};
+    const bool listed = std::find(holds.begin(), holds.end(), model_name(p.model)) != holds.end();
+    std::string text;
+    try {
+      text = format_camera(p, format);
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_FALSE(listed) << label << ": a model of the list refused: " << what;
+      EXPECT_NE(what.find("format holds"), std::string::npos) << what;
+      EXPECT_NE(what.find(std::string("not ") + std::string(model_name(p.model))), std::string::npos) << what;
+      ++refused;
+      continue;
     }
-    EXPECT_GT(held, 0) << to_string(format);
+    EXPECT_TRUE(listed) << label << ": written, but not in the format's list";
+    ++held;
+    CameraReadOptions options;
+    options.format = format;
+    options.image_size = std::pair{p.width, p.height};
+    const Camera back(parse_camera(text, label, options));
+    const Camera original(p);
+    EXPECT_EQ(back.width(), p.width);
+    EXPECT_EQ(back.height(), p.height);
+    const double limit = original.domain().closed ? original.domain().theta_max : original.domain().theta_max - 1e-3;
+    double worst = 0;
+    for (const Eigen::Vector3d& ray : test::random_rays(2000, limit, 3)) {
+      Eigen::Vector2d a, b;
+      ASSERT_TRUE(original.project(ray, &a));
+      ASSERT_TRUE(back.project(ray, &b)) << label;
+      worst = std::max(worst, (a - b).norm() / (1 + 1e-3 * (a - original.principal_point()).norm()));
+    }
+    EXPECT_LE(worst, 1e-9) << label;
+    if (back.parameters().pose) {  // formats with poses keep them
+      EXPECT_LT(back.parameters().pose->rotation.angularDistance(p.pose->rotation), 1e-12);
+      EXPECT_LT((back.parameters().pose->translation - p.pose->translation).norm(), 1e-12);
+    }
+    if (model_name(back.model()) == model_name(original.model()) && p.pixel_scale.x() == 1 &&
+        (format == CameraFormat::fishcam || format == CameraFormat::kalibr || format == CameraFormat::basalt)) {
+      // Stored as they are (basalt's unified model: the alpha form, exact to rounding).
+      const auto a = model_params(original.model()), b = model_params(back.model());
+      for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 4e-16 * std::abs(a[i])) << label;
+    }
   }
+  EXPECT_EQ(held + refused, int(test::every_model().size()));
+  EXPECT_GT(held, 0);
+}
+
+// A user limit on the valid domain: fishcam JSON only; every other format refuses it.
+TEST_P(EveryFormat, HoldsAThetaLimitOnlyIfFishcam) {
+  CameraParameters p = test::woodscape_front();
+  p.model = Equidistant<double>(340);
+  p.theta_limit = 1.2;
+  if (GetParam() == CameraFormat::fishcam) {
+    EXPECT_EQ(*parse_camera(format_camera(p, GetParam()), "x", GetParam()).theta_limit, 1.2);
+  } else {
+    try {
+      format_camera(p, GetParam());
+      ADD_FAILURE() << "a theta limit was written";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("cannot store a user field-of-view limit"), std::string::npos) << e.what();
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, EveryFormat, ::testing::ValuesIn(camera_formats()),
+                         [](const ::testing::TestParamInfo<CameraFormat>& info) {
+                           return std::string(to_string(info.param));
+                         });
+
+// docs/formats.md's table lists, per format, exactly the models of its list.
+TEST(Formats, TheDocsTableListsEachFormatsModels) {
+  const std::string docs = test::read_file(std::filesystem::path(FISHCAM_DATA_DIR) / ".." / "docs" / "formats.md");
+  int rows = 0;
+  for (const CameraFormat format : camera_formats()) {
+    const std::string key = "| `" + std::string(to_string(format)) + "` |";
+    const size_t at = docs.find(key);
+    ASSERT_NE(at, std::string::npos) << key;
+    const std::string row = docs.substr(at, docs.find('\n', at) - at);
+    const std::string models = row.substr(row.rfind('|', row.size() - 2) + 2);
+    std::string expected;
+    const auto names = camera_format_models(format);
+    for (size_t i = 0; i < names.size(); ++i) expected += (i ? ", " : "") + names[i];
+    if (format == CameraFormat::fishcam) expected = "every model";
+    EXPECT_EQ(models.substr(0, models.size() - 2), expected) << row;
+    ++rows;
+  }
+  EXPECT_EQ(rows, int(camera_formats().size()));
 }
 
 TEST(Formats, CamerasAreChosenByNameOrIndexAndSizesChecked) {

@@ -272,9 +272,24 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
   return j.dump();
 }
 
+std::vector<std::string> camera_format_models(CameraFormat format) {
+  const auto& listed = format_spec(format).models;
+  std::vector<std::string> out;
+  for (std::string_view name : listed.empty() ? model_names() : listed) out.emplace_back(name);
+  return out;
+}
+
 std::string format_camera(const CameraParameters& camera, CameraFormat format) {
   Camera check(camera);  // never write a camera we would refuse to read
-  std::string content = format_spec(format).write(camera);
+  const detail::FormatSpec& spec = format_spec(format);
+  // What a format holds is checked here, once, from its list: writers see only
+  // cameras of their models.
+  if (camera.theta_limit && !spec.holds_theta_limit) {
+    throw Error("theta_limit: the " + std::string(spec.name) +
+                " format cannot store a user field-of-view limit (fishcam JSON can)");
+  }
+  if (!spec.holds(model_name(camera.model))) detail::cannot_hold(camera, format);
+  std::string content = spec.write(camera);
   // Nor a file our own reader refuses (a value that overflows in the format's
   // parameterisation, say): read it back before anyone can write it.
   try {

@@ -41,9 +41,18 @@ std::string text_for_message(std::string_view text) {
   return plain ? std::string(text) : quoted_for_message(text);
 }
 
-std::string choices_for_message(const std::vector<std::string>& names) {
+std::string choices_for_message(const std::vector<std::string>& names, std::string_view conjunction) {
   std::string out;
-  for (size_t i = 0; i < names.size(); ++i) out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (i > 0 && i + 1 == names.size()) {
+      out.push_back(' ');
+      out.append(conjunction);
+      out.push_back(' ');
+    } else if (i > 0) {
+      out.append(", ");
+    }
+    out.append(names[i]);
+  }
   return out;
 }
 

@@ -74,7 +74,7 @@ def test_figures_agree_with_fishcam_map(tmp_path):
     kb = report["models"][0]
     assert kb["displacement"]["p95_px"] < 1 and kb["fit_rms_px"] < 0.2
     for picture in ["sphere.png", "augmented.png", "displacement-kannala-brandt.png", "displacement-stereographic.png"]:
-        assert (tmp_path / picture).stat().st_size > 10000, picture
+        assert (tmp_path / "figures" / "new" / picture).stat().st_size > 10000, picture
 
 
 def test_method_paper_uses_eqs_13_and_14(tmp_path):

@@ -28,6 +28,8 @@ std::optional<CameraFormat> parse_camera_format(std::string_view name);
 std::vector<CameraFormat> camera_formats();
 // "woodscape, mrcal, ..." for help texts and messages.
 std::string camera_format_names();
+// The registry models a format holds (its writer takes), in the format's order.
+std::vector<std::string> camera_format_models(CameraFormat format);
 // The format a file name's extension suggests for writing (.cameramodel: mrcal,
 // .yaml/.yml/.xml: opencv, .json: fishcam, .txt: colmap); nullopt if none.
 std::optional<CameraFormat> camera_format_for_extension(const std::filesystem::path& path);

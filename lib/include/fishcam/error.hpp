@@ -29,8 +29,8 @@ std::string text_for_message(std::string_view text);
 // characters (the common case stays readable), else quoted_for_message's form.
 std::string path_for_message(const std::filesystem::path& path);
 
-// "a, b or c": the names a value may take, for a message.
-std::string choices_for_message(const std::vector<std::string>& names);
+// "a, b or c" (or "a, b and c"): names for a message.
+std::string choices_for_message(const std::vector<std::string>& names, std::string_view conjunction = "or");
 
 // Whether text is well-formed UTF-8 (no overlong forms, surrogates or bytes past U+10FFFF).
 bool is_valid_utf8(std::string_view text);

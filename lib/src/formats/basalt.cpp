@@ -71,7 +71,6 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& original) {
-  reject_theta_limit(original, "basalt");
   const CameraParameters p = with_unit_ax(original);
   const double cx = p.principal_point.x(), cy = p.principal_point.y(), ay = p.pixel_scale.y();
   nlohmann::json k;
@@ -93,7 +92,7 @@ std::string write(const CameraParameters& original) {
   } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
     type = "pinhole", focal(m->f());
   } else {
-    cannot_hold(p, "basalt", "kannala-brandt (and equidistant), double-sphere, extended-unified, unified and pinhole");
+    cannot_hold(p, CameraFormat::basalt);
   }
   const Pose pose = p.pose.value_or(Pose{});
   const auto& q = pose.rotation;
@@ -109,8 +108,8 @@ std::string write(const CameraParameters& original) {
 }  // namespace
 
 extern const FormatSpec basalt_format{CameraFormat::basalt, "basalt", "basalt calibration JSON", {".json"},
-                                      "kannala-brandt (and equidistant), double-sphere, extended-unified, unified and "
-                                      "pinhole",
+                                      {"kannala-brandt", "equidistant", "double-sphere", "extended-unified", "unified",
+                                       "pinhole"},
                                       score, read, write};
 
 }  // namespace fishcam::detail

@@ -53,7 +53,6 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& original) {
-  reject_theta_limit(original, "camodocal");
   const CameraParameters p = with_unit_ax(original);
   const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
   std::string out = "%YAML:1.0\n---\n";
@@ -84,7 +83,7 @@ std::string write(const CameraParameters& original) {
     out += "projection_parameters:\n";
     line("fx", m->f()), line("fy", m->f() * ay), line("cx", cx), line("cy", cy);
   } else {
-    cannot_hold(p, "camodocal", "kannala-brandt (and equidistant), mei (and unified) and pinhole");
+    cannot_hold(p, CameraFormat::camodocal);
   }
   return out;
 }
@@ -92,7 +91,7 @@ std::string write(const CameraParameters& original) {
 }  // namespace
 
 extern const FormatSpec camodocal_format{CameraFormat::camodocal, "camodocal", "camodocal YAML", {".yaml", ".yml"},
-                                         "kannala-brandt (and equidistant), mei (and unified) and pinhole", score, read,
+                                         {"kannala-brandt", "equidistant", "mei", "unified", "pinhole"}, score, read,
                                          write};
 
 }  // namespace fishcam::detail

@@ -97,9 +97,8 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& original) {
-  reject_theta_limit(original, "COLMAP");
   const CameraParameters p = with_unit_ax(original);
-  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, "COLMAP");
+  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::colmap);
   const bool pinhole = kb.pinhole;
   const double f = kb.f;
   std::vector<double> params = {f, f * p.pixel_scale.y(), p.principal_point.x() + 0.5, p.principal_point.y() + 0.5};
@@ -119,6 +118,6 @@ std::string write(const CameraParameters& original) {
 }  // namespace
 
 extern const FormatSpec colmap_format{CameraFormat::colmap, "colmap", "COLMAP cameras.txt", {".txt"},
-                                      "kannala-brandt (and equidistant) and pinhole", score, read, write};
+                                      {"kannala-brandt", "equidistant", "pinhole"}, score, read, write};
 
 }  // namespace fishcam::detail

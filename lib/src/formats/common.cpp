@@ -256,15 +256,15 @@ DocFields DocFields::object(std::string_view key) const {
 }
 
 // ------------------------------------------------------------ models, poses, text
-void cannot_hold(const CameraParameters& camera, std::string_view format, std::string_view holds) {
-  throw Error("model: the " + std::string(format) + " format holds " + std::string(holds) + " models only, not " +
-              std::string(model_name(camera.model)));
+bool FormatSpec::holds(std::string_view model) const {
+  return models.empty() || std::find(models.begin(), models.end(), model) != models.end();
 }
 
-void reject_theta_limit(const CameraParameters& p, std::string_view format) {
-  if (p.theta_limit) {
-    throw Error("theta_limit: the " + std::string(format) + " format cannot store a user field-of-view limit");
-  }
+void cannot_hold(const CameraParameters& camera, CameraFormat format) {
+  const FormatSpec& spec = format_spec(format);
+  const std::vector<std::string> names(spec.models.begin(), spec.models.end());
+  throw Error("model: the " + std::string(spec.name) + " format holds " + choices_for_message(names, "and") +
+              " models only, not " + std::string(model_name(camera.model)));
 }
 
 CameraParameters with_unit_ax(CameraParameters p) {
@@ -290,10 +290,10 @@ KannalaBrandtLike kannala_brandt_of(const CameraParameters& p) {
   return out;
 }
 
-KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, std::string_view format) {
+KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, CameraFormat format) {
   if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) return {true, m->f(), {}};
   const KannalaBrandtLike kb = kannala_brandt_of(p);
-  if (!kb.ok) cannot_hold(p, format, "kannala-brandt (and equidistant) and pinhole");
+  if (!kb.ok) cannot_hold(p, format);
   return {false, kb.f, kb.k};
 }
 

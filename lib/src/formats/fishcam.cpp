@@ -53,6 +53,6 @@ std::string write(const CameraParameters& p) {
 }  // namespace
 
 extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
-                                       "every", score, read, write};
+                                       {}, score, read, write, true};
 
 }  // namespace fishcam::detail

@@ -59,12 +59,18 @@ struct FormatSpec {
   std::string_view name;
   std::string_view description;              // "Kalibr camchain YAML"
   std::vector<std::string_view> extensions;  // for choosing a writer from a file name
-  std::string_view holds;                    // the models it can hold, for messages
+  // The registry models its writer takes (empty: every one). format_camera checks
+  // a camera against it before the writer runs; the tests and docs/formats.md's
+  // table follow from it.
+  std::vector<std::string_view> models;
   // How surely the content is this format: 0 = not it; higher = surer (by parsing
   // and looking for the format's own keys, never by substring order).
   int (*score)(const Content&);
   std::vector<NamedCamera> (*read)(const Content&);
   std::string (*write)(const CameraParameters&);  // throws Error when it cannot hold the camera
+  bool holds_theta_limit = false;                 // a user limit on the valid domain (fishcam JSON only)
+
+  bool holds(std::string_view model) const;
 };
 
 const std::vector<const FormatSpec*>& format_table();
@@ -121,10 +127,9 @@ class DocFields {
   std::string source_, prefix_;
 };
 
-// A format's error about the model it was given: "model: the Kalibr format holds
-// kannala-brandt, ... not polynomial".
-[[noreturn]] void cannot_hold(const CameraParameters& camera, std::string_view format, std::string_view holds);
-void reject_theta_limit(const CameraParameters& p, std::string_view format);
+// A format's error about the model it was given: "model: the kalibr format holds
+// kannala-brandt, ... models only, not polynomial" (its FormatSpec::models).
+[[noreturn]] void cannot_hold(const CameraParameters& camera, CameraFormat format);
 // The model rescaled so that a_x = 1 (formats with fx, fy store f = fx, a_y = fy / fx).
 CameraParameters with_unit_ax(CameraParameters p);
 // K = [fx 0 cx; 0 fy cy] from fx, fy: f = fx, a_y = fy / fx. Throws unless fx, fy > 0.
@@ -145,7 +150,7 @@ struct KannalaBrandtOrPinhole {
   double f = 0;
   std::array<double, 4> k{};
 };
-KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, std::string_view format);
+KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, CameraFormat format);
 // Radial-tangential coefficients (k1, k2, p1, p2[, k3, ...]) that are all zero are
 // a pinhole with focal length f; anything else is refused naming why (tangential
 // terms: not radially symmetric; radial terms only: a model fishcam lacks).

@@ -119,7 +119,6 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& original) {
-  reject_theta_limit(original, "Kalibr");
   const CameraParameters p = with_unit_ax(original);
   const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
   const auto focal = [&](double f) { return std::vector<double>{f, f * ay, cx, cy}; };
@@ -144,7 +143,7 @@ std::string write(const CameraParameters& original) {
     const auto q = m->params();
     model = "eucm", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), {q[1], q[2]});
   } else {
-    cannot_hold(p, "Kalibr", "kannala-brandt (and equidistant), pinhole, unified, mei, double-sphere and extended-unified");
+    cannot_hold(p, CameraFormat::kalibr);
   }
   std::string out = "cam0:\n";
   out += "  camera_model: " + model + "\n";
@@ -163,8 +162,8 @@ std::string write(const CameraParameters& original) {
 }  // namespace
 
 extern const FormatSpec kalibr_format{CameraFormat::kalibr, "kalibr", "Kalibr camchain YAML", {".yaml", ".yml"},
-                                      "kannala-brandt (and equidistant), pinhole, unified, mei, double-sphere and "
-                                      "extended-unified",
+                                      {"kannala-brandt", "equidistant", "pinhole", "unified", "mei", "double-sphere",
+                                       "extended-unified"},
                                       score, read, write};
 
 }  // namespace fishcam::detail

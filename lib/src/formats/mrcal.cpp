@@ -47,7 +47,6 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {
-  reject_theta_limit(p, "mrcal");
   double f = 0;
   std::string lensmodel;
   if (const auto* m = std::get_if<Stereographic<double>>(&p.model)) {
@@ -55,8 +54,7 @@ std::string write(const CameraParameters& p) {
   } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
     f = m->f(), lensmodel = "LENSMODEL_PINHOLE";
   } else {
-    throw Error("model: mrcal's format holds pinhole and stereographic models only, not " +
-                std::string(model_name(p.model)));
+    cannot_hold(p, CameraFormat::mrcal);
   }
   const std::array<double, 6> rt = p.pose ? rt_cam_ref_from_pose(*p.pose) : std::array<double, 6>{};
   char buffer[1024];
@@ -77,6 +75,6 @@ std::string write(const CameraParameters& p) {
 }  // namespace
 
 extern const FormatSpec mrcal_format{CameraFormat::mrcal, "mrcal", "mrcal .cameramodel", {".cameramodel"},
-                                     "pinhole and stereographic", score, read, write};
+                                     {"pinhole", "stereographic"}, score, read, write};
 
 }  // namespace fishcam::detail

@@ -80,9 +80,8 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& original) {
-  reject_theta_limit(original, "OpenCV");
   const CameraParameters p = with_unit_ax(original);
-  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, "OpenCV");
+  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::opencv);
   const bool pinhole = kb.pinhole;
   const double f = kb.f;
   const cv::Matx33d K(f, 0, p.principal_point.x(), 0, f * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1);
@@ -106,7 +105,7 @@ std::string write(const CameraParameters& original) {
 }  // namespace
 
 extern const FormatSpec opencv_format{CameraFormat::opencv, "opencv", "OpenCV FileStorage YAML/XML",
-                                      {".yaml", ".yml", ".xml"}, "kannala-brandt (and equidistant) and pinhole",
+                                      {".yaml", ".yml", ".xml"}, {"kannala-brandt", "equidistant", "pinhole"},
                                       score, read, write};
 
 }  // namespace fishcam::detail

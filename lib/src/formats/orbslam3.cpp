@@ -47,9 +47,8 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& original) {
-  reject_theta_limit(original, "ORB-SLAM3");
   const CameraParameters p = with_unit_ax(original);
-  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, "ORB-SLAM3");
+  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::orbslam3);
   const bool pinhole = kb.pinhole;
   const double f = kb.f;
   std::string out = "%YAML:1.0\n\n";
@@ -68,6 +67,6 @@ std::string write(const CameraParameters& original) {
 }  // namespace
 
 extern const FormatSpec orbslam3_format{CameraFormat::orbslam3, "orbslam3", "ORB-SLAM3 settings YAML", {".yaml", ".yml"},
-                                        "kannala-brandt (and equidistant) and pinhole", score, read, write};
+                                        {"kannala-brandt", "equidistant", "pinhole"}, score, read, write};
 
 }  // namespace fishcam::detail

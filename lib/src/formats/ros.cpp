@@ -36,9 +36,8 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& original) {
-  reject_theta_limit(original, "ROS");
   const CameraParameters p = with_unit_ax(original);
-  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, "ROS camera_info");
+  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::ros);
   const bool pinhole = kb.pinhole;
   const double fx = kb.f, fy = fx * p.pixel_scale.y();
   const double cx = p.principal_point.x(), cy = p.principal_point.y();
@@ -60,6 +59,6 @@ std::string write(const CameraParameters& original) {
 }  // namespace
 
 extern const FormatSpec ros_format{CameraFormat::ros, "ros", "ROS camera_info YAML", {".yaml", ".yml"},
-                                   "kannala-brandt (and equidistant) and pinhole", score, read, write};
+                                   {"kannala-brandt", "equidistant", "pinhole"}, score, read, write};
 
 }  // namespace fishcam::detail

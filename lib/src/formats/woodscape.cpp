@@ -62,7 +62,6 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& original) {
-  reject_theta_limit(original, "WoodScape");
   const CameraParameters p = with_unit_ax(original);
   std::vector<double> k;
   if (const auto* poly = std::get_if<Polynomial<double>>(&p.model)) {
@@ -70,7 +69,7 @@ std::string write(const CameraParameters& original) {
   } else if (const auto* eq = std::get_if<Equidistant<double>>(&p.model)) {
     k = {eq->f()};
   } else {
-    cannot_hold(p, "WoodScape", "polynomial (and equidistant)");
+    cannot_hold(p, CameraFormat::woodscape);
   }
   if (k.size() > size_t(kMaxWoodScapeOrder)) {
     throw Error("model: the WoodScape format holds polynomials up to order " + std::to_string(kMaxWoodScapeOrder) +
@@ -93,6 +92,6 @@ std::string write(const CameraParameters& original) {
 }  // namespace
 
 extern const FormatSpec woodscape_format{CameraFormat::woodscape, "woodscape", "WoodScape / SynWoodScape calibration JSON",
-                                         {".json"}, "polynomial (and equidistant)", score, read, write};
+                                         {".json"}, {"polynomial", "equidistant"}, score, read, write};
 
 }  // namespace fishcam::detail
