@@ -214,20 +214,22 @@ TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
 }
 
 // Every registry model as the source (the kernel evaluates the source's
-// projection): the float kernel against the double reference.
-TEST(Augmentation, FastMapsOfEveryModelAgreeWithTheExactReference) {
-  const Camera target = woodscape();
-  for (const auto& [name, p] : test::every_model()) {
-    const ViewpointWarp warp(Camera(p), target);
-    ASSERT_TRUE(warp.float_kernel()) << name;
-    const ViewpointChange change = random_pose(*find_pose_preset("train"), 4).change();
-    for (DepthPrior prior : kPriors) {
-      const auto [worst, disagree, both] = fast_against_exact(warp, change, prior);
-      EXPECT_LE(worst, 1e-3) << name << " " << to_string(prior);
-      EXPECT_LE(disagree, 20) << name << " " << to_string(prior) << ": validity differs (only on the image border)";
-      EXPECT_GT(both, 50000) << name;
-    }
+// projection), one test each: the float kernel against the double reference.
+class EveryModelSource : public ::testing::TestWithParam<test::ModelCase> {};
+
+TEST_P(EveryModelSource, FastMapsAgreeWithTheExactReference) {
+  const ViewpointWarp warp(Camera(GetParam().second), woodscape());
+  ASSERT_TRUE(warp.float_kernel());
+  const ViewpointChange change = random_pose(pose_preset("train"), 4).change();
+  int priors = 0;
+  for (DepthPrior prior : kPriors) {
+    const auto [worst, disagree, both] = fast_against_exact(warp, change, prior);
+    EXPECT_LE(worst, 1e-3) << to_string(prior);
+    EXPECT_LE(disagree, 20) << to_string(prior) << ": validity differs (only on the image border)";
+    EXPECT_GT(both, 50000) << to_string(prior);
+    ++priors;
   }
+  EXPECT_EQ(priors, 3);
 }
 
 // The same lens written three ways (order 4, order 16 with k5..k16 = 0; f theta as
@@ -658,25 +660,30 @@ GridAgreement grid_against_exact(const ViewpointWarp& warp, const ViewpointChang
   return a;
 }
 
-// Every registry model as the source (fold variants included): the grid's float map
-// against the exact reference, within cv::remap's fixed-point step.
-TEST(Augmentation, GridMapsOfEveryModelAgreeWithTheExactReference) {
-  // Half-size cameras: a quarter of the exact maps' cost (the sanitizer build runs this too).
+// Every registry model as the source (fold variants included), one test each: the
+// grid's float map against the exact reference, within cv::remap's fixed-point step.
+TEST_P(EveryModelSource, GridMapsAgreeWithTheExactReference) {
+  // Half-size cameras: a quarter of the exact maps' cost.
   const Camera target(resized(woodscape().parameters(), 640, 483));
-  for (const auto& [name, p] : test::every_model()) {
-    const ViewpointWarp warp(Camera(resized(p, 640, 483)), target);
-    EXPECT_GT(warp.grid_spacing(), 0) << name;
-    for (std::uint64_t seed = 0; seed < 2; ++seed) {
-      const ViewpointChange change = random_pose(*find_pose_preset("large"), seed).change();
-      for (DepthPrior prior : kPriors) {
-        const auto [worst, differs, valid] = grid_against_exact(warp, change, prior);
-        EXPECT_LE(worst, 1.0 / 32) << name << " " << to_string(prior);
-        // As the per-pixel float kernel (FastMaps... above): only pixels on the image border.
-        EXPECT_LE(differs, 20) << name << " " << to_string(prior);
-      }
+  const ViewpointWarp warp(Camera(resized(GetParam().second, 640, 483)), target);
+  EXPECT_GT(warp.grid_spacing(), 0);
+  int checked = 0;
+  for (std::uint64_t seed = 0; seed < 2; ++seed) {
+    const ViewpointChange change = random_pose(pose_preset("large"), seed).change();
+    for (DepthPrior prior : kPriors) {
+      const auto [worst, differs, valid] = grid_against_exact(warp, change, prior);
+      EXPECT_LE(worst, 1.0 / 32) << to_string(prior);
+      // As the per-pixel float kernel (FastMaps... above): only pixels on the image border.
+      EXPECT_LE(differs, 20) << to_string(prior);
+      EXPECT_GT(valid, 10000) << to_string(prior) << ": too few pixels compared";
+      ++checked;
     }
   }
+  EXPECT_EQ(checked, 6);
 }
+
+INSTANTIATE_TEST_SUITE_P(Augmentation, EveryModelSource, ::testing::ValuesIn(test::every_model()),
+                         test::model_case_name);
 
 // Where float arithmetic is weakest: a full-circle fisheye whose image reaches
 // theta = 180 deg (the azimuth of a ray next to -z rests on components a rotation

@@ -26,58 +26,67 @@ std::vector<std::pair<std::string, CameraParameters>> cameras() {
   return all;
 }
 
-TEST(RoundTrip, ProjectUnprojectEveryPixel) {
-  for (const auto& [name, params] : cameras()) {
-    const Camera camera(params);
-    const auto pixels = every_pixel(camera);
-    std::vector<Eigen::Vector3d> rays(pixels.size());
-    std::vector<std::uint8_t> valid(pixels.size());
-    camera.unproject(pixels, rays, valid);
-    std::vector<Eigen::Vector2d> back(pixels.size());
-    std::vector<std::uint8_t> back_valid(pixels.size());
-    camera.project(rays, back, back_valid);
-    double worst = 0, widest = 0;
-    size_t count = 0;
-    for (size_t i = 0; i < pixels.size(); ++i) {
-      if (!valid[i]) continue;
-      ASSERT_TRUE(back_valid[i]) << name << " pixel " << pixels[i].transpose();
-      worst = std::max(worst, (back[i] - pixels[i]).norm());
-      widest = std::max(widest, std::acos(std::clamp(rays[i].z(), -1.0, 1.0)));
-      ++count;
-    }
-    EXPECT_LE(worst, 1e-9) << name;
-    if (name != "polynomial_fold") {
-      EXPECT_EQ(count, pixels.size()) << name << ": every pixel of this image is in the valid domain";
-    }
-    if (name.find("polynomial") == 0 && name != "polynomial_fold") {
-      EXPECT_GT(widest, 110 * M_PI / 180) << name << ": the corners are > 90 deg off-axis";
-    }
-    std::printf("  %-22s %8zu pixels, widest %.2f deg, worst round trip %.2e px\n", name.c_str(), count,
-                widest * 180 / M_PI, worst);
+// Every model (and a polynomial whose fold lies inside the image), one test each.
+class EveryModel : public ::testing::TestWithParam<test::ModelCase> {};
+
+TEST_P(EveryModel, ProjectUnprojectEveryPixel) {
+  const auto& [name, params] = GetParam();
+  const Camera camera(params);
+  const auto pixels = every_pixel(camera);
+  std::vector<Eigen::Vector3d> rays(pixels.size());
+  std::vector<std::uint8_t> valid(pixels.size());
+  camera.unproject(pixels, rays, valid);
+  std::vector<Eigen::Vector2d> back(pixels.size());
+  std::vector<std::uint8_t> back_valid(pixels.size());
+  camera.project(rays, back, back_valid);
+  double worst = 0, widest = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    if (!valid[i]) continue;
+    ASSERT_TRUE(back_valid[i]) << name << " pixel " << pixels[i].transpose();
+    worst = std::max(worst, (back[i] - pixels[i]).norm());
+    widest = std::max(widest, std::acos(std::clamp(rays[i].z(), -1.0, 1.0)));
+    ++count;
   }
+  EXPECT_LE(worst, 1e-9) << name;
+  if (name != "polynomial_fold") {
+    EXPECT_EQ(count, pixels.size()) << name << ": every pixel of this image is in the valid domain";
+  } else {  // the pixels inside the fold's circle, and only those
+    const size_t inside = size_t(std::count_if(pixels.begin(), pixels.end(), [&](const Eigen::Vector2d& q) {
+      return camera.rho_of_pixel(q) <= camera.domain().rho_max;
+    }));
+    EXPECT_NEAR(double(count), double(inside), 4.0) << "pixels unprojected vs inside the fold's circle";
+    EXPECT_GT(count, pixels.size() / 10);
+  }
+  if (name.find("polynomial") == 0 && name != "polynomial_fold") {
+    EXPECT_GT(widest, 110 * M_PI / 180) << name << ": the corners are > 90 deg off-axis";
+  }
+  std::printf("  %-22s %8zu pixels, widest %.2f deg, worst round trip %.2e px\n", name.c_str(), count,
+              widest * 180 / M_PI, worst);
 }
 
-TEST(RoundTrip, UnprojectProjectRandomRays) {
-  for (const auto& [name, params] : cameras()) {
-    const Camera camera(params);
-    const ValidDomain& d = camera.domain();
-    // Stay off the open limits (where rho diverges) and off a fold (where theta(rho)
-    // is ill-conditioned: there the pixel round trip above is the meaningful test).
-    const double theta_max = d.limited_by == ValidDomain::Limit::fold ? d.theta_max - 0.02
-                             : d.closed                                ? d.theta_max
-                                                                       : d.theta_max - 1e-3;
-    double worst = 0;
-    for (const Eigen::Vector3d& ray : test::random_rays(100000, theta_max, 99)) {
-      Eigen::Vector2d pixel;
-      Eigen::Vector3d back;
-      ASSERT_TRUE(camera.project(ray, &pixel)) << name << " " << ray.transpose();
-      ASSERT_TRUE(camera.unproject(pixel, &back)) << name;
-      EXPECT_NEAR(back.norm(), 1.0, 1e-15);
-      worst = std::max(worst, test::angle_between(ray, back));
-    }
-    EXPECT_LE(worst, 1e-12) << name;
+TEST_P(EveryModel, UnprojectProjectRandomRays) {
+  const auto& [name, params] = GetParam();
+  const Camera camera(params);
+  const ValidDomain& d = camera.domain();
+  // Stay off the open limits (where rho diverges) and off a fold (where theta(rho)
+  // is ill-conditioned: there the pixel round trip above is the meaningful test).
+  const double theta_max = d.limited_by == ValidDomain::Limit::fold ? d.theta_max - 0.02
+                           : d.closed                                ? d.theta_max
+                                                                     : d.theta_max - 1e-3;
+  double worst = 0;
+  for (const Eigen::Vector3d& ray : test::random_rays(100000, theta_max, 99)) {
+    Eigen::Vector2d pixel;
+    Eigen::Vector3d back;
+    ASSERT_TRUE(camera.project(ray, &pixel)) << name << " " << ray.transpose();
+    ASSERT_TRUE(camera.unproject(pixel, &back)) << name;
+    EXPECT_NEAR(back.norm(), 1.0, 1e-15);
+    worst = std::max(worst, test::angle_between(ray, back));
   }
+  EXPECT_LE(worst, 1e-12) << name;
 }
+
+INSTANTIATE_TEST_SUITE_P(RoundTrip, EveryModel, ::testing::ValuesIn(cameras()), test::model_case_name);
 
 TEST(RoundTrip, BatchesEqualSinglePointsAndThreadCountDoesNotMatter) {
   const Camera camera(test::woodscape_front());
@@ -134,47 +143,47 @@ namespace {
 
 // A point projected exactly at theta_max (closed domains) unprojects, whatever
 // rounding does to its radius; also under a user limit on theta.
-TEST(RoundTrip, PointsAtThetaMaxUnproject) {
-  auto all = test::every_model();
-  for (auto [name, p] : test::every_model()) {
-    p.theta_limit = 1.3;
-    all.emplace_back(name + "_limited", p);
-  }
-  for (const auto& [name, p] : all) {
+TEST_P(EveryModel, PointsAtThetaMaxUnproject) {
+  for (const double limit : {0.0, 1.3}) {
+    CameraParameters p = GetParam().second;
+    if (limit > 0) p.theta_limit = limit;
     const Camera camera(p);
     if (!camera.domain().closed) continue;
     const double t = camera.domain().theta_max;
+    int projected = 0;
     for (int k = 0; k < 360; ++k) {
       const double phi = k * M_PI / 180 + 0.001;
       const Eigen::Vector3d ray(std::sin(t) * std::cos(phi), std::sin(t) * std::sin(phi), std::cos(t));
       Eigen::Vector2d pixel;
       if (!camera.project(ray, &pixel)) continue;  // rounding put the ray itself past theta_max
+      ++projected;
       Eigen::Vector3d back;
-      EXPECT_TRUE(camera.unproject(pixel, &back)) << name << " phi " << phi;
+      EXPECT_TRUE(camera.unproject(pixel, &back)) << "limit " << limit << " phi " << phi;
     }
+    EXPECT_GE(projected, 288) << "limit " << limit << ": at least 80 % of the rays at theta_max project";
   }
 }
 
 // Only the direction of a point matters: scaled by 1e-300 ... 1e300 it projects
 // to the same pixel (bit for bit: the scaling inside is by powers of two), with
 // the Jacobian scaled by 1/s.
-TEST(RoundTrip, ProjectionIsScaleInvariantOverTheWholeDoubleRange) {
-  for (const auto& [name, p] : test::every_model()) {
-    const Camera camera(p);
-    for (const Eigen::Vector3d& ray : test::random_rays(50, std::min(camera.domain().theta_max, 1.5), 3)) {
-      Eigen::Vector2d reference;
-      Eigen::Matrix<double, 2, 3> reference_jacobian;
-      ASSERT_TRUE(camera.project(ray, &reference, &reference_jacobian)) << name;
-      for (double scale : {1e-300, 1e-170, 1e-160, 1e-20, 1e20, 1e160, 1e170, 1e300}) {
-        Eigen::Vector2d pixel;
-        Eigen::Matrix<double, 2, 3> jacobian;
-        ASSERT_TRUE(camera.project(ray * scale, &pixel, &jacobian)) << name << " " << scale;
-        EXPECT_LE((pixel - reference).norm(), 1e-9) << name << " " << scale;
-        EXPECT_LE((jacobian * scale - reference_jacobian).norm(), 1e-9 * reference_jacobian.norm())
-            << name << " " << scale;
-      }
+TEST_P(EveryModel, ProjectionIsScaleInvariantOverTheWholeDoubleRange) {
+  const Camera camera(GetParam().second);
+  int checked = 0;
+  for (const Eigen::Vector3d& ray : test::random_rays(50, std::min(camera.domain().theta_max, 1.5), 3)) {
+    Eigen::Vector2d reference;
+    Eigen::Matrix<double, 2, 3> reference_jacobian;
+    ASSERT_TRUE(camera.project(ray, &reference, &reference_jacobian));
+    for (double scale : {1e-300, 1e-170, 1e-160, 1e-20, 1e20, 1e160, 1e170, 1e300}) {
+      Eigen::Vector2d pixel;
+      Eigen::Matrix<double, 2, 3> jacobian;
+      ASSERT_TRUE(camera.project(ray * scale, &pixel, &jacobian)) << scale;
+      EXPECT_LE((pixel - reference).norm(), 1e-9) << scale;
+      EXPECT_LE((jacobian * scale - reference_jacobian).norm(), 1e-9 * reference_jacobian.norm()) << scale;
+      ++checked;
     }
   }
+  EXPECT_EQ(checked, 400);
 }
 
 }  // namespace

@@ -105,6 +105,11 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_model() {
   return out;
 }
 
+// Parameterised every-model tests: INSTANTIATE_TEST_SUITE_P(..., ValuesIn(every_model()),
+// model_case_name) gives each example its own test, named by its label.
+using ModelCase = std::pair<std::string, CameraParameters>;
+inline std::string model_case_name(const ::testing::TestParamInfo<ModelCase>& info) { return info.param.first; }
+
 // Uniformly distributed unit vectors with theta in [0, theta_max].
 inline std::vector<Eigen::Vector3d> random_rays(size_t n, double theta_max, unsigned seed) {
   std::mt19937_64 rng(seed);
@@ -148,3 +153,10 @@ inline CommandResult run_fishcam(const std::string& args, const std::string& std
 #endif
 
 }  // namespace fishcam::test
+
+namespace fishcam {
+// How GoogleTest shows a camera in a failing parameterised test.
+inline void PrintTo(const CameraParameters& p, std::ostream* out) {
+  *out << model_name(p.model) << " " << p.width << "x" << p.height;
+}
+}  // namespace fishcam
