@@ -53,7 +53,8 @@ void register_augment(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--force", o->force, "Replace existing output files");
   cmd->add_flag("--json", o->json, "Print the applied change as one JSON object (full precision)");
-  cmd->callback([o, out_label, cmd] {
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([o, out_label, cmd, inputs] {
     if (out_label->count() && o->label.empty()) throw Error("--out-label needs --label");
     const bool affine = o->method == "affine";
     if (affine) {
@@ -65,7 +66,7 @@ void register_augment(CLI::App& app) {
     }
     check_outputs({{o->out_image}, {o->out_label, true}, {o->out_mask}}, {o->source, o->target, o->image, o->label},
                   o->force);
-    const ViewpointWarp warp = make_warp(o->source, o->target);
+    const ViewpointWarp warp = make_warp(*inputs, o->source, o->target);
     const RandomPose pose = o->preset.empty() ? RandomPose{{o->pose.rotate[0], o->pose.rotate[1], o->pose.rotate[2]},
                                                            {o->pose.translate[0], o->pose.translate[1], o->pose.translate[2]}}
                                               : random_pose(pose_preset(o->preset, "--preset"), o->seed);

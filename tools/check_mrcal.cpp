@@ -30,8 +30,9 @@ void register_check_mrcal(CLI::App& app) {
   cmd->add_option("--depth", o->pose.depth, "Depth prior mrcal has (distance=1 or None)")
       ->check(CLI::IsMember({"target-sphere", "infinity"}))
       ->capture_default_str();
-  cmd->callback([o] {
-    const ViewpointWarp warp = make_warp(o->source, o->target);
+  const auto inputs = std::make_shared<const CameraInputs>();  // as the files say
+  cmd->callback([o, inputs] {
+    const ViewpointWarp warp = make_warp(*inputs, o->source, o->target);
     const ViewpointChange change = o->pose.change();
     // mrcal: the source frame is the reference; the target has rt_cam_ref = (R, t).
     CameraParameters source = warp.source().parameters(), target = warp.target().parameters();

@@ -34,9 +34,9 @@ void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth) {
   }
 }
 
-ViewpointWarp make_warp(const std::string& source, const std::string& target) {
-  const Camera source_camera = read_input_camera(source);
-  return target.empty() ? ViewpointWarp(source_camera) : ViewpointWarp(source_camera, read_input_camera(target));
+ViewpointWarp make_warp(const CameraInputs& inputs, const std::string& source, const std::string& target) {
+  const Camera source_camera = inputs.read(source);
+  return target.empty() ? ViewpointWarp(source_camera) : ViewpointWarp(source_camera, inputs.read(target));
 }
 
 nlohmann::json affine_to_json(const AffineChange& change) {
@@ -182,13 +182,6 @@ std::vector<std::string> format_names() {
   return names;
 }
 
-struct CameraInputOptions {
-  std::string camera, imagersize, format, distortion_model;
-};
-CameraInputOptions& camera_input_options() {
-  static CameraInputOptions options;
-  return options;
-}
 }  // namespace
 
 std::pair<int, int> parse_image_size(const std::string& text, const std::string& option) {
@@ -210,34 +203,34 @@ std::pair<int, int> parse_image_size(const std::string& text, const std::string&
   return {w, h};
 }
 
-void add_camera_input_options(CLI::App* cmd) {
-  CameraInputOptions& o = camera_input_options();
-  cmd->add_option("--camera", o.camera, "Which camera of a file with several (name or index; default: the first)");
-  cmd->add_option("--imagersize", o.imagersize, "Image size W,H (or WxH) for camera files without one");
+std::shared_ptr<const CameraInputs> add_camera_input_options(CLI::App* cmd) {
+  auto o = std::make_shared<CameraInputs>();
+  cmd->add_option("--camera", o->camera, "Which camera of a file with several (name or index; default: the first)");
+  cmd->add_option("--imagersize", o->imagersize, "Image size W,H (or WxH) for camera files without one");
   const bool format_taken = cmd->get_option_no_throw("--format") != nullptr;
-  cmd->add_option(format_taken ? "--input-format" : "--format", o.format,
+  cmd->add_option(format_taken ? "--input-format" : "--format", o->format,
                   "Read camera files as this format (default: detected): " + camera_format_names())
       ->check(CLI::IsMember(format_names()));
-  cmd->add_option("--distortion-model", o.distortion_model,
+  cmd->add_option("--distortion-model", o->distortion_model,
                   "For OpenCV files that do not say: fisheye (Kannala-Brandt) or plumb_bob (radial-tangential)")
       ->check(CLI::IsMember({"fisheye", "plumb_bob"}));
+  return o;
 }
 
-Camera read_input_camera(const std::filesystem::path& path, CameraFileInfo* info_out) {
-  const CameraInputOptions& o = camera_input_options();
+Camera CameraInputs::read(const std::filesystem::path& path, CameraFileInfo* info_out) const {
   CameraReadOptions options;
-  if (!o.camera.empty()) options.camera = o.camera;
-  if (!o.imagersize.empty()) options.image_size = parse_image_size(o.imagersize, "--imagersize");
-  if (!o.format.empty()) options.format = parse_camera_format(o.format);
-  if (!o.distortion_model.empty()) options.distortion_model = o.distortion_model;
+  if (!camera.empty()) options.camera = camera;
+  if (!imagersize.empty()) options.image_size = parse_image_size(imagersize, "--imagersize");
+  if (!format.empty()) options.format = parse_camera_format(format);
+  if (!distortion_model.empty()) options.distortion_model = distortion_model;
   CameraFileInfo info;
-  Camera camera = read_camera(path, options, &info);
-  for (const std::string& note : info.notes) std::fprintf(stderr, "fishcam: note: %s: %s\n", path_for_message(path).c_str(), note.c_str());
+  Camera result = read_camera(path, options, &info);
+  for (const std::string& note : info.notes) {
+    std::fprintf(stderr, "fishcam: note: %s: %s\n", path_for_message(path).c_str(), note.c_str());
+  }
   if (info_out) *info_out = info;
-  return camera;
+  return result;
 }
-
-
 
 void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options) {
   cmd->add_option("--out", options->out, "Output camera file")->required();

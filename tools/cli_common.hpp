@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -30,16 +31,21 @@ struct PoseOptions {
 };
 void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth = true);
 
-// How subcommands read their camera files: --camera NAME|INDEX, --imagersize W,H
-// (or WxH) and --format (--input-format where --format names the output), set on
-// the subcommands main.cpp lists; notes (which camera, what was not read) go to stderr.
-void add_camera_input_options(CLI::App* cmd);
-Camera read_input_camera(const std::filesystem::path& path, CameraFileInfo* info = nullptr);
+// How a subcommand reads its camera files: --camera NAME|INDEX, --imagersize W,H
+// (or WxH), --format (--input-format where --format names the output) and
+// --distortion-model, held per subcommand (no process-wide option state); notes
+// (which camera, what was not read) go to stderr.
+struct CameraInputs {
+  std::string camera, imagersize, format, distortion_model;
+  Camera read(const std::filesystem::path& path, CameraFileInfo* info = nullptr) const;
+};
+// Adds those options to cmd (after any --format of its own) and returns where they land.
+std::shared_ptr<const CameraInputs> add_camera_input_options(CLI::App* cmd);
 // "W,H" or "WxH" as positive integers; throws Error naming the option.
 std::pair<int, int> parse_image_size(const std::string& text, const std::string& option);
 
 // The warp from SOURCE to TARGET (TARGET empty: the source camera again).
-ViewpointWarp make_warp(const std::string& source, const std::string& target);
+ViewpointWarp make_warp(const CameraInputs& inputs, const std::string& source, const std::string& target);
 
 // Reads an image or fails with "PATH: cannot read image".
 cv::Mat read_image(const std::string& path, int flags);

@@ -140,8 +140,9 @@ void register_compare(CLI::App& app) {
                   "alternatives as fishcam JSON (MODEL.json)");
   cmd->add_flag("--json", o->json, "Print the results as JSON");
   cmd->add_flag("--force", o->force, "Replace existing files in --out");
-  cmd->callback([o] {
-    const Camera camera = read_input_camera(o->camera);
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([o, inputs] {
+    const Camera camera = inputs->read(o->camera);
     check_comparison_size(camera.width(), camera.height(), o->samples);  // before rendering anything
     std::vector<std::string> tokens;
     std::stringstream list(o->models);
@@ -160,13 +161,13 @@ void register_compare(CLI::App& app) {
     // Every output is known before anything is computed: checked first, written together last.
     std::vector<OutputFile> outputs;
     // Inputs: the camera, the pictures, and the --models entries that are files.
-    std::vector<std::string> inputs{o->camera, o->image, o->label};
+    std::vector<std::string> input_files{o->camera, o->image, o->label};
     std::error_code ec;
     for (const std::string& token : tokens) {
-      if (fs::exists(token, ec)) inputs.push_back(token);
+      if (fs::exists(token, ec)) input_files.push_back(token);
     }
     if (!o->out.empty()) {
-      check_output_not_input(o->out, {inputs.begin(), inputs.end()}, true);
+      check_output_not_input(o->out, {input_files.begin(), input_files.end()}, true);
       fs::create_directories(o->out, ec);
       if (ec) throw Error(path_for_message(o->out) + ": cannot create the folder (" + ec.message() + ")");
       outputs.push_back({fs::path(o->out) / "sphere.png"});
@@ -176,10 +177,10 @@ void register_compare(CLI::App& app) {
         outputs.push_back({fs::path(o->out) / (name + ".json")});
       }
     }
-    check_outputs(outputs, inputs, o->force);
+    check_outputs(outputs, input_files, o->force);
     std::vector<AlternativeModel> alternatives;
     for (const std::string& token : tokens) {
-      alternatives.push_back(fs::is_regular_file(token, ec) ? alternative_from_file(token, read_input_camera(token))
+      alternatives.push_back(fs::is_regular_file(token, ec) ? alternative_from_file(token, inputs->read(token))
                                                             : alternative_model(camera, token, o->method));
     }
 

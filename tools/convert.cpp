@@ -36,10 +36,11 @@ void register_convert(CLI::App& app) {
   cmd->add_option("--max-angle", o->max_angle, "Fit and report only rays up to this angle of incidence (degrees)")
       ->check(CLI::Range(0.1, 180.0));
   add_camera_output_options(cmd, &o->output);
-  cmd->callback([o, fit_center, fit_aspect] {
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([o, fit_center, fit_aspect, inputs] {
     check_outputs({{o->output.out}}, {o->source}, o->output.force);
     const auto started = std::chrono::steady_clock::now();
-    const Camera source = read_input_camera(o->source);
+    const Camera source = inputs->read(o->source);
     const ModelSpec spec = parse_model_spec(o->to);
     const CameraFormat format = o->output.resolved_format();
     const std::optional<double> max_theta = o->max_angle > 0 ? std::optional(o->max_angle / kDeg) : std::nullopt;

@@ -22,8 +22,9 @@ void register_diff(CLI::App& app) {
   cmd->add_option("--step", o->step, "Compare every STEP-th pixel")->check(CLI::Range(1, 256))->capture_default_str();
   cmd->add_flag("--no-rotation", o->no_rotation, "Do not fit a rotation between the frames");
   cmd->add_flag("--json", o->json, "Print one JSON object");
-  cmd->callback([o] {
-    const Camera a = read_input_camera(o->a), b = read_input_camera(o->b);
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([o, inputs] {
+    const Camera a = inputs->read(o->a), b = inputs->read(o->b);
     const ProjectionDiff diff = projection_diff(a, b, o->step, !o->no_rotation);
     const double angle_deg = Eigen::AngleAxisd(diff.rotation).angle() * 180 / std::numbers::pi;
     if (o->json) {

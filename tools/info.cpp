@@ -56,9 +56,10 @@ void register_info(CLI::App& app) {
   cmd->add_option("CAMERA", *path, "Camera file (" + camera_format_names() + ")")
       ->required();
   cmd->add_flag("--json", *json, "Print one JSON object");
-  cmd->callback([path, json] {
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([path, json, inputs] {
     CameraFileInfo info;
-    const Camera camera = read_input_camera(*path, &info);
+    const Camera camera = inputs->read(*path, &info);
     nlohmann::json j = nlohmann::json::parse(camera_info_json(camera, info.format));
     // JSON holds UTF-8 only: a name that is not (a key from a hostile file) is given escaped.
     const std::string name = is_valid_utf8(info.camera_name) ? info.camera_name : quoted_for_message(info.camera_name);

@@ -89,10 +89,6 @@ int main(int argc, char** argv) {
   fishcam::cli::register_sample_dataset(app);
   fishcam::cli::register_evaluate(app);
   fishcam::cli::register_compare(app);
-  // Subcommands that read camera files share how (--camera, --imagersize, --format).
-  for (const char* name : {"info", "project", "unproject", "render", "map", "augment", "convert", "diff", "synth-corners", "compare"}) {
-    fishcam::cli::add_camera_input_options(app.get_subcommand(name));
-  }
   guard_number_options(&app);
   // Our one line is the message: no OpenCV warnings around it.
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);

@@ -22,9 +22,10 @@ void register_map(CLI::App& app) {
   cmd->add_option("--out", o->out, "Output .npy file")->required();
   cmd->add_flag("--exact", o->exact, "Compute in double precision pixel by pixel (slow reference)");
   cmd->add_flag("--force", o->force, "Replace an existing output file");
-  cmd->callback([o] {
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([o, inputs] {
     check_outputs({{o->out}}, {o->source, o->target}, o->force);
-    const ViewpointWarp warp = make_warp(o->source, o->target);
+    const ViewpointWarp warp = make_warp(*inputs, o->source, o->target);
     WarpMaps maps;
     if (o->exact) {
       warp.compute_exact(o->pose.change(), o->pose.prior(), &maps);

@@ -16,8 +16,9 @@ void register_project(CLI::App& app) {
                                  "(%.17g) or 'nan nan' outside the valid domain");
   auto path = std::make_shared<std::string>();
   cmd->add_option("CAMERA", *path, "Camera file")->required();
-  cmd->callback([path] {
-    const Camera camera = read_input_camera(*path);
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([path, inputs] {
+    const Camera camera = inputs->read(*path);
     for_each_record<3>(std::cin, "three numbers 'x y z'", [&](const std::array<double, 3>& p) {
       Eigen::Vector2d pixel;
       if (camera.project({p[0], p[1], p[2]}, &pixel)) {

@@ -24,10 +24,11 @@ void register_render(CLI::App& app) {
   cmd->add_option("--out-image", o->out_image, "Output RGB image (e.g. render.png)")->required();
   cmd->add_option("--out-label", o->out_label, "Output label image (PNG, WoodScape class ids)")->required();
   cmd->add_flag("--force", o->force, "Replace existing output files");
-  cmd->callback([o] {
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([o, inputs] {
     check_outputs({{o->out_image}, {o->out_label, true}}, {o->camera, o->mount}, o->force);
-    const Camera camera = read_input_camera(o->camera);
-    const std::optional<Pose> mount_pose = o->mount.empty() ? camera.parameters().pose : read_input_camera(o->mount).parameters().pose;
+    const Camera camera = inputs->read(o->camera);
+    const std::optional<Pose> mount_pose = o->mount.empty() ? camera.parameters().pose : inputs->read(o->mount).parameters().pose;
     if (!mount_pose) {
       throw Error(o->camera + ": has no pose to place it in the scene (give one with --mount, e.g. "
                               "data/woodscape_front.json)");

@@ -30,9 +30,10 @@ void register_synth_corners(CLI::App& app) {
   cmd->add_option("--out", o->out, "Output corners.vnl")->required();
   cmd->add_option("--truth", o->truth, "Also write the true camera here (fishcam JSON)");
   cmd->add_flag("--force", o->force, "Replace existing output files");
-  cmd->callback([o] {
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([o, inputs] {
     check_outputs({{o->out}, {o->truth}}, {o->camera}, o->force);
-    const Camera camera = read_input_camera(o->camera);
+    const Camera camera = inputs->read(o->camera);
     const BoardSpec board = parse_board(o->board, o->spacing);
     const testing::SyntheticBoards synthetic = testing::synthesize_boards(camera, board, o->boards, o->noise, o->seed);
     // Corners and truth land together (or neither).

@@ -15,8 +15,9 @@ void register_unproject(CLI::App& app) {
                                  "(%.17g) or 'nan nan nan' outside the valid domain");
   auto path = std::make_shared<std::string>();
   cmd->add_option("CAMERA", *path, "Camera file")->required();
-  cmd->callback([path] {
-    const Camera camera = read_input_camera(*path);
+  const auto inputs = add_camera_input_options(cmd);
+  cmd->callback([path, inputs] {
+    const Camera camera = inputs->read(*path);
     for_each_record<2>(std::cin, "two numbers 'u v'", [&](const std::array<double, 2>& q) {
       Eigen::Vector3d ray;
       if (camera.unproject({q[0], q[1]}, &ray)) {
