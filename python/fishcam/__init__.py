@@ -36,7 +36,7 @@ def _info(self):
 
 
 def _camera_eq(self, other):
-    return isinstance(other, Camera) and self.to_json() == other.to_json()
+    return isinstance(other, Camera) and self.parameters_key() == other.parameters_key()
 
 
 def _warp_call(self, image=None, labels=None, change=None, depth="source-sphere", fill=0, label_fill=0,
@@ -93,7 +93,7 @@ random_change_in = _fishcam.random_change_in
 ViewpointWarp.__call__ = _warp_call
 Camera.info = _info
 Camera.__eq__ = _camera_eq
-Camera.__hash__ = lambda self: hash(self.to_json())
+Camera.__hash__ = lambda self: hash(self.parameters_key())
 
 
 def convert(camera, to, method="lsq", max_angle=None, fit_center=False, fit_aspect=False):

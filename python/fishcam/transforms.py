@@ -84,14 +84,15 @@ def _result(out, change):
 
 class _WarpCache:
     """One ViewpointWarp per distinct calibration (intrinsics + size): building one
-    unprojects every pixel, so it is kept, not rebuilt per sample."""
+    unprojects every pixel, so it is kept, not rebuilt per sample. Keyed by
+    Camera.parameters_key (microseconds; to_json() cost more than a warp)."""
 
     def __init__(self, limit=64):
         self._warps = {}
         self._limit = limit
 
     def get(self, camera):
-        key = camera.to_json()
+        key = camera.parameters_key(with_pose=False)  # a warp depends on the intrinsics and size only
         warp = self._warps.get(key)
         if warp is None:
             if len(self._warps) >= self._limit:

@@ -119,6 +119,26 @@ std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
 
 // The camera's full state as fishcam JSON (exact: doubles are written round-trip).
 std::string camera_state(const Camera& camera) { return format_camera(camera.parameters(), CameraFormat::fishcam); }
+
+// The camera's numbers as bytes: equal exactly when the cameras are (model, its
+// parameters, size, principal point, pixel scale, theta limit and, with_pose, the
+// pose). A cache key that costs microseconds, where to_json() formats and reads
+// back a file (milliseconds).
+py::bytes parameters_key(const Camera& camera, bool with_pose) {
+  const CameraParameters& p = camera.parameters();
+  std::string key(model_name(p.model));
+  key.push_back('\0');
+  std::vector<double> numbers = model_params(p.model);
+  numbers.insert(numbers.end(), {double(p.width), double(p.height), p.principal_point.x(), p.principal_point.y(),
+                                 p.pixel_scale.x(), p.pixel_scale.y(), p.theta_limit.value_or(-1.0)});
+  if (with_pose && p.pose) {
+    const auto& q = p.pose->rotation;
+    numbers.insert(numbers.end(), {q.w(), q.x(), q.y(), q.z(), p.pose->translation.x(), p.pose->translation.y(),
+                                   p.pose->translation.z()});
+  }
+  key.append(reinterpret_cast<const char*>(numbers.data()), numbers.size() * sizeof(double));
+  return py::bytes(key);
+}
 Camera camera_from_state(const std::string& state) {
   return Camera(parse_camera(state, "pickled camera", CameraFormat::fishcam));
 }
@@ -196,6 +216,9 @@ void bind_camera(py::module_& m) {
           "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
           py::arg("width"), py::arg("height"))
       .def("to_json", &camera_state, "The camera as fishcam JSON text")
+      .def("parameters_key", &parameters_key, py::arg("with_pose") = true,
+           "bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a "
+           "warp depends on); cheap, for caches and hashing")
       .def_static("from_json", &camera_from_state, py::arg("text"))
       .def(py::pickle([](const Camera& c) { return camera_state(c); },
                       [](const std::string& state) { return camera_from_state(state); }))

@@ -406,3 +406,25 @@ def test_arguments_of_the_wrong_type_are_one_line_fishcam_errors(cam):
         with pytest.raises(fishcam.Error) as error:
             call()
         assert message in str(error.value) and "\n" not in str(error.value), str(error.value)
+
+
+def test_parameters_key_is_exact_and_cheap(cam):
+    """The warp cache's key: equal exactly when the cameras are; the pose counts only
+    with with_pose (a warp depends on intrinsics and size)."""
+    same = fishcam.Camera.read(os.path.join(DATA, "woodscape_front.json"))
+    assert cam.parameters_key() == same.parameters_key() and cam == same and hash(cam) == hash(same)
+    assert cam.parameters_key() != cam.resized(640, 483).parameters_key()
+    text = json.loads(cam.to_json())
+    text["principal_point"][0] += 1e-9
+    nudged = fishcam.Camera.from_json(json.dumps(text))
+    assert nudged.parameters_key(with_pose=False) != cam.parameters_key(with_pose=False) and nudged != cam
+    text = json.loads(cam.to_json())
+    text["pose"]["translation"][0] += 0.5
+    moved = fishcam.Camera.from_json(json.dumps(text))
+    assert moved.parameters_key(with_pose=False) == cam.parameters_key(with_pose=False)
+    assert moved.parameters_key() != cam.parameters_key() and moved != cam
+    # One warp for cameras that differ only in their pose.
+    transform = RandomViewpoint(preset="small")
+    transform(image=np.zeros((cam.height, cam.width), np.uint8), camera=cam, seed=1)
+    transform(image=np.zeros((cam.height, cam.width), np.uint8), camera=moved, seed=2)
+    assert len(transform._warps._warps) == 1
