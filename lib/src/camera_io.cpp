@@ -289,7 +289,7 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
                 " format cannot store a user field-of-view limit (fishcam JSON can)");
   }
   if (!spec.holds(model_name(camera.model))) detail::cannot_hold(camera, format);
-  std::string content = spec.write(camera);
+  std::string content = spec.write(spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera));
   // Nor a file our own reader refuses (a value that overflows in the format's
   // parameterisation, say): read it back before anyone can write it.
   try {

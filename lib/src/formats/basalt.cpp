@@ -70,8 +70,7 @@ std::vector<NamedCamera> read(const Content& c) {
   return out;
 }
 
-std::string write(const CameraParameters& original) {
-  const CameraParameters p = with_unit_ax(original);
+std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const double cx = p.principal_point.x(), cy = p.principal_point.y(), ay = p.pixel_scale.y();
   nlohmann::json k;
   std::string type;

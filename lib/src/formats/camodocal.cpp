@@ -52,8 +52,7 @@ std::vector<NamedCamera> read(const Content& c) {
   return {named};
 }
 
-std::string write(const CameraParameters& original) {
-  const CameraParameters p = with_unit_ax(original);
+std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
   std::string out = "%YAML:1.0\n---\n";
   const KannalaBrandtLike kb = kannala_brandt_of(p);

@@ -96,12 +96,10 @@ std::vector<NamedCamera> read(const Content& c) {
   return out;
 }
 
-std::string write(const CameraParameters& original) {
-  const CameraParameters p = with_unit_ax(original);
+std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::colmap);
   const bool pinhole = kb.pinhole;
-  const double f = kb.f;
-  std::vector<double> params = {f, f * p.pixel_scale.y(), p.principal_point.x() + 0.5, p.principal_point.y() + 0.5};
+  std::vector<double> params = {kb.fx, kb.fy, kb.cx + 0.5, kb.cy + 0.5};
   if (!pinhole) params.insert(params.end(), kb.k.begin(), kb.k.end());
   std::string out = "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n";
   out += pinhole ? "1 PINHOLE " : "1 OPENCV_FISHEYE ";

@@ -291,10 +291,17 @@ KannalaBrandtLike kannala_brandt_of(const CameraParameters& p) {
 }
 
 KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, CameraFormat format) {
-  if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) return {true, m->f(), {}};
-  const KannalaBrandtLike kb = kannala_brandt_of(p);
-  if (!kb.ok) cannot_hold(p, format);
-  return {false, kb.f, kb.k};
+  KannalaBrandtOrPinhole out;
+  if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
+    out.pinhole = true, out.fx = m->f();
+  } else {
+    const KannalaBrandtLike kb = kannala_brandt_of(p);
+    if (!kb.ok) cannot_hold(p, format);
+    out.fx = kb.f, out.k = kb.k;
+  }
+  out.fy = out.fx * p.pixel_scale.y();
+  out.cx = p.principal_point.x(), out.cy = p.principal_point.y();
+  return out;
 }
 
 RadialModel pinhole_from_radial_tangential(const std::vector<double>& d, double f,

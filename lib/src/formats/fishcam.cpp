@@ -53,6 +53,6 @@ std::string write(const CameraParameters& p) {
 }  // namespace
 
 extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
-                                       {}, score, read, write, true};
+                                       {}, score, read, write, true, true};
 
 }  // namespace fishcam::detail

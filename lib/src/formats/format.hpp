@@ -69,6 +69,9 @@ struct FormatSpec {
   std::vector<NamedCamera> (*read)(const Content&);
   std::string (*write)(const CameraParameters&);  // throws Error when it cannot hold the camera
   bool holds_theta_limit = false;                 // a user limit on the valid domain (fishcam JSON only)
+  // Stores a_x as it is (fishcam JSON); every other writer is given the camera
+  // rescaled to a_x = 1 (f = fx, a_y = fy / fx) by format_camera.
+  bool keeps_pixel_scale = false;
 
   bool holds(std::string_view model) const;
 };
@@ -143,11 +146,12 @@ struct KannalaBrandtLike {
   std::array<double, 4> k{};
 };
 KannalaBrandtLike kannala_brandt_of(const CameraParameters& p);
-// For the formats that hold kannala-brandt (and equidistant) and pinhole models: f
-// and k1..k4 (0 for a pinhole), or Error naming the model the format cannot hold.
+// For the formats that hold kannala-brandt (and equidistant) and pinhole models, of
+// a camera with a_x = 1: K's fx, fy, cx, cy and k1..k4 (0 for a pinhole), or Error
+// naming the model the format cannot hold.
 struct KannalaBrandtOrPinhole {
   bool pinhole = false;
-  double f = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
   std::array<double, 4> k{};
 };
 KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, CameraFormat format);

@@ -118,8 +118,7 @@ std::vector<NamedCamera> read(const Content& c) {
   return out;
 }
 
-std::string write(const CameraParameters& original) {
-  const CameraParameters p = with_unit_ax(original);
+std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
   const auto focal = [&](double f) { return std::vector<double>{f, f * ay, cx, cy}; };
   std::string model, distortion = "none";

@@ -79,12 +79,10 @@ std::vector<NamedCamera> read(const Content& c) {
   return {out};
 }
 
-std::string write(const CameraParameters& original) {
-  const CameraParameters p = with_unit_ax(original);
+std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::opencv);
   const bool pinhole = kb.pinhole;
-  const double f = kb.f;
-  const cv::Matx33d K(f, 0, p.principal_point.x(), 0, f * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1);
+  const cv::Matx33d K(kb.fx, 0, kb.cx, 0, kb.fy, kb.cy, 0, 0, 1);
   cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
   fs << "distortion_model" << (pinhole ? "plumb_bob" : "fisheye");
   fs << "image_width" << p.width << "image_height" << p.height;

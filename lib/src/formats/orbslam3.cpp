@@ -46,15 +46,13 @@ std::vector<NamedCamera> read(const Content& c) {
   return out;
 }
 
-std::string write(const CameraParameters& original) {
-  const CameraParameters p = with_unit_ax(original);
+std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::orbslam3);
   const bool pinhole = kb.pinhole;
-  const double f = kb.f;
   std::string out = "%YAML:1.0\n\n";
   out += std::string("Camera.type: \"") + (pinhole ? "PinHole" : "KannalaBrandt8") + "\"\n\n";
   auto line = [&](const std::string& key, double v) { out += "Camera." + key + ": " + yaml_number(v) + "\n"; };
-  line("fx", f), line("fy", f * p.pixel_scale.y()), line("cx", p.principal_point.x()), line("cy", p.principal_point.y());
+  line("fx", kb.fx), line("fy", kb.fy), line("cx", kb.cx), line("cy", kb.cy);
   if (pinhole) {
     line("k1", 0), line("k2", 0), line("p1", 0), line("p2", 0);
   } else {

@@ -35,12 +35,10 @@ std::vector<NamedCamera> read(const Content& c) {
   return {named};
 }
 
-std::string write(const CameraParameters& original) {
-  const CameraParameters p = with_unit_ax(original);
+std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::ros);
   const bool pinhole = kb.pinhole;
-  const double fx = kb.f, fy = fx * p.pixel_scale.y();
-  const double cx = p.principal_point.x(), cy = p.principal_point.y();
+  const double fx = kb.fx, fy = kb.fy, cx = kb.cx, cy = kb.cy;
   auto matrix = [](int rows, int cols, const std::vector<double>& data) {
     return "\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: " + yaml_list(data) + "\n";
   };

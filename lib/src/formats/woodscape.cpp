@@ -61,8 +61,7 @@ std::vector<NamedCamera> read(const Content& c) {
   return {out};
 }
 
-std::string write(const CameraParameters& original) {
-  const CameraParameters p = with_unit_ax(original);
+std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   std::vector<double> k;
   if (const auto* poly = std::get_if<Polynomial<double>>(&p.model)) {
     k = poly->params();
