@@ -150,6 +150,220 @@ struct Options {
   int copies = 1, threads = 0, label_fill = 0;
 };
 
+// --shard K/N: images K, K+N, ... of the name-ordered list, with a manifest of its own.
+struct Shard {
+  bool given = false;
+  int index = 0, count = 1;
+  std::string manifest_name() const {
+    return given ? "manifest-" + std::to_string(index) + "-of-" + std::to_string(count) + ".jsonl" : "manifest.jsonl";
+  }
+};
+
+Shard parse_shard(const std::string& text) {
+  Shard shard;
+  if (text.empty()) return shard;
+  char slash = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &shard.index, &slash, &shard.count, &extra) != 3 || slash != '/' ||
+      shard.count < 1 || shard.count > 100000 || shard.index < 0 || shard.index >= shard.count) {
+    throw Error("--shard: expected K/N with 0 <= K < N (e.g. 0/4), got " + quoted_for_message(text));
+  }
+  shard.given = true;
+  return shard;
+}
+
+// The dataset's images (rgb_images/), in name order, this shard's only.
+std::vector<fs::path> list_images(const fs::path& root, const Shard& shard) {
+  const fs::path images_dir = root / "rgb_images";
+  if (!fs::is_directory(images_dir)) throw Error(path_for_message(images_dir) + ": missing (expected WoodScape layout)");
+  std::vector<fs::path> images;
+  for (const auto& entry : fs::directory_iterator(images_dir)) {
+    if (entry.is_regular_file() && is_image(entry.path())) images.push_back(entry.path());
+  }
+  std::sort(images.begin(), images.end());
+  if (images.empty()) throw Error(path_for_message(images_dir) + ": no images");
+  std::vector<fs::path> mine;
+  for (size_t i = size_t(shard.index); i < images.size(); i += size_t(shard.count)) mine.push_back(images[i]);
+  return mine;
+}
+
+// One preset's output: its folder (a sub-folder per preset when there are several)
+// and its manifest, locked.
+struct PresetOutput {
+  PosePreset preset;
+  fs::path dir;
+  std::unique_ptr<Manifest> manifest;
+};
+
+// An image of the dataset with its labels and camera, loaded when first needed
+// (a resumed run that has every output reads nothing).
+struct DatasetImage {
+  fs::path image_path, label_path, calibration_path;
+  std::optional<Camera> camera;
+  std::shared_ptr<const ViewpointWarp> warp;
+  cv::Mat image, labels;
+
+  void load(WarpCache& warps) {
+    if (warp) return;
+    camera = read_camera(calibration_path);
+    warp = warps.get(*camera);
+    image = read_image(image_path.string(), cv::IMREAD_UNCHANGED);
+    labels = read_image(label_path.string(), cv::IMREAD_UNCHANGED);
+    if (labels.channels() != 1) throw Error(path_for_message(label_path) + ": expected a single-channel label image");
+  }
+};
+
+class DatasetAugmentation {
+ public:
+  explicit DatasetAugmentation(const Options& o)
+      : o_(o), root_(o.root), out_(o.out), prior_(depth_prior(o.depth, "--depth")),
+        sampling_(*parse_sampling(o.sampling)), affine_(o.method == "affine") {}
+
+  void run() {
+    const Shard shard = parse_shard(o_.shard);
+    check_output_not_input(out_, {root_}, true);
+    std::stringstream list(o_.presets);
+    std::vector<PosePreset> presets;
+    for (std::string name; std::getline(list, name, ',');) presets.push_back(pose_preset(name, "--preset"));
+    if (o_.threads > 0) cv::setNumThreads(o_.threads);
+    const std::vector<fs::path> images = list_images(root_, shard);
+    if (images.empty()) {
+      std::printf("shard %d/%d: no images (the dataset has fewer than %d)\n", shard.index, shard.count, shard.index + 1);
+      return;
+    }
+    Progress progress(images.size() * presets.size());
+    std::vector<PresetOutput> outputs = prepare_outputs(presets, shard, progress);
+    for (PresetOutput& output : outputs) {
+      for (const fs::path& image_path : images) {
+        const std::string stem = image_path.stem().string();
+        progress.step(stem);
+        try {
+          augment_image(output, image_path);
+        } catch (const std::exception& e) {
+          failures_.push_back(path_for_message(stem) + ": " + e.what());
+          progress.report("skipped " + failures_.back());
+        }
+      }
+    }
+    std::printf("%ld written, %ld already there, %zu failed, into %s\n", written_, skipped_, failures_.size(),
+                out_.c_str());
+    if (!failures_.empty()) {
+      throw Error(std::to_string(failures_.size()) + " image/preset run(s) failed, first: " + failures_.front());
+    }
+  }
+
+ private:
+  // Every output folder is checked (symlinks inside --out included) before any is
+  // created, then created, cleared of killed runs' temporaries, and its manifest locked.
+  std::vector<PresetOutput> prepare_outputs(const std::vector<PosePreset>& presets, const Shard& shard,
+                                            Progress& progress) const {
+    std::vector<PresetOutput> outputs;
+    for (const PosePreset& preset : presets) {
+      outputs.push_back({preset, presets.size() > 1 ? out_ / std::string(preset.name) : out_, nullptr});
+      for (const char* sub : {"", "rgb_images", "semantic_annotations", "semantic_annotations/gtLabels", "calibration"}) {
+        check_output_not_input(outputs.back().dir / sub, {root_}, true);
+      }
+    }
+    for (PresetOutput& output : outputs) {
+      for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
+        fs::create_directories(output.dir / sub);
+        remove_stale_temporaries(output.dir / sub);  // of killed runs; parallel runs' stay
+      }
+      output.manifest = std::make_unique<Manifest>(output.dir / shard.manifest_name(), o_.method, progress);
+    }
+    return outputs;
+  }
+
+  // Every copy of one image under one preset: written unless already there, and
+  // listed in the manifest unless already listed.
+  void augment_image(PresetOutput& output, const fs::path& image_path) {
+    // The manifest is JSON: a name it cannot hold is refused before anything is written.
+    if (!is_valid_utf8(image_path.filename().native())) {
+      throw Error(path_for_message(image_path) + ": the file name is not valid UTF-8 (rename it)");
+    }
+    const std::string stem = image_path.stem().string();
+    DatasetImage source{image_path, root_ / "semantic_annotations" / "gtLabels" / (stem + ".png"),
+                        root_ / "calibration" / (stem + ".json"), std::nullopt, nullptr, {}, {}};
+    const std::string preset_name(output.preset.name);
+    for (int copy = 0; copy < o_.copies; ++copy) {
+      const std::string name = stem + "_" + preset_name + std::to_string(copy);
+      const fs::path out_image = output.dir / "rgb_images" / (name + image_path.extension().string());
+      const fs::path out_label = output.dir / "semantic_annotations" / "gtLabels" / (name + ".png");
+      const fs::path out_calibration = output.dir / "calibration" / (name + ".json");
+      const std::uint64_t seed = derive_seed(o_.seed, stem + "/" + preset_name, copy);
+      const RandomPose pose = random_pose(output.preset, seed);
+      const AffineChange affine_change = affine_ ? random_affine(affine_preset(preset_name), seed) : AffineChange{};
+      if (fs::exists(out_image) && fs::exists(out_label) && (affine_ || fs::exists(out_calibration))) {
+        ++skipped_;
+      } else {
+        source.load(warps_);
+        write_copy(source, pose, affine_change, out_image, out_label, out_calibration);
+        ++written_;
+      }
+      const std::string listed = fs::relative(out_image, output.dir).string();
+      if (!output.manifest->lists(listed)) {
+        output.manifest->append(manifest_line(image_path, listed, copy, output.preset, seed, pose, affine_change));
+      }
+    }
+  }
+
+  void write_copy(const DatasetImage& source, const RandomPose& pose, const AffineChange& affine_change,
+                  const fs::path& out_image, const fs::path& out_label, const fs::path& out_calibration) const {
+    cv::Mat out_pixels, out_labels;
+    if (affine_) {
+      WarpMaps maps;
+      affine_maps(affine_change, cv::Size(source.camera->width(), source.camera->height()), &maps);
+      warp_image(source.image, maps, &out_pixels);
+      warp_labels(source.labels, maps, o_.label_fill, &out_labels);
+    } else {
+      source.warp->augment(pose.change(), prior_,
+                           {&source.image, &out_pixels, 0, &source.labels, &out_labels, o_.label_fill, nullptr},
+                           sampling_);
+    }
+    std::vector<std::pair<fs::path, std::string>> files{{out_image, encode_image(out_image, out_pixels)},
+                                                         {out_label, encode_image(out_label, out_labels)}};
+    if (!affine_) {
+      // The output camera: same intrinsics, the moved pose (translation in
+      // unit-sphere units, written as metres).
+      CameraParameters moved = source.camera->parameters();
+      if (moved.pose) moved.pose = moved_camera(*moved.pose, pose.change());
+      files.emplace_back(out_calibration, format_camera(moved, CameraFormat::woodscape));
+    }
+    // The files land together (a killed run leaves none of them).
+    write_files_atomically(files, true);
+  }
+
+  nlohmann::json manifest_line(const fs::path& image_path, const std::string& output, int copy,
+                               const PosePreset& preset, std::uint64_t seed, const RandomPose& pose,
+                               const AffineChange& affine_change) const {
+    nlohmann::json line{{"image", image_path.filename().string()},
+                        {"output", output},
+                        {"copy", copy},
+                        {"preset", preset.name},
+                        {"seed", seed}};
+    if (affine_) {
+      line.update(affine_to_json(affine_change));
+    } else {
+      const auto& r = pose.rotation_deg;
+      const auto& t = pose.translation;
+      line.update({{"method", "viewpoint"},
+                   {"sampling", o_.sampling},
+                   {"rotation_deg", {r.x(), r.y(), r.z()}},
+                   {"translation", {t.x(), t.y(), t.z()}},
+                   {"depth", to_string(prior_)}});
+    }
+    return line;
+  }
+
+  const Options& o_;
+  const fs::path root_, out_;
+  const DepthPrior prior_;
+  const Sampling sampling_;
+  const bool affine_;
+  WarpCache warps_;
+  long written_ = 0, skipped_ = 0;
+  std::vector<std::string> failures_;
+};
+
 }  // namespace
 
 void register_augment_dataset(CLI::App& app) {
@@ -184,162 +398,7 @@ void register_augment_dataset(CLI::App& app) {
   cmd->add_option("--shard", o->shard,
                   "K/N: only images K, K+N, K+2N, ... (in name order, K in [0, N)), manifest-K-of-N.jsonl; the N "
                   "shards together equal one unsharded run");
-  cmd->callback([o] {
-    int shard = 0, shards = 1;
-    if (!o->shard.empty()) {
-      char slash = 0, extra = 0;
-      if (std::sscanf(o->shard.c_str(), "%d%c%d%c", &shard, &slash, &shards, &extra) != 3 || slash != '/' ||
-          shards < 1 || shards > 100000 || shard < 0 || shard >= shards) {
-        throw Error("--shard: expected K/N with 0 <= K < N (e.g. 0/4), got " + quoted_for_message(o->shard));
-      }
-    }
-    const std::string manifest_name =
-        o->shard.empty() ? "manifest.jsonl"
-                         : "manifest-" + std::to_string(shard) + "-of-" + std::to_string(shards) + ".jsonl";
-    const fs::path root = o->root, out = o->out;
-    check_output_not_input(out, {root}, true);
-    std::vector<PosePreset> presets;
-    std::stringstream list(o->presets);
-    for (std::string name; std::getline(list, name, ',');) {
-      presets.push_back(pose_preset(name, "--preset"));
-    }
-    const DepthPrior prior = depth_prior(o->depth, "--depth");
-    const bool affine = o->method == "affine";
-    const Sampling sampling = *parse_sampling(o->sampling);
-    if (o->threads > 0) cv::setNumThreads(o->threads);
-    const fs::path images_dir = root / "rgb_images";
-    if (!fs::is_directory(images_dir)) throw Error(path_for_message(images_dir) + ": missing (expected WoodScape layout)");
-    std::vector<fs::path> images;
-    for (const auto& entry : fs::directory_iterator(images_dir)) {
-      if (entry.is_regular_file() && is_image(entry.path())) images.push_back(entry.path());
-    }
-    std::sort(images.begin(), images.end());
-    if (images.empty()) throw Error(path_for_message(images_dir) + ": no images");
-    if (shards > 1) {
-      std::vector<fs::path> mine;
-      for (size_t i = size_t(shard); i < images.size(); i += size_t(shards)) mine.push_back(images[i]);
-      images = std::move(mine);
-      if (images.empty()) {
-        std::printf("shard %d/%d: no images (the dataset has fewer than %d)\n", shard, shards, shard + 1);
-        return;
-      }
-    }
-
-    Progress progress(images.size() * presets.size());
-    // Every output folder is checked (symlinks inside --out included) and every
-    // manifest locked before anything is written.
-    std::vector<fs::path> preset_dirs;
-    std::vector<std::unique_ptr<Manifest>> manifests;
-    for (const PosePreset& preset : presets) {
-      preset_dirs.push_back(presets.size() > 1 ? out / std::string(preset.name) : out);
-      for (const char* sub : {"", "rgb_images", "semantic_annotations", "semantic_annotations/gtLabels", "calibration"}) {
-        check_output_not_input(preset_dirs.back() / sub, {root}, true);
-      }
-    }
-    for (const fs::path& dir : preset_dirs) {
-      for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
-        fs::create_directories(dir / sub);
-        remove_stale_temporaries(dir / sub);  // of killed runs; parallel runs' stay
-      }
-      manifests.push_back(std::make_unique<Manifest>(dir / manifest_name, o->method, progress));
-    }
-    WarpCache warps;
-    long written = 0, skipped = 0;
-    std::vector<std::string> failures;
-    for (size_t p = 0; p < presets.size(); ++p) {
-      const PosePreset& preset = presets[p];
-      const fs::path& dir = preset_dirs[p];
-      Manifest& manifest = *manifests[p];
-      for (const fs::path& image_path : images) {
-        const std::string stem = image_path.stem().string();
-        progress.step(stem);
-        try {
-          // The manifest is JSON: a name it cannot hold is refused before anything is written.
-          if (!is_valid_utf8(image_path.filename().native())) {
-            throw Error(path_for_message(image_path) + ": the file name is not valid UTF-8 (rename it)");
-          }
-          const fs::path label_path = root / "semantic_annotations" / "gtLabels" / (stem + ".png");
-          const fs::path calibration_path = root / "calibration" / (stem + ".json");
-          std::optional<Camera> camera;
-          std::shared_ptr<const ViewpointWarp> warp;
-          cv::Mat image, labels;
-          for (int copy = 0; copy < o->copies; ++copy) {
-            const std::string name = stem + "_" + std::string(preset.name) + std::to_string(copy);
-            const fs::path out_image = dir / "rgb_images" / (name + image_path.extension().string());
-            const fs::path out_label = dir / "semantic_annotations" / "gtLabels" / (name + ".png");
-            const fs::path out_calibration = dir / "calibration" / (name + ".json");
-            const std::uint64_t seed = derive_seed(o->seed, stem + "/" + std::string(preset.name), copy);
-            const RandomPose pose = random_pose(preset, seed);
-            const AffineChange affine_change =
-                affine ? random_affine(*find_affine_preset(preset.name), seed) : AffineChange{};
-            const bool done =
-                fs::exists(out_image) && fs::exists(out_label) && (affine || fs::exists(out_calibration));
-            if (!done) {
-              if (!warp) {  // load once per image, only when there is work
-                camera = read_camera(calibration_path);
-                warp = warps.get(*camera);
-                image = read_image(image_path.string(), cv::IMREAD_UNCHANGED);
-                labels = read_image(label_path.string(), cv::IMREAD_UNCHANGED);
-                if (labels.channels() != 1) throw Error(path_for_message(label_path) + ": expected a single-channel label image");
-              }
-              cv::Mat out_pixels, out_labels;
-              if (affine) {
-                WarpMaps maps;
-                affine_maps(affine_change, cv::Size(camera->width(), camera->height()), &maps);
-                warp_image(image, maps, &out_pixels);
-                warp_labels(labels, maps, o->label_fill, &out_labels);
-              } else {
-                warp->augment(pose.change(), prior, {&image, &out_pixels, 0, &labels, &out_labels, o->label_fill, nullptr},
-                              sampling);
-              }
-              std::vector<std::pair<fs::path, std::string>> files{{out_image, encode_image(out_image, out_pixels)},
-                                                                   {out_label, encode_image(out_label, out_labels)}};
-              if (!affine) {
-                // The output camera: same intrinsics, the moved pose (translation in
-                // unit-sphere units, written as metres).
-                CameraParameters moved = camera->parameters();
-                if (moved.pose) moved.pose = moved_camera(*moved.pose, pose.change());
-                files.emplace_back(out_calibration, format_camera(moved, CameraFormat::woodscape));
-              }
-              // The files land together (a killed run leaves none of them).
-              write_files_atomically(files, true);
-              ++written;
-            } else {
-              ++skipped;
-            }
-            const std::string output = fs::relative(out_image, dir).string();
-            if (!manifest.lists(output)) {
-              const auto& r = pose.rotation_deg;
-              const auto& t = pose.translation;
-              nlohmann::json line{{"image", image_path.filename().string()},
-                                  {"output", output},
-                                  {"copy", copy},
-                                  {"preset", preset.name},
-                                  {"seed", seed}};
-              if (affine) {
-                line.update(affine_to_json(affine_change));
-              } else {
-                line.update({{"method", "viewpoint"},
-                             {"sampling", o->sampling},
-                             {"rotation_deg", {r.x(), r.y(), r.z()}},
-                             {"translation", {t.x(), t.y(), t.z()}},
-                             {"depth", to_string(prior)}});
-              }
-              manifest.append(line);
-            }
-          }
-        } catch (const std::exception& e) {
-          failures.push_back(path_for_message(stem) + ": " + e.what());
-          progress.report("skipped " + failures.back());
-        }
-      }
-    }
-    std::printf("%ld written, %ld already there, %zu failed, into %s\n", written, skipped, failures.size(),
-                out.c_str());
-    if (!failures.empty()) {
-      throw Error(std::to_string(failures.size()) + " image/preset run(s) failed, first: " + failures.front());
-    }
-  });
+  cmd->callback([o] { DatasetAugmentation(*o).run(); });
 }
 
 }  // namespace fishcam::cli
