@@ -98,6 +98,173 @@ cv::Mat side_by_side(std::vector<cv::Mat> pictures, int width) {
   return out;
 }
 
+struct Options {
+  std::string camera, models = "equidistant,stereographic,kannala-brandt", method = "lsq", preset = "train", image,
+                      label, out;
+  std::string depth = "source-sphere";
+  int samples = 8;
+  std::uint64_t seed = 0;
+  bool json = false, force = false;
+};
+
+// --models as tokens, each with its output name (a file's stem), none twice.
+std::vector<std::string> model_tokens(const std::string& models, std::vector<std::string>* names) {
+  std::vector<std::string> tokens;
+  std::stringstream list(models);
+  for (std::string token; std::getline(list, token, ',');) {
+    if (token.empty()) throw Error("--models: empty entry in " + quoted_for_message(models));
+    tokens.push_back(token);
+  }
+  if (tokens.empty()) throw Error("--models: no model given");
+  for (const std::string& token : tokens) {
+    names->push_back(file_stem(token));
+    if (std::count(names->begin(), names->end(), names->back()) > 1) {
+      throw Error("--models: " + quoted_for_message(token) + " given twice");
+    }
+  }
+  return tokens;
+}
+
+// Every output is known before anything is computed: --out (created) must hold no
+// input (the camera, the pictures, --models files), files are not replaced unless --force.
+void check_compare_outputs(const Options& o, const std::vector<std::string>& tokens,
+                           const std::vector<std::string>& names) {
+  std::vector<std::string> input_files{o.camera, o.image, o.label};
+  std::error_code ec;
+  for (const std::string& token : tokens) {
+    if (fs::exists(token, ec)) input_files.push_back(token);
+  }
+  std::vector<OutputFile> outputs;
+  if (!o.out.empty()) {
+    check_output_not_input(o.out, {input_files.begin(), input_files.end()}, true);
+    fs::create_directories(o.out, ec);
+    if (ec) throw Error(path_for_message(o.out) + ": cannot create the folder (" + ec.message() + ")");
+    outputs.push_back({fs::path(o.out) / "sphere.png"});
+    outputs.push_back({fs::path(o.out) / "augmented.png"});
+    for (const std::string& name : names) {
+      outputs.push_back({fs::path(o.out) / ("displacement-" + name + ".png")});
+      outputs.push_back({fs::path(o.out) / (name + ".json")});
+    }
+  }
+  check_outputs(outputs, input_files, o.force);
+}
+
+// The picture the figures show and the label images compared: the scene rendered
+// from the camera's mount (or the bundled WoodScape front camera's), or --image and
+// --label.
+cv::Mat pictures_and_labels(const Options& o, const Camera& camera, NamedLabels* labels) {
+  std::optional<Pose> mount = camera.parameters().pose;
+  if (!mount) mount = read_camera(bundled_data("woodscape_front.json")).parameters().pose;
+  const SceneRender scene = render_street_scene(camera, *mount);
+  labels->emplace_back("scene", scene.labels);
+  cv::Mat picture = scene.image;
+  const std::string size = std::to_string(camera.width()) + "x" + std::to_string(camera.height());
+  if (!o.image.empty()) {
+    picture = read_image(o.image, cv::IMREAD_COLOR);
+    if (picture.cols != camera.width() || picture.rows != camera.height()) {
+      throw Error(path_for_message(o.image) + ": is " + std::to_string(picture.cols) + "x" +
+                  std::to_string(picture.rows) + " but the camera is " + size);
+    }
+  }
+  if (!o.label.empty()) {
+    const cv::Mat user = read_image(o.label, cv::IMREAD_UNCHANGED);
+    if (user.channels() != 1 || user.cols != camera.width() || user.rows != camera.height()) {
+      throw Error(path_for_message(o.label) + ": expected single-channel labels of the camera's size " + size);
+    }
+    labels->emplace_back("user", user);
+  }
+  return picture;
+}
+
+// The figures (Fig. 8's spheres, the first change augmented through every model, a
+// displacement heatmap per model) and the alternatives as fishcam JSON, written together.
+void write_figures(const Options& o, const Camera& camera, const std::vector<AlternativeModel>& alternatives,
+                   const std::vector<std::string>& names, const Comparison& comparison, const cv::Mat& picture,
+                   DepthPrior prior) {
+  std::vector<std::pair<fs::path, std::string>> files;
+  const int sphere_size = 480;
+  std::vector<cv::Mat> spheres, augmented;
+  const auto add_model = [&](const Camera& model, const std::string& label) {
+    spheres.push_back(sphere_picture(model, picture, sphere_size));
+    title(spheres.back(), label);
+    WarpMaps maps;
+    ViewpointWarp(model).compute(comparison.changes[0].change(), prior, &maps);
+    augmented.emplace_back();
+    warp_image(picture, maps, &augmented.back());
+    title(augmented.back(), label);
+  };
+  add_model(camera, std::string(model_name(camera.model())) + " (camera)");
+  for (std::size_t m = 0; m < alternatives.size(); ++m) {
+    add_model(alternatives[m].camera, alternatives[m].name);
+    const fs::path heat = fs::path(o.out) / ("displacement-" + names[m] + ".png");
+    files.emplace_back(heat, encode_image(heat, heatmap(comparison.models[m].mean_displacement, alternatives[m].name)));
+    files.emplace_back(fs::path(o.out) / (names[m] + ".json"),
+                       format_camera(alternatives[m].camera.parameters(), CameraFormat::fishcam));
+  }
+  const fs::path sphere = fs::path(o.out) / "sphere.png", side = fs::path(o.out) / "augmented.png";
+  files.emplace_back(sphere, encode_image(sphere, side_by_side(spheres, sphere_size)));
+  files.emplace_back(side, encode_image(side, side_by_side(augmented, std::min(camera.width(), 640))));
+  write_files_atomically(files, o.force);
+}
+
+void print_comparison(const Options& o, const Camera& camera, const Comparison& comparison, size_t label_sets) {
+  std::printf("%s (%s, %dx%d): %d changes of preset %s (seed %llu), depth %s\n", o.camera.c_str(),
+              std::string(model_name(camera.model())).c_str(), camera.width(), camera.height(), o.samples,
+              o.preset.c_str(), static_cast<unsigned long long>(o.seed), o.depth.c_str());
+  std::printf("displacement (px) between where the two augmentations sample, over pixels with a source in both\n");
+  std::printf("%-18s %-24s %8s %9s %8s %8s %8s %7s %7s %7s %7s %9s %8s%s\n", "model", "how", "fit rms", "identity",
+              "mean", "p95", "max", "0-30", "30-60", "60-90", ">90", "validity", "labels",
+              label_sets > 1 ? "   user labels" : "");
+  for (const ModelComparison& r : comparison.models) {
+    const AlternativeModel& a = r.alternative;
+    char fit[32] = "-";
+    if (a.fit_rms_px) std::snprintf(fit, sizeof fit, "%.3f", *a.fit_rms_px);
+    std::printf("%-18s %-24s %8s %9.1e %8.3f %8.3f %8.3f", a.name.c_str(), a.how.substr(0, 24).c_str(), fit,
+                r.identity_max_px, r.all.mean_px, r.all.p95_px, r.all.max_px);
+    for (const DisplacementStats& band : r.by_angle) {
+      if (band.pixels > 0) {
+        std::printf(" %7.3f", band.mean_px);
+      } else {
+        std::printf(" %7s", "-");
+      }
+    }
+    std::printf(" %8.3f%% %7.3f%%", r.validity_differs_pct, r.labels_differ_pct[0]);
+    if (label_sets > 1) std::printf(" %13.3f%%", r.labels_differ_pct[1]);
+    std::printf("\n");
+  }
+  std::printf("angle bands: mean displacement by the angle of incidence (deg) under the camera; identity: the "
+              "unchanged view through both (a check: 0 up to the float maps' 1e-3 px)\n");
+  if (!o.out.empty()) std::printf("pictures and the alternatives' cameras in %s\n", o.out.c_str());
+}
+
+void run_compare(const Options& o, const CameraInputs& inputs) {
+  const Camera camera = inputs.read(o.camera);
+  check_comparison_size(camera.width(), camera.height(), o.samples);  // before rendering anything
+  std::vector<std::string> names;
+  const std::vector<std::string> tokens = model_tokens(o.models, &names);
+  check_compare_outputs(o, tokens, names);
+  std::vector<AlternativeModel> alternatives;
+  std::error_code ec;
+  for (const std::string& token : tokens) {
+    alternatives.push_back(fs::is_regular_file(token, ec) ? alternative_from_file(token, inputs.read(token))
+                                                          : alternative_model(camera, token, o.method));
+  }
+  NamedLabels labels;
+  const cv::Mat picture = pictures_and_labels(o, camera, &labels);
+  ComparisonOptions options;
+  options.preset = pose_preset(o.preset, "--preset");
+  options.samples = o.samples;
+  options.seed = o.seed;
+  options.prior = depth_prior(o.depth, "--depth");
+  const Comparison comparison = compare_models(camera, alternatives, options, labels);
+  if (!o.out.empty()) write_figures(o, camera, alternatives, names, comparison, picture, options.prior);
+  if (o.json) {
+    std::printf("%s\n", comparison_json(comparison).c_str());
+  } else {
+    print_comparison(o, camera, comparison, labels.size());
+  }
+}
+
 }  // namespace
 
 void register_compare(CLI::App& app) {
@@ -105,14 +272,6 @@ void register_compare(CLI::App& app) {
       "compare",
       "Compare augmenting with other projection models of a camera against augmenting with the camera itself "
       "(displacement, validity and labels; the paper's Table 5 and Fig. 8)");
-  struct Options {
-    std::string camera, models = "equidistant,stereographic,kannala-brandt", method = "lsq", preset = "train", image,
-                        label, out;
-    std::string depth = "source-sphere";
-    int samples = 8;
-    std::uint64_t seed = 0;
-    bool json = false, force = false;
-  };
   auto o = std::make_shared<Options>();
   cmd->add_option("CAMERA", o->camera, "Camera file (the reference: its own model)")->required();
   cmd->add_option("--models", o->models,
@@ -141,138 +300,7 @@ void register_compare(CLI::App& app) {
   cmd->add_flag("--json", o->json, "Print the results as JSON");
   cmd->add_flag("--force", o->force, "Replace existing files in --out");
   const auto inputs = add_camera_input_options(cmd);
-  cmd->callback([o, inputs] {
-    const Camera camera = inputs->read(o->camera);
-    check_comparison_size(camera.width(), camera.height(), o->samples);  // before rendering anything
-    std::vector<std::string> tokens;
-    std::stringstream list(o->models);
-    for (std::string token; std::getline(list, token, ',');) {
-      if (token.empty()) throw Error("--models: empty entry in " + quoted_for_message(o->models));
-      tokens.push_back(token);
-    }
-    if (tokens.empty()) throw Error("--models: no model given");
-    std::vector<std::string> names;
-    for (const std::string& token : tokens) {
-      names.push_back(file_stem(token));
-      if (std::count(names.begin(), names.end(), names.back()) > 1) {
-        throw Error("--models: " + quoted_for_message(token) + " given twice");
-      }
-    }
-    // Every output is known before anything is computed: checked first, written together last.
-    std::vector<OutputFile> outputs;
-    // Inputs: the camera, the pictures, and the --models entries that are files.
-    std::vector<std::string> input_files{o->camera, o->image, o->label};
-    std::error_code ec;
-    for (const std::string& token : tokens) {
-      if (fs::exists(token, ec)) input_files.push_back(token);
-    }
-    if (!o->out.empty()) {
-      check_output_not_input(o->out, {input_files.begin(), input_files.end()}, true);
-      fs::create_directories(o->out, ec);
-      if (ec) throw Error(path_for_message(o->out) + ": cannot create the folder (" + ec.message() + ")");
-      outputs.push_back({fs::path(o->out) / "sphere.png"});
-      outputs.push_back({fs::path(o->out) / "augmented.png"});
-      for (const std::string& name : names) {
-        outputs.push_back({fs::path(o->out) / ("displacement-" + name + ".png")});
-        outputs.push_back({fs::path(o->out) / (name + ".json")});
-      }
-    }
-    check_outputs(outputs, input_files, o->force);
-    std::vector<AlternativeModel> alternatives;
-    for (const std::string& token : tokens) {
-      alternatives.push_back(fs::is_regular_file(token, ec) ? alternative_from_file(token, inputs->read(token))
-                                                            : alternative_model(camera, token, o->method));
-    }
-
-    // The scene: rendered from the camera's mount (or the bundled WoodScape front camera's).
-    std::optional<Pose> mount = camera.parameters().pose;
-    if (!mount) mount = read_camera(bundled_data("woodscape_front.json")).parameters().pose;
-    const SceneRender scene = render_street_scene(camera, *mount);
-    NamedLabels labels{{"scene", scene.labels}};
-    cv::Mat picture = scene.image;
-    if (!o->image.empty()) {
-      picture = read_image(o->image, cv::IMREAD_COLOR);
-      if (picture.cols != camera.width() || picture.rows != camera.height()) {
-        throw Error(o->image + ": is " + std::to_string(picture.cols) + "x" + std::to_string(picture.rows) +
-                    " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
-      }
-    }
-    if (!o->label.empty()) {
-      const cv::Mat user = read_image(o->label, cv::IMREAD_UNCHANGED);
-      if (user.channels() != 1 || user.cols != camera.width() || user.rows != camera.height()) {
-        throw Error(o->label + ": expected single-channel labels of the camera's size " + std::to_string(camera.width()) +
-                    "x" + std::to_string(camera.height()));
-      }
-      labels.emplace_back("user", user);
-    }
-
-    ComparisonOptions options;
-    options.preset = pose_preset(o->preset, "--preset");
-    options.samples = o->samples;
-    options.seed = o->seed;
-    options.prior = depth_prior(o->depth, "--depth");
-    const Comparison comparison = compare_models(camera, alternatives, options, labels);
-
-    if (!o->out.empty()) {
-      std::vector<std::pair<fs::path, std::string>> files;
-      // Fig. 8: the camera's own model first, then each alternative.
-      const int sphere_size = 480;
-      std::vector<cv::Mat> spheres{sphere_picture(camera, picture, sphere_size)};
-      title(spheres.back(), std::string(model_name(camera.model())) + " (camera)");
-      std::vector<cv::Mat> augmented(1 + alternatives.size());
-      WarpMaps maps;
-      ViewpointWarp(camera).compute(comparison.changes[0].change(), options.prior, &maps);
-      warp_image(picture, maps, &augmented[0]);
-      title(augmented[0], std::string(model_name(camera.model())) + " (camera)");
-      for (std::size_t m = 0; m < alternatives.size(); ++m) {
-        spheres.push_back(sphere_picture(alternatives[m].camera, picture, sphere_size));
-        title(spheres.back(), alternatives[m].name);
-        ViewpointWarp(alternatives[m].camera).compute(comparison.changes[0].change(), options.prior, &maps);
-        warp_image(picture, maps, &augmented[m + 1]);
-        title(augmented[m + 1], alternatives[m].name);
-        const fs::path heat = fs::path(o->out) / ("displacement-" + names[m] + ".png");
-        files.emplace_back(heat, encode_image(heat, heatmap(comparison.models[m].mean_displacement, alternatives[m].name)));
-        files.emplace_back(fs::path(o->out) / (names[m] + ".json"),
-                           format_camera(alternatives[m].camera.parameters(), CameraFormat::fishcam));
-      }
-      const fs::path sphere = fs::path(o->out) / "sphere.png", side = fs::path(o->out) / "augmented.png";
-      files.emplace_back(sphere, encode_image(sphere, side_by_side(spheres, sphere_size)));
-      files.emplace_back(side, encode_image(side, side_by_side(augmented, std::min(camera.width(), 640))));
-      write_files_atomically(files, o->force);
-    }
-
-    if (o->json) {
-      std::printf("%s\n", comparison_json(comparison).c_str());
-      return;
-    }
-    std::printf("%s (%s, %dx%d): %d changes of preset %s (seed %llu), depth %s\n", o->camera.c_str(),
-                std::string(model_name(camera.model())).c_str(), camera.width(), camera.height(), o->samples,
-                o->preset.c_str(), static_cast<unsigned long long>(o->seed), o->depth.c_str());
-    std::printf("displacement (px) between where the two augmentations sample, over pixels with a source in both\n");
-    std::printf("%-18s %-24s %8s %9s %8s %8s %8s %7s %7s %7s %7s %9s %8s%s\n", "model", "how", "fit rms", "identity",
-                "mean", "p95", "max", "0-30", "30-60", "60-90", ">90", "validity", "labels",
-                labels.size() > 1 ? "   user labels" : "");
-    for (const ModelComparison& r : comparison.models) {
-      const AlternativeModel& a = r.alternative;
-      char fit[32] = "-";
-      if (a.fit_rms_px) std::snprintf(fit, sizeof fit, "%.3f", *a.fit_rms_px);
-      std::printf("%-18s %-24s %8s %9.1e %8.3f %8.3f %8.3f", a.name.c_str(), a.how.substr(0, 24).c_str(), fit, r.identity_max_px, r.all.mean_px, r.all.p95_px,
-                  r.all.max_px);
-      for (const DisplacementStats& band : r.by_angle) {
-        if (band.pixels > 0) {
-          std::printf(" %7.3f", band.mean_px);
-        } else {
-          std::printf(" %7s", "-");
-        }
-      }
-      std::printf(" %8.3f%% %7.3f%%", r.validity_differs_pct, r.labels_differ_pct[0]);
-      if (labels.size() > 1) std::printf(" %13.3f%%", r.labels_differ_pct[1]);
-      std::printf("\n");
-    }
-    std::printf("angle bands: mean displacement by the angle of incidence (deg) under the camera; identity: the "
-                "unchanged view through both (a check: 0 up to the float maps' 1e-3 px)\n");
-    if (!o->out.empty()) std::printf("pictures and the alternatives' cameras in %s\n", o->out.c_str());
-  });
+  cmd->callback([o, inputs] { run_compare(*o, *inputs); });
 }
 
 }  // namespace fishcam::cli
