@@ -72,7 +72,7 @@ void register_augment(CLI::App& app) {
                                               : random_pose(pose_preset(o->preset, "--preset"), o->seed);
     AffineChange affine_change;
     if (affine && !o->preset.empty()) {
-      affine_change = random_affine(*find_affine_preset(o->preset), o->seed);
+      affine_change = random_affine(affine_preset(o->preset, "--preset"), o->seed);
     } else if (!o->affine.empty()) {
       affine_change = AffineChange{o->affine[0], {o->affine[1], o->affine[2]}, o->affine[3]};
       check_affine(affine_change);
@@ -88,11 +88,7 @@ void register_augment(CLI::App& app) {
     if (!o->out_label.empty()) io.labels = &labels, io.out_labels = &out_labels;
     try {
       if (affine) {
-        WarpMaps maps;
-        affine_maps(affine_change, cv::Size(warp.source().width(), warp.source().height()), &maps);
-        warp_image(image, maps, &out);
-        if (io.labels) warp_labels(labels, maps, o->label_fill, &out_labels);
-        if (io.valid) valid = maps.validity();
+        affine_augment(affine_change, cv::Size(warp.source().width(), warp.source().height()), io);
       } else {
         warp.augment(pose.change(), o->pose.prior(), io, *parse_sampling(o->sampling));
       }

@@ -309,15 +309,11 @@ class DatasetAugmentation {
   void write_copy(const DatasetImage& source, const RandomPose& pose, const AffineChange& affine_change,
                   const fs::path& out_image, const fs::path& out_label, const fs::path& out_calibration) const {
     cv::Mat out_pixels, out_labels;
+    const AugmentIO io{&source.image, &out_pixels, 0, &source.labels, &out_labels, o_.label_fill, nullptr};
     if (affine_) {
-      WarpMaps maps;
-      affine_maps(affine_change, cv::Size(source.camera->width(), source.camera->height()), &maps);
-      warp_image(source.image, maps, &out_pixels);
-      warp_labels(source.labels, maps, o_.label_fill, &out_labels);
+      affine_augment(affine_change, cv::Size(source.camera->width(), source.camera->height()), io);
     } else {
-      source.warp->augment(pose.change(), prior_,
-                           {&source.image, &out_pixels, 0, &source.labels, &out_labels, o_.label_fill, nullptr},
-                           sampling_);
+      source.warp->augment(pose.change(), prior_, io, sampling_);
     }
     std::vector<std::pair<fs::path, std::string>> files{{out_image, encode_image(out_image, out_pixels)},
                                                          {out_label, encode_image(out_label, out_labels)}};

@@ -89,4 +89,12 @@ void affine_maps(const AffineChange& change, cv::Size size, WarpMaps* maps) {
   maps->invalid_count = invalid;
 }
 
+void affine_augment(const AffineChange& change, cv::Size size, const AugmentIO& io) {
+  WarpMaps maps;
+  affine_maps(change, size, &maps);
+  if (io.image) warp_image(*io.image, maps, io.out_image, io.fill);
+  if (io.labels) warp_labels(*io.labels, maps, io.label_fill, io.out_labels);
+  if (io.valid) maps.validity().copyTo(*io.valid);
+}
+
 }  // namespace fishcam

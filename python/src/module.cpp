@@ -287,15 +287,6 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
   return out;
 }
 
-// The affine baseline's AugmentIO, through the same maps and calls as `fishcam augment --method affine`.
-void apply_affine(const AffineChange& change, cv::Size size, const AugmentIO& io) {
-  WarpMaps maps;
-  affine_maps(change, size, &maps);
-  if (io.image) warp_image(*io.image, maps, io.out_image, io.fill);
-  if (io.labels) warp_labels(*io.labels, maps, io.label_fill, io.out_labels);
-  if (io.valid) maps.validity().copyTo(*io.valid);
-}
-
 Sampling sampling_of(const std::string& name) {
   const auto sampling = parse_sampling(name);
   if (!sampling) {
@@ -475,7 +466,7 @@ void bind_augmentation(py::module_& m) {
         if (given.ndim() < 2) throw Error(std::string(image ? "image" : "labels") + ": expected an HxW array");
         const cv::Size size(static_cast<int>(given.shape(1)), static_cast<int>(given.shape(0)));
         return resample(image, labels, size, size, fill, label_fill, return_valid,
-                        [&](const AugmentIO& io) { apply_affine(change, size, io); });
+                        [&](const AugmentIO& io) { affine_augment(change, size, io); });
       },
       py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"), py::arg("fill") = 0.0,
       py::arg("label_fill") = 0, py::arg("return_valid") = false);

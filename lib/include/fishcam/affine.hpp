@@ -52,4 +52,9 @@ AffineChange random_affine(const AffinePreset& preset, std::uint64_t seed);
 // pixel's source lies inside the image, its coordinates; elsewhere kOutsideSource.
 void affine_maps(const AffineChange& change, cv::Size size, WarpMaps* maps);
 
+// The affine baseline applied as ViewpointWarp::augment applies a viewpoint change:
+// io's image bilinear, labels nearest, fills and validity, for images of `size`.
+// The one pipeline `fishcam augment --method affine`, augment-dataset and Python use.
+void affine_augment(const AffineChange& change, cv::Size size, const AugmentIO& io);
+
 }  // namespace fishcam
