@@ -157,3 +157,24 @@ TEST(Fit, BadInput) {
 
 }  // namespace
 }  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// A model whose domain ends at a fixed angle (a trait of its class: pinhole, 90 deg)
+// refuses data past it, naming the angle.
+TEST(Fit, RaysPastAModelsFixedLimitAreRefused) {
+  const Camera wide(test::woodscape_front());
+  const auto samples = sample_image(wide, 16, 0);  // up to ~100 deg off-axis
+  try {
+    fit_camera(samples, parse_model_spec("pinhole"), wide.parameters());
+    ADD_FAILURE() << "a pinhole was fitted to rays past 90 deg";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("a pinhole model cannot see rays at or past 90 deg"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(fit_camera(sample_image(wide, 16, 0, 1.2), parse_model_spec("pinhole"), wide.parameters()));
+}
+
+}  // namespace
+}  // namespace fishcam

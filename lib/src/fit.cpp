@@ -8,6 +8,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 namespace fishcam {
@@ -180,11 +181,23 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
   if (samples.size() < size_t(2 * k + 3)) {
     throw Error("fit: " + std::to_string(samples.size()) + " samples cannot determine a " + spec.name + " model");
   }
-  if (spec.name == "pinhole") {
-    for (const auto& s : samples) {
-      if (!(s.ray.z() > 0)) throw Error("fit: a pinhole model cannot see rays at or past 90 deg (limit max_angle below 90)");
+  // A model whose domain ends at a fixed angle below 180 deg (pinhole: 90) cannot
+  // fit rays at or past it: a trait of the model class, not its name.
+  with_model_class(spec.name, [&]<template <typename> class Model>() {
+    if constexpr (requires { Model<double>::theta_limit(); }) {
+      constexpr double limit = Model<double>::theta_limit();
+      if constexpr (limit < std::numbers::pi) {
+        for (const auto& s : samples) {
+          if (!(std::atan2(s.ray.head<2>().norm(), s.ray.z()) < limit)) {
+            char degrees[16];
+            std::snprintf(degrees, sizeof degrees, "%g", limit * kDeg);
+            throw Error("fit: a " + spec.name + " model cannot see rays at or past " + degrees +
+                        " deg (limit max_angle below " + degrees + ")");
+          }
+        }
+      }
     }
-  }
+  });
   Eigen::Vector2d center = start.principal_point;
   double ay = start.pixel_scale.y();
   std::vector<double> params = with_model_class(spec.name, [&]<template <typename> class Model>() {
