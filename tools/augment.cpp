@@ -8,18 +8,113 @@
 
 namespace fishcam::cli {
 
+namespace {
+
+struct Options {
+  std::string source, target, image, label, out_image, out_label, out_mask, preset, method = "viewpoint",
+                                                                               sampling = "grid";
+  std::vector<double> affine;
+  PoseOptions pose;
+  std::uint64_t seed = 0;
+  int label_fill = 0;
+  bool force = false, json = false;
+};
+
+// The change to apply: --preset with --seed (the viewpoint or affine ranges of that
+// name), else --rotate/--translate or --affine.
+struct Change {
+  RandomPose pose;
+  AffineChange affine;
+};
+
+Change change_of(const Options& o, bool affine) {
+  Change c;
+  c.pose = o.preset.empty() ? RandomPose{{o.pose.rotate[0], o.pose.rotate[1], o.pose.rotate[2]},
+                                         {o.pose.translate[0], o.pose.translate[1], o.pose.translate[2]}}
+                            : random_pose(pose_preset(o.preset, "--preset"), o.seed);
+  if (affine && !o.preset.empty()) {
+    c.affine = random_affine(affine_preset(o.preset, "--preset"), o.seed);
+  } else if (!o.affine.empty()) {
+    c.affine = AffineChange{o.affine[0], {o.affine[1], o.affine[2]}, o.affine[3]};
+    check_affine(c.affine);
+  }
+  return c;
+}
+
+// What was applied, as text or (--json) one object at full precision.
+void print_change(const Options& o, const Change& c, bool affine) {
+  const nlohmann::json seed = o.preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.seed);
+  const nlohmann::json preset = o.preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.preset);
+  if (affine) {
+    nlohmann::json j = affine_to_json(c.affine);
+    if (!o.json) {
+      std::printf("affine: %s\n", j.dump().c_str());
+      return;
+    }
+    j["seed"] = seed, j["preset"] = preset;
+    std::printf("%s\n", j.dump().c_str());
+    return;
+  }
+  if (!o.json) {
+    std::printf("pose: %s, depth %s\n", describe(c.pose.rotation_deg, c.pose.translation).c_str(), o.pose.depth.c_str());
+    return;
+  }
+  const auto& r = c.pose.rotation_deg;
+  const auto& t = c.pose.translation;
+  const nlohmann::json j{{"rotation_deg", {r.x(), r.y(), r.z()}},
+                         {"translation", {t.x(), t.y(), t.z()}},
+                         {"depth", o.pose.depth},
+                         {"seed", seed},
+                         {"preset", preset}};
+  std::printf("%s\n", j.dump().c_str());  // nlohmann writes doubles round-trip exact
+}
+
+void run_augment(const Options& o, const CameraInputs& inputs, const CLI::App& cmd, bool out_label_given) {
+  if (out_label_given && o.label.empty()) throw Error("--out-label needs --label");
+  const bool affine = o.method == "affine";
+  if (affine) {
+    for (const char* option : {"--rotate", "--translate", "--depth", "--target", "--sampling"}) {
+      if (cmd.count(option)) throw Error(std::string(option) + ": not used by --method affine (see --affine)");
+    }
+  } else if (!o.affine.empty()) {
+    throw Error("--affine needs --method affine");
+  }
+  check_outputs({{o.out_image}, {o.out_label, true}, {o.out_mask}}, {o.source, o.target, o.image, o.label}, o.force);
+  const ViewpointWarp warp = make_warp(inputs, o.source, o.target);
+  const Change change = change_of(o, affine);
+  const cv::Mat image = read_image(o.image, cv::IMREAD_UNCHANGED);
+  cv::Mat labels;
+  if (!o.label.empty()) {
+    labels = read_image(o.label, cv::IMREAD_UNCHANGED);
+    if (labels.channels() != 1) throw Error(path_for_message(o.label) + ": expected a single-channel label image");
+  }
+  cv::Mat out, out_labels, valid;
+  AugmentIO io{&image, &out, 0, nullptr, nullptr, o.label_fill, o.out_mask.empty() ? nullptr : &valid};
+  if (!o.out_label.empty()) io.labels = &labels, io.out_labels = &out_labels;
+  try {
+    if (affine) {
+      affine_augment(change.affine, cv::Size(warp.source().width(), warp.source().height()), io);
+    } else {
+      warp.augment(change.pose.change(), o.pose.prior(), io, *parse_sampling(o.sampling));
+    }
+  } catch (const Error& e) {
+    // Which input was wrong: the library names the argument ("image: ...", "labels: ...").
+    const std::string what = e.what();
+    const bool labels_wrong = what.rfind("labels", 0) == 0 || what.rfind("warp_labels", 0) == 0;
+    throw Error(path_for_message(labels_wrong ? o.label : o.image) + ": " + what);
+  }
+  std::vector<std::pair<std::filesystem::path, cv::Mat>> outputs{{o.out_image, out}};
+  if (!o.out_label.empty()) outputs.emplace_back(o.out_label, out_labels);
+  if (!o.out_mask.empty()) outputs.emplace_back(o.out_mask, valid * 255);
+  write_images(outputs, o.force);
+  print_change(o, change, affine);
+}
+
+}  // namespace
+
 void register_augment(CLI::App& app) {
   auto* cmd = app.add_subcommand("augment", "Augment one image (and its labels) with a viewpoint change (or the "
                                             "affine baseline)");
-  struct Options {
-    std::string source, target, image, label, out_image, out_label, out_mask, preset, method = "viewpoint",
-                                                                                 sampling = "grid";
-    std::vector<double> affine;
-    PoseOptions pose;
-    std::uint64_t seed = 0;
-    int label_fill = 0;
-    bool force = false, json = false;
-  };
   auto o = std::make_shared<Options>();
   cmd->add_option("SOURCE", o->source, "Source camera file")->required();
   cmd->add_option("--image", o->image, "Input image (8/16-bit, 1-4 channels)")->required();
@@ -54,80 +149,7 @@ void register_augment(CLI::App& app) {
   cmd->add_flag("--force", o->force, "Replace existing output files");
   cmd->add_flag("--json", o->json, "Print the applied change as one JSON object (full precision)");
   const auto inputs = add_camera_input_options(cmd);
-  cmd->callback([o, out_label, cmd, inputs] {
-    if (out_label->count() && o->label.empty()) throw Error("--out-label needs --label");
-    const bool affine = o->method == "affine";
-    if (affine) {
-      for (const char* option : {"--rotate", "--translate", "--depth", "--target", "--sampling"}) {
-        if (cmd->count(option)) throw Error(std::string(option) + ": not used by --method affine (see --affine)");
-      }
-    } else if (!o->affine.empty()) {
-      throw Error("--affine needs --method affine");
-    }
-    check_outputs({{o->out_image}, {o->out_label, true}, {o->out_mask}}, {o->source, o->target, o->image, o->label},
-                  o->force);
-    const ViewpointWarp warp = make_warp(*inputs, o->source, o->target);
-    const RandomPose pose = o->preset.empty() ? RandomPose{{o->pose.rotate[0], o->pose.rotate[1], o->pose.rotate[2]},
-                                                           {o->pose.translate[0], o->pose.translate[1], o->pose.translate[2]}}
-                                              : random_pose(pose_preset(o->preset, "--preset"), o->seed);
-    AffineChange affine_change;
-    if (affine && !o->preset.empty()) {
-      affine_change = random_affine(affine_preset(o->preset, "--preset"), o->seed);
-    } else if (!o->affine.empty()) {
-      affine_change = AffineChange{o->affine[0], {o->affine[1], o->affine[2]}, o->affine[3]};
-      check_affine(affine_change);
-    }
-    const cv::Mat image = read_image(o->image, cv::IMREAD_UNCHANGED);
-    cv::Mat labels;
-    if (!o->label.empty()) {
-      labels = read_image(o->label, cv::IMREAD_UNCHANGED);
-      if (labels.channels() != 1) throw Error(o->label + ": expected a single-channel label image");
-    }
-    cv::Mat out, out_labels, valid;
-    AugmentIO io{&image, &out, 0, nullptr, nullptr, o->label_fill, o->out_mask.empty() ? nullptr : &valid};
-    if (!o->out_label.empty()) io.labels = &labels, io.out_labels = &out_labels;
-    try {
-      if (affine) {
-        affine_augment(affine_change, cv::Size(warp.source().width(), warp.source().height()), io);
-      } else {
-        warp.augment(pose.change(), o->pose.prior(), io, *parse_sampling(o->sampling));
-      }
-    } catch (const Error& e) {
-      // Which input was wrong: the library names the argument ("image: ...", "labels: ...").
-      const std::string what = e.what();
-      throw Error((what.rfind("labels", 0) == 0 || what.rfind("warp_labels", 0) == 0 ? o->label : o->image) + ": " +
-                  what);
-    }
-    std::vector<std::pair<std::filesystem::path, cv::Mat>> outputs{{o->out_image, out}};
-    if (!o->out_label.empty()) outputs.emplace_back(o->out_label, out_labels);
-    if (!o->out_mask.empty()) outputs.emplace_back(o->out_mask, valid * 255);
-    write_images(outputs, o->force);
-    const nlohmann::json seed_json = o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->seed);
-    const nlohmann::json preset_json = o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->preset);
-    if (affine) {
-      const nlohmann::json j = affine_to_json(affine_change);
-      if (o->json) {
-        nlohmann::json out = j;
-        out["seed"] = seed_json, out["preset"] = preset_json;
-        std::printf("%s\n", out.dump().c_str());
-      } else {
-        std::printf("affine: %s\n", j.dump().c_str());
-      }
-      return;
-    }
-    if (o->json) {
-      const auto& r = pose.rotation_deg;
-      const auto& t = pose.translation;
-      nlohmann::json j{{"rotation_deg", {r.x(), r.y(), r.z()}},
-                       {"translation", {t.x(), t.y(), t.z()}},
-                       {"depth", o->pose.depth},
-                       {"seed", seed_json},
-                       {"preset", preset_json}};
-      std::printf("%s\n", j.dump().c_str());  // nlohmann writes doubles round-trip exact
-      return;
-    }
-    std::printf("pose: %s, depth %s\n", describe(pose.rotation_deg, pose.translation).c_str(), o->pose.depth.c_str());
-  });
+  cmd->callback([o, out_label, cmd, inputs] { run_augment(*o, *inputs, *cmd, out_label->count() > 0); });
 }
 
 }  // namespace fishcam::cli
