@@ -144,6 +144,120 @@ std::string percent(std::optional<double> value, int width) {
   return buffer;
 }
 
+struct Options {
+  std::string pred, gt, valid, classes = "woodscape";
+  std::vector<std::string> sets;
+  std::int64_t ignore = 0;
+  bool json = false;
+};
+
+// --classes: woodscape's names, or N classes named 0..N-1.
+std::vector<std::string> class_names_of(const std::string& classes) {
+  std::vector<std::string> names;
+  if (classes == "woodscape") {
+    for (int c = 0; c < woodscape_class::kCount; ++c) names.emplace_back(woodscape_class_name(c));
+    return names;
+  }
+  char* end = nullptr;
+  const long n = std::strtol(classes.c_str(), &end, 10);
+  if (classes.empty() || *end != '\0' || n < 1 || n > 1024) {
+    throw Error("--classes: expected woodscape or a number of classes from 1 to 1024, got " +
+                quoted_for_message(classes));
+  }
+  for (long c = 0; c < n; ++c) names.push_back(std::to_string(c));
+  return names;
+}
+
+// One test set's scores as --json gives them (IoU and mIoU in %) and its mIoU; for
+// a set after the first, its degradation against the first set's mIoU.
+struct FirstSet {
+  std::optional<double> miou;
+};
+nlohmann::ordered_json set_result(const TestSet& set, const std::vector<std::string>& class_names,
+                                  std::optional<std::int64_t> ignored, const FirstSet* first,
+                                  std::optional<double>* miou_out) {
+  long images = 0;
+  const ConfusionMatrix matrix = evaluate_set(set, int(class_names.size()), ignored, &images);
+  const auto iou = matrix.iou();
+  const auto miou = matrix.miou();
+  const auto percent_or_null = [](std::optional<double> v) {
+    return v ? nlohmann::ordered_json(100 * *v) : nlohmann::ordered_json(nullptr);
+  };
+  nlohmann::ordered_json j{{"name", set.name}, {"images", images}, {"pixels", matrix.scored_pixels()}};
+  j["miou"] = percent_or_null(miou);
+  j["iou"] = nlohmann::ordered_json::object();
+  j["absent"] = nlohmann::ordered_json::array();
+  for (size_t c = 0; c < class_names.size(); ++c) {
+    j["iou"][class_names[c]] = percent_or_null(iou[c]);
+    if (!iou[c]) j["absent"].push_back(class_names[c]);
+  }
+  if (first) {
+    std::optional<double> degradation;
+    if (miou && first->miou && *first->miou > 0) degradation = (*miou - *first->miou) / *first->miou;
+    j["degradation_pct"] = percent_or_null(degradation);
+  }
+  *miou_out = miou;
+  return j;
+}
+
+// The paper's Table 2: a row per test set, mIoU, its relative change against the
+// first set, IoU per class; then the classes left out and the ignored value.
+void print_table(const std::vector<TestSet>& sets, const nlohmann::ordered_json& results,
+                 const std::vector<std::string>& class_names, std::optional<std::int64_t> ignored) {
+  size_t name_width = 8;
+  for (const TestSet& set : sets) name_width = std::max(name_width, set.name.size());
+  std::printf("%-*s %7s %9s %12s", int(name_width), "test set", "images", "mIoU (%)", "degrades (%)");
+  for (const std::string& name : class_names) std::printf(" %*s", int(std::max<size_t>(6, name.size())), name.c_str());
+  std::printf("\n");
+  const auto value = [](const nlohmann::ordered_json& v) {
+    return v.is_null() ? std::optional<double>() : std::optional<double>(v.get<double>() / 100);
+  };
+  for (size_t s = 0; s < sets.size(); ++s) {
+    const nlohmann::ordered_json& r = results[s];
+    std::printf("%-*s %7ld %9s %12s", int(name_width), sets[s].name.c_str(), r["images"].get<long>(),
+                percent(value(r["miou"]), 9).c_str(),
+                s == 0 ? "           -" : percent(value(r["degradation_pct"]), 12).c_str());
+    for (const std::string& name : class_names) {
+      std::printf(" %s", percent(value(r["iou"][name]), int(std::max<size_t>(6, name.size()))).c_str());
+    }
+    std::printf("\n");
+  }
+  for (size_t s = 0; s < sets.size(); ++s) {
+    if (results[s]["absent"].empty()) continue;
+    std::string names;
+    for (const auto& name : results[s]["absent"]) names += (names.empty() ? "" : ", ") + name.get<std::string>();
+    std::printf("%s: absent from prediction and ground truth, left out of its mIoU: %s\n", sets[s].name.c_str(),
+                names.c_str());
+  }
+  if (ignored) std::printf("ground-truth pixels of value %lld are not scored\n", static_cast<long long>(*ignored));
+}
+
+void run_evaluate(const Options& o, bool ignore_given) {
+  const std::vector<std::string> class_names = class_names_of(o.classes);
+  std::vector<TestSet> sets;
+  if (!o.sets.empty()) {
+    for (const std::string& text : o.sets) sets.push_back(parse_set(text));
+  } else if (!o.gt.empty()) {
+    sets = sets_of(o.pred, o.gt, o.valid);
+  } else {
+    throw Error("give --pred and --gt, or --set NAME=PRED_DIR:GT_DIR");
+  }
+  const std::optional<std::int64_t> ignored = ignore_given ? std::optional(o.ignore) : std::nullopt;
+  nlohmann::ordered_json results = nlohmann::ordered_json::array();
+  FirstSet first;
+  for (const TestSet& set : sets) {
+    std::optional<double> miou;
+    results.push_back(set_result(set, class_names, ignored, results.empty() ? nullptr : &first, &miou));
+    if (results.size() == 1) first.miou = miou;
+  }
+  if (o.json) {
+    const nlohmann::ordered_json out = results.size() == 1 ? results[0] : nlohmann::ordered_json{{"sets", results}};
+    std::printf("%s\n", out.dump(2).c_str());
+    return;
+  }
+  print_table(sets, results, class_names, ignored);
+}
+
 }  // namespace
 
 void register_evaluate(CLI::App& app) {
@@ -151,12 +265,6 @@ void register_evaluate(CLI::App& app) {
       "evaluate",
       "Score segmentation predictions against ground truth (the paper's eqs. 11-12): IoU per class and mIoU over one "
       "confusion matrix per test set");
-  struct Options {
-    std::string pred, gt, valid, classes = "woodscape";
-    std::vector<std::string> sets;
-    std::int64_t ignore = 0;
-    bool json = false;
-  };
   auto o = std::make_shared<Options>();
   auto* pred = cmd->add_option("--pred", o->pred, "Folder of predicted label images (matched to --gt by file stem)");
   auto* gt = cmd->add_option("--gt", o->gt,
@@ -176,88 +284,7 @@ void register_evaluate(CLI::App& app) {
   gt->needs(pred);
   valid->needs(gt);
   sets->excludes(pred)->excludes(gt);
-  cmd->callback([o, ignore] {
-    std::vector<std::string> class_names;
-    if (o->classes == "woodscape") {
-      for (int c = 0; c < woodscape_class::kCount; ++c) class_names.emplace_back(woodscape_class_name(c));
-    } else {
-      char* end = nullptr;
-      const long n = std::strtol(o->classes.c_str(), &end, 10);
-      if (o->classes.empty() || *end != '\0' || n < 1 || n > 1024) {
-        throw Error("--classes: expected woodscape or a number of classes from 1 to 1024, got " +
-                    quoted_for_message(o->classes));
-      }
-      for (long c = 0; c < n; ++c) class_names.push_back(std::to_string(c));
-    }
-    std::vector<TestSet> sets;
-    if (!o->sets.empty()) {
-      for (const std::string& text : o->sets) sets.push_back(parse_set(text));
-    } else if (!o->gt.empty()) {
-      sets = sets_of(o->pred, o->gt, o->valid);
-    } else {
-      throw Error("give --pred and --gt, or --set NAME=PRED_DIR:GT_DIR");
-    }
-    const std::optional<std::int64_t> ignored = ignore->count() ? std::optional(o->ignore) : std::nullopt;
-    const int classes = int(class_names.size());
-
-    nlohmann::ordered_json results = nlohmann::ordered_json::array();
-    std::optional<double> first_miou;
-    std::vector<std::string> rows;
-    for (const TestSet& set : sets) {
-      long images = 0;
-      const ConfusionMatrix matrix = evaluate_set(set, classes, ignored, &images);
-      const auto iou = matrix.iou();
-      const auto miou = matrix.miou();
-      nlohmann::ordered_json j{{"name", set.name}, {"images", images}, {"pixels", matrix.scored_pixels()}};
-      j["miou"] = miou ? nlohmann::ordered_json(100 * *miou) : nlohmann::ordered_json(nullptr);
-      j["iou"] = nlohmann::ordered_json::object();
-      j["absent"] = nlohmann::ordered_json::array();
-      for (int c = 0; c < classes; ++c) {
-        j["iou"][class_names[size_t(c)]] = iou[size_t(c)] ? nlohmann::ordered_json(100 * *iou[size_t(c)]) : nlohmann::ordered_json(nullptr);
-        if (!iou[size_t(c)]) j["absent"].push_back(class_names[size_t(c)]);
-      }
-      std::optional<double> degradation;
-      if (results.empty()) {
-        first_miou = miou;
-      } else if (miou && first_miou && *first_miou > 0) {
-        degradation = (*miou - *first_miou) / *first_miou;
-      }
-      if (!results.empty()) j["degradation_pct"] = degradation ? nlohmann::ordered_json(100 * *degradation) : nlohmann::ordered_json(nullptr);
-      results.push_back(j);
-    }
-    if (o->json) {
-      const nlohmann::ordered_json out = results.size() == 1 ? results[0] : nlohmann::ordered_json{{"sets", results}};
-      std::printf("%s\n", out.dump(2).c_str());
-      return;
-    }
-    // The paper's Table 2: a row per test set, mIoU, its relative change against the first set, IoU per class.
-    size_t name_width = 8;
-    for (const TestSet& set : sets) name_width = std::max(name_width, set.name.size());
-    std::printf("%-*s %7s %9s %12s", int(name_width), "test set", "images", "mIoU (%)", "degrades (%)");
-    for (const std::string& name : class_names) std::printf(" %*s", int(std::max<size_t>(6, name.size())), name.c_str());
-    std::printf("\n");
-    for (size_t s = 0; s < sets.size(); ++s) {
-      const nlohmann::ordered_json& r = results[s];
-      const auto value = [](const nlohmann::ordered_json& v) {
-        return v.is_null() ? std::optional<double>() : std::optional<double>(v.get<double>() / 100);
-      };
-      std::printf("%-*s %7ld %9s %12s", int(name_width), sets[s].name.c_str(), r["images"].get<long>(),
-                  percent(value(r["miou"]), 9).c_str(),
-                  s == 0 ? "           -" : percent(value(r["degradation_pct"]), 12).c_str());
-      for (const std::string& name : class_names) {
-        std::printf(" %s", percent(value(r["iou"][name]), int(std::max<size_t>(6, name.size()))).c_str());
-      }
-      std::printf("\n");
-    }
-    for (size_t s = 0; s < sets.size(); ++s) {
-      if (results[s]["absent"].empty()) continue;
-      std::string names;
-      for (const auto& name : results[s]["absent"]) names += (names.empty() ? "" : ", ") + name.get<std::string>();
-      std::printf("%s: absent from prediction and ground truth, left out of its mIoU: %s\n", sets[s].name.c_str(),
-                  names.c_str());
-    }
-    if (ignored) std::printf("ground-truth pixels of value %lld are not scored\n", static_cast<long long>(*ignored));
-  });
+  cmd->callback([o, ignore] { run_evaluate(*o, ignore->count() > 0); });
 }
 
 }  // namespace fishcam::cli
