@@ -10,7 +10,7 @@ namespace fishcam::cli {
 
 namespace {
 
-struct Options {
+struct AugmentOptions {
   std::string source, target, image, label, out_image, out_label, out_mask, preset, method = "viewpoint",
                                                                                sampling = "grid";
   std::vector<double> affine;
@@ -22,13 +22,13 @@ struct Options {
 
 // The change to apply: --preset with --seed (the viewpoint or affine ranges of that
 // name), else --rotate/--translate or --affine.
-struct Change {
+struct AugmentChange {
   RandomPose pose;
   AffineChange affine;
 };
 
-Change change_of(const Options& o, bool affine) {
-  Change c;
+AugmentChange change_of(const AugmentOptions& o, bool affine) {
+  AugmentChange c;
   c.pose = o.preset.empty() ? RandomPose{{o.pose.rotate[0], o.pose.rotate[1], o.pose.rotate[2]},
                                          {o.pose.translate[0], o.pose.translate[1], o.pose.translate[2]}}
                             : random_pose(pose_preset(o.preset, "--preset"), o.seed);
@@ -42,7 +42,7 @@ Change change_of(const Options& o, bool affine) {
 }
 
 // What was applied, as text or (--json) one object at full precision.
-void print_change(const Options& o, const Change& c, bool affine) {
+void print_change(const AugmentOptions& o, const AugmentChange& c, bool affine) {
   const nlohmann::json seed = o.preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.seed);
   const nlohmann::json preset = o.preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.preset);
   if (affine) {
@@ -69,7 +69,8 @@ void print_change(const Options& o, const Change& c, bool affine) {
   std::printf("%s\n", j.dump().c_str());  // nlohmann writes doubles round-trip exact
 }
 
-void run_augment(const Options& o, const CameraInputs& inputs, const CLI::App& cmd, bool out_label_given) {
+void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, const CLI::App& cmd,
+                         bool out_label_given) {
   if (out_label_given && o.label.empty()) throw Error("--out-label needs --label");
   const bool affine = o.method == "affine";
   if (affine) {
@@ -81,7 +82,7 @@ void run_augment(const Options& o, const CameraInputs& inputs, const CLI::App& c
   }
   check_outputs({{o.out_image}, {o.out_label, true}, {o.out_mask}}, {o.source, o.target, o.image, o.label}, o.force);
   const ViewpointWarp warp = make_warp(inputs, o.source, o.target);
-  const Change change = change_of(o, affine);
+  const AugmentChange change = change_of(o, affine);
   const cv::Mat image = read_image(o.image, cv::IMREAD_UNCHANGED);
   cv::Mat labels;
   if (!o.label.empty()) {
@@ -115,7 +116,7 @@ void run_augment(const Options& o, const CameraInputs& inputs, const CLI::App& c
 void register_augment(CLI::App& app) {
   auto* cmd = app.add_subcommand("augment", "Augment one image (and its labels) with a viewpoint change (or the "
                                             "affine baseline)");
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<AugmentOptions>();
   cmd->add_option("SOURCE", o->source, "Source camera file")->required();
   cmd->add_option("--image", o->image, "Input image (8/16-bit, 1-4 channels)")->required();
   cmd->add_option("--label", o->label, "Input label image (single channel 8/16-bit)");
@@ -149,7 +150,7 @@ void register_augment(CLI::App& app) {
   cmd->add_flag("--force", o->force, "Replace existing output files");
   cmd->add_flag("--json", o->json, "Print the applied change as one JSON object (full precision)");
   const auto inputs = add_camera_input_options(cmd);
-  cmd->callback([o, out_label, cmd, inputs] { run_augment(*o, *inputs, *cmd, out_label->count() > 0); });
+  cmd->callback([o, out_label, cmd, inputs] { run_augment_command(*o, *inputs, *cmd, out_label->count() > 0); });
 }
 
 }  // namespace fishcam::cli

@@ -144,7 +144,7 @@ class Manifest {
   std::set<std::string> listed_;
 };
 
-struct Options {
+struct DatasetOptions {
   std::string root, out, presets = "train", depth = "source-sphere", shard, method = "viewpoint", sampling = "grid";
   std::uint64_t seed = 0;
   int copies = 1, threads = 0, label_fill = 0;
@@ -214,7 +214,7 @@ struct DatasetImage {
 
 class DatasetAugmentation {
  public:
-  explicit DatasetAugmentation(const Options& o)
+  explicit DatasetAugmentation(const DatasetOptions& o)
       : o_(o), root_(o.root), out_(o.out), prior_(depth_prior(o.depth, "--depth")),
         sampling_(*parse_sampling(o.sampling)), affine_(o.method == "affine") {}
 
@@ -350,7 +350,7 @@ class DatasetAugmentation {
     return line;
   }
 
-  const Options& o_;
+  const DatasetOptions& o_;
   const fs::path root_, out_;
   const DepthPrior prior_;
   const Sampling sampling_;
@@ -367,7 +367,7 @@ void register_augment_dataset(CLI::App& app) {
       "augment-dataset",
       "Augment a WoodScape-layout dataset (rgb_images/, semantic_annotations/gtLabels/, calibration/): K copies per "
       "image with seeded random poses, a manifest.jsonl, resumable");
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<DatasetOptions>();
   cmd->add_option("ROOT", o->root, "Dataset folder (read only)")->required()->check(CLI::ExistingDirectory);
   cmd->add_option("--preset", o->presets,
                   "Pose preset, or several separated by commas (small,medium,large: the paper's test sets, one "

@@ -98,7 +98,7 @@ cv::Mat side_by_side(std::vector<cv::Mat> pictures, int width) {
   return out;
 }
 
-struct Options {
+struct CompareOptions {
   std::string camera, models = "equidistant,stereographic,kannala-brandt", method = "lsq", preset = "train", image,
                       label, out;
   std::string depth = "source-sphere";
@@ -127,7 +127,7 @@ std::vector<std::string> model_tokens(const std::string& models, std::vector<std
 
 // Every output is known before anything is computed: --out (created) must hold no
 // input (the camera, the pictures, --models files), files are not replaced unless --force.
-void check_compare_outputs(const Options& o, const std::vector<std::string>& tokens,
+void check_compare_outputs(const CompareOptions& o, const std::vector<std::string>& tokens,
                            const std::vector<std::string>& names) {
   std::vector<std::string> input_files{o.camera, o.image, o.label};
   std::error_code ec;
@@ -152,7 +152,7 @@ void check_compare_outputs(const Options& o, const std::vector<std::string>& tok
 // The picture the figures show and the label images compared: the scene rendered
 // from the camera's mount (or the bundled WoodScape front camera's), or --image and
 // --label.
-cv::Mat pictures_and_labels(const Options& o, const Camera& camera, NamedLabels* labels) {
+cv::Mat pictures_and_labels(const CompareOptions& o, const Camera& camera, NamedLabels* labels) {
   std::optional<Pose> mount = camera.parameters().pose;
   if (!mount) mount = read_camera(bundled_data("woodscape_front.json")).parameters().pose;
   const SceneRender scene = render_street_scene(camera, *mount);
@@ -178,7 +178,7 @@ cv::Mat pictures_and_labels(const Options& o, const Camera& camera, NamedLabels*
 
 // The figures (Fig. 8's spheres, the first change augmented through every model, a
 // displacement heatmap per model) and the alternatives as fishcam JSON, written together.
-void write_figures(const Options& o, const Camera& camera, const std::vector<AlternativeModel>& alternatives,
+void write_figures(const CompareOptions& o, const Camera& camera, const std::vector<AlternativeModel>& alternatives,
                    const std::vector<std::string>& names, const Comparison& comparison, const cv::Mat& picture,
                    DepthPrior prior) {
   std::vector<std::pair<fs::path, std::string>> files;
@@ -207,7 +207,7 @@ void write_figures(const Options& o, const Camera& camera, const std::vector<Alt
   write_files_atomically(files, o.force);
 }
 
-void print_comparison(const Options& o, const Camera& camera, const Comparison& comparison, size_t label_sets) {
+void print_comparison(const CompareOptions& o, const Camera& camera, const Comparison& comparison, size_t label_sets) {
   std::printf("%s (%s, %dx%d): %d changes of preset %s (seed %llu), depth %s\n", o.camera.c_str(),
               std::string(model_name(camera.model())).c_str(), camera.width(), camera.height(), o.samples,
               o.preset.c_str(), static_cast<unsigned long long>(o.seed), o.depth.c_str());
@@ -237,7 +237,7 @@ void print_comparison(const Options& o, const Camera& camera, const Comparison& 
   if (!o.out.empty()) std::printf("pictures and the alternatives' cameras in %s\n", o.out.c_str());
 }
 
-void run_compare(const Options& o, const CameraInputs& inputs) {
+void run_compare(const CompareOptions& o, const CameraInputs& inputs) {
   const Camera camera = inputs.read(o.camera);
   check_comparison_size(camera.width(), camera.height(), o.samples);  // before rendering anything
   std::vector<std::string> names;
@@ -272,7 +272,7 @@ void register_compare(CLI::App& app) {
       "compare",
       "Compare augmenting with other projection models of a camera against augmenting with the camera itself "
       "(displacement, validity and labels; the paper's Table 5 and Fig. 8)");
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<CompareOptions>();
   cmd->add_option("CAMERA", o->camera, "Camera file (the reference: its own model)")->required();
   cmd->add_option("--models", o->models,
                   "Alternatives, comma-separated: model names (fitted to CAMERA as fishcam convert does) or camera "

@@ -144,7 +144,7 @@ std::string percent(std::optional<double> value, int width) {
   return buffer;
 }
 
-struct Options {
+struct EvaluateOptions {
   std::string pred, gt, valid, classes = "woodscape";
   std::vector<std::string> sets;
   std::int64_t ignore = 0;
@@ -232,7 +232,7 @@ void print_table(const std::vector<TestSet>& sets, const nlohmann::ordered_json&
   if (ignored) std::printf("ground-truth pixels of value %lld are not scored\n", static_cast<long long>(*ignored));
 }
 
-void run_evaluate(const Options& o, bool ignore_given) {
+void run_evaluate(const EvaluateOptions& o, bool ignore_given) {
   const std::vector<std::string> class_names = class_names_of(o.classes);
   std::vector<TestSet> sets;
   if (!o.sets.empty()) {
@@ -265,7 +265,7 @@ void register_evaluate(CLI::App& app) {
       "evaluate",
       "Score segmentation predictions against ground truth (the paper's eqs. 11-12): IoU per class and mIoU over one "
       "confusion matrix per test set");
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<EvaluateOptions>();
   auto* pred = cmd->add_option("--pred", o->pred, "Folder of predicted label images (matched to --gt by file stem)");
   auto* gt = cmd->add_option("--gt", o->gt,
                              "Folder of ground-truth label images, a WoodScape-layout folder, or a folder that "
