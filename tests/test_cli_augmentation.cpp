@@ -179,15 +179,6 @@ TEST(CliAugmentation, DemoAndBench) {
 namespace fishcam {
 namespace {
 
-// The files of a folder tree, relative path -> content.
-std::map<std::string, std::string> tree(const std::filesystem::path& root) {
-  std::map<std::string, std::string> out;
-  for (const auto& e : std::filesystem::recursive_directory_iterator(root)) {
-    if (e.is_regular_file()) out[std::filesystem::relative(e.path(), root).string()] = test::read_file(e.path());
-  }
-  return out;
-}
-
 std::set<std::string> lines(const std::string& text) {
   std::set<std::string> out;
   std::stringstream in(text);
@@ -201,7 +192,7 @@ TEST(CliAugmentation, ShardsTogetherEqualOneRun) {
   const auto dir = test::scratch_dir("shards");
   auto r = run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 7 --seed 3 --size 160x121");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(tree(dir / "root").size(), 21u);
+  EXPECT_EQ(test::files_below(dir / "root").size(), 21u);
   r = run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 7 --seed 3 --size 160x121");
   EXPECT_NE(r.exit_code, 0) << "never replaces samples";
 
@@ -212,7 +203,7 @@ TEST(CliAugmentation, ShardsTogetherEqualOneRun) {
     r = run_fishcam(common + " --shard " + std::to_string(k) + "/3 --out " + quoted(dir / "sharded"));
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
-  auto whole = tree(dir / "whole"), sharded = tree(dir / "sharded");
+  auto whole = test::files_below(dir / "whole"), sharded = test::files_below(dir / "sharded");
   const std::set<std::string> whole_lines = lines(whole["manifest.jsonl"]);
   std::set<std::string> shard_lines;
   for (int k = 0; k < 3; ++k) {
@@ -241,7 +232,7 @@ TEST(CliAugmentation, AffineDatasetAndOptions) {
   const std::string common = "augment-dataset " + quoted(dir / "root") + " --preset train --seed 4 --out ";
   r = run_fishcam(common + quoted(dir / "affine") + " --method affine");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto files = tree(dir / "affine");
+  const auto files = test::files_below(dir / "affine");
   EXPECT_EQ(files.size(), 5u);  // 2 images, 2 labels, the manifest
   for (const auto& line : lines(files.at("manifest.jsonl"))) {
     const auto j = nlohmann::json::parse(line);
@@ -260,8 +251,8 @@ TEST(CliAugmentation, AffineDatasetAndOptions) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(test::read_file(dir / "exact/manifest.jsonl").find("\"sampling\":\"exact\""), std::string::npos);
 
-  const std::string image = quoted(dir / "root/rgb_images/" / tree(dir / "root/rgb_images").begin()->first);
-  const std::string camera = quoted(dir / "root/calibration/" / tree(dir / "root/calibration").begin()->first);
+  const std::string image = quoted(dir / "root/rgb_images/" / test::files_below(dir / "root/rgb_images").begin()->first);
+  const std::string camera = quoted(dir / "root/calibration/" / test::files_below(dir / "root/calibration").begin()->first);
   const std::string augment = "augment " + camera + " --image " + image + " --out-image " + quoted(dir / "a.png");
   for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
            {" --affine 1,0,0,1", "--affine needs --method affine"},

@@ -19,19 +19,6 @@ namespace fs = std::filesystem;
 using test::quoted;
 using test::run_fishcam;
 
-// Every regular file below dir (symlinks not followed) with its bytes.
-std::map<std::string, std::string> snapshot(const fs::path& dir) {
-  std::map<std::string, std::string> files;
-  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
-    if (it->is_symlink()) {
-      files[fs::relative(it->path(), dir).string()] = "-> " + fs::read_symlink(it->path()).string();
-    } else if (it->is_regular_file()) {
-      files[fs::relative(it->path(), dir).string()] = test::read_file(it->path());
-    }
-  }
-  return files;
-}
-
 std::vector<std::string> lines_of(const std::string& text) {
   std::vector<std::string> lines;
   std::stringstream in(text);
@@ -57,12 +44,12 @@ class CliOutputs : public ::testing::Test {
   }
   // Refused in one line containing `expected`; `watched` unchanged.
   void expect_refused(const std::string& args, const std::string& expected, const fs::path& watched) {
-    const auto before = snapshot(watched);
+    const auto before = test::files_below(watched);
     const auto r = run_fishcam(args);
     EXPECT_NE(r.exit_code, 0) << args;
     EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-    EXPECT_TRUE(snapshot(watched) == before) << args << ": " << watched << " changed";
+    EXPECT_TRUE(test::files_below(watched) == before) << args << ": " << watched << " changed";
   }
   fs::path dir_;
 };
@@ -188,7 +175,7 @@ TEST_F(CliOutputs, AFailedRenameNamesItsRealCause) {
 TEST_F(CliOutputs, ParallelShardsIntoOneOutEqualOneRun) {
   const auto root = dataset("ds", 8);
   ASSERT_EQ(run_fishcam(augment_dataset(root, dir_ / "single")).exit_code, 0);
-  const auto single = snapshot(dir_ / "single");
+  const auto single = test::files_below(dir_ / "single");
   std::multiset<std::string> single_lines;
   for (const char* preset : {"train", "small"}) {
     for (const auto& line : lines_of(single.at(std::string(preset) + "/manifest.jsonl"))) single_lines.insert(line);
@@ -204,7 +191,7 @@ TEST_F(CliOutputs, ParallelShardsIntoOneOutEqualOneRun) {
     ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
     std::map<std::string, std::string> files;
     std::multiset<std::string> lines;
-    for (const auto& [name, bytes] : snapshot(out)) {
+    for (const auto& [name, bytes] : test::files_below(out)) {
       if (name.find("manifest") != std::string::npos) {
         for (const auto& line : lines_of(bytes)) lines.insert(line);
       } else {
@@ -281,7 +268,7 @@ TEST_F(CliOutputs, NamesThatAreNotUtf8AreRefusedBeforeWriting) {
     EXPECT_NE(r.exit_code, 0);
     EXPECT_NE(r.err.find("not valid UTF-8"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("lat\\xe9n"), std::string::npos) << r.err;  // escaped in the message
-    for (const auto& [name, bytes] : snapshot(dir_ / "out")) EXPECT_EQ(name.find(bad), std::string::npos) << name;
+    for (const auto& [name, bytes] : test::files_below(dir_ / "out")) EXPECT_EQ(name.find(bad), std::string::npos) << name;
     EXPECT_EQ(lines_of(test::read_file(dir_ / "out" / "manifest.jsonl")).size(), 2u);
   }
 }
@@ -303,7 +290,7 @@ TEST_F(CliOutputs, DatasetsAreTheSameOnEveryInstructionSet) {
                                  "--depth target-sphere --sampling " + sampling + " --out " + quoted(out));
       unsetenv("FISHCAM_NO_AVX2");
       ASSERT_EQ(r.exit_code, 0) << r.err;
-      runs[baseline] = snapshot(out);
+      runs[baseline] = test::files_below(out);
     }
     EXPECT_EQ(runs[0].size(), 2u * 6 * 4 * 3 + 2);  // image, label, camera per copy; two manifests
     long differing = 0;

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <string>
 #include <unistd.h>
@@ -42,6 +43,22 @@ inline std::filesystem::path write_file(const std::filesystem::path& path, const
 inline std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The files below dir, relative path -> content; a symlink as "-> TARGET" (not
+// followed), so a test sees a link that was written through or replaced.
+inline std::map<std::string, std::string> files_below(const std::filesystem::path& dir) {
+  std::map<std::string, std::string> files;
+  for (auto it = std::filesystem::recursive_directory_iterator(dir); it != std::filesystem::recursive_directory_iterator();
+       ++it) {
+    const std::string name = std::filesystem::relative(it->path(), dir).string();
+    if (it->is_symlink()) {
+      files[name] = "-> " + std::filesystem::read_symlink(it->path()).string();
+    } else if (it->is_regular_file()) {
+      files[name] = read_file(it->path());
+    }
+  }
+  return files;
 }
 
 // The WoodScape front camera's public intrinsics, without pose.

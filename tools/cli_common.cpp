@@ -78,9 +78,7 @@ cv::Mat read_image(const std::string& path, int flags) {
   const auto status = std::filesystem::status(path, ec);
   if (ec && ec != std::errc::no_such_file_or_directory) throw Error(path_for_message(path) + ": " + ec.message());
   if (!std::filesystem::exists(status)) throw Error(path_for_message(path) + ": no such file");
-  if (!std::filesystem::is_regular_file(status)) {
-    throw Error(path_for_message(path) + ": not a regular file" + (ec ? " (" + ec.message() + ")" : std::string()));
-  }
+  if (!std::filesystem::is_regular_file(status)) throw Error(path_for_message(path) + ": not a regular file");
   cv::Mat image;
   {
     const SilencedStderr quiet;
