@@ -153,8 +153,10 @@ def presets():
 def set_num_threads(n):
     """The threads fishcam's compute uses.
 
-    fishcam runs on OpenCV's thread pool, which ``cv2`` in the same process shares:
-    this also sets ``cv2.setNumThreads``.
+    fishcam runs on the thread pool of the OpenCV it links (Debian's libopencv).
+    Debian's ``cv2`` (python3-opencv) is that OpenCV, so this also sets its
+    ``cv2.setNumThreads``; the opencv-python wheels from PyPI (which albumentations
+    installs) carry an OpenCV and a pool of their own, which this leaves alone.
     """
     if isinstance(n, bool) or not isinstance(n, (int, _np.integer)):
         raise Error(f"set_num_threads: expected an integer, got {type(n).__name__}")
