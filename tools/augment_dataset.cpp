@@ -320,9 +320,9 @@ class DatasetAugmentation {
     if (!affine_) {
       // The output camera: same intrinsics, the moved pose (translation in
       // unit-sphere units, written as metres).
-      CameraParameters moved = source.camera->parameters();
-      if (moved.pose) moved.pose = moved_camera(*moved.pose, pose.change());
-      files.emplace_back(out_calibration, format_camera(moved, CameraFormat::woodscape));
+      files.emplace_back(out_calibration,
+                         format_camera(augmented_camera(source.camera->parameters(), pose.change()),
+                                       CameraFormat::woodscape));
     }
     // The files land together (a killed run leaves none of them).
     write_files_atomically(files, true);

@@ -52,6 +52,16 @@ AffineChange random_affine(const AffinePreset& preset, std::uint64_t seed) {
   return change;
 }
 
+Eigen::Vector2d affine_forward(const AffineChange& change, cv::Size size, const Eigen::Vector2d& x) {
+  const double angle = change.rotation_deg * std::numbers::pi / 180;
+  const double cos_a = std::cos(angle) * change.scale, sin_a = std::sin(angle) * change.scale;
+  const Eigen::Vector2d c((size.width - 1) / 2.0, (size.height - 1) / 2.0);
+  const Eigen::Vector2d d = x - c;
+  // The y-down counter-clockwise rotation [cos sin; -sin cos].
+  return c + Eigen::Vector2d(cos_a * d.x() + sin_a * d.y(), -sin_a * d.x() + cos_a * d.y()) +
+         Eigen::Vector2d(change.translation.x() * size.width, change.translation.y() * size.height);
+}
+
 void affine_maps(const AffineChange& change, cv::Size size, WarpMaps* maps) {
   check_affine(change);
   if (size.width < 1 || size.height < 1) throw Error("affine_maps: empty image size");

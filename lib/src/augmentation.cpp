@@ -285,6 +285,91 @@ void ViewpointWarp::compute_grid(const ViewpointChange& change, DepthPrior prior
 int ViewpointWarp::grid_spacing() const { return grid_ ? grid_->spacing : 0; }
 double ViewpointWarp::grid_error_px() const { return grid_ ? grid_->measured_error_px : 0; }
 
+void ViewpointWarp::forward(const ViewpointChange& change, DepthPrior prior,
+                            std::span<const Eigen::Vector2d> source_pixels, std::span<Eigen::Vector2d> pixels,
+                            std::span<std::uint8_t> visible) const {
+  check_change(change);
+  if (pixels.size() != source_pixels.size() || visible.size() != source_pixels.size()) {
+    throw Error("ViewpointWarp::forward: outputs of the wrong size");
+  }
+  const double w = target_.width() - 0.5, h = target_.height() - 0.5;
+  const Eigen::Vector3d& t = change.translation;
+  for (size_t i = 0; i < source_pixels.size(); ++i) {
+    pixels[i] = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    visible[i] = 0;
+    Eigen::Vector3d ray;
+    if (!source_.unproject(source_pixels[i], &ray)) continue;
+    const Eigen::Vector3d rotated = change.rotation * ray;
+    Eigen::Vector3d d = rotated;  // infinity: the direction alone
+    if (prior == DepthPrior::source_sphere) {
+      d = rotated + t;
+    } else if (prior == DepthPrior::target_sphere) {
+      // d = t + lambda R p with |d| = 1 and lambda > 0 (the larger root).
+      const double b = rotated.dot(t), disc = b * b - (t.squaredNorm() - 1);
+      if (!(disc >= 0)) continue;
+      const double lambda = -b + std::sqrt(disc);
+      if (!(lambda > 0)) continue;
+      d = t + lambda * rotated;
+    }
+    const double norm = d.norm();
+    if (!(norm > 0) || !std::isfinite(norm)) continue;
+    d /= norm;
+    Eigen::Vector2d pixel;
+    if (!target_.project(d, &pixel)) continue;
+    pixels[i] = pixel;
+    const auto back = source_point(d, change, prior);
+    visible[i] = pixel.x() >= -0.5 && pixel.x() < w && pixel.y() >= -0.5 && pixel.y() < h && back &&
+                 (*back - ray).norm() < 1e-9;
+  }
+}
+
+void ViewpointWarp::warp_depth(const ViewpointChange& change, DepthPrior prior, const cv::Mat& depth,
+                               DepthValues values, cv::Mat* out, float fill) const {
+  if (depth.type() != CV_32FC1) throw Error("warp_depth: expected a float32 single-channel depth map");
+  if (depth.cols != source_.width() || depth.rows != source_.height()) {
+    throw Error("warp_depth: the depth map is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+                " but the camera is " + std::to_string(source_.width()) + "x" + std::to_string(source_.height()));
+  }
+  WarpMaps maps;
+  compute(change, prior, &maps, MapKind::sampling);
+  cv::remap(depth, *out, maps.map_x, maps.map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(fill));
+  if (change.is_identity()) return;
+  cv::parallel_for_(cv::Range(0, target_.height()), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      float* row = out->ptr<float>(v);
+      const float* source_x = maps.map_x.ptr<float>(v);
+      for (int u = 0; u < target_.width(); ++u) {
+        const double value = row[u];
+        if (source_x[u] == kOutsideSource || !(value > 0) || !std::isfinite(value)) continue;
+        Eigen::Vector3d d;
+        std::optional<Eigen::Vector3d> s;
+        if (target_.unproject(Eigen::Vector2d(u, v), &d)) s = source_point(d, change, prior);
+        if (!s || (values == DepthValues::z && !(s->z() > 0))) {
+          row[u] = std::numeric_limits<float>::quiet_NaN();  // no ray to re-express along
+          continue;
+        }
+        const Eigen::Vector3d point = change.rotation * (*s * (values == DepthValues::z ? value / s->z() : value)) +
+                                      change.translation;
+        row[u] = float(values == DepthValues::z ? point.z() : point.norm());
+      }
+    }
+  });
+}
+
+std::optional<DepthValues> parse_depth_values(std::string_view name) {
+  if (name == "range") return DepthValues::range;
+  if (name == "z") return DepthValues::z;
+  return std::nullopt;
+}
+
+std::string_view to_string(DepthValues values) { return values == DepthValues::range ? "range" : "z"; }
+
+const std::vector<std::string>& depth_values_names() {
+  static const std::vector<std::string> names = {std::string(to_string(DepthValues::range)),
+                                                 std::string(to_string(DepthValues::z))};
+  return names;
+}
+
 std::optional<Sampling> parse_sampling(std::string_view name) {
   if (name == "grid") return Sampling::grid;
   if (name == "exact") return Sampling::exact;

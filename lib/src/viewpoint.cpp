@@ -116,6 +116,11 @@ Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change
   return moved;
 }
 
+CameraParameters augmented_camera(CameraParameters camera, const ViewpointChange& change) {
+  camera.pose = moved_camera(camera.pose.value_or(Pose{}), change);
+  return camera;
+}
+
 const std::array<PosePreset, 4>& pose_presets() {
   static const std::array<PosePreset, 4> presets = {{
       {"small", 10, 0.1},

@@ -1,11 +1,16 @@
-"""fishcam for PyTorch: the viewpoint transform (and the affine baseline) as nn.Modules, a WoodScape dataset,
-an epoch-carrying sampler, and the DataLoader worker set-up.
+"""fishcam for PyTorch: the viewpoint change (and the affine baseline) as
+torchvision.transforms.v2 transforms, a WoodScape dataset that hands whole samples
+to its transform, an epoch-carrying sampler, and the DataLoader worker set-up.
 
-    dataset = fishcam.torch.WoodScapeDataset(root, transform=fishcam.torch.RandomViewpoint(preset="train"), seed=5)
+    from torchvision.transforms import v2
+    transform = v2.Compose([fishcam.torch.RandomViewpoint(preset="train"),   # camera from the sample
+                            v2.ColorJitter(0.2, 0.2), v2.ToDtype(torch.float32, scale=True)])
+    dataset = fishcam.torch.WoodScapeDataset(root, transform=transform, seed=5)
     loader = torch.utils.data.DataLoader(dataset, batch_size=8, num_workers=2,
                                          sampler=fishcam.torch.EpochSampler(torch.utils.data.RandomSampler(dataset)),
                                          worker_init_fn=fishcam.torch.worker_init_fn,
                                          persistent_workers=True,  # workers keep their warps
+                                         collate_fn=fishcam.torch.collate,
                                          generator=torch.Generator().manual_seed(0))
 
 Seeding: without a dataset seed, each sample's change comes from torch's generator
@@ -14,16 +19,30 @@ seeds per worker from its own generator: workers differ, and the same generator
 seed reproduces a run. With ``WoodScapeDataset(seed=S)``, sample ``i`` of epoch
 ``e`` gets ``derive_seed(S, f"epoch{e}", i)`` whatever the workers and processes:
 the epoch travels with the index from ``EpochSampler``, which runs in the main
-process and counts the epochs itself. A seeded dataset indexed by a bare index
-inside a DataLoader worker raises instead of repeating one epoch's changes (a
-worker's copy of the dataset never sees ``set_epoch`` from the main process).
+process and counts the epochs itself; torch's generator is seeded with that seed
+for the call, so the other random transforms of the pipeline follow it too. A
+seeded dataset indexed by a bare index inside a DataLoader worker raises instead
+of repeating one epoch's changes (a worker's copy of the dataset never sees
+``set_epoch`` from the main process).
 """
 
+import contextlib
+import contextvars
 import json
 import os
 
 import numpy as np
+import PIL.Image
 import torch
+
+try:
+    from torchvision import tv_tensors
+    from torchvision.transforms import v2
+except ImportError as error:  # pragma: no cover - the message is the point
+    raise ImportError("fishcam.torch needs torchvision >= 0.23 (transforms.v2 and tv_tensors.KeyPoints): "
+                      f"pip install torchvision ({error})") from None
+if not hasattr(tv_tensors, "KeyPoints"):  # pragma: no cover
+    raise ImportError("fishcam.torch needs torchvision >= 0.23 (tv_tensors.KeyPoints); pip install -U torchvision")
 
 from . import Camera, Error, derive_seed, set_num_threads
 from . import transforms as _transforms
@@ -47,65 +66,285 @@ def worker_init_fn(worker_id):
     set_num_threads(1)
 
 
-def _to_numpy(x, what):
-    """HWC numpy from a numpy array or a CHW / HW tensor; returns (array, was_tensor)."""
-    if isinstance(x, torch.Tensor):
-        if x.device.type != "cpu":
-            raise Error(f"{what}: fishcam runs on the CPU; got a tensor on {x.device} (move it with .cpu())")
-        array = x.detach().numpy()
-        if array.ndim == 3:
-            array = np.moveaxis(array, 0, -1)  # CHW -> HWC (a view; copied to contiguous in C++)
-        return array, True
-    if isinstance(x, np.ndarray):
-        return x, False
-    raise Error(f"{what}: expected a numpy array or a torch tensor, got {type(x).__name__}")
+class DepthMap(tv_tensors.TVTensor):
+    """A depth map (HxW or 1xHxW float32): the range along each pixel's ray, or its
+    z (the transform's ``depth_values``). fishcam's transforms sample it without
+    blending and re-express its values in the moved camera; torchvision's own
+    transforms do not know it and pass it through (put geometric torchvision
+    transforms before it only if they keep the geometry)."""
+
+    @classmethod
+    def _wrap(cls, tensor):
+        return tensor.as_subclass(cls)
+
+    def __new__(cls, data, *, dtype=None, device=None, requires_grad=None):
+        tensor = cls._to_tensor(data, dtype=dtype, device=device, requires_grad=requires_grad)
+        return cls._wrap(tensor)
 
 
-def _from_numpy(array, as_tensor):
-    if not as_tensor:
-        return array
-    tensor = torch.from_numpy(array)
-    return tensor.permute(2, 0, 1) if tensor.ndim == 3 else tensor
+class Polygon(tv_tensors.TVTensor):
+    """One closed polygon, (K, 2) float pixels x, y (pixel centres at integers), e.g.
+    a WoodScape instance outline. fishcam's transforms map its vertices and subdivide
+    its edges so that they follow the curved image within 0.5 px (K changes); put
+    several in a list. torchvision's own transforms pass it through."""
+
+    @classmethod
+    def _wrap(cls, tensor):
+        return tensor.as_subclass(cls)
+
+    def __new__(cls, data, *, dtype=None, device=None, requires_grad=None):
+        tensor = cls._to_tensor(data, dtype=dtype, device=device, requires_grad=requires_grad)
+        if tensor.ndim != 2 or tensor.shape[-1] != 2:
+            raise Error(f"Polygon: expected shape (K, 2), got {tuple(tensor.shape)}")
+        return cls._wrap(tensor)
 
 
-class _Transform(torch.nn.Module):
-    """A numpy transform of fishcam.transforms as a module: ``forward(image, mask=None,
-    camera=None, seed=None)`` -> ``(image, mask, change)``. Images HWC numpy or CHW
-    tensors (returned the same way), masks HW; the change is the manifest dict.
-    Without ``seed``, one is drawn from torch's (per-worker) generator."""
+# The seed a seeded dataset gives the transforms of one sample, and the records of
+# the changes they made (WoodScapeDataset reads them back into the item).
+_sample_seed = contextvars.ContextVar("fishcam_sample_seed", default=None)
+_sample_records = contextvars.ContextVar("fishcam_sample_records", default=None)
 
-    def __init__(self, transform):
+
+@contextlib.contextmanager
+def record_changes():
+    """Within the block, fishcam's transforms append the record of each change they
+    make (the manifest's dict: method, seed, rotation, translation, depth) to the
+    list this yields."""
+    records = []
+    token = _sample_records.set(records)
+    try:
+        yield records
+    finally:
+        _sample_records.reset(token)
+
+
+@contextlib.contextmanager
+def sample_seed(seed):
+    """Within the block, fishcam's transforms use ``seed`` (one 64-bit integer) instead
+    of drawing one, and torch's generator is seeded with it (restored afterwards), so
+    every random transform of a pipeline is reproducible per sample. Yields the list
+    of change records, as record_changes."""
+    seed = _transforms._check_seed(seed)
+    token = _sample_seed.set(seed)
+    try:
+        with record_changes() as records, torch.random.fork_rng(devices=[]):
+            torch.manual_seed(seed)
+            yield records
+    finally:
+        _sample_seed.reset(token)
+
+
+def _cpu(tensor, what):
+    if tensor.device.type != "cpu":
+        raise Error(f"{what}: fishcam runs on the CPU; got a tensor on {tensor.device} (move it with .cpu(), "
+                    "or use warp_batch for batches on a device)")
+    return tensor.detach()
+
+
+def _image_to_numpy(tensor, what):
+    """CHW (or HW) tensor -> HWC numpy (a view; the warp copies if it must), refusing
+    what the warp cannot take with the layout in the message."""
+    tensor = _cpu(tensor, what)
+    if tensor.ndim not in (2, 3):
+        raise Error(f"{what}: expected CxHxW or HxW, got shape {tuple(tensor.shape)}")
+    if tensor.dtype == torch.float64:
+        tensor = tensor.float()
+    array = tensor.numpy()
+    return np.moveaxis(array, 0, -1) if array.ndim == 3 else array
+
+
+def _numpy_to_image(array, like):
+    out = torch.from_numpy(np.ascontiguousarray(np.moveaxis(array, -1, 0) if array.ndim == 3 else array))
+    out = out.to(like.dtype) if out.dtype != like.dtype else out
+    return tv_tensors.wrap(out, like=like) if isinstance(like, tv_tensors.TVTensor) else out
+
+
+def _size_of(flat_inputs):
+    """(width, height) of the sample's images, masks or depth maps."""
+    for x in flat_inputs:
+        if isinstance(x, (tv_tensors.Image, tv_tensors.Mask, DepthMap)) or (
+                isinstance(x, torch.Tensor) and not isinstance(x, tv_tensors.TVTensor)):
+            return int(x.shape[-1]), int(x.shape[-2])
+        if isinstance(x, (tv_tensors.BoundingBoxes, tv_tensors.KeyPoints)):
+            return int(x.canvas_size[1]), int(x.canvas_size[0])
+    raise Error("nothing to size the change by: the sample has no image, mask, depth map, boxes or keypoints")
+
+
+class _FishcamTransform(v2.Transform):
+    """The v2 side of fishcam's transforms: one SampleChange per call (make_params),
+    applied to every input it knows by type (transform)."""
+
+    _transformed_types = (torch.Tensor, Camera)
+
+    def __init__(self, numpy_transform, min_visibility):
         super().__init__()
-        self.transform = transform
+        if not 0 <= _transforms._number(min_visibility, "min_visibility") <= 1:
+            raise Error(f"min_visibility: must be in [0, 1], got {min_visibility}")
+        self.numpy_transform = numpy_transform
+        self.min_visibility = float(min_visibility)
 
-    def forward(self, image, mask=None, camera=None, seed=None):
-        image_np, image_tensor = _to_numpy(image, "image")
-        mask_np, mask_tensor = (None, False) if mask is None else _to_numpy(mask, "mask")
-        if seed is None:
-            seed = torch_seed()
-        out = self.transform(image=image_np, mask=mask_np, camera=camera, seed=seed)
-        new_mask = _from_numpy(out["mask"], mask_tensor) if mask is not None else None
-        return _from_numpy(out["image"], image_tensor), new_mask, out["change"]
+    def _seed(self):
+        seed = _sample_seed.get()
+        return torch_seed() if seed is None else seed
+
+    def check_inputs(self, flat_inputs):
+        for x in flat_inputs:
+            # Passed through by torchvision, an image or mask in these forms would silently
+            # keep its geometry while the rest of the sample moves.
+            if isinstance(x, np.ndarray) and x.ndim >= 2:
+                raise Error(f"a numpy array {x.shape} in a torchvision pipeline: convert it (torch.from_numpy, "
+                            "tv_tensors.Image / Mask), or use fishcam.transforms for numpy samples")
+            if isinstance(x, PIL.Image.Image):
+                raise Error("PIL images: convert them first (v2.PILToTensor() or v2.ToImage() before this transform)")
+
+    def _draw(self, flat_inputs):
+        raise NotImplementedError
+
+    def make_params(self, flat_inputs):
+        sample_change = self._draw(flat_inputs)
+        records = _sample_records.get()
+        if records is not None:
+            records.append(sample_change.record)
+        boxes = [x for x in flat_inputs if isinstance(x, tv_tensors.BoundingBoxes)]
+        instance_masks = [x for x in flat_inputs if isinstance(x, tv_tensors.Mask) and x.ndim == 3]
+        pairs = [m for m in instance_masks if boxes and m.shape[0] == boxes[0].shape[0] and m.shape[0] > 0]
+        return {"change": sample_change, "instance_masks": pairs[0] if pairs else None}
+
+    def transform(self, inpt, params):
+        change = params["change"]
+        if isinstance(inpt, Camera):
+            return change.camera(inpt)
+        if isinstance(inpt, tv_tensors.BoundingBoxes):
+            return self._boxes(inpt, change, params["instance_masks"])
+        if isinstance(inpt, tv_tensors.KeyPoints):
+            points = _cpu(inpt, "keypoints").reshape(-1, 2).double().numpy()
+            mapped, visible = change.points(points)
+            out = torch.from_numpy(mapped).to(inpt.dtype).reshape(inpt.shape)
+            return tv_tensors.wrap(out, like=inpt)
+        if isinstance(inpt, Polygon):
+            mapped = change.polygon(_cpu(inpt, "polygon").double().numpy())
+            return tv_tensors.wrap(torch.from_numpy(mapped).to(inpt.dtype), like=inpt)
+        if isinstance(inpt, DepthMap):
+            tensor = _cpu(inpt, "depth map")
+            flat = tensor.reshape(tensor.shape[-2:]) if tensor.ndim == 3 and tensor.shape[0] == 1 else tensor
+            if flat.ndim != 2 or flat.dtype != torch.float32:
+                raise Error(f"depth map: expected HxW or 1xHxW float32, got {tuple(tensor.shape)} {tensor.dtype}")
+            out = torch.from_numpy(change.depth_map(flat.numpy())).reshape(tensor.shape)
+            return tv_tensors.wrap(out, like=inpt)
+        if isinstance(inpt, tv_tensors.Mask):
+            return tv_tensors.wrap(self._masks(inpt, change), like=inpt)
+        if isinstance(inpt, tv_tensors.TVTensor) and not isinstance(inpt, (tv_tensors.Image, tv_tensors.Video)):
+            raise Error(f"{type(inpt).__name__}: not a target fishcam's transforms know")
+        return self._images(inpt, change)
+
+    @staticmethod
+    def _masks(mask, change):
+        tensor = _cpu(mask, "mask")
+        if tensor.ndim == 2:
+            return torch.from_numpy(change.mask(tensor.numpy()))
+        if tensor.ndim == 3:  # instance masks (N, H, W): each resampled on its own
+            planes = [change.mask(plane.numpy(), f"mask[{i}]") for i, plane in enumerate(tensor)]
+            return torch.from_numpy(np.stack(planes)) if planes else tensor.clone()
+        raise Error(f"mask: expected HxW or NxHxW, got shape {tuple(tensor.shape)}")
+
+    @staticmethod
+    def _images(image, change):
+        if image.ndim == 4:  # a batch of images sharing the camera
+            return torch.stack([_FishcamTransform._images(x, change) for x in image])
+        array = _image_to_numpy(image, "image")
+        return _numpy_to_image(change.image(array), image)
+
+    def _boxes(self, boxes, change, instance_masks):
+        fmt = boxes.format
+        if "ROTATED" in str(fmt).upper() or "XYXYXYXY" in str(fmt).upper():
+            raise Error(f"boxes: rotated boxes ({fmt}) are not supported; use keypoints for their corners")
+        xyxy = v2.functional.convert_bounding_box_format(boxes.as_subclass(torch.Tensor), old_format=fmt,
+                                                         new_format=tv_tensors.BoundingBoxFormat.XYXY)
+        if instance_masks is not None:  # the tight box of each transformed instance
+            warped = self._masks(instance_masks, change)
+            out = torch.zeros((len(warped), 4), dtype=torch.float64)
+            for i, plane in enumerate(warped):
+                ys, xs = torch.nonzero(plane, as_tuple=True)
+                if len(xs):
+                    out[i] = torch.tensor([xs.min(), ys.min(), xs.max() + 1, ys.max() + 1], dtype=torch.float64)
+            visibility = (out[:, 2] > out[:, 0]).double()
+        else:
+            mapped, visibility = change.boxes(_cpu(xyxy, "boxes").double().numpy())
+            out, visibility = torch.from_numpy(mapped), torch.from_numpy(visibility)
+        # Boxes seen too little collapse to nothing: v2.SanitizeBoundingBoxes drops them.
+        out[visibility < self.min_visibility] = 0
+        out = v2.functional.convert_bounding_box_format(out.to(boxes.dtype), old_format=tv_tensors.BoundingBoxFormat.XYXY,
+                                                        new_format=fmt)
+        return tv_tensors.wrap(out, like=boxes)
 
 
-class RandomViewpoint(_Transform):
-    """fishcam.transforms.RandomViewpoint as a module (see _Transform)."""
+class RandomViewpoint(_FishcamTransform):
+    """The paper's viewpoint change as a torchvision v2 transform: one random change
+    per call for everything in the sample (any structure v2 takes; the same structure
+    back). The camera comes from the constructor or from a fishcam.Camera in the
+    sample (which comes back as the augmented camera: its pose moved by the change).
+
+    Targets: ``tv_tensors.Image`` or plain image tensors (CxHxW or a batch BxCxHxW
+    sharing the camera; uint8, uint16, float32; bilinear), ``tv_tensors.Mask`` (HxW
+    class ids or NxHxW instance masks, any integer or bool dtype, kept; nearest),
+    ``tv_tensors.BoundingBoxes`` (the tight box of each transformed instance mask
+    when NxHxW masks pair with the N boxes, else of the densely transformed
+    outline; clipped; boxes seen less than ``min_visibility`` collapse to zero size,
+    which ``v2.SanitizeBoundingBoxes`` drops), ``tv_tensors.KeyPoints`` (mapped
+    exactly; points that leave the view keep their coordinates outside the canvas,
+    NaN where they have no image), ``fishcam.torch.DepthMap``, ``fishcam.torch.Polygon``.
+    Without a seeded dataset, the seed comes from torch's generator.
+
+    Arguments as fishcam.transforms.RandomViewpoint, plus min_visibility (boxes).
+    """
 
     def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
-                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, sampling="grid"):
+                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, sampling="grid", depth_values="range",
+                 min_visibility=0.0):
         super().__init__(_transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
                                                      max_translation=max_translation, depth=depth, p=p, fill=fill,
-                                                     fill_mask=fill_mask, sampling=sampling))
+                                                     fill_mask=fill_mask, sampling=sampling,
+                                                     depth_values=depth_values), min_visibility)
+
+    def _draw(self, flat_inputs):
+        cameras = [x for x in flat_inputs if isinstance(x, Camera)]
+        if len(cameras) > 1 and any(c != cameras[0] for c in cameras[1:]):
+            raise Error("camera: the sample holds several different cameras; one change needs one camera")
+        camera = cameras[0] if cameras else self.numpy_transform.camera
+        if camera is None:
+            raise Error("camera: none given (pass one to the constructor or put a fishcam.Camera in the sample)")
+        return self.numpy_transform.draw(camera, self._seed())
+
+    def extra_repr(self):
+        return repr(self.numpy_transform)[len("RandomViewpoint("):-1] + f", min_visibility={self.min_visibility}"
 
 
-class RandomAffine(_Transform):
-    """fishcam.transforms.RandomAffine (the paper's affine baseline) as a module (see _Transform)."""
+class RandomAffine(_FishcamTransform):
+    """The paper's affine baseline (fishcam.transforms.RandomAffine) as a torchvision
+    v2 transform, with the targets of RandomViewpoint (depth maps keep their values;
+    a camera in the sample is passed on unchanged: the baseline has no camera model)."""
 
     def __init__(self, preset="train", max_rotation_deg=None, max_translation=None, scale_range=None, p=1.0,
-                 fill=0, fill_mask=0):
+                 fill=0, fill_mask=0, min_visibility=0.0):
         super().__init__(_transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
                                                   max_translation=max_translation, scale_range=scale_range, p=p,
-                                                  fill=fill, fill_mask=fill_mask))
+                                                  fill=fill, fill_mask=fill_mask), min_visibility)
+
+    def _draw(self, flat_inputs):
+        return self.numpy_transform.draw(_size_of(flat_inputs), self._seed())
+
+    def extra_repr(self):
+        return repr(self.numpy_transform)[len("RandomAffine("):-1] + f", min_visibility={self.min_visibility}"
+
+
+def collate(batch):
+    """torch's default collate, but fishcam.Camera objects (and other non-tensors the
+    default cannot stack: names, change records) are gathered into lists."""
+    if isinstance(batch[0], dict):
+        return {key: collate([item[key] for item in batch]) for key in batch[0]}
+    if isinstance(batch[0], (Camera, str)) or not isinstance(batch[0], (torch.Tensor, np.ndarray, int, float)):
+        return list(batch)
+    return torch.utils.data.default_collate(batch)
 
 
 class EpochSampler(torch.utils.data.Sampler):
@@ -153,22 +392,28 @@ class WoodScapeDataset(torch.utils.data.Dataset):
     ``semantic_annotations/gtLabels/NAME.png`` and ``calibration/NAME.json`` (one
     calibration per image, as WoodScape has).
 
-    Each item is a dict: ``image`` (CHW uint8 tensor), ``mask`` (HW int64 tensor),
-    ``name``, and ``change`` when a transform is set: the manifest's fields as a
-    JSON string (seeds are 64-bit, past torch's int64, so the default collate
-    could not batch them as numbers; ``json.loads`` gives the dict back). Cameras are read once per
-    distinct calibration file content; the transform keeps one warp per calibration.
-    With ``seed``, sample ``index`` in epoch ``e`` gets the seed
-    ``derive_seed(seed, f"epoch{e}", index)``: the same whatever the workers. The
-    epoch comes with the key: ``dataset[(e, index)]``, as ``EpochSampler`` yields
-    them; a bare ``dataset[index]`` uses ``set_epoch``'s epoch, in the main process
-    only (raises in a DataLoader worker, whose copy never sees ``set_epoch``).
+    Each item is a dict: ``image`` (``tv_tensors.Image``, 3xHxW uint8), ``mask``
+    (``tv_tensors.Mask``, HxW int64), ``camera`` (the fishcam.Camera of the image),
+    ``name``; the whole dict goes through ``transform`` (a v2 transform or
+    ``v2.Compose``; fishcam's transforms take the camera from it and put the
+    augmented camera back), and ``changes`` is added: the records of the changes
+    fishcam's transforms made, as a JSON list (seeds are 64-bit, past torch's int64;
+    ``json.loads`` gives the dicts back). Batch with ``collate_fn=fishcam.torch.collate``
+    (cameras are gathered into lists). Cameras are read once per distinct calibration
+    file content; the transforms keep one warp per calibration.
+
+    With ``seed``, sample ``index`` in epoch ``e`` is transformed under
+    ``sample_seed(derive_seed(seed, f"epoch{e}", index))``: the same change whatever
+    the workers. The epoch comes with the key: ``dataset[(e, index)]``, as
+    ``EpochSampler`` yields them; a bare ``dataset[index]`` uses ``set_epoch``'s
+    epoch, in the main process only (raises in a DataLoader worker, whose copy never
+    sees ``set_epoch``).
     """
 
     def __init__(self, root, transform=None, seed=None):
         self.root = os.fspath(root)
         self.transform = transform
-        self.seed = None if seed is None else int(seed)
+        self.seed = None if seed is None else _transforms._check_seed(seed)
         self.epoch = 0
         images = os.path.join(self.root, "rgb_images")
         if not os.path.isdir(images):
@@ -205,6 +450,7 @@ class WoodScapeDataset(torch.utils.data.Dataset):
         return len(self.names)
 
     def camera(self, name):
+        """The fishcam.Camera of sample ``name`` (read once per distinct file content)."""
         path = os.path.join(self.root, "calibration", name + ".json")
         with open(path, "rb") as f:
             key = f.read()
@@ -230,17 +476,16 @@ class WoodScapeDataset(torch.utils.data.Dataset):
                           _cv2().IMREAD_UNCHANGED)
         if mask.ndim != 2:
             raise Error(f"{name}: expected a single-channel label image")
-        item = {"name": name}
-        if self.transform is not None:
-            seed = None if self.seed is None else derive_seed(self.seed, f"epoch{epoch}", index)
-            camera = self.camera(name)
-            if isinstance(self.transform, _Transform):
-                image, mask, item["change"] = self.transform(image, mask, camera=camera, seed=seed)
-            else:
-                out = self.transform(image=image, mask=mask, camera=camera, seed=seed)
-                image, mask, item["change"] = out["image"], out["mask"], out["change"]
-        if "change" in item:
-            item["change"] = json.dumps(item["change"])
-        item["image"] = torch.from_numpy(np.ascontiguousarray(image)).permute(2, 0, 1)
-        item["mask"] = torch.from_numpy(mask.astype(np.int64))
+        item = {"image": tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1)),
+                "mask": tv_tensors.Mask(torch.from_numpy(mask.astype(np.int64))),
+                "camera": self.camera(name), "name": name}
+        if self.transform is None:
+            return item
+        if self.seed is None:
+            with record_changes() as records:
+                item = self.transform(item)
+        else:
+            with sample_seed(derive_seed(self.seed, f"epoch{epoch}", index)) as records:
+                item = self.transform(item)
+        item["changes"] = json.dumps(records)
         return item

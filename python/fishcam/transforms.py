@@ -1,15 +1,29 @@
-"""Viewpoint augmentation (and the affine baseline, RandomAffine) as numpy transforms
-with albumentations' call convention.
+"""Viewpoint augmentation (and the affine baseline, RandomAffine) as numpy transforms,
+framework-free, with albumentations' call convention: one change per call, applied
+to every target of the sample.
 
     t = RandomViewpoint(camera, preset="train")
     out = t(image=image, mask=labels)            # dict: image, mask, change
     out = t(image=image, mask=labels, seed=7)    # reproducible: the CLI's --preset train --seed 7
+    out = t(image=image, depth_map=depth, keypoints=xy, boxes=xyxy, polygons=[p0, p1], camera=cam)
+
+Targets (docs/python.md, "Targets"): images HxW or HxWxC (uint8, uint16, float32;
+bilinear); masks HxW of any integer or bool dtype (nearest, dtype kept); depth maps
+HxW float32 (nearest, values re-expressed in the moved camera); keypoints (N, 2)
+pixels with a visibility flag; boxes (N, 4) x_min, y_min, x_max, y_max in pixel-edge
+coordinates (the tight box of the transformed outline) with the visible fraction;
+polygons (K, 2) with edges subdivided to stay within 0.5 px of the curved image;
+the camera (its pose moved by the change). Pixel coordinates put pixel centres at
+integers (keypoints, polygons; as torchvision and albumentations do), boxes span
+pixel edges (the whole image is 0, 0, W, H).
 
 Randomness: no generator lives inside the transform (or any C++ object). Without
 ``seed=``, one 64-bit seed is drawn per call from the ``rng`` given to the
 constructor (a ``numpy.random.Generator``) or else from numpy's global generator,
 which PyTorch reseeds in every DataLoader worker; the change then follows from
-that seed exactly as the CLI's ``--seed`` does.
+that seed exactly as the CLI's ``--seed`` does. ``draw(...)`` gives the
+``SampleChange`` of one seed, which the torch and albumentations adapters apply to
+their targets.
 """
 
 import numpy as np
@@ -66,20 +80,159 @@ def _labels_for_warp(mask, fill_mask):
     return mask.astype(np.uint16), lambda out: out.astype(dtype)
 
 
+def _image_array(image, what):
+    """image as the warp takes it (HxW or HxWxC, C <= 4), or fishcam.Error with a layout hint."""
+    if not isinstance(image, np.ndarray):
+        raise Error(f"{what}: expected a numpy array, got {type(image).__name__}")
+    if image.ndim == 3 and image.shape[0] in (1, 3, 4) and image.shape[2] > 4:
+        raise Error(f"{what}: shape {image.shape} looks channels-first (CHW); numpy images are HxWxC "
+                    "(np.moveaxis(image, 0, -1))")
+    if image.dtype == np.float64:
+        raise Error(f"{what}: float64 images are not resampled; pass float32 (image.astype(np.float32))")
+    return image
+
+
+def _points_array(points, what, k=2):
+    """(N, k) float64 from any array-like of numbers, or fishcam.Error naming it."""
+    try:
+        array = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise Error(f"{what}: expected an array of numbers") from None
+    if array.size == 0:
+        return array.reshape(0, k)
+    if array.ndim != 2 or array.shape[1] != k:
+        raise Error(f"{what}: expected shape (N, {k}), got {array.shape}")
+    return array
+
+
+# The largest distance (px) a subdivided polygon edge keeps from the true curve,
+# and the most halvings one edge gets.
+POLYGON_TOLERANCE_PX = 0.5
+_MAX_SUBDIVISIONS = 16
+
+
+class SampleChange:
+    """One drawn change and what it does to each target of a sample (one draw for all).
+
+    Made by ``RandomViewpoint.draw`` / ``RandomAffine.draw``; ``record`` is the
+    change as the manifest records it. Methods take numpy arrays in the layouts of
+    the module docstring and return new ones.
+    """
+
+    def __init__(self, record, forward, resample, depth_map, camera, size, fill_mask):
+        self.record = record
+        self._fill_mask = fill_mask
+        self._forward = forward      # (N, 2) source pixels -> (pixels, visible)
+        self._resample = resample    # (image, labels) -> dict of the warp's outputs
+        self._depth_map = depth_map  # (depth map) -> depth map
+        self._camera = camera        # Camera -> Camera
+        self.size = size             # (width, height) of the output
+
+    def image(self, image, what="image"):
+        """An image resampled bilinearly (dtype and channels kept)."""
+        return self._resample(image=_image_array(image, what), labels=None)["image"]
+
+    def mask(self, mask, what="mask"):
+        """A label or instance-id mask resampled by nearest neighbour (never blended; dtype kept)."""
+        if not isinstance(mask, np.ndarray):
+            raise Error(f"{what}: expected a numpy array, got {type(mask).__name__}")
+        if mask.ndim != 2:
+            raise Error(f"{what}: expected an HxW array, got shape {mask.shape}")
+        labels, restore = _labels_for_warp(mask, self._fill_mask)
+        return restore(self._resample(image=None, labels=labels)["labels"])
+
+    def depth_map(self, depth_map, what="depth_map"):
+        """A depth map (HxW float32) seen from the moved camera (see RandomViewpoint)."""
+        if not isinstance(depth_map, np.ndarray) or depth_map.dtype != np.float32 or depth_map.ndim != 2:
+            got = f"{depth_map.dtype} {depth_map.shape}" if isinstance(depth_map, np.ndarray) else type(depth_map).__name__
+            raise Error(f"{what}: expected an HxW float32 array, got {got}")
+        return self._depth_map(depth_map)
+
+    def points(self, points, what="keypoints"):
+        """(N, 2) pixels -> (new pixels (N, 2) float64, visible (N,) bool). Exact; NaN
+        where a point has no image; not visible where it left the view or is hidden."""
+        return self._forward(_points_array(points, what))
+
+    def boxes(self, boxes, what="boxes", clip=True):
+        """(N, 4) x_min, y_min, x_max, y_max (pixel edges) -> (boxes (N, 4), visible
+        fraction (N,)): the tight box of the densely transformed outline, clipped to
+        the image unless ``clip=False``; the fraction of it inside the image (0, and
+        an empty box, where nothing maps)."""
+        boxes = _points_array(boxes, what, 4)
+        out = np.zeros_like(boxes)
+        visibility = np.zeros(len(boxes))
+        width, height = self.size
+        for i, (x0, y0, x1, y1) in enumerate(boxes):
+            if not (x1 >= x0 and y1 >= y0):
+                raise Error(f"{what}[{i}]: expected x_min <= x_max and y_min <= y_max, got {boxes[i].tolist()}")
+            outline = _box_outline(x0 - 0.5, y0 - 0.5, x1 - 0.5, y1 - 0.5)  # pixel centres at integers
+            mapped, _ = self._forward(outline)
+            mapped = mapped[np.isfinite(mapped).all(axis=1)] + 0.5
+            if len(mapped) == 0:
+                continue
+            lo, hi = mapped.min(axis=0), mapped.max(axis=0)
+            clipped_lo, clipped_hi = np.maximum(lo, 0), np.minimum(hi, (width, height))
+            area = np.prod(hi - lo)
+            inside = np.prod(np.maximum(clipped_hi - clipped_lo, 0))
+            visibility[i] = inside / area if area > 0 else float(inside >= 0 and (clipped_hi >= clipped_lo).all())
+            out[i] = [*np.minimum(clipped_lo, (width, height)), *np.maximum(clipped_hi, 0)] if clip else [*lo, *hi]
+        return out, visibility
+
+    def polygon(self, polygon, what="polygon"):
+        """(K, 2) vertices of a closed polygon -> (M, 2) vertices of its image, the
+        edges subdivided until each stays within POLYGON_TOLERANCE_PX of the true curve."""
+        vertices = _points_array(polygon, what)
+        if len(vertices) < 2:
+            return self._forward(vertices)[0]
+        edges_from = vertices
+        edges_to = np.roll(vertices, -1, axis=0)
+        return _subdivided(self._forward, edges_from, edges_to)
+
+    def camera(self, camera):
+        """The camera of the augmented sample."""
+        return self._camera(camera)
+
+
+def _box_outline(x0, y0, x1, y1, step=0.25):
+    """Points every `step` px around the box (corners included)."""
+    nx = max(int(np.ceil((x1 - x0) / step)), 1)
+    ny = max(int(np.ceil((y1 - y0) / step)), 1)
+    xs = np.linspace(x0, x1, nx + 1)
+    ys = np.linspace(y0, y1, ny + 1)
+    return np.concatenate([np.stack([xs, np.full_like(xs, y0)], 1), np.stack([xs, np.full_like(xs, y1)], 1),
+                           np.stack([np.full_like(ys, x0), ys], 1), np.stack([np.full_like(ys, x1), ys], 1)])
+
+
+def _subdivided(forward, starts, ends):
+    """The images of the closed chain of edges starts[i] -> ends[i], each edge halved
+    until the image of its midpoint lies within POLYGON_TOLERANCE_PX of the chord
+    between its ends' images (a curve bending less than that in between)."""
+    mapped_starts, _ = forward(starts)
+    pieces = []
+    for a, b, fa in zip(starts, ends, mapped_starts):
+        # Depth-first on one edge, in order: the stack holds (a, b, f(a), f(b), depth).
+        fb = forward(b[None])[0][0]
+        out = [fa]
+        stack = [(a, b, fa, fb, 0)]
+        while stack:
+            p, q, fp, fq, depth = stack.pop()
+            m = (p + q) / 2
+            fm = forward(m[None])[0][0]
+            chord = (fp + fq) / 2
+            bent = not np.all(np.isfinite(fm)) or np.linalg.norm(fm - chord) > POLYGON_TOLERANCE_PX / 2
+            if bent and depth < _MAX_SUBDIVISIONS and np.all(np.isfinite(fp)) and np.all(np.isfinite(fq)):
+                stack.append((m, q, fm, fq, depth + 1))
+                stack.append((p, m, fp, fm, depth + 1))
+            else:
+                out.append(fq)
+        pieces.append(np.array(out[:-1]))  # the end is the next edge's start
+    return np.concatenate(pieces) if pieces else np.zeros((0, 2))
+
+
 def _applies(p, seed):
     """Whether a transform with probability p changes the sample of this seed: the
     decision follows from the seed too, so seed= reproduces it."""
     return p >= 1 or np.random.default_rng(seed).random() < p
-
-
-def _result(out, change):
-    """A transform's return value (albumentations' keys) from a warp's output dict."""
-    result = {"change": change}
-    if "image" in out:
-        result["image"] = out["image"]
-    if "labels" in out:
-        result["mask"] = out["labels"]
-    return result
 
 
 class _WarpCache:
@@ -115,18 +268,23 @@ class RandomViewpoint:
     camera: the fishcam.Camera of the images (or None: then every call passes camera=).
     preset: "small", "medium", "large" or "train"; or give max_rotation_deg and
         max_translation instead (uniform per axis in [-max, max]).
-    depth: "source-sphere" (default), "target-sphere" or "infinity".
+    depth: the depth prior, "source-sphere" (default), "target-sphere" or "infinity":
+        where a pixel's scene point is assumed to be when the camera moves.
     p: probability of applying a change (else the identity, still reported).
     fill: image value where the new view has no source; fill_mask: the label there.
     rng: a numpy Generator to draw seeds from (default: numpy's global generator).
     sampling: "grid" (default: maps interpolated from grid nodes, within 1/32 px of
         the per-pixel map, as ``fishcam augment``) or "exact".
+    depth_values: what depth maps hold, "range" (along the ray; default) or "z".
     """
 
     def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
-                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, rng=None, sampling="grid"):
+                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, rng=None, sampling="grid",
+                 depth_values="range"):
         if sampling not in _fishcam.sampling_names():
             raise Error(f"sampling: expected {' or '.join(_fishcam.sampling_names())}, got {sampling!r}")
+        if depth_values not in _fishcam.depth_values_names():
+            raise Error(f"depth_values: expected {' or '.join(_fishcam.depth_values_names())}, got {depth_values!r}")
         if camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
         if (max_rotation_deg is None) != (max_translation is None):
@@ -151,6 +309,7 @@ class RandomViewpoint:
         self.fill_mask = _integer(fill_mask, "fill_mask")
         self.rng = rng
         self.sampling = sampling
+        self.depth_values = depth_values
         self._warps = _WarpCache()
 
     def change_for(self, seed):
@@ -160,28 +319,73 @@ class RandomViewpoint:
             return _fishcam.random_change(self.preset, seed)
         return _fishcam.random_change_in(self.max_rotation_deg, self.max_translation, seed)
 
-    def __call__(self, image=None, mask=None, camera=None, seed=None):
+    def draw(self, camera=None, seed=None):
+        """The SampleChange of one call: the change of ``seed`` (drawn when None) for
+        images of ``camera`` (default: the constructor's)."""
         camera = camera if camera is not None else self.camera
         if camera is None:
             raise Error("camera: none given (pass camera= to the constructor or the call)")
-        if image is None and mask is None:
-            raise Error("nothing to transform: pass image= and/or mask=")
+        if not isinstance(camera, Camera):
+            raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
         if seed is None:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.ViewpointChange()
         warp = self._warps.get(camera)
-        labels, restore = _labels_for_warp(mask, self.fill_mask)
-        out = warp.warp(image=image, labels=labels, change=change, depth=self.depth, fill=self.fill,
-                        label_fill=self.fill_mask, sampling=self.sampling)
-        if "labels" in out:
-            out["labels"] = restore(out["labels"])
-        return _result(out, change_to_dict(change, seed, self.depth))
+
+        def resample(image, labels):
+            return warp.warp(image=image, labels=labels, change=change, depth=self.depth, fill=self.fill,
+                             label_fill=self.fill_mask, sampling=self.sampling)
+
+        return SampleChange(
+            record=change_to_dict(change, seed, self.depth),
+            forward=lambda points: warp.forward(points, change, self.depth),
+            resample=resample,
+            depth_map=lambda depth_map: warp.warp_depth(depth_map, change, self.depth, self.depth_values),
+            camera=lambda c: c.augmented(change),
+            size=(camera.width, camera.height),
+            fill_mask=self.fill_mask)
+
+    def __call__(self, image=None, mask=None, camera=None, seed=None, **targets):
+        return _apply(self.draw(camera, seed), image, mask, camera if camera is not None else self.camera, targets)
 
     def __repr__(self):
         what = (f"preset={self.preset!r}" if self.preset is not None else
                 f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}")
-        return f"RandomViewpoint({what}, depth={self.depth!r}, p={self.p})"
+        return (f"RandomViewpoint({what}, depth={self.depth!r}, p={self.p}, fill={self.fill}, "
+                f"fill_mask={self.fill_mask}, sampling={self.sampling!r}, depth_values={self.depth_values!r})")
+
+
+_TARGETS = ("images", "depth_map", "keypoints", "boxes", "polygons")
+
+
+def _apply(sample_change, image, mask, camera, targets):
+    """The numpy transforms' call: every given target under one SampleChange; a dict
+    with the same keys, plus ``change`` (the record) and, for keypoints and boxes,
+    ``keypoints_visible`` and ``boxes_visibility``."""
+    unknown = sorted(set(targets) - set(_TARGETS))
+    if unknown:
+        raise Error(f"unknown target {unknown[0]!r} (expected image, mask, camera, {', '.join(_TARGETS)})")
+    if image is None and mask is None and not any(v is not None for v in targets.values()):
+        raise Error("nothing to transform: pass image= and/or mask= (or another target)")
+    out = {"change": sample_change.record}
+    if image is not None:
+        out["image"] = sample_change.image(image)
+    if mask is not None:
+        out["mask"] = sample_change.mask(mask)
+    if targets.get("images") is not None:
+        out["images"] = [sample_change.image(x, f"images[{i}]") for i, x in enumerate(targets["images"])]
+    if targets.get("depth_map") is not None:
+        out["depth_map"] = sample_change.depth_map(targets["depth_map"])
+    if targets.get("keypoints") is not None:
+        out["keypoints"], out["keypoints_visible"] = sample_change.points(targets["keypoints"])
+    if targets.get("boxes") is not None:
+        out["boxes"], out["boxes_visibility"] = sample_change.boxes(targets["boxes"])
+    if targets.get("polygons") is not None:
+        out["polygons"] = [sample_change.polygon(x, f"polygons[{i}]") for i, x in enumerate(targets["polygons"])]
+    if camera is not None:
+        out["camera"] = sample_change.camera(camera)
+    return out
 
 
 class RandomAffine:
@@ -231,20 +435,50 @@ class RandomAffine:
             return _fishcam.random_affine(self.preset, seed)
         return _fishcam.random_affine_in(self.max_rotation_deg, self.max_translation, *self.scale_range, seed)
 
-    def __call__(self, image=None, mask=None, camera=None, seed=None):
-        del camera  # no camera model: the baseline treats the image as flat
-        if image is None and mask is None:
-            raise Error("nothing to transform: pass image= and/or mask=")
+    def draw(self, size, seed=None):
+        """The SampleChange of one call for images of ``size`` = (width, height)."""
+        try:
+            width, height = (_integer(v, "size") for v in size)
+        except TypeError:
+            raise Error(f"size: expected (width, height), got {size!r}") from None
         if seed is None:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.AffineChange()
-        labels, restore = _labels_for_warp(mask, self.fill_mask)
-        out = _fishcam.affine_warp(image=image, labels=labels, change=change, fill=self.fill,
-                                   label_fill=self.fill_mask)
-        if "labels" in out:
-            out["labels"] = restore(out["labels"])
-        return _result(out, affine_to_dict(change, seed))
+
+        def resample(image, labels):
+            given = image if image is not None else labels
+            if given.shape[:2] != (height, width):
+                raise Error(f"{'image' if image is not None else 'mask'}: is {given.shape[1]}x{given.shape[0]} "
+                            f"but the sample is {width}x{height}")
+            return _fishcam.affine_warp(image=image, labels=labels, change=change, fill=self.fill,
+                                        label_fill=self.fill_mask)
+
+        def depth_map(values):
+            if values.shape != (height, width):
+                raise Error(f"depth_map: is {values.shape[1]}x{values.shape[0]} but the sample is {width}x{height}")
+            return _fishcam.affine_warp_depth(values, change)
+
+        return SampleChange(
+            record=affine_to_dict(change, seed),
+            forward=lambda points: _fishcam.affine_forward(points, change, width, height),
+            resample=resample,
+            depth_map=depth_map,
+            camera=lambda c: c,  # no camera model: the camera is passed on as it is
+            size=(width, height),
+            fill_mask=self.fill_mask)
+
+    def __call__(self, image=None, mask=None, camera=None, seed=None, **targets):
+        """As RandomViewpoint's; ``camera`` is passed on unchanged (the baseline has no
+        camera model), depth maps keep their values (sampled as masks)."""
+        given = next((x for x in (image, mask, targets.get("depth_map")) if x is not None), None)
+        if given is None and targets.get("images"):
+            given = targets["images"][0]
+        if given is None:
+            raise Error("nothing to transform: pass image= and/or mask= (or images=, depth_map=)")
+        if not isinstance(given, np.ndarray) or given.ndim < 2:
+            raise Error(f"image: expected an HxW or HxWxC numpy array, got {type(given).__name__}")
+        return _apply(self.draw((given.shape[1], given.shape[0]), seed), image, mask, camera, targets)
 
     def __repr__(self):
         what = (f"preset={self.preset!r}" if self.preset is not None else

@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <array>
 #include <cmath>
@@ -184,6 +185,14 @@ void bind_camera(py::module_& m) {
       .def_property_readonly("model", [](const Camera& c) { return std::string(model_name(c.model())); })
       .def_property_readonly("parameters", [](const Camera& c) { return model_params(c.model()); })
       .def_property_readonly("principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); })
+      .def_property_readonly(
+          "pose",
+          [](const Camera& c) -> std::optional<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> {
+            const auto& pose = c.parameters().pose;
+            if (!pose) return std::nullopt;
+            return std::pair(Eigen::Matrix3d(pose->rotation.toRotationMatrix()), Eigen::Vector3d(pose->translation));
+          },
+          "(rotation (3, 3), translation (3,)) of camera -> reference (p_ref = R p_cam + t), or None")
       .def_property_readonly("pixel_scale", [](const Camera& c) { return Eigen::Vector2d(c.pixel_scale()); })
       .def(
           "project",
@@ -215,6 +224,12 @@ void bind_camera(py::module_& m) {
       .def(
           "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
           py::arg("width"), py::arg("height"))
+      .def(
+          "augmented",
+          [](const Camera& c, const RandomPose& change) { return Camera(augmented_camera(c.parameters(), change.change())); },
+          py::arg("change"),
+          "The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera "
+          "without a pose gets one relative to its own frame)")
       .def("to_json", &camera_state, "The camera as fishcam JSON text")
       .def("parameters_key", &parameters_key, py::arg("with_pose") = true,
            "bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a "
@@ -338,6 +353,7 @@ void bind_augmentation(py::module_& m) {
   });
   m.def("depth_priors", [] { return depth_prior_names(); }, "The depth priors' names.");
   m.def("sampling_names", [] { return sampling_names(); }, "The sampling modes' names.");
+  m.def("depth_values_names", [] { return depth_values_names(); }, "What depth maps' values can be.");
   m.def("check_depth_prior", [](const std::string& name) { depth_prior(name); },
         "Raises fishcam.Error naming the choices unless name is a depth prior.");
   m.def("check_preset", [](const std::string& name) { pose_preset(name); },
@@ -400,6 +416,46 @@ void bind_augmentation(py::module_& m) {
           py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
           py::arg("return_valid") = false, py::arg("sampling") = "grid")
+      .def(
+          "forward",
+          [](const ViewpointWarp& warp, const py::handle& points, const RandomPose& change, const std::string& depth) {
+            const DepthPrior prior = depth_prior(depth);
+            return batch<2, 2>(points, "points", [&](auto in, auto out, auto ok) {
+              warp.forward(change.change(), prior, in, out, ok);
+            });
+          },
+          py::arg("points"), py::arg("change"), py::arg("depth") = "source-sphere",
+          "Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; "
+          "visible (N,) bool: inside the output and not hidden)")
+      .def(
+          "warp_depth",
+          [](const ViewpointWarp& warp, py::array depth_map, const RandomPose& change, const std::string& depth,
+             const std::string& values, float fill) {
+            const DepthPrior prior = depth_prior(depth);
+            const auto kind = parse_depth_values(values);
+            if (!kind) {
+              throw Error("values: expected " + choices_for_message(depth_values_names()) + ", got " +
+                          quoted_for_message(values));
+            }
+            if (!py::isinstance<py::array_t<float>>(depth_map) || depth_map.ndim() != 2) {
+              throw Error("depth_map: expected an HxW float32 array, got " + std::string(py::str(depth_map.dtype())) +
+                          " with " + std::to_string(depth_map.ndim()) + " dimensions");
+            }
+            cv::Mat in = as_mat(depth_map, "depth_map", false);
+            cv::Mat out_header;
+            py::array out = new_image(depth_map, warp.target().height(), warp.target().width(), &out_header);
+            const uchar* before = out_header.data;
+            {
+              py::gil_scoped_release release;
+              warp.warp_depth(change.change(), prior, in, *kind, &out_header, fill);
+            }
+            if (out_header.data != before) throw Error("internal: an output was reallocated");
+            return out;
+          },
+          py::arg("depth_map"), py::arg("change"), py::arg("depth") = "source-sphere", py::arg("values") = "range",
+          py::arg("fill") = std::numeric_limits<float>::quiet_NaN(),
+          "A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values "
+          "re-expressed in the moved camera (exact for rotations); fill where there is no source")
       .def_property_readonly("grid_spacing", &ViewpointWarp::grid_spacing)
       .def_property_readonly("grid_error_px", &ViewpointWarp::grid_error_px)
       .def(py::pickle(
@@ -450,6 +506,39 @@ void bind_augmentation(py::module_& m) {
       },
       py::arg("max_rotation_deg"), py::arg("max_translation"), py::arg("min_scale"), py::arg("max_scale"),
       py::arg("seed"));
+  m.def(
+      "affine_forward",
+      [](const py::handle& points, const AffineChange& change, int width, int height) {
+        check_affine(change);
+        if (width < 1 || height < 1) throw Error("affine_forward: image size must be positive");
+        const cv::Size size(width, height);
+        const double w = width - 0.5, h = height - 0.5;
+        return batch<2, 2>(points, "points", [&](auto in, auto out, auto ok) {
+          for (size_t i = 0; i < in.size(); ++i) {
+            out[i] = affine_forward(change, size, in[i]);
+            ok[i] = out[i].x() >= -0.5 && out[i].x() < w && out[i].y() >= -0.5 && out[i].y() < h;
+          }
+        });
+      },
+      py::arg("points"), py::arg("change"), py::arg("width"), py::arg("height"),
+      "Where points (N, 2) land under the affine change: (pixels (N, 2), visible (N,) bool: inside the image)");
+  m.def(
+      "affine_warp_depth",
+      [](py::array depth_map, const AffineChange& change, float fill) {
+        if (!py::isinstance<py::array_t<float>>(depth_map) || depth_map.ndim() != 2) {
+          throw Error("depth_map: expected an HxW float32 array, got " + std::string(py::str(depth_map.dtype())) +
+                      " with " + std::to_string(depth_map.ndim()) + " dimensions");
+        }
+        cv::Mat in = as_mat(depth_map, "depth_map", false), out_header;
+        py::array out = new_image(depth_map, in.rows, in.cols, &out_header);
+        py::gil_scoped_release release;
+        WarpMaps maps;
+        affine_maps(change, in.size(), &maps);
+        // No camera model: the values are kept, sampled as labels (never blended).
+        cv::remap(in, out_header, maps.map_x, maps.map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(fill));
+        return out;
+      },
+      py::arg("depth_map"), py::arg("change"), py::arg("fill") = std::numeric_limits<float>::quiet_NaN());
   m.def("affine_presets", [] {
     py::dict out;
     for (const AffinePreset& p : affine_presets()) {

@@ -80,12 +80,14 @@ def test_custom_ranges_and_bad_arguments():
 
 
 def test_torch_adapter_keeps_tensors_and_matches_numpy(scene):
+    from torchvision import tv_tensors
     image, labels = scene
     module = fishcam.torch.RandomAffine(preset="medium")
-    tensor = torch.from_numpy(image).permute(2, 0, 1)
-    out_image, out_mask, change = module(tensor, torch.from_numpy(labels), seed=11)
+    tensor = tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1))
+    with fishcam.torch.sample_seed(11) as records:
+        out_image, out_mask = module((tensor, tv_tensors.Mask(torch.from_numpy(labels))))
     assert out_image.shape == tensor.shape and out_mask.shape == labels.shape
     expected = RandomAffine(preset="medium")(image=image, mask=labels, seed=11)
     np.testing.assert_array_equal(out_image.permute(1, 2, 0).numpy(), expected["image"])
     np.testing.assert_array_equal(out_mask.numpy(), expected["mask"])
-    assert change["method"] == "affine"
+    assert records == [expected["change"]] and records[0]["method"] == "affine"

@@ -1,5 +1,7 @@
-"""fishcam.torch inside DataLoaders: seeding across workers and epochs, reproducibility,
-a seeded dataset independent of the number of workers, CPU-only errors."""
+"""fishcam.torch inside DataLoaders and torchvision v2 pipelines: seeding across
+workers and epochs, reproducibility, a seeded dataset independent of the number of
+workers, dict and tuple samples beside photometric transforms, every tv_tensor
+target, bad input."""
 
 import json
 import os
@@ -11,6 +13,8 @@ import torch
 
 import fishcam
 import fishcam.torch as ft
+from torchvision import tv_tensors
+from torchvision.transforms import v2
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 
@@ -49,7 +53,9 @@ class Images(torch.utils.data.Dataset):
 
     def __getitem__(self, index):
         image = torch.full((3, self.camera.height, self.camera.width), index, dtype=torch.uint8)
-        _, _, change = self.transform(image)
+        with ft.record_changes() as records:
+            self.transform(image)
+        (change,) = records
         return torch.tensor(change["rotation_deg"] + change["translation"], dtype=torch.float64)
 
 
@@ -72,33 +78,54 @@ def test_changes_differ_across_workers_and_epochs_and_reproduce(small_camera):
     assert not torch.equal(a[0], c[0])
 
 
-def epoch_seeds(loader, dataset, epochs):
-    """Per epoch, {index: seed of its change} as the loader delivered them."""
+def seed_of(changes):
+    (change,) = json.loads(changes)
+    return change["seed"]
+
+
+def epoch_seeds(loader, dataset, epochs, images=None):
+    """Per epoch, {index: seed of its change} as the loader delivered them; with
+    ``images``, also {(epoch, index): image bytes} into it."""
     out = []
-    for _ in range(epochs):
+    for e in range(epochs):
         seeds = {}
         for batch in loader:
-            for name, change in zip(batch["name"], batch["change"]):
+            for k, (name, changes) in enumerate(zip(batch["name"], batch["changes"])):
                 index = dataset.names.index(name)
                 assert index not in seeds, "an index delivered twice in one epoch"
-                seeds[index] = json.loads(change)["seed"]
+                seeds[index] = seed_of(changes)
+                if images is not None:
+                    images[(e, index)] = batch["image"][k].numpy().tobytes()
         out.append(seeds)
     return out
+
+
+PIPELINE_IMAGES = {}
 
 
 @pytest.mark.parametrize("workers,persistent", [(0, False), (1, False), (1, True), (2, False), (2, True)])
 def test_every_epoch_reaches_every_worker(dataset_root, workers, persistent):
     """Sample i of epoch e gets derive_seed(S, "epoch{e}", i): persistent workers
-    included, whatever the sampler's order (the silent repeat this replaced)."""
-    ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="medium"), seed=11)
+    included, whatever the sampler's order (the silent repeat this replaced); the
+    whole v2 pipeline (a photometric transform too) gives the same images whatever
+    the workers."""
+    transform = v2.Compose([ft.RandomViewpoint(preset="medium"), v2.ColorJitter(0.4, 0.4), v2.GaussianBlur(3)])
+    ds = ft.WoodScapeDataset(dataset_root, transform=transform, seed=11)
     sampler = ft.EpochSampler(torch.utils.data.RandomSampler(ds, generator=torch.Generator().manual_seed(3)))
     loader = torch.utils.data.DataLoader(ds, batch_size=4, num_workers=workers, persistent_workers=persistent,
-                                         sampler=sampler, worker_init_fn=ft.worker_init_fn if workers else None)
-    epochs = epoch_seeds(loader, ds, 3)
+                                         sampler=sampler, worker_init_fn=ft.worker_init_fn if workers else None,
+                                         collate_fn=ft.collate)
+    images = {}
+    epochs = epoch_seeds(loader, ds, 3, images)
     assert len(epochs) == 3
     for e, seeds in enumerate(epochs):
         assert seeds == {i: fishcam.derive_seed(11, f"epoch{e}", i) for i in range(len(ds))}, e
     assert len({s for seeds in epochs for s in seeds.values()}) == 3 * len(ds), "a change repeated across epochs"
+    assert len(set(images.values())) == len(images), "an image repeated across epochs"
+    if PIPELINE_IMAGES:  # the images of the first configuration that ran
+        assert images == PIPELINE_IMAGES, "the pipeline's output depends on the worker configuration"
+    else:
+        PIPELINE_IMAGES.update(images)
     sampler.set_epoch(7)  # resuming: the next pass is epoch 7
     assert epoch_seeds(loader, ds, 1)[0] == {i: fishcam.derive_seed(11, "epoch7", i) for i in range(len(ds))}
 
@@ -112,25 +139,27 @@ def test_distributed_ranks_share_the_epoch_seeds(dataset_root):
     for e in range(2):
         seeds = {}
         for sampler in ranks:
-            loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=1, sampler=sampler)
+            loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=1, sampler=sampler,
+                                                 collate_fn=ft.collate)
             for batch in loader:
-                for name, change in zip(batch["name"], batch["change"]):
-                    seeds[ds.names.index(name)] = json.loads(change)["seed"]
+                for name, changes in zip(batch["name"], batch["changes"]):
+                    seeds[ds.names.index(name)] = seed_of(changes)
         assert seeds == {i: fishcam.derive_seed(4, f"epoch{e}", i) for i in range(len(ds))}
     assert ranks[0].sampler.epoch == 1
 
 
 def test_a_seeded_dataset_without_the_epoch_in_workers_is_refused(dataset_root):
     ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"), seed=4)
-    loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=1, persistent_workers=True)
+    loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=1, persistent_workers=True,
+                                         collate_fn=ft.collate)
     with pytest.raises(fishcam.Error, match="EpochSampler"):
         next(iter(loader))
     # In the main process a bare index uses set_epoch's epoch; unseeded datasets take bare indices anywhere.
     ds.set_epoch(2)
-    assert json.loads(ds[1]["change"])["seed"] == fishcam.derive_seed(4, "epoch2", 1)
-    assert json.loads(ds[(5, 1)]["change"])["seed"] == fishcam.derive_seed(4, "epoch5", 1)
+    assert seed_of(ds[1]["changes"]) == fishcam.derive_seed(4, "epoch2", 1)
+    assert seed_of(ds[(5, 1)]["changes"]) == fishcam.derive_seed(4, "epoch5", 1)
     unseeded = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"))
-    assert len(list(torch.utils.data.DataLoader(unseeded, batch_size=3, num_workers=1))) == 2
+    assert len(list(torch.utils.data.DataLoader(unseeded, batch_size=3, num_workers=1, collate_fn=ft.collate))) == 2
     with pytest.raises(IndexError):
         ds[(0, len(ds))]
     with pytest.raises(fishcam.Error, match="start_epoch"):
@@ -138,38 +167,134 @@ def test_a_seeded_dataset_without_the_epoch_in_workers_is_refused(dataset_root):
 
 
 def test_dataset_items(dataset_root, small_camera):
-    ds = ft.WoodScapeDataset(dataset_root, transform=fishcam.transforms.RandomViewpoint(preset="small"), seed=3)
+    ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"), seed=3)
     item = ds[0]
-    assert item["image"].shape == (3, 121, 160) and item["image"].dtype == torch.uint8
-    assert item["mask"].shape == (121, 160) and item["mask"].dtype == torch.int64
-    assert json.loads(item["change"])["seed"] == fishcam.derive_seed(3, "epoch0", 0)
-    assert ds.camera(item["name"]) == fishcam.Camera.read(str(dataset_root / "calibration" / f"{item['name']}.json"))
+    assert isinstance(item["image"], tv_tensors.Image) and item["image"].shape == (3, 121, 160)
+    assert item["image"].dtype == torch.uint8
+    assert isinstance(item["mask"], tv_tensors.Mask) and item["mask"].dtype == torch.int64
+    assert seed_of(item["changes"]) == fishcam.derive_seed(3, "epoch0", 0)
+    plain = ds.camera(item["name"])
+    assert plain == fishcam.Camera.read(str(dataset_root / "calibration" / f"{item['name']}.json"))
+    change = fishcam.random_change("small", fishcam.derive_seed(3, "epoch0", 0))
+    assert item["camera"] == plain.augmented(change), "the item's camera is the augmented one"
+    untransformed = ft.WoodScapeDataset(dataset_root)[0]
+    assert untransformed["camera"] == plain and "changes" not in untransformed
     pickle.loads(pickle.dumps(ds))
+    batch = ft.collate([ds[0], ds[1]])
+    assert batch["image"].shape == (2, 3, 121, 160) and len(batch["camera"]) == 2
 
 
-def test_tensor_and_numpy_forms_agree(small_camera):
-    module = ft.RandomViewpoint(small_camera, preset="large")
-    rng = np.random.default_rng(1)
-    hwc = rng.integers(0, 256, (121, 160, 3), dtype=np.uint8)
-    mask = rng.integers(0, 10, (121, 160), dtype=np.uint8)
-    a, am, _ = module(hwc, mask, seed=5)
-    b, bm, _ = module(torch.from_numpy(hwc).permute(2, 0, 1), torch.from_numpy(mask), seed=5)
-    assert isinstance(b, torch.Tensor) and b.shape == (3, 121, 160)
-    np.testing.assert_array_equal(a, b.permute(1, 2, 0).numpy())
-    np.testing.assert_array_equal(am, bm.numpy())
-    pickle.loads(pickle.dumps(module))
+def sample(camera, with_camera=True):
+    rng = torch.Generator().manual_seed(0)
+    h, w = camera.height, camera.width
+    out = {
+        "image": tv_tensors.Image(torch.randint(0, 256, (3, h, w), dtype=torch.uint8, generator=rng)),
+        "mask": tv_tensors.Mask(torch.randint(0, 10, (h, w), generator=rng)),
+        "boxes": tv_tensors.BoundingBoxes([[40, 30, 90, 70], [100, 60, 130, 100]], format="XYXY", canvas_size=(h, w)),
+        "labels": torch.tensor([3, 5]),
+        "points": tv_tensors.KeyPoints([[80.0, 60.0], [20.0, 15.0]], canvas_size=(h, w)),
+        "depth": ft.DepthMap(torch.full((h, w), 4.0)),
+        "polygons": [ft.Polygon([[40.0, 30.0], [90.0, 30.0], [90.0, 70.0]])],
+        "name": "sample",
+    }
+    if with_camera:
+        out["camera"] = camera
+    return out
 
 
-def test_cuda_tensors_and_wrong_types_are_refused(small_camera):
-    module = ft.RandomViewpoint(small_camera)
-    with pytest.raises(fishcam.Error, match="expected a numpy array or a torch tensor"):
-        module([[1, 2], [3, 4]])
+def test_v2_pipelines_on_dicts_and_tuples(small_camera):
+    """Inside v2.Compose beside photometric and other geometric transforms: the same
+    structure and types back; every target under the one change the numpy
+    transform applies for the same seed."""
+    pipeline = v2.Compose([ft.RandomViewpoint(preset="large"), v2.ColorJitter(0.3, 0.3), v2.GaussianBlur(3),
+                           v2.RandomHorizontalFlip(p=0.0), v2.ToDtype(torch.float32, scale=True)])
+    given = sample(small_camera)
+    with ft.sample_seed(9) as records:
+        out = pipeline(given)
+    assert set(out) == set(given) and records[0]["seed"] == 9
+    for key in ["image", "mask", "boxes", "points", "depth"]:
+        assert type(out[key]) is type(given[key]), key
+    assert out["image"].dtype == torch.float32 and out["mask"].dtype == torch.int64
+    assert isinstance(out["polygons"][0], ft.Polygon) and out["name"] == "sample"
+    assert torch.equal(out["labels"], given["labels"])
+
+    alone = ft.RandomViewpoint(preset="large")
+    with ft.sample_seed(9):
+        viewpoint_only = alone(sample(small_camera))
+    numpy_side = fishcam.transforms.RandomViewpoint(small_camera, preset="large")(
+        image=given["image"].permute(1, 2, 0).numpy(), mask=given["mask"].numpy(),
+        keypoints=given["points"].numpy(), boxes=given["boxes"].numpy(), depth_map=given["depth"].numpy(),
+        polygons=[p.numpy() for p in given["polygons"]], camera=small_camera, seed=9)
+    np.testing.assert_array_equal(viewpoint_only["image"].permute(1, 2, 0).numpy(), numpy_side["image"])
+    np.testing.assert_array_equal(viewpoint_only["mask"].numpy(), numpy_side["mask"])
+    np.testing.assert_allclose(viewpoint_only["points"].numpy(), numpy_side["keypoints"], rtol=1e-6)
+    np.testing.assert_allclose(viewpoint_only["depth"].numpy(), numpy_side["depth_map"])
+    np.testing.assert_allclose(viewpoint_only["boxes"].numpy(), np.floor(numpy_side["boxes"]), atol=1)
+    np.testing.assert_allclose(viewpoint_only["polygons"][0].numpy(), numpy_side["polygons"][0], rtol=1e-6)
+    assert viewpoint_only["camera"] == numpy_side["camera"]
+
+    # A tuple sample (image, mask) with the camera from the constructor; plain tensors too.
+    with ft.sample_seed(9):
+        image, mask = ft.RandomViewpoint(small_camera, preset="large")((given["image"], given["mask"]))
+    assert isinstance(image, tv_tensors.Image) and isinstance(mask, tv_tensors.Mask)
+    assert torch.equal(image, viewpoint_only["image"]) and torch.equal(mask, viewpoint_only["mask"])
+    with ft.sample_seed(9):
+        plain = ft.RandomViewpoint(small_camera, preset="large")(given["image"].as_subclass(torch.Tensor))
+    assert type(plain) is torch.Tensor and torch.equal(plain, viewpoint_only["image"].as_subclass(torch.Tensor))
+    # A batch of images sharing the camera: each under the same change.
+    with ft.sample_seed(9):
+        batch = ft.RandomViewpoint(small_camera, preset="large")(torch.stack([given["image"]] * 2))
+    assert torch.equal(batch[0], batch[1]) and torch.equal(batch[0], plain)
+
+
+def test_instance_masks_give_tight_boxes_and_unseen_boxes_collapse(small_camera):
+    """N instance masks paired with N boxes: each box becomes the tight box of its
+    transformed mask (in the boxes' own format); an instance the change moves out of
+    view collapses and v2.SanitizeBoundingBoxes drops it with its label and mask."""
+    h, w = small_camera.height, small_camera.width
+    instances = torch.zeros((2, h, w), dtype=torch.uint8)
+    instances[0, 30:70, 40:90] = 1
+    instances[1, 0:4, 0:4] = 1  # in the corner, outside the lens's image circle: nothing maps
+    t = v2.Compose([ft.RandomViewpoint(small_camera, preset="small", min_visibility=0.5),
+                    v2.SanitizeBoundingBoxes(labels_getter=lambda s: s["labels"])])
+    with ft.sample_seed(3):
+        out = t({"image": tv_tensors.Image(torch.zeros(3, h, w, dtype=torch.uint8)),
+                 "masks": tv_tensors.Mask(instances),
+                 "boxes": tv_tensors.BoundingBoxes([[40, 30, 50, 40], [0, 0, 4, 4]], format="XYWH", canvas_size=(h, w)),
+                 "labels": torch.tensor([1, 2])})
+    assert out["boxes"].format == tv_tensors.BoundingBoxFormat.XYWH
+    assert out["labels"].tolist() == [1] and len(out["masks"]) == 1
+    ys, xs = torch.nonzero(out["masks"][0], as_tuple=True)
+    x0, y0 = xs.min().item(), ys.min().item()
+    assert out["boxes"][0].tolist() == [x0, y0, xs.max().item() + 1 - x0, ys.max().item() + 1 - y0]
+
+
+def test_bad_samples_are_refused_in_one_line(small_camera):
+    import PIL.Image
+    t = ft.RandomViewpoint(small_camera)
+    h, w = small_camera.height, small_camera.width
+    cases = [
+        ((PIL.Image.new("RGB", (w, h)),), "PIL images"),
+        (({"image": np.zeros((h, w, 3), np.uint8)},), "numpy array"),
+        ((torch.zeros(3, 10, 10, dtype=torch.uint8),), "is 10x10 but the camera is 160x121"),
+        ((torch.zeros(3, h, w, dtype=torch.int64),), "dtype"),
+        ((torch.zeros(3, h, w, dtype=torch.uint8, device="meta"),), "CPU"),
+        (({"image": tv_tensors.Image(torch.zeros(3, h, w, dtype=torch.uint8)),
+           "depth": ft.DepthMap(torch.zeros(h, w, dtype=torch.float64))},), "float32"),
+        (({"image": torch.zeros(3, h, w, dtype=torch.uint8), "a": small_camera, "b": small_camera.resized(80, 60)},),
+         "several different cameras"),
+    ]
+    for args, message in cases:
+        with pytest.raises(fishcam.Error, match=message) as error:
+            t(*args)
+        assert "\n" not in str(error.value)
+    with pytest.raises(fishcam.Error, match="camera: none given"):
+        ft.RandomViewpoint()(torch.zeros(3, h, w, dtype=torch.uint8))
     if torch.cuda.is_available():  # pragma: no cover (no GPU here)
         with pytest.raises(fishcam.Error, match="CPU"):
-            module(torch.zeros(3, 121, 160, dtype=torch.uint8, device="cuda"))
-    fake = torch.zeros(3, 121, 160, dtype=torch.uint8, device="meta")
-    with pytest.raises(fishcam.Error, match="CPU"):
-        module(fake)
+            t(torch.zeros(3, h, w, dtype=torch.uint8, device="cuda"))
+    assert "preset='train'" in repr(t) and "min_visibility=0.0" in repr(t)
+    pickle.loads(pickle.dumps(t))
 
 
 def test_no_hang_after_fork(tmp_path):
@@ -184,10 +309,11 @@ def test_no_hang_after_fork(tmp_path):
         t = ft.RandomViewpoint(cam)
         img = torch.full((3, 242, 320), 9, dtype=torch.uint8)
         for s in range(3):
-            t(img, seed=s)
+            with ft.sample_seed(s):
+                t(img)
         class D(torch.utils.data.Dataset):
             def __len__(self): return 8
-            def __getitem__(self, i): return t(img)[0].float().max()
+            def __getitem__(self, i): return t(img).float().max()
         for init in [None, ft.worker_init_fn]:
             loader = torch.utils.data.DataLoader(D(), batch_size=2, num_workers=2, worker_init_fn=init,
                                                  multiprocessing_context="fork")
@@ -211,8 +337,9 @@ def test_masks_keep_their_dtype(small_camera):
         assert out.dtype == dtype and np.array_equal(out, expected.astype(dtype)), dtype
     flags = transform(mask=labels > 4, seed=3)["mask"]
     assert flags.dtype == np.bool_ and np.array_equal(flags, expected > 4)
-    _, mask, _ = ft.RandomViewpoint(small_camera, preset="medium")(
-        torch.zeros(3, 121, 160, dtype=torch.uint8), torch.from_numpy(labels.astype(np.int64)), seed=3)
+    with ft.sample_seed(3):
+        mask = ft.RandomViewpoint(small_camera, preset="medium")(
+            (torch.zeros(3, 121, 160, dtype=torch.uint8), tv_tensors.Mask(torch.from_numpy(labels.astype(np.int64)))))[1]
     assert mask.dtype == torch.int64 and torch.equal(mask, torch.from_numpy(expected.astype(np.int64)))
     with pytest.raises(fishcam.Error, match="outside 0..65535"):
         transform(mask=np.full((121, 160), 70000, np.int64), seed=1)

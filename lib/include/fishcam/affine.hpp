@@ -48,6 +48,10 @@ AffinePreset affine_preset(std::string_view name, std::string_view what = "prese
 // Seeded like random_pose (SeededUniform); draw order: rotation, tx, ty, scale.
 AffineChange random_affine(const AffinePreset& preset, std::uint64_t seed);
 
+// Where the source pixel x lands (the formula above), for points: keypoints,
+// polygon vertices, box corners.
+Eigen::Vector2d affine_forward(const AffineChange& change, cv::Size size, const Eigen::Vector2d& x);
+
 // Sampling maps (MapKind::sampling) of the change for images of `size`: where a
 // pixel's source lies inside the image, its coordinates; elsewhere kOutsideSource.
 void affine_maps(const AffineChange& change, cv::Size size, WarpMaps* maps);

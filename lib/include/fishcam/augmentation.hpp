@@ -5,9 +5,14 @@
 
 #include <opencv2/core.hpp>
 
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
+#include <span>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "fishcam/camera.hpp"
 #include "fishcam/viewpoint.hpp"
@@ -63,6 +68,13 @@ std::optional<Sampling> parse_sampling(std::string_view name);  // "grid" | "exa
 const std::vector<std::string>& sampling_names();  // the CLI's choices, Python, messages
 std::string_view to_string(Sampling sampling);
 
+// What a depth map's values are: the range (distance from the camera centre along
+// the pixel's ray) or z (distance along the optical axis).
+enum class DepthValues { range, z };
+std::optional<DepthValues> parse_depth_values(std::string_view name);  // "range" | "z"
+const std::vector<std::string>& depth_values_names();  // the choices, Python, messages
+std::string_view to_string(DepthValues values);
+
 // One sample to augment: any of the image and the labels (with their outputs),
 // and optionally where the output has a source.
 struct AugmentIO {
@@ -112,6 +124,26 @@ class ViewpointWarp {
   // (as warp_image / warp_labels) and non-finite changes.
   void augment(const ViewpointChange& change, DepthPrior prior, const AugmentIO& io,
                Sampling sampling = Sampling::grid) const;
+  // The forward direction, for points (keypoints, polygon vertices, box outlines):
+  // where the scene point of each source pixel (on its ray at the depth prior's
+  // distance) appears in the output, exactly (double; the maps' inverse). NaN where
+  // the source pixel has no ray or the moved point no projection. visible[i] is 1
+  // where the output pixel lies inside the output image and its own source point
+  // is this one: 0 where the point left the view or is hidden (the far side of the
+  // prior's sphere). Throws Error for a non-finite change.
+  void forward(const ViewpointChange& change, DepthPrior prior, std::span<const Eigen::Vector2d> source_pixels,
+               std::span<Eigen::Vector2d> pixels, std::span<std::uint8_t> visible) const;
+  // A depth map (CV_32FC1, source size) seen from the moved camera: sampled as the
+  // labels are (nearest neighbour, so never blended across depth edges), each value
+  // re-expressed as the range or z of its scene point in the moved camera (the
+  // point at that range or z along the source ray the output pixel samples): exact
+  // for rotations; with a translation the point is where the depth map says, but it
+  // is drawn at the pixel the depth prior puts it. Values that are not finite and
+  // positive (no-depth markers, the sky's infinity) are copied as they are; pixels
+  // without a source become `fill`. *out may be preallocated (output size, CV_32FC1).
+  void warp_depth(const ViewpointChange& change, DepthPrior prior, const cv::Mat& depth, DepthValues values,
+                  cv::Mat* out, float fill = std::numeric_limits<float>::quiet_NaN()) const;
+
   // The grid's node spacing (px) and its measured worst interpolation error (px)
   // against the per-pixel float map; 0 and 0 where there is no grid (no float
   // kernel, or no spacing from 16 down to 2 px interpolates 80 % of the cells within

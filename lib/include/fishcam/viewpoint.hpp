@@ -44,6 +44,10 @@ void check_change(const ViewpointChange& change);
 // camera at camera_to_reference sees P: the camera after the viewpoint change
 // (t in the reference's units).
 Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change);
+// The camera of an augmented image: the same intrinsics, its pose moved by the
+// change (a camera without a pose gets one relative to its own frame before the
+// change), so that 3-D tasks stay consistent with the image.
+CameraParameters augmented_camera(CameraParameters camera, const ViewpointChange& change);
 
 // Uniform, independent ranges per degree of freedom: rotation in
 // [-max_rotation_deg, +max_rotation_deg] about each axis, translation in

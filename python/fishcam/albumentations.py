@@ -1,0 +1,165 @@
+"""fishcam's transforms as albumentations transforms (albumentations >= 2.0; imported
+only when it is installed).
+
+    import albumentations as A
+    import fishcam.albumentations as fa
+    pipeline = A.Compose([fa.RandomViewpoint(camera, preset="train"), A.ColorJitter()],
+                         bbox_params=A.BboxParams(format="pascal_voc", label_fields=["labels"]),
+                         keypoint_params=A.KeypointParams(format="xy"),
+                         additional_targets={"image2": "image", "instances": "mask"}, seed=0)
+    out = pipeline(image=image, mask=mask, bboxes=boxes, labels=labels, keypoints=points,
+                   depth=depth_map, camera=camera)
+
+One change per call for every target: ``image``/``images`` (HxW or HxWxC uint8,
+uint16, float32; bilinear), ``mask``/``masks`` (any integer or bool dtype, kept;
+nearest), ``bboxes`` (the tight box of the densely transformed outline;
+albumentations then clips and applies ``min_visibility``), ``keypoints`` (mapped
+exactly; the angle and scale columns are kept as they are; hidden points become
+NaN, so ``remove_invisible`` drops them with those that left the view), and the
+targets albumentations has no type for: ``depth`` (HxW float32 depth map, sampled
+without blending, values re-expressed in the moved camera), ``polygons`` (a list of
+(K, 2) vertex arrays, edges subdivided to follow the curved image within 0.5 px),
+``camera`` (a fishcam.Camera: the camera of the images, returned augmented). The
+seed of the change is drawn from the transform's generator, which ``A.Compose(seed=)``
+seeds; ``A.ReplayCompose`` replays it.
+"""
+
+import numpy as np
+
+try:
+    import albumentations as _albumentations
+    from albumentations.core.transforms_interface import DualTransform as _DualTransform
+except ImportError as error:  # pragma: no cover - the message is the point
+    raise ImportError(f"fishcam.albumentations needs albumentations >= 2.0: pip install albumentations ({error})") \
+        from None
+
+from . import Camera, Error
+from . import transforms as _transforms
+
+__all__ = ["RandomViewpoint", "RandomAffine"]
+
+if int(_albumentations.__version__.split(".")[0]) < 2:  # pragma: no cover
+    raise ImportError(f"fishcam.albumentations needs albumentations >= 2.0, found {_albumentations.__version__}")
+
+
+class _FishcamDualTransform(_DualTransform):
+    """The albumentations side: the seed in get_params (from the transform's
+    generator), the camera and size from the data, one SampleChange per call."""
+
+    def __init__(self, numpy_transform, p):
+        super().__init__(p=p)
+        self._numpy_transform = numpy_transform
+
+    @property
+    def targets(self):
+        return {**super().targets, "depth": self.apply_to_depth, "polygons": self.apply_to_polygons,
+                "camera": self.apply_to_camera}
+
+    def get_params(self):
+        return {"seed": int(self.random_generator.integers(0, 2**64, dtype=np.uint64))}
+
+    def get_params_dependent_on_data(self, params, data):
+        camera = data.get("camera")
+        if camera is not None and not isinstance(camera, Camera):
+            raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
+        return {"source_camera": camera}
+
+    def _change(self, params):
+        raise NotImplementedError
+
+    def apply(self, img, **params):
+        return self._change(params).image(img)
+
+    def apply_to_mask(self, mask, **params):
+        if mask.ndim == 3:  # albumentations' multi-channel mask: each channel a label plane
+            return np.stack([self.apply_to_mask(np.ascontiguousarray(mask[..., c]), **params)
+                             for c in range(mask.shape[2])], axis=-1)
+        return self._change(params).mask(mask)
+
+    def apply_to_masks(self, masks, **params):
+        return np.stack([self.apply_to_mask(m, **params) for m in masks]) if len(masks) else masks
+
+    def apply_to_images(self, images, **params):
+        return np.stack([self.apply(x, **params) for x in images])
+
+    def apply_to_bboxes(self, bboxes, **params):
+        if len(bboxes) == 0:
+            return bboxes
+        height, width = params["shape"][:2]
+        scale = np.array([width, height, width, height], dtype=np.float64)
+        boxes, _ = self._change(params).boxes(bboxes[:, :4].astype(np.float64) * scale, clip=False)
+        out = bboxes.copy()
+        out[:, :4] = boxes / scale
+        return out
+
+    def apply_to_keypoints(self, keypoints, **params):
+        if len(keypoints) == 0:
+            return keypoints
+        mapped, visible = self._change(params).points(keypoints[:, :2].astype(np.float64))
+        height, width = params["shape"][:2]
+        inside = (mapped[:, 0] >= -0.5) & (mapped[:, 0] < width - 0.5) & (mapped[:, 1] >= -0.5) & \
+                 (mapped[:, 1] < height - 0.5)
+        mapped[inside & ~visible] = np.nan  # hidden, not merely outside
+        out = keypoints.copy()
+        out[:, :2] = mapped
+        return out
+
+    def apply_to_depth(self, depth, **params):
+        return self._change(params).depth_map(depth, "depth")
+
+    def apply_to_polygons(self, polygons, **params):
+        change = self._change(params)
+        return [change.polygon(p, f"polygons[{i}]") for i, p in enumerate(polygons)]
+
+    def apply_to_camera(self, value, **params):
+        return self._change(params).camera(value)
+
+
+class RandomViewpoint(_FishcamDualTransform):
+    """fishcam.transforms.RandomViewpoint as an albumentations transform (see the
+    module). The camera comes from the constructor or from ``camera=`` in the call;
+    ``p`` is albumentations' (its generator decides)."""
+
+    def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
+                 depth="source-sphere", fill=0, fill_mask=0, sampling="grid", depth_values="range", p=1.0):
+        super().__init__(_transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
+                                                     max_translation=max_translation, depth=depth, fill=fill,
+                                                     fill_mask=fill_mask, sampling=sampling,
+                                                     depth_values=depth_values), p)
+        self.camera, self.preset = camera, preset
+        self.max_rotation_deg, self.max_translation = max_rotation_deg, max_translation
+        self.depth, self.fill, self.fill_mask = depth, fill, fill_mask
+        self.sampling, self.depth_values = sampling, depth_values
+
+    def get_transform_init_args_names(self):
+        return ("camera", "preset", "max_rotation_deg", "max_translation", "depth", "fill", "fill_mask", "sampling",
+                "depth_values")
+
+    def _change(self, params):
+        camera = params.get("source_camera") or self.camera
+        if camera is None:
+            raise Error("camera: none given (pass one to the constructor or camera= in the call)")
+        height, width = params["shape"][:2]
+        if (camera.width, camera.height) != (width, height):
+            raise Error(f"image: is {width}x{height} but the camera is {camera.width}x{camera.height}")
+        return self._numpy_transform.draw(camera, params["seed"])
+
+
+class RandomAffine(_FishcamDualTransform):
+    """fishcam.transforms.RandomAffine (the paper's affine baseline) as an
+    albumentations transform; depth maps keep their values, a camera is passed on."""
+
+    def __init__(self, preset="train", max_rotation_deg=None, max_translation=None, scale_range=None, fill=0,
+                 fill_mask=0, p=1.0):
+        super().__init__(_transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
+                                                  max_translation=max_translation, scale_range=scale_range,
+                                                  fill=fill, fill_mask=fill_mask), p)
+        self.preset, self.max_rotation_deg, self.max_translation = preset, max_rotation_deg, max_translation
+        self.scale_range, self.fill, self.fill_mask = scale_range, fill, fill_mask
+
+    def get_transform_init_args_names(self):
+        return ("preset", "max_rotation_deg", "max_translation", "scale_range", "fill", "fill_mask")
+
+    def _change(self, params):
+        height, width = params["shape"][:2]
+        return self._numpy_transform.draw((width, height), params["seed"])

@@ -1,0 +1,106 @@
+"""fishcam.albumentations inside albumentations pipelines: Compose with boxes,
+keypoints and additional targets under one change, the numpy transform's result for
+the same seed, Compose(seed=) reproducibility, ReplayCompose replay."""
+
+import os
+
+import numpy as np
+import pytest
+
+import fishcam
+
+if os.environ.get("FISHCAM_REQUIRE_PEERS") != "1":
+    pytest.importorskip("albumentations")
+import albumentations as A  # noqa: E402
+
+import fishcam.albumentations as fa  # noqa: E402
+
+DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
+
+
+@pytest.fixture(scope="module")
+def cam():
+    return fishcam.Camera.read(os.path.join(DATA, "woodscape_front.json")).resized(320, 242)
+
+
+@pytest.fixture(scope="module")
+def data(cam):
+    rng = np.random.default_rng(0)
+    h, w = cam.height, cam.width
+    return dict(image=rng.integers(0, 256, (h, w, 3), dtype=np.uint8),
+                image2=rng.integers(0, 256, (h, w), dtype=np.uint8),
+                mask=rng.integers(0, 10, (h, w)).astype(np.int64),
+                instances=rng.integers(0, 3, (h, w)).astype(np.int32),
+                bboxes=np.array([[100.0, 90.0, 160.0, 140.0], [2.0, 2.0, 12.0, 12.0]]), labels=[4, 7],
+                keypoints=np.array([[160.0, 121.0], [60.0, 50.0], [1.0, 1.0]]),
+                depth=np.full((h, w), 5.0, np.float32), polygons=[np.array([[100.0, 90], [160, 90], [160, 140]])])
+
+
+def compose(cam, seed, min_visibility=0.0):
+    return A.Compose([fa.RandomViewpoint(cam, preset="large")],
+                     bbox_params=A.BboxParams(format="pascal_voc", label_fields=["labels"],
+                                              min_visibility=min_visibility),
+                     keypoint_params=A.KeypointParams(format="xy", remove_invisible=False),
+                     additional_targets={"image2": "image", "instances": "mask"}, seed=seed)
+
+
+def test_every_target_under_the_numpy_transforms_change(cam, data):
+    pipeline = compose(cam, seed=5)
+    out = pipeline(**data, camera=cam)
+    seed = pipeline.transforms[0].params["seed"]
+    expected = fishcam.transforms.RandomViewpoint(cam, preset="large")(
+        image=data["image"], mask=data["mask"], depth_map=data["depth"], keypoints=data["keypoints"],
+        boxes=data["bboxes"], polygons=data["polygons"], camera=cam, seed=seed)
+    np.testing.assert_array_equal(out["image"], expected["image"])
+    np.testing.assert_array_equal(out["image2"], fishcam.transforms.RandomViewpoint(cam, preset="large")(
+        image=data["image2"], seed=seed)["image"])
+    assert out["mask"].dtype == np.int64 and np.array_equal(out["mask"], expected["mask"])
+    assert out["instances"].dtype == np.int32
+    np.testing.assert_array_equal(out["depth"], expected["depth_map"])
+    np.testing.assert_allclose(out["polygons"][0], expected["polygons"][0])
+    assert out["camera"] == expected["camera"]
+    # Keypoints: exact (albumentations keeps them in float32); hidden ones NaN.
+    kp = np.array(out["keypoints"], dtype=np.float64)
+    seen = expected["keypoints_visible"]
+    np.testing.assert_allclose(kp[seen], expected["keypoints"][seen], atol=1e-3)
+    # Boxes: the tight box of the outline, then albumentations' own clipping.
+    boxes = np.array(out["bboxes"])
+    kept = np.array(out["labels"]) == 4
+    np.testing.assert_allclose(boxes[kept][0], np.clip(expected["boxes"][0], 0, (320, 242, 320, 242)), atol=1e-3)
+
+
+def test_seeds_reproduce_and_replay(cam, data):
+    a = compose(cam, seed=1)(**data)
+    b = compose(cam, seed=1)(**data)
+    c = compose(cam, seed=2)(**data)
+    assert np.array_equal(a["image"], b["image"]) and not np.array_equal(a["image"], c["image"])
+    replay = A.ReplayCompose([fa.RandomViewpoint(cam, preset="medium"), A.HorizontalFlip(p=0.5)])
+    first = replay(image=data["image"], mask=data["mask"])
+    again = A.ReplayCompose.replay(first["replay"], image=data["image"], mask=data["mask"])
+    assert np.array_equal(first["image"], again["image"]) and np.array_equal(first["mask"], again["mask"])
+
+
+def test_min_visibility_drops_boxes_that_leave(cam, data):
+    """albumentations' min_visibility, on the boxes fishcam returns unclipped: a box
+    survives exactly when at least that much of its transformed box is in view."""
+    dropped = 0
+    for seed in range(12):
+        pipeline = compose(cam, seed=seed, min_visibility=0.9)
+        out = pipeline(**data)
+        _, visibility = fishcam.transforms.RandomViewpoint(cam, preset="large").draw(
+            seed=pipeline.transforms[0].params["seed"]).boxes(data["bboxes"])
+        assert (7 in out["labels"]) == (visibility[1] >= 0.9), seed
+        dropped += 7 not in out["labels"]
+    assert dropped >= 3, "too few seeds moved the corner box out of view to test anything"
+
+
+def test_affine_and_errors(cam, data):
+    out = A.Compose([fa.RandomAffine(preset="small")], seed=0)(image=data["image"], mask=data["mask"],
+                                                               depth=data["depth"])
+    assert out["image"].shape == data["image"].shape and out["depth"].dtype == np.float32
+    assert set(np.unique(out["depth"][np.isfinite(out["depth"])])) <= {5.0}
+    with pytest.raises(fishcam.Error, match="camera: none given"):
+        A.Compose([fa.RandomViewpoint()])(image=data["image"])
+    with pytest.raises(fishcam.Error, match="is 10x10 but the camera is 320x242"):
+        A.Compose([fa.RandomViewpoint(cam)])(image=np.zeros((10, 10), np.uint8))
+    assert "preset='large'" in repr(fa.RandomViewpoint(cam, preset="large"))
