@@ -328,6 +328,74 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
   for (const auto& [name, p] : test::every_model()) EXPECT_TRUE(ViewpointWarp(Camera(p)).float_kernel()) << name;
 }
 
+// The forward direction inverts the maps under every prior: a visible point's
+// output pixel has, in the exact maps, a source within the map's pixel grid of it,
+// and its source point (source_point of the output ray) is the point's own ray.
+TEST(Augmentation, ForwardPointsInvertTheMapsUnderEveryPrior) {
+  const Camera camera(resized(woodscape().parameters(), 320, 242));
+  const ViewpointWarp warp(camera);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(3, 316), v(3, 238);  // rounding stays inside the image
+  std::vector<Eigen::Vector2d> points(300);
+  for (auto& p : points) p = Eigen::Vector2d(u(rng), v(rng));
+  int checked = 0;
+  for (const DepthPrior prior : kPriors) {
+    for (const ViewpointChange& change : {ViewpointChange::from_euler_deg({12, -25, 8}, {0.2, -0.1, 0.3}),
+                                          ViewpointChange::from_euler_deg({-5, 3, 30}, {0, 0, -0.4})}) {
+      std::vector<Eigen::Vector2d> out(points.size());
+      std::vector<std::uint8_t> visible(points.size());
+      warp.forward(change, prior, points, out, visible);
+      WarpMaps maps;
+      warp.compute_exact(change, prior, &maps);
+      for (size_t i = 0; i < points.size(); ++i) {
+        if (!visible[i]) continue;
+        Eigen::Vector3d ray, d;
+        ASSERT_TRUE(camera.unproject(points[i], &ray));
+        ASSERT_TRUE(camera.unproject(out[i], &d));
+        const auto back = source_point(d, change, prior);
+        ASSERT_TRUE(back);
+        EXPECT_LT((*back - ray).norm(), 1e-9) << to_string(prior);
+        const int x = int(std::lround(out[i].x())), y = int(std::lround(out[i].y()));
+        ASSERT_TRUE(maps.valid.at<uchar>(y, x));
+        EXPECT_LT(std::hypot(maps.map_x.at<float>(y, x) - points[i].x(), maps.map_y.at<float>(y, x) - points[i].y()),
+                  1.5);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 6 * 300 / 2) << "too few visible points to test anything";
+}
+
+// Depth maps under a rotation keep each point's range; the output's z is the z of
+// the moved point; values that are not depths pass through; sizes are checked.
+TEST(Augmentation, DepthMapsAreReExpressedInTheMovedCamera) {
+  const Camera camera(resized(woodscape().parameters(), 320, 242));
+  const ViewpointWarp warp(camera);
+  const ViewpointChange rotation = ViewpointChange::from_euler_deg({10, -20, 5});
+  cv::Mat depth(242, 320, CV_32FC1, cv::Scalar(2.5f)), out;
+  depth(cv::Rect(0, 0, 20, 20)).setTo(0.0f);  // a no-depth marker
+  warp.warp_depth(rotation, DepthPrior::source_sphere, depth, DepthValues::range, &out, -1.0f);
+  int ranges = 0;
+  for (int y = 0; y < out.rows; ++y) {
+    for (int x = 0; x < out.cols; ++x) {
+      const float value = out.at<float>(y, x);
+      if (value == -1.0f || value == 0.0f) continue;
+      EXPECT_NEAR(value, 2.5f, 2e-6f);
+      ++ranges;
+    }
+  }
+  EXPECT_GT(ranges, 320 * 242 / 3);
+  // z: a translation along the optical axis moves every point's z by -t_z exactly.
+  const ViewpointChange back = ViewpointChange::from_euler_deg({0, 0, 0}, {0, 0, -0.5});
+  cv::Mat z(242, 320, CV_32FC1, cv::Scalar(4.0f)), z_out;
+  warp.warp_depth(back, DepthPrior::infinity, z, DepthValues::z, &z_out);
+  EXPECT_NEAR(z_out.at<float>(121, 160), 3.5f, 1e-5f);
+  cv::Mat wrong(10, 10, CV_32FC1);
+  EXPECT_THROW(warp.warp_depth(rotation, DepthPrior::source_sphere, wrong, DepthValues::range, &out), Error);
+  cv::Mat doubles(242, 320, CV_64FC1);
+  EXPECT_THROW(warp.warp_depth(rotation, DepthPrior::source_sphere, doubles, DepthValues::range, &out), Error);
+}
+
 TEST(Augmentation, NonFiniteOrNonRotationChangesAreRefused) {
   CameraParameters p = test::woodscape_front();
   p.width = 64, p.height = 48, p.principal_point = {31.5, 23.5};
