@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """The Python package's costs, measured in one run (docs/performance.md):
 
 1. per-sample augmentation (1280x966 RGB bilinear + labels nearest, a new `train`
@@ -6,10 +6,13 @@
    augment` total, interleaved in rounds (a Python block, then a C++ block), 1 and
    2 threads; target <= 1.05x;
 2. a DataLoader over WoodScape-sized samples (PNG files from `fishcam
-   sample-dataset`) with 0 and 2 workers, with and without RandomViewpoint;
+   sample-dataset`, 640x483 and 1280x966) with 0 and 2 persistent workers, with
+   RandomViewpoint against without, per sample in steady state (target <= 1.10x),
+   and the first epoch (warps built) apart;
 3. the augmentation's share of a CPU training step of a small segmentation network.
 
-Usage: PYTHONPATH=build/python /usr/bin/python3 tools/bench_python.py [--fishcam build/tools/fishcam] [--json]
+Usage: PYTHONPATH=build/python build/venv/bin/python tools/bench_python.py [--fishcam build/tools/fishcam]
+       [--only per-sample|dataloader|training] [--json]   (build/venv: scripts/python-env.sh)
 """
 
 import argparse
@@ -59,31 +62,54 @@ def per_sample(fishcam, binary, data, samples, rounds):
     return rows
 
 
-def loader_throughput(fishcam, binary, samples):
+def loader_cost(fishcam, binary, samples, epochs):
+    """Per sample in steady state, a DataLoader over WoodScape-layout PNG samples
+    with RandomViewpoint against the same loader without it: both persistent,
+    seeded, EpochSampler, fishcam.torch.collate; their epochs interleaved (A, B, A,
+    B, ...) so that both see the same machine; the first epoch (warps built: every
+    sample of `fishcam sample-dataset` has its own calibration) reported apart."""
     import torch
     import fishcam.torch as ft
+    rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        subprocess.run([binary, "sample-dataset", f"{tmp}/ws", "--images", str(samples), "--seed", "1"],
-                       check=True, capture_output=True)
-        rows = []
-        for workers in (0, 2):
-            for augment in (False, True):
-                ds = ft.WoodScapeDataset(f"{tmp}/ws", transform=ft.RandomViewpoint(preset="train") if augment else None,
-                                         seed=1)
-                loader = torch.utils.data.DataLoader(ds, batch_size=4, num_workers=workers,
-                                                     worker_init_fn=ft.worker_init_fn if workers else None)
+        for width, height in ((640, 483), (1280, 966)):
+            root = f"{tmp}/ws{width}"
+            subprocess.run([binary, "sample-dataset", root, "--images", str(samples), "--seed", "1",
+                            "--size", f"{width}x{height}"], check=True, capture_output=True)
+            for workers in (0, 2):
+                loaders = {}
+                for augment in (False, True):
+                    ds = ft.WoodScapeDataset(root, transform=ft.RandomViewpoint(preset="train") if augment else None,
+                                             seed=1)
+                    loaders[augment] = torch.utils.data.DataLoader(
+                        ds, batch_size=4, num_workers=workers, persistent_workers=workers > 0,
+                        sampler=ft.EpochSampler(torch.utils.data.SequentialSampler(ds)),
+                        worker_init_fn=ft.worker_init_fn if workers else None, collate_fn=ft.collate)
                 fishcam.set_num_threads(2 if workers == 0 else 1)
-                next(iter(loader))  # warm up (workers, caches)
-                start = time.perf_counter()
-                n = sum(len(batch["name"]) for _ in range(2) for batch in loader)
-                rows.append({"workers": workers, "augment": augment, "samples_per_s": n / (time.perf_counter() - start)})
+                per_sample = {False: [], True: []}
+                first = {}
+                for epoch in range(epochs + 1):
+                    for augment in (False, True):
+                        start = time.perf_counter()
+                        n = sum(len(batch["name"]) for batch in loaders[augment])
+                        seconds = (time.perf_counter() - start) / n
+                        if epoch == 0:
+                            first[augment] = seconds
+                        else:
+                            per_sample[augment].append(seconds)
+                plain, augmented = statistics.median(per_sample[False]), statistics.median(per_sample[True])
+                rows.append({"size": f"{width}x{height}", "workers": workers, "plain_ms": 1e3 * plain,
+                             "augmented_ms": 1e3 * augmented, "ratio": augmented / plain,
+                             "first_epoch_plain_ms": 1e3 * first[False],
+                             "first_epoch_augmented_ms": 1e3 * first[True]})
+                del loaders
     return rows
 
 
 def training_share(fishcam, data, steps):
     """A small encoder-decoder (about 0.1 M parameters) on 640x483 batches of 4."""
     import torch
-    import fishcam.torch as ft
+    import fishcam.transforms
     torch.manual_seed(0)
     camera = fishcam.Camera.read(data).resized(640, 483)
     net = torch.nn.Sequential(
@@ -93,7 +119,7 @@ def training_share(fishcam, data, steps):
         torch.nn.ConvTranspose2d(64, 32, 4, stride=2, padding=1), torch.nn.ReLU(),
         torch.nn.ConvTranspose2d(32, 10, 4, stride=2, padding=1))
     optimiser = torch.optim.SGD(net.parameters(), lr=1e-3)
-    transform = ft.RandomViewpoint(camera, preset="train")
+    transform = fishcam.transforms.RandomViewpoint(camera, preset="train")
     rng = np.random.default_rng(0)
     images = [rng.integers(0, 256, (483, 640, 3), dtype=np.uint8) for _ in range(4)]
     masks = [rng.integers(0, 10, (483, 640), dtype=np.uint8) for _ in range(4)]
@@ -101,10 +127,10 @@ def training_share(fishcam, data, steps):
     augment_s, step_s = [], []
     for step in range(steps):
         start = time.perf_counter()
-        batch = [transform(image, mask, seed=4 * step + k) for k, (image, mask) in enumerate(zip(images, masks))]
+        batch = [transform(image=image, mask=mask, seed=4 * step + k) for k, (image, mask) in enumerate(zip(images, masks))]
         middle = time.perf_counter()
-        x = torch.stack([torch.from_numpy(b[0]).permute(2, 0, 1) for b in batch]).float() / 255
-        y = torch.stack([torch.from_numpy(b[1].astype(np.int64)) for b in batch])
+        x = torch.stack([torch.from_numpy(b["image"]).permute(2, 0, 1) for b in batch]).float() / 255
+        y = torch.stack([torch.from_numpy(b["mask"].astype(np.int64)) for b in batch])
         out = net(x)[:, :, :483, :640]
         loss = torch.nn.functional.cross_entropy(out, y)
         optimiser.zero_grad()
@@ -125,30 +151,37 @@ def main():
     parser.add_argument("--camera", default=os.path.join(here, "..", "data", "woodscape_front.json"))
     parser.add_argument("--samples", type=int, default=41)
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--loader-samples", type=int, default=16)
+    parser.add_argument("--epochs", type=int, default=4, help="steady-state epochs per loader (after the first)")
+    parser.add_argument("--only", choices=["per-sample", "dataloader", "training"], help="run one part")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     import fishcam
-    result = {
-        "per_sample": per_sample(fishcam, args.fishcam, args.camera, args.samples, args.rounds),
-        "dataloader": loader_throughput(fishcam, args.fishcam, 16),
-        "training": training_share(fishcam, args.camera, 12),
+    parts = {
+        "per_sample": lambda: per_sample(fishcam, args.fishcam, args.camera, args.samples, args.rounds),
+        "dataloader": lambda: loader_cost(fishcam, args.fishcam, args.loader_samples, args.epochs),
+        "training": lambda: training_share(fishcam, args.camera, 12),
     }
+    result = {name: run() for name, run in parts.items() if args.only in (None, name.replace("_", "-"))}
     if args.json:
         print(json.dumps(result, indent=2))
         return
-    print("per-sample augmentation 1280x966 (median of %d, median over %d interleaved rounds)" %
-          (args.samples, args.rounds))
-    for r in result["per_sample"]:
-        print("  %d thread(s): python %.2f ms, C++ bench %.2f ms, ratio %.3f" %
-              (r["threads"], r["python_ms"], r["cpp_ms"], r["python_over_cpp"]))
-    print("DataLoader over 1280x966 PNG samples, batch 4:")
-    for r in result["dataloader"]:
-        print("  %d workers, %-16s %6.1f samples/s" %
-              (r["workers"], "RandomViewpoint" if r["augment"] else "no augmentation", r["samples_per_s"]))
-    t = result["training"]
-    print("CPU training step, batch 4 at 640x483 (%d torch threads): augmentation %.1f ms, step %.1f ms, share %.1f %%"
-          % (t["torch_threads"], t["augment_ms"], t["train_step_ms"], 100 * t["augment_share"]))
-
+    if "per_sample" in result:
+        print("per-sample augmentation 1280x966 (median of %d, median over %d interleaved rounds)" %
+              (args.samples, args.rounds))
+        for r in result["per_sample"]:
+            print("  %d thread(s): python %.2f ms, C++ bench %.2f ms, ratio %.3f" %
+                  (r["threads"], r["python_ms"], r["cpp_ms"], r["python_over_cpp"]))
+    if "dataloader" in result:
+        print("DataLoader, WoodScape-layout PNG samples, batch 4, per sample in steady state (epochs interleaved):")
+        for r in result["dataloader"]:
+            print("  %-9s %d workers: plain %6.2f ms, RandomViewpoint %6.2f ms, ratio %.3f; first epoch %.1f / %.1f ms"
+                  % (r["size"], r["workers"], r["plain_ms"], r["augmented_ms"], r["ratio"],
+                     r["first_epoch_plain_ms"], r["first_epoch_augmented_ms"]))
+    if "training" in result:
+        t = result["training"]
+        print("CPU training step, batch 4 at 640x483 (%d torch threads): augmentation %.1f ms, step %.1f ms, "
+              "share %.1f %%" % (t["torch_threads"], t["augment_ms"], t["train_step_ms"], 100 * t["augment_share"]))
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -121,6 +121,10 @@ CameraParameters augmented_camera(CameraParameters camera, const ViewpointChange
   return camera;
 }
 
+Camera augmented_camera(const Camera& camera, const ViewpointChange& change) {
+  return camera.with_pose(augmented_camera(camera.parameters(), change).pose);
+}
+
 const std::array<PosePreset, 4>& pose_presets() {
   static const std::array<PosePreset, 4> presets = {{
       {"small", 10, 0.1},

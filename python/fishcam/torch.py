@@ -128,7 +128,7 @@ def sample_seed(seed):
     token = _sample_seed.set(seed)
     try:
         with record_changes() as records, torch.random.fork_rng(devices=[]):
-            torch.manual_seed(seed)
+            torch.default_generator.manual_seed(seed)  # the CPU's: torch.manual_seed also queues every device's
             yield records
     finally:
         _sample_seed.reset(token)
@@ -154,7 +154,9 @@ def _image_to_numpy(tensor, what):
 
 
 def _numpy_to_image(array, like):
-    out = torch.from_numpy(np.ascontiguousarray(np.moveaxis(array, -1, 0) if array.ndim == 3 else array))
+    # CHW as a view of the HWC result (as the dataset's own images are): no copy.
+    out = torch.from_numpy(array)
+    out = out.permute(2, 0, 1) if out.ndim == 3 else out
     out = out.to(like.dtype) if out.dtype != like.dtype else out
     return tv_tensors.wrap(out, like=like) if isinstance(like, tv_tensors.TVTensor) else out
 
@@ -208,9 +210,27 @@ class _FishcamTransform(v2.Transform):
         boxes = [x for x in flat_inputs if isinstance(x, tv_tensors.BoundingBoxes)]
         instance_masks = [x for x in flat_inputs if isinstance(x, tv_tensors.Mask) and x.ndim == 3]
         pairs = [m for m in instance_masks if boxes and m.shape[0] == boxes[0].shape[0] and m.shape[0] > 0]
-        return {"change": sample_change, "instance_masks": pairs[0] if pairs else None}
+        return {"change": sample_change, "instance_masks": pairs[0] if pairs else None,
+                "done": self._image_and_mask(flat_inputs, sample_change)}
+
+    @staticmethod
+    def _image_and_mask(flat_inputs, change):
+        """The sample's first image and first HxW mask resampled in one pass (the maps
+        computed once for both), keyed by the inputs' ids for transform()."""
+        images = [x for x in flat_inputs if isinstance(x, torch.Tensor) and x.ndim == 3 and (
+            isinstance(x, tv_tensors.Image) or not isinstance(x, tv_tensors.TVTensor))]
+        masks = [x for x in flat_inputs if isinstance(x, tv_tensors.Mask) and x.ndim == 2]
+        if not images or not masks:
+            return {}
+        image, mask = images[0], masks[0]
+        out_image, out_mask = change.image_and_mask(_image_to_numpy(image, "image"), _cpu(mask, "mask").numpy())
+        return {id(image): _numpy_to_image(out_image, image),
+                id(mask): tv_tensors.wrap(torch.from_numpy(out_mask), like=mask)}
 
     def transform(self, inpt, params):
+        done = params["done"].get(id(inpt))
+        if done is not None:
+            return done
         change = params["change"]
         if isinstance(inpt, Camera):
             return change.camera(inpt)
@@ -393,8 +413,10 @@ class WoodScapeDataset(torch.utils.data.Dataset):
     calibration per image, as WoodScape has).
 
     Each item is a dict: ``image`` (``tv_tensors.Image``, 3xHxW uint8), ``mask``
-    (``tv_tensors.Mask``, HxW int64), ``camera`` (the fishcam.Camera of the image),
-    ``name``; the whole dict goes through ``transform`` (a v2 transform or
+    (``tv_tensors.Mask``, HxW ``mask_dtype``, int64 by default: what cross-entropy
+    takes; None keeps the PNG's uint8/uint16), ``camera`` (the fishcam.Camera of the
+    image), ``name``; the whole dict goes through ``transform`` (the mask still as
+    decoded, which is cheaper to resample; a v2 transform or
     ``v2.Compose``; fishcam's transforms take the camera from it and put the
     augmented camera back), and ``changes`` is added: the records of the changes
     fishcam's transforms made, as a JSON list (seeds are 64-bit, past torch's int64;
@@ -410,9 +432,10 @@ class WoodScapeDataset(torch.utils.data.Dataset):
     sees ``set_epoch``).
     """
 
-    def __init__(self, root, transform=None, seed=None):
+    def __init__(self, root, transform=None, seed=None, mask_dtype=torch.int64):
         self.root = os.fspath(root)
         self.transform = transform
+        self.mask_dtype = mask_dtype
         self.seed = None if seed is None else _transforms._check_seed(seed)
         self.epoch = 0
         images = os.path.join(self.root, "rgb_images")
@@ -476,16 +499,25 @@ class WoodScapeDataset(torch.utils.data.Dataset):
                           _cv2().IMREAD_UNCHANGED)
         if mask.ndim != 2:
             raise Error(f"{name}: expected a single-channel label image")
+        # The transform gets the mask as decoded (uint8 or uint16: cheaper to resample);
+        # the item has it in mask_dtype.
         item = {"image": tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1)),
-                "mask": tv_tensors.Mask(torch.from_numpy(mask.astype(np.int64))),
-                "camera": self.camera(name), "name": name}
+                "mask": tv_tensors.Mask(torch.from_numpy(mask)), "camera": self.camera(name), "name": name}
         if self.transform is None:
-            return item
+            return self._with_mask_dtype(item)
         if self.seed is None:
             with record_changes() as records:
                 item = self.transform(item)
         else:
             with sample_seed(derive_seed(self.seed, f"epoch{epoch}", index)) as records:
                 item = self.transform(item)
+        item = self._with_mask_dtype(item)
         item["changes"] = json.dumps(records)
+        return item
+
+    def _with_mask_dtype(self, item):
+        mask = item.get("mask") if isinstance(item, dict) else None
+        if self.mask_dtype is not None and isinstance(mask, torch.Tensor) and mask.dtype != self.mask_dtype:
+            item["mask"] = tv_tensors.wrap(mask.to(self.mask_dtype), like=mask) \
+                if isinstance(mask, tv_tensors.TVTensor) else mask.to(self.mask_dtype)
         return item

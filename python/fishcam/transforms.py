@@ -141,6 +141,15 @@ class SampleChange:
         labels, restore = _labels_for_warp(mask, self._fill_mask)
         return restore(self._resample(image=None, labels=labels)["labels"])
 
+    def image_and_mask(self, image, mask):
+        """Both in one pass (the maps are computed once): (image, mask)."""
+        image = _image_array(image, "image")
+        if not isinstance(mask, np.ndarray) or mask.ndim != 2:
+            raise Error(f"mask: expected an HxW numpy array, got {getattr(mask, 'shape', type(mask).__name__)}")
+        labels, restore = _labels_for_warp(mask, self._fill_mask)
+        out = self._resample(image=image, labels=labels)
+        return out["image"], restore(out["labels"])
+
     def depth_map(self, depth_map, what="depth_map"):
         """A depth map (HxW float32) seen from the moved camera (see RandomViewpoint)."""
         if not isinstance(depth_map, np.ndarray) or depth_map.dtype != np.float32 or depth_map.ndim != 2:
@@ -347,7 +356,8 @@ class RandomViewpoint:
             fill_mask=self.fill_mask)
 
     def __call__(self, image=None, mask=None, camera=None, seed=None, **targets):
-        return _apply(self.draw(camera, seed), image, mask, camera if camera is not None else self.camera, targets)
+        # The augmented camera is returned for a camera given with the sample.
+        return _apply(self.draw(camera, seed), image, mask, camera, targets)
 
     def __repr__(self):
         what = (f"preset={self.preset!r}" if self.preset is not None else
@@ -369,9 +379,11 @@ def _apply(sample_change, image, mask, camera, targets):
     if image is None and mask is None and not any(v is not None for v in targets.values()):
         raise Error("nothing to transform: pass image= and/or mask= (or another target)")
     out = {"change": sample_change.record}
-    if image is not None:
+    if image is not None and mask is not None:
+        out["image"], out["mask"] = sample_change.image_and_mask(image, mask)
+    elif image is not None:
         out["image"] = sample_change.image(image)
-    if mask is not None:
+    elif mask is not None:
         out["mask"] = sample_change.mask(mask)
     if targets.get("images") is not None:
         out["images"] = [sample_change.image(x, f"images[{i}]") for i, x in enumerate(targets["images"])]

@@ -226,7 +226,7 @@ void bind_camera(py::module_& m) {
           py::arg("width"), py::arg("height"))
       .def(
           "augmented",
-          [](const Camera& c, const RandomPose& change) { return Camera(augmented_camera(c.parameters(), change.change())); },
+          [](const Camera& c, const RandomPose& change) { return augmented_camera(c, change.change()); },
           py::arg("change"),
           "The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera "
           "without a pose gets one relative to its own frame)")

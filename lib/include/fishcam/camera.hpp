@@ -80,6 +80,13 @@ class Camera {
   explicit Camera(CameraParameters parameters, double table_tolerance_px = InverseTable::kDefaultTolerancePx);
 
   const CameraParameters& parameters() const { return params_; }
+  // The same camera with another pose (the pose is not part of the projection:
+  // the domain and the inverse table are kept, not recomputed).
+  Camera with_pose(std::optional<Pose> pose) const {
+    Camera moved = *this;
+    moved.params_.pose = std::move(pose);
+    return moved;
+  }
   int width() const { return params_.width; }
   int height() const { return params_.height; }
   const Eigen::Vector2d& principal_point() const { return params_.principal_point; }

@@ -48,6 +48,7 @@ Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change
 // change (a camera without a pose gets one relative to its own frame before the
 // change), so that 3-D tasks stay consistent with the image.
 CameraParameters augmented_camera(CameraParameters camera, const ViewpointChange& change);
+Camera augmented_camera(const Camera& camera, const ViewpointChange& change);  // cheap: no tables rebuilt
 
 // Uniform, independent ranges per degree of freedom: rotation in
 // [-max_rotation_deg, +max_rotation_deg] about each axis, translation in
