@@ -62,12 +62,14 @@ def per_sample(fishcam, binary, data, samples, rounds):
     return rows
 
 
-def loader_cost(fishcam, binary, samples, epochs):
+def loader_cost(fishcam, binary, samples, epochs, photo=None):
     """Per sample in steady state, a DataLoader over WoodScape-layout PNG samples
     with RandomViewpoint against the same loader without it: both persistent,
     seeded, EpochSampler, fishcam.torch.collate; their epochs interleaved (A, B, A,
     B, ...) so that both see the same machine; the first epoch (warps built: every
-    sample of `fishcam sample-dataset` has its own calibration) reported apart."""
+    sample of `fishcam sample-dataset` has its own calibration) reported apart.
+    With `photo`, every RGB image is that photo (resized, as PNG): real content
+    decodes slower than the rendered scenes' flat colours."""
     import torch
     import fishcam.torch as ft
     rows = []
@@ -76,6 +78,14 @@ def loader_cost(fishcam, binary, samples, epochs):
             root = f"{tmp}/ws{width}"
             subprocess.run([binary, "sample-dataset", root, "--images", str(samples), "--seed", "1",
                             "--size", f"{width}x{height}"], check=True, capture_output=True)
+            if photo:
+                import cv2
+                picture = cv2.imread(photo, cv2.IMREAD_COLOR)
+                if picture is None:
+                    raise SystemExit(f"{photo}: cannot read image")
+                picture = cv2.resize(picture, (width, height), interpolation=cv2.INTER_AREA)
+                for name in os.listdir(f"{root}/rgb_images"):
+                    cv2.imwrite(f"{root}/rgb_images/{name}", picture)
             for workers in (0, 2):
                 loaders = {}
                 for augment in (False, True):
@@ -98,7 +108,8 @@ def loader_cost(fishcam, binary, samples, epochs):
                         else:
                             per_sample[augment].append(seconds)
                 plain, augmented = statistics.median(per_sample[False]), statistics.median(per_sample[True])
-                rows.append({"size": f"{width}x{height}", "workers": workers, "plain_ms": 1e3 * plain,
+                rows.append({"size": f"{width}x{height}", "images": "photo" if photo else "rendered",
+                             "workers": workers, "plain_ms": 1e3 * plain,
                              "augmented_ms": 1e3 * augmented, "ratio": augmented / plain,
                              "first_epoch_plain_ms": 1e3 * first[False],
                              "first_epoch_augmented_ms": 1e3 * first[True]})
@@ -152,14 +163,20 @@ def main():
     parser.add_argument("--samples", type=int, default=41)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--loader-samples", type=int, default=16)
+    shared_photo = os.path.join(here, "..", "..", "shared", "data", "woodscape", "front.jpg")
+    parser.add_argument("--photo", default=shared_photo if os.path.exists(shared_photo) else None,
+                        help="a real photo for the loader's RGB images (default: ../shared's WoodScape image when "
+                             "present; 'none' for the rendered scenes)")
     parser.add_argument("--epochs", type=int, default=4, help="steady-state epochs per loader (after the first)")
     parser.add_argument("--only", choices=["per-sample", "dataloader", "training"], help="run one part")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
+    if args.photo == "none":
+        args.photo = None
     import fishcam
     parts = {
         "per_sample": lambda: per_sample(fishcam, args.fishcam, args.camera, args.samples, args.rounds),
-        "dataloader": lambda: loader_cost(fishcam, args.fishcam, args.loader_samples, args.epochs),
+        "dataloader": lambda: loader_cost(fishcam, args.fishcam, args.loader_samples, args.epochs, args.photo),
         "training": lambda: training_share(fishcam, args.camera, 12),
     }
     result = {name: run() for name, run in parts.items() if args.only in (None, name.replace("_", "-"))}
@@ -175,8 +192,8 @@ def main():
     if "dataloader" in result:
         print("DataLoader, WoodScape-layout PNG samples, batch 4, per sample in steady state (epochs interleaved):")
         for r in result["dataloader"]:
-            print("  %-9s %d workers: plain %6.2f ms, RandomViewpoint %6.2f ms, ratio %.3f; first epoch %.1f / %.1f ms"
-                  % (r["size"], r["workers"], r["plain_ms"], r["augmented_ms"], r["ratio"],
+            print("  %-9s %-8s %d workers: plain %6.2f ms, RandomViewpoint %6.2f ms, ratio %.3f; first epoch %.1f / %.1f ms"
+                  % (r["size"], r["images"], r["workers"], r["plain_ms"], r["augmented_ms"], r["ratio"],
                      r["first_epoch_plain_ms"], r["first_epoch_augmented_ms"]))
     if "training" in result:
         t = result["training"]

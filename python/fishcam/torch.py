@@ -70,8 +70,8 @@ class DepthMap(tv_tensors.TVTensor):
     """A depth map (HxW or 1xHxW float32): the range along each pixel's ray, or its
     z (the transform's ``depth_values``). fishcam's transforms sample it without
     blending and re-express its values in the moved camera; torchvision's own
-    transforms do not know it and pass it through (put geometric torchvision
-    transforms before it only if they keep the geometry)."""
+    transforms do not know it and pass it through unchanged (a flip or crop after
+    fishcam's transform would leave it behind)."""
 
     @classmethod
     def _wrap(cls, tensor):
@@ -136,8 +136,7 @@ def sample_seed(seed):
 
 def _cpu(tensor, what):
     if tensor.device.type != "cpu":
-        raise Error(f"{what}: fishcam runs on the CPU; got a tensor on {tensor.device} (move it with .cpu(), "
-                    "or use warp_batch for batches on a device)")
+        raise Error(f"{what}: fishcam runs on the CPU; got a tensor on {tensor.device} (move it with .cpu())")
     return tensor.detach()
 
 
@@ -186,8 +185,14 @@ class _FishcamTransform(v2.Transform):
         self.min_visibility = float(min_visibility)
 
     def _seed(self):
+        """The sample's seed (sample_seed) for the first fishcam transform of the
+        sample, seeds derived from it for any later one; else one from torch's generator."""
         seed = _sample_seed.get()
-        return torch_seed() if seed is None else seed
+        if seed is None:
+            return torch_seed()
+        records = _sample_records.get()
+        made = len(records) if records is not None else 0
+        return seed if made == 0 else derive_seed(seed, "fishcam-transform", made)
 
     def check_inputs(self, flat_inputs):
         for x in flat_inputs:

@@ -247,6 +247,17 @@ def test_v2_pipelines_on_dicts_and_tuples(small_camera):
     assert torch.equal(batch[0], batch[1]) and torch.equal(batch[0], plain)
 
 
+def test_several_fishcam_transforms_in_one_sample_draw_different_changes(small_camera):
+    image = torch.zeros(3, small_camera.height, small_camera.width, dtype=torch.uint8)
+    pipeline = v2.Compose([ft.RandomViewpoint(small_camera, preset="small"), ft.RandomViewpoint(small_camera),
+                           ft.RandomAffine()])
+    with ft.sample_seed(21) as records:
+        pipeline(image)
+    assert [r["seed"] for r in records] == [21, fishcam.derive_seed(21, "fishcam-transform", 1),
+                                            fishcam.derive_seed(21, "fishcam-transform", 2)]
+    assert [r["method"] for r in records] == ["viewpoint", "viewpoint", "affine"]
+
+
 def test_instance_masks_give_tight_boxes_and_unseen_boxes_collapse(small_camera):
     """N instance masks paired with N boxes: each box becomes the tight box of its
     transformed mask (in the boxes' own format); an instance the change moves out of
