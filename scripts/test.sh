@@ -1,9 +1,14 @@
 #!/usr/bin/env bash
 # Installs what is missing (Debian packages; the Python test environment in
-# build/venv from PyPI), builds, and runs the whole test suite.
+# build/venv from PyPI), builds, installs the Python package into build/venv with
+# `pip install .`, and runs the whole test suite (the Python tests against that
+# installed package).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 ./scripts/python-env.sh build/venv
-./scripts/build.sh -DFISHCAM_TEST_PYTHON="$PWD/build/venv/bin/python"
+./scripts/build.sh -DFISHCAM_TEST_PYTHON="$PWD/build/venv/bin/python" -DFISHCAM_TEST_INSTALLED_PACKAGE=ON
+# Debian's CMake first on PATH (the first cmake may be another): pip's build uses it.
+PATH=/usr/bin:$PATH build/venv/bin/python -m pip install --quiet --no-deps --disable-pip-version-check . 2>&1 |
+  { grep -v "^WARNING: Location 'file:" || true; }
 /usr/bin/ctest --test-dir build --output-on-failure -j "$(nproc)"

@@ -429,3 +429,14 @@ def test_parameters_key_is_exact_and_cheap(cam):
     transform(image=np.zeros((cam.height, cam.width), np.uint8), camera=cam, seed=1)
     transform(image=np.zeros((cam.height, cam.width), np.uint8), camera=moved, seed=2)
     assert len(transform._warps._warps) == 1
+
+
+def test_the_package_under_test_is_the_installed_one():
+    """The README's test command tests what `pip install .` installed (CTest says so),
+    and the wheel's version is the library's."""
+    import tomllib
+    if os.environ.get("FISHCAM_EXPECT_INSTALLED") == "1":
+        assert "site-packages" in fishcam.__file__, fishcam.__file__
+    with open(os.path.join(os.path.dirname(__file__), "..", "..", "pyproject.toml"), "rb") as f:
+        assert tomllib.load(f)["project"]["version"] == fishcam.__version__
+
