@@ -28,6 +28,7 @@ of repeating one epoch's changes (a worker's copy of the dataset never sees
 
 import contextlib
 import contextvars
+import typing
 import json
 import os
 
@@ -360,6 +361,89 @@ class RandomAffine(_FishcamTransform):
 
     def extra_repr(self):
         return repr(self.numpy_transform)[len("RandomAffine("):-1] + f", min_visibility={self.min_visibility}"
+
+
+class WarpedBatch(typing.NamedTuple):
+    """warp_batch's result: images (B, C, H, W), masks (B, H, W) or None, valid (B, H, W) bool."""
+
+    images: torch.Tensor
+    masks: typing.Optional[torch.Tensor]
+    valid: torch.Tensor
+
+
+_batch_warps = _transforms._WarpCache()
+
+
+def warp_batch(images, cameras, changes, masks=None, depth="source-sphere", fill=0.0, fill_mask=0):
+    """Viewpoint changes for a batch of tensors on any device.
+
+    The maps come from fishcam on the CPU (the grid path, geometric: within 1/32 px
+    of the per-pixel map), one per sample; the sampling is
+    ``torch.nn.functional.grid_sample`` on the tensors' device (CPU or CUDA):
+    bilinear for images, nearest for masks, in one call for the batch.
+
+    Args:
+        images: (B, C, H, W) tensor, uint8, uint16 or floating point, on any device.
+        cameras: one fishcam.Camera for the batch, or a sequence of B (one per sample).
+        changes: a sequence of B fishcam.ViewpointChange (e.g. ``fishcam.random_change``).
+        masks: None or (B, H, W) integer or bool tensor on the images' device (nearest; dtype kept).
+        depth: the depth prior ("source-sphere", "target-sphere", "infinity").
+        fill: the image value where the moved camera has no source; fill_mask: the mask value.
+
+    Returns:
+        WarpedBatch(images, masks, valid): the images and masks in their dtypes and on
+        their device; valid (B, H, W) bool, where the output has a source.
+    """
+    if not isinstance(images, torch.Tensor) or images.ndim != 4:
+        raise Error(f"images: expected a (B, C, H, W) tensor, got {getattr(images, 'shape', type(images).__name__)}")
+    batch, _, height, width = images.shape
+    cameras = [cameras] * batch if isinstance(cameras, Camera) else list(cameras)
+    changes = list(changes)
+    if len(cameras) != batch or len(changes) != batch:
+        raise Error(f"cameras, changes: expected one per image ({batch}), got {len(cameras)} and {len(changes)}")
+    if masks is not None and (not isinstance(masks, torch.Tensor) or tuple(masks.shape) != (batch, height, width)):
+        raise Error(f"masks: expected a ({batch}, {height}, {width}) tensor, got "
+                    f"{getattr(masks, 'shape', type(masks).__name__)}")
+    if masks is not None and masks.device != images.device:
+        raise Error(f"masks: on {masks.device} but the images are on {images.device}")
+    grids = torch.empty((batch, height, width, 2), dtype=torch.float32)
+    valid = torch.empty((batch, height, width), dtype=torch.bool)
+    for i, (camera, change) in enumerate(zip(cameras, changes)):
+        if not isinstance(camera, Camera):
+            raise Error(f"cameras[{i}]: expected a fishcam.Camera, got {type(camera).__name__}")
+        if not isinstance(change, _transforms._fishcam.ViewpointChange):
+            raise Error(f"changes[{i}]: expected a fishcam.ViewpointChange, got {type(change).__name__}")
+        if (camera.width, camera.height) != (width, height):
+            raise Error(f"images: are {width}x{height} but cameras[{i}] is {camera.width}x{camera.height}")
+        map_x, map_y, ok = _batch_warps.get(camera).maps(change, depth=depth, grid=True)
+        # grid_sample's align_corners=True puts -1 and 1 on the outer pixel centres;
+        # sources in the outer half pixel are clamped onto them, as fishcam's
+        # resampling does, and the pixels without a source are filled below.
+        x = torch.from_numpy(np.nan_to_num(map_x, nan=0.0)).clamp_(0, width - 1)
+        y = torch.from_numpy(np.nan_to_num(map_y, nan=0.0)).clamp_(0, height - 1)
+        grids[i, ..., 0] = x * (2.0 / max(width - 1, 1)) - 1
+        grids[i, ..., 1] = y * (2.0 / max(height - 1, 1)) - 1
+        valid[i] = torch.from_numpy(ok)
+    device = images.device
+    grids, valid = grids.to(device), valid.to(device)
+    floating = images if images.is_floating_point() else images.float()
+    sampled = torch.nn.functional.grid_sample(floating, grids.to(floating.dtype), mode="bilinear",
+                                              padding_mode="border", align_corners=True)
+    sampled = torch.where(valid[:, None], sampled, torch.as_tensor(float(fill), dtype=sampled.dtype, device=device))
+    if not images.is_floating_point():
+        info = torch.iinfo(images.dtype)
+        sampled = sampled.round_().clamp_(info.min, info.max)
+    out_masks = None
+    if masks is not None:
+        if masks.is_floating_point():
+            raise Error(f"masks: expected an integer or bool tensor, got {masks.dtype}")
+        # float32 holds integers exactly up to 2^24: labels and instance ids.
+        if masks.numel() and (int(masks.min()) < 0 or int(masks.max()) >= 2**24):
+            raise Error("masks: values outside 0..2^24 cannot be sampled exactly")
+        picked = torch.nn.functional.grid_sample(masks[:, None].float(), grids, mode="nearest",
+                                                 padding_mode="border", align_corners=True)[:, 0]
+        out_masks = torch.where(valid, picked, torch.as_tensor(float(fill_mask), device=device)).to(masks.dtype)
+    return WarpedBatch(sampled.to(images.dtype), out_masks, valid)
 
 
 def collate(batch):

@@ -372,10 +372,11 @@ void bind_augmentation(py::module_& m) {
       .def(
           "maps",
           [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth, const std::string& kind,
-             bool exact) {
+             bool exact, bool grid) {
             const DepthPrior prior = depth_prior(depth);
             const MapKind map = map_kind(kind);
             if (exact && map != MapKind::geometric) throw Error("exact: only geometric maps have an exact path");
+            if (grid && (exact || map != MapKind::geometric)) throw Error("grid: gives geometric maps, not exact ones");
             const int h = warp.target().height(), w = warp.target().width();
             py::array_t<float> map_x({h, w}), map_y({h, w});
             py::array_t<bool> valid({h, w});
@@ -388,8 +389,14 @@ void bind_augmentation(py::module_& m) {
               py::gil_scoped_release release;
               if (exact) {
                 warp.compute_exact(change.change(), prior, &maps);
+              } else if (grid) {
+                warp.compute_grid(change.change(), prior, &maps);
               } else {
                 warp.compute(change.change(), prior, &maps, map);
+              }
+              if (maps.map_x.data != static_cast<void*>(map_x.mutable_data()) ||
+                  maps.map_y.data != static_cast<void*>(map_y.mutable_data())) {
+                throw Error("internal: a map was reallocated");
               }
               if (map == MapKind::sampling) {
                 cv::Mat header(h, w, CV_8UC1, valid.mutable_data());
@@ -399,7 +406,7 @@ void bind_augmentation(py::module_& m) {
             return py::make_tuple(map_x, map_y, valid);
           },
           py::arg("change"), py::arg("depth") = "source-sphere", py::arg("kind") = "geometric",
-          py::arg("exact") = false)
+          py::arg("exact") = false, py::arg("grid") = false)
       .def(
           "warp",
           [](const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
