@@ -9,7 +9,9 @@
    sample-dataset`, 640x483 and 1280x966) with 0 and 2 persistent workers, with
    RandomViewpoint against without, per sample in steady state (target <= 1.10x),
    and the first epoch (warps built) apart;
-3. the augmentation's share of a CPU training step of a small segmentation network.
+3. the augmentation's share of a CPU training step of a small segmentation network;
+4. fishcam beside albumentations' and kornia's fisheye augmentations and kornia's
+   batched remap, per sample, in one process.
 
 Usage: PYTHONPATH=build/python build/venv/bin/python tools/bench_python.py [--fishcam build/tools/fishcam]
        [--only per-sample|dataloader|training] [--json]   (build/venv: scripts/python-env.sh)
@@ -117,6 +119,64 @@ def loader_cost(fishcam, binary, samples, epochs, photo=None):
     return rows
 
 
+def peers(fishcam, data, samples, rounds, batch=8):
+    """Per-sample time of fishcam beside the augmentations users would otherwise pick,
+    on the same 1280x966 RGB image (+ labels where the peer takes them), in one
+    process, interleaved in rounds, each library on 1 thread and then 2:
+    fishcam.transforms.RandomViewpoint (image + mask), albumentations'
+    OpticalDistortion(mode="fisheye") (image + mask), kornia's RandomFisheye (float
+    image tensor), and the batched paths: fishcam.torch.warp_batch and kornia's
+    remap (grid_sample) with the same maps precomputed, per sample of a batch."""
+    import albumentations
+    import cv2
+    import kornia
+    import torch
+    import fishcam.torch as ft
+    from fishcam.transforms import RandomViewpoint
+    camera = fishcam.Camera.read(data)
+    rng = np.random.default_rng(0)
+    image = rng.integers(0, 256, (camera.height, camera.width, 3), dtype=np.uint8)
+    image = cv2.GaussianBlur(image, (0, 0), 3)  # some structure, as a photo has
+    labels = rng.integers(0, 10, (camera.height, camera.width), dtype=np.uint8)
+    ours = RandomViewpoint(camera, preset="train")
+    optical = albumentations.OpticalDistortion(distort_limit=0.5, mode="fisheye", p=1.0)
+    optical.set_random_seed(0)
+    fisheye = kornia.augmentation.RandomFisheye(torch.tensor([-0.3, 0.3]), torch.tensor([-0.3, 0.3]),
+                                                torch.tensor([0.9, 1.0]), p=1.0)
+    tensor = torch.from_numpy(image).permute(2, 0, 1)[None].float() / 255
+    images = torch.from_numpy(np.stack([image] * batch)).permute(0, 3, 1, 2).contiguous()
+    changes = [fishcam.random_change("train", i) for i in range(batch)]
+    map_x, map_y, _ = ft._batch_warps.get(camera).maps(changes[0], grid=True)
+    kornia_x = torch.from_numpy(np.nan_to_num(map_x, nan=-1.0))[None].expand(batch, -1, -1)
+    kornia_y = torch.from_numpy(np.nan_to_num(map_y, nan=-1.0))[None].expand(batch, -1, -1)
+    float_images = images.float()
+    cases = {
+        "fishcam RandomViewpoint": lambda i: ours(image=image, mask=labels, seed=i),
+        "albumentations OpticalDistortion fisheye": lambda i: optical(image=image, mask=labels),
+        "kornia RandomFisheye": lambda i: fisheye(tensor),
+        "fishcam warp_batch (per sample of %d)" % batch: lambda i: ft.warp_batch(images, camera, changes),
+        "kornia remap, same maps (per sample of %d)" % batch: lambda i: kornia.geometry.transform.remap(
+            float_images, kornia_x, kornia_y, align_corners=True),
+    }
+    per_batch = {name for name in cases if "per sample of" in name}
+    rows = []
+    for threads in (1, 2):
+        fishcam.set_num_threads(threads)
+        torch.set_num_threads(threads)
+        cv2.setNumThreads(threads)
+        times = {name: [] for name in cases}
+        for r in range(rounds):
+            for name, run in cases.items():
+                n = max(samples // batch, 3) if name in per_batch else samples
+                ms = median_ms(lambda i: run(1000 * r + i), n)
+                times[name].append(ms / batch if name in per_batch else ms)
+        base = statistics.median(times["fishcam RandomViewpoint"])
+        for name in cases:
+            t = statistics.median(times[name])
+            rows.append({"threads": threads, "case": name, "ms": t, "over_fishcam": t / base})
+    return rows
+
+
 def training_share(fishcam, data, steps):
     """A small encoder-decoder (about 0.1 M parameters) on 640x483 batches of 4."""
     import torch
@@ -168,7 +228,7 @@ def main():
                         help="a real photo for the loader's RGB images (default: ../shared's WoodScape image when "
                              "present; 'none' for the rendered scenes)")
     parser.add_argument("--epochs", type=int, default=4, help="steady-state epochs per loader (after the first)")
-    parser.add_argument("--only", choices=["per-sample", "dataloader", "training"], help="run one part")
+    parser.add_argument("--only", choices=["per-sample", "dataloader", "training", "peers"], help="run one part")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     if args.photo == "none":
@@ -178,6 +238,7 @@ def main():
         "per_sample": lambda: per_sample(fishcam, args.fishcam, args.camera, args.samples, args.rounds),
         "dataloader": lambda: loader_cost(fishcam, args.fishcam, args.loader_samples, args.epochs, args.photo),
         "training": lambda: training_share(fishcam, args.camera, 12),
+        "peers": lambda: peers(fishcam, args.camera, args.samples, args.rounds),
     }
     result = {name: run() for name, run in parts.items() if args.only in (None, name.replace("_", "-"))}
     if args.json:
@@ -195,6 +256,10 @@ def main():
             print("  %-9s %-8s %d workers: plain %6.2f ms, RandomViewpoint %6.2f ms, ratio %.3f; first epoch %.1f / %.1f ms"
                   % (r["size"], r["images"], r["workers"], r["plain_ms"], r["augmented_ms"], r["ratio"],
                      r["first_epoch_plain_ms"], r["first_epoch_augmented_ms"]))
+    if "peers" in result:
+        print("Beside the peers, 1280x966 RGB (median per sample; ratio to fishcam's per-sample transform):")
+        for r in result["peers"]:
+            print("  %d thread(s) %-44s %8.2f ms  %5.2fx" % (r["threads"], r["case"], r["ms"], r["over_fishcam"]))
     if "training" in result:
         t = result["training"]
         print("CPU training step, batch 4 at 640x483 (%d torch threads): augmentation %.1f ms, step %.1f ms, "

@@ -415,14 +415,8 @@ def warp_batch(images, cameras, changes, masks=None, depth="source-sphere", fill
             raise Error(f"changes[{i}]: expected a fishcam.ViewpointChange, got {type(change).__name__}")
         if (camera.width, camera.height) != (width, height):
             raise Error(f"images: are {width}x{height} but cameras[{i}] is {camera.width}x{camera.height}")
-        map_x, map_y, ok = _batch_warps.get(camera).maps(change, depth=depth, grid=True)
-        # grid_sample's align_corners=True puts -1 and 1 on the outer pixel centres;
-        # sources in the outer half pixel are clamped onto them, as fishcam's
-        # resampling does, and the pixels without a source are filled below.
-        x = torch.from_numpy(np.nan_to_num(map_x, nan=0.0)).clamp_(0, width - 1)
-        y = torch.from_numpy(np.nan_to_num(map_y, nan=0.0)).clamp_(0, height - 1)
-        grids[i, ..., 0] = x * (2.0 / max(width - 1, 1)) - 1
-        grids[i, ..., 1] = y * (2.0 / max(height - 1, 1)) - 1
+        grid, ok = _batch_warps.get(camera).sampling_grid(change, depth)
+        grids[i] = torch.from_numpy(grid)
         valid[i] = torch.from_numpy(ok)
     device = images.device
     grids, valid = grids.to(device), valid.to(device)

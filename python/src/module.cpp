@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -423,6 +424,40 @@ void bind_augmentation(py::module_& m) {
           py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
           py::arg("return_valid") = false, py::arg("sampling") = "grid")
+      .def(
+          "sampling_grid",
+          [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth) {
+            const DepthPrior prior = depth_prior(depth);
+            const int h = warp.target().height(), w = warp.target().width();
+            const int sw = warp.source().width(), sh = warp.source().height();
+            py::array_t<float> grid({h, w, 2});
+            py::array_t<bool> valid({h, w});
+            {
+              py::gil_scoped_release release;
+              WarpMaps maps;
+              warp.compute_grid(change.change(), prior, &maps);
+              // torch.nn.functional.grid_sample's coordinates with align_corners=True:
+              // -1 and 1 on the outer pixel centres; sources in the outer half pixel
+              // clamped onto them (as fishcam's resampling does); 0 where there is none.
+              const float sx = sw > 1 ? 2.0f / float(sw - 1) : 0.0f, sy = sh > 1 ? 2.0f / float(sh - 1) : 0.0f;
+              float* out = grid.mutable_data();
+              bool* ok = valid.mutable_data();
+              for (int v = 0; v < h; ++v) {
+                const float* x = maps.map_x.ptr<float>(v);
+                const float* y = maps.map_y.ptr<float>(v);
+                const uchar* inside = maps.valid.ptr<uchar>(v);
+                for (int u = 0; u < w; ++u, out += 2, ++ok) {
+                  *ok = inside[u] != 0;
+                  out[0] = *ok ? std::clamp(x[u], 0.0f, float(sw - 1)) * sx - 1 : 0.0f;
+                  out[1] = *ok ? std::clamp(y[u], 0.0f, float(sh - 1)) * sy - 1 : 0.0f;
+                }
+              }
+            }
+            return py::make_tuple(grid, valid);
+          },
+          py::arg("change"), py::arg("depth") = "source-sphere",
+          "The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): "
+          "(grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)")
       .def(
           "forward",
           [](const ViewpointWarp& warp, const py::handle& points, const RandomPose& change, const std::string& depth) {
