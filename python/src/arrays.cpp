@@ -1,0 +1,95 @@
+// Numpy <-> library plumbing shared by the binding files (bindings.hpp).
+#include <algorithm>
+#include <string>
+
+#include "bindings.hpp"
+
+namespace fishcam::python {
+
+using PointArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// (N, k) float64, C-contiguous: the input itself when it already is one (no copy),
+// else a converted copy (forcecast). `what` names the argument in errors.
+PointArray rows_of(const py::handle& input, py::ssize_t k, const char* what) {
+  PointArray array = PointArray::ensure(input);
+  if (!array) throw Error(std::string(what) + ": expected an array of numbers");
+  if (array.ndim() != 2 || array.shape(1) != k) {
+    std::string shape = "(";
+    for (py::ssize_t i = 0; i < array.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(array.shape(i));
+    throw Error(std::string(what) + ": expected shape (N, " + std::to_string(k) + "), got " + shape + ")");
+  }
+  return array;
+}
+
+// A numpy image as a cv::Mat header on its memory (no copy). HxW or HxWxC, C <= 4,
+// C-contiguous (else copied), dtype among `depths`.
+cv::Mat as_mat(py::array& array, const char* what, bool labels) {
+  if (!(array.flags() & py::array::c_style)) {
+    array = py::array::ensure(array, py::array::c_style);  // a contiguous copy: never strided reads
+  }
+  if (array.ndim() >= 2 && (array.shape(0) >= 32767 || array.shape(1) >= 32767)) {
+    throw Error(std::string(what) + ": 32767 pixels or more per side (cv::remap takes fewer)");
+  }
+  const int ndim = static_cast<int>(array.ndim());
+  if (ndim != 2 && !(ndim == 3 && !labels)) {
+    throw Error(std::string(what) + (labels ? ": expected an HxW array" : ": expected an HxW or HxWxC array"));
+  }
+  const int channels = ndim == 3 ? static_cast<int>(array.shape(2)) : 1;
+  if (channels < 1 || channels > 4) throw Error(std::string(what) + ": expected 1 to 4 channels, got " + std::to_string(channels));
+  int depth = -1;
+  if (py::isinstance<py::array_t<std::uint8_t>>(array)) depth = CV_8U;
+  if (py::isinstance<py::array_t<std::uint16_t>>(array)) depth = CV_16U;
+  if (!labels && py::isinstance<py::array_t<float>>(array)) depth = CV_32F;
+  if (depth < 0) {
+    throw Error(std::string(what) + ": expected dtype " + (labels ? "uint8 or uint16" : "uint8, uint16 or float32") +
+                ", got " + std::string(py::str(array.dtype())));
+  }
+  // Inputs are only read: read-only arrays (np.asarray of a PIL image, a memory map
+  // opened with mode 'r') are taken as they are.
+  return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_MAKETYPE(depth, channels),
+                 const_cast<void*>(array.data()));
+}
+
+
+// A new numpy array of height x width (x the channels of `like`), dtype of `like`,
+// and a cv::Mat header on its memory.
+py::array new_image(const py::array& like, int height, int width, cv::Mat* header) {
+  std::vector<py::ssize_t> shape{height, width};
+  if (like.ndim() == 3) shape.push_back(like.shape(2));
+  py::array out(like.dtype(), shape);
+  const int channels = like.ndim() == 3 ? static_cast<int>(like.shape(2)) : 1;
+  const int depth = like.itemsize() == 1 ? CV_8U : like.itemsize() == 2 ? CV_16U : CV_32F;
+  *header = cv::Mat(height, width, CV_MAKETYPE(depth, channels), out.mutable_data());
+  return out;
+}
+
+LabelSpan labels_of(const py::handle& input, const char* what, py::array* keep) {
+  *keep = py::array::ensure(input, py::array::c_style);
+  if (!*keep) throw Error(std::string(what) + ": expected an array of integer labels");
+  const py::array& a = *keep;
+  const auto n = static_cast<std::size_t>(a.size());
+  if (py::isinstance<py::array_t<std::uint8_t>>(a)) return std::span(static_cast<const std::uint8_t*>(a.data()), n);
+  if (py::isinstance<py::array_t<std::uint16_t>>(a)) return std::span(static_cast<const std::uint16_t*>(a.data()), n);
+  if (py::isinstance<py::array_t<std::int32_t>>(a)) return std::span(static_cast<const std::int32_t*>(a.data()), n);
+  if (py::isinstance<py::array_t<std::int64_t>>(a)) return std::span(static_cast<const std::int64_t*>(a.data()), n);
+  throw Error(std::string(what) + ": expected dtype uint8, uint16, int32 or int64, got " + std::string(py::str(a.dtype())));
+}
+
+
+std::string shape_text(const py::array& a) {
+  std::string out = "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) out += (i ? ", " : "") + std::to_string(a.shape(i));
+  return out + (a.ndim() == 1 ? ",)" : ")");
+}
+
+
+std::string camera_state(const Camera& camera) {
+  return format_camera(camera.parameters(), CameraFormat::fishcam);
+}
+
+Camera camera_from_state(const std::string& state) {
+  return Camera(parse_camera(state, "pickled camera", CameraFormat::fishcam));
+}
+
+
+}  // namespace fishcam::python

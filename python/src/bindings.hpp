@@ -1,0 +1,74 @@
+// The bindings' shared pieces: numpy <-> library plumbing (zero-copy inputs when
+// C-contiguous, outputs allocated as numpy arrays and written in place) and the
+// camera's state, for the per-area binding files (camera.cpp, augmentation.cpp,
+// metrics.cpp) that module.cpp assembles.
+#pragma once
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <opencv2/core.hpp>
+
+#include <optional>
+#include <span>
+#include <string>
+
+#include "fishcam/camera.hpp"
+#include "fishcam/camera_io.hpp"
+#include "fishcam/metrics.hpp"
+#include "fishcam/viewpoint.hpp"
+
+namespace fishcam::python {
+
+namespace py = pybind11;
+
+using PointArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// (N, k) float64, C-contiguous: the input itself when it already is one (no copy),
+// else a converted copy (forcecast). `what` names the argument in errors.
+PointArray rows_of(const py::handle& input, py::ssize_t k, const char* what);
+
+// A batch call of the library on (N, kIn) rows: (N, kOut) float64 results and
+// (N,) bool validity, computed in place on numpy memory with the GIL released.
+template <int kIn, int kOut, class Compute>
+py::tuple batch(const py::handle& input, const char* what, const Compute& compute) {
+  using In = Eigen::Matrix<double, kIn, 1>;
+  using Out = Eigen::Matrix<double, kOut, 1>;
+  const PointArray rows = rows_of(input, kIn, what);
+  const size_t n = static_cast<size_t>(rows.shape(0));
+  py::array_t<double> results({py::ssize_t(n), py::ssize_t(kOut)});
+  py::array_t<bool> ok{py::ssize_t(n)};
+  {
+    py::gil_scoped_release release;
+    compute(std::span<const In>(reinterpret_cast<const In*>(rows.data()), n),
+            std::span<Out>(reinterpret_cast<Out*>(results.mutable_data()), n),
+            std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(ok.mutable_data()), n));
+  }
+  return py::make_tuple(results, ok);
+}
+
+// A numpy image as a cv::Mat header on its memory (no copy). HxW or HxWxC, C <= 4,
+// C-contiguous (else copied), dtype among `depths`.
+cv::Mat as_mat(py::array& array, const char* what, bool labels);
+
+// A new numpy array of height x width (x the channels of `like`), dtype of `like`,
+// and a cv::Mat header on its memory.
+py::array new_image(const py::array& like, int height, int width, cv::Mat* header);
+
+// Integer labels of any shape as a LabelSpan over the array's own memory (a
+// C-contiguous copy only when it is strided); `keep` holds that memory.
+LabelSpan labels_of(const py::handle& input, const char* what, py::array* keep);
+// "(2, 3)" for messages.
+std::string shape_text(const py::array& a);
+
+// The camera's full state as fishcam JSON (exact: doubles are written round-trip).
+std::string camera_state(const Camera& camera);
+Camera camera_from_state(const std::string& state);
+
+void bind_camera(py::module_& m);
+void bind_augmentation(py::module_& m);
+void bind_metrics(py::module_& m);
+
+}  // namespace fishcam::python

@@ -1,0 +1,154 @@
+// fishcam.Camera and fishcam.convert.
+#include <cmath>
+#include <numbers>
+
+#include "bindings.hpp"
+#include "fishcam/fit.hpp"
+
+namespace fishcam::python {
+namespace {
+
+std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
+  if (!name) return std::nullopt;
+  const auto format = parse_camera_format(*name);
+  if (!format) throw Error("format: unknown camera format '" + *name + "' (expected one of: " + camera_format_names() + ")");
+  return format;
+}
+
+
+// The camera's numbers as bytes: equal exactly when the cameras are (model, its
+// parameters, size, principal point, pixel scale, theta limit and, with_pose, the
+// pose). A cache key that costs microseconds, where to_json() formats and reads
+// back a file (milliseconds).
+py::bytes parameters_key(const Camera& camera, bool with_pose) {
+  const CameraParameters& p = camera.parameters();
+  std::string key(model_name(p.model));
+  key.push_back('\0');
+  std::vector<double> numbers = model_params(p.model);
+  numbers.insert(numbers.end(), {double(p.width), double(p.height), p.principal_point.x(), p.principal_point.y(),
+                                 p.pixel_scale.x(), p.pixel_scale.y(), p.theta_limit.value_or(-1.0)});
+  if (with_pose && p.pose) {
+    const auto& q = p.pose->rotation;
+    numbers.insert(numbers.end(), {q.w(), q.x(), q.y(), q.z(), p.pose->translation.x(), p.pose->translation.y(),
+                                   p.pose->translation.z()});
+  }
+  key.append(reinterpret_cast<const char*>(numbers.data()), numbers.size() * sizeof(double));
+  return py::bytes(key);
+}
+
+}  // namespace
+
+void bind_camera(py::module_& m) {
+  py::class_<Camera>(m, "Camera")
+      .def_static(
+          "read",
+          [](const std::string& path, std::optional<py::object> camera, std::optional<std::pair<int, int>> image_size,
+             std::optional<std::string> format, std::optional<std::string> distortion_model) {
+            CameraReadOptions options;
+            options.format = format_of(format);
+            options.distortion_model = distortion_model;
+            if (camera && !camera->is_none()) options.camera = py::str(*camera);
+            options.image_size = image_size;
+            py::gil_scoped_release release;
+            return read_camera(path, options);
+          },
+          py::arg("path"), py::arg("camera") = py::none(), py::arg("image_size") = py::none(),
+          py::arg("format") = py::none(), py::arg("distortion_model") = py::none())
+      .def(
+          "write",
+          [](const Camera& camera, const std::string& path, std::optional<std::string> format, bool overwrite) {
+            CameraFormat resolved;
+            if (format) {
+              resolved = *format_of(format);
+            } else if (const auto by_extension = camera_format_for_extension(path)) {
+              resolved = *by_extension;
+            } else {
+              throw Error(path + ": cannot tell the format from the extension; pass format=");
+            }
+            write_camera(camera.parameters(), path, resolved, overwrite);
+          },
+          py::arg("path"), py::arg("format") = py::none(), py::arg("overwrite") = false)
+      .def_property_readonly("width", &Camera::width)
+      .def_property_readonly("height", &Camera::height)
+      .def_property_readonly("model", [](const Camera& c) { return std::string(model_name(c.model())); })
+      .def_property_readonly("parameters", [](const Camera& c) { return model_params(c.model()); })
+      .def_property_readonly("principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); })
+      .def_property_readonly(
+          "pose",
+          [](const Camera& c) -> std::optional<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> {
+            const auto& pose = c.parameters().pose;
+            if (!pose) return std::nullopt;
+            return std::pair(Eigen::Matrix3d(pose->rotation.toRotationMatrix()), Eigen::Vector3d(pose->translation));
+          },
+          "(rotation (3, 3), translation (3,)) of camera -> reference (p_ref = R p_cam + t), or None")
+      .def_property_readonly("pixel_scale", [](const Camera& c) { return Eigen::Vector2d(c.pixel_scale()); })
+      .def(
+          "project",
+          [](const Camera& camera, const py::handle& points) {
+            return batch<3, 2>(points, "points", [&](auto in, auto out, auto ok) { camera.project(in, out, ok); });
+          },
+          py::arg("points"))
+      .def(
+          "unproject",
+          [](const Camera& camera, const py::handle& pixels) {
+            return batch<2, 3>(pixels, "pixels", [&](auto in, auto out, auto ok) { camera.unproject(in, out, ok); });
+          },
+          py::arg("pixels"))
+      .def(
+          "theta_from_rho",
+          [](const Camera& camera, py::array_t<double, py::array::c_style | py::array::forcecast> rho) {
+            py::array_t<double> theta(std::vector<py::ssize_t>(rho.shape(), rho.shape() + rho.ndim()));
+            const double* in = rho.data();
+            double* out = theta.mutable_data();
+            const py::ssize_t n = rho.size();
+            {
+              py::gil_scoped_release release;
+              for (py::ssize_t i = 0; i < n; ++i) out[i] = camera.theta_from_rho(in[i]);
+            }
+            return theta;
+          },
+          py::arg("rho"))
+      .def("info_json", [](const Camera& c) { return camera_info_json(c); })
+      .def(
+          "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
+          py::arg("width"), py::arg("height"))
+      .def(
+          "augmented",
+          [](const Camera& c, const RandomPose& change) { return augmented_camera(c, change.change()); },
+          py::arg("change"),
+          "The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera "
+          "without a pose gets one relative to its own frame)")
+      .def("to_json", &camera_state, "The camera as fishcam JSON text")
+      .def("parameters_key", &parameters_key, py::arg("with_pose") = true,
+           "bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a "
+           "warp depends on); cheap, for caches and hashing")
+      .def_static("from_json", &camera_from_state, py::arg("text"))
+      .def(py::pickle([](const Camera& c) { return camera_state(c); },
+                      [](const std::string& state) { return camera_from_state(state); }))
+      .def("__repr__", [](const Camera& c) {
+        return "<fishcam.Camera " + std::string(model_name(c.model())) + " " + std::to_string(c.width()) + "x" +
+               std::to_string(c.height()) + ">";
+      });
+
+  m.def(
+      "convert",
+      [](const Camera& source, const std::string& to, const std::string& method, std::optional<double> max_angle_deg,
+         bool fit_center, bool fit_aspect) {
+        std::optional<double> max_theta;
+        if (max_angle_deg) {
+          if (!std::isfinite(*max_angle_deg)) throw Error("max_angle: must be finite");
+          max_theta = *max_angle_deg * std::numbers::pi / 180;
+        }
+        const ModelSpec spec = parse_model_spec(to);
+        std::optional<Conversion> c;
+        {
+          py::gil_scoped_release release;
+          c = convert_camera(source, spec, method, max_theta, {fit_center, fit_aspect});
+        }
+        return py::make_tuple(Camera(c->camera), fit_report_json(c->camera, c->report), c->widest_theta);
+      },
+      py::arg("camera"), py::arg("to"), py::arg("method") = "lsq", py::arg("max_angle") = py::none(),
+      py::arg("fit_center") = false, py::arg("fit_aspect") = false);
+}
+
+}  // namespace fishcam::python
