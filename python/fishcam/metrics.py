@@ -42,6 +42,10 @@ class ConfusionMatrix(_fishcam.ConfusionMatrix):
     """
 
     def update(self, prediction, ground_truth, valid=None):
+        """Counts the pixels of one batch: prediction and ground_truth integer arrays
+        (numpy or torch, CUDA tensors copied to the host) of one shape, valid an
+        optional bool mask of that shape. A value that is not a class (nor the
+        ignored label) raises fishcam.Error and leaves the matrix unchanged."""
         prediction = _as_numpy(prediction, "prediction")
         ground_truth = _as_numpy(ground_truth, "ground_truth")
         if valid is not None:
@@ -50,9 +54,12 @@ class ConfusionMatrix(_fishcam.ConfusionMatrix):
         return self
 
     def iou(self):
+        """Per-class intersection over union, (num_classes,) float64 fractions; NaN for
+        classes absent from both prediction and ground truth."""
         return np.array([np.nan if v is None else v for v in self._iou()], dtype=np.float64)
 
     def miou(self):
+        """The mean of iou() over the classes present (a float fraction; NaN if none)."""
         value = self._miou()
         return float("nan") if value is None else value
 

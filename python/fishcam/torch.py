@@ -48,6 +48,9 @@ if not hasattr(tv_tensors, "KeyPoints"):  # pragma: no cover
 from . import Camera, Error, derive_seed, set_num_threads
 from . import transforms as _transforms
 
+__all__ = ["RandomViewpoint", "RandomAffine", "DepthMap", "Polygon", "WoodScapeDataset", "EpochSampler", "WarpedBatch",
+           "warp_batch", "collate", "sample_seed", "record_changes", "worker_init_fn", "torch_seed"]
+
 
 def _cv2():
     import cv2  # python3-opencv: only the dataset needs it

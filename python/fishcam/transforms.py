@@ -30,6 +30,8 @@ import numpy as np
 
 from . import Camera, Error, ViewpointWarp, _check_seed, _fishcam, change_to_dict
 
+__all__ = ["RandomViewpoint", "RandomAffine", "SampleChange", "POLYGON_TOLERANCE_PX", "affine_to_dict", "draw_seed"]
+
 
 def draw_seed(rng=None):
     """One 64-bit seed from ``rng`` (a numpy Generator) or numpy's global generator."""

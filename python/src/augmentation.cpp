@@ -79,12 +79,16 @@ Sampling sampling_of(const std::string& name) {
 }  // namespace
 
 void bind_augmentation(py::module_& m) {
-  py::class_<RandomPose>(m, "ViewpointChange")
+  py::class_<RandomPose>(m, "ViewpointChange",
+                         "A viewpoint change (the paper's eq. 7): a point P of the camera frame is at R P + t in the "
+                         "moved camera's frame; R = Rz Ry Rx of rotation_deg (x applied first), t in unit-sphere units.")
       .def(py::init(&change_from), py::arg("rotation_deg") = Eigen::Vector3d::Zero(),
-           py::arg("translation") = Eigen::Vector3d::Zero())
-      .def_readonly("rotation_deg", &RandomPose::rotation_deg)
-      .def_readonly("translation", &RandomPose::translation)
-      .def_property_readonly("rotation", [](const RandomPose& p) { return Eigen::Matrix3d(p.change().rotation); })
+           py::arg("translation") = Eigen::Vector3d::Zero(), "rotation_deg: (3,) degrees about x, y, z; translation: (3,).")
+      .def_readonly("rotation_deg", &RandomPose::rotation_deg, "Degrees about x, y, z: float64 array (3,).")
+      .def_readonly("translation", &RandomPose::translation, "t of eq. 7: float64 array (3,).")
+      .def_property_readonly(
+          "rotation", [](const RandomPose& p) { return Eigen::Matrix3d(p.change().rotation); },
+          "R of eq. 7: float64 array (3, 3).")
       .def(py::pickle(
           [](const RandomPose& p) { return py::make_tuple(p.rotation_deg, p.translation); },
           [](const py::tuple& t) { return change_from(t[0].cast<Eigen::Vector3d>(), t[1].cast<Eigen::Vector3d>()); }))
@@ -95,6 +99,16 @@ void bind_augmentation(py::module_& m) {
                       p.translation.y(), p.translation.z());
         return std::string(buffer);
       });
+
+  // Camera.augmented takes a ViewpointChange: defined once that type is bound, so
+  // its signature (and the stubs) name it.
+  py::reinterpret_borrow<py::class_<Camera>>(m.attr("Camera"))
+      .def(
+          "augmented",
+          [](const Camera& c, const RandomPose& change) { return augmented_camera(c, change.change()); },
+          py::arg("change"),
+          "The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera "
+          "without a pose gets one relative to its own frame)");
 
   m.def(
       "random_change",
@@ -126,17 +140,23 @@ void bind_augmentation(py::module_& m) {
         "Raises fishcam.Error naming the choices unless name is a depth prior.");
   m.def("check_preset", [](const std::string& name) { pose_preset(name); },
         "Raises fishcam.Error naming the choices unless name is a pose preset.");
-  m.def("derive_seed", &derive_seed, py::arg("seed"), py::arg("key"), py::arg("index"));
+  m.def("derive_seed", &derive_seed, py::arg("seed"), py::arg("key"), py::arg("index"),
+        "A 64-bit seed per (key, index) from one user seed (SplitMix64 over FNV-1a of the key): "
+        "the seeds of augment-dataset, compare and WoodScapeDataset(seed=).");
 
-  py::class_<ViewpointWarp>(m, "ViewpointWarp")
+  py::class_<ViewpointWarp>(m, "ViewpointWarp",
+                            "The viewpoint augmentation of one calibration (source camera -> target camera, the same "
+                            "by default): caches the target's rays and the grid plan, so keep one per calibration.")
       .def(py::init([](const Camera& source, std::optional<Camera> target) {
              py::gil_scoped_release release;
              return target ? ViewpointWarp(source, *target) : ViewpointWarp(source);
            }),
-           py::arg("camera"), py::arg("target") = py::none())
-      .def_property_readonly("source", &ViewpointWarp::source)
-      .def_property_readonly("target", &ViewpointWarp::target)
-      .def_property_readonly("float_kernel", &ViewpointWarp::float_kernel)
+           py::arg("camera"), py::arg("target") = py::none(),
+           "camera: the images' camera; target: the output camera (default: the same).")
+      .def_property_readonly("source", &ViewpointWarp::source, "The images' camera.")
+      .def_property_readonly("target", &ViewpointWarp::target, "The output camera.")
+      .def_property_readonly("float_kernel", &ViewpointWarp::float_kernel,
+                             "Whether maps come from the float kernel (within 1e-3 px), else the exact path.")
       .def(
           "maps",
           [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth, const std::string& kind,
@@ -174,7 +194,10 @@ void bind_augmentation(py::module_& m) {
             return py::make_tuple(map_x, map_y, valid);
           },
           py::arg("change"), py::arg("depth") = "source-sphere", py::arg("kind") = "geometric",
-          py::arg("exact") = false, py::arg("grid") = false)
+          py::arg("exact") = false, py::arg("grid") = false,
+          "The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source "
+          "coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision "
+          "reference; grid=True: the grid path's (within 1/32 px), geometric.")
       .def(
           "warp",
           [](const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
@@ -188,9 +211,12 @@ void bind_augmentation(py::module_& m) {
             return resample(image, labels, source, target, fill, label_fill, return_valid,
                             [&](const AugmentIO& io) { warp.augment(change.change(), prior, io, how); });
           },
-          py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
+          py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
-          py::arg("return_valid") = false, py::arg("sampling") = "grid")
+          py::arg("return_valid") = false, py::arg("sampling") = "grid",
+          "One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; "
+          "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
+          "asked.")
       .def(
           "sampling_grid",
           [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth) {
@@ -265,8 +291,10 @@ void bind_augmentation(py::module_& m) {
           py::arg("fill") = std::numeric_limits<float>::quiet_NaN(),
           "A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values "
           "re-expressed in the moved camera (exact for rotations); fill where there is no source")
-      .def_property_readonly("grid_spacing", &ViewpointWarp::grid_spacing)
-      .def_property_readonly("grid_error_px", &ViewpointWarp::grid_error_px)
+      .def_property_readonly("grid_spacing", &ViewpointWarp::grid_spacing,
+                             "The grid path's node spacing in pixels (0: no grid, per-pixel maps).")
+      .def_property_readonly("grid_error_px", &ViewpointWarp::grid_error_px,
+                             "The grid's measured worst interpolation error against the per-pixel map (px).")
       .def(py::pickle(
           [](const ViewpointWarp& w) { return py::make_tuple(camera_state(w.source()), camera_state(w.target())); },
           [](const py::tuple& t) {
@@ -366,14 +394,15 @@ void bind_augmentation(py::module_& m) {
         return resample(image, labels, size, size, fill, label_fill, return_valid,
                         [&](const AugmentIO& io) { affine_augment(change, size, io); });
       },
-      py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"), py::arg("fill") = 0.0,
+      py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
+      py::arg("fill") = 0.0,
       py::arg("label_fill") = 0, py::arg("return_valid") = false);
 
   m.def("set_num_threads", [](int n) {
     if (n < 1 || n > 1024) throw Error("set_num_threads: expected 1 to 1024, got " + std::to_string(n));
     cv::setNumThreads(n);
   });
-  m.def("get_num_threads", [] { return cv::getNumThreads(); });
+  m.def("get_num_threads", [] { return cv::getNumThreads(); }, "The threads fishcam's compute uses (int).");
 
   // For the zero-copy tests: the address of the memory the bindings compute on
   // for an input (points with k columns, or an image / labels).

@@ -39,7 +39,10 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
 }  // namespace
 
 void bind_camera(py::module_& m) {
-  py::class_<Camera>(m, "Camera")
+  py::class_<Camera>(m, "Camera",
+                     "A calibrated camera: a radial model rho(theta), principal point, pixel scale, image size and "
+                     "an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z "
+                     "forward. Immutable; equal cameras compare equal and hash alike.")
       .def_static(
           "read",
           [](const std::string& path, std::optional<py::object> camera, std::optional<std::pair<int, int>> image_size,
@@ -53,7 +56,10 @@ void bind_camera(py::module_& m) {
             return read_camera(path, options);
           },
           py::arg("path"), py::arg("camera") = py::none(), py::arg("image_size") = py::none(),
-          py::arg("format") = py::none(), py::arg("distortion_model") = py::none())
+          py::arg("format") = py::none(), py::arg("distortion_model") = py::none(),
+          "Reads a camera file in any format fishcam knows (docs/formats.md). camera: which camera of a "
+          "multi-camera file (index or name); image_size: (width, height) for files without one; format: force a "
+          "reader; distortion_model: 'fisheye' or 'plumb_bob' for OpenCV files that do not say.")
       .def(
           "write",
           [](const Camera& camera, const std::string& path, std::optional<std::string> format, bool overwrite) {
@@ -67,12 +73,20 @@ void bind_camera(py::module_& m) {
             }
             write_camera(camera.parameters(), path, resolved, overwrite);
           },
-          py::arg("path"), py::arg("format") = py::none(), py::arg("overwrite") = false)
-      .def_property_readonly("width", &Camera::width)
-      .def_property_readonly("height", &Camera::height)
-      .def_property_readonly("model", [](const Camera& c) { return std::string(model_name(c.model())); })
-      .def_property_readonly("parameters", [](const Camera& c) { return model_params(c.model()); })
-      .def_property_readonly("principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); })
+          py::arg("path"), py::arg("format") = py::none(), py::arg("overwrite") = false,
+          "Writes the camera in `format` (default: from the extension); refuses an existing file unless "
+          "overwrite=True, and a format that cannot hold the model.")
+      .def_property_readonly("width", &Camera::width, "Image width in pixels (int).")
+      .def_property_readonly("height", &Camera::height, "Image height in pixels (int).")
+      .def_property_readonly(
+          "model", [](const Camera& c) { return std::string(model_name(c.model())); },
+          "The model's name (docs/models.md), e.g. 'polynomial', 'kannala-brandt'.")
+      .def_property_readonly(
+          "parameters", [](const Camera& c) { return model_params(c.model()); },
+          "The model's parameters (list of float), in the order docs/models.md gives.")
+      .def_property_readonly(
+          "principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); },
+          "(cx, cy) in pixels, float64 array (2,).")
       .def_property_readonly(
           "pose",
           [](const Camera& c) -> std::optional<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> {
@@ -80,20 +94,25 @@ void bind_camera(py::module_& m) {
             if (!pose) return std::nullopt;
             return std::pair(Eigen::Matrix3d(pose->rotation.toRotationMatrix()), Eigen::Vector3d(pose->translation));
           },
-          "(rotation (3, 3), translation (3,)) of camera -> reference (p_ref = R p_cam + t), or None")
-      .def_property_readonly("pixel_scale", [](const Camera& c) { return Eigen::Vector2d(c.pixel_scale()); })
+          "The pose camera to reference, p_ref = R p_cam + t: a tuple of R (3, 3) and t (3,), or None")
+      .def_property_readonly(
+          "pixel_scale", [](const Camera& c) { return Eigen::Vector2d(c.pixel_scale()); },
+          "(a_x, a_y): pixel = c + a * rho(theta) * direction; float64 array (2,).")
       .def(
           "project",
           [](const Camera& camera, const py::handle& points) {
             return batch<3, 2>(points, "points", [&](auto in, auto out, auto ok) { camera.project(in, out, ok); });
           },
-          py::arg("points"))
+          py::arg("points"),
+          "Projects points (N, 3) of the camera frame: (pixels (N, 2) float64, ok (N,) bool); NaN where the "
+          "point is outside the valid field of view.")
       .def(
           "unproject",
           [](const Camera& camera, const py::handle& pixels) {
             return batch<2, 3>(pixels, "pixels", [&](auto in, auto out, auto ok) { camera.unproject(in, out, ok); });
           },
-          py::arg("pixels"))
+          py::arg("pixels"),
+          "Unit rays (N, 3) float64 of pixels (N, 2), and ok (N,) bool; NaN where a pixel has no ray.")
       .def(
           "theta_from_rho",
           [](const Camera& camera, py::array_t<double, py::array::c_style | py::array::forcecast> rho) {
@@ -107,22 +126,20 @@ void bind_camera(py::module_& m) {
             }
             return theta;
           },
-          py::arg("rho"))
-      .def("info_json", [](const Camera& c) { return camera_info_json(c); })
+          py::arg("rho"),
+          "theta (radians) of radii rho (pixels, any shape, float64; same shape out); NaN outside the valid domain.")
+      .def("info_json", [](const Camera& c) { return camera_info_json(c); },
+           "What `fishcam info --json` prints (str); info() gives it as a dict.")
       .def(
           "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
-          py::arg("width"), py::arg("height"))
-      .def(
-          "augmented",
-          [](const Camera& c, const RandomPose& change) { return augmented_camera(c, change.change()); },
-          py::arg("change"),
-          "The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera "
-          "without a pose gets one relative to its own frame)")
+          py::arg("width"), py::arg("height"),
+          "The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.")
       .def("to_json", &camera_state, "The camera as fishcam JSON text")
       .def("parameters_key", &parameters_key, py::arg("with_pose") = true,
            "bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a "
            "warp depends on); cheap, for caches and hashing")
-      .def_static("from_json", &camera_from_state, py::arg("text"))
+      .def_static("from_json", &camera_from_state, py::arg("text"),
+                  "The camera of fishcam JSON text (what to_json gives).")
       .def(py::pickle([](const Camera& c) { return camera_state(c); },
                       [](const std::string& state) { return camera_from_state(state); }))
       .def("__repr__", [](const Camera& c) {

@@ -103,7 +103,9 @@ void bind_metrics(py::module_& m) {
             py::gil_scoped_release release;
             matrix.update(pred, gt, mask_span, width);
           },
-          py::arg("prediction"), py::arg("ground_truth"), py::arg("valid") = py::none())
+          py::arg("prediction"), py::arg("ground_truth"), py::arg("valid") = py::none(),
+          "Counts pixels: prediction and ground_truth integer arrays of one shape (uint8, uint16, int32, int64), "
+          "valid an optional bool mask of that shape; a value that is not a class raises and counts nothing.")
       .def("merge", &ConfusionMatrix::merge, py::arg("other"))
       .def_property_readonly("num_classes", &ConfusionMatrix::num_classes)
       .def_property_readonly("ignore", &ConfusionMatrix::ignore)

@@ -1,0 +1,286 @@
+"""
+fishcam's C++ library (use the fishcam package, not this module)
+"""
+from __future__ import annotations
+import numpy
+import typing
+__all__: list[str] = ['AffineChange', 'Camera', 'ConfusionMatrix', 'Error', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'sampling_names', 'set_num_threads']
+class Error(ValueError):
+    pass
+class Camera:
+    """
+    A calibrated camera: a radial model rho(theta), principal point, pixel scale, image size and an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z forward. Immutable; equal cameras compare equal and hash alike.
+    """
+    @staticmethod
+    def from_json(text: str) -> Camera:
+        """
+        The camera of fishcam JSON text (what to_json gives).
+        """
+    @staticmethod
+    def read(path: str, camera: typing.Any | None = None, image_size: tuple[int, int] | None = None, format: str | None = None, distortion_model: str | None = None) -> Camera:
+        """
+        Reads a camera file in any format fishcam knows (docs/formats.md). camera: which camera of a multi-camera file (index or name); image_size: (width, height) for files without one; format: force a reader; distortion_model: 'fisheye' or 'plumb_bob' for OpenCV files that do not say.
+        """
+    def __getstate__(self) -> str:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, arg0: str) -> None:
+        ...
+    def augmented(self, change: ViewpointChange) -> Camera:
+        """
+        The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera without a pose gets one relative to its own frame)
+        """
+    def info_json(self) -> str:
+        """
+        What `fishcam info --json` prints (str); info() gives it as a dict.
+        """
+    def parameters_key(self, with_pose: bool = True) -> bytes:
+        """
+        bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a warp depends on); cheap, for caches and hashing
+        """
+    def project(self, points: typing.Any) -> tuple:
+        """
+        Projects points (N, 3) of the camera frame: (pixels (N, 2) float64, ok (N,) bool); NaN where the point is outside the valid field of view.
+        """
+    def resized(self, width: int, height: int) -> Camera:
+        """
+        The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.
+        """
+    def theta_from_rho(self, rho: numpy.ndarray[numpy.float64]) -> numpy.ndarray[numpy.float64]:
+        """
+        theta (radians) of radii rho (pixels, any shape, float64; same shape out); NaN outside the valid domain.
+        """
+    def to_json(self) -> str:
+        """
+        The camera as fishcam JSON text
+        """
+    def unproject(self, pixels: typing.Any) -> tuple:
+        """
+        Unit rays (N, 3) float64 of pixels (N, 2), and ok (N,) bool; NaN where a pixel has no ray.
+        """
+    def write(self, path: str, format: str | None = None, overwrite: bool = False) -> None:
+        """
+        Writes the camera in `format` (default: from the extension); refuses an existing file unless overwrite=True, and a format that cannot hold the model.
+        """
+    @property
+    def height(self) -> int:
+        """
+        Image height in pixels (int).
+        """
+    @property
+    def model(self) -> str:
+        """
+        The model's name (docs/models.md), e.g. 'polynomial', 'kannala-brandt'.
+        """
+    @property
+    def parameters(self) -> list[float]:
+        """
+        The model's parameters (list of float), in the order docs/models.md gives.
+        """
+    @property
+    def pixel_scale(self) -> numpy.ndarray[numpy.float64[2, 1]]:
+        """
+        (a_x, a_y): pixel = c + a * rho(theta) * direction; float64 array (2,).
+        """
+    @property
+    def pose(self) -> tuple[numpy.ndarray[numpy.float64[3, 3]], numpy.ndarray[numpy.float64[3, 1]]] | None:
+        """
+        The pose camera to reference, p_ref = R p_cam + t: a tuple of R (3, 3) and t (3,), or None
+        """
+    @property
+    def principal_point(self) -> numpy.ndarray[numpy.float64[2, 1]]:
+        """
+        (cx, cy) in pixels, float64 array (2,).
+        """
+    @property
+    def width(self) -> int:
+        """
+        Image width in pixels (int).
+        """
+class ViewpointChange:
+    """
+    A viewpoint change (the paper's eq. 7): a point P of the camera frame is at R P + t in the moved camera's frame; R = Rz Ry Rx of rotation_deg (x applied first), t in unit-sphere units.
+    """
+    def __getstate__(self) -> tuple:
+        ...
+    def __init__(self, rotation_deg: numpy.ndarray[numpy.float64[3, 1]] = ..., translation: numpy.ndarray[numpy.float64[3, 1]] = ...) -> None:
+        """
+        rotation_deg: (3,) degrees about x, y, z; translation: (3,).
+        """
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, arg0: tuple) -> None:
+        ...
+    @property
+    def rotation(self) -> numpy.ndarray[numpy.float64[3, 3]]:
+        """
+        R of eq. 7: float64 array (3, 3).
+        """
+    @property
+    def rotation_deg(self) -> numpy.ndarray[numpy.float64[3, 1]]:
+        """
+        Degrees about x, y, z: float64 array (3,).
+        """
+    @property
+    def translation(self) -> numpy.ndarray[numpy.float64[3, 1]]:
+        """
+        t of eq. 7: float64 array (3,).
+        """
+class ViewpointWarp:
+    """
+    The viewpoint augmentation of one calibration (source camera -> target camera, the same by default): caches the target's rays and the grid plan, so keep one per calibration.
+    """
+    def __getstate__(self) -> tuple:
+        ...
+    def __init__(self, camera: Camera, target: Camera | None = None) -> None:
+        """
+        camera: the images' camera; target: the output camera (default: the same).
+        """
+    def __setstate__(self, arg0: tuple) -> None:
+        ...
+    def forward(self, points: typing.Any, change: ViewpointChange, depth: str = 'source-sphere') -> tuple:
+        """
+        Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; visible (N,) bool: inside the output and not hidden)
+        """
+    def maps(self, change: ViewpointChange, depth: str = 'source-sphere', kind: str = 'geometric', exact: bool = False, grid: bool = False) -> tuple:
+        """
+        The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision reference; grid=True: the grid path's (within 1/32 px), geometric.
+        """
+    def sampling_grid(self, change: ViewpointChange, depth: str = 'source-sphere') -> tuple:
+        """
+        The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): (grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)
+        """
+    def warp(self, *, image: numpy.ndarray | None = None, labels: numpy.ndarray | None = None, change: ViewpointChange, depth: str = 'source-sphere', fill: float = 0.0, label_fill: int = 0, return_valid: bool = False, sampling: str = 'grid') -> dict:
+        """
+        One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when asked.
+        """
+    def warp_depth(self, depth_map: numpy.ndarray, change: ViewpointChange, depth: str = 'source-sphere', values: str = 'range', fill: float = ...) -> numpy.ndarray:
+        """
+        A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values re-expressed in the moved camera (exact for rotations); fill where there is no source
+        """
+    @property
+    def float_kernel(self) -> bool:
+        """
+        Whether maps come from the float kernel (within 1e-3 px), else the exact path.
+        """
+    @property
+    def grid_error_px(self) -> float:
+        """
+        The grid's measured worst interpolation error against the per-pixel map (px).
+        """
+    @property
+    def grid_spacing(self) -> int:
+        """
+        The grid path's node spacing in pixels (0: no grid, per-pixel maps).
+        """
+    @property
+    def source(self) -> Camera:
+        """
+        The images' camera.
+        """
+    @property
+    def target(self) -> Camera:
+        """
+        The output camera.
+        """
+class AffineChange:
+    def __getstate__(self) -> tuple:
+        ...
+    def __init__(self, rotation_deg: float = 0.0, translation: numpy.ndarray[numpy.float64[2, 1]] = ..., scale: float = 1.0) -> None:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, arg0: tuple) -> None:
+        ...
+    @property
+    def rotation_deg(self) -> float:
+        ...
+    @property
+    def scale(self) -> float:
+        ...
+    @property
+    def translation(self) -> numpy.ndarray[numpy.float64[2, 1]]:
+        ...
+class ConfusionMatrix:
+    def __init__(self, num_classes: int, ignore: int | None = None) -> None:
+        ...
+    def _iou(self) -> list[float | None]:
+        ...
+    def _miou(self) -> float | None:
+        ...
+    def merge(self, other: ConfusionMatrix) -> None:
+        ...
+    def update(self, prediction: typing.Any, ground_truth: typing.Any, valid: typing.Any = None) -> None:
+        """
+        Counts pixels: prediction and ground_truth integer arrays of one shape (uint8, uint16, int32, int64), valid an optional bool mask of that shape; a value that is not a class raises and counts nothing.
+        """
+    @property
+    def counts(self) -> numpy.ndarray[numpy.int64]:
+        ...
+    @property
+    def ignore(self) -> int | None:
+        ...
+    @property
+    def num_classes(self) -> int:
+        ...
+    @property
+    def scored_pixels(self) -> int:
+        ...
+def _input_address(arg0: typing.Any, arg1: str) -> int:
+    ...
+def affine_forward(points: typing.Any, change: AffineChange, width: int, height: int) -> tuple:
+    """
+    Where points (N, 2) land under the affine change: (pixels (N, 2), visible (N,) bool: inside the image)
+    """
+def affine_presets() -> dict:
+    ...
+def affine_warp(*, image: numpy.ndarray | None = None, labels: numpy.ndarray | None = None, change: AffineChange, fill: float = 0.0, label_fill: int = 0, return_valid: bool = False) -> dict:
+    ...
+def affine_warp_depth(depth_map: numpy.ndarray, change: AffineChange, fill: float = ...) -> numpy.ndarray:
+    ...
+def check_depth_prior(arg0: str) -> None:
+    """
+    Raises fishcam.Error naming the choices unless name is a depth prior.
+    """
+def check_preset(arg0: str) -> None:
+    """
+    Raises fishcam.Error naming the choices unless name is a pose preset.
+    """
+def compare(camera: Camera, models: list, method: str, preset: str, samples: int, seed: int, depth: str, labels: dict) -> str:
+    ...
+def convert(camera: Camera, to: str, method: str = 'lsq', max_angle: float | None = None, fit_center: bool = False, fit_aspect: bool = False) -> tuple:
+    ...
+def depth_priors() -> list[str]:
+    """
+    The depth priors' names.
+    """
+def depth_values_names() -> list[str]:
+    """
+    What depth maps' values can be.
+    """
+def derive_seed(seed: int, key: str, index: int) -> int:
+    """
+    A 64-bit seed per (key, index) from one user seed (SplitMix64 over FNV-1a of the key): the seeds of augment-dataset, compare and WoodScapeDataset(seed=).
+    """
+def get_num_threads() -> int:
+    """
+    The threads fishcam's compute uses (int).
+    """
+def presets() -> dict:
+    ...
+def random_affine(preset: str, seed: int) -> AffineChange:
+    ...
+def random_affine_in(max_rotation_deg: float, max_translation: float, min_scale: float, max_scale: float, seed: int) -> AffineChange:
+    ...
+def random_change(preset: str, seed: int) -> ViewpointChange:
+    ...
+def random_change_in(max_rotation_deg: float, max_translation: float, seed: int) -> ViewpointChange:
+    ...
+def sampling_names() -> list[str]:
+    """
+    The sampling modes' names.
+    """
+def set_num_threads(arg0: int) -> None:
+    ...
+__version__: str = '0.1.0'
