@@ -11,6 +11,7 @@ Usage: build/venv/bin/python tools/python_stubs.py EXTENSION_DIR [--check]
 import argparse
 import difflib
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -28,11 +29,19 @@ def generate(extension_dir):
         env = dict(os.environ, PYTHONPATH=tmp)
         # numpy 1.x has no numpy.bool (pybind11 names bool arrays so): the stubs say numpy.bool_.
         subprocess.run([sys.executable, "-m", "pybind11_stubgen", "_fishcam", "-o", os.path.join(tmp, "out"),
-                        "--ignore-unresolved-names", "numpy.bool", "--exit-code"], check=True, env=env,
-                       capture_output=True, text=True)
+                        "--ignore-unresolved-names", "numpy.bool", "--numpy-array-use-type-var", "--exit-code"],
+                       check=True, env=env, capture_output=True, text=True)
         with open(os.path.join(tmp, "out", "_fishcam.pyi")) as f:
             text = f.read()
-    return text.replace("numpy.bool]", "numpy.bool_]")
+    text = text.replace("numpy.bool]", "numpy.bool_]")
+    # pybind11 2.10 names py::dict, py::tuple and py::list without their items:
+    # what the functions document, in the types mypy --strict asks for.
+    text = re.sub(r"-> dict:", "-> dict[str, typing.Any]:", text)
+    text = re.sub(r"-> tuple:", "-> tuple[typing.Any, ...]:", text)
+    text = re.sub(r": list([,)])", r": list[typing.Any]\1", text)
+    text = re.sub(r": dict([,)])", r": dict[str, typing.Any]\1", text)
+    text = re.sub(r": tuple([,)])", r": tuple[typing.Any, ...]\1", text)
+    return text
 
 
 def main():

@@ -7,6 +7,7 @@ library's one-line message. See docs/python.md.
 
 import functools as _functools
 import json as _json
+import typing as _typing
 
 import numpy as _np
 
@@ -30,26 +31,6 @@ __all__ = [
 DEPTH_PRIORS = tuple(_fishcam.depth_priors())  # the library's names
 
 
-def _info(self):
-    """The fields of ``fishcam info --json`` as a dict."""
-    return _json.loads(self.info_json())
-
-
-def _camera_eq(self, other):
-    return isinstance(other, Camera) and self.parameters_key() == other.parameters_key()
-
-
-def _warp_call(self, image=None, labels=None, change=None, depth="source-sphere", fill=0, label_fill=0,
-               return_valid=False, sampling="grid"):
-    """``warp(image=..., labels=..., change=...)``: the augmented image and labels as
-    ``fishcam augment`` writes them (a dict: image, labels, and valid when asked).
-    sampling: "grid" (maps interpolated from grid nodes, within 1/32 px) or "exact"."""
-    if change is None:
-        raise Error("change: required (a fishcam.ViewpointChange)")
-    return self.warp(image=image, labels=labels, change=change, depth=depth, fill=fill, label_fill=label_fill,
-                     return_valid=return_valid, sampling=sampling)
-
-
 def _one_line_argument_errors(function, name, bound=False):
     """pybind11 reports arguments of the wrong type as a multi-line TypeError;
     fishcam's errors are one-line fishcam.Error naming the call."""
@@ -71,7 +52,7 @@ def _one_line_argument_errors(function, name, bound=False):
 
 def _wrap_public_callables(cls):
     for attribute, value in list(vars(cls).items()):
-        if attribute.startswith("_") and attribute != "__init__":
+        if attribute.startswith("_") and attribute not in ("__init__", "__call__"):
             continue
         static = isinstance(value, staticmethod)
         function = value.__func__ if static else value
@@ -90,10 +71,6 @@ for _name, _function in list(vars(_fishcam).items()):
 derive_seed = _fishcam.derive_seed
 random_change_in = _fishcam.random_change_in
 
-ViewpointWarp.__call__ = _warp_call
-Camera.info = _info
-Camera.__eq__ = _camera_eq
-Camera.__hash__ = lambda self: hash(self.parameters_key())
 
 
 def convert(camera, to, method="lsq", max_angle=None, fit_center=False, fit_aspect=False):

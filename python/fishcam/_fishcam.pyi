@@ -21,8 +21,16 @@ class Camera:
         """
         Reads a camera file in any format fishcam knows (docs/formats.md). camera: which camera of a multi-camera file (index or name); image_size: (width, height) for files without one; format: force a reader; distortion_model: 'fisheye' or 'plumb_bob' for OpenCV files that do not say.
         """
+    def __eq__(self, other: typing.Any) -> bool:
+        """
+        Equal when every number of the two cameras is (parameters_key).
+        """
     def __getstate__(self) -> str:
         ...
+    def __hash__(self) -> int:
+        """
+        The hash of parameters_key(): equal cameras hash alike.
+        """
     def __repr__(self) -> str:
         ...
     def __setstate__(self, arg0: str) -> None:
@@ -30,6 +38,10 @@ class Camera:
     def augmented(self, change: ViewpointChange) -> Camera:
         """
         The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera without a pose gets one relative to its own frame)
+        """
+    def info(self) -> typing.Any:
+        """
+        What `fishcam info --json` prints, as a dict: model, parameters, width, height, cx, cy, pixel_scale, theta_max_deg, rho_max_px, fov_deg, pose, ...
         """
     def info_json(self) -> str:
         """
@@ -39,7 +51,7 @@ class Camera:
         """
         bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a warp depends on); cheap, for caches and hashing
         """
-    def project(self, points: typing.Any) -> tuple:
+    def project(self, points: typing.Any) -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         Projects points (N, 3) of the camera frame: (pixels (N, 2) float64, ok (N,) bool); NaN where the point is outside the valid field of view.
         """
@@ -47,7 +59,7 @@ class Camera:
         """
         The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.
         """
-    def theta_from_rho(self, rho: numpy.ndarray[numpy.float64]) -> numpy.ndarray[numpy.float64]:
+    def theta_from_rho(self, rho: numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]:
         """
         theta (radians) of radii rho (pixels, any shape, float64; same shape out); NaN outside the valid domain.
         """
@@ -55,7 +67,7 @@ class Camera:
         """
         The camera as fishcam JSON text
         """
-    def unproject(self, pixels: typing.Any) -> tuple:
+    def unproject(self, pixels: typing.Any) -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         Unit rays (N, 3) float64 of pixels (N, 2), and ok (N,) bool; NaN where a pixel has no ray.
         """
@@ -79,17 +91,17 @@ class Camera:
         The model's parameters (list of float), in the order docs/models.md gives.
         """
     @property
-    def pixel_scale(self) -> numpy.ndarray[numpy.float64[2, 1]]:
+    def pixel_scale(self) -> numpy.ndarray[tuple[typing.Literal[2], typing.Literal[1]], numpy.dtype[numpy.float64]]:
         """
         (a_x, a_y): pixel = c + a * rho(theta) * direction; float64 array (2,).
         """
     @property
-    def pose(self) -> tuple[numpy.ndarray[numpy.float64[3, 3]], numpy.ndarray[numpy.float64[3, 1]]] | None:
+    def pose(self) -> tuple[numpy.ndarray[tuple[typing.Literal[3], typing.Literal[3]], numpy.dtype[numpy.float64]], numpy.ndarray[tuple[typing.Literal[3], typing.Literal[1]], numpy.dtype[numpy.float64]]] | None:
         """
         The pose camera to reference, p_ref = R p_cam + t: a tuple of R (3, 3) and t (3,), or None
         """
     @property
-    def principal_point(self) -> numpy.ndarray[numpy.float64[2, 1]]:
+    def principal_point(self) -> numpy.ndarray[tuple[typing.Literal[2], typing.Literal[1]], numpy.dtype[numpy.float64]]:
         """
         (cx, cy) in pixels, float64 array (2,).
         """
@@ -102,28 +114,28 @@ class ViewpointChange:
     """
     A viewpoint change (the paper's eq. 7): a point P of the camera frame is at R P + t in the moved camera's frame; R = Rz Ry Rx of rotation_deg (x applied first), t in unit-sphere units.
     """
-    def __getstate__(self) -> tuple:
+    def __getstate__(self) -> tuple[typing.Any, ...]:
         ...
-    def __init__(self, rotation_deg: numpy.ndarray[numpy.float64[3, 1]] = ..., translation: numpy.ndarray[numpy.float64[3, 1]] = ...) -> None:
+    def __init__(self, rotation_deg: numpy.ndarray[tuple[typing.Literal[3], typing.Literal[1]], numpy.dtype[numpy.float64]] = ..., translation: numpy.ndarray[tuple[typing.Literal[3], typing.Literal[1]], numpy.dtype[numpy.float64]] = ...) -> None:
         """
         rotation_deg: (3,) degrees about x, y, z; translation: (3,).
         """
     def __repr__(self) -> str:
         ...
-    def __setstate__(self, arg0: tuple) -> None:
+    def __setstate__(self, arg0: tuple[typing.Any, ...]) -> None:
         ...
     @property
-    def rotation(self) -> numpy.ndarray[numpy.float64[3, 3]]:
+    def rotation(self) -> numpy.ndarray[tuple[typing.Literal[3], typing.Literal[3]], numpy.dtype[numpy.float64]]:
         """
         R of eq. 7: float64 array (3, 3).
         """
     @property
-    def rotation_deg(self) -> numpy.ndarray[numpy.float64[3, 1]]:
+    def rotation_deg(self) -> numpy.ndarray[tuple[typing.Literal[3], typing.Literal[1]], numpy.dtype[numpy.float64]]:
         """
         Degrees about x, y, z: float64 array (3,).
         """
     @property
-    def translation(self) -> numpy.ndarray[numpy.float64[3, 1]]:
+    def translation(self) -> numpy.ndarray[tuple[typing.Literal[3], typing.Literal[1]], numpy.dtype[numpy.float64]]:
         """
         t of eq. 7: float64 array (3,).
         """
@@ -131,31 +143,53 @@ class ViewpointWarp:
     """
     The viewpoint augmentation of one calibration (source camera -> target camera, the same by default): caches the target's rays and the grid plan, so keep one per calibration.
     """
-    def __getstate__(self) -> tuple:
+    def __call__(self, *, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, labels: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, change: ViewpointChange, depth: str = 'source-sphere', fill: float = 0.0, label_fill: int = 0, return_valid: bool = False, sampling: str = 'grid') -> dict[str, typing.Any]:
+        """
+        warp(...): one augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when asked.
+        """
+    def __getstate__(self) -> tuple[typing.Any, ...]:
         ...
     def __init__(self, camera: Camera, target: Camera | None = None) -> None:
         """
         camera: the images' camera; target: the output camera (default: the same).
         """
-    def __setstate__(self, arg0: tuple) -> None:
+    def __setstate__(self, arg0: tuple[typing.Any, ...]) -> None:
         ...
-    def forward(self, points: typing.Any, change: ViewpointChange, depth: str = 'source-sphere') -> tuple:
+    @typing.overload
+    def forward(self, points: typing.Any, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; visible (N,) bool: inside the output and not hidden)
         """
-    def maps(self, change: ViewpointChange, depth: str = 'source-sphere', kind: str = 'geometric', exact: bool = False, grid: bool = False) -> tuple:
+    @typing.overload
+    def forward(self, points: typing.Any, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
+        """
+        Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; visible (N,) bool: inside the output and not hidden)
+        """
+    def maps(self, change: ViewpointChange, depth: str = 'source-sphere', kind: str = 'geometric', exact: bool = False, grid: bool = False) -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float32]], numpy.ndarray[typing.Any, numpy.dtype[numpy.float32]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision reference; grid=True: the grid path's (within 1/32 px), geometric.
         """
-    def sampling_grid(self, change: ViewpointChange, depth: str = 'source-sphere') -> tuple:
+    @typing.overload
+    def sampling_grid(self, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float32]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): (grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)
         """
-    def warp(self, *, image: numpy.ndarray | None = None, labels: numpy.ndarray | None = None, change: ViewpointChange, depth: str = 'source-sphere', fill: float = 0.0, label_fill: int = 0, return_valid: bool = False, sampling: str = 'grid') -> dict:
+    @typing.overload
+    def sampling_grid(self, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float32]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
+        """
+        The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): (grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)
+        """
+    def warp(self, *, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, labels: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, change: ViewpointChange, depth: str = 'source-sphere', fill: float = 0.0, label_fill: int = 0, return_valid: bool = False, sampling: str = 'grid') -> dict[str, typing.Any]:
         """
         One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when asked.
         """
-    def warp_depth(self, depth_map: numpy.ndarray, change: ViewpointChange, depth: str = 'source-sphere', values: str = 'range', fill: float = ...) -> numpy.ndarray:
+    @typing.overload
+    def warp_depth(self, depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: ViewpointChange, depth: str = 'source-sphere', values: str = 'range', fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
+        """
+        A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values re-expressed in the moved camera (exact for rotations); fill where there is no source
+        """
+    @typing.overload
+    def warp_depth(self, depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: ViewpointChange, depth: str = 'source-sphere', values: str = 'range', fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
         """
         A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values re-expressed in the moved camera (exact for rotations); fill where there is no source
         """
@@ -185,13 +219,13 @@ class ViewpointWarp:
         The output camera.
         """
 class AffineChange:
-    def __getstate__(self) -> tuple:
+    def __getstate__(self) -> tuple[typing.Any, ...]:
         ...
-    def __init__(self, rotation_deg: float = 0.0, translation: numpy.ndarray[numpy.float64[2, 1]] = ..., scale: float = 1.0) -> None:
+    def __init__(self, rotation_deg: float = 0.0, translation: numpy.ndarray[tuple[typing.Literal[2], typing.Literal[1]], numpy.dtype[numpy.float64]] = ..., scale: float = 1.0) -> None:
         ...
     def __repr__(self) -> str:
         ...
-    def __setstate__(self, arg0: tuple) -> None:
+    def __setstate__(self, arg0: tuple[typing.Any, ...]) -> None:
         ...
     @property
     def rotation_deg(self) -> float:
@@ -200,7 +234,7 @@ class AffineChange:
     def scale(self) -> float:
         ...
     @property
-    def translation(self) -> numpy.ndarray[numpy.float64[2, 1]]:
+    def translation(self) -> numpy.ndarray[tuple[typing.Literal[2], typing.Literal[1]], numpy.dtype[numpy.float64]]:
         ...
 class ConfusionMatrix:
     def __init__(self, num_classes: int, ignore: int | None = None) -> None:
@@ -216,7 +250,7 @@ class ConfusionMatrix:
         Counts pixels: prediction and ground_truth integer arrays of one shape (uint8, uint16, int32, int64), valid an optional bool mask of that shape; a value that is not a class raises and counts nothing.
         """
     @property
-    def counts(self) -> numpy.ndarray[numpy.int64]:
+    def counts(self) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.int64]]:
         ...
     @property
     def ignore(self) -> int | None:
@@ -229,15 +263,15 @@ class ConfusionMatrix:
         ...
 def _input_address(arg0: typing.Any, arg1: str) -> int:
     ...
-def affine_forward(points: typing.Any, change: AffineChange, width: int, height: int) -> tuple:
+def affine_forward(points: typing.Any, change: AffineChange, width: int, height: int) -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
     """
     Where points (N, 2) land under the affine change: (pixels (N, 2), visible (N,) bool: inside the image)
     """
-def affine_presets() -> dict:
+def affine_presets() -> dict[str, typing.Any]:
     ...
-def affine_warp(*, image: numpy.ndarray | None = None, labels: numpy.ndarray | None = None, change: AffineChange, fill: float = 0.0, label_fill: int = 0, return_valid: bool = False) -> dict:
+def affine_warp(*, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, labels: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, change: AffineChange, fill: float = 0.0, label_fill: int = 0, return_valid: bool = False) -> dict[str, typing.Any]:
     ...
-def affine_warp_depth(depth_map: numpy.ndarray, change: AffineChange, fill: float = ...) -> numpy.ndarray:
+def affine_warp_depth(depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: AffineChange, fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
     ...
 def check_depth_prior(arg0: str) -> None:
     """
@@ -247,9 +281,9 @@ def check_preset(arg0: str) -> None:
     """
     Raises fishcam.Error naming the choices unless name is a pose preset.
     """
-def compare(camera: Camera, models: list, method: str, preset: str, samples: int, seed: int, depth: str, labels: dict) -> str:
+def compare(camera: Camera, models: list[typing.Any], method: str, preset: str, samples: int, seed: int, depth: str, labels: dict[str, typing.Any]) -> str:
     ...
-def convert(camera: Camera, to: str, method: str = 'lsq', max_angle: float | None = None, fit_center: bool = False, fit_aspect: bool = False) -> tuple:
+def convert(camera: Camera, to: str, method: str = 'lsq', max_angle: float | None = None, fit_center: bool = False, fit_aspect: bool = False) -> tuple[Camera, str, float]:
     ...
 def depth_priors() -> list[str]:
     """
@@ -267,7 +301,7 @@ def get_num_threads() -> int:
     """
     The threads fishcam's compute uses (int).
     """
-def presets() -> dict:
+def presets() -> dict[str, typing.Any]:
     ...
 def random_affine(preset: str, seed: int) -> AffineChange:
     ...

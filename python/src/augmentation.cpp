@@ -191,7 +191,7 @@ void bind_augmentation(py::module_& m) {
                 maps.validity().copyTo(header);  // same size and type: written in place
               }
             }
-            return py::make_tuple(map_x, map_y, valid);
+            return std::tuple(map_x, map_y, valid);
           },
           py::arg("change"), py::arg("depth") = "source-sphere", py::arg("kind") = "geometric",
           py::arg("exact") = false, py::arg("grid") = false,
@@ -246,7 +246,100 @@ void bind_augmentation(py::module_& m) {
                 }
               }
             }
-            return py::make_tuple(grid, valid);
+            return std::pair(grid, valid);
+          },
+          py::arg("change"), py::arg("depth") = "source-sphere",
+          "The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): "
+          "(grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)")
+      .def(
+          "forward",
+          [](const ViewpointWarp& warp, const py::handle& points, const RandomPose& change, const std::string& depth) {
+            const DepthPrior prior = depth_prior(depth);
+            return batch<2, 2>(points, "points", [&](auto in, auto out, auto ok) {
+              warp.forward(change.change(), prior, in, out, ok);
+            });
+          },
+          py::arg("points"), py::arg("change"), py::arg("depth") = "source-sphere",
+          "Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; "
+          "visible (N,) bool: inside the output and not hidden)")
+      .def(
+          "warp_depth",
+          [](const ViewpointWarp& warp, py::array depth_map, const RandomPose& change, const std::string& depth,
+             const std::string& values, float fill) {
+            const DepthPrior prior = depth_prior(depth);
+            const auto kind = parse_depth_values(values);
+            if (!kind) {
+              throw Error("values: expected " + choices_for_message(depth_values_names()) + ", got " +
+                          quoted_for_message(values));
+            }
+            if (!py::isinstance<py::array_t<float>>(depth_map) || depth_map.ndim() != 2) {
+              throw Error("depth_map: expected an HxW float32 array, got " + std::string(py::str(depth_map.dtype())) +
+                          " with " + std::to_string(depth_map.ndim()) + " dimensions");
+            }
+            cv::Mat in = as_mat(depth_map, "depth_map", false);
+            cv::Mat out_header;
+            py::array out = new_image(depth_map, warp.target().height(), warp.target().width(), &out_header);
+            const uchar* before = out_header.data;
+            {
+              py::gil_scoped_release release;
+              warp.warp_depth(change.change(), prior, in, *kind, &out_header, fill);
+            }
+            if (out_header.data != before) throw Error("internal: an output was reallocated");
+            return out;
+          },
+          py::arg("depth_map"), py::arg("change"), py::arg("depth") = "source-sphere", py::arg("values") = "range",
+          py::arg("fill") = std::numeric_limits<float>::quiet_NaN(),
+          "A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values "
+          "re-expressed in the moved camera (exact for rotations); fill where there is no source")
+      .def(
+          "__call__",
+          [](const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
+             const RandomPose& change, const std::string& depth, double fill, int label_fill, bool return_valid,
+             const std::string& sampling) {
+            const DepthPrior prior = depth_prior(depth);
+            const Sampling how = sampling_of(sampling);
+            const cv::Size source(warp.source().width(), warp.source().height());
+            const cv::Size target(warp.target().width(), warp.target().height());
+            // The same calls as `fishcam augment`.
+            return resample(image, labels, source, target, fill, label_fill, return_valid,
+                            [&](const AugmentIO& io) { warp.augment(change.change(), prior, io, how); });
+          },
+          py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
+          py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
+          py::arg("return_valid") = false, py::arg("sampling") = "grid",
+          "warp(...): one augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; "
+          "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
+          "asked.")
+      .def(
+          "sampling_grid",
+          [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth) {
+            const DepthPrior prior = depth_prior(depth);
+            const int h = warp.target().height(), w = warp.target().width();
+            const int sw = warp.source().width(), sh = warp.source().height();
+            py::array_t<float> grid({h, w, 2});
+            py::array_t<bool> valid({h, w});
+            {
+              py::gil_scoped_release release;
+              WarpMaps maps;
+              warp.compute_grid(change.change(), prior, &maps);
+              // torch.nn.functional.grid_sample's coordinates with align_corners=True:
+              // -1 and 1 on the outer pixel centres; sources in the outer half pixel
+              // clamped onto them (as fishcam's resampling does); 0 where there is none.
+              const float sx = sw > 1 ? 2.0f / float(sw - 1) : 0.0f, sy = sh > 1 ? 2.0f / float(sh - 1) : 0.0f;
+              float* out = grid.mutable_data();
+              bool* ok = valid.mutable_data();
+              for (int v = 0; v < h; ++v) {
+                const float* x = maps.map_x.ptr<float>(v);
+                const float* y = maps.map_y.ptr<float>(v);
+                const uchar* inside = maps.valid.ptr<uchar>(v);
+                for (int u = 0; u < w; ++u, out += 2, ++ok) {
+                  *ok = inside[u] != 0;
+                  out[0] = *ok ? std::clamp(x[u], 0.0f, float(sw - 1)) * sx - 1 : 0.0f;
+                  out[1] = *ok ? std::clamp(y[u], 0.0f, float(sh - 1)) * sy - 1 : 0.0f;
+                }
+              }
+            }
+            return std::pair(grid, valid);
           },
           py::arg("change"), py::arg("depth") = "source-sphere",
           "The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): "

@@ -33,7 +33,8 @@ PointArray rows_of(const py::handle& input, py::ssize_t k, const char* what);
 // A batch call of the library on (N, kIn) rows: (N, kOut) float64 results and
 // (N,) bool validity, computed in place on numpy memory with the GIL released.
 template <int kIn, int kOut, class Compute>
-py::tuple batch(const py::handle& input, const char* what, const Compute& compute) {
+std::pair<py::array_t<double>, py::array_t<bool>> batch(const py::handle& input, const char* what,
+                                                        const Compute& compute) {
   using In = Eigen::Matrix<double, kIn, 1>;
   using Out = Eigen::Matrix<double, kOut, 1>;
   const PointArray rows = rows_of(input, kIn, what);
@@ -46,7 +47,7 @@ py::tuple batch(const py::handle& input, const char* what, const Compute& comput
             std::span<Out>(reinterpret_cast<Out*>(results.mutable_data()), n),
             std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(ok.mutable_data()), n));
   }
-  return py::make_tuple(results, ok);
+  return {results, ok};
 }
 
 // A numpy image as a cv::Mat header on its memory (no copy). HxW or HxWxC, C <= 4,

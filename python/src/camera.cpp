@@ -134,6 +134,21 @@ void bind_camera(py::module_& m) {
           "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
           py::arg("width"), py::arg("height"),
           "The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.")
+      .def(
+          "info",
+          [](const Camera& c) { return py::module_::import("json").attr("loads")(camera_info_json(c)); },
+          "What `fishcam info --json` prints, as a dict: model, parameters, width, height, cx, cy, pixel_scale, "
+          "theta_max_deg, rho_max_px, fov_deg, pose, ...")
+      .def(
+          "__eq__",
+          [](const Camera& a, const py::object& b) {
+            return py::isinstance<Camera>(b) &&
+                   std::string(parameters_key(a, true)) == std::string(parameters_key(b.cast<const Camera&>(), true));
+          },
+          py::arg("other"), "Equal when every number of the two cameras is (parameters_key).")
+      .def(
+          "__hash__", [](const Camera& c) { return py::hash(parameters_key(c, true)); },
+          "The hash of parameters_key(): equal cameras hash alike.")
       .def("to_json", &camera_state, "The camera as fishcam JSON text")
       .def("parameters_key", &parameters_key, py::arg("with_pose") = true,
            "bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a "
@@ -162,7 +177,7 @@ void bind_camera(py::module_& m) {
           py::gil_scoped_release release;
           c = convert_camera(source, spec, method, max_theta, {fit_center, fit_aspect});
         }
-        return py::make_tuple(Camera(c->camera), fit_report_json(c->camera, c->report), c->widest_theta);
+        return std::tuple(Camera(c->camera), fit_report_json(c->camera, c->report), c->widest_theta);
       },
       py::arg("camera"), py::arg("to"), py::arg("method") = "lsq", py::arg("max_angle") = py::none(),
       py::arg("fit_center") = false, py::arg("fit_aspect") = false);
