@@ -10,6 +10,7 @@ import json as _json
 import typing as _typing
 
 import numpy as _np
+import numpy.typing as _npt
 
 from ._fishcam import (  # noqa: F401  (re-exported API)
     Camera,
@@ -31,11 +32,14 @@ __all__ = [
 DEPTH_PRIORS = tuple(_fishcam.depth_priors())  # the library's names
 
 
-def _one_line_argument_errors(function, name, bound=False):
+_F = _typing.TypeVar("_F", bound=_typing.Callable[..., _typing.Any])
+
+
+def _one_line_argument_errors(function: _F, name: str, bound: bool = False) -> _F:
     """pybind11 reports arguments of the wrong type as a multi-line TypeError;
     fishcam's errors are one-line fishcam.Error naming the call."""
     @_functools.wraps(function)
-    def call(*args, **kwargs):
+    def call(*args: _typing.Any, **kwargs: _typing.Any) -> _typing.Any:
         try:
             return function(*args, **kwargs)
         except TypeError as e:
@@ -47,10 +51,10 @@ def _one_line_argument_errors(function, name, bound=False):
             given = ", ".join([type(a).__name__ for a in args[1 if bound else 0:]] +
                               [f"{k}={type(v).__name__}" for k, v in kwargs.items()])
             raise Error(f"{name}: arguments of the wrong type or range ({given}); expected {expected}") from None
-    return call
+    return _typing.cast(_F, call)
 
 
-def _wrap_public_callables(cls):
+def _wrap_public_callables(cls: type) -> None:
     for attribute, value in list(vars(cls).items()):
         if attribute.startswith("_") and attribute not in ("__init__", "__call__"):
             continue
@@ -72,8 +76,8 @@ derive_seed = _fishcam.derive_seed
 random_change_in = _fishcam.random_change_in
 
 
-
-def convert(camera, to, method="lsq", max_angle=None, fit_center=False, fit_aspect=False):
+def convert(camera: Camera, to: str, method: str = "lsq", max_angle: _typing.Optional[float] = None,
+            fit_center: bool = False, fit_aspect: bool = False) -> _typing.Tuple[Camera, _typing.Dict[str, _typing.Any]]:
     """Fit model ``to`` to ``camera`` as ``fishcam convert`` does.
 
     Returns ``(camera, report)``; the report dict has the keys of ``fishcam convert
@@ -81,14 +85,20 @@ def convert(camera, to, method="lsq", max_angle=None, fit_center=False, fit_aspe
     and ``warning`` where OpenCV's fisheye functions could not use the whole field of view.
     """
     fitted, report_json, widest_theta = _fishcam.convert(camera, to, method, max_angle, fit_center, fit_aspect)
-    report = _json.loads(report_json)
+    report: _typing.Dict[str, _typing.Any] = _json.loads(report_json)
     report["method"] = method
     report["widest_theta_deg"] = float(_np.degrees(widest_theta))
     return fitted, report
 
 
-def compare(camera, models=("equidistant", "stereographic", "kannala-brandt"), method="lsq", preset="train",
-            samples=8, seed=0, depth="source-sphere", labels=None):
+ModelArgument = _typing.Union[str, Camera, _typing.Tuple[str, Camera]]
+
+
+def compare(camera: Camera,
+            models: _typing.Union[ModelArgument, _typing.Sequence[ModelArgument]] = (
+                "equidistant", "stereographic", "kannala-brandt"),
+            method: str = "lsq", preset: str = "train", samples: int = 8, seed: int = 0, depth: str = "source-sphere",
+            labels: _typing.Optional[_typing.Mapping[str, "_npt.NDArray[_typing.Any]"]] = None) -> _typing.Dict[str, _typing.Any]:
     """What ``fishcam compare`` measures, as a dict (the keys of its ``--json``).
 
     models: model names (fitted to ``camera`` as ``convert`` does; ``method="paper"``
@@ -97,37 +107,37 @@ def compare(camera, models=("equidistant", "stereographic", "kannala-brandt"), m
     of the camera's size, compared under both augmentations (the CLI adds its
     rendered scene as "scene"). See docs/comparison.md.
     """
-    if isinstance(models, (str, Camera)):
-        models = [models]
+    listed: _typing.List[_typing.Any] = [models] if isinstance(models, (str, Camera)) else list(models)
     if isinstance(seed, bool) or not isinstance(seed, (int, _np.integer)) or seed < 0:
         raise Error(f"seed: expected a non-negative integer, got {seed!r}")
     if isinstance(samples, bool) or not isinstance(samples, (int, _np.integer)):
         raise Error(f"samples: expected an integer, got {samples!r}")
-    return _json.loads(_fishcam.compare(camera, list(models), method, preset, int(samples), int(seed), depth,
-                                        dict(labels or {})))
+    result: _typing.Dict[str, _typing.Any] = _json.loads(
+        _fishcam.compare(camera, listed, method, preset, int(samples), int(seed), depth, dict(labels or {})))
+    return result
 
 
-def random_change(preset, seed):
+def random_change(preset: str, seed: int) -> ViewpointChange:
     """The viewpoint change of the CLI's ``--preset PRESET --seed SEED``."""
     seed = _check_seed(seed)
     return _fishcam.random_change(preset, seed)
 
 
-def _check_seed(seed):
+def _check_seed(seed: object) -> int:
     if isinstance(seed, (bool, _np.bool_)) or not isinstance(seed, (int, _np.integer)):
         raise Error(f"seed: expected an integer, got {type(seed).__name__}")
-    seed = int(seed)
-    if not 0 <= seed < 2**64:
-        raise Error(f"seed: must be in [0, 2^64), got {seed}")
-    return seed
+    value = int(seed)
+    if not 0 <= value < 2**64:
+        raise Error(f"seed: must be in [0, 2^64), got {value}")
+    return value
 
 
-def presets():
+def presets() -> _typing.Dict[str, _typing.Tuple[float, float]]:
     """The pose presets: name -> (max_rotation_deg, max_translation)."""
     return _fishcam.presets()
 
 
-def set_num_threads(n):
+def set_num_threads(n: int) -> None:
     """The threads fishcam's compute uses.
 
     fishcam runs on the thread pool of the OpenCV it links (Debian's libopencv).
@@ -140,7 +150,8 @@ def set_num_threads(n):
     _fishcam.set_num_threads(int(n))
 
 
-def change_to_dict(change, seed=None, depth="source-sphere"):
+def change_to_dict(change: ViewpointChange, seed: _typing.Optional[int] = None,
+                   depth: str = "source-sphere") -> _typing.Dict[str, _typing.Any]:
     """A change as the manifest records it: method, seed, rotation_deg, translation, depth (JSON-able)."""
     return {
         "method": "viewpoint",

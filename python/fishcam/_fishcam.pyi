@@ -155,12 +155,6 @@ class ViewpointWarp:
         """
     def __setstate__(self, arg0: tuple[typing.Any, ...]) -> None:
         ...
-    @typing.overload
-    def forward(self, points: typing.Any, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
-        """
-        Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; visible (N,) bool: inside the output and not hidden)
-        """
-    @typing.overload
     def forward(self, points: typing.Any, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; visible (N,) bool: inside the output and not hidden)
@@ -169,12 +163,6 @@ class ViewpointWarp:
         """
         The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision reference; grid=True: the grid path's (within 1/32 px), geometric.
         """
-    @typing.overload
-    def sampling_grid(self, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float32]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
-        """
-        The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): (grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)
-        """
-    @typing.overload
     def sampling_grid(self, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float32]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): (grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)
@@ -183,12 +171,6 @@ class ViewpointWarp:
         """
         One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when asked.
         """
-    @typing.overload
-    def warp_depth(self, depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: ViewpointChange, depth: str = 'source-sphere', values: str = 'range', fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
-        """
-        A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values re-expressed in the moved camera (exact for rotations); fill where there is no source
-        """
-    @typing.overload
     def warp_depth(self, depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: ViewpointChange, depth: str = 'source-sphere', values: str = 'range', fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
         """
         A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values re-expressed in the moved camera (exact for rotations); fill where there is no source

@@ -24,7 +24,10 @@ seed of the change is drawn from the transform's generator, which ``A.Compose(se
 seeds; ``A.ReplayCompose`` replays it.
 """
 
+import typing
+
 import numpy as np
+import numpy.typing as npt
 
 try:
     import albumentations as _albumentations
@@ -42,47 +45,50 @@ if int(_albumentations.__version__.split(".")[0]) < 2:  # pragma: no cover
     raise ImportError(f"fishcam.albumentations needs albumentations >= 2.0, found {_albumentations.__version__}")
 
 
+Array = npt.NDArray[typing.Any]
+Params = typing.Dict[str, typing.Any]
+
+
 class _FishcamDualTransform(_DualTransform):
     """The albumentations side: the seed in get_params (from the transform's
     generator), the camera and size from the data, one SampleChange per call."""
 
-    def __init__(self, numpy_transform, p):
+    def __init__(self, p: float) -> None:
         super().__init__(p=p)
-        self._numpy_transform = numpy_transform
 
     @property
-    def targets(self):
+    def targets(self) -> typing.Dict[str, typing.Callable[..., typing.Any]]:
         return {**super().targets, "depth": self.apply_to_depth, "polygons": self.apply_to_polygons,
                 "camera": self.apply_to_camera}
 
-    def get_params(self):
+    def get_params(self) -> Params:
         return {"seed": int(self.random_generator.integers(0, 2**64, dtype=np.uint64))}
 
-    def get_params_dependent_on_data(self, params, data):
+    def get_params_dependent_on_data(self, params: Params, data: Params) -> Params:
         camera = data.get("camera")
         if camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
         return {"source_camera": camera}
 
-    def _change(self, params):
+    def _change(self, params: Params) -> _transforms.SampleChange:
         raise NotImplementedError
 
-    def apply(self, img, **params):
+    def apply(self, img: Array, **params: typing.Any) -> Array:
         return self._change(params).image(img)
 
-    def apply_to_mask(self, mask, **params):
+    def apply_to_mask(self, mask: Array, **params: typing.Any) -> Array:
         if mask.ndim == 3:  # albumentations' multi-channel mask: each channel a label plane
             return np.stack([self.apply_to_mask(np.ascontiguousarray(mask[..., c]), **params)
                              for c in range(mask.shape[2])], axis=-1)
         return self._change(params).mask(mask)
 
-    def apply_to_masks(self, masks, **params):
+    def apply_to_masks(self, masks: Array, **params: typing.Any) -> Array:
         return np.stack([self.apply_to_mask(m, **params) for m in masks]) if len(masks) else masks
 
-    def apply_to_images(self, images, **params):
+    def apply_to_images(self, images: Array, **params: typing.Any) -> Array:
         return np.stack([self.apply(x, **params) for x in images])
 
-    def apply_to_bboxes(self, bboxes, **params):
+    def apply_to_bboxes(self, bboxes: Array, **params: typing.Any) -> Array:
         if len(bboxes) == 0:
             return bboxes
         height, width = params["shape"][:2]
@@ -92,7 +98,7 @@ class _FishcamDualTransform(_DualTransform):
         out[:, :4] = boxes / scale
         return out
 
-    def apply_to_keypoints(self, keypoints, **params):
+    def apply_to_keypoints(self, keypoints: Array, **params: typing.Any) -> Array:
         if len(keypoints) == 0:
             return keypoints
         mapped, visible = self._change(params).points(keypoints[:, :2].astype(np.float64))
@@ -104,14 +110,14 @@ class _FishcamDualTransform(_DualTransform):
         out[:, :2] = mapped
         return out
 
-    def apply_to_depth(self, depth, **params):
+    def apply_to_depth(self, depth: Array, **params: typing.Any) -> Array:
         return self._change(params).depth_map(depth, "depth")
 
-    def apply_to_polygons(self, polygons, **params):
+    def apply_to_polygons(self, polygons: typing.Sequence[Array], **params: typing.Any) -> typing.List[Array]:
         change = self._change(params)
         return [change.polygon(p, f"polygons[{i}]") for i, p in enumerate(polygons)]
 
-    def apply_to_camera(self, value, **params):
+    def apply_to_camera(self, value: Camera, **params: typing.Any) -> Camera:
         return self._change(params).camera(value)
 
 
@@ -120,46 +126,52 @@ class RandomViewpoint(_FishcamDualTransform):
     module). The camera comes from the constructor or from ``camera=`` in the call;
     ``p`` is albumentations' (its generator decides)."""
 
-    def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
-                 depth="source-sphere", fill=0, fill_mask=0, sampling="grid", depth_values="range", p=1.0):
-        super().__init__(_transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
-                                                     max_translation=max_translation, depth=depth, fill=fill,
-                                                     fill_mask=fill_mask, sampling=sampling,
-                                                     depth_values=depth_values), p)
+    def __init__(self, camera: typing.Optional[Camera] = None, preset: str = "train",
+                 max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
+                 depth: str = "source-sphere", fill: float = 0, fill_mask: int = 0, sampling: str = "grid",
+                 depth_values: str = "range", p: float = 1.0) -> None:
+        super().__init__(p)
+        self._viewpoint = _transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
+                                                      max_translation=max_translation, depth=depth, fill=fill,
+                                                      fill_mask=fill_mask, sampling=sampling,
+                                                      depth_values=depth_values)
         self.camera, self.preset = camera, preset
         self.max_rotation_deg, self.max_translation = max_rotation_deg, max_translation
         self.depth, self.fill, self.fill_mask = depth, fill, fill_mask
         self.sampling, self.depth_values = sampling, depth_values
 
-    def get_transform_init_args_names(self):
+    def get_transform_init_args_names(self) -> typing.Tuple[str, ...]:
         return ("camera", "preset", "max_rotation_deg", "max_translation", "depth", "fill", "fill_mask", "sampling",
                 "depth_values")
 
-    def _change(self, params):
+    def _change(self, params: Params) -> _transforms.SampleChange:
         camera = params.get("source_camera") or self.camera
         if camera is None:
             raise Error("camera: none given (pass one to the constructor or camera= in the call)")
         height, width = params["shape"][:2]
         if (camera.width, camera.height) != (width, height):
             raise Error(f"image: is {width}x{height} but the camera is {camera.width}x{camera.height}")
-        return self._numpy_transform.draw(camera, params["seed"])
+        return self._viewpoint.draw(camera, params["seed"])
 
 
 class RandomAffine(_FishcamDualTransform):
     """fishcam.transforms.RandomAffine (the paper's affine baseline) as an
     albumentations transform; depth maps keep their values, a camera is passed on."""
 
-    def __init__(self, preset="train", max_rotation_deg=None, max_translation=None, scale_range=None, fill=0,
-                 fill_mask=0, p=1.0):
-        super().__init__(_transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
+    def __init__(self, preset: str = "train", max_rotation_deg: typing.Optional[float] = None,
+                 max_translation: typing.Optional[float] = None,
+                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, fill: float = 0, fill_mask: int = 0,
+                 p: float = 1.0) -> None:
+        super().__init__(p)
+        self._affine = _transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
                                                   max_translation=max_translation, scale_range=scale_range,
-                                                  fill=fill, fill_mask=fill_mask), p)
+                                                  fill=fill, fill_mask=fill_mask)
         self.preset, self.max_rotation_deg, self.max_translation = preset, max_rotation_deg, max_translation
         self.scale_range, self.fill, self.fill_mask = scale_range, fill, fill_mask
 
-    def get_transform_init_args_names(self):
+    def get_transform_init_args_names(self) -> typing.Tuple[str, ...]:
         return ("preset", "max_rotation_deg", "max_translation", "scale_range", "fill", "fill_mask")
 
-    def _change(self, params):
+    def _change(self, params: Params) -> _transforms.SampleChange:
         height, width = params["shape"][:2]
-        return self._numpy_transform.draw((width, height), params["seed"])
+        return self._affine.draw((width, height), params["seed"])

@@ -11,19 +11,23 @@ absent from both prediction and ground truth has IoU NaN and is left out of the
 mean.
 """
 
+import typing
+
 import numpy as np
+import numpy.typing as npt
 
 from . import Error, _fishcam
 
 __all__ = ["ConfusionMatrix"]
 
 
-def _as_numpy(x, what):
+def _as_numpy(x: typing.Any, what: str) -> npt.NDArray[typing.Any]:
     if isinstance(x, np.ndarray):
         return x
     if type(x).__module__.startswith("torch"):
         # GPU outputs are copied to the host: the counting runs in C++ on the CPU.
-        return x.detach().cpu().numpy()
+        array: npt.NDArray[typing.Any] = x.detach().cpu().numpy()
+        return array
     if x is None:
         raise Error(f"{what}: expected an array, got None")
     return np.asarray(x)
@@ -41,7 +45,8 @@ class ConfusionMatrix(_fishcam.ConfusionMatrix):
     counts: the matrix as an int64 (num_classes, num_classes) array.
     """
 
-    def update(self, prediction, ground_truth, valid=None):
+    def update(self, prediction: typing.Any, ground_truth: typing.Any,
+               valid: typing.Any = None) -> None:
         """Counts the pixels of one batch: prediction and ground_truth integer arrays
         (numpy or torch, CUDA tensors copied to the host) of one shape, valid an
         optional bool mask of that shape. A value that is not a class (nor the
@@ -51,18 +56,17 @@ class ConfusionMatrix(_fishcam.ConfusionMatrix):
         if valid is not None:
             valid = _as_numpy(valid, "valid")
         super().update(prediction, ground_truth, valid)
-        return self
 
-    def iou(self):
+    def iou(self) -> npt.NDArray[np.float64]:
         """Per-class intersection over union, (num_classes,) float64 fractions; NaN for
         classes absent from both prediction and ground truth."""
         return np.array([np.nan if v is None else v for v in self._iou()], dtype=np.float64)
 
-    def miou(self):
+    def miou(self) -> float:
         """The mean of iou() over the classes present (a float fraction; NaN if none)."""
         value = self._miou()
         return float("nan") if value is None else value
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return (f"ConfusionMatrix(num_classes={self.num_classes}, ignore={self.ignore}, "
                 f"scored_pixels={self.scored_pixels})")

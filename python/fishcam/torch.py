@@ -45,26 +45,30 @@ except ImportError as error:  # pragma: no cover - the message is the point
 if not hasattr(tv_tensors, "KeyPoints"):  # pragma: no cover
     raise ImportError("fishcam.torch needs torchvision >= 0.23 (tv_tensors.KeyPoints); pip install -U torchvision")
 
-from . import Camera, Error, derive_seed, set_num_threads
+from . import Camera, Error, ViewpointChange, _check_seed, derive_seed, set_num_threads
 from . import transforms as _transforms
 
 __all__ = ["RandomViewpoint", "RandomAffine", "DepthMap", "Polygon", "WoodScapeDataset", "EpochSampler", "WarpedBatch",
            "warp_batch", "collate", "sample_seed", "record_changes", "worker_init_fn", "torch_seed"]
 
 
-def _cv2():
+Sample = typing.Any  # anything torchvision.transforms.v2 takes: a tensor, a tuple, a dict, ...
+Params = typing.Dict[str, typing.Any]
+
+
+def _cv2() -> typing.Any:
     import cv2  # python3-opencv: only the dataset needs it
 
     return cv2
 
 
-def torch_seed():
+def torch_seed() -> int:
     """One 64-bit seed from torch's (per-worker) generator."""
     hi, lo = torch.randint(0, 2**32, (2,), dtype=torch.int64).tolist()
-    return (hi << 32) | lo
+    return int((hi << 32) | lo)
 
 
-def worker_init_fn(worker_id):
+def worker_init_fn(worker_id: int) -> None:
     """For DataLoader workers: one fishcam thread each (the workers are the parallelism)."""
     del worker_id
     set_num_threads(1)
@@ -78,10 +82,12 @@ class DepthMap(tv_tensors.TVTensor):
     fishcam's transform would leave it behind)."""
 
     @classmethod
-    def _wrap(cls, tensor):
+    def _wrap(cls, tensor: torch.Tensor) -> "DepthMap":
         return tensor.as_subclass(cls)
 
-    def __new__(cls, data, *, dtype=None, device=None, requires_grad=None):
+    def __new__(cls, data: typing.Any, *, dtype: typing.Optional[torch.dtype] = None,
+                device: typing.Optional[torch.device] = None,
+                requires_grad: typing.Optional[bool] = None) -> "DepthMap":
         tensor = cls._to_tensor(data, dtype=dtype, device=device, requires_grad=requires_grad)
         return cls._wrap(tensor)
 
@@ -93,10 +99,12 @@ class Polygon(tv_tensors.TVTensor):
     several in a list. torchvision's own transforms pass it through."""
 
     @classmethod
-    def _wrap(cls, tensor):
+    def _wrap(cls, tensor: torch.Tensor) -> "Polygon":
         return tensor.as_subclass(cls)
 
-    def __new__(cls, data, *, dtype=None, device=None, requires_grad=None):
+    def __new__(cls, data: typing.Any, *, dtype: typing.Optional[torch.dtype] = None,
+                device: typing.Optional[torch.device] = None,
+                requires_grad: typing.Optional[bool] = None) -> "Polygon":
         tensor = cls._to_tensor(data, dtype=dtype, device=device, requires_grad=requires_grad)
         if tensor.ndim != 2 or tensor.shape[-1] != 2:
             raise Error(f"Polygon: expected shape (K, 2), got {tuple(tensor.shape)}")
@@ -105,16 +113,18 @@ class Polygon(tv_tensors.TVTensor):
 
 # The seed a seeded dataset gives the transforms of one sample, and the records of
 # the changes they made (WoodScapeDataset reads them back into the item).
-_sample_seed = contextvars.ContextVar("fishcam_sample_seed", default=None)
-_sample_records = contextvars.ContextVar("fishcam_sample_records", default=None)
+_sample_seed: "contextvars.ContextVar[typing.Optional[int]]" = contextvars.ContextVar("fishcam_sample_seed",
+                                                                                      default=None)
+_sample_records: "contextvars.ContextVar[typing.Optional[typing.List[_transforms.Record]]]" = contextvars.ContextVar(
+    "fishcam_sample_records", default=None)
 
 
 @contextlib.contextmanager
-def record_changes():
+def record_changes() -> typing.Iterator[typing.List[_transforms.Record]]:
     """Within the block, fishcam's transforms append the record of each change they
     make (the manifest's dict: method, seed, rotation, translation, depth) to the
     list this yields."""
-    records = []
+    records: typing.List[_transforms.Record] = []
     token = _sample_records.set(records)
     try:
         yield records
@@ -123,12 +133,12 @@ def record_changes():
 
 
 @contextlib.contextmanager
-def sample_seed(seed):
+def sample_seed(seed: int) -> typing.Iterator[typing.List[_transforms.Record]]:
     """Within the block, fishcam's transforms use ``seed`` (one 64-bit integer) instead
     of drawing one, and torch's generator is seeded with it (restored afterwards), so
     every random transform of a pipeline is reproducible per sample. Yields the list
     of change records, as record_changes."""
-    seed = _transforms._check_seed(seed)
+    seed = _check_seed(seed)
     token = _sample_seed.set(seed)
     try:
         with record_changes() as records, torch.random.fork_rng(devices=[]):
@@ -138,13 +148,13 @@ def sample_seed(seed):
         _sample_seed.reset(token)
 
 
-def _cpu(tensor, what):
+def _cpu(tensor: torch.Tensor, what: str) -> torch.Tensor:
     if tensor.device.type != "cpu":
         raise Error(f"{what}: fishcam runs on the CPU; got a tensor on {tensor.device} (move it with .cpu())")
     return tensor.detach()
 
 
-def _image_to_numpy(tensor, what):
+def _image_to_numpy(tensor: torch.Tensor, what: str) -> _transforms.Array:
     """CHW (or HW) tensor -> HWC numpy (a view; the warp copies if it must), refusing
     what the warp cannot take with the layout in the message."""
     tensor = _cpu(tensor, what)
@@ -152,11 +162,11 @@ def _image_to_numpy(tensor, what):
         raise Error(f"{what}: expected CxHxW or HxW, got shape {tuple(tensor.shape)}")
     if tensor.dtype == torch.float64:
         tensor = tensor.float()
-    array = tensor.numpy()
+    array: _transforms.Array = tensor.numpy()
     return np.moveaxis(array, 0, -1) if array.ndim == 3 else array
 
 
-def _numpy_to_image(array, like):
+def _numpy_to_image(array: _transforms.Array, like: torch.Tensor) -> torch.Tensor:
     # CHW as a view of the HWC result (as the dataset's own images are): no copy.
     out = torch.from_numpy(array)
     out = out.permute(2, 0, 1) if out.ndim == 3 else out
@@ -164,7 +174,7 @@ def _numpy_to_image(array, like):
     return tv_tensors.wrap(out, like=like) if isinstance(like, tv_tensors.TVTensor) else out
 
 
-def _size_of(flat_inputs):
+def _size_of(flat_inputs: typing.List[typing.Any]) -> typing.Tuple[int, int]:
     """(width, height) of the sample's images, masks or depth maps."""
     for x in flat_inputs:
         if isinstance(x, (tv_tensors.Image, tv_tensors.Mask, DepthMap)) or (
@@ -181,14 +191,13 @@ class _FishcamTransform(v2.Transform):
 
     _transformed_types = (torch.Tensor, Camera)
 
-    def __init__(self, numpy_transform, min_visibility):
+    def __init__(self, min_visibility: float) -> None:
         super().__init__()
         if not 0 <= _transforms._number(min_visibility, "min_visibility") <= 1:
             raise Error(f"min_visibility: must be in [0, 1], got {min_visibility}")
-        self.numpy_transform = numpy_transform
         self.min_visibility = float(min_visibility)
 
-    def _seed(self):
+    def _seed(self) -> int:
         """The sample's seed (sample_seed) for the first fishcam transform of the
         sample, seeds derived from it for any later one; else one from torch's generator."""
         seed = _sample_seed.get()
@@ -198,7 +207,7 @@ class _FishcamTransform(v2.Transform):
         made = len(records) if records is not None else 0
         return seed if made == 0 else derive_seed(seed, "fishcam-transform", made)
 
-    def check_inputs(self, flat_inputs):
+    def check_inputs(self, flat_inputs: typing.List[typing.Any]) -> None:
         for x in flat_inputs:
             # Passed through by torchvision, an image or mask in these forms would silently
             # keep its geometry while the rest of the sample moves.
@@ -208,10 +217,10 @@ class _FishcamTransform(v2.Transform):
             if isinstance(x, PIL.Image.Image):
                 raise Error("PIL images: convert them first (v2.PILToTensor() or v2.ToImage() before this transform)")
 
-    def _draw(self, flat_inputs):
+    def _draw(self, flat_inputs: typing.List[typing.Any]) -> _transforms.SampleChange:
         raise NotImplementedError
 
-    def make_params(self, flat_inputs):
+    def make_params(self, flat_inputs: typing.List[typing.Any]) -> Params:
         sample_change = self._draw(flat_inputs)
         records = _sample_records.get()
         if records is not None:
@@ -223,7 +232,8 @@ class _FishcamTransform(v2.Transform):
                 "done": self._image_and_mask(flat_inputs, sample_change)}
 
     @staticmethod
-    def _image_and_mask(flat_inputs, change):
+    def _image_and_mask(flat_inputs: typing.List[typing.Any],
+                        change: _transforms.SampleChange) -> typing.Dict[int, torch.Tensor]:
         """The sample's first image and first HxW mask resampled in one pass (the maps
         computed once for both), keyed by the inputs' ids for transform()."""
         images = [x for x in flat_inputs if isinstance(x, torch.Tensor) and x.ndim == 3 and (
@@ -236,7 +246,7 @@ class _FishcamTransform(v2.Transform):
         return {id(image): _numpy_to_image(out_image, image),
                 id(mask): tv_tensors.wrap(torch.from_numpy(out_mask), like=mask)}
 
-    def transform(self, inpt, params):
+    def transform(self, inpt: typing.Any, params: Params) -> typing.Any:
         done = params["done"].get(id(inpt))
         if done is not None:
             return done
@@ -267,7 +277,7 @@ class _FishcamTransform(v2.Transform):
         return self._images(inpt, change)
 
     @staticmethod
-    def _masks(mask, change):
+    def _masks(mask: torch.Tensor, change: _transforms.SampleChange) -> torch.Tensor:
         tensor = _cpu(mask, "mask")
         if tensor.ndim == 2:
             return torch.from_numpy(change.mask(tensor.numpy()))
@@ -277,13 +287,14 @@ class _FishcamTransform(v2.Transform):
         raise Error(f"mask: expected HxW or NxHxW, got shape {tuple(tensor.shape)}")
 
     @staticmethod
-    def _images(image, change):
+    def _images(image: torch.Tensor, change: _transforms.SampleChange) -> torch.Tensor:
         if image.ndim == 4:  # a batch of images sharing the camera
             return torch.stack([_FishcamTransform._images(x, change) for x in image])
         array = _image_to_numpy(image, "image")
         return _numpy_to_image(change.image(array), image)
 
-    def _boxes(self, boxes, change, instance_masks):
+    def _boxes(self, boxes: tv_tensors.BoundingBoxes, change: _transforms.SampleChange,
+               instance_masks: typing.Optional[torch.Tensor]) -> tv_tensors.BoundingBoxes:
         fmt = boxes.format
         if "ROTATED" in str(fmt).upper() or "XYXYXYXY" in str(fmt).upper():
             raise Error(f"boxes: rotated boxes ({fmt}) are not supported; use keypoints for their corners")
@@ -298,8 +309,8 @@ class _FishcamTransform(v2.Transform):
                     out[i] = torch.tensor([xs.min(), ys.min(), xs.max() + 1, ys.max() + 1], dtype=torch.float64)
             visibility = (out[:, 2] > out[:, 0]).double()
         else:
-            mapped, visibility = change.boxes(_cpu(xyxy, "boxes").double().numpy())
-            out, visibility = torch.from_numpy(mapped), torch.from_numpy(visibility)
+            mapped, seen = change.boxes(_cpu(xyxy, "boxes").double().numpy())
+            out, visibility = torch.from_numpy(mapped), torch.from_numpy(seen)
         # Boxes seen too little collapse to nothing: v2.SanitizeBoundingBoxes drops them.
         out[visibility < self.min_visibility] = 0
         out = v2.functional.convert_bounding_box_format(out.to(boxes.dtype), old_format=tv_tensors.BoundingBoxFormat.XYXY,
@@ -327,15 +338,16 @@ class RandomViewpoint(_FishcamTransform):
     Arguments as fishcam.transforms.RandomViewpoint, plus min_visibility (boxes).
     """
 
-    def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
-                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, sampling="grid", depth_values="range",
-                 min_visibility=0.0):
-        super().__init__(_transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
-                                                     max_translation=max_translation, depth=depth, p=p, fill=fill,
-                                                     fill_mask=fill_mask, sampling=sampling,
-                                                     depth_values=depth_values), min_visibility)
+    def __init__(self, camera: typing.Optional[Camera] = None, preset: typing.Optional[str] = "train",
+                 max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
+                 depth: str = "source-sphere", p: float = 1.0, fill: float = 0, fill_mask: int = 0,
+                 sampling: str = "grid", depth_values: str = "range", min_visibility: float = 0.0) -> None:
+        super().__init__(min_visibility)
+        self.numpy_transform = _transforms.RandomViewpoint(
+            camera, preset=preset, max_rotation_deg=max_rotation_deg, max_translation=max_translation, depth=depth,
+            p=p, fill=fill, fill_mask=fill_mask, sampling=sampling, depth_values=depth_values)
 
-    def _draw(self, flat_inputs):
+    def _draw(self, flat_inputs: typing.List[typing.Any]) -> _transforms.SampleChange:
         cameras = [x for x in flat_inputs if isinstance(x, Camera)]
         if len(cameras) > 1 and any(c != cameras[0] for c in cameras[1:]):
             raise Error("camera: the sample holds several different cameras; one change needs one camera")
@@ -344,7 +356,7 @@ class RandomViewpoint(_FishcamTransform):
             raise Error("camera: none given (pass one to the constructor or put a fishcam.Camera in the sample)")
         return self.numpy_transform.draw(camera, self._seed())
 
-    def extra_repr(self):
+    def extra_repr(self) -> str:
         return repr(self.numpy_transform)[len("RandomViewpoint("):-1] + f", min_visibility={self.min_visibility}"
 
 
@@ -353,16 +365,19 @@ class RandomAffine(_FishcamTransform):
     v2 transform, with the targets of RandomViewpoint (depth maps keep their values;
     a camera in the sample is passed on unchanged: the baseline has no camera model)."""
 
-    def __init__(self, preset="train", max_rotation_deg=None, max_translation=None, scale_range=None, p=1.0,
-                 fill=0, fill_mask=0, min_visibility=0.0):
-        super().__init__(_transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
-                                                  max_translation=max_translation, scale_range=scale_range, p=p,
-                                                  fill=fill, fill_mask=fill_mask), min_visibility)
+    def __init__(self, preset: typing.Optional[str] = "train", max_rotation_deg: typing.Optional[float] = None,
+                 max_translation: typing.Optional[float] = None,
+                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, p: float = 1.0, fill: float = 0,
+                 fill_mask: int = 0, min_visibility: float = 0.0) -> None:
+        super().__init__(min_visibility)
+        self.numpy_transform = _transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
+                                                        max_translation=max_translation, scale_range=scale_range,
+                                                        p=p, fill=fill, fill_mask=fill_mask)
 
-    def _draw(self, flat_inputs):
+    def _draw(self, flat_inputs: typing.List[typing.Any]) -> _transforms.SampleChange:
         return self.numpy_transform.draw(_size_of(flat_inputs), self._seed())
 
-    def extra_repr(self):
+    def extra_repr(self) -> str:
         return repr(self.numpy_transform)[len("RandomAffine("):-1] + f", min_visibility={self.min_visibility}"
 
 
@@ -377,7 +392,9 @@ class WarpedBatch(typing.NamedTuple):
 _batch_warps = _transforms._WarpCache()
 
 
-def warp_batch(images, cameras, changes, masks=None, depth="source-sphere", fill=0.0, fill_mask=0):
+def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequence[Camera]],
+               changes: typing.Sequence[ViewpointChange], masks: typing.Optional[torch.Tensor] = None,
+               depth: str = "source-sphere", fill: float = 0.0, fill_mask: int = 0) -> WarpedBatch:
     """Viewpoint changes for a batch of tensors on any device.
 
     The maps come from fishcam on the CPU (the grid path, geometric: within 1/32 px
@@ -414,7 +431,7 @@ def warp_batch(images, cameras, changes, masks=None, depth="source-sphere", fill
     for i, (camera, change) in enumerate(zip(cameras, changes)):
         if not isinstance(camera, Camera):
             raise Error(f"cameras[{i}]: expected a fishcam.Camera, got {type(camera).__name__}")
-        if not isinstance(change, _transforms._fishcam.ViewpointChange):
+        if not isinstance(change, ViewpointChange):
             raise Error(f"changes[{i}]: expected a fishcam.ViewpointChange, got {type(change).__name__}")
         if (camera.width, camera.height) != (width, height):
             raise Error(f"images: are {width}x{height} but cameras[{i}] is {camera.width}x{camera.height}")
@@ -443,17 +460,17 @@ def warp_batch(images, cameras, changes, masks=None, depth="source-sphere", fill
     return WarpedBatch(sampled.to(images.dtype), out_masks, valid)
 
 
-def collate(batch):
+def collate(batch: typing.Sequence[typing.Any]) -> typing.Any:
     """torch's default collate, but fishcam.Camera objects (and other non-tensors the
     default cannot stack: names, change records) are gathered into lists."""
     if isinstance(batch[0], dict):
         return {key: collate([item[key] for item in batch]) for key in batch[0]}
     if isinstance(batch[0], (Camera, str)) or not isinstance(batch[0], (torch.Tensor, np.ndarray, int, float)):
         return list(batch)
-    return torch.utils.data.default_collate(batch)
+    return torch.utils.data.default_collate(list(batch))
 
 
-class EpochSampler(torch.utils.data.Sampler):
+class EpochSampler(torch.utils.data.Sampler[typing.Tuple[int, int]]):
     """Yields ``(epoch, index)`` for every index of ``sampler``, one epoch per pass.
 
     The DataLoader iterates its sampler in the main process, so the epoch reaches
@@ -469,22 +486,22 @@ class EpochSampler(torch.utils.data.Sampler):
         start_epoch: the first pass's epoch.
     """
 
-    def __init__(self, sampler, start_epoch=0):
+    def __init__(self, sampler: typing.Iterable[int], start_epoch: int = 0) -> None:
         if isinstance(start_epoch, bool) or not isinstance(start_epoch, int) or start_epoch < 0:
             raise Error(f"EpochSampler: start_epoch must be a non-negative integer, got {start_epoch!r}")
         self.sampler = sampler
         self.next_epoch = start_epoch
 
-    def set_epoch(self, epoch):
+    def set_epoch(self, epoch: int) -> None:
         """Makes the next pass epoch ``epoch``."""
         if isinstance(epoch, bool) or not isinstance(epoch, int) or epoch < 0:
             raise Error(f"EpochSampler.set_epoch: expected a non-negative integer, got {epoch!r}")
         self.next_epoch = epoch
 
-    def __len__(self):
-        return len(self.sampler)
+    def __len__(self) -> int:
+        return len(typing.cast(typing.Sized, self.sampler))
 
-    def __iter__(self):
+    def __iter__(self) -> typing.Iterator[typing.Tuple[int, int]]:
         epoch = self.next_epoch
         self.next_epoch = epoch + 1
         if hasattr(self.sampler, "set_epoch"):
@@ -493,7 +510,7 @@ class EpochSampler(torch.utils.data.Sampler):
             yield (epoch, int(index))
 
 
-class WoodScapeDataset(torch.utils.data.Dataset):
+class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
     """Samples of a WoodScape-layout folder: ``rgb_images/NAME.png``,
     ``semantic_annotations/gtLabels/NAME.png`` and ``calibration/NAME.json`` (one
     calibration per image, as WoodScape has).
@@ -518,11 +535,13 @@ class WoodScapeDataset(torch.utils.data.Dataset):
     sees ``set_epoch``).
     """
 
-    def __init__(self, root, transform=None, seed=None, mask_dtype=torch.int64):
+    def __init__(self, root: typing.Union[str, "os.PathLike[str]"],
+                 transform: typing.Optional[typing.Callable[[Sample], Sample]] = None, seed: typing.Optional[int] = None,
+                 mask_dtype: typing.Optional[torch.dtype] = torch.int64) -> None:
         self.root = os.fspath(root)
         self.transform = transform
         self.mask_dtype = mask_dtype
-        self.seed = None if seed is None else _transforms._check_seed(seed)
+        self.seed = None if seed is None else _check_seed(seed)
         self.epoch = 0
         images = os.path.join(self.root, "rgb_images")
         if not os.path.isdir(images):
@@ -532,13 +551,13 @@ class WoodScapeDataset(torch.utils.data.Dataset):
         if not self.names:
             raise Error(f"{images}: no images")
         self._files = {os.path.splitext(f)[0]: f for f in os.listdir(images)}
-        self._cameras = {}
+        self._cameras: typing.Dict[bytes, Camera] = {}
 
-    def set_epoch(self, epoch):
+    def set_epoch(self, epoch: int) -> None:
         """The epoch of bare-index items in this process (DataLoader workers: use EpochSampler)."""
         self.epoch = int(epoch)
 
-    def _epoch_and_index(self, key):
+    def _epoch_and_index(self, key: typing.Union[int, typing.Tuple[int, int]]) -> typing.Tuple[typing.Optional[int], int]:
         if isinstance(key, tuple):
             if len(key) != 2:
                 raise Error(f"WoodScapeDataset: expected an index or (epoch, index), got {key!r}")
@@ -555,10 +574,10 @@ class WoodScapeDataset(torch.utils.data.Dataset):
             raise IndexError(f"WoodScapeDataset: index {index} out of range for {len(self.names)} samples")
         return epoch, index % len(self.names)
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self.names)
 
-    def camera(self, name):
+    def camera(self, name: str) -> Camera:
         """The fishcam.Camera of sample ``name`` (read once per distinct file content)."""
         path = os.path.join(self.root, "calibration", name + ".json")
         with open(path, "rb") as f:
@@ -570,13 +589,13 @@ class WoodScapeDataset(torch.utils.data.Dataset):
         return camera
 
     @staticmethod
-    def _read(path, flags):
-        image = _cv2().imread(path, flags)
+    def _read(path: str, flags: int) -> _transforms.Array:
+        image: typing.Optional[_transforms.Array] = _cv2().imread(path, flags)
         if image is None:
             raise Error(f"{path}: cannot read image")
         return image
 
-    def __getitem__(self, key):
+    def __getitem__(self, key: typing.Union[int, typing.Tuple[int, int]]) -> Sample:
         epoch, index = self._epoch_and_index(key)
         name = self.names[index]
         image = self._read(os.path.join(self.root, "rgb_images", self._files[name]), _cv2().IMREAD_COLOR)
@@ -601,7 +620,7 @@ class WoodScapeDataset(torch.utils.data.Dataset):
         item["changes"] = json.dumps(records)
         return item
 
-    def _with_mask_dtype(self, item):
+    def _with_mask_dtype(self, item: Sample) -> Sample:
         mask = item.get("mask") if isinstance(item, dict) else None
         if self.mask_dtype is not None and isinstance(mask, torch.Tensor) and mask.dtype != self.mask_dtype:
             item["mask"] = tv_tensors.wrap(mask.to(self.mask_dtype), like=mask) \

@@ -26,14 +26,23 @@ that seed exactly as the CLI's ``--seed`` does. ``draw(...)`` gives the
 their targets.
 """
 
-import numpy as np
+import typing
 
-from . import Camera, Error, ViewpointWarp, _check_seed, _fishcam, change_to_dict
+import numpy as np
+import numpy.typing as npt
+
+from . import Camera, Error, ViewpointChange, ViewpointWarp, _check_seed, _fishcam, change_to_dict
 
 __all__ = ["RandomViewpoint", "RandomAffine", "SampleChange", "POLYGON_TOLERANCE_PX", "affine_to_dict", "draw_seed"]
 
 
-def draw_seed(rng=None):
+Array = npt.NDArray[typing.Any]
+Record = typing.Dict[str, typing.Any]
+# (N, 2) source pixels -> (pixels (N, 2), visible (N,)): a change's forward direction.
+Forward = typing.Callable[[Array], typing.Tuple[Array, Array]]
+
+
+def draw_seed(rng: typing.Optional[np.random.Generator] = None) -> int:
     """One 64-bit seed from ``rng`` (a numpy Generator) or numpy's global generator."""
     if rng is not None:
         return int(rng.integers(0, 2**64, dtype=np.uint64))
@@ -42,28 +51,28 @@ def draw_seed(rng=None):
     return (hi << 32) | lo
 
 
-def _number(value, what):
+def _number(value: object, what: str) -> float:
     """value as a float, or fishcam.Error naming the argument."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise Error(f"{what}: expected a number, got {type(value).__name__}")
     return float(value)
 
 
-def _integer(value, what):
+def _integer(value: object, what: str) -> int:
     """value as an int, or fishcam.Error naming the argument."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
         raise Error(f"{what}: expected an integer, got {type(value).__name__}")
     return int(value)
 
 
-def _check_p_and_fill(p, fill):
+def _check_p_and_fill(p: float, fill: float) -> None:
     if not (0 <= _number(p, "p") <= 1):
         raise Error(f"p: must be in [0, 1], got {p}")
     if not np.isfinite(_number(fill, "fill")):
         raise Error("fill: must be finite")
 
 
-def _labels_for_warp(mask, fill_mask):
+def _labels_for_warp(mask: Array, fill_mask: int) -> typing.Tuple[Array, typing.Callable[[Array], Array]]:
     """The mask as the warp takes it (uint8 or uint16: labels are sampled, never
     blended) and a function giving the warped mask its original dtype back. bool,
     int32 and int64 masks (torch's default for class ids) with values in 0..65535
@@ -82,7 +91,7 @@ def _labels_for_warp(mask, fill_mask):
     return mask.astype(np.uint16), lambda out: out.astype(dtype)
 
 
-def _image_array(image, what):
+def _image_array(image: object, what: str) -> Array:
     """image as the warp takes it (HxW or HxWxC, C <= 4), or fishcam.Error with a layout hint."""
     if not isinstance(image, np.ndarray):
         raise Error(f"{what}: expected a numpy array, got {type(image).__name__}")
@@ -94,7 +103,7 @@ def _image_array(image, what):
     return image
 
 
-def _points_array(points, what, k=2):
+def _points_array(points: object, what: str, k: int = 2) -> Array:
     """(N, k) float64 from any array-like of numbers, or fishcam.Error naming it."""
     try:
         array = np.asarray(points, dtype=np.float64)
@@ -121,7 +130,10 @@ class SampleChange:
     the module docstring and return new ones.
     """
 
-    def __init__(self, record, forward, resample, depth_map, camera, size, fill_mask):
+    def __init__(self, record: Record, forward: Forward,
+                 resample: typing.Callable[..., typing.Dict[str, Array]],
+                 depth_map: typing.Callable[[Array], Array], camera: typing.Callable[[Camera], Camera],
+                 size: typing.Tuple[int, int], fill_mask: int) -> None:
         self.record = record
         self._fill_mask = fill_mask
         self._forward = forward      # (N, 2) source pixels -> (pixels, visible)
@@ -130,11 +142,11 @@ class SampleChange:
         self._camera = camera        # Camera -> Camera
         self.size = size             # (width, height) of the output
 
-    def image(self, image, what="image"):
+    def image(self, image: Array, what: str = "image") -> Array:
         """An image resampled bilinearly (dtype and channels kept)."""
         return self._resample(image=_image_array(image, what), labels=None)["image"]
 
-    def mask(self, mask, what="mask"):
+    def mask(self, mask: Array, what: str = "mask") -> Array:
         """A label or instance-id mask resampled by nearest neighbour (never blended; dtype kept)."""
         if not isinstance(mask, np.ndarray):
             raise Error(f"{what}: expected a numpy array, got {type(mask).__name__}")
@@ -143,7 +155,7 @@ class SampleChange:
         labels, restore = _labels_for_warp(mask, self._fill_mask)
         return restore(self._resample(image=None, labels=labels)["labels"])
 
-    def image_and_mask(self, image, mask):
+    def image_and_mask(self, image: Array, mask: Array) -> typing.Tuple[Array, Array]:
         """Both in one pass (the maps are computed once): (image, mask)."""
         image = _image_array(image, "image")
         if not isinstance(mask, np.ndarray) or mask.ndim != 2:
@@ -152,19 +164,19 @@ class SampleChange:
         out = self._resample(image=image, labels=labels)
         return out["image"], restore(out["labels"])
 
-    def depth_map(self, depth_map, what="depth_map"):
+    def depth_map(self, depth_map: Array, what: str = "depth_map") -> Array:
         """A depth map (HxW float32) seen from the moved camera (see RandomViewpoint)."""
         if not isinstance(depth_map, np.ndarray) or depth_map.dtype != np.float32 or depth_map.ndim != 2:
             got = f"{depth_map.dtype} {depth_map.shape}" if isinstance(depth_map, np.ndarray) else type(depth_map).__name__
             raise Error(f"{what}: expected an HxW float32 array, got {got}")
         return self._depth_map(depth_map)
 
-    def points(self, points, what="keypoints"):
+    def points(self, points: object, what: str = "keypoints") -> typing.Tuple[Array, Array]:
         """(N, 2) pixels -> (new pixels (N, 2) float64, visible (N,) bool). Exact; NaN
         where a point has no image; not visible where it left the view or is hidden."""
         return self._forward(_points_array(points, what))
 
-    def boxes(self, boxes, what="boxes", clip=True):
+    def boxes(self, boxes: object, what: str = "boxes", clip: bool = True) -> typing.Tuple[Array, Array]:
         """(N, 4) x_min, y_min, x_max, y_max (pixel edges) -> (boxes (N, 4), visible
         fraction (N,)): the tight box of the densely transformed outline, clipped to
         the image unless ``clip=False``; the fraction of it inside the image (0, and
@@ -189,7 +201,7 @@ class SampleChange:
             out[i] = [*np.minimum(clipped_lo, (width, height)), *np.maximum(clipped_hi, 0)] if clip else [*lo, *hi]
         return out, visibility
 
-    def polygon(self, polygon, what="polygon"):
+    def polygon(self, polygon: object, what: str = "polygon") -> Array:
         """(K, 2) vertices of a closed polygon -> (M, 2) vertices of its image, the
         edges subdivided until each stays within POLYGON_TOLERANCE_PX of the true curve."""
         vertices = _points_array(polygon, what)
@@ -199,12 +211,12 @@ class SampleChange:
         edges_to = np.roll(vertices, -1, axis=0)
         return _subdivided(self._forward, edges_from, edges_to)
 
-    def camera(self, camera):
+    def camera(self, camera: Camera) -> Camera:
         """The camera of the augmented sample."""
         return self._camera(camera)
 
 
-def _box_outline(x0, y0, x1, y1, step=0.25):
+def _box_outline(x0: float, y0: float, x1: float, y1: float, step: float = 0.25) -> Array:
     """Points every `step` px around the box (corners included)."""
     nx = max(int(np.ceil((x1 - x0) / step)), 1)
     ny = max(int(np.ceil((y1 - y0) / step)), 1)
@@ -214,7 +226,7 @@ def _box_outline(x0, y0, x1, y1, step=0.25):
                            np.stack([np.full_like(ys, x0), ys], 1), np.stack([np.full_like(ys, x1), ys], 1)])
 
 
-def _subdivided(forward, starts, ends):
+def _subdivided(forward: Forward, starts: Array, ends: Array) -> Array:
     """The images of the closed chain of edges starts[i] -> ends[i], each edge halved
     until the image of its midpoint lies within POLYGON_TOLERANCE_PX of the chord
     between its ends' images (a curve bending less than that in between)."""
@@ -240,7 +252,7 @@ def _subdivided(forward, starts, ends):
     return np.concatenate(pieces) if pieces else np.zeros((0, 2))
 
 
-def _applies(p, seed):
+def _applies(p: float, seed: int) -> bool:
     """Whether a transform with probability p changes the sample of this seed: the
     decision follows from the seed too, so seed= reproduces it."""
     return p >= 1 or np.random.default_rng(seed).random() < p
@@ -251,11 +263,12 @@ class _WarpCache:
     unprojects every pixel, so it is kept, not rebuilt per sample. Keyed by
     Camera.parameters_key (microseconds; to_json() cost more than a warp)."""
 
-    def __init__(self, limit=64):
+    def __init__(self, limit: int = 64) -> None:
+        self._warps: typing.Dict[bytes, ViewpointWarp] = {}
         self._warps = {}
         self._limit = limit
 
-    def get(self, camera):
+    def get(self, camera: Camera) -> ViewpointWarp:
         key = camera.parameters_key(with_pose=False)  # a warp depends on the intrinsics and size only
         warp = self._warps.get(key)
         if warp is None:
@@ -265,10 +278,10 @@ class _WarpCache:
             self._warps[key] = warp
         return warp
 
-    def __getstate__(self):
+    def __getstate__(self) -> typing.Dict[str, int]:
         return {"limit": self._limit}  # warps are rebuilt on demand after unpickling
 
-    def __setstate__(self, state):
+    def __setstate__(self, state: typing.Dict[str, int]) -> None:
         self._warps = {}
         self._limit = state["limit"]
 
@@ -289,9 +302,11 @@ class RandomViewpoint:
     depth_values: what depth maps hold, "range" (along the ray; default) or "z".
     """
 
-    def __init__(self, camera=None, preset="train", max_rotation_deg=None, max_translation=None,
-                 depth="source-sphere", p=1.0, fill=0, fill_mask=0, rng=None, sampling="grid",
-                 depth_values="range"):
+    def __init__(self, camera: typing.Optional[Camera] = None, preset: typing.Optional[str] = "train",
+                 max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
+                 depth: str = "source-sphere", p: float = 1.0, fill: float = 0, fill_mask: int = 0,
+                 rng: typing.Optional[np.random.Generator] = None, sampling: str = "grid",
+                 depth_values: str = "range") -> None:
         if sampling not in _fishcam.sampling_names():
             raise Error(f"sampling: expected {' or '.join(_fishcam.sampling_names())}, got {sampling!r}")
         if depth_values not in _fishcam.depth_values_names():
@@ -302,12 +317,14 @@ class RandomViewpoint:
             raise Error("max_rotation_deg and max_translation go together")
         if max_rotation_deg is not None:
             preset = None
-            if not (np.isfinite(_number(max_rotation_deg, "max_rotation_deg")) and 0 <= max_rotation_deg <= 180):
+            rotation = _number(max_rotation_deg, "max_rotation_deg")
+            if not (np.isfinite(rotation) and 0 <= rotation <= 180):
                 raise Error(f"max_rotation_deg: must be in [0, 180], got {max_rotation_deg}")
-            if not (np.isfinite(_number(max_translation, "max_translation")) and max_translation >= 0):
+            translation = _number(max_translation, "max_translation")
+            if not (np.isfinite(translation) and translation >= 0):
                 raise Error(f"max_translation: must be finite and >= 0, got {max_translation}")
         else:
-            _fishcam.check_preset(preset)
+            _fishcam.check_preset(str(preset))
         _fishcam.check_depth_prior(depth)
         _check_p_and_fill(p, fill)
         self.camera = camera
@@ -323,14 +340,15 @@ class RandomViewpoint:
         self.depth_values = depth_values
         self._warps = _WarpCache()
 
-    def change_for(self, seed):
+    def change_for(self, seed: int) -> ViewpointChange:
         """The change this transform applies for ``seed`` (what the CLI's --seed gives)."""
         seed = _check_seed(seed)
         if self.preset is not None:
             return _fishcam.random_change(self.preset, seed)
+        assert self.max_rotation_deg is not None and self.max_translation is not None
         return _fishcam.random_change_in(self.max_rotation_deg, self.max_translation, seed)
 
-    def draw(self, camera=None, seed=None):
+    def draw(self, camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None) -> SampleChange:
         """The SampleChange of one call: the change of ``seed`` (drawn when None) for
         images of ``camera`` (default: the constructor's)."""
         camera = camera if camera is not None else self.camera
@@ -344,7 +362,7 @@ class RandomViewpoint:
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.ViewpointChange()
         warp = self._warps.get(camera)
 
-        def resample(image, labels):
+        def resample(image: typing.Optional[Array], labels: typing.Optional[Array]) -> typing.Dict[str, Array]:
             return warp.warp(image=image, labels=labels, change=change, depth=self.depth, fill=self.fill,
                              label_fill=self.fill_mask, sampling=self.sampling)
 
@@ -357,11 +375,15 @@ class RandomViewpoint:
             size=(camera.width, camera.height),
             fill_mask=self.fill_mask)
 
-    def __call__(self, image=None, mask=None, camera=None, seed=None, **targets):
+    def __call__(self, image: typing.Optional[Array] = None, mask: typing.Optional[Array] = None,
+                 camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None,
+                 **targets: typing.Any) -> typing.Dict[str, typing.Any]:
+        """One change for every target given (module docstring); a dict with the same
+        keys, ``change`` (the record) and the visibility of keypoints and boxes."""
         # The augmented camera is returned for a camera given with the sample.
         return _apply(self.draw(camera, seed), image, mask, camera, targets)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         what = (f"preset={self.preset!r}" if self.preset is not None else
                 f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}")
         return (f"RandomViewpoint({what}, depth={self.depth!r}, p={self.p}, fill={self.fill}, "
@@ -371,7 +393,8 @@ class RandomViewpoint:
 _TARGETS = ("images", "depth_map", "keypoints", "boxes", "polygons")
 
 
-def _apply(sample_change, image, mask, camera, targets):
+def _apply(sample_change: SampleChange, image: typing.Optional[Array], mask: typing.Optional[Array],
+           camera: typing.Optional[Camera], targets: typing.Dict[str, typing.Any]) -> typing.Dict[str, typing.Any]:
     """The numpy transforms' call: every given target under one SampleChange; a dict
     with the same keys, plus ``change`` (the record) and, for keypoints and boxes,
     ``keypoints_visible`` and ``boxes_visibility``."""
@@ -380,7 +403,7 @@ def _apply(sample_change, image, mask, camera, targets):
         raise Error(f"unknown target {unknown[0]!r} (expected image, mask, camera, {', '.join(_TARGETS)})")
     if image is None and mask is None and not any(v is not None for v in targets.values()):
         raise Error("nothing to transform: pass image= and/or mask= (or another target)")
-    out = {"change": sample_change.record}
+    out: typing.Dict[str, typing.Any] = {"change": sample_change.record}
     if image is not None and mask is not None:
         out["image"], out["mask"] = sample_change.image_and_mask(image, mask)
     elif image is not None:
@@ -415,24 +438,25 @@ class RandomAffine:
     seed gives the same change as ``fishcam augment --method affine --seed``.
     """
 
-    def __init__(self, preset="train", max_rotation_deg=None, max_translation=None, scale_range=None, p=1.0,
-                 fill=0, fill_mask=0, rng=None):
+    def __init__(self, preset: typing.Optional[str] = "train", max_rotation_deg: typing.Optional[float] = None,
+                 max_translation: typing.Optional[float] = None,
+                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, p: float = 1.0, fill: float = 0,
+                 fill_mask: int = 0, rng: typing.Optional[np.random.Generator] = None) -> None:
         custom = (max_rotation_deg, max_translation, scale_range)
         if any(v is not None for v in custom) and not all(v is not None for v in custom):
             raise Error("max_rotation_deg, max_translation and scale_range go together")
+        self.scale_range: typing.Optional[typing.Tuple[float, float]] = None
         if max_rotation_deg is not None:
             preset = None
             try:
-                low, high = (float(v) for v in scale_range)
+                low, high = (float(v) for v in typing.cast(typing.Iterable[float], scale_range))
             except (TypeError, ValueError):
                 raise Error(f"scale_range: expected (low, high), got {scale_range!r}") from None
             # The library checks the ranges (one message for every binding).
-            _fishcam.random_affine_in(max_rotation_deg, max_translation, low, high, 0)
+            _fishcam.random_affine_in(max_rotation_deg, _number(max_translation, "max_translation"), low, high, 0)
             self.scale_range = (low, high)
         elif preset not in _fishcam.affine_presets():
-            _fishcam.random_affine(preset, 0)  # raises naming the presets
-        else:
-            self.scale_range = None
+            _fishcam.random_affine(str(preset), 0)  # raises naming the presets
         _check_p_and_fill(p, fill)
         self.preset = preset
         self.max_rotation_deg = max_rotation_deg
@@ -442,14 +466,15 @@ class RandomAffine:
         self.fill_mask = _integer(fill_mask, "fill_mask")
         self.rng = rng
 
-    def change_for(self, seed):
+    def change_for(self, seed: int) -> _fishcam.AffineChange:
         """The change this transform applies for ``seed`` (what the CLI's --seed gives)."""
         seed = _check_seed(seed)
         if self.preset is not None:
             return _fishcam.random_affine(self.preset, seed)
+        assert self.max_rotation_deg is not None and self.max_translation is not None and self.scale_range
         return _fishcam.random_affine_in(self.max_rotation_deg, self.max_translation, *self.scale_range, seed)
 
-    def draw(self, size, seed=None):
+    def draw(self, size: typing.Tuple[int, int], seed: typing.Optional[int] = None) -> SampleChange:
         """The SampleChange of one call for images of ``size`` = (width, height)."""
         try:
             width, height = (_integer(v, "size") for v in size)
@@ -460,15 +485,16 @@ class RandomAffine:
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.AffineChange()
 
-        def resample(image, labels):
+        def resample(image: typing.Optional[Array], labels: typing.Optional[Array]) -> typing.Dict[str, Array]:
             given = image if image is not None else labels
+            assert given is not None
             if given.shape[:2] != (height, width):
                 raise Error(f"{'image' if image is not None else 'mask'}: is {given.shape[1]}x{given.shape[0]} "
                             f"but the sample is {width}x{height}")
             return _fishcam.affine_warp(image=image, labels=labels, change=change, fill=self.fill,
                                         label_fill=self.fill_mask)
 
-        def depth_map(values):
+        def depth_map(values: Array) -> Array:
             if values.shape != (height, width):
                 raise Error(f"depth_map: is {values.shape[1]}x{values.shape[0]} but the sample is {width}x{height}")
             return _fishcam.affine_warp_depth(values, change)
@@ -482,7 +508,9 @@ class RandomAffine:
             size=(width, height),
             fill_mask=self.fill_mask)
 
-    def __call__(self, image=None, mask=None, camera=None, seed=None, **targets):
+    def __call__(self, image: typing.Optional[Array] = None, mask: typing.Optional[Array] = None,
+                 camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None,
+                 **targets: typing.Any) -> typing.Dict[str, typing.Any]:
         """As RandomViewpoint's; ``camera`` is passed on unchanged (the baseline has no
         camera model), depth maps keep their values (sampled as masks)."""
         given = next((x for x in (image, mask, targets.get("depth_map")) if x is not None), None)
@@ -494,14 +522,14 @@ class RandomAffine:
             raise Error(f"image: expected an HxW or HxWxC numpy array, got {type(given).__name__}")
         return _apply(self.draw((given.shape[1], given.shape[0]), seed), image, mask, camera, targets)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         what = (f"preset={self.preset!r}" if self.preset is not None else
                 f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}, "
                 f"scale_range={self.scale_range}")
         return f"RandomAffine({what}, p={self.p})"
 
 
-def affine_to_dict(change, seed=None):
+def affine_to_dict(change: _fishcam.AffineChange, seed: typing.Optional[int] = None) -> Record:
     """An affine change as the manifest records it (``augment-dataset --method affine``)."""
     return {
         "method": "affine",
