@@ -38,6 +38,7 @@ def generate(extension_dir):
     # what the functions document, in the types mypy --strict asks for.
     text = re.sub(r"-> dict:", "-> dict[str, typing.Any]:", text)
     text = re.sub(r"-> tuple:", "-> tuple[typing.Any, ...]:", text)
+    text = re.sub(r"-> typing.Iterator:", "-> typing.Iterator[typing.Any]:", text)
     text = re.sub(r": list([,)])", r": list[typing.Any]\1", text)
     text = re.sub(r": dict([,)])", r": dict[str, typing.Any]\1", text)
     text = re.sub(r": tuple([,)])", r": tuple[typing.Any, ...]\1", text)

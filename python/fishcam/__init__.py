@@ -6,15 +6,20 @@ library's one-line message. See docs/python.md.
 """
 
 import functools as _functools
-import json as _json
 import typing as _typing
 
 import numpy as _np
 import numpy.typing as _npt
 
 from ._fishcam import (  # noqa: F401  (re-exported API)
+    AngleBin,
     Camera,
+    Comparison,
+    Conversion,
+    DisplacementStats,
     Error,
+    FitReport,
+    ModelComparison,
     ViewpointChange,
     ViewpointWarp,
     __version__,
@@ -25,7 +30,7 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
 from . import _fishcam
 
 __all__ = [
-    "Camera", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
+    "AngleBin", "Camera", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
     "random_change", "set_num_threads", "presets", "change_to_dict", "__version__",
 ]
 
@@ -77,18 +82,17 @@ random_change_in = _fishcam.random_change_in
 
 
 def convert(camera: Camera, to: str, method: str = "lsq", max_angle: _typing.Optional[float] = None,
-            fit_center: bool = False, fit_aspect: bool = False) -> _typing.Tuple[Camera, _typing.Dict[str, _typing.Any]]:
-    """Fit model ``to`` to ``camera`` as ``fishcam convert`` does.
+            fit_center: bool = False, fit_aspect: bool = False) -> Conversion:
+    """Fits model ``to`` to ``camera`` as ``fishcam convert`` does (method "lsq" or
+    "paper"; max_angle in degrees; fit_center / fit_aspect free the principal point
+    and a_y).
 
-    Returns ``(camera, report)``; the report dict has the keys of ``fishcam convert
-    --json`` (rms_px, p99_px, max_px, by_angle, model, parameters, ...) and ``method``,
-    and ``warning`` where OpenCV's fisheye functions could not use the whole field of view.
+    Returns a ``fishcam.Conversion``: ``camera`` (the fitted one), ``report`` (a
+    ``FitReport``: rms_px, p99_px, max_px, the rays below 90 degrees, by_angle),
+    ``widest_theta_deg`` and ``to_json()`` (what ``fishcam convert --json`` prints);
+    it unpacks as ``camera, report = fishcam.convert(...)``.
     """
-    fitted, report_json, widest_theta = _fishcam.convert(camera, to, method, max_angle, fit_center, fit_aspect)
-    report: _typing.Dict[str, _typing.Any] = _json.loads(report_json)
-    report["method"] = method
-    report["widest_theta_deg"] = float(_np.degrees(widest_theta))
-    return fitted, report
+    return _fishcam.convert(camera, to, method, max_angle, fit_center, fit_aspect)
 
 
 ModelArgument = _typing.Union[str, Camera, _typing.Tuple[str, Camera]]
@@ -98,8 +102,10 @@ def compare(camera: Camera,
             models: _typing.Union[ModelArgument, _typing.Sequence[ModelArgument]] = (
                 "equidistant", "stereographic", "kannala-brandt"),
             method: str = "lsq", preset: str = "train", samples: int = 8, seed: int = 0, depth: str = "source-sphere",
-            labels: _typing.Optional[_typing.Mapping[str, "_npt.NDArray[_typing.Any]"]] = None) -> _typing.Dict[str, _typing.Any]:
-    """What ``fishcam compare`` measures, as a dict (the keys of its ``--json``).
+            labels: _typing.Optional[_typing.Mapping[str, "_npt.NDArray[_typing.Any]"]] = None) -> Comparison:
+    """What ``fishcam compare`` measures: a ``fishcam.Comparison`` (its ``models``, one
+    ``ModelComparison`` each: displacement, by_angle, validity and label differences,
+    the mean displacement per pixel as an array; ``to_json()``: the CLI's ``--json``).
 
     models: model names (fitted to ``camera`` as ``convert`` does; ``method="paper"``
     uses eqs. 13-14 for equidistant and stereographic), camera files, fishcam.Camera
@@ -112,9 +118,7 @@ def compare(camera: Camera,
         raise Error(f"seed: expected a non-negative integer, got {seed!r}")
     if isinstance(samples, bool) or not isinstance(samples, (int, _np.integer)):
         raise Error(f"samples: expected an integer, got {samples!r}")
-    result: _typing.Dict[str, _typing.Any] = _json.loads(
-        _fishcam.compare(camera, listed, method, preset, int(samples), int(seed), depth, dict(labels or {})))
-    return result
+    return _fishcam.compare(camera, listed, method, preset, int(samples), int(seed), depth, dict(labels or {}))
 
 
 def random_change(preset: str, seed: int) -> ViewpointChange:

@@ -4,7 +4,7 @@ fishcam's C++ library (use the fishcam package, not this module)
 from __future__ import annotations
 import numpy
 import typing
-__all__: list[str] = ['AffineChange', 'Camera', 'ConfusionMatrix', 'Error', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'sampling_names', 'set_num_threads']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FitReport', 'ModelComparison', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'sampling_names', 'set_num_threads']
 class Error(ValueError):
     pass
 class Camera:
@@ -109,6 +109,113 @@ class Camera:
     def width(self) -> int:
         """
         Image width in pixels (int).
+        """
+class AngleBin:
+    """
+    A fit's error over the rays of one 10-degree band of theta.
+    """
+    @property
+    def max_px(self) -> float:
+        """
+        Largest pixel error.
+        """
+    @property
+    def rms_px(self) -> float:
+        """
+        Root mean square pixel error (2-D norm).
+        """
+    @property
+    def samples(self) -> int:
+        """
+        Rays in the band (int).
+        """
+    @property
+    def theta_from_deg(self) -> float:
+        """
+        The band's lower edge (degrees).
+        """
+    @property
+    def theta_to_deg(self) -> float:
+        """
+        The band's upper edge (degrees).
+        """
+class FitReport:
+    """
+    How far the fitted camera reprojects the source camera's rays (pixels, 2-D norm): what `fishcam convert --json` prints.
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def by_angle(self) -> list[AngleBin]:
+        """
+        The error per 10-degree band (list of AngleBin).
+        """
+    @property
+    def max_below_90_px(self) -> float:
+        """
+        Largest error over the rays below 90 deg.
+        """
+    @property
+    def max_px(self) -> float:
+        """
+        Largest pixel error.
+        """
+    @property
+    def p99_px(self) -> float:
+        """
+        99th percentile of the pixel error.
+        """
+    @property
+    def rms_below_90_px(self) -> float:
+        """
+        RMS error over the rays below 90 deg.
+        """
+    @property
+    def rms_px(self) -> float:
+        """
+        Root mean square pixel error.
+        """
+    @property
+    def samples(self) -> int:
+        """
+        Rays compared (int).
+        """
+    @property
+    def samples_below_90(self) -> int:
+        """
+        Rays with theta < 90 deg (what OpenCV's fisheye functions can use).
+        """
+    @property
+    def unprojectable(self) -> int:
+        """
+        Rays the fitted camera cannot project (int).
+        """
+class Conversion:
+    """
+    fishcam.convert's result: the fitted camera and its FitReport; unpacks as (camera, report).
+    """
+    def __iter__(self) -> typing.Iterator[typing.Any]:
+        """
+        camera, report = fishcam.convert(...)
+        """
+    def to_json(self) -> str:
+        """
+        What `fishcam convert --json` prints (str).
+        """
+    @property
+    def camera(self) -> Camera:
+        """
+        The fitted camera.
+        """
+    @property
+    def report(self) -> FitReport:
+        """
+        Its FitReport against the source camera.
+        """
+    @property
+    def widest_theta_deg(self) -> float:
+        """
+        The widest ray of the evaluation grid (degrees).
         """
 class ViewpointChange:
     """
@@ -218,6 +325,134 @@ class AffineChange:
     @property
     def translation(self) -> numpy.ndarray[tuple[typing.Literal[2], typing.Literal[1]], numpy.dtype[numpy.float64]]:
         ...
+class DisplacementStats:
+    """
+    How far the alternative model's augmentation puts pixels from the reference's (px).
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def max_px(self) -> float:
+        """
+        Largest displacement.
+        """
+    @property
+    def mean_px(self) -> float:
+        """
+        Mean displacement.
+        """
+    @property
+    def p95_px(self) -> float:
+        """
+        95th percentile (numpy's linear interpolation).
+        """
+    @property
+    def pixels(self) -> int:
+        """
+        (output pixel, change) pairs compared (int).
+        """
+class ModelComparison:
+    """
+    One alternative model against the reference camera.
+    """
+    @property
+    def by_angle(self) -> list[DisplacementStats]:
+        """
+        Per band of Comparison.angle_bands_deg (list of DisplacementStats).
+        """
+    @property
+    def camera(self) -> Camera:
+        """
+        The alternative camera.
+        """
+    @property
+    def displacement(self) -> DisplacementStats:
+        """
+        Over every compared pixel (DisplacementStats).
+        """
+    @property
+    def fit_rms_px(self) -> float | None:
+        """
+        The fit's RMS error over the camera's image when fitted, else None.
+        """
+    @property
+    def how(self) -> str:
+        """
+        Where it came from: 'least-squares fit', "the paper's eqs. 13-14", 'read from FILE', ...
+        """
+    @property
+    def identity_max_px(self) -> float:
+        """
+        Largest displacement of the identity change (the models' own disagreement).
+        """
+    @property
+    def labels_differ_pct(self) -> list[float]:
+        """
+        Percent of labels that differ, per label image (aligned with Comparison.label_names).
+        """
+    @property
+    def mean_displacement(self) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.float32]]:
+        """
+        Mean displacement per output pixel over the changes, (H, W) float32, NaN where none.
+        """
+    @property
+    def name(self) -> str:
+        """
+        The model as named: a model name or a file.
+        """
+    @property
+    def validity_differs_pct(self) -> float:
+        """
+        Percent of output pixels with a source under one model only.
+        """
+class Comparison:
+    """
+    What `fishcam compare` measures (docs/comparison.md).
+    """
+    def to_json(self) -> str:
+        """
+        What `fishcam compare --json` prints (str).
+        """
+    @property
+    def angle_bands_deg(self) -> list[float]:
+        """
+        The edges of ModelComparison.by_angle's bands (degrees).
+        """
+    @property
+    def changes(self) -> list[ViewpointChange]:
+        """
+        The viewpoint changes (list of ViewpointChange).
+        """
+    @property
+    def depth(self) -> str:
+        """
+        The depth prior.
+        """
+    @property
+    def label_names(self) -> list[str]:
+        """
+        The label images compared.
+        """
+    @property
+    def models(self) -> list[ModelComparison]:
+        """
+        One ModelComparison per alternative model.
+        """
+    @property
+    def preset(self) -> str:
+        """
+        The pose preset of the changes.
+        """
+    @property
+    def samples(self) -> int:
+        """
+        Changes compared.
+        """
+    @property
+    def seed(self) -> int:
+        """
+        The changes' seed.
+        """
 class ConfusionMatrix:
     def __init__(self, num_classes: int, ignore: int | None = None) -> None:
         ...
@@ -263,10 +498,12 @@ def check_preset(arg0: str) -> None:
     """
     Raises fishcam.Error naming the choices unless name is a pose preset.
     """
-def compare(camera: Camera, models: list[typing.Any], method: str, preset: str, samples: int, seed: int, depth: str, labels: dict[str, typing.Any]) -> str:
+def compare(camera: Camera, models: list[typing.Any], method: str, preset: str, samples: int, seed: int, depth: str, labels: dict[str, typing.Any]) -> Comparison:
     ...
-def convert(camera: Camera, to: str, method: str = 'lsq', max_angle: float | None = None, fit_center: bool = False, fit_aspect: bool = False) -> tuple[Camera, str, float]:
-    ...
+def convert(camera: Camera, to: str, method: str = 'lsq', max_angle: float | None = None, fit_center: bool = False, fit_aspect: bool = False) -> Conversion:
+    """
+    Fits model `to` to `camera` as `fishcam convert` does (method 'lsq' or 'paper'; max_angle in degrees): a Conversion (camera, report).
+    """
 def depth_priors() -> list[str]:
     """
     The depth priors' names.

@@ -1,5 +1,6 @@
 // fishcam.Camera and fishcam.convert.
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "bindings.hpp"
@@ -162,6 +163,50 @@ void bind_camera(py::module_& m) {
                std::to_string(c.height()) + ">";
       });
 
+  // fishcam convert's result, typed: the fitted camera and its error report.
+  py::class_<ErrorReport::Bin>(m, "AngleBin", "A fit's error over the rays of one 10-degree band of theta.")
+      .def_readonly("theta_from_deg", &ErrorReport::Bin::theta_from_deg, "The band's lower edge (degrees).")
+      .def_readonly("theta_to_deg", &ErrorReport::Bin::theta_to_deg, "The band's upper edge (degrees).")
+      .def_readonly("samples", &ErrorReport::Bin::samples, "Rays in the band (int).")
+      .def_readonly("rms_px", &ErrorReport::Bin::rms_px, "Root mean square pixel error (2-D norm).")
+      .def_readonly("max_px", &ErrorReport::Bin::max_px, "Largest pixel error.");
+  py::class_<ErrorReport>(m, "FitReport",
+                          "How far the fitted camera reprojects the source camera's rays (pixels, 2-D norm): what "
+                          "`fishcam convert --json` prints.")
+      .def_readonly("samples", &ErrorReport::samples, "Rays compared (int).")
+      .def_readonly("unprojectable", &ErrorReport::unprojectable, "Rays the fitted camera cannot project (int).")
+      .def_readonly("rms_px", &ErrorReport::rms_px, "Root mean square pixel error.")
+      .def_readonly("p99_px", &ErrorReport::p99_px, "99th percentile of the pixel error.")
+      .def_readonly("max_px", &ErrorReport::max_px, "Largest pixel error.")
+      .def_readonly("samples_below_90", &ErrorReport::samples_below_90,
+                    "Rays with theta < 90 deg (what OpenCV's fisheye functions can use).")
+      .def_readonly("rms_below_90_px", &ErrorReport::rms_below_90_px, "RMS error over the rays below 90 deg.")
+      .def_readonly("max_below_90_px", &ErrorReport::max_below_90_px, "Largest error over the rays below 90 deg.")
+      .def_readonly("by_angle", &ErrorReport::by_angle, "The error per 10-degree band (list of AngleBin).")
+      .def("__repr__", [](const ErrorReport& r) {
+        char buffer[160];
+        std::snprintf(buffer, sizeof buffer, "FitReport(rms_px=%.6g, p99_px=%.6g, max_px=%.6g, samples=%ld)", r.rms_px,
+                      r.p99_px, r.max_px, r.samples);
+        return std::string(buffer);
+      });
+  py::class_<Conversion>(m, "Conversion",
+                         "fishcam.convert's result: the fitted camera and its FitReport; unpacks as "
+                         "(camera, report).")
+      .def_property_readonly("camera", [](const Conversion& c) { return Camera(c.camera); }, "The fitted camera.")
+      .def_readonly("report", &Conversion::report, "Its FitReport against the source camera.")
+      .def_property_readonly(
+          "widest_theta_deg", [](const Conversion& c) { return c.widest_theta * 180 / std::numbers::pi; },
+          "The widest ray of the evaluation grid (degrees).")
+      .def(
+          "to_json", [](const Conversion& c) { return fit_report_json(c.camera, c.report); },
+          "What `fishcam convert --json` prints (str).")
+      .def(
+          "__iter__",
+          [](const Conversion& c) {
+            return py::iter(py::make_tuple(Camera(c.camera), py::cast(c.report)));
+          },
+          "camera, report = fishcam.convert(...)");
+
   m.def(
       "convert",
       [](const Camera& source, const std::string& to, const std::string& method, std::optional<double> max_angle_deg,
@@ -172,15 +217,13 @@ void bind_camera(py::module_& m) {
           max_theta = *max_angle_deg * std::numbers::pi / 180;
         }
         const ModelSpec spec = parse_model_spec(to);
-        std::optional<Conversion> c;
-        {
-          py::gil_scoped_release release;
-          c = convert_camera(source, spec, method, max_theta, {fit_center, fit_aspect});
-        }
-        return std::tuple(Camera(c->camera), fit_report_json(c->camera, c->report), c->widest_theta);
+        py::gil_scoped_release release;
+        return convert_camera(source, spec, method, max_theta, {fit_center, fit_aspect});
       },
       py::arg("camera"), py::arg("to"), py::arg("method") = "lsq", py::arg("max_angle") = py::none(),
-      py::arg("fit_center") = false, py::arg("fit_aspect") = false);
+      py::arg("fit_center") = false, py::arg("fit_aspect") = false,
+      "Fits model `to` to `camera` as `fishcam convert` does (method 'lsq' or 'paper'; max_angle in degrees): "
+      "a Conversion (camera, report).");
 }
 
 }  // namespace fishcam::python

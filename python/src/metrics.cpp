@@ -49,16 +49,81 @@ void bind_comparison(py::module_& m) {
           a = std::filesystem::is_regular_file(a.name, ec) ? alternative_from_file(a.name, read_camera(a.name))
                                                            : alternative_model(camera, a.name, method);
         }
-        return comparison_json(compare_models(camera, alternatives, options, named));
+        return compare_models(camera, alternatives, options, named);
       },
       py::arg("camera"), py::arg("models"), py::arg("method"), py::arg("preset"), py::arg("samples"), py::arg("seed"),
       py::arg("depth"), py::arg("labels"));
+}
+
+// fishcam compare's result, typed.
+void bind_comparison_results(py::module_& m) {
+  py::class_<DisplacementStats>(m, "DisplacementStats",
+                                "How far the alternative model's augmentation puts pixels from the reference's (px).")
+      .def_readonly("pixels", &DisplacementStats::pixels, "(output pixel, change) pairs compared (int).")
+      .def_readonly("mean_px", &DisplacementStats::mean_px, "Mean displacement.")
+      .def_readonly("p95_px", &DisplacementStats::p95_px, "95th percentile (numpy's linear interpolation).")
+      .def_readonly("max_px", &DisplacementStats::max_px, "Largest displacement.")
+      .def("__repr__", [](const DisplacementStats& d) {
+        char buffer[160];
+        std::snprintf(buffer, sizeof buffer, "DisplacementStats(mean_px=%.6g, p95_px=%.6g, max_px=%.6g, pixels=%ld)",
+                      d.mean_px, d.p95_px, d.max_px, d.pixels);
+        return std::string(buffer);
+      });
+  py::class_<ModelComparison>(m, "ModelComparison", "One alternative model against the reference camera.")
+      .def_property_readonly("name", [](const ModelComparison& c) { return c.alternative.name; },
+                             "The model as named: a model name or a file.")
+      .def_property_readonly("how", [](const ModelComparison& c) { return c.alternative.how; },
+                             "Where it came from: 'least-squares fit', \"the paper's eqs. 13-14\", 'read from FILE', ...")
+      .def_property_readonly("camera", [](const ModelComparison& c) { return c.alternative.camera; },
+                             "The alternative camera.")
+      .def_property_readonly("fit_rms_px", [](const ModelComparison& c) { return c.alternative.fit_rms_px; },
+                             "The fit's RMS error over the camera's image when fitted, else None.")
+      .def_readonly("identity_max_px", &ModelComparison::identity_max_px,
+                    "Largest displacement of the identity change (the models' own disagreement).")
+      .def_readonly("displacement", &ModelComparison::all, "Over every compared pixel (DisplacementStats).")
+      .def_property_readonly(
+          "by_angle",
+          [](const ModelComparison& c) { return std::vector<DisplacementStats>(c.by_angle.begin(), c.by_angle.end()); },
+          "Per band of Comparison.angle_bands_deg (list of DisplacementStats).")
+      .def_readonly("validity_differs_pct", &ModelComparison::validity_differs_pct,
+                    "Percent of output pixels with a source under one model only.")
+      .def_readonly("labels_differ_pct", &ModelComparison::labels_differ_pct,
+                    "Percent of labels that differ, per label image (aligned with Comparison.label_names).")
+      .def_property_readonly(
+          "mean_displacement",
+          [](const ModelComparison& c) {
+            const cv::Mat& d = c.mean_displacement;
+            py::array_t<float> out({d.rows, d.cols});
+            for (int v = 0; v < d.rows; ++v) std::copy_n(d.ptr<float>(v), d.cols, out.mutable_data(v, 0));
+            return out;
+          },
+          "Mean displacement per output pixel over the changes, (H, W) float32, NaN where none.");
+  py::class_<Comparison>(m, "Comparison", "What `fishcam compare` measures (docs/comparison.md).")
+      .def_property_readonly("preset", [](const Comparison& c) { return std::string(c.options.preset.name); },
+                             "The pose preset of the changes.")
+      .def_property_readonly("samples", [](const Comparison& c) { return c.options.samples; }, "Changes compared.")
+      .def_property_readonly("seed", [](const Comparison& c) { return c.options.seed; }, "The changes' seed.")
+      .def_property_readonly("depth", [](const Comparison& c) { return std::string(to_string(c.options.prior)); },
+                             "The depth prior.")
+      .def_property_readonly(
+          "angle_bands_deg",
+          [](const Comparison&) {
+            return std::vector<double>(Comparison::kAngleBandsDeg.begin(), Comparison::kAngleBandsDeg.end());
+          },
+          "The edges of ModelComparison.by_angle's bands (degrees).")
+      .def_readonly("label_names", &Comparison::label_names, "The label images compared.")
+      .def_readonly("changes", &Comparison::changes, "The viewpoint changes (list of ViewpointChange).")
+      .def_readonly("models", &Comparison::models, "One ModelComparison per alternative model.")
+      .def(
+          "to_json", [](const Comparison& c) { return comparison_json(c); },
+          "What `fishcam compare --json` prints (str).");
 }
 
 
 }  // namespace
 
 void bind_metrics(py::module_& m) {
+  bind_comparison_results(m);
   bind_comparison(m);
   py::class_<ConfusionMatrix>(m, "ConfusionMatrix")
       .def(py::init<int, std::optional<std::int64_t>>(), py::arg("num_classes"), py::arg("ignore") = py::none())

@@ -97,9 +97,20 @@ def test_python_compare_equals_the_cli():
     cam = fishcam.Camera.read(CAMERA)
     # The CLI adds the rendered scene's labels; Python compares the labels it is given.
     result = fishcam.compare(cam, ["kannala-brandt", ("itself", cam)], samples=1, seed=9)
-    assert result["changes"] == report["changes"]
-    assert result["models"][0]["displacement"] == report["models"][0]["displacement"]
-    assert result["models"][1]["displacement"]["max_px"] == 0
+    assert isinstance(result, fishcam.Comparison) and result.preset == "train" and result.seed == 9
+    # Typed values, the same numbers as the CLI's JSON; to_json() is that JSON.
+    assert [list(c.rotation_deg) + list(c.translation) for c in result.changes] == \
+        [c["rotation_deg"] + c["translation"] for c in report["changes"]]
+    kb = result.models[0]
+    assert {"mean_px": kb.displacement.mean_px, "p95_px": kb.displacement.p95_px, "max_px": kb.displacement.max_px,
+            "pixels": kb.displacement.pixels} == {k: report["models"][0]["displacement"][k]
+                                                  for k in ("mean_px", "p95_px", "max_px", "pixels")}
+    assert kb.name == "kannala-brandt" and kb.how == "least-squares fit" and kb.camera.model == "kannala-brandt"
+    assert len(kb.by_angle) == len(result.angle_bands_deg) - 1
+    assert kb.mean_displacement.shape == (cam.height, cam.width) and kb.mean_displacement.dtype == np.float32
+    assert np.nanmax(kb.mean_displacement) <= kb.displacement.max_px + 1e-6
+    assert result.models[1].displacement.max_px == 0 and result.models[1].name == "itself"
+    assert json.loads(result.to_json())["models"][0]["displacement"] == report["models"][0]["displacement"]
     with pytest.raises(fishcam.Error, match="neither a camera file nor a model"):
         fishcam.compare(cam, ["fisheye-of-my-dreams"], samples=1)
     with pytest.raises(fishcam.Error, match="preset"):

@@ -224,11 +224,16 @@ def test_resized_follows_the_pixel_centre_convention(cam):
 
 
 def test_convert_matches_the_cli(cam, tmp_path):
-    kb, report = fishcam.convert(cam, to="kannala-brandt")
+    conversion = fishcam.convert(cam, to="kannala-brandt")
+    kb, report = conversion
     cli = json.loads(run_cli("convert", data("woodscape_front.json"), "--to", "kannala-brandt", "--out",
                              tmp_path / "kb.json", "--json"))
-    assert report["parameters"] == cli["parameters"]
-    assert report["rms_px"] == cli["rms_px"]
+    assert kb.parameters == cli["parameters"] and conversion.camera == kb
+    assert isinstance(report, fishcam.FitReport) and report.rms_px == cli["rms_px"]
+    assert report.p99_px == cli["p99_px"] and report.samples_below_90 == cli["below_90_deg"]["samples"]
+    assert [b.rms_px for b in report.by_angle] == [b["rms_px"] for b in cli["by_angle"]]
+    assert json.loads(conversion.to_json()) == {k: v for k, v in cli.items() if k in json.loads(conversion.to_json())}
+    assert 90 < conversion.widest_theta_deg <= cam.info()["theta_max_deg"]
     assert kb.model == "kannala-brandt"
     assert kb == fishcam.Camera.read(str(tmp_path / "kb.json"))
     eq, paper = fishcam.convert(cam, to="equidistant", method="paper")
@@ -339,7 +344,7 @@ def test_camera_read_options(cam):
                                            ("kannala-brandt", "orbslam3", "yaml")])
 def test_every_model_and_format_reaches_python(cam, tmp_path, model, fmt, ext):
     fitted, report = fishcam.convert(cam, model)
-    assert fitted.model == model and report["rms_px"] < 1.0
+    assert fitted.model == model and report.rms_px < 1.0
     path = tmp_path / f"c.{ext}"
     fitted.write(str(path), format=fmt)
     back = fishcam.Camera.read(str(path), format=fmt)
