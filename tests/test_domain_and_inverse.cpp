@@ -164,29 +164,40 @@ TEST(Inverse, EveryUnprojectionOutsideTheDomainIsNaN) {
   }
 }
 
-TEST(Inverse, RobustSolverResidualAndAlgebraicCrossCheck) {
-  for (const auto& [name, params] : test::every_model()) {
-    const Camera camera(params);
-    std::mt19937_64 rng(17);
-    const double rho_hi = camera.domain().closed ? camera.domain().rho_max : 3000.0;
-    std::uniform_real_distribution<double> uniform(0.0, rho_hi);
-    for (int i = 0; i < 20000; ++i) {
-      const double rho = uniform(rng), theta = camera.theta_from_rho(rho);
-      ASSERT_TRUE(camera.domain().contains_theta(theta)) << name << " rho " << rho;
-      ASSERT_LE(residual_px(camera, rho, theta), 1e-9) << name << " rho " << rho;
-      std::visit(
-          [&, model_name = name](const auto& m) {
-            if constexpr (PolynomialInTheta<std::decay_t<decltype(m)>>) {
-              if (i % 10 == 0) {
-                const double algebraic = testing::algebraic_theta(m.power_coefficients(), rho, camera.domain());
-                ASSERT_NEAR(algebraic, theta, 1e-9) << model_name << " rho " << rho;
-              }
+// One test per example of every model (test_support.hpp).
+class EveryModel : public ::testing::TestWithParam<test::ModelCase> {};
+
+TEST_P(EveryModel, RobustSolverResidualAndAlgebraicCrossCheck) {
+  const Camera camera(GetParam().second);
+  std::mt19937_64 rng(17);
+  const double rho_hi = camera.domain().closed ? camera.domain().rho_max : 3000.0;
+  std::uniform_real_distribution<double> uniform(0.0, rho_hi);
+  int algebraic_checks = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double rho = uniform(rng), theta = camera.theta_from_rho(rho);
+    ASSERT_TRUE(camera.domain().contains_theta(theta)) << "rho " << rho;
+    ASSERT_LE(residual_px(camera, rho, theta), 1e-9) << "rho " << rho;
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (PolynomialInTheta<std::decay_t<decltype(m)>>) {
+            if (i % 10 == 0) {
+              const double algebraic = testing::algebraic_theta(m.power_coefficients(), rho, camera.domain());
+              ASSERT_NEAR(algebraic, theta, 1e-9) << "rho " << rho;
+              ++algebraic_checks;
             }
-          },
-          camera.model());
-    }
+          }
+        },
+        camera.model());
   }
+  std::visit(
+      [&](const auto& m) {
+        // Models polynomial in theta are also checked against the algebraic root.
+        EXPECT_EQ(algebraic_checks, PolynomialInTheta<std::decay_t<decltype(m)>> ? 2000 : 0);
+      },
+      camera.model());
 }
+
+INSTANTIATE_TEST_SUITE_P(Inverse, EveryModel, ::testing::ValuesIn(test::every_model()), test::model_case_name);
 
 TEST(Inverse, FoldRadiiSolveToTheBracket) {
   // Right next to a fold rho' -> 0: Newton alone diverges, the bracket keeps it.

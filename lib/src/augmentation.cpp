@@ -356,6 +356,20 @@ void ViewpointWarp::warp_depth(const ViewpointChange& change, DepthPrior prior, 
   });
 }
 
+std::optional<MapKind> parse_map_kind(std::string_view name) {
+  if (name == "sampling") return MapKind::sampling;
+  if (name == "geometric") return MapKind::geometric;
+  return std::nullopt;
+}
+
+std::string_view to_string(MapKind kind) { return kind == MapKind::sampling ? "sampling" : "geometric"; }
+
+const std::vector<std::string>& map_kind_names() {
+  static const std::vector<std::string> names = {std::string(to_string(MapKind::sampling)),
+                                                 std::string(to_string(MapKind::geometric))};
+  return names;
+}
+
 std::optional<DepthValues> parse_depth_values(std::string_view name) {
   if (name == "range") return DepthValues::range;
   if (name == "z") return DepthValues::z;

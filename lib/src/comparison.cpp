@@ -94,7 +94,7 @@ AlternativeModel alternative_model(const Camera& camera, const std::string& toke
                 model_names_text() + ")");
   }
   check_conversion_method(method);
-  const bool paper = method == "paper" && (spec.name == "equidistant" || spec.name == "stereographic");
+  const bool paper = method == "paper" && model_has_paper_form(spec.name);
   const Conversion c = convert_camera(camera, spec, paper ? "paper" : "lsq");
   return {token, paper ? "the paper's eqs. 13-14" : "least-squares fit", Camera(c.camera), c.report.rms_px};
 }

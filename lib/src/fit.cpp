@@ -135,7 +135,8 @@ ModelSpec parse_model_spec(std::string_view text) {
   const auto colon = text.find(':');
   spec.name = std::string(text.substr(0, colon));
   if (colon != std::string_view::npos) {
-    if (spec.name != "polynomial") throw Error("model " + quoted_for_message(std::string(text)) + ": only polynomial takes an order");
+    const bool ordered = with_model_class(spec.name, []<template <typename> class Model>() { return takes_order<Model>; });
+    if (!ordered) throw Error("model " + quoted_for_message(std::string(text)) + ": only polynomial takes an order");
     const std::string order(text.substr(colon + 1));
     size_t used = 0;
     int n = 0;
@@ -217,15 +218,21 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
 }
 
 CameraParameters paper_camera(const Camera& source, const ModelSpec& spec) {
-  if (spec.name != "equidistant" && spec.name != "stereographic") {
+  if (!model_has_paper_form(spec.name)) {
     throw Error("the paper's method (eqs. 13-14) defines equidistant and stereographic models only, not " + spec.name);
   }
+  // The image's half width at half the horizontal field of view.
   const double rho = source.width() / 2.0;
   const double theta = source.field_of_view_deg().horizontal / 2 / kDeg;
   CameraParameters p = source.parameters();
   p.theta_limit.reset();
-  p.model = spec.name == "equidistant" ? RadialModel(Equidistant<double>(rho / theta))
-                                       : RadialModel(Stereographic<double>(rho / (2 * std::tan(theta / 2))));
+  p.model = with_model_class(spec.name, [&]<template <typename> class Model>() -> RadialModel {
+    if constexpr (has_paper_form<Model>) {
+      return Model<double>::from_paper(rho, theta);
+    } else {
+      throw Error("unreachable: " + spec.name + " has no paper form");
+    }
+  });
   return p;
 }
 

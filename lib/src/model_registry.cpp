@@ -83,4 +83,8 @@ RadialModel make_model(std::string_view name, std::span<const double> params) {
   });
 }
 
+bool model_has_paper_form(std::string_view name) {
+  return with_model_class(name, []<template <typename> class Model>() { return has_paper_form<Model>; });
+}
+
 }  // namespace fishcam

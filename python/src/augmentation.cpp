@@ -15,9 +15,9 @@ namespace fishcam::python {
 namespace {
 
 MapKind map_kind(const std::string& name) {
-  if (name == "geometric") return MapKind::geometric;
-  if (name == "sampling") return MapKind::sampling;
-  throw Error("kind: expected geometric or sampling, got '" + name + "'");
+  const auto kind = parse_map_kind(name);
+  if (!kind) throw Error("kind: expected " + choices_for_message(map_kind_names()) + ", got " + quoted_for_message(name));
+  return *kind;
 }
 
 RandomPose change_from(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3d& translation) {

@@ -36,6 +36,10 @@ enum class MapKind {
   geometric,
 };
 
+std::optional<MapKind> parse_map_kind(std::string_view name);  // "sampling" | "geometric"
+const std::vector<std::string>& map_kind_names();  // Python's choices, messages
+std::string_view to_string(MapKind kind);
+
 // The sampling maps' coordinate for pixels without a source inside the source image.
 constexpr float kOutsideSource = -100000.0f;
 

@@ -85,6 +85,15 @@ decltype(auto) with_model_class(std::string_view name, F&& f) {
   return detail::dispatch_list(static_cast<ModelRegistry*>(nullptr), name, std::forward<F>(f));
 }
 
+// Model traits generic code asks instead of testing names (radial_models.hpp).
+template <template <typename> class Model>
+constexpr bool has_paper_form = requires { Model<double>::from_paper(1.0, 1.0); };
+template <template <typename> class Model>
+constexpr bool takes_order = requires { Model<double>::kTakesOrder; };
+// Whether the model called `name` has the paper's closed form (eqs. 13-14);
+// throws Error for an unknown name.
+bool model_has_paper_form(std::string_view name);
+
 std::string_view model_name(const RadialModel& model);
 std::vector<double> model_params(const RadialModel& model);
 // The names of a model's parameters, in params() order ("k1".."kN" for polynomial).

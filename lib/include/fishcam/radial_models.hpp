@@ -26,6 +26,9 @@
 //   basis(theta, n, g), from_basis   rho linear in the parameters: exact linear fits
 //   fit_starts(f), param_bounds(i)   otherwise: where the non-linear fit starts, and its bounds
 //   unified_form()                   the float warp kernel's unified-camera form (below)
+//   from_paper(rho, theta)           the paper's closed-form conversion (its eqs. 13-14): the
+//                                    model whose image has radius rho at angle theta
+//   kTakesOrder                      the model's name takes a parameter count ("polynomial:6")
 #pragma once
 
 #include <algorithm>
@@ -61,6 +64,7 @@ template <typename Scalar>
 class Polynomial {
  public:
   static constexpr std::string_view kName = "polynomial";
+  static constexpr bool kTakesOrder = true;
   static constexpr std::array<std::string_view, 0> kParamNames{};  // k1..kN: any count
   static constexpr int kMaxOrder = 64;  // coefficients a file may give (fits stop at 12, fit.hpp)
 
@@ -143,6 +147,8 @@ class Equidistant {
   static constexpr double theta_limit() { return std::numbers::pi; }
   static constexpr bool limit_is_open() { return false; }
   Equidistant scaled(const Scalar& s) const { return Equidistant(f_ * s); }
+  // Eq. 13: f = rho / theta.
+  static Equidistant from_paper(double rho, double theta) { return Equidistant(Scalar(rho / theta)); }
   std::vector<Scalar> power_coefficients() const { return {Scalar(0), f_}; }
   std::vector<Scalar> params() const { return {f_}; }
   const Scalar& f() const { return f_; }
@@ -183,6 +189,10 @@ class Stereographic {
   static constexpr double theta_limit() { return std::numbers::pi; }
   static constexpr bool limit_is_open() { return true; }
   Stereographic scaled(const Scalar& s) const { return Stereographic(f_ * s); }
+  // Eq. 14: f = rho / (2 tan(theta / 2)).
+  static Stereographic from_paper(double rho, double theta) {
+    return Stereographic(Scalar(rho / (2 * std::tan(theta / 2))));
+  }
   std::vector<Scalar> params() const { return {f_}; }
   const Scalar& f() const { return f_; }
   UnifiedForm unified_form() const { return {2 * double(f_), 1, 0, 1, 0, 0}; }
