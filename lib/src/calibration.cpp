@@ -267,148 +267,150 @@ void check_solution(const CalibrationResult& r, int width, int height, const std
   }
 }
 
-template <template <typename> class Model>
-CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boards, const BoardSpec& board, int width,
-                                 int height, const ModelSpec& spec) {
-  const std::vector<Eigen::Vector3d> points = board_points(board);
-  const std::vector<std::vector<Eigen::Vector3d>> all_points(boards.size(), points);
+// What every step of one calibration reads: the boards' corners and the board's
+// points (the same for every board), and the image size.
+struct Observations {
+  const std::vector<const BoardObservation*>& boards;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::vector<Eigen::Vector3d>> all_points;  // points, once per board
   std::vector<std::vector<Eigen::Vector2d>> corners;
-  for (const auto* b : boards) corners.push_back(b->corners);
-  const Eigen::Vector2d center0((width - 1) / 2.0, (height - 1) / 2.0);
+  int width, height;
 
-  // Initialisation: equidistant cameras over a range of focal lengths (fisheye to
-  // narrow), boards placed from their rays; the focal length that reprojects best wins.
+  Observations(const std::vector<const BoardObservation*>& b, const BoardSpec& board, int w, int h)
+      : boards(b), points(board_points(board)), all_points(b.size(), points), width(w), height(h) {
+    for (const auto* o : boards) corners.push_back(o->corners);
+  }
+  CameraParameters camera(const Solve& s, const RadialModel& model) const {
+    CameraParameters p;
+    p.width = width, p.height = height, p.principal_point = s.center, p.pixel_scale = {1.0, s.ay}, p.model = model;
+    return p;
+  }
+};
+
+// Step 1, initialisation: equidistant cameras over a range of focal lengths
+// (fisheye to narrow), boards placed from their rays; the focal length that
+// reprojects best wins, and its board poses are refined with the intrinsics fixed.
+Solve initial_solve(const Observations& o, const BoardSpec& board) {
+  const Eigen::Vector2d center0((o.width - 1) / 2.0, (o.height - 1) / 2.0);
   double best_cost = std::numeric_limits<double>::infinity();
   Solve best;
   for (int step = 0; step < 12; ++step) {
-    const double f = width * 0.1 * std::pow(1.25, step);
+    const double f = o.width * 0.1 * std::pow(1.25, step);
     Solve s{{f}, center0, 1.0, {}};
-    CameraParameters p;
-    p.width = width, p.height = height, p.principal_point = center0, p.model = Equidistant<double>(f);
-    const Camera guess(p);
+    const Camera guess(o.camera(s, Equidistant<double>(f)));
     bool ok = true;
-    for (size_t b = 0; b < boards.size() && ok; ++b) {
-      std::vector<Eigen::Vector3d> rays(corners[b].size());
-      for (size_t i = 0; i < rays.size(); ++i) ok = ok && guess.unproject(corners[b][i], &rays[i]);
-      const auto pose = ok ? pose_from_rays(rays, points, board) : std::nullopt;
+    for (size_t b = 0; b < o.boards.size() && ok; ++b) {
+      std::vector<Eigen::Vector3d> rays(o.corners[b].size());
+      for (size_t i = 0; i < rays.size(); ++i) ok = ok && guess.unproject(o.corners[b][i], &rays[i]);
+      const auto pose = ok ? pose_from_rays(rays, o.points, board) : std::nullopt;
       ok = ok && pose.has_value();
       if (ok) s.poses.push_back(pose_block(*pose));
     }
     if (!ok) continue;
     // Score: the robust (truncated at 20 px) reprojection error of these poses.
     double cost = 0;
-    for (size_t b = 0; b < boards.size(); ++b) {
+    for (size_t b = 0; b < o.boards.size(); ++b) {
       const BoardPose pose = pose_of(s.poses[b]);
-      for (size_t i = 0; i < points.size(); ++i) {
+      for (size_t i = 0; i < o.points.size(); ++i) {
         Eigen::Vector2d q;
-        const double e = guess.project(to_camera(pose, points[i]), &q) ? (q - corners[b][i]).norm() : 20.0;
+        const double e = guess.project(to_camera(pose, o.points[i]), &q) ? (q - o.corners[b][i]).norm() : 20.0;
         cost += std::min(e, 20.0);
       }
     }
     if (cost < best_cost) best_cost = cost, best = s;
   }
   if (!std::isfinite(best_cost)) throw Error("calibrate: could not initialise any board pose (are the corners valid?)");
-  {
-    ceres::CauchyLoss loss(2.0);
-    solve<Equidistant>(&best, all_points, corners, /*intrinsics_fixed=*/true, &loss, nullptr);
-  }
+  ceres::CauchyLoss loss(2.0);
+  solve<Equidistant>(&best, o.all_points, o.corners, /*intrinsics_fixed=*/true, &loss, nullptr);
+  return best;
+}
 
-  // Joint solve of the target model from the best start: robust first, then plain
-  // least squares without the outliers.
-  // Models non-linear in their shape parameters: a polynomial is calibrated first
-  // (linear in its parameters, so robust from the equidistant start); the model's
-  // own starts scaled by its k1, and that polynomial converted to the model (the
-  // multi-start fit of fishcam convert), each solved; the lowest cost wins.
-  std::vector<std::vector<double>> starts = {Model<double>::initial_params(best.model[0], spec.order)};
+// Step 2, the robust joint solve of the target model from the start. Models
+// non-linear in their shape parameters: a polynomial is calibrated first (linear in
+// its parameters, so robust from the equidistant start); the model's own starts
+// scaled by its k1, and that polynomial converted to the model (the multi-start fit
+// of fishcam convert), each solved; the lowest cost wins.
+template <template <typename> class Model>
+Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
+  std::vector<std::vector<double>> starts = {Model<double>::initial_params(start.model[0], spec.order)};
   if constexpr (!LinearInParams<Model<double>>) {
-    Solve poly = best;
-    poly.model = Polynomial<double>::initial_params(best.model[0], 4);
+    Solve poly = start;
+    poly.model = Polynomial<double>::initial_params(start.model[0], 4);
     ceres::CauchyLoss loss(1.0);
-    solve<Polynomial>(&poly, all_points, corners, false, &loss, nullptr);
+    solve<Polynomial>(&poly, o.all_points, o.corners, false, &loss, nullptr);
     try {
-      CameraParameters p;
-      p.width = width, p.height = height, p.principal_point = poly.center, p.pixel_scale = {1.0, poly.ay};
-      p.model = Polynomial<double>(poly.model);
+      const CameraParameters p = o.camera(poly, Polynomial<double>(poly.model));
       const Camera polynomial(p);
       starts = Model<double>::fit_starts(poly.model[0]);
       starts.push_back(model_params(fit_camera(sample_image(polynomial, 8, 4), spec, p).model));
-      best = poly;
+      start = poly;
     } catch (const Error&) {  // no valid polynomial camera: the model's own starts
-      starts = Model<double>::fit_starts(best.model[0]);
+      starts = Model<double>::fit_starts(start.model[0]);
     }
   }
   Solve s;
   double lowest = std::numeric_limits<double>::infinity();
-  for (const auto& start : starts) {
-    Solve candidate = best;
-    candidate.model = start;
+  for (const auto& params : starts) {
+    Solve candidate = start;
+    candidate.model = params;
     ceres::CauchyLoss loss(1.0);
-    const double cost = solve<Model>(&candidate, all_points, corners, false, &loss, nullptr).final_cost;
+    const double cost = solve<Model>(&candidate, o.all_points, o.corners, false, &loss, nullptr).final_cost;
     if (cost < lowest) lowest = cost, s = std::move(candidate);
   }
-  CalibrationResult result;
-  CameraParameters camera;
-  camera.width = width, camera.height = height;
-  auto current_camera = [&] {
-    camera.principal_point = s.center;
-    camera.pixel_scale = {1.0, s.ay};
-    camera.model = make_model(spec.name, s.model);
-    return Camera(camera);
-  };
-  // Outliers: corners beyond 5 robust sigmas (median absolute error * 1.4826 * sqrt(2) ~ 2D).
-  {
-    const Camera c = current_camera();
-    std::vector<double> errors;
-    std::vector<std::vector<double>> per_board(boards.size());
-    for (size_t b = 0; b < boards.size(); ++b) {
-      const BoardPose pose = pose_of(s.poses[b]);
-      for (size_t i = 0; i < points.size(); ++i) {
-        Eigen::Vector2d q;
-        const double e = c.project(to_camera(pose, points[i]), &q) ? (q - corners[b][i]).norm()
-                                                                     : std::numeric_limits<double>::infinity();
-        per_board[b].push_back(e);
-        errors.push_back(e);
-      }
-    }
-    std::vector<double> sorted = errors;
-    std::nth_element(sorted.begin(), sorted.begin() + long(sorted.size() / 2), sorted.end());
-    const double sigma = std::max(1.4826 * sorted[sorted.size() / 2], 1e-9);
-    for (size_t b = 0; b < boards.size(); ++b) {
-      for (size_t i = 0; i < points.size(); ++i) {
-        if (per_board[b][i] > 5 * sigma + 1e-6) {
-          result.outliers.push_back({boards[b]->filename, int(i), per_board[b][i]});
-        }
-      }
-    }
-  }
-  // Drop outliers (keep board order of the remaining corners consistent with points).
-  std::vector<std::vector<Eigen::Vector3d>> board_points_kept(boards.size(), points);
-  for (const auto& o : result.outliers) {
-    for (size_t b = 0; b < boards.size(); ++b) {
-      if (boards[b]->filename != o.filename) continue;
-      board_points_kept[b][size_t(o.corner)] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    }
-  }
-  std::vector<std::vector<Eigen::Vector3d>> kept_points(boards.size());
-  std::vector<std::vector<Eigen::Vector2d>> kept_corners(boards.size());
-  for (size_t b = 0; b < boards.size(); ++b) {
-    for (size_t i = 0; i < points.size(); ++i) {
-      if (board_points_kept[b][i].allFinite()) {
-        kept_points[b].push_back(points[i]);
-        kept_corners[b].push_back(corners[b][i]);
-      }
-    }
-  }
-  // Final plain least squares without the outliers, and the covariance.
-  std::vector<double> sigmas;
-  result.observations = solve<Model>(&s, kept_points, kept_corners, false, nullptr, &sigmas).num_residuals / 2;
-  const Camera final_camera = current_camera();
-  result.camera = camera;
-  double sum2 = 0;
-  for (size_t b = 0; b < boards.size(); ++b) {
+  return s;
+}
+
+// Step 3, outliers: corners beyond 5 robust sigmas of the robust solve (median
+// absolute error * 1.4826, the 2-D error's scale).
+std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, const Camera& camera, const Solve& s) {
+  std::vector<double> errors;
+  std::vector<std::vector<double>> per_board(o.boards.size());
+  for (size_t b = 0; b < o.boards.size(); ++b) {
     const BoardPose pose = pose_of(s.poses[b]);
-    result.poses.push_back(pose);
-    result.used_images.push_back(boards[b]->filename);
+    for (size_t i = 0; i < o.points.size(); ++i) {
+      Eigen::Vector2d q;
+      const double e = camera.project(to_camera(pose, o.points[i]), &q) ? (q - o.corners[b][i]).norm()
+                                                                         : std::numeric_limits<double>::infinity();
+      per_board[b].push_back(e);
+      errors.push_back(e);
+    }
+  }
+  std::nth_element(errors.begin(), errors.begin() + long(errors.size() / 2), errors.end());
+  const double sigma = std::max(1.4826 * errors[errors.size() / 2], 1e-9);
+  std::vector<CalibrationResult::Outlier> outliers;
+  for (size_t b = 0; b < o.boards.size(); ++b) {
+    for (size_t i = 0; i < o.points.size(); ++i) {
+      if (per_board[b][i] > 5 * sigma + 1e-6) outliers.push_back({o.boards[b]->filename, int(i), per_board[b][i]});
+    }
+  }
+  return outliers;
+}
+
+// Step 4, the final plain least squares without the outliers, its covariance, and
+// the report: per-image and overall RMS (2-D norm), parameters and their sigmas.
+template <template <typename> class Model>
+void final_solve(const Observations& o, Solve s, const ModelSpec& spec, CalibrationResult* result) {
+  std::vector<std::vector<Eigen::Vector3d>> kept_points(o.boards.size());
+  std::vector<std::vector<Eigen::Vector2d>> kept_corners(o.boards.size());
+  for (size_t b = 0; b < o.boards.size(); ++b) {
+    for (size_t i = 0; i < o.points.size(); ++i) {
+      const bool outlier = std::any_of(result->outliers.begin(), result->outliers.end(), [&](const auto& x) {
+        return x.filename == o.boards[b]->filename && size_t(x.corner) == i;
+      });
+      if (outlier) continue;
+      kept_points[b].push_back(o.points[i]);
+      kept_corners[b].push_back(o.corners[b][i]);
+    }
+  }
+  std::vector<double> sigmas;
+  result->observations = solve<Model>(&s, kept_points, kept_corners, false, nullptr, &sigmas).num_residuals / 2;
+  result->camera = o.camera(s, make_model(spec.name, s.model));
+  const Camera final_camera(result->camera);
+  double sum2 = 0;
+  for (size_t b = 0; b < o.boards.size(); ++b) {
+    const BoardPose pose = pose_of(s.poses[b]);
+    result->poses.push_back(pose);
+    result->used_images.push_back(o.boards[b]->filename);
     double board_sum2 = 0;
     for (size_t i = 0; i < kept_points[b].size(); ++i) {
       Eigen::Vector2d q;
@@ -416,15 +418,24 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
       board_sum2 += (q - kept_corners[b][i]).squaredNorm();
     }
     sum2 += board_sum2;
-    result.per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max<size_t>(1, kept_points[b].size()))));
+    result->per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max<size_t>(1, kept_points[b].size()))));
   }
-  result.rms_px = std::sqrt(sum2 / double(std::max(1L, result.observations)));
-  std::vector<std::string> names = model_param_names(spec.name, int(s.model.size()));
-  names.insert(names.end(), {"cx", "cy", "a_y"});
-  result.parameter_names = names;
-  result.parameters = s.model;
-  result.parameters.insert(result.parameters.end(), {s.center.x(), s.center.y(), s.ay});
-  result.sigmas = sigmas;
+  result->rms_px = std::sqrt(sum2 / double(std::max(1L, result->observations)));
+  result->parameter_names = model_param_names(spec.name, int(s.model.size()));
+  result->parameter_names.insert(result->parameter_names.end(), {"cx", "cy", "a_y"});
+  result->parameters = s.model;
+  result->parameters.insert(result->parameters.end(), {s.center.x(), s.center.y(), s.ay});
+  result->sigmas = sigmas;
+}
+
+template <template <typename> class Model>
+CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boards, const BoardSpec& board, int width,
+                                 int height, const ModelSpec& spec) {
+  const Observations o(boards, board, width, height);
+  const Solve robust = robust_solve<Model>(o, initial_solve(o, board), spec);
+  CalibrationResult result;
+  result.outliers = find_outliers(o, Camera(o.camera(robust, make_model(spec.name, robust.model))), robust);
+  final_solve<Model>(o, robust, spec, &result);
   return result;
 }
 
