@@ -46,8 +46,8 @@ double newton10(const Model& model, double rho) {
 
 volatile double g_sink;  // keeps the timed loops from being optimised away
 
-void run_roots(const std::string& path, bool json, int repeats) {
-  const Camera camera = read_camera(path);
+// theta(rho) per call by each solver, and full-image unprojection, as JSON.
+nlohmann::json measure_roots(const Camera& camera, const std::string& path, int repeats) {
   // Radii of the image (the largest pixel radius, capped at rho_max), uniformly.
   double rho_hi = 0;
   for (double u : {-0.5, camera.width() - 0.5}) {
@@ -112,13 +112,12 @@ void run_roots(const std::string& path, bool json, int repeats) {
     }
   }
   cv::setNumThreads(threads_before);
+  return out;
+}
 
-  if (json) {
-    std::printf("%s\n", out.dump(2).c_str());
-    return;
-  }
+void print_roots(const nlohmann::json& out, const Camera& camera, const std::string& path, int repeats) {
   std::printf("theta(rho) on %s, %zu radii uniform in [0, %.1f] px, median of %d runs, 1 thread\n", path.c_str(),
-              kSamples, rho_hi, repeats);
+              out["samples"].get<size_t>(), out["rho_range_px"][1].get<double>(), repeats);
   std::printf("  robust solver (bracketed Newton)  %8.1f ns/call  (started from the table, as Camera does)\n",
               out["robust_ns"].get<double>());
   std::printf("  robust solver, cold start         %8.1f ns/call  (theta0 = rho / rho'(0))\n",
@@ -129,11 +128,21 @@ void run_roots(const std::string& path, bool json, int repeats) {
     std::printf("  companion-matrix eigenvalues      %8.1f ns/call\n", out["companion_ns"].get<double>());
   }
   std::printf("  plain 10-step Newton (OpenCV)     %8.1f ns/call  (worst residual %.2g px)\n",
-              out["newton10_ns"].get<double>(), newton_worst);
+              out["newton10_ns"].get<double>(), out["newton10_worst_residual_px"].get<double>());
   std::printf("full-image unprojection %dx%d (ms):\n", camera.width(), camera.height());
   for (const char* name : {"robust", "table"}) {
     std::printf("  %-7s 1 thread %7.2f   2 threads %7.2f\n", name,
                 out["unproject_image_ms"][name]["1"].get<double>(), out["unproject_image_ms"][name]["2"].get<double>());
+  }
+}
+
+void run_roots(const std::string& path, bool json, int repeats) {
+  const Camera camera = read_camera(path);
+  const nlohmann::json out = measure_roots(camera, path, repeats);
+  if (json) {
+    std::printf("%s\n", out.dump(2).c_str());
+  } else {
+    print_roots(out, camera, path, repeats);
   }
 }
 
@@ -143,12 +152,8 @@ void run_roots(const std::string& path, bool json, int repeats) {
 // (CV_16SC2 + interpolation table for the image, rounded for the labels), or the
 // float maps themselves, whichever is faster. Per sample the total and both floors
 // run interleaved (in rotating order) on the same pose and inputs.
-void run_augment(const std::string& path, bool json, int samples, Sampling sampling, std::optional<cv::Size> size) {
-  Camera camera = read_camera(path);
-  if (!camera.parameters().pose) throw Error(path + ": the benchmark renders the scene and needs a camera pose");
-  if (size) camera = Camera(resized(camera.parameters(), size->width, size->height));
+nlohmann::json measure_augment(const Camera& camera, const ViewpointWarp& warp, int samples, Sampling sampling) {
   const SceneRender scene = render_street_scene(camera, *camera.parameters().pose);
-  const ViewpointWarp warp(camera);
   const PosePreset train = *find_pose_preset("train");
   cv::Mat image, labels;
   const int threads_before = cv::getNumThreads();
@@ -204,6 +209,15 @@ void run_augment(const std::string& path, bool json, int samples, Sampling sampl
                        {"total_over_remap", total_ms / floor_ms}});
   }
   cv::setNumThreads(threads_before);
+  return results;
+}
+
+void run_augment(const std::string& path, bool json, int samples, Sampling sampling, std::optional<cv::Size> size) {
+  Camera camera = read_camera(path);
+  if (!camera.parameters().pose) throw Error(path + ": the benchmark renders the scene and needs a camera pose");
+  if (size) camera = Camera(resized(camera.parameters(), size->width, size->height));
+  const ViewpointWarp warp(camera);
+  const nlohmann::json results = measure_augment(camera, warp, samples, sampling);
   nlohmann::json out = results.back();  // the 2-thread numbers at the top level
   out["camera"] = path;
   out["width"] = camera.width();

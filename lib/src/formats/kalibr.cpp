@@ -35,6 +35,22 @@ Pose pose_of(const DocFields& f, const char* key) {
   return *pose;
 }
 
+// resolution and T_cam_imu / T_imu_cam, where a camera has them.
+void read_size_and_pose(const DocFields& f, CameraParameters* p) {
+  if (f.has("resolution")) {
+    const auto r = f.numbers("resolution", 2, 2);
+    for (double x : r) {
+      if (!(x >= 1 && x <= (1 << 16)) || x != std::floor(x)) f.fail("resolution", "expected two positive integers");
+    }
+    p->width = int(r[0]), p->height = int(r[1]);
+  }
+  if (f.has("T_cam_imu")) {
+    p->pose = inverse(pose_of(f, "T_cam_imu"));  // fishcam's pose is camera -> reference (the IMU)
+  } else if (f.has("T_imu_cam")) {
+    p->pose = pose_of(f, "T_imu_cam");
+  }
+}
+
 std::vector<NamedCamera> read(const Content& c) {
   const DocNode& root = c.yaml_or_throw();
   std::vector<NamedCamera> out;
@@ -99,18 +115,7 @@ std::vector<NamedCamera> read(const Content& c) {
     } else {
       f.fail("camera_model", "unsupported " + quoted_for_message(model) + " (expected pinhole, omni, ds or eucm)");
     }
-    if (f.has("resolution")) {
-      const auto r = f.numbers("resolution", 2, 2);
-      for (double x : r) {
-        if (!(x >= 1 && x <= (1 << 16)) || x != std::floor(x)) f.fail("resolution", "expected two positive integers");
-      }
-      p.width = int(r[0]), p.height = int(r[1]);
-    }
-    if (f.has("T_cam_imu")) {
-      p.pose = inverse(pose_of(f, "T_cam_imu"));  // fishcam's pose is camera -> reference (the IMU)
-    } else if (f.has("T_imu_cam")) {
-      p.pose = pose_of(f, "T_imu_cam");
-    }
+    read_size_and_pose(f, &p);
     if (f.has("T_cn_cnm1")) named.notes.push_back(text_for_message(root.keys[i]) + ".T_cn_cnm1 (relative to the previous camera) is not read");
     out.push_back(std::move(named));
   }
