@@ -22,6 +22,8 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
     ModelComparison,
     ViewpointChange,
     ViewpointWarp,
+    ValidDomain,
+    FieldOfView,
     __version__,
     derive_seed,
     get_num_threads,
@@ -30,7 +32,7 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
 from . import _fishcam
 
 __all__ = [
-    "AngleBin", "Camera", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
+    "AngleBin", "Camera", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
     "random_change", "set_num_threads", "presets", "change_to_dict", "__version__",
 ]
 

@@ -4,9 +4,56 @@ fishcam's C++ library (use the fishcam package, not this module)
 from __future__ import annotations
 import numpy
 import typing
-__all__: list[str] = ['AffineChange', 'AngleBin', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FitReport', 'ModelComparison', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'sampling_names', 'set_num_threads']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'sampling_names', 'set_num_threads']
 class Error(ValueError):
     pass
+class ValidDomain:
+    """
+    Where a camera's model is valid: theta in [0, theta_max] (closed) or [0, theta_max).
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def closed(self) -> bool:
+        """
+        Whether theta_max itself is valid.
+        """
+    @property
+    def limited_by(self) -> str:
+        """
+        What sets theta_max: 'model', 'fold' (rho stops increasing) or 'user' (a theta limit).
+        """
+    @property
+    def rho_max_px(self) -> float | None:
+        """
+        rho(theta_max) in pixel-scale units, or None where the model diverges there.
+        """
+    @property
+    def theta_max_deg(self) -> float:
+        """
+        The largest valid angle of incidence (degrees).
+        """
+class FieldOfView:
+    """
+    The image's angular coverage through the principal point (degrees).
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def diagonal(self) -> float:
+        """
+        Degrees across its diagonal.
+        """
+    @property
+    def horizontal(self) -> float:
+        """
+        Degrees across the image's width.
+        """
+    @property
+    def vertical(self) -> float:
+        """
+        Degrees across its height.
+        """
 class Camera:
     """
     A calibrated camera: a radial model rho(theta), principal point, pixel scale, image size and an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z forward. Immutable; equal cameras compare equal and hash alike.
@@ -39,13 +86,9 @@ class Camera:
         """
         The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera without a pose gets one relative to its own frame)
         """
-    def info(self) -> typing.Any:
-        """
-        What `fishcam info --json` prints, as a dict: model, parameters, width, height, cx, cy, pixel_scale, theta_max_deg, rho_max_px, fov_deg, pose, ...
-        """
     def info_json(self) -> str:
         """
-        What `fishcam info --json` prints (str); info() gives it as a dict.
+        What `fishcam info --json` prints (str); the same values typed: model, parameters, principal_point, pixel_scale, domain, field_of_view_deg, pose.
         """
     def parameters_key(self, with_pose: bool = True) -> bytes:
         """
@@ -74,6 +117,16 @@ class Camera:
     def write(self, path: str, format: str | None = None, overwrite: bool = False) -> None:
         """
         Writes the camera in `format` (default: from the extension); refuses an existing file unless overwrite=True, and a format that cannot hold the model.
+        """
+    @property
+    def domain(self) -> ValidDomain:
+        """
+        The model's valid domain (ValidDomain).
+        """
+    @property
+    def field_of_view_deg(self) -> FieldOfView:
+        """
+        The image's angular coverage (FieldOfView, degrees).
         """
     @property
     def height(self) -> int:

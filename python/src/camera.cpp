@@ -40,6 +40,38 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
 }  // namespace
 
 void bind_camera(py::module_& m) {
+  py::class_<ValidDomain>(m, "ValidDomain",
+                          "Where a camera's model is valid: theta in [0, theta_max] (closed) or [0, theta_max).")
+      .def_property_readonly(
+          "theta_max_deg", [](const ValidDomain& d) { return d.theta_max * 180 / std::numbers::pi; },
+          "The largest valid angle of incidence (degrees).")
+      .def_readonly("closed", &ValidDomain::closed, "Whether theta_max itself is valid.")
+      .def_property_readonly(
+          "limited_by", [](const ValidDomain& d) { return std::string(to_string(d.limited_by)); },
+          "What sets theta_max: 'model', 'fold' (rho stops increasing) or 'user' (a theta limit).")
+      .def_property_readonly(
+          "rho_max_px", [](const ValidDomain& d) -> std::optional<double> {
+            return d.closed ? std::optional(d.rho_max) : std::nullopt;
+          },
+          "rho(theta_max) in pixel-scale units, or None where the model diverges there.")
+      .def("__repr__", [](const ValidDomain& d) {
+        char buffer[128];
+        std::snprintf(buffer, sizeof buffer, "ValidDomain(theta_max_deg=%.6g, closed=%s, limited_by='%s')",
+                      d.theta_max * 180 / std::numbers::pi, d.closed ? "True" : "False", to_string(d.limited_by));
+        return std::string(buffer);
+      });
+  py::class_<Camera::FieldOfView>(m, "FieldOfView",
+                                  "The image's angular coverage through the principal point (degrees).")
+      .def_readonly("horizontal", &Camera::FieldOfView::horizontal, "Degrees across the image's width.")
+      .def_readonly("vertical", &Camera::FieldOfView::vertical, "Degrees across its height.")
+      .def_readonly("diagonal", &Camera::FieldOfView::diagonal, "Degrees across its diagonal.")
+      .def("__repr__", [](const Camera::FieldOfView& f) {
+        char buffer[128];
+        std::snprintf(buffer, sizeof buffer, "FieldOfView(horizontal=%.6g, vertical=%.6g, diagonal=%.6g)",
+                      f.horizontal, f.vertical, f.diagonal);
+        return std::string(buffer);
+      });
+
   py::class_<Camera>(m, "Camera",
                      "A calibrated camera: a radial model rho(theta), principal point, pixel scale, image size and "
                      "an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z "
@@ -130,16 +162,15 @@ void bind_camera(py::module_& m) {
           py::arg("rho"),
           "theta (radians) of radii rho (pixels, any shape, float64; same shape out); NaN outside the valid domain.")
       .def("info_json", [](const Camera& c) { return camera_info_json(c); },
-           "What `fishcam info --json` prints (str); info() gives it as a dict.")
+           "What `fishcam info --json` prints (str); the same values typed: model, parameters, principal_point, "
+           "pixel_scale, domain, field_of_view_deg, pose.")
       .def(
           "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
           py::arg("width"), py::arg("height"),
           "The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.")
-      .def(
-          "info",
-          [](const Camera& c) { return py::module_::import("json").attr("loads")(camera_info_json(c)); },
-          "What `fishcam info --json` prints, as a dict: model, parameters, width, height, cx, cy, pixel_scale, "
-          "theta_max_deg, rho_max_px, fov_deg, pose, ...")
+      .def_property_readonly("domain", &Camera::domain, "The model's valid domain (ValidDomain).")
+      .def_property_readonly("field_of_view_deg", &Camera::field_of_view_deg,
+                             "The image's angular coverage (FieldOfView, degrees).")
       .def(
           "__eq__",
           [](const Camera& a, const py::object& b) {

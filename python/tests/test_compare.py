@@ -82,7 +82,7 @@ def test_method_paper_uses_eqs_13_and_14(tmp_path):
                             "paper", "--samples", 1, "--json"))
     cam = fishcam.Camera.read(CAMERA)
     rho = cam.width / 2
-    theta = math.radians(cam.info()["fov_deg"]["horizontal"] / 2)
+    theta = math.radians(cam.field_of_view_deg.horizontal / 2)
     by_name = {m["name"]: m for m in report["models"]}
     assert by_name["equidistant"]["parameters"][0] == pytest.approx(rho / theta, rel=1e-12)
     assert by_name["stereographic"]["parameters"][0] == pytest.approx(rho / (2 * math.tan(theta / 2)), rel=1e-12)

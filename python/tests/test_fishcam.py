@@ -46,11 +46,18 @@ def test_version_and_error_type():
 
 
 def test_info_has_the_cli_fields(cam, tmp_path):
-    info = cam.info()
+    info = json.loads(cam.info_json())
     cli = json.loads(run_cli("info", data("woodscape_front.json"), "--json"))
     for key in cli:
         if key not in ("format", "camera"):  # what the file said, not the camera
             assert info[key] == cli[key], key
+    # The same values, typed.
+    assert cam.domain.theta_max_deg == cli["theta_max_deg"] and cam.domain.closed == cli["theta_max_closed"]
+    assert cam.domain.limited_by == cli["theta_max_limited_by"] and cam.domain.rho_max_px == cli["rho_max_px"]
+    fov = cam.field_of_view_deg
+    assert [fov.horizontal, fov.vertical, fov.diagonal] == [cli["fov_deg"][k] for k in ("horizontal", "vertical",
+                                                                                        "diagonal")]
+    assert list(cam.principal_point) == [cli["cx"], cli["cy"]] and cam.parameters == cli["parameters"]
 
 
 @pytest.mark.parametrize("name", BUNDLED)
@@ -233,12 +240,12 @@ def test_convert_matches_the_cli(cam, tmp_path):
     assert report.p99_px == cli["p99_px"] and report.samples_below_90 == cli["below_90_deg"]["samples"]
     assert [b.rms_px for b in report.by_angle] == [b["rms_px"] for b in cli["by_angle"]]
     assert json.loads(conversion.to_json()) == {k: v for k, v in cli.items() if k in json.loads(conversion.to_json())}
-    assert 90 < conversion.widest_theta_deg <= cam.info()["theta_max_deg"]
+    assert 90 < conversion.widest_theta_deg <= cam.domain.theta_max_deg
     assert kb.model == "kannala-brandt"
     assert kb == fishcam.Camera.read(str(tmp_path / "kb.json"))
     eq, paper = fishcam.convert(cam, to="equidistant", method="paper")
     # Eq. 13: f = (W / 2) / (half the horizontal field of view).
-    half_fov = np.radians(cam.info()["fov_deg"]["horizontal"] / 2)
+    half_fov = np.radians(cam.field_of_view_deg.horizontal / 2)
     assert eq.parameters[0] == pytest.approx(cam.width / 2 / half_fov, rel=1e-12)
 
 
@@ -251,7 +258,7 @@ def test_write_refuses_to_replace_unless_overwrite(cam, tmp_path):
     assert fishcam.Camera.read(str(path)) == cam
     for fmt in ["woodscape", "fishcam"]:
         cam.write(str(tmp_path / f"c.{fmt}"), format=fmt)
-        assert fishcam.Camera.read(str(tmp_path / f"c.{fmt}"), format=fmt).info()["cx"] == cam.info()["cx"]
+        assert fishcam.Camera.read(str(tmp_path / f"c.{fmt}"), format=fmt).principal_point[0] == cam.principal_point[0]
     with pytest.raises(fishcam.Error, match="extension"):
         cam.write(str(tmp_path / "c.dat"))
 
