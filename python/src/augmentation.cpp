@@ -75,6 +75,18 @@ Sampling sampling_of(const std::string& name) {
   return *sampling;
 }
 
+// One augmented sample, what `fishcam augment` writes (ViewpointWarp.warp and __call__).
+py::dict augment_sample(const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
+                        const RandomPose& change, const std::string& depth, double fill, int label_fill,
+                        bool return_valid, const std::string& sampling) {
+  const DepthPrior prior = depth_prior(depth);
+  const Sampling how = sampling_of(sampling);
+  const cv::Size source(warp.source().width(), warp.source().height());
+  const cv::Size target(warp.target().width(), warp.target().height());
+  return resample(image, labels, source, target, fill, label_fill, return_valid,
+                  [&](const AugmentIO& io) { warp.augment(change.change(), prior, io, how); });
+}
+
 
 }  // namespace
 
@@ -200,17 +212,7 @@ void bind_augmentation(py::module_& m) {
           "reference; grid=True: the grid path's (within 1/32 px), geometric.")
       .def(
           "warp",
-          [](const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
-             const RandomPose& change, const std::string& depth, double fill, int label_fill, bool return_valid,
-             const std::string& sampling) {
-            const DepthPrior prior = depth_prior(depth);
-            const Sampling how = sampling_of(sampling);
-            const cv::Size source(warp.source().width(), warp.source().height());
-            const cv::Size target(warp.target().width(), warp.target().height());
-            // The same calls as `fishcam augment`.
-            return resample(image, labels, source, target, fill, label_fill, return_valid,
-                            [&](const AugmentIO& io) { warp.augment(change.change(), prior, io, how); });
-          },
+          &augment_sample,
           py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
           py::arg("return_valid") = false, py::arg("sampling") = "grid",
@@ -293,17 +295,7 @@ void bind_augmentation(py::module_& m) {
           "re-expressed in the moved camera (exact for rotations); fill where there is no source")
       .def(
           "__call__",
-          [](const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
-             const RandomPose& change, const std::string& depth, double fill, int label_fill, bool return_valid,
-             const std::string& sampling) {
-            const DepthPrior prior = depth_prior(depth);
-            const Sampling how = sampling_of(sampling);
-            const cv::Size source(warp.source().width(), warp.source().height());
-            const cv::Size target(warp.target().width(), warp.target().height());
-            // The same calls as `fishcam augment`.
-            return resample(image, labels, source, target, fill, label_fill, return_valid,
-                            [&](const AugmentIO& io) { warp.augment(change.change(), prior, io, how); });
-          },
+          &augment_sample,
           py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
           py::arg("return_valid") = false, py::arg("sampling") = "grid",
