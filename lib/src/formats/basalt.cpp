@@ -15,15 +15,15 @@ int score(const Content& c) {
 }
 
 std::vector<NamedCamera> read(const Content& c) {
-  const JsonFields top(c.json_or_throw(), c.source());
-  const JsonFields v = top.object("value0");
+  const DocFields top(c.json_document(), c.source());
+  const DocFields v = top.object("value0");
   const size_t count = v.size("intrinsics");
   if (count == 0) v.fail("intrinsics", "no camera");
   std::vector<NamedCamera> out;
   for (size_t i = 0; i < count; ++i) {
-    const JsonFields cam = v.item("intrinsics", i);
+    const DocFields cam = v.item("intrinsics", i);
     const std::string type = cam.string("camera_type");
-    const JsonFields k = cam.object("intrinsics");
+    const DocFields k = cam.object("intrinsics");
     NamedCamera named{std::to_string(i), {}, {}};
     CameraParameters& p = named.camera;
     const double fx = k.number("fx"), fy = k.number("fy");
@@ -50,17 +50,16 @@ std::vector<NamedCamera> read(const Content& c) {
                                        : " (expected kb4, ds, eucm, ucm or pinhole)"));
     }
     if (v.has("resolution") && i < v.size("resolution")) {
-      const nlohmann::json& r = v.get("resolution")[i];
-      const std::string key = "resolution[" + std::to_string(i) + "]";
-      if (!r.is_array() || r.size() != 2 || !r[0].is_number() || !r[1].is_number()) v.fail(key, "expected [width, height]");
-      const double w = r[0].get<double>(), h = r[1].get<double>();
-      for (double x : {w, h}) {
-        if (!(x >= 1 && x <= (1 << 16)) || x != std::floor(x)) v.fail(key, "expected positive integers <= 65536");
+      const auto wh = v.numbers("resolution", i, 2, 2);  // [width, height]
+      for (double x : wh) {
+        if (!(x >= 1 && x <= (1 << 16)) || x != std::floor(x)) {
+          v.fail("resolution[" + std::to_string(i) + "]", "expected positive integers <= 65536");
+        }
       }
-      p.width = int(w), p.height = int(h);
+      p.width = int(wh[0]), p.height = int(wh[1]);
     }
     if (v.has("T_imu_cam") && i < v.size("T_imu_cam")) {
-      const JsonFields t = v.item("T_imu_cam", i);
+      const DocFields t = v.item("T_imu_cam", i);
       const Eigen::Quaterniond q(t.number("qw"), t.number("qx"), t.number("qy"), t.number("qz"));
       if (std::abs(q.norm() - 1) > 1e-6) t.fail("qw", "the quaternion must have unit norm");
       p.pose = Pose{q.normalized(), {t.number("px"), t.number("py"), t.number("pz")}};

@@ -10,8 +10,6 @@
 namespace fishcam::detail {
 namespace {
 
-std::string type_name(const nlohmann::json& j) { return j.is_number() ? "number" : j.type_name(); }
-
 std::string_view trimmed(std::string_view s) {
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
@@ -64,6 +62,54 @@ const nlohmann::json& Content::json_or_throw() const {
   throw Error(source_ + ": not valid JSON (" + quoted_for_message(json_error_, 120) + ")");
 }
 
+namespace {
+
+// A parsed JSON value (or Python literal) as a document; scalars keep their type
+// in the tag.
+DocNode document_of(const nlohmann::json& j) {
+  DocNode node;
+  if (j.is_object()) {
+    node.kind = DocNode::Kind::map;
+    for (const auto& [key, value] : j.items()) {
+      node.keys.push_back(key);
+      node.items.push_back(document_of(value));
+    }
+  } else if (j.is_array()) {
+    node.kind = DocNode::Kind::sequence;
+    for (const auto& value : j) node.items.push_back(document_of(value));
+  } else if (!j.is_null()) {
+    node.kind = DocNode::Kind::scalar;
+    node.tag = j.is_string() ? "str" : j.is_boolean() ? "bool" : "float";
+    // Numbers round-trip exactly through dump(); a Python literal's nan or inf stays one.
+    const bool non_finite = j.is_number_float() && !std::isfinite(j.get<double>());
+    node.scalar = j.is_string() ? j.get<std::string>() : non_finite ? (j.get<double>() > 0 ? "inf" : "nan") : j.dump();
+    if (non_finite && j.get<double>() < 0) node.scalar = "-inf";
+  }
+  return node;
+}
+
+// What a JSON-typed scalar is, in messages ("expected a number, got string").
+std::string json_type(const DocNode& n) {
+  if (n.kind == DocNode::Kind::map) return "object";
+  if (n.kind == DocNode::Kind::sequence) return "array";
+  if (n.kind == DocNode::Kind::null) return "null";
+  return n.tag == "str" ? "string" : n.tag == "bool" ? "boolean" : "number";
+}
+
+}  // namespace
+
+const DocNode& Content::json_document() const {
+  if (!json_document_) json_document_ = document_of(json_or_throw());
+  return *json_document_;
+}
+
+const DocNode* Content::python_literal_document() const {
+  if (!literal_document_) {
+    if (const auto* literal = python_literal()) literal_document_ = document_of(*literal);
+  }
+  return literal_document_ ? &*literal_document_ : nullptr;
+}
+
 const DocNode* Content::yaml() const {
   if (!yaml_tried_) {
     yaml_tried_ = true;
@@ -95,72 +141,6 @@ const nlohmann::json* Content::python_literal() const {
   return literal_ ? &*literal_ : nullptr;
 }
 
-// ------------------------------------------------------------ JsonFields
-void JsonFields::fail(std::string_view key, std::string_view problem) const {
-  throw Error(source_ + ": " + text_for_message(prefix_ + std::string(key)) + ": " + std::string(problem));
-}
-
-const nlohmann::json& JsonFields::get(std::string_view key) const {
-  if (!j_.is_object()) fail(key, "missing (not inside an object)");
-  const auto it = j_.find(key);
-  if (it == j_.end()) fail(key, "missing");
-  return *it;
-}
-
-double JsonFields::as_number(const nlohmann::json& v, std::string_view key) const {
-  if (!v.is_number()) fail(key, "expected a number, got " + type_name(v));
-  const double x = v.get<double>();
-  if (!std::isfinite(x)) fail(key, "must be finite");
-  return x;
-}
-
-double JsonFields::number(std::string_view key) const { return as_number(get(key), key); }
-
-int JsonFields::positive_integer(std::string_view key) const {
-  const double v = number(key);
-  if (!(v >= 1 && v <= (1 << 16)) || v != std::floor(v)) fail(key, "expected a positive integer <= 65536");
-  return static_cast<int>(v);
-}
-
-std::string JsonFields::string(std::string_view key) const {
-  const auto& v = get(key);
-  if (!v.is_string()) fail(key, "expected a string, got " + type_name(v));
-  return v.get<std::string>();
-}
-
-std::vector<double> JsonFields::numbers(std::string_view key, size_t min_size, size_t max_size) const {
-  const auto& v = get(key);
-  if (!v.is_array()) fail(key, "expected a list of numbers, got " + type_name(v));
-  if (v.size() < min_size || v.size() > max_size) {
-    fail(key, min_size == max_size ? "expected " + std::to_string(min_size) + " numbers, got " + std::to_string(v.size())
-                                   : "expected " + std::to_string(min_size) + " to " + std::to_string(max_size) +
-                                         " numbers, got " + std::to_string(v.size()));
-  }
-  std::vector<double> out;
-  for (size_t i = 0; i < v.size(); ++i) out.push_back(as_number(v[i], std::string(key) + "[" + std::to_string(i) + "]"));
-  return out;
-}
-
-JsonFields JsonFields::object(std::string_view key) const {
-  const auto& v = get(key);
-  if (!v.is_object()) fail(key, "expected an object, got " + type_name(v));
-  return JsonFields(v, source_, prefix_ + std::string(key) + ".");
-}
-
-size_t JsonFields::size(std::string_view key) const {
-  const auto& v = get(key);
-  if (!v.is_array()) fail(key, "expected a list, got " + type_name(v));
-  return v.size();
-}
-
-JsonFields JsonFields::item(std::string_view key, size_t index) const {
-  const auto& v = get(key);
-  const std::string name = std::string(key) + "[" + std::to_string(index) + "]";
-  if (!v.is_array() || index >= v.size()) fail(name, "missing");
-  if (!v[index].is_object()) fail(name, "expected an object, got " + type_name(v[index]));
-  return JsonFields(v[index], source_, prefix_ + name + ".");
-}
-
 // ------------------------------------------------------------ DocFields
 void DocFields::fail(std::string_view key, std::string_view problem) const {
   throw Error(source_ + ": " + text_for_message(prefix_ + std::string(key)) + ": " + std::string(problem));
@@ -188,12 +168,14 @@ double DocFields::parse_number(const std::string& text, const std::function<void
 double DocFields::number(std::string_view key) const {
   const DocNode& n = get(key);
   if (n.kind != DocNode::Kind::scalar) fail(key, "expected a number");
+  if (n.tag == "str" || n.tag == "bool") fail(key, "expected a number, got " + json_type(n));
   return parse_number(n.scalar, [&](std::string_view problem) { fail(key, problem); });
 }
 
 int DocFields::positive_integer(std::string_view key) const {
   const DocNode& n = get(key);
   if (n.kind != DocNode::Kind::scalar) fail(key, "expected an integer");
+  if (n.tag == "str" || n.tag == "bool") fail(key, "expected an integer, got " + json_type(n));
   const double v = parse_number(n.scalar, [&](std::string_view problem) {
     fail(key, problem.starts_with("expected a number") ? "expected an integer" + std::string(problem.substr(17)) : problem);
   });
@@ -204,13 +186,26 @@ int DocFields::positive_integer(std::string_view key) const {
 std::string DocFields::string(std::string_view key) const {
   const DocNode& n = get(key);
   if (n.kind != DocNode::Kind::scalar) fail(key, "expected text");
+  if (n.tag == "float" || n.tag == "bool") fail(key, "expected a string, got " + json_type(n));
+  if (n.tag == "str") return n.scalar;  // JSON: the string as it is
   std::string s(trimmed(n.scalar));
   if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);  // XML keeps quotes
   return s;
 }
 
 std::vector<double> DocFields::numbers(std::string_view key, size_t min_size, size_t max_size) const {
+  return numbers_of(get(key), key, min_size, max_size);
+}
+
+std::vector<double> DocFields::numbers(std::string_view key, size_t index, size_t min_size, size_t max_size) const {
   const DocNode& n = get(key);
+  const std::string name = std::string(key) + "[" + std::to_string(index) + "]";
+  if (n.kind != DocNode::Kind::sequence || index >= n.items.size()) fail(name, "missing");
+  return numbers_of(n.items[index], name, min_size, max_size);
+}
+
+std::vector<double> DocFields::numbers_of(const DocNode& n, std::string_view key, size_t min_size,
+                                          size_t max_size) const {
   std::vector<std::string> texts;
   const DocNode* data = &n;
   std::string item_prefix(key);
@@ -218,18 +213,22 @@ std::vector<double> DocFields::numbers(std::string_view key, size_t min_size, si
   if (data->kind == DocNode::Kind::sequence) {
     for (const auto& item : data->items) {
       if (item.kind != DocNode::Kind::scalar) fail(key, "expected a list of numbers");
+      if (item.tag == "str" || item.tag == "bool") fail(key, "expected a list of numbers, got a " + json_type(item));
       texts.push_back(item.scalar);
       if (texts.size() > max_size) break;
     }
-  } else if (data->kind == DocNode::Kind::scalar) {  // XML: whitespace-separated
+  } else if (data->kind == DocNode::Kind::scalar && data->tag.empty()) {  // XML: whitespace-separated
     std::istringstream words(data->scalar);
     for (std::string word; words >> word && texts.size() <= max_size;) texts.push_back(word);
   } else {
     fail(key, "expected a list of numbers");
   }
   if (texts.size() < min_size || texts.size() > max_size) {
-    fail(key, min_size == max_size ? "expected " + std::to_string(min_size) + " numbers"
-                                   : "expected " + std::to_string(min_size) + " to " + std::to_string(max_size) + " numbers");
+    // Past max_size the count stopped early: "more".
+    const std::string got = texts.size() > max_size ? "more" : std::to_string(texts.size());
+    fail(key, (min_size == max_size ? "expected " + std::to_string(min_size) + " numbers"
+                                    : "expected " + std::to_string(min_size) + " to " + std::to_string(max_size) +
+                                          " numbers") + ", got " + got);
   }
   std::vector<double> out;
   for (size_t i = 0; i < texts.size(); ++i) {
@@ -253,6 +252,20 @@ DocFields DocFields::object(std::string_view key) const {
   const DocNode& n = get(key);
   if (n.kind != DocNode::Kind::map) fail(key, "expected a map");
   return DocFields(n, source_, prefix_ + std::string(key) + ".");
+}
+
+size_t DocFields::size(std::string_view key) const {
+  const DocNode& n = get(key);
+  if (n.kind != DocNode::Kind::sequence) fail(key, "expected a list");
+  return n.items.size();
+}
+
+DocFields DocFields::item(std::string_view key, size_t index) const {
+  const DocNode& n = get(key);
+  const std::string name = std::string(key) + "[" + std::to_string(index) + "]";
+  if (n.kind != DocNode::Kind::sequence || index >= n.items.size()) fail(name, "missing");
+  if (n.items[index].kind != DocNode::Kind::map) fail(name, "expected a map");
+  return DocFields(n.items[index], source_, prefix_ + name + ".");
 }
 
 // ------------------------------------------------------------ models, poses, text
@@ -360,7 +373,7 @@ Pose inverse(const Pose& pose) {
   return out;
 }
 
-Pose pose_from_json(const JsonFields& f, const char* quaternion_key) {
+Pose pose_from_json(const DocFields& f, const char* quaternion_key) {
   const std::vector<double> q = f.numbers(quaternion_key, 4, 4);
   const std::vector<double> t = f.numbers("translation", 3, 3);
   const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);

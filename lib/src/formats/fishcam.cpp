@@ -15,7 +15,7 @@ int score(const Content& c) {
 }
 
 std::vector<NamedCamera> read(const Content& c) {
-  const JsonFields f(c.json_or_throw(), c.source());
+  const DocFields f(c.json_document(), c.source());
   const double version = f.number("fishcam_camera");
   if (version != 1) f.fail("fishcam_camera", "unsupported format version (this build reads version 1)");
   CameraParameters p;

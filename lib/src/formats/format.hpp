@@ -37,13 +37,18 @@ class Content {
   // The parsed views or a one-line error naming the file.
   const nlohmann::json& json_or_throw() const;
   const DocNode& yaml_or_throw() const;
+  // The JSON or the Python literal as a document, the one tree readers walk with
+  // DocFields whatever the syntax (converted once; scalars keep their JSON type in
+  // DocNode::tag: "str", "float", "bool").
+  const DocNode& json_document() const;
+  const DocNode* python_literal_document() const;
 
  private:
   std::string_view text_;
   std::string source_;
   const CameraReadOptions* options_;
   mutable std::optional<nlohmann::json> json_, literal_;
-  mutable std::optional<DocNode> yaml_;
+  mutable std::optional<DocNode> yaml_, json_document_, literal_document_;
   mutable bool json_tried_ = false, yaml_tried_ = false, literal_tried_ = false;
   mutable std::string json_error_, yaml_error_, literal_error_;
 };
@@ -81,30 +86,9 @@ const FormatSpec& format_spec(CameraFormat format);
 
 // ------------------------------------------------------------ shared helpers
 
-// Typed, named access to a JSON object: every failure says file, field and problem.
-class JsonFields {
- public:
-  JsonFields(const nlohmann::json& object, std::string source, std::string prefix = "")
-      : j_(object), source_(std::move(source)), prefix_(std::move(prefix)) {}
-  [[noreturn]] void fail(std::string_view key, std::string_view problem) const;
-  bool has(std::string_view key) const { return j_.is_object() && j_.contains(key); }
-  const nlohmann::json& get(std::string_view key) const;
-  double number(std::string_view key) const;
-  int positive_integer(std::string_view key) const;
-  std::string string(std::string_view key) const;
-  std::vector<double> numbers(std::string_view key, size_t min_size, size_t max_size) const;
-  JsonFields object(std::string_view key) const;
-  JsonFields item(std::string_view key, size_t index) const;  // key[index], an object
-  size_t size(std::string_view key) const;                    // length of the list `key`
-  const std::string& source() const { return source_; }
-
- private:
-  double as_number(const nlohmann::json& v, std::string_view key) const;
-  const nlohmann::json& j_;
-  std::string source_, prefix_;
-};
-
-// The same for YAML/XML documents (scalars are text: numbers are parsed here).
+// Typed, named access to a document's map (YAML, XML, JSON, a Python literal):
+// every failure says file, field and problem. Scalars are text, numbers parsed
+// here; a JSON string is never taken for a number, nor a JSON number for a string.
 class DocFields {
  public:
   DocFields(const DocNode& node, std::string source, std::string prefix = "")
@@ -117,15 +101,20 @@ class DocFields {
   std::string string(std::string_view key) const;
   // A list of numbers: a YAML sequence, or an opencv-matrix's data.
   std::vector<double> numbers(std::string_view key, size_t min_size, size_t max_size) const;
+  // The list of numbers key[index] (a list of lists).
+  std::vector<double> numbers(std::string_view key, size_t index, size_t min_size, size_t max_size) const;
   // An opencv-matrix (rows, cols, data) with `count` elements.
   std::vector<double> matrix(std::string_view key, int count) const;
   DocFields object(std::string_view key) const;
+  DocFields item(std::string_view key, size_t index) const;  // key[index], a map
+  size_t size(std::string_view key) const;                   // length of the list `key`
   const DocNode& node() const { return node_; }
   const std::string& source() const { return source_; }
 
   static double parse_number(const std::string& text, const std::function<void(std::string_view)>& fail);
 
  private:
+  std::vector<double> numbers_of(const DocNode& n, std::string_view key, size_t min_size, size_t max_size) const;
   const DocNode& node_;
   std::string source_, prefix_;
 };
@@ -170,7 +159,7 @@ std::array<double, 16> matrix_from_pose(const Pose& pose);
 Pose inverse(const Pose& pose);
 // A pose as JSON: quaternion (x, y, z, w: scalar last, unit norm to 1e-6) under
 // quaternion_key, and "translation".
-Pose pose_from_json(const JsonFields& f, const char* quaternion_key);
+Pose pose_from_json(const DocFields& f, const char* quaternion_key);
 nlohmann::json pose_to_json(const Pose& pose, const char* quaternion_key);
 
 // YAML text helpers for writers (numbers with 17 significant digits).

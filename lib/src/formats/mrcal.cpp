@@ -15,10 +15,10 @@ int score(const Content& c) {
 }
 
 std::vector<NamedCamera> read(const Content& c) {
-  const auto* root = c.python_literal();
+  const DocNode* root = c.python_literal_document();
   if (!root) throw Error(c.source() + ": not a valid mrcal .cameramodel (" + c.python_literal_error() + ")");
-  if (!root->is_object()) throw Error(c.source() + ": not a valid mrcal .cameramodel (expected a dict)");
-  const JsonFields f(*root, c.source());
+  if (root->kind != DocNode::Kind::map) throw Error(c.source() + ": not a valid mrcal .cameramodel (expected a dict)");
+  const DocFields f(*root, c.source());
   const std::string lensmodel = f.string("lensmodel");
   const bool pinhole = lensmodel == "LENSMODEL_PINHOLE";
   if (!pinhole && lensmodel != "LENSMODEL_STEREOGRAPHIC") {

@@ -24,10 +24,10 @@ int score(const Content& c) {
 }
 
 std::vector<NamedCamera> read(const Content& c) {
-  const nlohmann::json& root = c.json_or_throw();
-  if (!root.is_object()) throw Error(c.source() + ": expected a JSON object at the top level");
-  const JsonFields top(root, c.source());
-  const JsonFields in = top.object("intrinsic");
+  const DocNode& root = c.json_document();
+  if (root.kind != DocNode::Kind::map) throw Error(c.source() + ": expected a JSON object at the top level");
+  const DocFields top(root, c.source());
+  const DocFields in = top.object("intrinsic");
   const std::string model = in.string("model");
   if (model != "radial_poly") in.fail("model", "unsupported WoodScape model " + quoted_for_message(model) + " (expected radial_poly)");
   const double poly_order = in.number("poly_order");
@@ -48,7 +48,7 @@ std::vector<NamedCamera> read(const Content& c) {
   p.pixel_scale = {1.0, aspect};
   p.model = Polynomial<double>(k);
   if (top.has("extrinsic")) {
-    const JsonFields ex = top.object("extrinsic");
+    const DocFields ex = top.object("extrinsic");
     if (!ex.has("translation") && ex.has(kSynWoodScapeTranslation)) {
       // SynWoodScape: the translation is in CARLA's frame, which its files do not
       // document against WoodScape's vehicle frame: no pose rather than a wrong one.
