@@ -72,7 +72,7 @@ class Camera:
         """
         Equal when every number of the two cameras is (parameters_key).
         """
-    def __getstate__(self) -> str:
+    def __getstate__(self) -> typing.Any:
         ...
     def __hash__(self) -> int:
         """
@@ -80,7 +80,7 @@ class Camera:
         """
     def __repr__(self) -> str:
         ...
-    def __setstate__(self, arg0: str) -> None:
+    def __setstate__(self, arg0: typing.Any) -> None:
         ...
     def augmented(self, change: ViewpointChange) -> Camera:
         """

@@ -1,5 +1,7 @@
 // fishcam.Camera and fishcam.convert.
+#include <array>
 #include <cmath>
+#include <map>
 #include <cstdio>
 #include <numbers>
 
@@ -21,8 +23,7 @@ std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
 // parameters, size, principal point, pixel scale, theta limit and, with_pose, the
 // pose). A cache key that costs microseconds, where to_json() formats and reads
 // back a file (milliseconds).
-py::bytes parameters_key(const Camera& camera, bool with_pose) {
-  const CameraParameters& p = camera.parameters();
+std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
   std::string key(model_name(p.model));
   key.push_back('\0');
   std::vector<double> numbers = model_params(p.model);
@@ -34,7 +35,55 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
                                    p.pose->translation.z()});
   }
   key.append(reinterpret_cast<const char*>(numbers.data()), numbers.size() * sizeof(double));
-  return py::bytes(key);
+  return key;
+}
+
+py::bytes parameters_key(const Camera& camera, bool with_pose) {
+  return py::bytes(parameters_key_of(camera.parameters(), with_pose));
+}
+
+// Pickling, for DataLoader workers that send a camera with every sample: the
+// camera's numbers (exact), and on the way back one Camera per distinct
+// intrinsics kept by the process (building one computes its domain and inverse
+// table, milliseconds), given the pickled pose (microseconds).
+py::object camera_pickle_state(const Camera& c) {
+  const CameraParameters& p = c.parameters();
+  py::object pose = py::none();
+  if (p.pose) {
+    const auto& q = p.pose->rotation;
+    const auto& t = p.pose->translation;
+    pose = py::make_tuple(q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z());
+  }
+  return py::make_tuple(std::string(model_name(p.model)), model_params(p.model), p.width, p.height,
+                        p.principal_point.x(), p.principal_point.y(), p.pixel_scale.x(), p.pixel_scale.y(),
+                        p.theta_limit ? py::cast(*p.theta_limit) : py::none(), pose);
+}
+
+Camera camera_from_pickle_state(const py::object& state) {
+  if (py::isinstance<py::str>(state)) return camera_from_state(state.cast<std::string>());  // earlier pickles
+  const py::tuple t = state.cast<py::tuple>();
+  if (t.size() != 10) throw Error("pickled camera: expected 10 fields, got " + std::to_string(t.size()));
+  CameraParameters p;
+  p.model = make_model(t[0].cast<std::string>(), t[1].cast<std::vector<double>>());
+  p.width = t[2].cast<int>(), p.height = t[3].cast<int>();
+  p.principal_point = {t[4].cast<double>(), t[5].cast<double>()};
+  p.pixel_scale = {t[6].cast<double>(), t[7].cast<double>()};
+  if (!t[8].is_none()) p.theta_limit = t[8].cast<double>();
+  std::optional<Pose> pose;
+  if (!t[9].is_none()) {
+    const auto v = t[9].cast<std::array<double, 7>>();
+    pose = Pose{Eigen::Quaterniond(v[0], v[1], v[2], v[3]), {v[4], v[5], v[6]}};
+  }
+  // The cache holds cameras without a pose (the GIL guards it); a camera is
+  // built, and so validated, the first time its numbers come.
+  static std::map<std::string, Camera> cameras;
+  const std::string key = parameters_key_of(p, false);
+  auto it = cameras.find(key);
+  if (it == cameras.end()) {
+    if (cameras.size() >= 256) cameras.erase(cameras.begin());
+    it = cameras.emplace(key, Camera(p)).first;
+  }
+  return it->second.with_pose(pose);
 }
 
 }  // namespace
@@ -187,8 +236,7 @@ void bind_camera(py::module_& m) {
            "warp depends on); cheap, for caches and hashing")
       .def_static("from_json", &camera_from_state, py::arg("text"),
                   "The camera of fishcam JSON text (what to_json gives).")
-      .def(py::pickle([](const Camera& c) { return camera_state(c); },
-                      [](const std::string& state) { return camera_from_state(state); }))
+      .def(py::pickle(&camera_pickle_state, &camera_from_pickle_state))
       .def("__repr__", [](const Camera& c) {
         return "<fishcam.Camera " + std::string(model_name(c.model())) + " " + std::to_string(c.width()) + "x" +
                std::to_string(c.height()) + ">";
