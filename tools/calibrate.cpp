@@ -1,4 +1,5 @@
 // fishcam calibrate: intrinsics and board poses from chessboard corners.
+#include <cmath>
 #include <cstdio>
 
 #include "fishcam/corners.hpp"
@@ -35,11 +36,18 @@ void register_calibrate(CLI::App& app) {
     const CalibrationResult result = calibrate(observations, board, width, height, spec);
     write_camera(result.camera, o->output.out, format, o->output.force);
     for (const auto& warning : result.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
+    // rms_px: the root mean square of the corners' 2-D reprojection error (the
+    // norm); mrcal and OpenCV print it per coordinate, which is rms_px / sqrt(2).
+    nlohmann::json outliers = nlohmann::json::array();
+    for (const auto& outlier : result.outliers) {
+      outliers.push_back({{"image", outlier.filename}, {"corner", outlier.corner}, {"error_px", outlier.error_px}});
+    }
     nlohmann::json j = {{"model", model_name(result.camera.model)},
                         {"rms_px", result.rms_px},
+                        {"rms_per_coordinate_px", result.rms_px / std::sqrt(2.0)},
                         {"corners", result.observations},
                         {"images", result.used_images.size()},
-                        {"outliers", result.outliers.size()},
+                        {"outliers", outliers},
                         {"warnings", result.warnings},
                         {"out", o->output.out}};
     for (size_t i = 0; i < result.parameters.size(); ++i) {
@@ -50,9 +58,10 @@ void register_calibrate(CLI::App& app) {
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
-    std::printf("calibrated %s from %zu images, %ld corners: rms %.4f px, %zu outliers; wrote %s\n",
+    std::printf("calibrated %s from %zu images, %ld corners: rms %.4f px (2-D; %.4f per coordinate), %zu outliers; "
+                "wrote %s\n",
                 std::string(model_name(result.camera.model)).c_str(), result.used_images.size(), result.observations,
-                result.rms_px, result.outliers.size(), o->output.out.c_str());
+                result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(), o->output.out.c_str());
     for (size_t i = 0; i < result.parameters.size(); ++i) {
       std::printf("  %-4s %16.10g +- %.3g\n", result.parameter_names[i].c_str(), result.parameters[i], result.sigmas[i]);
     }
