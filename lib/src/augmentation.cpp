@@ -334,16 +334,27 @@ void ViewpointWarp::warp_depth(const ViewpointChange& change, DepthPrior prior, 
   compute(change, prior, &maps, MapKind::sampling);
   cv::remap(depth, *out, maps.map_x, maps.map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(fill));
   if (change.is_identity()) return;
+  const int width = target_.width();
+  // The output's rays: cached by the float path (NaN where none), else unprojected.
+  const bool cached = !rays_.empty();
   cv::parallel_for_(cv::Range(0, target_.height()), [&](const cv::Range& rows) {
     for (int v = rows.start; v < rows.end; ++v) {
       float* row = out->ptr<float>(v);
       const float* source_x = maps.map_x.ptr<float>(v);
-      for (int u = 0; u < target_.width(); ++u) {
+      for (int u = 0; u < width; ++u) {
         const double value = row[u];
         if (source_x[u] == kOutsideSource || !(value > 0) || !std::isfinite(value)) continue;
         Eigen::Vector3d d;
+        bool ray = false;
+        if (cached) {
+          const size_t i = size_t(v) * size_t(width) + size_t(u);
+          d = Eigen::Vector3d(rays_.ptr<float>(0)[i], rays_.ptr<float>(1)[i], rays_.ptr<float>(2)[i]);
+          ray = d.allFinite();
+        } else {
+          ray = target_.unproject(Eigen::Vector2d(u, v), &d);
+        }
         std::optional<Eigen::Vector3d> s;
-        if (target_.unproject(Eigen::Vector2d(u, v), &d)) s = source_point(d, change, prior);
+        if (ray) s = source_point(d.normalized(), change, prior);
         if (!s || (values == DepthValues::z && !(s->z() > 0))) {
           row[u] = std::numeric_limits<float>::quiet_NaN();  // no ray to re-express along
           continue;
