@@ -33,10 +33,19 @@ void expect_only_errors(const Read& read) {
   }
 }
 
-// The input as a file (for readers that take paths), one per process.
+// The input as a file (for readers that take paths), one per process, removed
+// when the process exits (a replay of the corpus must not leave files behind).
 inline std::filesystem::path as_file(const std::uint8_t* data, std::size_t size, const char* extension) {
-  static const std::filesystem::path path =
-      std::filesystem::temp_directory_path() / ("fishcam-fuzz-" + std::to_string(::getpid()) + extension);
+  struct ProcessFile {
+    std::filesystem::path path;
+    ~ProcessFile() {
+      std::error_code ignored;
+      std::filesystem::remove(path, ignored);
+    }
+  };
+  static const ProcessFile file{std::filesystem::temp_directory_path() /
+                                ("fishcam-fuzz-" + std::to_string(::getpid()) + extension)};
+  const std::filesystem::path& path = file.path;
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) std::abort();
   if (size && std::fwrite(data, 1, size, f) != size) std::abort();
