@@ -1,6 +1,12 @@
 // fishcam calibrate: intrinsics and board poses from chessboard corners.
+#include <fnmatch.h>
+
 #include <cmath>
 #include <cstdio>
+#include <numbers>
+#include <set>
+#include <sstream>
+#include <thread>
 
 #include "fishcam/corners.hpp"
 #include "cli_common.hpp"
@@ -8,14 +14,59 @@
 #include "fishcam/calibration.hpp"
 
 namespace fishcam::cli {
+namespace {
+
+// --images PATTERN[,PATTERN...]: the observations whose file name matches one of
+// the shell patterns (fnmatch); a pattern that matches nothing is an error (a
+// typo must not calibrate from fewer images than meant).
+std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, const std::string& list) {
+  std::vector<std::string> patterns;
+  std::stringstream stream(list);
+  for (std::string p; std::getline(stream, p, ',');) {
+    if (p.empty()) throw Error("--images: empty pattern in '" + list + "'");
+    patterns.push_back(p);
+  }
+  if (patterns.empty()) throw Error("--images: no pattern given");
+  std::set<std::string> unmatched(patterns.begin(), patterns.end());
+  std::vector<BoardObservation> kept;
+  for (auto& o : all) {
+    bool match = false;
+    for (const auto& p : patterns) {
+      if (fnmatch(p.c_str(), o.filename.c_str(), 0) == 0) match = true, unmatched.erase(p);
+    }
+    if (match) kept.push_back(std::move(o));
+  }
+  if (!unmatched.empty()) throw Error("--images: '" + *unmatched.begin() + "' matches no image of the corners file");
+  return kept;
+}
+
+nlohmann::json poses_json(const CalibrationResult& result) {
+  nlohmann::json poses = nlohmann::json::array();
+  for (size_t i = 0; i < result.poses.size(); ++i) {
+    const auto& q = result.poses[i].rotation;
+    const auto& t = result.poses[i].translation;
+    poses.push_back({{"image", result.used_images[i]},
+                     {"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}},
+                     {"translation", {t.x(), t.y(), t.z()}},
+                     {"rms_px", result.per_image_rms_px[i]}});
+  }
+  return poses;
+}
+
+constexpr const char* kPoseConvention =
+    "p_camera = R(quaternion) p_board + translation; board corner (i, j) at (i * spacing, j * spacing, 0), in board "
+    "order (rows of W corners)";
+
+}  // namespace
 
 void register_calibrate(CLI::App& app) {
   auto* cmd = app.add_subcommand("calibrate", "Calibrate a camera model from chessboard corners: joint Ceres solve "
                                               "of intrinsics and board poses, robust, with uncertainties");
   struct Options {
-    std::string corners, board, model;
+    std::string corners, board, model, images, poses, theta_limit;
     std::string imagersize;
     double spacing = 0;
+    int threads = int(std::max(1u, std::thread::hardware_concurrency()));
     CameraOutputOptions output;
   };
   auto o = std::make_shared<Options>();
@@ -25,17 +76,40 @@ void register_calibrate(CLI::App& app) {
   cmd->add_option("--imagersize", o->imagersize, "Image size W,H (or WxH)")->required();
   cmd->add_option("--model", o->model, "Model: " + fishcam::model_names_text())
       ->required();
+  cmd->add_option("--images", o->images,
+                  "Use only the images whose file name matches one of these shell patterns (comma-separated)");
+  cmd->add_option("--poses", o->poses, "Also write the board poses (JSON) to this file");
+  cmd->add_option("--threads", o->threads, "Threads for the independent solves (the result is the same for any count)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  add_theta_limit_option(cmd, &o->theta_limit);
   add_camera_output_options(cmd, &o->output);
   cmd->callback([o] {
-    check_outputs({{o->output.out}}, {o->corners}, o->output.force);
+    std::vector<OutputFile> outputs = {{o->output.out}};
+    if (!o->poses.empty()) outputs.push_back({o->poses});
+    check_outputs(outputs, {o->corners}, o->output.force);
     const BoardSpec board = parse_board(o->board, o->spacing);
     const ModelSpec spec = parse_model_spec(o->model);
     const CameraFormat format = o->output.resolved_format();
     const auto [width, height] = parse_image_size(o->imagersize, "--imagersize");
-    const auto observations = read_corners(o->corners, board);
-    const CalibrationResult result = calibrate(observations, board, width, height, spec);
-    write_camera(result.camera, o->output.out, format, o->output.force);
+    auto observations = read_corners(o->corners, board);
+    if (!o->images.empty()) observations = select_images(std::move(observations), o->images);
+    const CalibrationResult result = calibrate(observations, board, width, height, spec, {o->threads});
+    const CameraParameters camera = apply_theta_limit(result.camera, o->theta_limit);
+    // Everything is computed (and every output checked) before the first file is written.
+    const nlohmann::json poses = poses_json(result);
+    std::vector<std::pair<std::filesystem::path, std::string>> files = {{o->output.out, format_camera(camera, format)}};
+    if (!o->poses.empty()) {
+      files.emplace_back(o->poses, nlohmann::json({{"convention", kPoseConvention}, {"poses", poses}}).dump(2) + "\n");
+    }
+    write_files_atomically(files, o->output.force);
+    note_dropped_record(camera, format, o->output.out);
     for (const auto& warning : result.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
+    for (const auto& text : result.undetermined) {
+      std::fprintf(stderr, "fishcam: warning: not determined by the data: %s\n", text.c_str());
+    }
+    constexpr double kDeg = 180 / std::numbers::pi;
+    const CalibrationRecord& record = *result.camera.calibration;
     // rms_px: the root mean square of the corners' 2-D reprojection error (the
     // norm); mrcal and OpenCV print it per coordinate, which is rms_px / sqrt(2).
     nlohmann::json outliers = nlohmann::json::array();
@@ -45,13 +119,22 @@ void register_calibrate(CLI::App& app) {
     nlohmann::json j = {{"model", model_name(result.camera.model)},
                         {"rms_px", result.rms_px},
                         {"rms_per_coordinate_px", result.rms_px / std::sqrt(2.0)},
+                        {"noise_px", result.noise_px},
                         {"corners", result.observations},
                         {"images", result.used_images.size()},
                         {"outliers", outliers},
+                        {"undetermined", result.undetermined},
+                        {"observed_theta_max_deg", record.theta_max * kDeg},
+                        {"theta_limit_deg", camera.theta_limit ? nlohmann::json(*camera.theta_limit * kDeg) : nullptr},
+                        {"poses", poses},
+                        {"pose_convention", kPoseConvention},
                         {"warnings", result.warnings},
                         {"out", o->output.out}};
     for (size_t i = 0; i < result.parameters.size(); ++i) {
-      j["parameters"][result.parameter_names[i]] = {{"value", result.parameters[i]}, {"sigma", result.sigmas[i]}};
+      const double sigma = result.sigmas[i];
+      j["parameters"][result.parameter_names[i]] = {{"value", result.parameters[i]},
+                                                    {"sigma", std::isnan(sigma) ? nlohmann::json(nullptr) : nlohmann::json(sigma)},
+                                                    {"determined", !std::isnan(sigma)}};
     }
     for (size_t i = 0; i < result.used_images.size(); ++i) j["per_image_rms_px"][result.used_images[i]] = result.per_image_rms_px[i];
     if (o->output.json) {
@@ -63,9 +146,17 @@ void register_calibrate(CLI::App& app) {
                 std::string(model_name(result.camera.model)).c_str(), result.used_images.size(), result.observations,
                 result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(), o->output.out.c_str());
     for (size_t i = 0; i < result.parameters.size(); ++i) {
-      std::printf("  %-4s %16.10g +- %.3g\n", result.parameter_names[i].c_str(), result.parameters[i], result.sigmas[i]);
+      if (std::isnan(result.sigmas[i])) {
+        std::printf("  %-4s %16.10g    not determined by the data\n", result.parameter_names[i].c_str(),
+                    result.parameters[i]);
+      } else {
+        std::printf("  %-4s %16.10g +- %.3g\n", result.parameter_names[i].c_str(), result.parameters[i],
+                    result.sigmas[i]);
+      }
     }
-    std::printf("  per-image rms (px):");
+    std::printf("  observed angles of incidence up to %.1f deg", record.theta_max * kDeg);
+    if (camera.theta_limit) std::printf(" (valid domain capped at %.1f deg)", *camera.theta_limit * kDeg);
+    std::printf("\n  per-image rms (px):");
     for (size_t i = 0; i < result.used_images.size(); ++i) {
       std::printf("%s %s %.3f", i % 4 ? "," : "\n   ", result.used_images[i].c_str(), result.per_image_rms_px[i]);
     }

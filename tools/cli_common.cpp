@@ -2,7 +2,10 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <numbers>
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -236,6 +239,45 @@ void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options) {
       ->check(CLI::IsMember(format_names()));
   cmd->add_flag("--json", options->json, "Print the report as one JSON object");
   cmd->add_flag("--force", options->force, "Replace an existing output file");
+}
+
+void note_dropped_record(const CameraParameters& camera, CameraFormat format, const std::string& out) {
+  if (camera.calibration && !camera_format_holds_calibration_record(format)) {
+    std::fprintf(stderr,
+                 "fishcam: note: the %s format cannot hold the calibration record (observed angles%s); %s was written "
+                 "without it (fishcam JSON keeps it)\n",
+                 std::string(to_string(format)).c_str(),
+                 camera.calibration->covariance.size() ? ", projection uncertainty" : "", out.c_str());
+  }
+}
+
+void write_camera_file(const CameraParameters& camera, const std::string& out, CameraFormat format, bool force) {
+  write_camera(camera, out, format, force);
+  note_dropped_record(camera, format, out);
+}
+
+void add_theta_limit_option(CLI::App* cmd, std::string* text) {
+  cmd->add_option("--theta-limit", *text,
+                  "data[+DEG]: cap the valid domain at the largest angle of incidence the calibration observed "
+                  "(plus DEG degrees)");
+}
+
+CameraParameters apply_theta_limit(const CameraParameters& camera, const std::string& text) {
+  if (text.empty()) return camera;
+  double margin_deg = 0;
+  if (text != "data") {
+    const std::string prefix = "data+";
+    if (text.rfind(prefix, 0) != 0) {
+      throw Error("--theta-limit: expected data or data+DEG (degrees beyond the observed angles), got '" + text + "'");
+    }
+    const std::string number = text.substr(prefix.size());
+    const char* end = number.c_str();
+    margin_deg = number.empty() ? std::nan("") : std::strtod(number.c_str(), const_cast<char**>(&end));
+    if (*end != '\0' || !std::isfinite(margin_deg) || margin_deg < 0) {
+      throw Error("--theta-limit: the margin after data+ must be a number of degrees >= 0, got '" + number + "'");
+    }
+  }
+  return limited_to_observed(camera, margin_deg * std::numbers::pi / 180);
 }
 
 void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what) {

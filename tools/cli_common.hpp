@@ -90,6 +90,17 @@ struct CameraOutputOptions {
 };
 void add_camera_output_options(CLI::App* cmd, CameraOutputOptions* options);
 
+// Writes a camera (atomically; refuses to replace a file unless force) and says on
+// stderr when the format leaves out the camera's calibration record.
+void write_camera_file(const CameraParameters& camera, const std::string& out, CameraFormat format, bool force);
+// The note alone, for commands that write the camera with other files.
+void note_dropped_record(const CameraParameters& camera, CameraFormat format, const std::string& out);
+
+// --theta-limit data[+DEG] (calibrate, convert): the camera capped at its observed
+// angles plus DEG (fishcam::limited_to_observed); text empty: the camera as it is.
+void add_theta_limit_option(CLI::App* cmd, std::string* text);
+CameraParameters apply_theta_limit(const CameraParameters& camera, const std::string& text);
+
 // A fitted camera and its error report as text (as JSON: fishcam::fit_report_json).
 void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what);
 

@@ -19,7 +19,7 @@ void register_convert(CLI::App& app) {
   auto* cmd = app.add_subcommand("convert", "Fit another projection model to a camera and report the pixel error "
                                             "it costs");
   struct Options {
-    std::string source, to, method = "lsq";
+    std::string source, to, method = "lsq", theta_limit;
     double max_angle = 0;
     bool fit_center = false, fit_aspect = false;
     CameraOutputOptions output;
@@ -35,6 +35,7 @@ void register_convert(CLI::App& app) {
   auto* fit_aspect = cmd->add_flag("--fit-aspect", o->fit_aspect, "Also fit a_y (the aspect)");
   cmd->add_option("--max-angle", o->max_angle, "Fit and report only rays up to this angle of incidence (degrees)")
       ->check(CLI::Range(0.1, 180.0));
+  add_theta_limit_option(cmd, &o->theta_limit);
   add_camera_output_options(cmd, &o->output);
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([o, fit_center, fit_aspect, inputs] {
@@ -43,13 +44,16 @@ void register_convert(CLI::App& app) {
     const Camera source = inputs->read(o->source);
     const ModelSpec spec = parse_model_spec(o->to);
     const CameraFormat format = o->output.resolved_format();
-    const std::optional<double> max_theta = o->max_angle > 0 ? std::optional(o->max_angle / kDeg) : std::nullopt;
+    std::optional<double> max_theta = o->max_angle > 0 ? std::optional(o->max_angle / kDeg) : std::nullopt;
+    // --theta-limit data: the fit, its report and the new camera stop at the observed angles.
+    const std::optional<double> data_limit = apply_theta_limit(source.parameters(), o->theta_limit).theta_limit;
+    if (!o->theta_limit.empty() && data_limit) max_theta = std::min(max_theta.value_or(*data_limit), *data_limit);
     if (o->method == "paper" && (fit_center->count() || fit_aspect->count())) {
       throw Error("--fit-center/--fit-aspect apply to --method lsq only");
     }
     const Conversion conversion = convert_camera(source, spec, o->method, max_theta, {o->fit_center, o->fit_aspect});
     const double fit_ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    const CameraParameters& fitted = conversion.camera;
+    const CameraParameters fitted = apply_theta_limit(conversion.camera, o->theta_limit);
     const ErrorReport& report = conversion.report;
     const double widest = conversion.widest_theta;
     std::string warning;
@@ -61,7 +65,7 @@ void register_convert(CLI::App& app) {
                     widest * kDeg, report.rms_below_90_px, report.max_below_90_px);
       warning = buffer;
     }
-    write_camera(fitted, o->output.out, format, o->output.force);
+    write_camera_file(fitted, o->output.out, format, o->output.force);
     if (!warning.empty()) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
     if (o->output.json) {
       nlohmann::json j = nlohmann::json::parse(fit_report_json(fitted, report));

@@ -60,7 +60,7 @@ void register_fit(CLI::App& app) {
     }
     const CameraParameters fitted = fit_camera(samples, spec, start, {o->fit_center, o->fit_aspect});
     const ErrorReport report = reprojection_errors(Camera(fitted), samples);
-    write_camera(fitted, o->output.out, format, o->output.force);
+    write_camera_file(fitted, o->output.out, format, o->output.force);
     if (o->output.json) {
       nlohmann::json j = nlohmann::json::parse(fit_report_json(fitted, report));
       j["out"] = o->output.out;

@@ -6,6 +6,7 @@
 #include <ceres/rotation.h>
 
 #include "ceres_support.hpp"
+#include "fishcam/parallel.hpp"
 
 #include <Eigen/SVD>
 #include <cmath>
@@ -95,6 +96,21 @@ struct CornerResidual {
   }
 };
 
+// A camera-frame point's pixel, for the Jacobians of projection uncertainty.
+template <template <typename> class Model>
+struct PointProjection {
+  int params;
+  double ax;
+
+  template <typename T>
+  bool operator()(T const* const* p, T* pixel) const {
+    const Model<T> model = detail::model_from_block<Model>(p[0], params);
+    const T mapping[4] = {p[1][0], p[1][1], T(ax), p[2][0]};
+    project_radial(model, mapping, p[3], pixel);
+    return true;
+  }
+};
+
 std::array<double, 6> pose_block(const BoardPose& pose) {
   const Eigen::AngleAxisd aa(pose.rotation);
   const Eigen::Vector3d r = aa.axis() * aa.angle();
@@ -117,16 +133,11 @@ struct Solve {
   std::vector<std::array<double, 6>> poses;
 };
 
-// The joint (or, with intrinsics_fixed, pose-only) solve over all boards; each
-// board's points and corners pair up. With sigmas: the intrinsics' 1-sigma from
-// the covariance, scaled by the residual variance.
+// One residual block per corner, in board order then corner order (the order
+// fixes the Jacobian's rows, and so every sum over them).
 template <template <typename> class Model>
-ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vector3d>>& points,
-                             const std::vector<std::vector<Eigen::Vector2d>>& corners, bool intrinsics_fixed,
-                             ceres::LossFunction* loss, std::vector<double>* sigmas) {
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
+void add_corner_residuals(ceres::Problem* problem, Solve* s, const std::vector<std::vector<Eigen::Vector3d>>& points,
+                          const std::vector<std::vector<Eigen::Vector2d>>& corners, ceres::LossFunction* loss) {
   const int n = static_cast<int>(s->model.size());
   for (size_t b = 0; b < corners.size(); ++b) {
     for (size_t i = 0; i < corners[b].size(); ++i) {
@@ -137,10 +148,23 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
       cost->AddParameterBlock(1);
       cost->AddParameterBlock(6);
       cost->SetNumResiduals(2);
-      problem.AddResidualBlock(cost, loss, s->model.data(), s->center.data(), &s->ay, s->poses[b].data());
+      problem->AddResidualBlock(cost, loss, s->model.data(), s->center.data(), &s->ay, s->poses[b].data());
     }
   }
-  detail::bound_model_block<Model>(&problem, s->model.data(), n);
+}
+
+// The joint (or, with intrinsics_fixed, pose-only) solve over all boards; each
+// board's points and corners pair up. One thread: Ceres sums costs and gradients
+// per thread, so more threads change the last bits of the result.
+template <template <typename> class Model>
+ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vector3d>>& points,
+                             const std::vector<std::vector<Eigen::Vector2d>>& corners, bool intrinsics_fixed,
+                             ceres::LossFunction* loss) {
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  add_corner_residuals<Model>(&problem, s, points, corners, loss);
+  detail::bound_model_block<Model>(&problem, s->model.data(), int(s->model.size()));
   if (intrinsics_fixed) {
     problem.SetParameterBlockConstant(s->model.data());
     problem.SetParameterBlockConstant(s->center.data());
@@ -149,28 +173,107 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
   ceres::Solver::Summary summary;
   ceres::Solve(detail::solver_options(ceres::SPARSE_SCHUR), &problem, &summary);
   if (!summary.IsSolutionUsable()) throw Error("calibrate: the solve failed: " + summary.message);
-  if (sigmas) {
-    ceres::Covariance::Options covariance_options;
-    covariance_options.algorithm_type = ceres::DENSE_SVD;
-    covariance_options.null_space_rank = -1;
-    covariance_options.num_threads = 2;
-    ceres::Covariance covariance(covariance_options);
-    const std::vector<std::pair<const double*, const double*>> blocks = {
-        {s->model.data(), s->model.data()}, {s->center.data(), s->center.data()}, {&s->ay, &s->ay}};
-    sigmas->assign(size_t(n) + 3, std::numeric_limits<double>::quiet_NaN());
-    if (covariance.Compute(blocks, &problem)) {
-      const double dof = double(summary.num_residuals - summary.num_effective_parameters);
-      const double variance = dof > 0 ? 2 * summary.final_cost / dof : std::numeric_limits<double>::quiet_NaN();
-      std::vector<double> m(size_t(n) * n), c(4), a(1);
-      covariance.GetCovarianceBlock(s->model.data(), s->model.data(), m.data());
-      covariance.GetCovarianceBlock(s->center.data(), s->center.data(), c.data());
-      covariance.GetCovarianceBlock(&s->ay, &s->ay, a.data());
-      for (int i = 0; i < n; ++i) (*sigmas)[i] = std::sqrt(m[size_t(i) * n + i] * variance);
-      (*sigmas)[n] = std::sqrt(c[0] * variance), (*sigmas)[n + 1] = std::sqrt(c[3] * variance);
-      (*sigmas)[n + 2] = std::sqrt(a[0] * variance);
+  return summary;
+}
+
+// The covariance of every parameter of a solve -- (model, cx, cy, a_y, then each
+// board's angle-axis and translation) -- as sigma^2 (J^T J)^+ with sigma^2 the
+// residual variance per coordinate. Directions the data do not determine (scaled
+// eigenvalues of J^T J below kUndetermined of the largest) are left out of the
+// inverse and returned, so that no sigma pretends to know them.
+struct ParameterCovariance {
+  Eigen::MatrixXd covariance;
+  std::vector<Eigen::VectorXd> undetermined;  // unit directions in parameters scaled to unit curvature
+  double variance = 0;                        // residual variance per coordinate, px^2
+};
+
+constexpr double kUndetermined = 1e-12;
+
+template <template <typename> class Model>
+ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<Eigen::Vector3d>>& points,
+                                         const std::vector<std::vector<Eigen::Vector2d>>& corners) {
+  ceres::Problem problem;
+  add_corner_residuals<Model>(&problem, &s, points, corners, nullptr);
+  ceres::Problem::EvaluateOptions options;
+  options.parameter_blocks = {s.model.data(), s.center.data(), &s.ay};
+  for (auto& pose : s.poses) options.parameter_blocks.push_back(pose.data());
+  options.apply_loss_function = false;
+  options.num_threads = 1;
+  double cost = 0;
+  ceres::CRSMatrix crs;
+  problem.Evaluate(options, &cost, nullptr, nullptr, &crs);
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int k = crs.rows[size_t(r)]; k < crs.rows[size_t(r) + 1]; ++k) jacobian(r, crs.cols[size_t(k)]) = crs.values[size_t(k)];
+  }
+  const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
+  const Eigen::Index m = normal.rows();
+  Eigen::VectorXd scale(m);  // to unit curvature: the threshold then has no units
+  for (Eigen::Index i = 0; i < m; ++i) scale[i] = normal(i, i) > 0 ? 1 / std::sqrt(normal(i, i)) : 0.0;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scale.asDiagonal() * normal * scale.asDiagonal());
+  const double largest = eigen.eigenvalues().maxCoeff();
+  ParameterCovariance out;
+  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(m, m);
+  int rank = 0;
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const double lambda = eigen.eigenvalues()[k];
+    const Eigen::VectorXd v = eigen.eigenvectors().col(k);
+    if (lambda > kUndetermined * largest) {
+      inverse += v * v.transpose() / lambda;
+      ++rank;
+    } else {
+      out.undetermined.push_back(v);
     }
   }
-  return summary;
+  for (Eigen::Index i = 0; i < m; ++i) {  // a parameter no residual depends on
+    if (scale[i] == 0) {
+      Eigen::VectorXd v = Eigen::VectorXd::Zero(m);
+      v[i] = 1;
+      out.undetermined.push_back(v);
+    }
+  }
+  const double dof = double(crs.num_rows - rank);
+  out.variance = dof > 0 ? 2 * cost / dof : std::numeric_limits<double>::quiet_NaN();
+  out.covariance = out.variance * scale.asDiagonal() * inverse * scale.asDiagonal();
+  return out;
+}
+
+// The left Jacobian of SO(3) at angle-axis r: R(r + dr) = exp([J dr]x) R(r) to first order.
+Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& r) {
+  const double angle = r.norm();
+  Eigen::Matrix3d k;
+  k << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+  if (angle < 1e-8) return Eigen::Matrix3d::Identity() + 0.5 * k;
+  return Eigen::Matrix3d::Identity() + (1 - std::cos(angle)) / (angle * angle) * k +
+         (angle - std::sin(angle)) / (angle * angle * angle) * k * k;
+}
+
+Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d k;
+  k << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return k;
+}
+
+// What projection uncertainty needs of the full covariance (mrcal's definition):
+// a point fixed relative to the boards moves, in the camera frame, by the mean of
+// the boards' motions. Board b's pose perturbed by (dr, dt) moves a camera-frame
+// point p to p + w x p + t' with w = J_l(r_b) dr and t' = dt + t_b x w; the record
+// keeps the intrinsics and the mean (w, t') over the boards.
+Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s) {
+  const Eigen::Index intrinsics = Eigen::Index(s.model.size()) + 3;
+  const Eigen::Index boards = Eigen::Index(s.poses.size());
+  Eigen::MatrixXd map = Eigen::MatrixXd::Zero(intrinsics + 6, intrinsics + 6 * boards);
+  map.topLeftCorner(intrinsics, intrinsics).setIdentity();
+  for (Eigen::Index b = 0; b < boards; ++b) {
+    const auto& pose = s.poses[size_t(b)];
+    const Eigen::Matrix3d jl = left_jacobian({pose[0], pose[1], pose[2]});
+    const Eigen::Index col = intrinsics + 6 * b;
+    map.block<3, 3>(intrinsics, col) = jl / double(boards);
+    map.block<3, 3>(intrinsics + 3, col) = cross_matrix({pose[3], pose[4], pose[5]}) * jl / double(boards);
+    map.block<3, 3>(intrinsics + 3, col + 3) = Eigen::Matrix3d::Identity() / double(boards);
+  }
+  Eigen::MatrixXd c = map * full.covariance * map.transpose();
+  return (c + c.transpose()) / 2;
 }
 
 // How far corners, read as a cols x rows grid in board order, are from a grid: the
@@ -275,9 +378,10 @@ struct Observations {
   std::vector<std::vector<Eigen::Vector3d>> all_points;  // points, once per board
   std::vector<std::vector<Eigen::Vector2d>> corners;
   int width, height;
+  int threads;  // for independent solves (starts); each solve runs on one thread
 
-  Observations(const std::vector<const BoardObservation*>& b, const BoardSpec& board, int w, int h)
-      : boards(b), points(board_points(board)), all_points(b.size(), points), width(w), height(h) {
+  Observations(const std::vector<const BoardObservation*>& b, const BoardSpec& board, int w, int h, int t)
+      : boards(b), points(board_points(board)), all_points(b.size(), points), width(w), height(h), threads(t) {
     for (const auto* o : boards) corners.push_back(o->corners);
   }
   CameraParameters camera(const Solve& s, const RadialModel& model) const {
@@ -292,21 +396,22 @@ struct Observations {
 // reprojects best wins, and its board poses are refined with the intrinsics fixed.
 Solve initial_solve(const Observations& o, const BoardSpec& board) {
   const Eigen::Vector2d center0((o.width - 1) / 2.0, (o.height - 1) / 2.0);
-  double best_cost = std::numeric_limits<double>::infinity();
-  Solve best;
-  for (int step = 0; step < 12; ++step) {
+  constexpr int kSteps = 12;
+  std::vector<Solve> scan(kSteps);
+  std::vector<double> costs(kSteps, std::numeric_limits<double>::infinity());
+  for_each_index(kSteps, o.threads, [&](int step) {
     const double f = o.width * 0.1 * std::pow(1.25, step);
     Solve s{{f}, center0, 1.0, {}};
     const Camera guess(o.camera(s, Equidistant<double>(f)));
-    bool ok = true;
-    for (size_t b = 0; b < o.boards.size() && ok; ++b) {
+    for (size_t b = 0; b < o.boards.size(); ++b) {
       std::vector<Eigen::Vector3d> rays(o.corners[b].size());
-      for (size_t i = 0; i < rays.size(); ++i) ok = ok && guess.unproject(o.corners[b][i], &rays[i]);
-      const auto pose = ok ? pose_from_rays(rays, o.points, board) : std::nullopt;
-      ok = ok && pose.has_value();
-      if (ok) s.poses.push_back(pose_block(*pose));
+      for (size_t i = 0; i < rays.size(); ++i) {
+        if (!guess.unproject(o.corners[b][i], &rays[i])) return;
+      }
+      const auto pose = pose_from_rays(rays, o.points, board);
+      if (!pose) return;
+      s.poses.push_back(pose_block(*pose));
     }
-    if (!ok) continue;
     // Score: the robust (truncated at 20 px) reprojection error of these poses.
     double cost = 0;
     for (size_t b = 0; b < o.boards.size(); ++b) {
@@ -317,19 +422,22 @@ Solve initial_solve(const Observations& o, const BoardSpec& board) {
         cost += std::min(e, 20.0);
       }
     }
-    if (cost < best_cost) best_cost = cost, best = s;
-  }
-  if (!std::isfinite(best_cost)) throw Error("calibrate: could not initialise any board pose (are the corners valid?)");
+    scan[size_t(step)] = std::move(s), costs[size_t(step)] = cost;
+  });
+  const auto best = std::min_element(costs.begin(), costs.end());  // the first of equal costs
+  if (!std::isfinite(*best)) throw Error("calibrate: could not initialise any board pose (are the corners valid?)");
+  Solve start = std::move(scan[size_t(best - costs.begin())]);
   ceres::CauchyLoss loss(2.0);
-  solve<Equidistant>(&best, o.all_points, o.corners, /*intrinsics_fixed=*/true, &loss, nullptr);
-  return best;
+  solve<Equidistant>(&start, o.all_points, o.corners, /*intrinsics_fixed=*/true, &loss);
+  return start;
 }
 
 // Step 2, the robust joint solve of the target model from the start. Models
 // non-linear in their shape parameters: a polynomial is calibrated first (linear in
 // its parameters, so robust from the equidistant start); the model's own starts
 // scaled by its k1, and that polynomial converted to the model (the multi-start fit
-// of fishcam convert), each solved; the lowest cost wins.
+// of fishcam convert), each solved (on o.threads threads); the lowest cost wins,
+// the first start among equal costs.
 template <template <typename> class Model>
 Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
   std::vector<std::vector<double>> starts = {Model<double>::initial_params(start.model[0], spec.order)};
@@ -337,7 +445,7 @@ Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
     Solve poly = start;
     poly.model = Polynomial<double>::initial_params(start.model[0], 4);
     ceres::CauchyLoss loss(1.0);
-    solve<Polynomial>(&poly, o.all_points, o.corners, false, &loss, nullptr);
+    solve<Polynomial>(&poly, o.all_points, o.corners, false, &loss);
     try {
       const CameraParameters p = o.camera(poly, Polynomial<double>(poly.model));
       const Camera polynomial(p);
@@ -348,16 +456,14 @@ Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
       starts = Model<double>::fit_starts(start.model[0]);
     }
   }
-  Solve s;
-  double lowest = std::numeric_limits<double>::infinity();
-  for (const auto& params : starts) {
-    Solve candidate = start;
-    candidate.model = params;
+  std::vector<Solve> candidates(starts.size(), start);
+  std::vector<double> costs(starts.size());
+  for_each_index(int(starts.size()), o.threads, [&](int k) {
+    candidates[size_t(k)].model = starts[size_t(k)];
     ceres::CauchyLoss loss(1.0);
-    const double cost = solve<Model>(&candidate, o.all_points, o.corners, false, &loss, nullptr).final_cost;
-    if (cost < lowest) lowest = cost, s = std::move(candidate);
-  }
-  return s;
+    costs[size_t(k)] = solve<Model>(&candidates[size_t(k)], o.all_points, o.corners, false, &loss).final_cost;
+  });
+  return std::move(candidates[size_t(std::min_element(costs.begin(), costs.end()) - costs.begin())]);
 }
 
 // Step 3, outliers: corners beyond 5 robust sigmas of the robust solve (median
@@ -386,6 +492,28 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
   return outliers;
 }
 
+// "f, xi and alpha trade against each other", with a hint where a model is
+// degenerate (the unified family at xi ~ 0: xi then acts as a combination of f and
+// alpha).
+std::string undetermined_text(const std::vector<std::string>& names, bool poses, const std::string& model,
+                              const std::vector<double>& parameters) {
+  std::string text;
+  for (size_t i = 0; i < names.size(); ++i) {
+    text += (i == 0 ? "" : i + 1 == names.size() ? (poses ? ", " : " and ") : ", ") + names[i];
+  }
+  if (poses) text += names.empty() ? "the board poses" : " and the board poses";
+  text += names.size() + (poses ? 1 : 0) > 1 ? " trade against each other: the data determine "
+                                                "only a combination of them"
+                                              : " has no effect on the data";
+  const auto names_all = model_param_names(model, int(parameters.size()) - 3);
+  const auto xi = std::find(names_all.begin(), names_all.end(), "xi");
+  if (xi != names_all.end() && std::abs(parameters[size_t(xi - names_all.begin())]) < 0.05) {
+    text += " (xi ~ 0, where the " + model + " model's xi acts as a combination of its other parameters; a model "
+            "without xi, such as kannala-brandt, determines this lens)";
+  }
+  return text;
+}
+
 // Step 4, the final plain least squares without the outliers, its covariance, and
 // the report: per-image and overall RMS (2-D norm), parameters and their sigmas.
 template <template <typename> class Model>
@@ -402,20 +530,26 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
       kept_corners[b].push_back(o.corners[b][i]);
     }
   }
-  std::vector<double> sigmas;
-  result->observations = solve<Model>(&s, kept_points, kept_corners, false, nullptr, &sigmas).num_residuals / 2;
+  result->observations = solve<Model>(&s, kept_points, kept_corners, false, nullptr).num_residuals / 2;
   result->camera = o.camera(s, make_model(spec.name, s.model));
   const Camera final_camera(result->camera);
   double sum2 = 0;
+  CalibrationRecord record;
+  record.theta_max_by_azimuth.fill(std::numeric_limits<double>::quiet_NaN());
   for (size_t b = 0; b < o.boards.size(); ++b) {
     const BoardPose pose = pose_of(s.poses[b]);
     result->poses.push_back(pose);
     result->used_images.push_back(o.boards[b]->filename);
     double board_sum2 = 0;
     for (size_t i = 0; i < kept_points[b].size(); ++i) {
+      const Eigen::Vector3d point = to_camera(pose, kept_points[b][i]);
       Eigen::Vector2d q;
-      final_camera.project(to_camera(pose, kept_points[b][i]), &q);
+      final_camera.project(point, &q);
       board_sum2 += (q - kept_corners[b][i]).squaredNorm();
+      const double theta = std::atan2(point.head<2>().norm(), point.z());
+      double& sector = record.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(std::atan2(point.y(), point.x())))];
+      if (!(sector >= theta)) sector = theta;  // NaN: the sector's first corner
+      record.theta_max = std::max(record.theta_max, theta);
     }
     sum2 += board_sum2;
     result->per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max<size_t>(1, kept_points[b].size()))));
@@ -425,13 +559,31 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
   result->parameter_names.insert(result->parameter_names.end(), {"cx", "cy", "a_y"});
   result->parameters = s.model;
   result->parameters.insert(result->parameters.end(), {s.center.x(), s.center.y(), s.ay});
-  result->sigmas = sigmas;
+
+  const ParameterCovariance full = parameter_covariance<Model>(s, kept_points, kept_corners);
+  const size_t intrinsics = result->parameters.size();
+  result->noise_px = std::sqrt(full.variance);
+  result->sigmas.assign(intrinsics, 0);
+  for (size_t i = 0; i < intrinsics; ++i) result->sigmas[i] = std::sqrt(full.covariance(Eigen::Index(i), Eigen::Index(i)));
+  for (const Eigen::VectorXd& direction : full.undetermined) {
+    std::vector<std::string> names;
+    for (size_t i = 0; i < intrinsics; ++i) {
+      if (std::abs(direction[Eigen::Index(i)]) >= 0.1) {
+        names.push_back(result->parameter_names[i]);
+        result->sigmas[i] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+    const bool poses = direction.tail(direction.size() - Eigen::Index(intrinsics)).norm() >= 0.1;
+    result->undetermined.push_back(undetermined_text(names, poses, spec.name, result->parameters));
+  }
+  record.covariance = projection_covariance_of(full, s);
+  result->camera.calibration = record;
 }
 
 template <template <typename> class Model>
 CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boards, const BoardSpec& board, int width,
-                                 int height, const ModelSpec& spec) {
-  const Observations o(boards, board, width, height);
+                                 int height, const ModelSpec& spec, const CalibrationOptions& options) {
+  const Observations o(boards, board, width, height, options.threads);
   const Solve robust = robust_solve<Model>(o, initial_solve(o, board), spec);
   CalibrationResult result;
   result.outliers = find_outliers(o, Camera(o.camera(robust, make_model(spec.name, robust.model))), robust);
@@ -442,8 +594,9 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
 }  // namespace
 
 CalibrationResult calibrate(const std::vector<BoardObservation>& observations, const BoardSpec& board, int width,
-                            int height, const ModelSpec& spec) {
+                            int height, const ModelSpec& spec, const CalibrationOptions& options) {
   check_board(board);
+  if (options.threads < 1) throw Error("calibrate: threads must be >= 1, got " + std::to_string(options.threads));
   std::vector<const BoardObservation*> boards;
   for (const auto& o : observations) {
     if (o.corners.empty()) continue;
@@ -461,7 +614,7 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
   }
   check_board_order(boards, board);
   CalibrationResult result = with_model_class(spec.name, [&]<template <typename> class Model>() {
-    return calibrate_with<Model>(boards, board, width, height, spec);
+    return calibrate_with<Model>(boards, board, width, height, spec, options);
   });
   check_solution(result, width, height, spec.name);
   check_distinct_poses(result);
@@ -481,6 +634,55 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
                               "% of the image (8x6 grid): the model is extrapolated elsewhere; add boards near the rim");
   }
   return result;
+}
+
+Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2d& pixel,
+                                      std::optional<double> distance) {
+  const auto& record = camera.parameters().calibration;
+  if (!record || record->covariance.size() == 0) {
+    throw Error("projection uncertainty: the camera carries no calibration covariance (fishcam calibrate writes one "
+                "into fishcam JSON)");
+  }
+  if (distance && !(*distance > 0 && std::isfinite(*distance))) {
+    throw Error("projection uncertainty: the distance must be finite and > 0");
+  }
+  Eigen::Vector3d ray;
+  if (!camera.unproject(pixel, &ray)) return Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d point = distance ? Eigen::Vector3d(*distance * ray) : ray;
+  std::vector<double> model = model_params(camera.model());
+  Eigen::Vector2d center = camera.principal_point();
+  double ay = camera.pixel_scale().y();
+  const int n = int(model.size());
+  Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> d_model(2, n);
+  Eigen::Matrix<double, 2, 2, Eigen::RowMajor> d_center;
+  Eigen::Matrix<double, 2, 1> d_ay;
+  Eigen::Matrix<double, 2, 3, Eigen::RowMajor> d_point;
+  const std::string name(model_name(camera.model()));
+  with_model_class(name, [&]<template <typename> class Model>() {
+    ceres::DynamicAutoDiffCostFunction<PointProjection<Model>, 8> f(
+        new PointProjection<Model>{n, camera.pixel_scale().x()});
+    f.AddParameterBlock(n);
+    f.AddParameterBlock(2);
+    f.AddParameterBlock(1);
+    f.AddParameterBlock(3);
+    f.SetNumResiduals(2);
+    const double* blocks[4] = {model.data(), center.data(), &ay, point.data()};
+    double* jacobians[4] = {d_model.data(), d_center.data(), d_ay.data(), d_point.data()};
+    double q[2];
+    f.Evaluate(blocks, q, jacobians);
+  });
+  // d pixel / d (model, cx, cy, a_y, w, t): a board-fixed point moves to p + w x p + t.
+  Eigen::MatrixXd jacobian(2, n + 9);
+  jacobian << d_model, d_center, d_ay, -d_point * cross_matrix(point), (distance ? d_point : Eigen::Matrix<double, 2, 3, Eigen::RowMajor>::Zero());
+  return jacobian * record->covariance * jacobian.transpose();
+}
+
+double projection_uncertainty(const Camera& camera, const Eigen::Vector2d& pixel, std::optional<double> distance) {
+  const Eigen::Matrix2d c = projection_covariance(camera, pixel, distance);
+  if (!c.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+  // The larger eigenvalue of a symmetric 2x2.
+  const double mean = (c(0, 0) + c(1, 1)) / 2, half = (c(0, 0) - c(1, 1)) / 2;
+  return std::sqrt(std::max(0.0, mean + std::sqrt(half * half + c(0, 1) * c(0, 1))));
 }
 
 }  // namespace fishcam

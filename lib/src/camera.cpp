@@ -157,7 +157,62 @@ CameraParameters resized(const CameraParameters& camera, int width, int height) 
   out.width = width, out.height = height;
   out.principal_point = (camera.principal_point.array() + 0.5) * s.array() - 0.5;
   out.pixel_scale = camera.pixel_scale.cwiseProduct(s);
+  if (out.calibration && out.calibration->covariance.size() > 0) {
+    // d cx' = s_x d cx, d cy' = s_y d cy, d a_y' = s_y d a_y; nothing else changes.
+    Eigen::MatrixXd& c = out.calibration->covariance;
+    const Eigen::Index n = c.rows() - 9;
+    const double scale[3] = {s.x(), s.y(), s.y()};
+    for (int k = 0; k < 3; ++k) c.row(n + k) *= scale[k], c.col(n + k) *= scale[k];
+  }
   return out;
+}
+
+namespace {
+
+void check_calibration_record(const CalibrationRecord& r, size_t model_params) {
+  const auto angle = [](double a) { return a >= 0 && a <= std::numbers::pi; };
+  if (!angle(r.theta_max)) fail("calibration.theta_max: must be in [0, 180] degrees, got ", r.theta_max * kDeg);
+  for (double a : r.theta_max_by_azimuth) {
+    if (!std::isnan(a) && !(angle(a) && a <= r.theta_max)) {
+      fail("calibration.theta_max_by_azimuth: every sector's angle must be in [0, theta_max] (or unobserved)");
+    }
+  }
+  const Eigen::MatrixXd& c = r.covariance;
+  if (c.size() == 0) return;
+  const Eigen::Index n = Eigen::Index(model_params) + 9;
+  if (c.rows() != n || c.cols() != n) {
+    fail("calibration.covariance: expected ", n, "x", n, " (model parameters, cx, cy, a_y, board motion), got ",
+         c.rows(), "x", c.cols());
+  }
+  if (!c.allFinite()) fail("calibration.covariance: must be finite");
+  const double scale = c.cwiseAbs().maxCoeff();
+  if ((c - c.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail("calibration.covariance: must be symmetric");
+  if (c.diagonal().minCoeff() < 0) fail("calibration.covariance: variances (the diagonal) must be >= 0");
+}
+
+}  // namespace
+
+CameraParameters limited_to_observed(CameraParameters camera, double margin) {
+  if (!camera.calibration) {
+    fail("theta limit 'data': the camera carries no calibration record (fishcam calibrate writes one into fishcam "
+         "JSON)");
+  }
+  if (!(margin >= 0 && margin < std::numbers::pi)) fail("theta limit 'data+DEG': the margin must be in [0, 180) degrees");
+  const double limit = std::min(camera.calibration->theta_max + margin, std::numbers::pi);
+  camera.theta_limit = camera.theta_limit ? std::min(*camera.theta_limit, limit) : limit;
+  return camera;
+}
+
+int CalibrationRecord::sector_of(double azimuth) {
+  const double turn = 2 * std::numbers::pi;
+  const int k = int(std::floor((azimuth + std::numbers::pi) / turn * kAzimuthSectors));
+  return std::clamp(k, 0, kAzimuthSectors - 1);
+}
+
+bool CalibrationRecord::observed(const Eigen::Vector3d& ray) const {
+  const double theta = std::atan2(ray.head<2>().norm(), ray.z());
+  const double limit = theta_max_by_azimuth[size_t(sector_of(std::atan2(ray.y(), ray.x())))];
+  return theta <= limit;  // false for NaN: no corner in that sector
 }
 
 Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_(std::move(parameters)) {
@@ -183,6 +238,7 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
     if (std::abs(norm - 1) > 1e-6) fail("pose: rotation quaternion must have unit norm, got ", norm);
     pose.rotation.normalize();
   }
+  if (params_.calibration) check_calibration_record(*params_.calibration, model_params(params_.model).size());
   domain_ = std::visit([&](const auto& m) { return compute_domain(m, params_.theta_limit); }, params_.model);
   table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
 }

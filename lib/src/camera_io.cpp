@@ -272,6 +272,10 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
   return j.dump();
 }
 
+bool camera_format_holds_calibration_record(CameraFormat format) {
+  return format_spec(format).holds_calibration_record;
+}
+
 std::vector<std::string> camera_format_models(CameraFormat format) {
   const auto& listed = format_spec(format).models;
   std::vector<std::string> out;
@@ -289,7 +293,9 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
                 " format cannot store a user field-of-view limit (fishcam JSON can)");
   }
   if (!spec.holds(model_name(camera.model))) detail::cannot_hold(camera, format);
-  std::string content = spec.write(spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera));
+  CameraParameters written = spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera);
+  if (!spec.holds_calibration_record) written.calibration.reset();
+  std::string content = spec.write(written);
   // Nor a file our own reader refuses (a value that overflows in the format's
   // parameterisation, say): read it back before anyone can write it.
   try {

@@ -14,6 +14,13 @@
 namespace fishcam {
 namespace {
 
+// A converted camera keeps its source's calibration record's observed angles (the
+// camera frame is the same) but not the covariance, which belongs to the source's
+// parameters.
+void drop_covariance(CameraParameters* p) {
+  if (p->calibration) p->calibration->covariance.resize(0, 0);
+}
+
 constexpr double kDeg = 180 / std::numbers::pi;
 
 double theta_of(const Eigen::Vector3d& ray) { return std::atan2(ray.head<2>().norm(), ray.z()); }
@@ -209,6 +216,7 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
   fitted.pixel_scale.y() = ay;
   fitted.model = make_model(spec.name, params);
   fitted.theta_limit.reset();
+  drop_covariance(&fitted);
   try {
     Camera check(fitted);
   } catch (const Error& e) {
@@ -226,6 +234,7 @@ CameraParameters paper_camera(const Camera& source, const ModelSpec& spec) {
   const double theta = source.field_of_view_deg().horizontal / 2 / kDeg;
   CameraParameters p = source.parameters();
   p.theta_limit.reset();
+  drop_covariance(&p);
   p.model = with_model_class(spec.name, [&]<template <typename> class Model>() -> RadialModel {
     if constexpr (has_paper_form<Model>) {
       return Model<double>::from_paper(rho, theta);

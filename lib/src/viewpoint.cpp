@@ -116,12 +116,16 @@ Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change
   return moved;
 }
 
+// The virtual camera sees other rays than the calibrated one did: the calibration
+// record (observed angles, covariance) does not carry over.
 CameraParameters augmented_camera(CameraParameters camera, const ViewpointChange& change) {
   camera.pose = moved_camera(camera.pose.value_or(Pose{}), change);
+  camera.calibration.reset();
   return camera;
 }
 
 Camera augmented_camera(const Camera& camera, const ViewpointChange& change) {
+  if (camera.parameters().calibration) return Camera(augmented_camera(camera.parameters(), change));
   return camera.with_pose(augmented_camera(camera.parameters(), change).pose);
 }
 

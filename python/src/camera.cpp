@@ -48,6 +48,7 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
 // table, milliseconds), given the pickled pose (microseconds).
 py::object camera_pickle_state(const Camera& c) {
   const CameraParameters& p = c.parameters();
+  if (p.calibration) return py::str(format_camera(p, CameraFormat::fishcam));  // the record travels too
   py::object pose = py::none();
   if (p.pose) {
     const auto& q = p.pose->rotation;

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,14 +28,43 @@ struct CalibrationResult {
   };
   std::vector<Outlier> outliers;           // corners the robust loss discounted (> 5 sigma)
   std::vector<std::string> parameter_names;  // model parameters, then cx, cy, a_y
-  std::vector<double> parameters, sigmas;    // values and 1-sigma uncertainties (covariance of the solve)
+  // Values and 1-sigma uncertainties (the solve's covariance); sigma NaN for a
+  // parameter the data do not determine (see undetermined).
+  std::vector<double> parameters, sigmas;
+  // One text per combination of parameters the data do not determine (a direction
+  // of the solve's covariance with no curvature), naming the parameters.
+  std::vector<std::string> undetermined;
+  double noise_px = 0;                       // residual standard deviation per coordinate
   std::vector<std::string> warnings;         // e.g. boards that leave most of the image uncovered
+};
+
+struct CalibrationOptions {
+  // Threads for the independent solves (the model's starts, the initial focal-length
+  // scan). Each solve runs on one thread and results are combined in a fixed order,
+  // so the result is the same, bit for bit, for every count.
+  int threads = 1;
 };
 
 // Joint solve. Initialisation works for lenses past 180 deg: an equidistant model
 // scanned over focal lengths, each board placed from its corners' rays, the best
 // start refined. Throws Error on too little or degenerate data.
+// The result's camera carries a CalibrationRecord: the observed incidence angles
+// and the covariance projection uncertainty is computed from.
 CalibrationResult calibrate(const std::vector<BoardObservation>& observations, const BoardSpec& board, int width,
-                            int height, const ModelSpec& model);
+                            int height, const ModelSpec& model, const CalibrationOptions& options = {});
+
+// Projection uncertainty as mrcal defines it: the spread of the projection of a
+// point fixed relative to the calibration boards, seen at `pixel`, through
+// calibrations perturbed by the corner noise -- propagated (to first order) from
+// the covariance of the intrinsics and the boards' mean motion in the camera's
+// CalibrationRecord. The point lies at `distance` (board units) along the pixel's
+// ray, or at infinity (nullopt: only rotations move it). Returns the 2x2 covariance
+// (px^2); NaN where the pixel does not unproject. Throws Error when the camera
+// carries no covariance (only fishcam calibrate writes one).
+Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2d& pixel,
+                                      std::optional<double> distance);
+// Its worst-direction 1-sigma (px): the square root of the larger eigenvalue, as
+// mrcal's projection_uncertainty(what = "worstdirection-stdev").
+double projection_uncertainty(const Camera& camera, const Eigen::Vector2d& pixel, std::optional<double> distance);
 
 }  // namespace fishcam

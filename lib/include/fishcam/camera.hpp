@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
@@ -52,6 +53,28 @@ struct Pose {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 };
 
+// What a calibration learnt from its data, kept with the camera it produced:
+// fishcam JSON holds it, other formats cannot (writing to them drops it, and the
+// tools say so). fishcam/calibration.hpp computes it and the projection
+// uncertainty from it.
+struct CalibrationRecord {
+  static constexpr int kAzimuthSectors = 24;  // 15 degrees each
+  // Incidence angle theta (radians) of the corners the solve used: the largest, and
+  // the largest per azimuth sector -- azimuth atan2(y, x) in the camera frame,
+  // sector k covering [-180 + 15 k, -165 + 15 k) degrees; NaN where no corner fell.
+  double theta_max = 0;
+  std::array<double, kAzimuthSectors> theta_max_by_azimuth{};
+  // Covariance of (model parameters, cx, cy, a_y, then the mean motion of the board
+  // frames relative to the camera: rotation vector (3, radians) and translation (3,
+  // board units)), scaled by the solve's residual variance; empty when not known.
+  Eigen::MatrixXd covariance;
+
+  static int sector_of(double azimuth);
+  // Whether a camera-frame direction is inside the observed range: theta at most
+  // the largest observed in its azimuth sector.
+  bool observed(const Eigen::Vector3d& ray) const;
+};
+
 struct CameraParameters {
   int width = 0;
   int height = 0;
@@ -60,12 +83,20 @@ struct CameraParameters {
   RadialModel model;
   std::optional<double> theta_limit;  // radians; a user cap on the valid domain
   std::optional<Pose> pose;
+  std::optional<CalibrationRecord> calibration;
 };
 
 // The same lens for the image resized to width x height: with pixel centres at
 // integer coordinates, c' = (c + 0.5) s - 0.5 and a' = a s per axis (s = new / old
-// size), exactly; model, user limit and pose unchanged. Throws Error for sizes < 1.
+// size), exactly; model, user limit and pose unchanged, the calibration record's
+// covariance re-expressed for the new cx, cy, a_y. Throws Error for sizes < 1.
 CameraParameters resized(const CameraParameters& camera, int width, int height);
+
+// The camera with its valid domain capped (theta_limit) at the largest incidence
+// angle its calibration observed plus margin (radians, >= 0), so unprojection and
+// augmentation stop where the calibration stops knowing. Throws Error when the
+// camera carries no calibration record.
+CameraParameters limited_to_observed(CameraParameters camera, double margin);
 
 // Which theta(rho) a batch unprojection uses.
 enum class InversePath {

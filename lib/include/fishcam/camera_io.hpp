@@ -72,8 +72,13 @@ Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& o
 // height, cx, cy, pixel_scale, theta_max_deg, rho_max_px, fov_deg, pose, ...).
 std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> format = std::nullopt);
 
+// Whether the format keeps a camera's calibration record (fishcam JSON only).
+bool camera_format_holds_calibration_record(CameraFormat format);
+
 // The file content of a camera in a format; throws Error when the format cannot
-// hold the camera (e.g. a polynomial in mrcal's format) rather than dropping anything.
+// hold the camera (e.g. a polynomial in mrcal's format) rather than dropping
+// anything -- except the calibration record, which only fishcam JSON holds and the
+// others leave out (check camera_format_holds_calibration_record and tell the user).
 std::string format_camera(const CameraParameters& camera, CameraFormat format);
 // Writes atomically (temporary file + rename). Refuses to replace an existing file
 // unless overwrite is true.

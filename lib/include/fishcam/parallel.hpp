@@ -17,4 +17,10 @@ void set_parallel_for(ParallelFor run);
 
 void parallel_for(int count, const std::function<void(int begin, int end)>& body);
 
+// body(i) for every i in [0, count) on at most `threads` threads of its own, for
+// work whose result must not depend on the thread count (each i's result is its
+// own; the caller combines them in index order). The exception of the lowest
+// index that threw is rethrown once all have run.
+void for_each_index(int count, int threads, const std::function<void(int i)>& body);
+
 }  // namespace fishcam

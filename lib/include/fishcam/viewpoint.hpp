@@ -46,9 +46,11 @@ void check_change(const ViewpointChange& change);
 Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change);
 // The camera of an augmented image: the same intrinsics, its pose moved by the
 // change (a camera without a pose gets one relative to its own frame before the
-// change), so that 3-D tasks stay consistent with the image.
+// change), so that 3-D tasks stay consistent with the image. A calibration record
+// is dropped: the virtual camera's pixels see other rays than the calibration did.
 CameraParameters augmented_camera(CameraParameters camera, const ViewpointChange& change);
-Camera augmented_camera(const Camera& camera, const ViewpointChange& change);  // cheap: no tables rebuilt
+// Cheap (no tables rebuilt) unless the camera carries a calibration record.
+Camera augmented_camera(const Camera& camera, const ViewpointChange& change);
 
 // Uniform, independent ranges per degree of freedom: rotation in
 // [-max_rotation_deg, +max_rotation_deg] about each axis, translation in

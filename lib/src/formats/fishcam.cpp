@@ -14,6 +14,51 @@ int score(const Content& c) {
   return j && j->is_object() && j->contains("fishcam_camera") ? 100 : 0;
 }
 
+// "calibration": {"theta_max_deg", "theta_max_by_azimuth_deg" (one per 15-degree
+// sector, null where no corner fell), "covariance" (rows; optional)}.
+CalibrationRecord read_calibration(const DocFields& f) {
+  CalibrationRecord r;
+  r.theta_max = f.number("theta_max_deg") / kDeg;
+  const DocNode& sectors = f.get("theta_max_by_azimuth_deg");
+  if (sectors.kind != DocNode::Kind::sequence || sectors.items.size() != size_t(CalibrationRecord::kAzimuthSectors)) {
+    f.fail("theta_max_by_azimuth_deg", "expected a list of " + std::to_string(CalibrationRecord::kAzimuthSectors) +
+                                           " angles (null where unobserved)");
+  }
+  for (size_t k = 0; k < sectors.items.size(); ++k) {
+    const DocNode& item = sectors.items[k];
+    r.theta_max_by_azimuth[k] =
+        item.kind == DocNode::Kind::null
+            ? std::numeric_limits<double>::quiet_NaN()
+            : DocFields::parse_number(item.scalar, [&](std::string_view problem) {
+                f.fail("theta_max_by_azimuth_deg", "item " + std::to_string(k) + ": " + std::string(problem));
+              }) / kDeg;
+  }
+  if (f.has("covariance")) {
+    const size_t n = f.size("covariance");
+    if (n == 0 || n > 80) f.fail("covariance", "expected a square matrix as a list of rows");
+    r.covariance.resize(Eigen::Index(n), Eigen::Index(n));
+    for (size_t i = 0; i < n; ++i) {
+      const auto row = f.numbers("covariance", i, n, n);
+      for (size_t j = 0; j < n; ++j) r.covariance(Eigen::Index(i), Eigen::Index(j)) = row[j];
+    }
+  }
+  return r;
+}
+
+nlohmann::json calibration_json(const CalibrationRecord& r) {
+  nlohmann::json sectors = nlohmann::json::array();
+  for (double a : r.theta_max_by_azimuth) sectors.push_back(std::isnan(a) ? nlohmann::json(nullptr) : nlohmann::json(a * kDeg));
+  nlohmann::json j = {{"theta_max_deg", r.theta_max * kDeg}, {"theta_max_by_azimuth_deg", sectors}};
+  if (r.covariance.size() > 0) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (Eigen::Index i = 0; i < r.covariance.rows(); ++i) {
+      rows.push_back(std::vector<double>(r.covariance.row(i).begin(), r.covariance.row(i).end()));
+    }
+    j["covariance"] = rows;
+  }
+  return j;
+}
+
 std::vector<NamedCamera> read(const Content& c) {
   const DocFields f(c.json_document(), c.source());
   const double version = f.number("fishcam_camera");
@@ -34,6 +79,7 @@ std::vector<NamedCamera> read(const Content& c) {
   }
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
   if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
+  if (f.has("calibration")) p.calibration = read_calibration(f.object("calibration"));
   return {{"0", p, {}}};
 }
 
@@ -47,12 +93,13 @@ std::string write(const CameraParameters& p) {
                          {"parameters", model_params(p.model)}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
+  if (p.calibration) root["calibration"] = calibration_json(*p.calibration);
   return root.dump(2) + "\n";
 }
 
 }  // namespace
 
 extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
-                                       {}, score, read, write, true, true};
+                                       {}, score, read, write, true, true, true};
 
 }  // namespace fishcam::detail

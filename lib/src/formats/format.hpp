@@ -77,6 +77,9 @@ struct FormatSpec {
   // Stores a_x as it is (fishcam JSON); every other writer is given the camera
   // rescaled to a_x = 1 (f = fx, a_y = fy / fx) by format_camera.
   bool keeps_pixel_scale = false;
+  // Holds a calibration record (observed angles, covariance); format_camera drops
+  // the record for the others (callers say so: camera_format_holds_calibration_record).
+  bool holds_calibration_record = false;
 
   bool holds(std::string_view model) const;
 };
