@@ -13,6 +13,7 @@ import numpy.typing as _npt
 
 from ._fishcam import (  # noqa: F401  (re-exported API)
     AngleBin,
+    Calibration,
     Camera,
     Comparison,
     Conversion,
@@ -25,14 +26,16 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
     ValidDomain,
     FieldOfView,
     __version__,
+    calibrate,
     derive_seed,
     get_num_threads,
     random_change_in,
+    read_corners,
 )
 from . import _fishcam
 
 __all__ = [
-    "AngleBin", "Camera", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
+    "AngleBin", "Calibration", "Camera", "calibrate", "read_corners", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
     "random_change", "set_num_threads", "presets", "change_to_dict", "__version__",
 ]
 

@@ -4,7 +4,7 @@ fishcam's C++ library (use the fishcam package, not this module)
 from __future__ import annotations
 import numpy
 import typing
-__all__: list[str] = ['AffineChange', 'AngleBin', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'sampling_names', 'set_num_threads']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'sampling_names', 'set_num_threads']
 class Error(ValueError):
     pass
 class ValidDomain:
@@ -90,6 +90,14 @@ class Camera:
         """
         What `fishcam info --json` prints (str); the same values typed: model, parameters, principal_point, pixel_scale, domain, field_of_view_deg, pose.
         """
+    def limited_to_observed(self, margin_deg: float = 0.0) -> Camera:
+        """
+        The camera with its valid domain capped at the observed angles plus margin_deg (`--theta-limit data+DEG`).
+        """
+    def observed(self, rays: typing.Any) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]:
+        """
+        Whether camera-frame rays (N, 3) lie within the angles its calibration observed (per 15-degree azimuth sector): (N,) bool.
+        """
     def parameters_key(self, with_pose: bool = True) -> bytes:
         """
         bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a warp depends on); cheap, for caches and hashing
@@ -97,6 +105,10 @@ class Camera:
     def project(self, points: typing.Any) -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         Projects points (N, 3) of the camera frame: (pixels (N, 2) float64, ok (N,) bool); NaN where the point is outside the valid field of view.
+        """
+    def projection_uncertainty(self, pixels: typing.Any, distance: float | None = None) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]:
+        """
+        Projection uncertainty (mrcal's definition, worst-direction 1-sigma, px) at pixels (N, 2): how far the projection of a point fixed relative to the calibration boards, seen there, moves through calibrations perturbed by the corner noise. distance: along the ray in board units (metres); None: at infinity. NaN where a pixel has no ray. Needs a camera written by calibration (fishcam JSON).
         """
     def resized(self, width: int, height: int) -> Camera:
         """
@@ -116,7 +128,7 @@ class Camera:
         """
     def write(self, path: str, format: str | None = None, overwrite: bool = False) -> None:
         """
-        Writes the camera in `format` (default: from the extension); refuses an existing file unless overwrite=True, and a format that cannot hold the model.
+        Writes the camera in `format` (default: from the extension); refuses an existing file unless overwrite=True, and a format that cannot hold the model. Only fishcam JSON keeps a calibration record (a UserWarning says when it is left out).
         """
     @property
     def domain(self) -> ValidDomain:
@@ -137,6 +149,11 @@ class Camera:
     def model(self) -> str:
         """
         The model's name (docs/models.md), e.g. 'polynomial', 'kannala-brandt'.
+        """
+    @property
+    def observed_theta_max_deg(self) -> float | None:
+        """
+        The largest angle of incidence its calibration observed (degrees), or None for a camera without a calibration record.
         """
     @property
     def parameters(self) -> list[float]:
@@ -531,6 +548,77 @@ class ConfusionMatrix:
     @property
     def scored_pixels(self) -> int:
         ...
+class Calibration:
+    """
+    A chessboard calibration (what `fishcam calibrate --json` reports), typed.
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def camera(self) -> Camera:
+        """
+        The calibrated camera, with its calibration record (observed angles, covariance).
+        """
+    @property
+    def corners(self) -> int:
+        """
+        Corners used (outliers excluded).
+        """
+    @property
+    def images(self) -> list[str]:
+        """
+        File names of the boards used, in file order.
+        """
+    @property
+    def noise_px(self) -> float:
+        """
+        Residual standard deviation per coordinate (px), degrees of freedom accounted for.
+        """
+    @property
+    def outliers(self) -> list[tuple[str, int, float]]:
+        """
+        Corners dropped as outliers: (image, corner index, error px).
+        """
+    @property
+    def parameters(self) -> dict[str, typing.Any]:
+        """
+        Model parameters, cx, cy, a_y by name (dict of float).
+        """
+    @property
+    def per_image_rms_px(self) -> list[float]:
+        """
+        RMS per image (px), as `images`.
+        """
+    @property
+    def poses(self) -> list[tuple[numpy.ndarray[tuple[typing.Literal[3], typing.Literal[3]], numpy.dtype[numpy.float64]], numpy.ndarray[tuple[typing.Literal[3], typing.Literal[1]], numpy.dtype[numpy.float64]]]]:
+        """
+        Board poses, as `images`: (R, t) with p_camera = R p_board + t.
+        """
+    @property
+    def rms_per_coordinate_px(self) -> float:
+        """
+        The same per coordinate (what mrcal and OpenCV print): rms_px / sqrt(2).
+        """
+    @property
+    def rms_px(self) -> float:
+        """
+        RMS of the corners' 2-D reprojection error (px).
+        """
+    @property
+    def sigmas(self) -> dict[str, typing.Any]:
+        """
+        1-sigma uncertainty by name (dict); None for a parameter the data do not determine.
+        """
+    @property
+    def undetermined(self) -> list[str]:
+        """
+        The combinations of parameters the data do not determine (list of str).
+        """
+    @property
+    def warnings(self) -> list[str]:
+        """
+        What the user should know (list of str).
+        """
 def _input_address(arg0: typing.Any, arg1: str) -> int:
     ...
 def affine_forward(points: typing.Any, change: AffineChange, width: int, height: int) -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
@@ -543,6 +631,10 @@ def affine_warp(*, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | N
     ...
 def affine_warp_depth(depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: AffineChange, fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
     ...
+def calibrate(observations: list[typing.Any], board: tuple[int, int], spacing: float, image_size: tuple[int, int], model: str, threads: int = 1) -> Calibration:
+    """
+    Calibrates `model` from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot determine a camera (a transposed board, one pose, a principal point off the image, ...).
+    """
 def check_depth_prior(arg0: str) -> None:
     """
     Raises fishcam.Error naming the choices unless name is a depth prior.
@@ -583,6 +675,10 @@ def random_change(preset: str, seed: int) -> ViewpointChange:
     ...
 def random_change_in(max_rotation_deg: float, max_translation: float, seed: int) -> ViewpointChange:
     ...
+def read_corners(path: str, board: tuple[int, int]) -> list[tuple[str, numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]]]:
+    """
+    A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners: a list of (filename, corners (N, 2) float64), N = 0 for an image without a board.
+    """
 def sampling_names() -> list[str]:
     """
     The sampling modes' names.

@@ -155,10 +155,17 @@ void bind_camera(py::module_& m) {
               throw Error(path + ": cannot tell the format from the extension; pass format=");
             }
             write_camera(camera.parameters(), path, resolved, overwrite);
+            if (camera.parameters().calibration && !camera_format_holds_calibration_record(resolved)) {
+              py::module_::import("warnings")
+                  .attr("warn")("the " + std::string(to_string(resolved)) +
+                                " format cannot hold the calibration record (observed angles, projection "
+                                "uncertainty); " + path + " was written without it (fishcam JSON keeps it)");
+            }
           },
           py::arg("path"), py::arg("format") = py::none(), py::arg("overwrite") = false,
           "Writes the camera in `format` (default: from the extension); refuses an existing file unless "
-          "overwrite=True, and a format that cannot hold the model.")
+          "overwrite=True, and a format that cannot hold the model. Only fishcam JSON keeps a calibration record "
+          "(a UserWarning says when it is left out).")
       .def_property_readonly("width", &Camera::width, "Image width in pixels (int).")
       .def_property_readonly("height", &Camera::height, "Image height in pixels (int).")
       .def_property_readonly(
@@ -242,6 +249,8 @@ void bind_camera(py::module_& m) {
         return "<fishcam.Camera " + std::string(model_name(c.model())) + " " + std::to_string(c.width()) + "x" +
                std::to_string(c.height()) + ">";
       });
+  auto camera_class = py::reinterpret_borrow<py::class_<Camera>>(m.attr("Camera"));
+  bind_calibration_record(camera_class);
 
   // fishcam convert's result, typed: the fitted camera and its error report.
   py::class_<ErrorReport::Bin>(m, "AngleBin", "A fit's error over the rays of one 10-degree band of theta.")

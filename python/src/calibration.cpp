@@ -1,0 +1,180 @@
+// Chessboard calibration (fishcam.calibrate, fishcam.read_corners) and what a
+// calibrated camera knows about its data (Camera.projection_uncertainty, ...).
+#include "bindings.hpp"
+#include "fishcam/calibration.hpp"
+#include "fishcam/corners.hpp"
+
+#include <numbers>
+
+namespace fishcam::python {
+namespace {
+
+constexpr double kDeg = 180 / std::numbers::pi;
+
+BoardSpec board_of(const std::pair<int, int>& board, double spacing) {
+  BoardSpec spec{board.first, board.second, spacing};
+  check_board(spec);
+  return spec;
+}
+
+std::vector<BoardObservation> observations_of(const py::list& items) {
+  std::vector<BoardObservation> out;
+  for (const py::handle& item : items) {
+    if (!py::isinstance<py::tuple>(item) || py::len(item) != 2) {
+      throw Error("observations: expected (filename, corners (N, 2)) pairs");
+    }
+    BoardObservation o;
+    o.filename = py::str(item[py::int_(0)]);
+    const PointArray corners = rows_of(item[py::int_(1)], 2, "observations: corners");
+    const auto* rows = reinterpret_cast<const Eigen::Vector2d*>(corners.data());
+    o.corners.assign(rows, rows + corners.shape(0));
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
+}  // namespace
+
+void bind_calibration(py::module_& m) {
+  py::class_<CalibrationResult>(m, "Calibration",
+                                "A chessboard calibration (what `fishcam calibrate --json` reports), typed.")
+      .def_property_readonly(
+          "camera", [](const CalibrationResult& r) { return Camera(r.camera); },
+          "The calibrated camera, with its calibration record (observed angles, covariance).")
+      .def_readonly("rms_px", &CalibrationResult::rms_px, "RMS of the corners' 2-D reprojection error (px).")
+      .def_property_readonly(
+          "rms_per_coordinate_px", [](const CalibrationResult& r) { return r.rms_px / std::sqrt(2.0); },
+          "The same per coordinate (what mrcal and OpenCV print): rms_px / sqrt(2).")
+      .def_readonly("noise_px", &CalibrationResult::noise_px,
+                    "Residual standard deviation per coordinate (px), degrees of freedom accounted for.")
+      .def_readonly("corners", &CalibrationResult::observations, "Corners used (outliers excluded).")
+      .def_readonly("images", &CalibrationResult::used_images, "File names of the boards used, in file order.")
+      .def_readonly("per_image_rms_px", &CalibrationResult::per_image_rms_px, "RMS per image (px), as `images`.")
+      .def_property_readonly(
+          "parameters",
+          [](const CalibrationResult& r) {
+            py::dict d;
+            for (size_t i = 0; i < r.parameters.size(); ++i) d[py::str(r.parameter_names[i])] = r.parameters[i];
+            return d;
+          },
+          "Model parameters, cx, cy, a_y by name (dict of float).")
+      .def_property_readonly(
+          "sigmas",
+          [](const CalibrationResult& r) {
+            py::dict d;
+            for (size_t i = 0; i < r.sigmas.size(); ++i) {
+              d[py::str(r.parameter_names[i])] = std::isnan(r.sigmas[i]) ? py::object(py::none()) : py::float_(r.sigmas[i]);
+            }
+            return d;
+          },
+          "1-sigma uncertainty by name (dict); None for a parameter the data do not determine.")
+      .def_readonly("undetermined", &CalibrationResult::undetermined,
+                    "The combinations of parameters the data do not determine (list of str).")
+      .def_property_readonly(
+          "outliers",
+          [](const CalibrationResult& r) {
+            std::vector<std::tuple<std::string, int, double>> out;
+            for (const auto& o : r.outliers) out.emplace_back(o.filename, o.corner, o.error_px);
+            return out;
+          },
+          "Corners dropped as outliers: (image, corner index, error px).")
+      .def_property_readonly(
+          "poses",
+          [](const CalibrationResult& r) {
+            std::vector<std::pair<Eigen::Matrix3d, Eigen::Vector3d>> out;
+            for (const auto& p : r.poses) out.emplace_back(p.rotation.toRotationMatrix(), p.translation);
+            return out;
+          },
+          "Board poses, as `images`: (R, t) with p_camera = R p_board + t.")
+      .def_readonly("warnings", &CalibrationResult::warnings, "What the user should know (list of str).")
+      .def("__repr__", [](const CalibrationResult& r) {
+        char buffer[160];
+        std::snprintf(buffer, sizeof buffer, "<fishcam.Calibration %s, %zu images, rms %.4f px>",
+                      std::string(model_name(r.camera.model)).c_str(), r.used_images.size(), r.rms_px);
+        return std::string(buffer);
+      });
+
+  m.def(
+      "read_corners",
+      [](const std::string& path, std::pair<int, int> board) {
+        const auto observations = read_corners(path, board_of(board, 1.0));
+        std::vector<std::pair<std::string, py::array_t<double>>> out;
+        for (const auto& o : observations) {
+          py::array_t<double> corners({py::ssize_t(o.corners.size()), py::ssize_t(2)});
+          std::memcpy(corners.mutable_data(), o.corners.data(), o.corners.size() * sizeof(Eigen::Vector2d));
+          out.emplace_back(o.filename, corners);
+        }
+        return out;
+      },
+      py::arg("path"), py::arg("board"),
+      "A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners: a list of "
+      "(filename, corners (N, 2) float64), N = 0 for an image without a board.");
+  m.def(
+      "calibrate",
+      [](const py::list& observations, std::pair<int, int> board, double spacing, std::pair<int, int> image_size,
+         const std::string& model, int threads) {
+        const BoardSpec spec = board_of(board, spacing);
+        const std::vector<BoardObservation> boards = observations_of(observations);
+        const ModelSpec model_spec = parse_model_spec(model);
+        py::gil_scoped_release release;
+        return calibrate(boards, spec, image_size.first, image_size.second, model_spec, {threads});
+      },
+      py::arg("observations"), py::arg("board"), py::arg("spacing"), py::arg("image_size"), py::arg("model"),
+      py::arg("threads") = 1,
+      "Calibrates `model` from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; "
+      "board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for "
+      "the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot "
+      "determine a camera (a transposed board, one pose, a principal point off the image, ...).");
+}
+
+void bind_calibration_record(py::class_<Camera>& camera) {
+  camera
+      .def_property_readonly(
+          "observed_theta_max_deg",
+          [](const Camera& c) -> std::optional<double> {
+            const auto& r = c.parameters().calibration;
+            return r ? std::optional(r->theta_max * kDeg) : std::nullopt;
+          },
+          "The largest angle of incidence its calibration observed (degrees), or None for a camera without a "
+          "calibration record.")
+      .def(
+          "observed",
+          [](const Camera& c, const py::handle& rays) {
+            const auto& r = c.parameters().calibration;
+            if (!r) throw Error("observed: the camera carries no calibration record");
+            const PointArray rows = rows_of(rays, 3, "rays");
+            py::array_t<bool> out{rows.shape(0)};
+            const auto* in = reinterpret_cast<const Eigen::Vector3d*>(rows.data());
+            for (py::ssize_t i = 0; i < rows.shape(0); ++i) out.mutable_data()[i] = r->observed(in[i]);
+            return out;
+          },
+          py::arg("rays"),
+          "Whether camera-frame rays (N, 3) lie within the angles its calibration observed (per 15-degree azimuth "
+          "sector): (N,) bool.")
+      .def(
+          "limited_to_observed",
+          [](const Camera& c, double margin_deg) { return Camera(limited_to_observed(c.parameters(), margin_deg / kDeg)); },
+          py::arg("margin_deg") = 0.0,
+          "The camera with its valid domain capped at the observed angles plus margin_deg (`--theta-limit "
+          "data+DEG`).")
+      .def(
+          "projection_uncertainty",
+          [](const Camera& c, const py::handle& pixels, std::optional<double> distance) {
+            const PointArray rows = rows_of(pixels, 2, "pixels");
+            const size_t n = size_t(rows.shape(0));
+            py::array_t<double> out{py::ssize_t(n)};
+            const auto* in = reinterpret_cast<const Eigen::Vector2d*>(rows.data());
+            double* values = out.mutable_data();
+            if (n > 0) values[0] = projection_uncertainty(c, in[0], distance);  // errors with the GIL held
+            py::gil_scoped_release release;
+            for (size_t i = 1; i < n; ++i) values[i] = projection_uncertainty(c, in[i], distance);
+            return out;
+          },
+          py::arg("pixels"), py::arg("distance") = py::none(),
+          "Projection uncertainty (mrcal's definition, worst-direction 1-sigma, px) at pixels (N, 2): how far the "
+          "projection of a point fixed relative to the calibration boards, seen there, moves through "
+          "calibrations perturbed by the corner noise. distance: along the ray in board units (metres); None: "
+          "at infinity. NaN where a pixel has no ray. Needs a camera written by calibration (fishcam JSON).");
+}
+
+}  // namespace fishcam::python
