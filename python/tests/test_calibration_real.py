@@ -1,0 +1,112 @@
+"""Calibration on real fisheye chessboard photos (../shared/data/calibration: 29
+images of one camera, 960x600, 9x6 inner corners), against OpenCV's
+cv2.fisheye.calibrate on the same corners, and the projection uncertainty against
+the difference between calibrations from the odd and the even images. Skipped
+where ../shared is absent."""
+
+import os
+import re
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fishcam
+
+PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "calibration"
+BOARD = (9, 6)
+SPACING = 0.03  # not given with the photos; intrinsics do not depend on it
+SIZE = (960, 600)
+
+pytestmark = pytest.mark.skipif(not (PHOTOS / "right1.jpg").exists(), reason="no ../shared/data/calibration")
+
+
+@pytest.fixture(scope="module")
+def observations(tmp_path_factory: pytest.TempPathFactory) -> list:
+    binary = os.environ.get("FISHCAM_BINARY")
+    if not binary:
+        pytest.skip("FISHCAM_BINARY (the fishcam program) is not set")
+    out = tmp_path_factory.mktemp("real_corners") / "corners.vnl"
+    images = sorted(PHOTOS.glob("right*.jpg"), key=lambda p: int(re.findall(r"\d+", p.name)[0]))
+    subprocess.run([binary, "detect-corners", *map(str, images), "--board", "9x6", "--out", str(out)], check=True,
+                   capture_output=True)
+    found = fishcam.read_corners(str(out), BOARD)
+    assert len(found) == 29 and all(len(c) == 54 for _, c in found)
+    return found
+
+
+def data_pixels(camera: fishcam.Camera, step: int = 8) -> np.ndarray:
+    """Pixels (every `step`) whose rays lie within the calibration's observed angles."""
+    u, v = np.meshgrid(np.arange(0, camera.width, step, dtype=float), np.arange(0, camera.height, step, dtype=float))
+    pixels = np.stack([u.ravel(), v.ravel()], axis=1)
+    rays, ok = camera.unproject(pixels)
+    inside = ok.copy()
+    inside[ok] = camera.observed(rays[ok])
+    return pixels[inside]
+
+
+def test_kannala_brandt_agrees_with_cv2_fisheye_calibrate(observations: list) -> None:
+    cv2 = pytest.importorskip("cv2")
+    ours = fishcam.calibrate(observations, BOARD, SPACING, SIZE, "kannala-brandt", threads=2)
+    assert ours.outliers == [] and ours.undetermined == []
+    board = np.zeros((54, 3))
+    board[:, 0] = np.tile(np.arange(9), 6) * SPACING
+    board[:, 1] = np.repeat(np.arange(6), 9) * SPACING
+    # OpenCV's own initialisation fails on these boards (InitExtrinsics asserts): start it
+    # from the usual guess, f = W / 4 at the image centre.
+    guess = np.array([[240.0, 0, 479.5], [0, 240.0, 299.5], [0, 0, 1]])
+    flags = (cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW |
+             cv2.fisheye.CALIB_USE_INTRINSIC_GUESS)
+    _, k, d, _, _ = cv2.fisheye.calibrate([board.reshape(-1, 1, 3)] * len(observations),
+                                          [c.reshape(-1, 1, 2) for _, c in observations], SIZE, guess, np.zeros(4),
+                                          flags=flags,
+                                          criteria=(cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-15))
+    camera = ours.camera
+    pixels = data_pixels(camera)
+    assert len(pixels) > 1500
+    rays, ok = camera.unproject(pixels)
+    assert ok.all()
+    theirs, _ = cv2.fisheye.projectPoints(rays.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), k, d)
+    error = np.linalg.norm(theirs.reshape(-1, 2) - pixels, axis=1)
+    assert error.max() <= 0.01, f"fishcam vs cv2.fisheye.calibrate over the data region: max {error.max():.3g} px"
+    # The parameters too: f = fx, a_y = fy / fx, the same k1..k4.
+    p = ours.parameters
+    assert p["f"] == pytest.approx(k[0, 0], rel=1e-6)
+    assert p["a_y"] == pytest.approx(k[1, 1] / k[0, 0], rel=1e-6)
+    assert [p["k1"], p["k2"], p["k3"], p["k4"]] == pytest.approx(d.ravel(), rel=1e-4, abs=1e-7)
+
+
+def test_projection_uncertainty_predicts_the_odd_even_difference(observations: list) -> None:
+    number = {name: int(re.findall(r"\d+", name)[0]) for name, _ in observations}
+    odd = [o for o in observations if number[o[0]] % 2 == 1]
+    even = [o for o in observations if number[o[0]] % 2 == 0]
+    a = fishcam.calibrate(odd, BOARD, SPACING, SIZE, "kannala-brandt").camera
+    b = fishcam.calibrate(even, BOARD, SPACING, SIZE, "kannala-brandt").camera
+    full = fishcam.calibrate(observations, BOARD, SPACING, SIZE, "kannala-brandt").camera
+    pixels = data_pixels(full)
+    rays, ok = a.unproject(pixels)
+    projected, seen = b.project(rays)
+    assert (ok & seen).all()
+    difference = np.linalg.norm(projected - pixels, axis=1)
+    predicted = np.sqrt(a.projection_uncertainty(pixels) ** 2 + b.projection_uncertainty(pixels) ** 2)
+    ratio = np.sqrt(np.mean(difference ** 2)) / np.sqrt(np.mean(predicted ** 2))
+    # A 2-D difference of two independent calibrations is sqrt(trace) of their summed
+    # covariance: between 1 and sqrt(2) times the worst-direction sigma. Real corners also
+    # carry what no Gaussian noise model holds (a measured 1.6).
+    assert 0.7 <= ratio <= 2.5, f"odd/even difference / predicted = {ratio:.2f}"
+    # Beyond the observed angles the uncertainty grows: the model is extrapolated there.
+    centre = full.projection_uncertainty(np.array([full.principal_point]))[0]
+    assert full.projection_uncertainty(np.array([[480.0, 5.0]]))[0] > 2 * centre
+
+
+def test_theta_limit_data_stops_unprojection_where_the_data_stop(observations: list) -> None:
+    camera = fishcam.calibrate(observations, BOARD, SPACING, SIZE, "kannala-brandt").camera
+    observed = camera.observed_theta_max_deg
+    assert observed is not None and 60 < observed < 75  # the boards reach about 68 degrees
+    capped = camera.limited_to_observed(margin_deg=2)
+    assert capped.domain.theta_max_deg == pytest.approx(observed + 2)
+    assert capped.domain.limited_by == "user"
+    # A pixel at 85 degrees: the calibrated model unprojects it (extrapolating), the capped one does not.
+    pixel, _ = camera.project(np.array([[np.sin(np.radians(85)), 0.0, np.cos(np.radians(85))]]))
+    assert camera.unproject(pixel)[1][0] and not capped.unproject(pixel)[1][0]
