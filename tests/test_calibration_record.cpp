@@ -277,3 +277,58 @@ TEST(Calibration, TheProgramSelectsImagesAndCapsAtTheData) {
 
 }  // namespace
 }  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// info says what the data support beside the model's domain; uncertainty reports
+// and draws it, and refuses a camera without a covariance.
+TEST(Calibration, InfoAndUncertaintyShowWhatTheDataSupport) {
+  const auto dir = test::scratch_dir("calibrate_info");
+  const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
+  std::vector<BoardObservation> inner;  // boards within 55 deg of the axis only
+  for (const auto& o : testing::synthesize_boards(truth, kBoard, 80, 0.2, 9).observations) {
+    if (std::all_of(o.corners.begin(), o.corners.end(), [&](const Eigen::Vector2d& c) {
+          Eigen::Vector3d ray;
+          return truth.unproject(c, &ray) && std::acos(ray.z()) < 55 / kDeg;
+        })) {
+      inner.push_back(o);
+    }
+  }
+  ASSERT_GE(inner.size(), 6u);
+  write_corners(dir / "c.vnl", inner);
+  auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                             " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model polynomial --out " +
+                             test::quoted(dir / "cal.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_fishcam("info --json " + test::quoted(dir / "cal.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto info = nlohmann::json::parse(r.out);
+  const auto& observed = info["observed"];
+  EXPECT_LT(observed["theta_max_deg"].get<double>(), 55.1);
+  EXPECT_EQ(observed["theta_max_by_azimuth_deg"].size(), size_t(CalibrationRecord::kAzimuthSectors));
+  EXPECT_TRUE(observed["has_covariance"].get<bool>());
+  ASSERT_GE(observed["extrapolated"].size(), 2u);  // the 190-degree image spans far more than 110 degrees of data
+  EXPECT_NE(observed["extrapolated"][0].get<std::string>().find("horizontal field of view"), std::string::npos);
+  r = test::run_fishcam("info " + test::quoted(dir / "cal.json"));
+  EXPECT_NE(r.out.find("extrapolated:"), std::string::npos) << r.out;
+  r = test::run_fishcam("info --json " + test::quoted(test::data_path("kannala_brandt.yaml")));
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["observed"].is_null());
+
+  r = test::run_fishcam("uncertainty --json --distance 2 --out " + test::quoted(dir / "u.png") + " " +
+                        test::quoted(dir / "cal.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto u = nlohmann::json::parse(r.out);
+  EXPECT_GT(u["observed"]["pixels"].get<long>(), 1000);
+  EXPECT_LT(u["observed"]["p95_px"].get<double>(), u["valid_image"]["max_px"].get<double>());
+  EXPECT_GT(u["at_principal_point_px"].get<double>(), 0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "u.png"));
+  r = test::run_fishcam("uncertainty --out " + test::quoted(dir / "v.png") + " " +
+                        test::quoted(test::data_path("kannala_brandt.yaml")));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("carries no calibration covariance"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "v.png"));
+}
+
+}  // namespace
+}  // namespace fishcam

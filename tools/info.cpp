@@ -1,4 +1,5 @@
 // fishcam info CAMERA [--json]: what a calibration says and where it is valid.
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -37,6 +38,18 @@ void print_text(const nlohmann::json& j) {
                 table["fallback_cells"].get<int>());
   } else {
     std::printf("inverse table     none (closed-form inverse)\n");
+  }
+  if (const auto& observed = j["observed"]; observed.is_null()) {
+    std::printf("observed angles   unknown (no calibration record: only fishcam calibrate writes one)\n");
+  } else {
+    const auto axis = [](const nlohmann::json& v) { return v.is_null() ? std::string("-") : std::to_string(int(std::lround(v.get<double>()))); };
+    std::printf("observed angles   theta up to %.3f deg; the corners span %s deg horizontally, %s deg vertically%s\n",
+                observed["theta_max_deg"].get<double>(), axis(observed["fov_deg"]["horizontal"]).c_str(),
+                axis(observed["fov_deg"]["vertical"]).c_str(),
+                observed["has_covariance"].get<bool>() ? " (projection uncertainty: fishcam uncertainty)" : "");
+    for (const auto& text : observed["extrapolated"]) {
+      std::printf("  extrapolated:   %s\n", text.get<std::string>().c_str());
+    }
   }
   if (j.contains("pose")) {
     const auto& q = j["pose"]["quaternion_xyzw"];

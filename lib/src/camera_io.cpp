@@ -241,6 +241,68 @@ Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& o
   return Camera(parse_camera(read_camera_file(path), path_for_message(path), options, info));
 }
 
+namespace {
+
+// The largest observed theta next to an azimuth (the two sectors that meet there;
+// NaN when neither holds a corner).
+double observed_next_to(const CalibrationRecord& r, double azimuth) {
+  const double step = 2 * std::numbers::pi / CalibrationRecord::kAzimuthSectors;
+  const double a = r.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(azimuth - step / 2))];
+  const double b = r.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(azimuth + step / 2 - 2 * std::numbers::pi * (azimuth + step / 2 >= std::numbers::pi)))];
+  return std::isnan(a) ? b : std::isnan(b) ? a : std::max(a, b);
+}
+
+// What the calibration's data support, beside the model's own domain: the observed
+// angles, the field of view they span along the image axes, and what of the
+// model's domain and field of view exists only in extrapolation.
+json observed_json(const Camera& camera) {
+  constexpr double kToDeg = 180 / std::numbers::pi;
+  const CameraParameters& p = camera.parameters();
+  const CalibrationRecord& r = *p.calibration;
+  const auto number = [](double v) { return std::isnan(v) ? json(nullptr) : json(v); };
+  json sectors = json::array();
+  for (double a : r.theta_max_by_azimuth) sectors.push_back(number(a * kToDeg));
+  const double pi = std::numbers::pi;
+  const double horizontal = (observed_next_to(r, 0) + observed_next_to(r, pi)) * kToDeg;
+  const double vertical = (observed_next_to(r, pi / 2) + observed_next_to(r, -pi / 2)) * kToDeg;
+  json extrapolated = json::array();
+  const auto fov = camera.field_of_view_deg();
+  char text[240];
+  const double observed_deg = r.theta_max * kToDeg;
+  for (const auto& [name, model_fov, data_fov] : {std::tuple{"horizontal", fov.horizontal, horizontal},
+                                                  std::tuple{"vertical", fov.vertical, vertical}}) {
+    if (std::isnan(data_fov) || model_fov > data_fov + 1.0) {
+      std::snprintf(text, sizeof text,
+                    "the %s field of view (%.1f deg) reaches beyond the %s deg the calibration's corners span", name,
+                    model_fov, std::isnan(data_fov) ? "none" : std::to_string(int(std::lround(data_fov))).c_str());
+      extrapolated.push_back(text);
+    }
+  }
+  // The model's own domain, without a user limit: a fold past the observed angles is
+  // the fit's extrapolation, not the lens.
+  CameraParameters unlimited = p;
+  unlimited.theta_limit.reset();
+  const ValidDomain model_domain = Camera(unlimited).domain();
+  if (model_domain.limited_by == ValidDomain::Limit::fold && model_domain.theta_max > r.theta_max) {
+    std::snprintf(text, sizeof text,
+                  "the model folds at theta = %.1f deg (rho = %.1f px), beyond the observed %.1f deg: pixels past it "
+                  "have no ray although the lens may see there",
+                  model_domain.theta_max * kToDeg, model_domain.rho_max, observed_deg);
+    extrapolated.push_back(text);
+  } else if (camera.domain().theta_max > r.theta_max + 1e-9) {
+    std::snprintf(text, sizeof text, "the valid domain (theta up to %.1f deg) reaches beyond the observed %.1f deg",
+                  camera.domain().theta_max * kToDeg, observed_deg);
+    extrapolated.push_back(text);
+  }
+  return {{"theta_max_deg", observed_deg},
+          {"theta_max_by_azimuth_deg", sectors},
+          {"fov_deg", {{"horizontal", number(horizontal)}, {"vertical", number(vertical)}}},
+          {"has_covariance", r.covariance.size() > 0},
+          {"extrapolated", extrapolated}};
+}
+
+}  // namespace
+
 std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> format) {
   constexpr double kToDeg = 180 / std::numbers::pi;
   const auto& p = camera.parameters();
@@ -269,6 +331,7 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
     const auto& t = p.pose->translation;
     j["pose"] = {{"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"translation", {t.x(), t.y(), t.z()}}};
   }
+  j["observed"] = p.calibration ? observed_json(camera) : json(nullptr);
   return j.dump();
 }
 
