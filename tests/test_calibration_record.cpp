@@ -330,5 +330,54 @@ TEST(Calibration, InfoAndUncertaintyShowWhatTheDataSupport) {
   EXPECT_FALSE(std::filesystem::exists(dir / "v.png"));
 }
 
+// diff as mrcal's projection_diff: two models of the same corners agree where the
+// boards were and part in extrapolation; by default diff compares where the data
+// are (and says so), weighting the rotation fit by the uncertainties.
+TEST(Calibration, DiffComparesWhereTheBoardsWere) {
+  const auto dir = test::scratch_dir("calibrate_diff");
+  const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
+  std::vector<BoardObservation> inner;
+  for (const auto& o : testing::synthesize_boards(truth, kBoard, 80, 0.2, 10).observations) {
+    if (std::all_of(o.corners.begin(), o.corners.end(), [&](const Eigen::Vector2d& c) {
+          Eigen::Vector3d ray;
+          return truth.unproject(c, &ray) && std::acos(ray.z()) < 60 / kDeg;
+        })) {
+      inner.push_back(o);
+    }
+  }
+  ASSERT_GE(inner.size(), 8u);
+  write_corners(dir / "c.vnl", inner);
+  for (const char* model : {"kannala-brandt", "polynomial"}) {
+    const auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                                     " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model " + model +
+                                     " --out " + test::quoted(dir / (std::string(model) + ".json")));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const std::string pair = test::quoted(dir / "kannala-brandt.json") + " " + test::quoted(dir / "polynomial.json");
+  auto r = test::run_fishcam("diff --json " + pair);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto data = nlohmann::json::parse(r.out);
+  EXPECT_NE(data["region"].get<std::string>().find("observed"), std::string::npos);
+  EXPECT_EQ(data["weights"], "1 / (sigma_A^2 + sigma_B^2)");
+  r = test::run_fishcam("diff --json --region all --weights none " + pair);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto all = nlohmann::json::parse(r.out);
+  EXPECT_GT(all["pixels"].get<long>(), data["pixels"].get<long>());
+  EXPECT_GT(all["rms_px"].get<double>(), 5 * data["rms_px"].get<double>());  // extrapolation dominates
+  r = test::run_fishcam("diff --json --weights none --corners " + test::quoted(dir / "c.vnl") + " --board 10x10 " + pair);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto hull = nlohmann::json::parse(r.out);
+  EXPECT_NE(hull["region"].get<std::string>().find("convex hull"), std::string::npos);
+  EXPECT_LT(hull["rms_px"].get<double>(), all["rms_px"].get<double>());
+  // Refused in one line: weights without covariances, a data region nobody knows.
+  const std::string plain = test::quoted(test::data_path("kannala_brandt.yaml"));
+  for (const std::string& bad : {"--weights uncertainty " + plain + " " + plain, "--region data " + plain + " " + plain,
+                                "--corners " + test::quoted(dir / "c.vnl") + " " + pair}) {
+    r = test::run_fishcam("diff " + bad);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace fishcam

@@ -1,5 +1,6 @@
 #include "fishcam/error.hpp"
 #include "fishcam/fit.hpp"
+#include "fishcam/calibration.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -288,24 +289,45 @@ ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspond
 }
 
 ProjectionDiff projection_diff(const Camera& a, const Camera& b, int step, bool fit_rotation) {
-  const auto samples = sample_image(a, step, step / 2);
+  ProjectionDiffOptions options;
+  options.step = step, options.fit_rotation = fit_rotation;
+  return projection_diff(a, b, options);
+}
+
+ProjectionDiff projection_diff(const Camera& a, const Camera& b, const ProjectionDiffOptions& options) {
+  std::vector<Correspondence> samples;
+  for (const auto& s : sample_image(a, options.step, options.step / 2)) {
+    if (!options.region || options.region(s.pixel, s.ray)) samples.push_back(s);
+  }
+  std::vector<double> weights(samples.size(), 1.0);
+  if (options.weigh_by_uncertainty) {
+    for (size_t i = 0; i < samples.size(); ++i) {
+      Eigen::Vector2d q;
+      const double sa = projection_uncertainty(a, samples[i].pixel, std::nullopt);
+      const double sb = b.project(samples[i].ray, &q) ? projection_uncertainty(b, q, std::nullopt) : 0.0;
+      weights[i] = 1 / std::max(sa * sa + sb * sb, 1e-12);
+      if (!std::isfinite(weights[i])) weights[i] = 0;
+    }
+  }
   ProjectionDiff diff;
-  auto residuals = [&](const Eigen::Matrix3d& r, Eigen::MatrixXd* jacobian) {
-    std::vector<double> errors;
+  // Residuals (and their Jacobians in a small left rotation w) of the samples B
+  // sees inside its image, scaled by the square roots of their weights.
+  auto residuals = [&](const Eigen::Matrix3d& r, Eigen::MatrixXd* jacobian, std::vector<double>* used_weights) {
     std::vector<Eigen::Vector2d> out;
-    if (jacobian) jacobian->resize(0, 3);
     std::vector<Eigen::Matrix<double, 2, 3>> rows;
-    for (const auto& s : samples) {
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const auto& s = samples[i];
       Eigen::Vector2d q;
       Eigen::Matrix<double, 2, 3> j;
       const Eigen::Vector3d rotated = r * s.ray;
       if (!b.project(rotated, &q, &j)) continue;
       if (!(q.x() >= -0.5 && q.y() >= -0.5 && q.x() < b.width() - 0.5 && q.y() < b.height() - 0.5)) continue;
       out.push_back(q - s.pixel);
+      if (used_weights) used_weights->push_back(weights[i]);
       // d q / d w for a small rotation w applied on the left: J * (-[r ray]x).
       Eigen::Matrix3d cross;
       cross << 0, -rotated.z(), rotated.y(), rotated.z(), 0, -rotated.x(), -rotated.y(), rotated.x(), 0;
-      rows.push_back(-j * cross);
+      rows.push_back(-std::sqrt(weights[i]) * j * cross);
     }
     if (jacobian) {
       jacobian->resize(long(2 * rows.size()), 3);
@@ -314,18 +336,22 @@ ProjectionDiff projection_diff(const Camera& a, const Camera& b, int step, bool 
     return out;
   };
   Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
-  for (int iteration = 0; fit_rotation && iteration < 20; ++iteration) {  // Gauss-Newton on the rotation
+  for (int iteration = 0; options.fit_rotation && iteration < 20; ++iteration) {  // Gauss-Newton on the rotation
     Eigen::MatrixXd jacobian;
-    const auto e = residuals(r, &jacobian);
+    std::vector<double> w;
+    const auto e = residuals(r, &jacobian, &w);
     if (e.size() < 10) break;
     Eigen::VectorXd rhs(long(2 * e.size()));
-    for (size_t i = 0; i < e.size(); ++i) rhs.segment<2>(long(2 * i)) = e[i];
-    const Eigen::Vector3d w = -(jacobian.transpose() * jacobian).ldlt().solve(jacobian.transpose() * rhs);
-    r = Eigen::AngleAxisd(w.norm(), w.norm() > 0 ? Eigen::Vector3d(w.normalized()) : Eigen::Vector3d::UnitX()) * r;
-    if (w.norm() < 1e-15) break;
+    for (size_t i = 0; i < e.size(); ++i) rhs.segment<2>(long(2 * i)) = std::sqrt(w[i]) * e[i];
+    const Eigen::Vector3d step = -(jacobian.transpose() * jacobian).ldlt().solve(jacobian.transpose() * rhs);
+    r = Eigen::AngleAxisd(step.norm(), step.norm() > 0 ? Eigen::Vector3d(step.normalized()) : Eigen::Vector3d::UnitX()) * r;
+    if (step.norm() < 1e-15) break;
   }
-  const auto e = residuals(r, nullptr);
-  if (e.empty()) throw Error("diff: the two cameras share no pixels");
+  const auto e = residuals(r, nullptr, nullptr);
+  if (e.empty()) {
+    throw Error(options.region ? "diff: no pixel of the region is valid in both cameras"
+                               : "diff: the two cameras share no pixels");
+  }
   double sum2 = 0;
   for (const auto& v : e) sum2 += v.squaredNorm(), diff.max_px = std::max(diff.max_px, v.norm());
   diff.pixels = long(e.size());

@@ -2,6 +2,7 @@
 // converting one model into another, with the error it costs reported honestly.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -100,6 +101,19 @@ struct ProjectionDiff {
   long pixels = 0;  // compared (valid in both and inside B's image)
   double rms_px = 0, max_px = 0;
 };
+struct ProjectionDiffOptions {
+  int step = 8;
+  bool fit_rotation = true;
+  // Compare (and fit the rotation on) only A's pixels for which this holds, given the
+  // pixel and A's ray: mrcal's region restriction (e.g. where the calibration's
+  // corners were). Empty: every pixel valid in both.
+  std::function<bool(const Eigen::Vector2d& pixel, const Eigen::Vector3d& ray)> region;
+  // Weigh each pixel in the rotation fit by 1 / (sigma_A^2 + sigma_B^2), the two
+  // cameras' projection uncertainties at infinity (fishcam/calibration.hpp): where a
+  // calibration is unsure, its difference counts less. Both need a covariance.
+  bool weigh_by_uncertainty = false;
+};
+ProjectionDiff projection_diff(const Camera& a, const Camera& b, const ProjectionDiffOptions& options);
 ProjectionDiff projection_diff(const Camera& a, const Camera& b, int step = 8, bool fit_rotation = true);
 
 }  // namespace fishcam
