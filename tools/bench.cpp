@@ -1,6 +1,7 @@
 // fishcam bench roots CAMERA [--json]: the cost of theta(rho), every method in one
 // run on one camera (this machine is shared and noisy: compare within a run).
 #include <opencv2/core.hpp>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include "cli_common.hpp"
 #include "fishcam/augmentation.hpp"
 #include "fishcam/calibration.hpp"
+#include "fishcam/chessboard.hpp"
 #include "fishcam/fit.hpp"
 #include "fishcam/camera_io.hpp"
 #include "fishcam/scene.hpp"
@@ -329,6 +331,115 @@ void run_fit(bool json, int repeats) {
               out["calibrate_50_boards_ms"].get<double>());
 }
 
+// Chessboard detection on rendered photographs with known corners (the Kannala-Brandt
+// camera at 960 px wide, boards all over the image, blur 0.8 px, noise 2 grey levels):
+// time per image of detect_chessboard against OpenCV's findChessboardCorners +
+// cornerSubPix (11 x 11 window), interleaved, and the old findChessboardCornersSB
+// (exhaustive, accuracy) for reference; the corner error of each against the truth.
+void run_corners(bool json, int boards_count, int repeats) {
+  const CameraParameters full = read_camera(bundled_data("kannala_brandt.yaml")).parameters();
+  const Camera camera(resized(full, 960, int(std::lround(full.height * 960.0 / full.width))));
+  const BoardSpec board{9, 6, 0.1};
+  const auto poses = testing::synthesize_boards(camera, board, boards_count, 0.0, 1).poses;
+  const auto points = board_points(board);
+  struct Method {
+    const char* name;
+    std::function<std::optional<std::vector<Eigen::Vector2d>>(const cv::Mat&)> detect;
+    double seconds = 0;
+    long found = 0, corners = 0;
+    double sum2 = 0, worst = 0;
+  };
+  const cv::TermCriteria until(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.01);
+  std::vector<Method> methods = {
+      {"findChessboardCorners + cornerSubPix", [&](const cv::Mat& gray) -> std::optional<std::vector<Eigen::Vector2d>> {
+         std::vector<cv::Point2f> c;
+         if (!cv::findChessboardCorners(gray, {board.cols, board.rows}, c,
+                                        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
+           return std::nullopt;
+         }
+         cv::cornerSubPix(gray, c, {5, 5}, {-1, -1}, until);
+         std::vector<Eigen::Vector2d> out;
+         for (const auto& p : c) out.emplace_back(p.x, p.y);
+         return out;
+       }},
+      {"fishcam detect_chessboard", [&](const cv::Mat& gray) { return detect_chessboard(gray, board); }},
+      {"findChessboardCornersSB (exhaustive, accuracy)",
+       [&](const cv::Mat& gray) -> std::optional<std::vector<Eigen::Vector2d>> {
+         std::vector<cv::Point2f> c;
+         if (!cv::findChessboardCornersSB(gray, {board.cols, board.rows}, c,
+                                          cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY)) {
+           return std::nullopt;
+         }
+         std::vector<Eigen::Vector2d> out;
+         for (const auto& p : c) out.emplace_back(p.x, p.y);
+         return out;
+       }},
+  };
+  std::vector<cv::Mat> images;
+  std::vector<std::vector<Eigen::Vector2d>> truths;
+  for (size_t b = 0; b < poses.size(); ++b) {
+    const auto pixels = testing::render_board_image(camera, board, poses[b], 3, 0.8, 2.0, b);
+    images.push_back(cv::Mat(camera.height(), camera.width(), CV_8UC1, const_cast<std::uint8_t*>(pixels.data())).clone());
+    std::vector<Eigen::Vector2d> truth;
+    for (const auto& p : points) {
+      Eigen::Vector2d q;
+      camera.project(poses[b].rotation * p + poses[b].translation, &q);
+      truth.push_back(q);
+    }
+    truths.push_back(truth);
+  }
+  const int saved_threads = cv::getNumThreads();
+  cv::setNumThreads(1);  // per image on one thread: detect-corners runs images in parallel
+  for (int r = 0; r < repeats; ++r) {
+    for (size_t b = 0; b < images.size(); ++b) {
+      for (auto& m : methods) {  // interleaved: the same image through every method in turn
+        const auto start = std::chrono::steady_clock::now();
+        const auto found = m.detect(images[b]);
+        m.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (r > 0 || !found) continue;
+        // OpenCV may number the corners from either end: compare in the closer order.
+        double direct = 0, reversed = 0;
+        const size_t n = truths[b].size();
+        for (size_t i = 0; i < n; ++i) {
+          direct += ((*found)[i] - truths[b][i]).squaredNorm();
+          reversed += ((*found)[n - 1 - i] - truths[b][i]).squaredNorm();
+        }
+        const bool flip = reversed < direct;
+        for (size_t i = 0; i < n; ++i) {
+          const double e = ((*found)[flip ? n - 1 - i : i] - truths[b][i]).norm();
+          m.worst = std::max(m.worst, e);
+        }
+        m.sum2 += std::min(direct, reversed);
+        m.corners += long(n);
+        ++m.found;
+      }
+    }
+  }
+  cv::setNumThreads(saved_threads);
+  nlohmann::json out = {{"images", images.size()}, {"repeats", repeats}, {"size", {camera.width(), camera.height()}}};
+  const double baseline = methods[0].seconds;
+  for (const auto& m : methods) {
+    out["methods"].push_back({{"name", m.name},
+                              {"ms_per_image", 1e3 * m.seconds / double(repeats * images.size())},
+                              {"ratio_to_findChessboardCorners", m.seconds / baseline},
+                              {"found", m.found},
+                              {"rms_px", m.corners ? std::sqrt(m.sum2 / double(m.corners)) : 0.0},
+                              {"max_px", m.worst}});
+  }
+  if (json) {
+    std::printf("%s\n", out.dump(2).c_str());
+    return;
+  }
+  std::printf("chessboard detection, %zu rendered %dx%d images (9x6 boards, blur 0.8 px, noise 2), %d repeats, one "
+              "thread:\n", images.size(), camera.width(), camera.height(), repeats);
+  for (const auto& m : out["methods"]) {
+    std::printf("  %-48s %7.1f ms/image (%.2fx)  found %ld, corner error rms %.3f px, max %.3f px\n",
+                m["name"].get<std::string>().c_str(), m["ms_per_image"].get<double>(),
+                m["ratio_to_findChessboardCorners"].get<double>(), m["found"].get<long>(), m["rms_px"].get<double>(),
+                m["max_px"].get<double>());
+  }
+}
+
 }  // namespace
 
 void register_bench(CLI::App& app) {
@@ -373,6 +484,16 @@ void register_bench(CLI::App& app) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   fit->callback([=] { run_fit(*fit_json, *fit_repeats); });
+
+  auto* corners = bench->add_subcommand("corners", "Chessboard detection time and corner accuracy on rendered "
+                                                   "photographs with known corners");
+  auto corners_json = std::make_shared<bool>(false);
+  auto corners_boards = std::make_shared<int>(24);
+  auto corners_repeats = std::make_shared<int>(3);
+  corners->add_flag("--json", *corners_json, "Print one JSON object");
+  corners->add_option("--boards", *corners_boards, "Rendered images")->check(CLI::Range(1, 1000))->capture_default_str();
+  corners->add_option("--repeats", *corners_repeats, "Passes over the images")->check(CLI::Range(1, 100))->capture_default_str();
+  corners->callback([=] { run_corners(*corners_json, *corners_boards, *corners_repeats); });
 
   augment->callback([=] {
     const std::string camera =

@@ -1,28 +1,35 @@
-// fishcam detect-corners IMAGES...: chessboard corners found by OpenCV, in mrcal's corners format.
-#include <opencv2/calib3d.hpp>
+// fishcam detect-corners IMAGES...: chessboard corners found by OpenCV (fishcam/chessboard.hpp), in
+// mrcal's corners format.
 #include <opencv2/imgcodecs.hpp>
+#include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
+#include <mutex>
+#include <thread>
 
 #include "fishcam/corners.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/calibration.hpp"
+#include "fishcam/chessboard.hpp"
+#include "fishcam/parallel.hpp"
 
 namespace fishcam::cli {
 
 void register_detect_corners(CLI::App& app) {
-  auto* cmd = app.add_subcommand("detect-corners", "Find chessboard corners (OpenCV findChessboardCornersSB) and "
-                                                   "write them in mrcal's corners format");
+  auto* cmd = app.add_subcommand("detect-corners", "Find chessboard corners (OpenCV) and write them in mrcal's "
+                                                   "corners format");
   struct Options {
     std::vector<std::string> images;
     std::string board, out;
+    int threads = int(std::max(1u, std::thread::hardware_concurrency()));
     bool force = false;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("IMAGES", o->images, "Images")->required();
   cmd->add_option("--board", o->board, "Inner corners WxH, e.g. 10x10")->required();
   cmd->add_option("--out", o->out, "Output corners.vnl")->required();
+  cmd->add_option("--threads", o->threads, "Images detected in parallel")->check(CLI::Range(1, 256))->capture_default_str();
   cmd->add_flag("--force", o->force, "Replace an existing output file");
   cmd->callback([o] {
     {
@@ -32,33 +39,49 @@ void register_detect_corners(CLI::App& app) {
     const BoardSpec board = parse_board(o->board, 1.0);
     // OpenCV's detector needs more than 2 corners per side.
     if (board.cols < 3 || board.rows < 3) throw Error("--board: detection needs at least 3x3 inner corners");
-    std::vector<BoardObservation> observations;
-    long found = 0;
-    std::vector<std::string> failures;
-    for (const std::string& path : o->images) {
-      cv::Mat gray;
+    const size_t count = o->images.size();
+    std::vector<BoardObservation> observations(count);
+    std::vector<std::string> failures(count);
+    std::atomic<int> done{0};
+    const bool progress = isatty(fileno(stderr));
+    std::mutex print;
+    for_each_index(int(count), o->threads, [&](int k) {
+      const std::string& path = o->images[size_t(k)];
+      observations[size_t(k)].filename = path;
       try {
-        gray = read_image(path, cv::IMREAD_GRAYSCALE);
+        const cv::Mat gray = read_image(path, cv::IMREAD_GRAYSCALE);
+        if (auto corners = detect_chessboard(gray, board)) observations[size_t(k)].corners = std::move(*corners);
       } catch (const Error& e) {
-        failures.push_back(e.what());
-        std::fprintf(stderr, "fishcam: skipped %s\n", e.what());
+        failures[size_t(k)] = e.what();
+      }
+      const int finished = ++done;
+      if (progress) {
+        const std::lock_guard lock(print);
+        std::fprintf(stderr, "\rdetect-corners: %d/%zu images", finished, count);
+        if (size_t(finished) == count) std::fprintf(stderr, "\n");
+      }
+    });
+    // Images that could not be read are left out of the file (and reported); the
+    // others keep the order they were given in.
+    std::vector<BoardObservation> readable;
+    std::vector<std::string> unreadable;
+    long found = 0;
+    for (size_t k = 0; k < count; ++k) {
+      if (!failures[k].empty()) {
+        unreadable.push_back(failures[k]);
+        std::fprintf(stderr, "fishcam: skipped %s\n", failures[k].c_str());
         continue;
       }
-      std::vector<cv::Point2f> corners;
-      const bool ok = cv::findChessboardCornersSB(gray, {board.cols, board.rows}, corners,
-                                                  cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
-      BoardObservation observation{path, {}};
-      if (ok) {
-        for (const auto& c : corners) observation.corners.emplace_back(c.x, c.y);
-        ++found;
-      }
-      observations.push_back(std::move(observation));
+      found += observations[k].corners.empty() ? 0 : 1;
+      readable.push_back(std::move(observations[k]));
     }
-    if (observations.empty()) throw Error("no image could be read; nothing written (first: " + failures[0] + ")");
-    write_corners(o->out, observations, o->force);
-    std::printf("%ld of %zu images show a %dx%d board; wrote %s\n", found, o->images.size(), board.cols, board.rows,
+    if (readable.empty()) throw Error("no image could be read; nothing written (first: " + unreadable[0] + ")");
+    write_corners(o->out, readable, o->force);
+    std::printf("%ld of %zu images show a %dx%d board; wrote %s\n", found, count, board.cols, board.rows,
                 o->out.c_str());
-    if (!failures.empty()) throw Error(std::to_string(failures.size()) + " image(s) unreadable, first: " + failures[0]);
+    if (!unreadable.empty()) {
+      throw Error(std::to_string(unreadable.size()) + " image(s) unreadable, first: " + unreadable[0]);
+    }
   });
 }
 

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -65,6 +66,78 @@ SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, 
       placed = true;
     }
     if (!placed) throw Error("synthesize_boards: could not place board " + std::to_string(b) + " inside the image");
+  }
+  return out;
+}
+
+}  // namespace fishcam::testing
+
+namespace fishcam::testing {
+
+std::vector<std::uint8_t> render_board_image(const Camera& camera, const BoardSpec& board, const BoardPose& pose,
+                                             int supersample, double blur_px, double noise_dn, std::uint64_t seed) {
+  check_board(board);
+  if (supersample < 1 || supersample > 8 || !(blur_px >= 0) || !(noise_dn >= 0)) {
+    throw Error("render_board_image: supersample in [1, 8], blur and noise >= 0");
+  }
+  const int w = camera.width(), h = camera.height(), n = supersample;
+  std::vector<Eigen::Vector2d> pixels;
+  pixels.reserve(size_t(w) * size_t(h) * size_t(n * n));
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) pixels.emplace_back(u - 0.5 + (i + 0.5) / n, v - 0.5 + (j + 0.5) / n);
+      }
+    }
+  }
+  std::vector<Eigen::Vector3d> rays(pixels.size());
+  std::vector<std::uint8_t> valid(pixels.size());
+  camera.unproject(pixels, rays, valid);
+  const Eigen::Matrix3d r = pose.rotation.toRotationMatrix();
+  const Eigen::Vector3d normal = r.col(2);
+  const double offset = normal.dot(pose.translation), s = board.spacing;
+  std::vector<double> grey(size_t(w) * size_t(h), 0.0);
+  for (size_t k = 0; k < rays.size(); ++k) {
+    double value = 128;  // background
+    const double along = valid[k] ? normal.dot(rays[k]) : 0;
+    const double distance = along != 0 ? offset / along : -1;
+    if (distance > 0) {
+      const Eigen::Vector3d p = r.transpose() * (distance * rays[k] - pose.translation);
+      const double x = p.x() / s, y = p.y() / s;  // inner corners at integers 0..cols-1, 0..rows-1
+      if (x >= -1 && y >= -1 && x < board.cols && y < board.rows) {
+        value = (int(std::floor(x)) + int(std::floor(y))) % 2 == 0 ? 20 : 235;
+      } else if (x >= -2 && y >= -2 && x < board.cols + 1 && y < board.rows + 1) {
+        value = 235;  // the white margin detectors need
+      }
+    }
+    grey[k / size_t(n * n)] += value / (n * n);
+  }
+  // Separable Gaussian blur (clamped borders), then noise.
+  if (blur_px > 0) {
+    const int radius = int(std::ceil(3 * blur_px));
+    std::vector<double> kernel(size_t(2 * radius + 1));
+    double sum = 0;
+    for (int i = -radius; i <= radius; ++i) sum += kernel[size_t(i + radius)] = std::exp(-0.5 * i * i / (blur_px * blur_px));
+    for (double& k : kernel) k /= sum;
+    std::vector<double> tmp(grey.size());
+    for (int pass = 0; pass < 2; ++pass) {
+      for (int v = 0; v < h; ++v) {
+        for (int u = 0; u < w; ++u) {
+          double acc = 0;
+          for (int i = -radius; i <= radius; ++i) {
+            const int uu = pass == 0 ? std::clamp(u + i, 0, w - 1) : u, vv = pass == 1 ? std::clamp(v + i, 0, h - 1) : v;
+            acc += kernel[size_t(i + radius)] * grey[size_t(vv) * size_t(w) + size_t(uu)];
+          }
+          tmp[size_t(v) * size_t(w) + size_t(u)] = acc;
+        }
+      }
+      grey.swap(tmp);
+    }
+  }
+  Random random{std::mt19937_64(seed)};
+  std::vector<std::uint8_t> out(grey.size());
+  for (size_t k = 0; k < grey.size(); ++k) {
+    out[k] = std::uint8_t(std::clamp(std::lround(grey[k] + noise_dn * random.normal()), 0L, 255L));
   }
   return out;
 }

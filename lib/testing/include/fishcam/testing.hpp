@@ -22,6 +22,16 @@ struct SyntheticBoards {
 SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, int count, double noise_px,
                                   std::uint64_t seed);
 
+// A photograph of a chessboard (cols + 1 by rows + 1 squares, a white margin of one
+// square around them, grey beyond) seen by the camera with the board at `pose`:
+// each pixel the mean of supersample x supersample sub-pixel rays (the exact
+// coverage of the squares, up to that sampling), 8-bit grayscale, then a Gaussian
+// blur of blur_px and Gaussian noise of noise_dn grey levels (seeded). The board's
+// inner corners project to camera.project(pose * corner): the truth to compare
+// detectors with.
+std::vector<std::uint8_t> render_board_image(const Camera& camera, const BoardSpec& board, const BoardPose& pose,
+                                             int supersample, double blur_px, double noise_dn, std::uint64_t seed);
+
 // theta for rho from the companion-matrix roots of rho(theta) - rho (polynomial-type
 // models): an independent algebraic cross-check of the iterative solver. NaN when
 // no real root lies in the domain.
