@@ -53,6 +53,34 @@ struct CalibrationOptions {
 CalibrationResult calibrate(const std::vector<BoardObservation>& observations, const BoardSpec& board, int width,
                             int height, const ModelSpec& model, const CalibrationOptions& options = {});
 
+// A camera rig (a stereo pair, a car's surround-view cameras): every camera's
+// intrinsics, each camera's pose relative to camera 0 and the boards' poses, solved
+// jointly from images taken at the same instants. Images of one instant have the
+// same file name (the last path component: left/0001.png and right/0001.png).
+struct RigCamera {
+  std::vector<BoardObservation> observations;
+  int width = 0, height = 0;
+  ModelSpec model;
+};
+struct RigCalibrationResult {
+  // Per camera: its report (intrinsics and sigmas from the joint solve; the record's
+  // observed angles from the joint solve, its covariance from the camera's own
+  // boards), camera.pose = camera -> camera 0 (camera 0: identity).
+  std::vector<CalibrationResult> cameras;
+  // Per camera, 1-sigma of its pose relative to camera 0 from the joint covariance:
+  // rotation (rad, the angle-axis components' largest) and translation (board units,
+  // the largest component); 0 for camera 0.
+  std::vector<double> rotation_sigma_rad, translation_sigma;
+  double rms_px = 0;      // over every camera's corners (2-D)
+  long instants = 0;      // distinct instants with a board
+  std::vector<std::string> warnings;
+};
+// Each camera must calibrate on its own (>= 3 boards, fishcam::calibrate's checks),
+// and every camera must share instants with camera 0, directly or through others.
+// Throws Error naming the camera otherwise.
+RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
+                                   const CalibrationOptions& options = {});
+
 // Projection uncertainty as mrcal defines it: the spread of the projection of a
 // point fixed relative to the calibration boards, seen at `pixel`, through
 // calibrations perturbed by the corner noise -- propagated (to first order) from
