@@ -477,7 +477,8 @@ Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
 }
 
 // Step 3, outliers: corners beyond 5 robust sigmas of the robust solve (median
-// absolute error * 1.4826, the 2-D error's scale).
+// absolute error * 1.4826, the 2-D error's scale) and beyond 0.1 px (however exact
+// the others, a corner that close is no outlier).
 std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, const Camera& camera, const Solve& s) {
   std::vector<double> errors;
   std::vector<std::vector<double>> per_board(o.boards.size());
@@ -496,7 +497,7 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
   std::vector<CalibrationResult::Outlier> outliers;
   for (size_t b = 0; b < o.boards.size(); ++b) {
     for (size_t i = 0; i < o.points.size(); ++i) {
-      if (per_board[b][i] > 5 * sigma + 1e-6) outliers.push_back({o.boards[b]->filename, int(i), per_board[b][i]});
+      if (per_board[b][i] > std::max(5 * sigma, 0.1)) outliers.push_back({o.boards[b]->filename, int(i), per_board[b][i]});
     }
   }
   return outliers;
@@ -528,28 +529,43 @@ std::string undetermined_text(const std::vector<std::string>& names, bool poses,
 // the report: per-image and overall RMS (2-D norm), parameters and their sigmas.
 template <template <typename> class Model>
 void final_solve(const Observations& o, Solve s, const ModelSpec& spec, CalibrationResult* result) {
-  std::vector<std::vector<Eigen::Vector3d>> kept_points(o.boards.size());
-  std::vector<std::vector<Eigen::Vector2d>> kept_corners(o.boards.size());
+  // The corners that are not outliers, per board; a board left with fewer than 3
+  // has no determined pose and is left out (and said so).
+  std::vector<std::vector<Eigen::Vector3d>> kept_points;
+  std::vector<std::vector<Eigen::Vector2d>> kept_corners;
+  std::vector<size_t> used;  // index into o.boards of each kept board
+  std::vector<std::array<double, 6>> poses;
   for (size_t b = 0; b < o.boards.size(); ++b) {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<Eigen::Vector2d> corners;
     for (size_t i = 0; i < o.points.size(); ++i) {
       const bool outlier = std::any_of(result->outliers.begin(), result->outliers.end(), [&](const auto& x) {
         return x.filename == o.boards[b]->filename && size_t(x.corner) == i;
       });
       if (outlier) continue;
-      kept_points[b].push_back(o.points[i]);
-      kept_corners[b].push_back(o.corners[b][i]);
+      points.push_back(o.points[i]);
+      corners.push_back(o.corners[b][i]);
     }
+    if (points.size() < 3) {
+      result->warnings.push_back("image " + o.boards[b]->filename + ": " + std::to_string(o.points.size() - points.size()) +
+                                 " of its corners are outliers; the image is left out");
+      continue;
+    }
+    kept_points.push_back(std::move(points)), kept_corners.push_back(std::move(corners));
+    used.push_back(b), poses.push_back(s.poses[b]);
   }
+  if (used.size() < 3) throw Error("calibrate: fewer than 3 images keep enough corners after the outliers are removed");
+  s.poses = std::move(poses);
   result->observations = solve<Model>(&s, kept_points, kept_corners, false, nullptr).num_residuals / 2;
   result->camera = o.camera(s, make_model(spec.name, s.model));
   const Camera final_camera(result->camera);
   double sum2 = 0;
   CalibrationRecord record;
   record.theta_max_by_azimuth.fill(std::numeric_limits<double>::quiet_NaN());
-  for (size_t b = 0; b < o.boards.size(); ++b) {
+  for (size_t b = 0; b < used.size(); ++b) {
     const BoardPose pose = pose_of(s.poses[b]);
     result->poses.push_back(pose);
-    result->used_images.push_back(o.boards[b]->filename);
+    result->used_images.push_back(o.boards[used[b]]->filename);
     double board_sum2 = 0;
     for (size_t i = 0; i < kept_points[b].size(); ++i) {
       const Eigen::Vector3d point = to_camera(pose, kept_points[b][i]);
