@@ -123,5 +123,53 @@ TEST(Rig, ACameraSharingNoInstantIsRefused) {
   EXPECT_THROW(calibrate_rig({rig.cameras[0]}, kBoard), Error);
 }
 
+// Through the program: one --corners per camera, one file for the rig in each
+// format that holds rigs (read back: every camera and its pose), refused in one line
+// by a format that holds one camera.
+TEST(Rig, TheProgramWritesTheRigInEveryFormatThatHoldsOne) {
+  const SyntheticRig rig = surround_rig(0.2, 4);
+  const auto dir = test::scratch_dir("rig_cli");
+  std::string corners;
+  for (size_t k = 0; k < 4; ++k) {
+    const auto path = dir / ("cam" + std::to_string(k) + ".vnl");
+    write_corners(path, rig.cameras[k].observations);
+    corners += " --corners " + test::quoted(path);
+  }
+  const std::string base = "calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model kannala-brandt ";
+  int formats = 0;
+  std::vector<Pose> first;
+  for (const std::string name : {"rig.json", "rig.yaml", "basalt.json"}) {
+    const std::string format = name == "rig.yaml" ? "kalibr" : name == "basalt.json" ? "basalt" : "fishcam";
+    const auto r = test::run_fishcam(base + "--format " + format + " --out " + test::quoted(dir / name));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    for (size_t k = 0; k < 4; ++k) {
+      CameraReadOptions options;
+      options.camera = std::to_string(k);
+      const Camera camera = read_camera(dir / name, options);
+      ASSERT_TRUE(camera.parameters().pose) << name << " camera " << k;
+      const Pose& pose = *camera.parameters().pose;
+      if (formats == 0) {
+        first.push_back(pose);
+        EXPECT_EQ(camera.parameters().calibration.has_value(), true);
+        continue;
+      }
+      EXPECT_LT(pose.rotation.angularDistance(first[k].rotation), 1e-9) << name << " camera " << k;
+      EXPECT_LT((pose.translation - first[k].translation).norm(), 1e-9) << name << " camera " << k;
+    }
+    ++formats;
+  }
+  EXPECT_EQ(formats, 3);
+  EXPECT_LT(first[1].rotation.angularDistance(relative(rig.truth, 1).rotation), 0.01);
+  auto r = test::run_fishcam(base + "--out " + test::quoted(dir / "rig_opencv.yaml") + " --format opencv");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("holds one camera, not a rig"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "rig_opencv.yaml"));
+  r = test::run_fishcam("calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model "
+                        "kannala-brandt,equidistant --out " + test::quoted(dir / "bad.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("one per camera (4)"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace fishcam

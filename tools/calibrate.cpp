@@ -57,24 +57,124 @@ constexpr const char* kPoseConvention =
     "p_camera = R(quaternion) p_board + translation; board corner (i, j) at (i * spacing, j * spacing, 0), in board "
     "order (rows of W corners)";
 
+struct CalibrateOptions {
+  std::vector<std::string> corners, imagersize;
+  std::string board, model, images, poses, theta_limit;
+  double spacing = 0;
+  int threads = int(std::max(1u, std::thread::hardware_concurrency()));
+  CameraOutputOptions output;
+};
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream stream(text);
+  for (std::string part; std::getline(stream, part, ',');) parts.push_back(part);
+  return parts;
+}
+
+// One value for every camera, or one per camera.
+std::vector<std::string> per_camera(const std::vector<std::string>& given, size_t cameras, const char* option) {
+  if (given.size() == 1) return std::vector<std::string>(cameras, given[0]);
+  if (given.size() != cameras) {
+    throw Error(std::string(option) + ": give one value, or one per camera (" + std::to_string(cameras) + "), not " +
+                std::to_string(given.size()));
+  }
+  return given;
+}
+
+// calibrate with several --corners: a rig (fishcam::calibrate_rig), written as one
+// file in a format that holds rigs.
+void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
+  const size_t n = o.corners.size();
+  const CameraFormat format = o.output.resolved_format();
+  if (!camera_format_holds_rig(format)) format_rig({}, format);  // the one-line refusal, before any work
+  const auto models = per_camera(split_commas(o.model), n, "--model");
+  const auto sizes = per_camera(o.imagersize, n, "--imagersize");
+  std::vector<RigCamera> cameras(n);
+  for (size_t k = 0; k < n; ++k) {
+    cameras[k].model = parse_model_spec(models[k]);
+    std::tie(cameras[k].width, cameras[k].height) = parse_image_size(sizes[k], "--imagersize");
+    cameras[k].observations = read_corners(o.corners[k], board);
+    if (!o.images.empty()) cameras[k].observations = select_images(std::move(cameras[k].observations), o.images);
+  }
+  const RigCalibrationResult rig = calibrate_rig(cameras, board, {o.threads});
+  std::vector<CameraParameters> written;
+  for (const auto& r : rig.cameras) written.push_back(apply_theta_limit(r.camera, o.theta_limit));
+  std::vector<std::pair<std::filesystem::path, std::string>> files = {{o.output.out, format_rig(written, format)}};
+  nlohmann::json report = {{"rms_px", rig.rms_px}, {"rms_per_coordinate_px", rig.rms_px / std::sqrt(2.0)},
+                           {"instants", rig.instants}, {"warnings", rig.warnings}, {"out", o.output.out},
+                           {"pose_convention", "camera -> camera 0: p_camera0 = R(quaternion) p_camera + translation; "
+                                               "board poses as for one camera, in each camera's frame"}};
+  nlohmann::json all_poses = nlohmann::json::array();
+  for (size_t k = 0; k < n; ++k) {
+    const CalibrationResult& r = rig.cameras[k];
+    const Pose& pose = *r.camera.pose;
+    nlohmann::json camera = {
+        {"corners_file", o.corners[k]}, {"model", model_name(r.camera.model)}, {"rms_px", r.rms_px},
+        {"corners", r.observations}, {"images", r.used_images.size()}, {"undetermined", r.undetermined},
+        {"pose", {{"quaternion_xyzw", {pose.rotation.x(), pose.rotation.y(), pose.rotation.z(), pose.rotation.w()}},
+                  {"translation", {pose.translation.x(), pose.translation.y(), pose.translation.z()}},
+                  {"rotation_sigma_deg", rig.rotation_sigma_rad[k] * 180 / std::numbers::pi},
+                  {"translation_sigma", rig.translation_sigma[k]}}}};
+    for (size_t i = 0; i < r.parameters.size(); ++i) {
+      camera["parameters"][r.parameter_names[i]] = {
+          {"value", r.parameters[i]},
+          {"sigma", std::isnan(r.sigmas[i]) ? nlohmann::json(nullptr) : nlohmann::json(r.sigmas[i])}};
+    }
+    report["cameras"].push_back(camera);
+    all_poses.push_back({{"camera", k}, {"poses", poses_json(r)}});
+  }
+  if (!o.poses.empty()) {
+    files.emplace_back(o.poses, nlohmann::json({{"convention", kPoseConvention}, {"cameras", all_poses}}).dump(2) + "\n");
+  }
+  write_files_atomically(files, o.output.force);
+  for (const auto& warning : rig.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
+  for (size_t k = 0; k < n; ++k) {
+    for (const auto& text : rig.cameras[k].undetermined) {
+      std::fprintf(stderr, "fishcam: warning: camera %zu: not determined by the data: %s\n", k, text.c_str());
+    }
+  }
+  if (!written.empty() && written[0].calibration && !camera_format_holds_calibration_record(format)) {
+    note_dropped_record(written[0], format, o.output.out);
+  }
+  if (o.output.json) {
+    std::printf("%s\n", report.dump(2).c_str());
+    return;
+  }
+  std::printf("calibrated a rig of %zu cameras from %ld instants: rms %.4f px (2-D; %.4f per coordinate); wrote %s\n",
+              n, rig.instants, rig.rms_px, rig.rms_px / std::sqrt(2.0), o.output.out.c_str());
+  for (size_t k = 0; k < n; ++k) {
+    const CalibrationResult& r = rig.cameras[k];
+    const Pose& pose = *r.camera.pose;
+    std::printf("  camera %zu (%s, %zu images, rms %.4f px): ", k, std::string(model_name(r.camera.model)).c_str(),
+                r.used_images.size(), r.rms_px);
+    if (k == 0) {
+      std::printf("the rig's frame\n");
+    } else {
+      std::printf("rotation %.4f deg +- %.2g, translation (%.6g, %.6g, %.6g) +- %.2g\n",
+                  Eigen::AngleAxisd(pose.rotation).angle() * 180 / std::numbers::pi,
+                  rig.rotation_sigma_rad[k] * 180 / std::numbers::pi, pose.translation.x(), pose.translation.y(),
+                  pose.translation.z(), rig.translation_sigma[k]);
+    }
+  }
+}
+
 }  // namespace
 
 void register_calibrate(CLI::App& app) {
   auto* cmd = app.add_subcommand("calibrate", "Calibrate a camera model from chessboard corners: joint Ceres solve "
                                               "of intrinsics and board poses, robust, with uncertainties");
-  struct Options {
-    std::string corners, board, model, images, poses, theta_limit;
-    std::string imagersize;
-    double spacing = 0;
-    int threads = int(std::max(1u, std::thread::hardware_concurrency()));
-    CameraOutputOptions output;
-  };
-  auto o = std::make_shared<Options>();
-  cmd->add_option("--corners", o->corners, "corners.vnl (mrcal's format)")->required();
+  auto o = std::make_shared<CalibrateOptions>();
+  cmd->add_option("--corners", o->corners,
+                  "corners.vnl (mrcal's format); once per camera for a rig (images of one instant share their file "
+                  "name)")
+      ->required();
   cmd->add_option("--board", o->board, "Inner corners WxH")->required();
   cmd->add_option("--spacing", o->spacing, "Corner spacing (m)")->required()->check(CLI::PositiveNumber);
-  cmd->add_option("--imagersize", o->imagersize, "Image size W,H (or WxH)")->required();
-  cmd->add_option("--model", o->model, "Model: " + fishcam::model_names_text())
+  cmd->add_option("--imagersize", o->imagersize, "Image size WxH (or W,H); for a rig once, or once per camera")
+      ->required();
+  cmd->add_option("--model", o->model,
+                  "Model: " + fishcam::model_names_text() + "; for a rig one, or one per camera (comma-separated)")
       ->required();
   cmd->add_option("--images", o->images,
                   "Use only the images whose file name matches one of these shell patterns (comma-separated)");
@@ -87,12 +187,14 @@ void register_calibrate(CLI::App& app) {
   cmd->callback([o] {
     std::vector<OutputFile> outputs = {{o->output.out}};
     if (!o->poses.empty()) outputs.push_back({o->poses});
-    check_outputs(outputs, {o->corners}, o->output.force);
+    check_outputs(outputs, o->corners, o->output.force);
     const BoardSpec board = parse_board(o->board, o->spacing);
+    if (o->corners.size() > 1) return calibrate_rig_command(*o, board);
+    if (o->imagersize.size() > 1) throw Error("--imagersize: one camera takes one image size");
     const ModelSpec spec = parse_model_spec(o->model);
     const CameraFormat format = o->output.resolved_format();
-    const auto [width, height] = parse_image_size(o->imagersize, "--imagersize");
-    auto observations = read_corners(o->corners, board);
+    const auto [width, height] = parse_image_size(o->imagersize[0], "--imagersize");
+    auto observations = read_corners(o->corners[0], board);
     if (!o->images.empty()) observations = select_images(std::move(observations), o->images);
     const CalibrationResult result = calibrate(observations, board, width, height, spec, {o->threads});
     const CameraParameters camera = apply_theta_limit(result.camera, o->theta_limit);

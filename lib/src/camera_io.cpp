@@ -374,6 +374,59 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
   return content;
 }
 
+bool camera_format_holds_rig(CameraFormat format) { return format_spec(format).write_rig != nullptr; }
+
+std::string format_rig(const std::vector<CameraParameters>& cameras, CameraFormat format) {
+  const detail::FormatSpec& spec = format_spec(format);
+  if (!spec.write_rig) {
+    std::string holders;
+    for (const auto* s : detail::format_table()) {
+      if (s->write_rig) holders += std::string(holders.empty() ? "" : ", ") + std::string(s->name);
+    }
+    throw Error("the " + std::string(spec.name) + " format holds one camera, not a rig (rigs: " + holders + ")");
+  }
+  if (cameras.empty()) throw Error("a rig needs at least one camera");
+  std::vector<CameraParameters> written;
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const CameraParameters& camera = cameras[i];
+    Camera check(camera);
+    const std::string which = "camera " + std::to_string(i) + ": ";
+    if (!camera.pose) throw Error(which + "a rig camera needs its pose relative to camera 0");
+    if (camera.theta_limit && !spec.holds_theta_limit) {
+      throw Error(which + "theta_limit: the " + std::string(spec.name) +
+                  " format cannot store a user field-of-view limit (fishcam JSON can)");
+    }
+    if (!spec.holds(model_name(camera.model))) {
+      try {
+        detail::cannot_hold(camera, format);
+      } catch (const Error& e) {
+        throw Error(which + e.what());
+      }
+    }
+    CameraParameters w = spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera);
+    if (!spec.holds_calibration_record) w.calibration.reset();
+    written.push_back(std::move(w));
+  }
+  std::string content = spec.write_rig(written);
+  for (size_t i = 0; i < cameras.size(); ++i) {  // every camera reads back
+    CameraReadOptions options;
+    options.format = format;
+    options.camera = std::to_string(i);
+    try {
+      parse_camera(content, "", options);
+    } catch (const Error& e) {
+      throw Error("the " + std::string(to_string(format)) + " format cannot hold camera " + std::to_string(i) +
+                  " of this rig (" + e.what() + ")");
+    }
+  }
+  return content;
+}
+
+void write_rig(const std::vector<CameraParameters>& cameras, const std::filesystem::path& path, CameraFormat format,
+               bool overwrite) {
+  write_file_atomically(path, format_rig(cameras, format), overwrite);
+}
+
 void write_camera(const CameraParameters& camera, const std::filesystem::path& path, CameraFormat format,
                   bool overwrite) {
   write_file_atomically(path, format_camera(camera, format), overwrite);

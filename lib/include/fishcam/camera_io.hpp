@@ -72,6 +72,16 @@ Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& o
 // height, cx, cy, pixel_scale, theta_max_deg, rho_max_px, fov_deg, pose, ...).
 std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> format = std::nullopt);
 
+// A camera rig in one file: every camera with its pose relative to the first
+// (CameraParameters::pose = camera -> camera 0). fishcam JSON ("fishcam_rig"),
+// Kalibr (camN with T_cn_cnm1, no T_cam_imu) and basalt (T_imu_cam, camera 0
+// standing in for the IMU) hold rigs; the others refuse in one line. Read back
+// with read_camera(path, {.camera = "N"}).
+bool camera_format_holds_rig(CameraFormat format);
+std::string format_rig(const std::vector<CameraParameters>& cameras, CameraFormat format);
+void write_rig(const std::vector<CameraParameters>& cameras, const std::filesystem::path& path, CameraFormat format,
+               bool overwrite = false);
+
 // Whether the format keeps a camera's calibration record (fishcam JSON only).
 bool camera_format_holds_calibration_record(CameraFormat format);
 

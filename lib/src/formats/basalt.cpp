@@ -105,9 +105,26 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
+namespace {
+
+// One entry per camera in T_imu_cam (camera -> camera 0: the first camera stands in
+// for the IMU), intrinsics and resolution.
+std::string write_rig(const std::vector<CameraParameters>& cameras) {
+  nlohmann::json v = {{"T_imu_cam", nlohmann::json::array()},
+                      {"intrinsics", nlohmann::json::array()},
+                      {"resolution", nlohmann::json::array()}};
+  for (const CameraParameters& p : cameras) {
+    const nlohmann::json one = nlohmann::json::parse(write(p))["value0"];
+    for (const char* key : {"T_imu_cam", "intrinsics", "resolution"}) v[key].push_back(one[key][0]);
+  }
+  return nlohmann::json{{"value0", v}}.dump(4) + "\n";
+}
+
+}  // namespace
+
 extern const FormatSpec basalt_format{CameraFormat::basalt, "basalt", "basalt calibration JSON", {".json"},
                                       {"kannala-brandt", "equidistant", "double-sphere", "extended-unified", "unified",
                                        "pinhole"},
-                                      score, read, write};
+                                      score, read, write, false, false, false, write_rig};
 
 }  // namespace fishcam::detail

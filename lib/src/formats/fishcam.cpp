@@ -11,7 +11,7 @@ constexpr double kDeg = 180 / std::numbers::pi;
 
 int score(const Content& c) {
   const auto* j = c.json();
-  return j && j->is_object() && j->contains("fishcam_camera") ? 100 : 0;
+  return j && j->is_object() && (j->contains("fishcam_camera") || j->contains("fishcam_rig")) ? 100 : 0;
 }
 
 // "calibration": {"theta_max_deg", "theta_max_by_azimuth_deg" (one per 15-degree
@@ -59,10 +59,7 @@ nlohmann::json calibration_json(const CalibrationRecord& r) {
   return j;
 }
 
-std::vector<NamedCamera> read(const Content& c) {
-  const DocFields f(c.json_document(), c.source());
-  const double version = f.number("fishcam_camera");
-  if (version != 1) f.fail("fishcam_camera", "unsupported format version (this build reads version 1)");
+CameraParameters read_camera_fields(const DocFields& f) {
   CameraParameters p;
   p.width = f.positive_integer("width");
   p.height = f.positive_integer("height");
@@ -80,12 +77,31 @@ std::vector<NamedCamera> read(const Content& c) {
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
   if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
   if (f.has("calibration")) p.calibration = read_calibration(f.object("calibration"));
-  return {{"0", p, {}}};
+  return p;
 }
 
-std::string write(const CameraParameters& p) {
-  nlohmann::json root = {{"fishcam_camera", 1},
-                         {"width", p.width},
+// One camera ({"fishcam_camera": 1, ...}) or a rig ({"fishcam_rig": 1, "cameras":
+// [{"name": ..., the camera's fields}, ...]}, poses camera -> camera 0).
+std::vector<NamedCamera> read(const Content& c) {
+  const DocFields f(c.json_document(), c.source());
+  if (f.has("fishcam_rig")) {
+    if (f.number("fishcam_rig") != 1) f.fail("fishcam_rig", "unsupported format version (this build reads version 1)");
+    const size_t n = f.size("cameras");
+    if (n == 0) f.fail("cameras", "expected a list of cameras");
+    std::vector<NamedCamera> out;
+    for (size_t i = 0; i < n; ++i) {
+      const DocFields camera = f.item("cameras", i);
+      out.push_back({camera.has("name") ? camera.string("name") : std::to_string(i), read_camera_fields(camera), {}});
+    }
+    return out;
+  }
+  const double version = f.number("fishcam_camera");
+  if (version != 1) f.fail("fishcam_camera", "unsupported format version (this build reads version 1)");
+  return {{"0", read_camera_fields(f), {}}};
+}
+
+nlohmann::json camera_json(const CameraParameters& p) {
+  nlohmann::json root = {{"width", p.width},
                          {"height", p.height},
                          {"principal_point", {p.principal_point.x(), p.principal_point.y()}},
                          {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
@@ -94,12 +110,28 @@ std::string write(const CameraParameters& p) {
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
   if (p.calibration) root["calibration"] = calibration_json(*p.calibration);
+  return root;
+}
+
+std::string write(const CameraParameters& p) {
+  nlohmann::json root = {{"fishcam_camera", 1}};
+  root.update(camera_json(p));
   return root.dump(2) + "\n";
+}
+
+std::string write_rig(const std::vector<CameraParameters>& cameras) {
+  nlohmann::json list = nlohmann::json::array();
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    nlohmann::json camera = {{"name", "cam" + std::to_string(i)}};
+    camera.update(camera_json(cameras[i]));
+    list.push_back(camera);
+  }
+  return nlohmann::json{{"fishcam_rig", 1}, {"cameras", list}}.dump(2) + "\n";
 }
 
 }  // namespace
 
 extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
-                                       {}, score, read, write, true, true, true};
+                                       {}, score, read, write, true, true, true, write_rig};
 
 }  // namespace fishcam::detail

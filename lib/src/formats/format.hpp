@@ -80,6 +80,9 @@ struct FormatSpec {
   // Holds a calibration record (observed angles, covariance); format_camera drops
   // the record for the others (callers say so: camera_format_holds_calibration_record).
   bool holds_calibration_record = false;
+  // Several cameras with their poses relative to the first (camera -> camera 0), in
+  // one file; nullptr for formats that hold one camera.
+  std::string (*write_rig)(const std::vector<CameraParameters>&) = nullptr;
 
   bool holds(std::string_view model) const;
 };
@@ -160,6 +163,7 @@ std::array<double, 6> rt_cam_ref_from_pose(const Pose& pose);
 std::optional<Pose> pose_from_matrix(const std::vector<double>& m16, std::string* problem);
 std::array<double, 16> matrix_from_pose(const Pose& pose);
 Pose inverse(const Pose& pose);
+Pose compose_poses(const Pose& a, const Pose& b);  // a after b
 // A pose as JSON: quaternion (x, y, z, w: scalar last, unit norm to 1e-6) under
 // quaternion_key, and "translation".
 Pose pose_from_json(const DocFields& f, const char* quaternion_key);

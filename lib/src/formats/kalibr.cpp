@@ -54,6 +54,7 @@ void read_size_and_pose(const DocFields& f, CameraParameters* p) {
 std::vector<NamedCamera> read(const Content& c) {
   const DocNode& root = c.yaml_or_throw();
   std::vector<NamedCamera> out;
+  std::vector<std::pair<size_t, Pose>> chained;  // T_cn_cnm1 by camera index
   for (size_t i = 0; i < root.items.size(); ++i) {
     if (!is_camera(root.items[i])) continue;
     const DocFields f(root.items[i], c.source(), root.keys[i] + ".");
@@ -116,10 +117,25 @@ std::vector<NamedCamera> read(const Content& c) {
       f.fail("camera_model", "unsupported " + quoted_for_message(model) + " (expected pinhole, omni, ds or eucm)");
     }
     read_size_and_pose(f, &p);
-    if (f.has("T_cn_cnm1")) named.notes.push_back(text_for_message(root.keys[i]) + ".T_cn_cnm1 (relative to the previous camera) is not read");
+    if (f.has("T_cn_cnm1")) {
+      if (p.pose) {
+        named.notes.push_back(text_for_message(root.keys[i]) + ".T_cn_cnm1 is not read (T_cam_imu gives the pose)");
+      } else {
+        chained.emplace_back(out.size(), pose_of(f, "T_cn_cnm1"));
+      }
+    }
     out.push_back(std::move(named));
   }
   if (out.empty()) throw Error(c.source() + ": no camera (a Kalibr camchain has cam0: camera_model, intrinsics, ...)");
+  // A rig without an IMU: T_cn_cnm1 (camera n-1 -> camera n) on every camera after
+  // the first gives each camera's pose relative to the first (camera -> camera 0).
+  if (!chained.empty()) {
+    if (chained.size() + 1 != out.size() || chained.front().first != 1) {
+      throw Error(c.source() + ": T_cn_cnm1 must be on every camera after the first (and only there)");
+    }
+    out[0].camera.pose = Pose{};
+    for (const auto& [n, t] : chained) out[n].camera.pose = compose_poses(*out[n - 1].camera.pose, inverse(t));
+  }
   return out;
 }
 
@@ -165,9 +181,32 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
+namespace {
+
+// Every camera as camN with T_cn_cnm1 (camera n-1 -> camera n) from the poses
+// (camera -> camera 0); no T_cam_imu.
+std::string write_rig(const std::vector<CameraParameters>& cameras) {
+  std::string out;
+  for (size_t n = 0; n < cameras.size(); ++n) {
+    CameraParameters alone = cameras[n];
+    alone.pose.reset();
+    std::string block = write(alone);
+    block.replace(0, 4, "cam" + std::to_string(n));  // "cam0" -> "camN"
+    out += block;
+    if (n > 0) {
+      const auto m = matrix_from_pose(compose_poses(inverse(*cameras[n].pose), *cameras[n - 1].pose));
+      out += "  T_cn_cnm1:\n";
+      for (int r = 0; r < 4; ++r) out += "  - " + yaml_list({m[4 * r], m[4 * r + 1], m[4 * r + 2], m[4 * r + 3]}) + "\n";
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 extern const FormatSpec kalibr_format{CameraFormat::kalibr, "kalibr", "Kalibr camchain YAML", {".yaml", ".yml"},
                                       {"kannala-brandt", "equidistant", "pinhole", "unified", "mei", "double-sphere",
                                        "extended-unified"},
-                                      score, read, write};
+                                      score, read, write, false, false, false, write_rig};
 
 }  // namespace fishcam::detail
