@@ -242,7 +242,8 @@ TEST_F(CliHostile, FileTextInMessagesIsEscaped) {
   const std::string camera = "  camera_model: pinhole\n  intrinsics: [300, 300, 320, 240]\n  resolution: [640, 480]\n"
                              "  distortion_model: none\n  distortion_coeffs: []\n";
   test::write_file(dir_ / "keys.yaml", "\"ca\\rm0\":\n" + camera + "\"cam\\xe9\":\n" + camera +
-                                           "  T_cn_cnm1: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n");
+                                           "  T_cn_cnm1: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n"
+                                           "  T_cam_imu: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n");
   expect_refused("info " + q("keys.yaml") + " --camera 5", "(the file has 0 = 'ca\\rm0', 1 = 'cam\\xc3\\xa9')");
   const auto note = run_fishcam("info " + q("keys.yaml") + " --camera 1 --json");
   EXPECT_EQ(note.exit_code, 0) << note.err;

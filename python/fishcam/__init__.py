@@ -26,7 +26,9 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
     ValidDomain,
     FieldOfView,
     __version__,
+    RigCalibration,
     calibrate,
+    calibrate_rig,
     derive_seed,
     get_num_threads,
     random_change_in,
@@ -35,7 +37,7 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
 from . import _fishcam
 
 __all__ = [
-    "AngleBin", "Calibration", "Camera", "calibrate", "read_corners", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
+    "AngleBin", "Calibration", "Camera", "RigCalibration", "calibrate", "calibrate_rig", "read_corners", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
     "random_change", "set_num_threads", "presets", "change_to_dict", "__version__",
 ]
 

@@ -4,7 +4,7 @@ fishcam's C++ library (use the fishcam package, not this module)
 from __future__ import annotations
 import numpy
 import typing
-__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'sampling_names', 'set_num_threads']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'sampling_names', 'set_num_threads']
 class Error(ValueError):
     pass
 class ValidDomain:
@@ -619,6 +619,42 @@ class Calibration:
         """
         What the user should know (list of str).
         """
+class RigCalibration:
+    """
+    A camera rig's joint calibration (what `fishcam calibrate --corners A --corners B ... --json` reports), typed.
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def cameras(self) -> list[Calibration]:
+        """
+        Per camera its Calibration; camera.pose is camera -> camera 0.
+        """
+    @property
+    def instants(self) -> int:
+        """
+        Distinct instants with a board.
+        """
+    @property
+    def rms_px(self) -> float:
+        """
+        RMS 2-D reprojection error over every camera (px).
+        """
+    @property
+    def rotation_sigma_deg(self) -> list[float]:
+        """
+        Per camera, 1-sigma of its rotation relative to camera 0 (degrees; the largest angle-axis component).
+        """
+    @property
+    def translation_sigma(self) -> list[float]:
+        """
+        Per camera, 1-sigma of its translation relative to camera 0 (board units; the largest component).
+        """
+    @property
+    def warnings(self) -> list[str]:
+        """
+        What the user should know (list of str).
+        """
 def _input_address(arg0: typing.Any, arg1: str) -> int:
     ...
 def affine_forward(points: typing.Any, change: AffineChange, width: int, height: int) -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
@@ -634,6 +670,10 @@ def affine_warp_depth(depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.An
 def calibrate(observations: list[typing.Any], board: tuple[int, int], spacing: float, image_size: tuple[int, int], model: str, threads: int = 1) -> Calibration:
     """
     Calibrates `model` from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot determine a camera (a transposed board, one pose, a principal point off the image, ...).
+    """
+def calibrate_rig(cameras: list[typing.Any], board: tuple[int, int], spacing: float, threads: int = 1) -> RigCalibration:
+    """
+    Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per camera, observations as read_corners gives them; images of one instant share their file name (the last path component). Every camera's intrinsics, its pose relative to camera 0 and the boards' poses: a RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.
     """
 def check_depth_prior(arg0: str) -> None:
     """

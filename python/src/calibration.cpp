@@ -125,6 +125,52 @@ void bind_calibration(py::module_& m) {
       "board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for "
       "the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot "
       "determine a camera (a transposed board, one pose, a principal point off the image, ...).");
+  py::class_<RigCalibrationResult>(m, "RigCalibration",
+                                   "A camera rig's joint calibration (what `fishcam calibrate --corners A --corners B "
+                                   "... --json` reports), typed.")
+      .def_readonly("cameras", &RigCalibrationResult::cameras,
+                    "Per camera its Calibration; camera.pose is camera -> camera 0.")
+      .def_property_readonly(
+          "rotation_sigma_deg",
+          [](const RigCalibrationResult& r) {
+            std::vector<double> out;
+            for (double s : r.rotation_sigma_rad) out.push_back(s * kDeg);
+            return out;
+          },
+          "Per camera, 1-sigma of its rotation relative to camera 0 (degrees; the largest angle-axis component).")
+      .def_readonly("translation_sigma", &RigCalibrationResult::translation_sigma,
+                    "Per camera, 1-sigma of its translation relative to camera 0 (board units; the largest "
+                    "component).")
+      .def_readonly("rms_px", &RigCalibrationResult::rms_px, "RMS 2-D reprojection error over every camera (px).")
+      .def_readonly("instants", &RigCalibrationResult::instants, "Distinct instants with a board.")
+      .def_readonly("warnings", &RigCalibrationResult::warnings, "What the user should know (list of str).")
+      .def("__repr__", [](const RigCalibrationResult& r) {
+        return "<fishcam.RigCalibration " + std::to_string(r.cameras.size()) + " cameras, " +
+               std::to_string(r.instants) + " instants>";
+      });
+  m.def(
+      "calibrate_rig",
+      [](const py::list& cameras, std::pair<int, int> board, double spacing, int threads) {
+        const BoardSpec spec = board_of(board, spacing);
+        std::vector<RigCamera> rig;
+        for (const py::handle& item : cameras) {
+          if (!py::isinstance<py::tuple>(item) || py::len(item) != 3) {
+            throw Error("cameras: expected (observations, (width, height), model) per camera");
+          }
+          RigCamera camera;
+          camera.observations = observations_of(item[py::int_(0)].cast<py::list>());
+          std::tie(camera.width, camera.height) = item[py::int_(1)].cast<std::pair<int, int>>();
+          camera.model = parse_model_spec(item[py::int_(2)].cast<std::string>());
+          rig.push_back(std::move(camera));
+        }
+        py::gil_scoped_release release;
+        return calibrate_rig(rig, spec, {threads});
+      },
+      py::arg("cameras"), py::arg("board"), py::arg("spacing"), py::arg("threads") = 1,
+      "Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per "
+      "camera, observations as read_corners gives them; images of one instant share their file name (the last "
+      "path component). Every camera's intrinsics, its pose relative to camera 0 and the boards' poses: a "
+      "RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.");
 }
 
 void bind_calibration_record(py::class_<Camera>& camera) {

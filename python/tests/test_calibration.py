@@ -1,0 +1,104 @@
+"""fishcam.calibrate / calibrate_rig on synthetic boards, and what a calibrated Camera
+knows about its data (projection uncertainty, observed angles) -- through Python."""
+
+import os
+import pickle
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import fishcam
+
+DATA = Path(os.environ.get("FISHCAM_DATA_DIR", Path(__file__).resolve().parents[2] / "data"))
+BOARD = (9, 6)
+SPACING = 0.1
+
+
+def lens() -> fishcam.Camera:
+    return fishcam.Camera.read(str(DATA / "kannala_brandt.yaml")).resized(640, 483)
+
+
+def rotation(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rx = np.array([[1, 0, 0], [0, cp, -sp], [0, sp, cp]])
+    rz = np.array([[cr, -sr, 0], [sr, cr, 0], [0, 0, 1]])
+    return ry @ rx @ rz
+
+
+def board_points() -> np.ndarray:
+    points = np.zeros((54, 3))
+    points[:, 0] = np.tile(np.arange(9), 6) * SPACING
+    points[:, 1] = np.repeat(np.arange(6), 9) * SPACING
+    return points
+
+
+def stereo_boards(camera: fishcam.Camera, baseline: float, count: int, noise: float,
+                  seed: int) -> tuple[list[Any], list[Any]]:
+    """Boards in front of a stereo pair (camera 1 at +baseline along x, turned 10 degrees):
+    each camera observes the boards it sees whole, images named by instant."""
+    random = np.random.default_rng(seed)
+    right = rotation(np.radians(10), 0, 0)
+    left_obs: list[Any] = []
+    right_obs: list[Any] = []
+    for i in range(count):
+        r = rotation(*random.uniform(-0.6, 0.6, 3))
+        centre = np.array([random.uniform(-1.2, 1.2), random.uniform(-0.8, 0.8), random.uniform(0.8, 1.6)])
+        points = (board_points() - board_points().mean(axis=0)) @ r.T + centre
+        for observations, transform in ((left_obs, lambda p: p), (right_obs, lambda p: (p - [baseline, 0, 0]) @ right)):
+            pixels, ok = camera.project(transform(points))
+            inside = ok & (pixels[:, 0] >= 0) & (pixels[:, 1] >= 0) & (pixels[:, 0] <= 639) & (pixels[:, 1] <= 482)
+            if inside.all():
+                observations.append((f"cam/{i:03d}.png", pixels + random.normal(0, noise, pixels.shape)))
+    return left_obs, right_obs
+
+
+def test_calibrate_recovers_the_lens_and_carries_its_record() -> None:
+    camera = lens()
+    left, _ = stereo_boards(camera, 0.2, 40, 0.2, 1)
+    result = fishcam.calibrate(left, BOARD, SPACING, (640, 483), "kannala-brandt", threads=2)
+    assert isinstance(result, fishcam.Calibration)
+    assert result.rms_px == pytest.approx(0.2 * np.sqrt(2), rel=0.2)
+    assert result.rms_per_coordinate_px == pytest.approx(result.rms_px / np.sqrt(2))
+    truth = camera.parameters[0] * camera.pixel_scale[0]  # calibration gives a_x = 1
+    assert abs(result.parameters["f"] - truth) < 4 * result.sigmas["f"]
+    assert len(result.poses) == len(result.images) == len(result.per_image_rms_px)
+    calibrated = result.camera
+    assert calibrated.observed_theta_max_deg is not None
+    sigma = calibrated.projection_uncertainty(np.array([[320.0, 241.0], [-1000.0, 0.0]]), distance=1.0)
+    assert 0 < sigma[0] < 0.2 and np.isnan(sigma[1])
+    # The record survives pickling (DataLoader workers) and fishcam JSON, not other formats.
+    assert pickle.loads(pickle.dumps(calibrated)).observed_theta_max_deg == calibrated.observed_theta_max_deg
+    assert fishcam.Camera.from_json(calibrated.to_json()).observed_theta_max_deg == calibrated.observed_theta_max_deg
+    with pytest.raises(fishcam.Error, match="no calibration"):
+        camera.projection_uncertainty(np.array([[320.0, 241.0]]))
+
+
+def test_calibrate_refuses_what_cannot_be_a_camera() -> None:
+    left, _ = stereo_boards(lens(), 0.2, 40, 0.2, 2)
+    with pytest.raises(fishcam.Error, match="pass --board 9x6"):
+        fishcam.calibrate(left, (6, 9), SPACING, (640, 483), "kannala-brandt")
+    with pytest.raises(fishcam.Error, match="at least 3"):
+        fishcam.calibrate(left[:2], BOARD, SPACING, (640, 483), "kannala-brandt")
+    with pytest.raises(fishcam.Error):
+        fishcam.calibrate([("a.png", np.zeros((54, 3)))], BOARD, SPACING, (640, 483), "kannala-brandt")
+
+
+def test_calibrate_rig_recovers_a_stereo_pair() -> None:
+    camera = lens()
+    left, right = stereo_boards(camera, 0.2, 60, 0.0, 3)
+    assert len(set(n for n, _ in left) & set(n for n, _ in right)) >= 5
+    rig = fishcam.calibrate_rig([(left, (640, 483), "kannala-brandt"), (right, (640, 483), "kannala-brandt")],
+                                BOARD, SPACING, threads=2)
+    assert isinstance(rig, fishcam.RigCalibration) and len(rig.cameras) == 2
+    assert rig.rms_px < 1e-6
+    r, t = rig.cameras[1].camera.pose  # camera 1 -> camera 0
+    assert np.allclose(t, [0.2, 0, 0], atol=1e-5)
+    assert np.allclose(r, rotation(np.radians(10), 0, 0), atol=1e-6)
+    r0, t0 = rig.cameras[0].camera.pose
+    assert np.allclose(r0, np.eye(3)) and np.allclose(t0, 0)
+    assert rig.rotation_sigma_deg[0] == 0
+    with pytest.raises(fishcam.Error, match="at least 2 cameras"):
+        fishcam.calibrate_rig([(left, (640, 483), "kannala-brandt")], BOARD, SPACING)
