@@ -202,11 +202,16 @@ ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<dou
   double cost = 0;
   ceres::CRSMatrix crs;
   problem->Evaluate(options, &cost, nullptr, nullptr, &crs);
-  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  // J^T J from the sparse rows (each corner touches its intrinsics and one pose).
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(crs.num_cols, crs.num_cols);
   for (int r = 0; r < crs.num_rows; ++r) {
-    for (int k = crs.rows[size_t(r)]; k < crs.rows[size_t(r) + 1]; ++k) jacobian(r, crs.cols[size_t(k)]) = crs.values[size_t(k)];
+    const int begin = crs.rows[size_t(r)], end = crs.rows[size_t(r) + 1];
+    for (int a = begin; a < end; ++a) {
+      for (int b = begin; b < end; ++b) {
+        normal(crs.cols[size_t(a)], crs.cols[size_t(b)]) += crs.values[size_t(a)] * crs.values[size_t(b)];
+      }
+    }
   }
-  const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
   const Eigen::Index m = normal.rows();
   Eigen::VectorXd scale(m);  // to unit curvature: the threshold then has no units
   for (Eigen::Index i = 0; i < m; ++i) scale[i] = normal(i, i) > 0 ? 1 / std::sqrt(normal(i, i)) : 0.0;
@@ -249,19 +254,18 @@ ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<
 }
 
 // The left Jacobian of SO(3) at angle-axis r: R(r + dr) = exp([J dr]x) R(r) to first order.
-Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& r) {
-  const double angle = r.norm();
-  Eigen::Matrix3d k;
-  k << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-  if (angle < 1e-8) return Eigen::Matrix3d::Identity() + 0.5 * k;
-  return Eigen::Matrix3d::Identity() + (1 - std::cos(angle)) / (angle * angle) * k +
-         (angle - std::sin(angle)) / (angle * angle * angle) * k * k;
-}
-
 Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
   Eigen::Matrix3d k;
   k << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
   return k;
+}
+
+Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& r) {
+  const double angle = r.norm();
+  const Eigen::Matrix3d k = cross_matrix(r);
+  if (angle < 1e-8) return Eigen::Matrix3d::Identity() + 0.5 * k;
+  return Eigen::Matrix3d::Identity() + (1 - std::cos(angle)) / (angle * angle) * k +
+         (angle - std::sin(angle)) / (angle * angle * angle) * k * k;
 }
 
 // What projection uncertainty needs of the full covariance (mrcal's definition):
@@ -560,8 +564,7 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
   result->camera = o.camera(s, make_model(spec.name, s.model));
   const Camera final_camera(result->camera);
   double sum2 = 0;
-  CalibrationRecord record;
-  record.theta_max_by_azimuth.fill(std::numeric_limits<double>::quiet_NaN());
+  CalibrationRecord record = CalibrationRecord::nothing_observed();
   for (size_t b = 0; b < used.size(); ++b) {
     const BoardPose pose = pose_of(s.poses[b]);
     result->poses.push_back(pose);
@@ -572,10 +575,7 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
       Eigen::Vector2d q;
       final_camera.project(point, &q);
       board_sum2 += (q - kept_corners[b][i]).squaredNorm();
-      const double theta = std::atan2(point.head<2>().norm(), point.z());
-      double& sector = record.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(std::atan2(point.y(), point.x())))];
-      if (!(sector >= theta)) sector = theta;  // NaN: the sector's first corner
-      record.theta_max = std::max(record.theta_max, theta);
+      record.observe(point);
     }
     sum2 += board_sum2;
     result->per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max<size_t>(1, kept_points[b].size()))));
@@ -854,8 +854,9 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();
     double sum2 = 0;
     CalibrationRecord& record = *p.calibration;
-    record.theta_max = 0;
-    record.theta_max_by_azimuth.fill(std::numeric_limits<double>::quiet_NaN());
+    const Eigen::MatrixXd own_covariance = record.covariance;
+    record = CalibrationRecord::nothing_observed();
+    record.covariance = own_covariance;
     std::set<std::pair<std::string, int>> outliers;
     for (const auto& o : singles[k].outliers) outliers.insert({o.filename, o.corner});
     for (const auto& [i, o] : observed[k]) {
@@ -868,10 +869,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
         Eigen::Vector2d q;
         camera.project(point, &q);
         board_sum2 += (q - o->corners[c]).squaredNorm(), ++used;
-        const double theta = std::atan2(point.head<2>().norm(), point.z());
-        double& sector = record.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(std::atan2(point.y(), point.x())))];
-        if (!(sector >= theta)) sector = theta;
-        record.theta_max = std::max(record.theta_max, theta);
+        record.observe(point);
       }
       sum2 += board_sum2;
       r.poses.push_back(board_pose);

@@ -203,6 +203,19 @@ CameraParameters limited_to_observed(CameraParameters camera, double margin) {
   return camera;
 }
 
+CalibrationRecord CalibrationRecord::nothing_observed() {
+  CalibrationRecord r;
+  r.theta_max_by_azimuth.fill(kNaN);
+  return r;
+}
+
+void CalibrationRecord::observe(const Eigen::Vector3d& point) {
+  const double theta = std::atan2(point.head<2>().norm(), point.z());
+  double& sector = theta_max_by_azimuth[size_t(sector_of(std::atan2(point.y(), point.x())))];
+  if (!(sector >= theta)) sector = theta;  // NaN: the sector's first corner
+  theta_max = std::max(theta_max, theta);
+}
+
 int CalibrationRecord::sector_of(double azimuth) {
   const double turn = 2 * std::numbers::pi;
   const int k = int(std::floor((azimuth + std::numbers::pi) / turn * kAzimuthSectors));

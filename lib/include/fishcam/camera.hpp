@@ -69,6 +69,9 @@ struct CalibrationRecord {
   // board units)), scaled by the solve's residual variance; empty when not known.
   Eigen::MatrixXd covariance;
 
+  // No corner yet (every sector NaN); observe() each corner's camera-frame point.
+  static CalibrationRecord nothing_observed();
+  void observe(const Eigen::Vector3d& point);
   static int sector_of(double azimuth);
   // Whether a camera-frame direction is inside the observed range: theta at most
   // the largest observed in its azimuth sector.
