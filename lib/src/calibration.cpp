@@ -162,7 +162,7 @@ void add_corner_residuals(ceres::Problem* problem, Solve* s, const std::vector<s
 template <template <typename> class Model>
 ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vector3d>>& points,
                              const std::vector<std::vector<Eigen::Vector2d>>& corners, bool intrinsics_fixed,
-                             ceres::LossFunction* loss) {
+                             ceres::LossFunction* loss, int max_iterations = 200) {
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
@@ -174,7 +174,9 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
     problem.SetParameterBlockConstant(&s->ay);
   }
   ceres::Solver::Summary summary;
-  ceres::Solve(detail::solver_options(ceres::SPARSE_SCHUR), &problem, &summary);
+  ceres::Solver::Options options = detail::solver_options(ceres::SPARSE_SCHUR);
+  options.max_num_iterations = max_iterations;
+  ceres::Solve(options, &problem, &summary);
   if (!summary.IsSolutionUsable()) throw Error("calibrate: the solve failed: " + summary.message);
   return summary;
 }
@@ -464,20 +466,27 @@ Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
       const CameraParameters p = o.camera(poly, Polynomial<double>(poly.model));
       const Camera polynomial(p);
       starts = Model<double>::fit_starts(poly.model[0]);
-      starts.push_back(model_params(fit_camera(sample_image(polynomial, 8, 4), spec, p).model));
+      // A start needs no dense fit: about 40 samples across the image.
+      starts.push_back(model_params(fit_camera(sample_image(polynomial, std::max(8, o.width / 40), 4), spec, p).model));
       start = poly;
     } catch (const Error&) {  // no valid polynomial camera: the model's own starts
       starts = Model<double>::fit_starts(start.model[0]);
     }
   }
+  // Every start screened for 25 iterations (enough to tell the basins apart), the
+  // best one finished.
+  constexpr int kScreening = 25;
   std::vector<Solve> candidates(starts.size(), start);
   std::vector<double> costs(starts.size());
   for_each_index(int(starts.size()), o.threads, [&](int k) {
     candidates[size_t(k)].model = starts[size_t(k)];
     ceres::CauchyLoss loss(1.0);
-    costs[size_t(k)] = solve<Model>(&candidates[size_t(k)], o.all_points, o.corners, false, &loss).final_cost;
+    costs[size_t(k)] = solve<Model>(&candidates[size_t(k)], o.all_points, o.corners, false, &loss, kScreening).final_cost;
   });
-  return std::move(candidates[size_t(std::min_element(costs.begin(), costs.end()) - costs.begin())]);
+  Solve best = std::move(candidates[size_t(std::min_element(costs.begin(), costs.end()) - costs.begin())]);
+  ceres::CauchyLoss loss(1.0);
+  solve<Model>(&best, o.all_points, o.corners, false, &loss);
+  return best;
 }
 
 // Step 3, outliers: corners beyond 5 robust sigmas of the robust solve (median
