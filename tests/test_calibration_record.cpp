@@ -379,5 +379,34 @@ TEST(Calibration, DiffComparesWhereTheBoardsWere) {
   }
 }
 
+// convert --theta-limit data: the converted camera keeps the observed angles (the
+// same camera frame), drops the covariance, and stops at the data; a camera
+// without a record is refused in one line, nothing written.
+TEST(Calibration, ConvertCapsAtTheObservedAngles) {
+  const auto dir = test::scratch_dir("convert_theta_limit");
+  const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
+  write_corners(dir / "c.vnl", testing::synthesize_boards(truth, kBoard, 12, 0.3, 11).observations);
+  auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                             " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model kannala-brandt --out " +
+                             test::quoted(dir / "cal.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_fishcam("convert " + test::quoted(dir / "cal.json") + " --to polynomial --theta-limit data+2 --out " +
+                        test::quoted(dir / "poly.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Camera calibrated = read_camera(dir / "cal.json"), converted = read_camera(dir / "poly.json");
+  const auto& record = converted.parameters().calibration;
+  ASSERT_TRUE(record);
+  EXPECT_EQ(record->covariance.size(), 0);  // it belonged to the Kannala-Brandt parameters
+  EXPECT_NEAR(record->theta_max, calibrated.parameters().calibration->theta_max, 1e-12);
+  EXPECT_NEAR(converted.domain().theta_max, record->theta_max + 2 / kDeg, 1e-9);
+  EXPECT_EQ(converted.domain().limited_by, ValidDomain::Limit::user);
+  r = test::run_fishcam("convert " + test::quoted(test::data_path("kannala_brandt.yaml")) +
+                        " --to polynomial --theta-limit data --out " + test::quoted(dir / "none.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("carries no calibration record"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.json"));
+}
+
 }  // namespace
 }  // namespace fishcam
