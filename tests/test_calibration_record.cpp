@@ -115,24 +115,45 @@ TEST(ProjectionUncertainty, NeedsACovarianceAndIsNaNWithoutARay) {
 }
 
 // At xi = 0 the double-sphere model's xi is a combination of f and alpha: the
-// Jacobian has a null direction. Its sigmas were printed as tight numbers (f +-
-// 4.8e-6 while f moved by 10 between halves of the data); now they are "not
-// determined", with the combination named, and the other parameters keep theirs.
+// Jacobian has a null direction there. Its sigmas were printed as tight numbers (f
+// +- 4.8e-6 while f moved by 10 between halves of the data). Where the solve ends in
+// that flat valley depends on rounding (xi ~ 1e-8 in the release build, 0.03 under
+// the sanitizers), so the test holds for both: a parameter is either reported "not
+// determined" (the combination named) or its sigma is honest -- the two halves of
+// the boards (independent calibrations) differ by no more than a few sigmas.
 TEST(Calibration, ParametersTheDataDoNotDetermineHaveNoSigma) {
   CameraParameters p;
   p.width = 960, p.height = 600, p.principal_point = {478, 298};
   p.model = make_model("double-sphere", std::vector<double>{230, 0.0, 0.6});
   const BoardSpec board{9, 6, 0.1};
-  const auto boards = testing::synthesize_boards(Camera(p), board, 30, 0.2, 3);
-  const CalibrationResult r = calibrate(boards.observations, board, p.width, p.height, {"double-sphere"});
-  EXPECT_LT(std::abs(r.parameters[1]), 1e-6);  // the solve ends at xi = 0, where the model is degenerate
+  const auto boards = testing::synthesize_boards(Camera(p), board, 30, 0.2, 3).observations;
+  std::vector<BoardObservation> odd, even;
+  for (size_t b = 0; b < boards.size(); ++b) (b % 2 ? odd : even).push_back(boards[b]);
+  const CalibrationResult r = calibrate(boards, board, p.width, p.height, {"double-sphere"});
+  const CalibrationResult a = calibrate(odd, board, p.width, p.height, {"double-sphere"});
+  const CalibrationResult b = calibrate(even, board, p.width, p.height, {"double-sphere"});
   ASSERT_EQ(r.parameter_names, (std::vector<std::string>{"f", "xi", "alpha", "cx", "cy", "a_y"}));
-  for (int i : {0, 1, 2}) EXPECT_TRUE(std::isnan(r.sigmas[size_t(i)])) << r.parameter_names[size_t(i)];
-  for (int i : {3, 4, 5}) EXPECT_TRUE(std::isfinite(r.sigmas[size_t(i)]) && r.sigmas[size_t(i)] > 0);
-  ASSERT_EQ(r.undetermined.size(), 1u);
-  EXPECT_NE(r.undetermined[0].find("f, xi and alpha trade against each other"), std::string::npos)
-      << r.undetermined[0];
+  int undetermined = 0;
+  for (size_t i = 0; i < 3; ++i) {
+    if (std::isnan(r.sigmas[i])) {
+      ++undetermined;
+    } else {
+      // Halves of the data: each sigma ~ sqrt(2) of the full one, their difference ~ 2 sigma.
+      EXPECT_LE(std::abs(a.parameters[i] - b.parameters[i]), 12 * r.sigmas[i])
+          << r.parameter_names[i] << " sigma " << r.sigmas[i] << " (xi = " << r.parameters[1] << ")";
+    }
+  }
+  if (undetermined > 0) {
+    EXPECT_EQ(undetermined, 3);
+    ASSERT_EQ(r.undetermined.size(), 1u);
+    EXPECT_NE(r.undetermined[0].find("f, xi and alpha trade against each other"), std::string::npos)
+        << r.undetermined[0];
+  }
+  for (size_t i = 3; i < 6; ++i) EXPECT_TRUE(std::isfinite(r.sigmas[i]) && r.sigmas[i] > 0);
+  std::printf("  double-sphere at xi = 0: the solve ended at xi = %.3g; %d of f, xi, alpha undetermined\n",
+              r.parameters[1], undetermined);
   // A well-determined model reports every sigma, and nothing undetermined.
+  p.width = 1280, p.height = 966, p.principal_point = {643, 479};
   p.model = make_model("double-sphere", std::vector<double>{330, 0.3, 0.6});
   const auto determined = calibrate(testing::synthesize_boards(Camera(p), kBoard, 20, 0.2, 3).observations, kBoard,
                                     p.width, p.height, {"double-sphere"});
