@@ -162,7 +162,7 @@ void add_corner_residuals(ceres::Problem* problem, Solve* s, const std::vector<s
 template <template <typename> class Model>
 ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vector3d>>& points,
                              const std::vector<std::vector<Eigen::Vector2d>>& corners, bool intrinsics_fixed,
-                             ceres::LossFunction* loss, int max_iterations = 200) {
+                             ceres::LossFunction* loss, int max_iterations = 200, double tolerance = 1e-15) {
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
@@ -176,6 +176,7 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
   ceres::Solver::Summary summary;
   ceres::Solver::Options options = detail::solver_options(ceres::SPARSE_SCHUR);
   options.max_num_iterations = max_iterations;
+  options.function_tolerance = options.parameter_tolerance = tolerance;
   ceres::Solve(options, &problem, &summary);
   if (!summary.IsSolutionUsable()) throw Error("calibrate: the solve failed: " + summary.message);
   return summary;
@@ -483,9 +484,11 @@ Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
     ceres::CauchyLoss loss(1.0);
     costs[size_t(k)] = solve<Model>(&candidates[size_t(k)], o.all_points, o.corners, false, &loss, kScreening).final_cost;
   });
+  // Finished to 1e-9: the robust solution only decides the outliers; the final
+  // plain solve (step 4) polishes.
   Solve best = std::move(candidates[size_t(std::min_element(costs.begin(), costs.end()) - costs.begin())]);
   ceres::CauchyLoss loss(1.0);
-  solve<Model>(&best, o.all_points, o.corners, false, &loss);
+  solve<Model>(&best, o.all_points, o.corners, false, &loss, 200, 1e-9);
   return best;
 }
 
