@@ -2,6 +2,7 @@
 #include <fnmatch.h>
 
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <numbers>
 #include <set>
@@ -16,9 +17,10 @@
 namespace fishcam::cli {
 namespace {
 
-// --images PATTERN[,PATTERN...]: the observations whose file name matches one of
-// the shell patterns (fnmatch); a pattern that matches nothing is an error (a
-// typo must not calibrate from fewer images than meant).
+// --images PATTERN[,PATTERN...]: the observations whose file name (as the corners
+// file gives it, or its last component) matches one of the shell patterns
+// (fnmatch); a pattern that matches nothing is an error (a typo must not calibrate
+// from fewer images than meant).
 std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, const std::string& list) {
   std::vector<std::string> patterns;
   std::stringstream stream(list);
@@ -32,7 +34,10 @@ std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, c
   for (auto& o : all) {
     bool match = false;
     for (const auto& p : patterns) {
-      if (fnmatch(p.c_str(), o.filename.c_str(), 0) == 0) match = true, unmatched.erase(p);
+      const std::string name = std::filesystem::path(o.filename).filename().string();
+      if (fnmatch(p.c_str(), o.filename.c_str(), 0) == 0 || fnmatch(p.c_str(), name.c_str(), 0) == 0) {
+        match = true, unmatched.erase(p);
+      }
     }
     if (match) kept.push_back(std::move(o));
   }
