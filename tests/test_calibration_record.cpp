@@ -18,6 +18,19 @@ namespace {
 const BoardSpec kBoard{10, 10, 0.1};
 constexpr double kDeg = 180 / std::numbers::pi;
 
+// Synthetic boards all of whose corners lie within max_deg of the optical axis.
+std::vector<BoardObservation> boards_within(const Camera& truth, double max_deg, int count, std::uint64_t seed) {
+  std::vector<BoardObservation> inner;
+  for (const auto& o : testing::synthesize_boards(truth, kBoard, count, 0.2, seed).observations) {
+    const bool confined = std::all_of(o.corners.begin(), o.corners.end(), [&](const Eigen::Vector2d& c) {
+      Eigen::Vector3d ray;
+      return truth.unproject(c, &ray) && std::acos(ray.z()) < max_deg / kDeg;
+    });
+    if (confined) inner.push_back(o);
+  }
+  return inner;
+}
+
 std::vector<BoardObservation> renoised(const std::vector<BoardObservation>& clean, double sigma, std::uint64_t seed) {
   std::mt19937_64 random(seed);
   std::normal_distribution<double> noise(0, sigma);
@@ -165,14 +178,7 @@ TEST(Calibration, ParametersTheDataDoNotDetermineHaveNoSigma) {
 // camera capped at the data stops there (unprojection NaN beyond).
 TEST(Calibration, RecordsTheObservedAnglesAndCapsTheDomainAtThem) {
   const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
-  std::vector<BoardObservation> inner;
-  for (const auto& o : testing::synthesize_boards(truth, kBoard, 80, 0.2, 5).observations) {
-    const bool confined = std::all_of(o.corners.begin(), o.corners.end(), [&](const Eigen::Vector2d& c) {
-      Eigen::Vector3d ray;
-      return truth.unproject(c, &ray) && std::acos(ray.z()) < 60 / kDeg;
-    });
-    if (confined) inner.push_back(o);
-  }
+  const std::vector<BoardObservation> inner = boards_within(truth, 60, 80, 5);
   ASSERT_GE(inner.size(), 8u);
   const CalibrationResult r = calibrate(inner, kBoard, 1280, 966, {"kannala-brandt"});
   const CalibrationRecord& record = *r.camera.calibration;
@@ -307,15 +313,7 @@ namespace {
 TEST(Calibration, InfoAndUncertaintyShowWhatTheDataSupport) {
   const auto dir = test::scratch_dir("calibrate_info");
   const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
-  std::vector<BoardObservation> inner;  // boards within 55 deg of the axis only
-  for (const auto& o : testing::synthesize_boards(truth, kBoard, 80, 0.2, 9).observations) {
-    if (std::all_of(o.corners.begin(), o.corners.end(), [&](const Eigen::Vector2d& c) {
-          Eigen::Vector3d ray;
-          return truth.unproject(c, &ray) && std::acos(ray.z()) < 55 / kDeg;
-        })) {
-      inner.push_back(o);
-    }
-  }
+  const std::vector<BoardObservation> inner = boards_within(truth, 55, 80, 9);
   ASSERT_GE(inner.size(), 6u);
   write_corners(dir / "c.vnl", inner);
   auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
@@ -357,15 +355,7 @@ TEST(Calibration, InfoAndUncertaintyShowWhatTheDataSupport) {
 TEST(Calibration, DiffComparesWhereTheBoardsWere) {
   const auto dir = test::scratch_dir("calibrate_diff");
   const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
-  std::vector<BoardObservation> inner;
-  for (const auto& o : testing::synthesize_boards(truth, kBoard, 80, 0.2, 10).observations) {
-    if (std::all_of(o.corners.begin(), o.corners.end(), [&](const Eigen::Vector2d& c) {
-          Eigen::Vector3d ray;
-          return truth.unproject(c, &ray) && std::acos(ray.z()) < 60 / kDeg;
-        })) {
-      inner.push_back(o);
-    }
-  }
+  const std::vector<BoardObservation> inner = boards_within(truth, 60, 80, 10);
   ASSERT_GE(inner.size(), 8u);
   write_corners(dir / "c.vnl", inner);
   for (const char* model : {"kannala-brandt", "polynomial"}) {

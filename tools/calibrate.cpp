@@ -17,18 +17,23 @@
 namespace fishcam::cli {
 namespace {
 
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream stream(text);
+  for (std::string part; std::getline(stream, part, ',');) parts.push_back(part);
+  return parts;
+}
+
 // --images PATTERN[,PATTERN...]: the observations whose file name (as the corners
 // file gives it, or its last component) matches one of the shell patterns
 // (fnmatch); a pattern that matches nothing is an error (a typo must not calibrate
 // from fewer images than meant).
 std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, const std::string& list) {
-  std::vector<std::string> patterns;
-  std::stringstream stream(list);
-  for (std::string p; std::getline(stream, p, ',');) {
-    if (p.empty()) throw Error("--images: empty pattern in '" + list + "'");
-    patterns.push_back(p);
-  }
+  const std::vector<std::string> patterns = split_commas(list);
   if (patterns.empty()) throw Error("--images: no pattern given");
+  for (const auto& p : patterns) {
+    if (p.empty()) throw Error("--images: empty pattern in '" + list + "'");
+  }
   std::set<std::string> unmatched(patterns.begin(), patterns.end());
   std::vector<BoardObservation> kept;
   for (auto& o : all) {
@@ -69,13 +74,6 @@ struct CalibrateOptions {
   int threads = int(std::max(1u, std::thread::hardware_concurrency()));
   CameraOutputOptions output;
 };
-
-std::vector<std::string> split_commas(const std::string& text) {
-  std::vector<std::string> parts;
-  std::stringstream stream(text);
-  for (std::string part; std::getline(stream, part, ',');) parts.push_back(part);
-  return parts;
-}
 
 // One value for every camera, or one per camera.
 std::vector<std::string> per_camera(const std::vector<std::string>& given, size_t cameras, const char* option) {

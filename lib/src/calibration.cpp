@@ -708,11 +708,6 @@ struct RigCornerResidual {
   }
 };
 
-Pose compose(const Pose& a, const Pose& b) { return {a.rotation * b.rotation, a.rotation * b.translation + a.translation}; }
-Pose inverted(const Pose& a) {
-  const Eigen::Quaterniond r = a.rotation.conjugate();
-  return {r, -(r * a.translation)};
-}
 
 // The mean of rigid transforms: quaternions aligned in sign and averaged, translations averaged.
 Pose mean_pose(const std::vector<Pose>& poses) {
@@ -774,7 +769,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
         std::vector<Pose> estimates;
         for (const auto& [i, pose_b] : seen[b]) {
           if (const auto it = seen[a].find(i); it != seen[a].end()) {
-            estimates.push_back(compose(compose(pose_b, inverted(it->second)), *from_rig[a]));
+            estimates.push_back(compose(compose(pose_b, inverse(it->second)), *from_rig[a]));
           }
         }
         if (!estimates.empty()) from_rig[b] = mean_pose(estimates), grew = true;
@@ -802,21 +797,23 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   for (size_t k = 0; k < n; ++k) {
     for (const auto& [i, pose] : seen[k]) {
       if (placed[size_t(i)]) continue;
-      board_blocks[size_t(i)] = pose_block(compose(inverted(*from_rig[k]), pose));
+      board_blocks[size_t(i)] = pose_block(compose(inverse(*from_rig[k]), pose));
       placed[size_t(i)] = true;
     }
   }
   const auto points = board_points(board);
+  std::vector<std::set<std::pair<std::string, int>>> outliers(n);  // (image, corner) per camera, from step 1
+  for (size_t k = 0; k < n; ++k) {
+    for (const auto& o : singles[k].outliers) outliers[k].insert({o.filename, o.corner});
+  }
   ceres::Problem problem;
   std::vector<long> corners_of(n, 0);
   for (size_t k = 0; k < n; ++k) {
-    std::set<std::pair<std::string, int>> outliers;
-    for (const auto& o : singles[k].outliers) outliers.insert({o.filename, o.corner});
     const int params = int(intrinsics[k].model.size());
     with_model_class(cameras[k].model.name, [&]<template <typename> class Model>() {
       for (const auto& [i, o] : observed[k]) {
         for (size_t c = 0; c < o->corners.size(); ++c) {
-          if (outliers.count({o->filename, int(c)})) continue;
+          if (outliers[k].count({o->filename, int(c)})) continue;
           auto* cost = new ceres::DynamicAutoDiffCostFunction<RigCornerResidual<Model>, 8>(
               new RigCornerResidual<Model>{points[c], o->corners[c], params, k > 0});
           cost->AddParameterBlock(params);
@@ -860,7 +857,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     p.model = make_model(cameras[k].model.name, intrinsics[k].model);
     p.principal_point = intrinsics[k].center;
     p.pixel_scale = {1.0, intrinsics[k].ay};
-    p.pose = inverted(rig_to_camera);  // camera -> camera 0
+    p.pose = inverse(rig_to_camera);  // camera -> camera 0
     const Camera camera(p);
     // Reprojection, board poses (in this camera's frame) and observed angles from the joint solution.
     r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();
@@ -869,14 +866,12 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     const Eigen::MatrixXd own_covariance = record.covariance;
     record = CalibrationRecord::nothing_observed();
     record.covariance = own_covariance;
-    std::set<std::pair<std::string, int>> outliers;
-    for (const auto& o : singles[k].outliers) outliers.insert({o.filename, o.corner});
     for (const auto& [i, o] : observed[k]) {
       const Pose board_pose = compose(rig_to_camera, pose_of(board_blocks[size_t(i)]));
       double board_sum2 = 0;
       long used = 0;
       for (size_t c = 0; c < o->corners.size(); ++c) {
-        if (outliers.count({o->filename, int(c)})) continue;
+        if (outliers[k].count({o->filename, int(c)})) continue;
         const Eigen::Vector3d point = board_pose.rotation * points[c] + board_pose.translation;
         Eigen::Vector2d q;
         camera.project(point, &q);

@@ -192,6 +192,15 @@ void check_calibration_record(const CalibrationRecord& r, size_t model_params) {
 
 }  // namespace
 
+Pose compose(const Pose& a, const Pose& b) {
+  return Pose{(a.rotation * b.rotation).normalized(), a.rotation * b.translation + a.translation};
+}
+
+Pose inverse(const Pose& pose) {
+  const Eigen::Quaterniond r = pose.rotation.conjugate();
+  return Pose{r, -(r * pose.translation)};
+}
+
 CameraParameters limited_to_observed(CameraParameters camera, double margin) {
   if (!camera.calibration) {
     fail("theta limit 'data': the camera carries no calibration record (fishcam calibrate writes one into fishcam "

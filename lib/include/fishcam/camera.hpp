@@ -52,6 +52,9 @@ struct Pose {
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 };
+// a after b: p -> a(b(p)).
+Pose compose(const Pose& a, const Pose& b);
+Pose inverse(const Pose& pose);
 
 // What a calibration learnt from its data, kept with the camera it produced:
 // fishcam JSON holds it, other formats cannot (writing to them drops it, and the

@@ -366,17 +366,6 @@ std::array<double, 16> matrix_from_pose(const Pose& pose) {
   return {r(0, 0), r(0, 1), r(0, 2), t.x(), r(1, 0), r(1, 1), r(1, 2), t.y(), r(2, 0), r(2, 1), r(2, 2), t.z(), 0, 0, 0, 1};
 }
 
-Pose compose_poses(const Pose& a, const Pose& b) {
-  return Pose{(a.rotation * b.rotation).normalized(), a.rotation * b.translation + a.translation};
-}
-
-Pose inverse(const Pose& pose) {
-  Pose out;
-  out.rotation = pose.rotation.conjugate();
-  out.translation = -(out.rotation * pose.translation);
-  return out;
-}
-
 Pose pose_from_json(const DocFields& f, const char* quaternion_key) {
   const std::vector<double> q = f.numbers(quaternion_key, 4, 4);
   const std::vector<double> t = f.numbers("translation", 3, 3);

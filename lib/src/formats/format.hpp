@@ -162,8 +162,6 @@ std::array<double, 6> rt_cam_ref_from_pose(const Pose& pose);
 // A 4x4 row-major rigid transform (last row 0 0 0 1, rotation orthonormal to 1e-6).
 std::optional<Pose> pose_from_matrix(const std::vector<double>& m16, std::string* problem);
 std::array<double, 16> matrix_from_pose(const Pose& pose);
-Pose inverse(const Pose& pose);
-Pose compose_poses(const Pose& a, const Pose& b);  // a after b
 // A pose as JSON: quaternion (x, y, z, w: scalar last, unit norm to 1e-6) under
 // quaternion_key, and "translation".
 Pose pose_from_json(const DocFields& f, const char* quaternion_key);

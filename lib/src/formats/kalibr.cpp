@@ -134,7 +134,7 @@ std::vector<NamedCamera> read(const Content& c) {
       throw Error(c.source() + ": T_cn_cnm1 must be on every camera after the first (and only there)");
     }
     out[0].camera.pose = Pose{};
-    for (const auto& [n, t] : chained) out[n].camera.pose = compose_poses(*out[n - 1].camera.pose, inverse(t));
+    for (const auto& [n, t] : chained) out[n].camera.pose = compose(*out[n - 1].camera.pose, inverse(t));
   }
   return out;
 }
@@ -194,7 +194,7 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
     block.replace(0, 4, "cam" + std::to_string(n));  // "cam0" -> "camN"
     out += block;
     if (n > 0) {
-      const auto m = matrix_from_pose(compose_poses(inverse(*cameras[n].pose), *cameras[n - 1].pose));
+      const auto m = matrix_from_pose(compose(inverse(*cameras[n].pose), *cameras[n - 1].pose));
       out += "  T_cn_cnm1:\n";
       for (int r = 0; r < 4; ++r) out += "  - " + yaml_list({m[4 * r], m[4 * r + 1], m[4 * r + 2], m[4 * r + 3]}) + "\n";
     }
