@@ -138,8 +138,9 @@ TEST(Rig, TheProgramWritesTheRigInEveryFormatThatHoldsOne) {
   const std::string base = "calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model kannala-brandt ";
   int formats = 0;
   std::vector<Pose> first;
-  for (const std::string name : {"rig.json", "rig.yaml", "basalt.json"}) {
-    const std::string format = name == "rig.yaml" ? "kalibr" : name == "basalt.json" ? "basalt" : "fishcam";
+  for (const CameraFormat f : camera_formats()) {  // every format of the table that holds a rig, fishcam first
+    if (!camera_format_holds_rig(f)) continue;
+    const std::string format(to_string(f)), name = "rig_" + format + ".out";
     const auto r = test::run_fishcam(base + "--format " + format + " --out " + test::quoted(dir / name));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     for (size_t k = 0; k < 4; ++k) {
