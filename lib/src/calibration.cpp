@@ -1,25 +1,87 @@
 #include "fishcam/calibration.hpp"
-#include "fishcam/fit.hpp"
-
-#include "fishcam/atomic_file.hpp"
-
-#include <ceres/rotation.h>
-
-#include "ceres_support.hpp"
-#include "fishcam/parallel.hpp"
 
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <map>
-#include <filesystem>
-#include <numeric>
-#include <set>
-#include <random>
-#include <sstream>
+#include <optional>
+
+#include "calibration_internal.hpp"
+#include "fishcam/parallel.hpp"
 
 namespace fishcam {
+namespace detail {
+
+std::array<double, 6> pose_block(const BoardPose& pose) {
+  const Eigen::AngleAxisd aa(pose.rotation);
+  const Eigen::Vector3d r = aa.axis() * aa.angle();
+  return {r.x(), r.y(), r.z(), pose.translation.x(), pose.translation.y(), pose.translation.z()};
+}
+
+BoardPose pose_of(const std::array<double, 6>& b) {
+  const Eigen::Vector3d r(b[0], b[1], b[2]);
+  const double angle = r.norm();
+  BoardPose pose;
+  pose.rotation = angle > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, r / angle)) : Eigen::Quaterniond::Identity();
+  pose.translation = {b[3], b[4], b[5]};
+  return pose;
+}
+
+// A solve whose result cannot be right is an error, not a camera.
+void check_solution(const CalibrationResult& r, int width, int height, const std::string& model) {
+  const std::string what = "calibrate (" + model + "): ";
+  const auto& p = r.camera.principal_point;
+  if (!std::isfinite(r.rms_px) ||
+      !std::all_of(r.parameters.begin(), r.parameters.end(), [](double v) { return std::isfinite(v); })) {
+    throw Error(what + "the solve ended without a finite cost or parameters (check --board, --imagersize and the "
+                       "corners)");
+  }
+  char text[160];
+  if (!(p.x() >= 0 && p.x() <= width - 1 && p.y() >= 0 && p.y() <= height - 1)) {
+    std::snprintf(text, sizeof text, "the principal point (%.1f, %.1f) lies outside the %dx%d image", p.x(), p.y(),
+                  width, height);
+    throw Error(what + text + " (check --imagersize and --board; the data do not determine this model)");
+  }
+  const double ay = r.camera.pixel_scale.y();
+  if (!(ay >= 0.5 && ay <= 2.0)) {
+    std::snprintf(text, sizeof text, "the pixel aspect a_y = %.3g is outside [0.5, 2]", ay);
+    throw Error(what + text + " (check --imagersize and --board; the data do not determine this model)");
+  }
+}
+
+// "f, xi and alpha trade against each other", with a hint where a model is
+// degenerate (the unified family at xi ~ 0: xi then acts as a combination of f and
+// alpha).
+std::string undetermined_text(const std::vector<std::string>& names, bool poses, const std::string& model,
+                              const std::vector<double>& parameters) {
+  std::string text;
+  for (size_t i = 0; i < names.size(); ++i) {
+    text += (i == 0 ? "" : i + 1 == names.size() ? (poses ? ", " : " and ") : ", ") + names[i];
+  }
+  if (poses) text += names.empty() ? "the board poses" : " and the board poses";
+  text += names.size() + (poses ? 1 : 0) > 1 ? " trade against each other: the data determine "
+                                                "only a combination of them"
+                                              : " has no effect on the data";
+  const auto names_all = model_param_names(model, int(parameters.size()) - 3);
+  const auto xi = std::find(names_all.begin(), names_all.end(), "xi");
+  if (xi != names_all.end() && std::abs(parameters[size_t(xi - names_all.begin())]) < 0.05) {
+    text += " (xi ~ 0, where the " + model + " model's xi acts as a combination of its other parameters; a model "
+            "without xi, such as kannala-brandt, determines this lens)";
+  }
+  return text;
+}
+
+}  // namespace detail
+
 namespace {
+
+using detail::check_solution;
+using detail::CornerCost;
+using detail::ParameterCovariance;
+using detail::pose_block;
+using detail::pose_of;
+using detail::projection_covariance_of;
+using detail::Solve;
+using detail::undetermined_text;
 
 Eigen::Vector3d to_camera(const BoardPose& pose, const Eigen::Vector3d& p) { return pose.rotation * p + pose.translation; }
 
@@ -74,68 +136,6 @@ std::optional<BoardPose> pose_from_rays(const std::vector<Eigen::Vector3d>& rays
   return pose;
 }
 
-// One corner's reprojection residual, for Ceres. One block per corner, so that a
-// robust loss (applied per block) discounts single bad corners, not whole boards.
-template <template <typename> class Model>
-struct CornerResidual {
-  Eigen::Vector3d point;
-  Eigen::Vector2d corner;
-  int params;
-
-  template <typename T>
-  bool operator()(T const* const* p, T* residuals) const {
-    const Model<T> model = detail::model_from_block<Model>(p[0], params);
-    const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
-    const T* pose = p[3];  // angle-axis, translation
-    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
-    T camera[3];
-    ceres::AngleAxisRotatePoint(pose, board, camera);
-    for (int k = 0; k < 3; ++k) camera[k] += pose[3 + k];
-    T pixel[2];
-    project_radial(model, mapping, camera, pixel);
-    residuals[0] = pixel[0] - corner.x();
-    residuals[1] = pixel[1] - corner.y();
-    return true;
-  }
-};
-
-// A camera-frame point's pixel, for the Jacobians of projection uncertainty.
-template <template <typename> class Model>
-struct PointProjection {
-  int params;
-  double ax;
-
-  template <typename T>
-  bool operator()(T const* const* p, T* pixel) const {
-    const Model<T> model = detail::model_from_block<Model>(p[0], params);
-    const T mapping[4] = {p[1][0], p[1][1], T(ax), p[2][0]};
-    project_radial(model, mapping, p[3], pixel);
-    return true;
-  }
-};
-
-std::array<double, 6> pose_block(const BoardPose& pose) {
-  const Eigen::AngleAxisd aa(pose.rotation);
-  const Eigen::Vector3d r = aa.axis() * aa.angle();
-  return {r.x(), r.y(), r.z(), pose.translation.x(), pose.translation.y(), pose.translation.z()};
-}
-
-BoardPose pose_of(const std::array<double, 6>& b) {
-  const Eigen::Vector3d r(b[0], b[1], b[2]);
-  const double angle = r.norm();
-  BoardPose pose;
-  pose.rotation = angle > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, r / angle)) : Eigen::Quaterniond::Identity();
-  pose.translation = {b[3], b[4], b[5]};
-  return pose;
-}
-
-struct Solve {
-  std::vector<double> model;
-  Eigen::Vector2d center;
-  double ay = 1;
-  std::vector<std::array<double, 6>> poses;
-};
-
 // One residual block per corner, in board order then corner order (the order
 // fixes the Jacobian's rows, and so every sum over them).
 template <template <typename> class Model>
@@ -144,13 +144,7 @@ void add_corner_residuals(ceres::Problem* problem, Solve* s, const std::vector<s
   const int n = static_cast<int>(s->model.size());
   for (size_t b = 0; b < corners.size(); ++b) {
     for (size_t i = 0; i < corners[b].size(); ++i) {
-      auto* cost = new ceres::DynamicAutoDiffCostFunction<CornerResidual<Model>, 8>(
-          new CornerResidual<Model>{points[b][i], corners[b][i], n});
-      cost->AddParameterBlock(n);
-      cost->AddParameterBlock(2);
-      cost->AddParameterBlock(1);
-      cost->AddParameterBlock(6);
-      cost->SetNumResiduals(2);
+      auto* cost = new CornerCost<Model>(points[b][i], corners[b][i], n);
       problem->AddResidualBlock(cost, loss, s->model.data(), s->center.data(), &s->ay, s->poses[b].data());
     }
   }
@@ -174,7 +168,7 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
     problem.SetParameterBlockConstant(&s->ay);
   }
   ceres::Solver::Summary summary;
-  ceres::Solver::Options options = detail::solver_options(ceres::SPARSE_SCHUR);
+  ceres::Solver::Options options = detail::solver_options(ceres::DENSE_SCHUR);
   options.max_num_iterations = max_iterations;
   options.function_tolerance = options.parameter_tolerance = tolerance;
   ceres::Solve(options, &problem, &summary);
@@ -182,115 +176,14 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
   return summary;
 }
 
-// The covariance of every parameter of a solve -- (model, cx, cy, a_y, then each
-// board's angle-axis and translation) -- as sigma^2 (J^T J)^+ with sigma^2 the
-// residual variance per coordinate. Directions the data do not determine (scaled
-// eigenvalues of J^T J below kUndetermined of the largest) are left out of the
-// inverse and returned, so that no sigma pretends to know them.
-struct ParameterCovariance {
-  Eigen::MatrixXd covariance;
-  std::vector<Eigen::VectorXd> undetermined;  // unit directions in parameters scaled to unit curvature
-  double variance = 0;                        // residual variance per coordinate, px^2
-};
-
-constexpr double kUndetermined = 1e-12;
-
-// The covariance of a problem's parameter blocks, in the given order, at their
-// current values (no loss function).
-ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<double*>& blocks) {
-  ceres::Problem::EvaluateOptions options;
-  options.parameter_blocks = blocks;
-  options.apply_loss_function = false;
-  options.num_threads = 1;
-  double cost = 0;
-  ceres::CRSMatrix crs;
-  problem->Evaluate(options, &cost, nullptr, nullptr, &crs);
-  // J^T J from the sparse rows (each corner touches its intrinsics and one pose).
-  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(crs.num_cols, crs.num_cols);
-  for (int r = 0; r < crs.num_rows; ++r) {
-    const int begin = crs.rows[size_t(r)], end = crs.rows[size_t(r) + 1];
-    for (int a = begin; a < end; ++a) {
-      for (int b = begin; b < end; ++b) {
-        normal(crs.cols[size_t(a)], crs.cols[size_t(b)]) += crs.values[size_t(a)] * crs.values[size_t(b)];
-      }
-    }
-  }
-  const Eigen::Index m = normal.rows();
-  Eigen::VectorXd scale(m);  // to unit curvature: the threshold then has no units
-  for (Eigen::Index i = 0; i < m; ++i) scale[i] = normal(i, i) > 0 ? 1 / std::sqrt(normal(i, i)) : 0.0;
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scale.asDiagonal() * normal * scale.asDiagonal());
-  const double largest = eigen.eigenvalues().maxCoeff();
-  ParameterCovariance out;
-  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(m, m);
-  int rank = 0;
-  for (Eigen::Index k = 0; k < m; ++k) {
-    const double lambda = eigen.eigenvalues()[k];
-    const Eigen::VectorXd v = eigen.eigenvectors().col(k);
-    if (lambda > kUndetermined * largest) {
-      inverse += v * v.transpose() / lambda;
-      ++rank;
-    } else {
-      out.undetermined.push_back(v);
-    }
-  }
-  for (Eigen::Index i = 0; i < m; ++i) {  // a parameter no residual depends on
-    if (scale[i] == 0) {
-      Eigen::VectorXd v = Eigen::VectorXd::Zero(m);
-      v[i] = 1;
-      out.undetermined.push_back(v);
-    }
-  }
-  const double dof = double(crs.num_rows - rank);
-  out.variance = dof > 0 ? 2 * cost / dof : std::numeric_limits<double>::quiet_NaN();
-  out.covariance = out.variance * scale.asDiagonal() * inverse * scale.asDiagonal();
-  return out;
-}
-
 template <template <typename> class Model>
 ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<Eigen::Vector3d>>& points,
                                          const std::vector<std::vector<Eigen::Vector2d>>& corners) {
   ceres::Problem problem;
   add_corner_residuals<Model>(&problem, &s, points, corners, nullptr);
-  std::vector<double*> blocks = {s.model.data(), s.center.data(), &s.ay};
-  for (auto& pose : s.poses) blocks.push_back(pose.data());
-  return covariance_of(&problem, blocks);
-}
-
-// The left Jacobian of SO(3) at angle-axis r: R(r + dr) = exp([J dr]x) R(r) to first order.
-Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d k;
-  k << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return k;
-}
-
-Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& r) {
-  const double angle = r.norm();
-  const Eigen::Matrix3d k = cross_matrix(r);
-  if (angle < 1e-8) return Eigen::Matrix3d::Identity() + 0.5 * k;
-  return Eigen::Matrix3d::Identity() + (1 - std::cos(angle)) / (angle * angle) * k +
-         (angle - std::sin(angle)) / (angle * angle * angle) * k * k;
-}
-
-// What projection uncertainty needs of the full covariance (mrcal's definition):
-// a point fixed relative to the boards moves, in the camera frame, by the mean of
-// the boards' motions. Board b's pose perturbed by (dr, dt) moves a camera-frame
-// point p to p + w x p + t' with w = J_l(r_b) dr and t' = dt + t_b x w; the record
-// keeps the intrinsics and the mean (w, t') over the boards.
-Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s) {
-  const Eigen::Index intrinsics = Eigen::Index(s.model.size()) + 3;
-  const Eigen::Index boards = Eigen::Index(s.poses.size());
-  Eigen::MatrixXd map = Eigen::MatrixXd::Zero(intrinsics + 6, intrinsics + 6 * boards);
-  map.topLeftCorner(intrinsics, intrinsics).setIdentity();
-  for (Eigen::Index b = 0; b < boards; ++b) {
-    const auto& pose = s.poses[size_t(b)];
-    const Eigen::Matrix3d jl = left_jacobian({pose[0], pose[1], pose[2]});
-    const Eigen::Index col = intrinsics + 6 * b;
-    map.block<3, 3>(intrinsics, col) = jl / double(boards);
-    map.block<3, 3>(intrinsics + 3, col) = cross_matrix({pose[3], pose[4], pose[5]}) * jl / double(boards);
-    map.block<3, 3>(intrinsics + 3, col + 3) = Eigen::Matrix3d::Identity() / double(boards);
-  }
-  Eigen::MatrixXd c = map * full.covariance * map.transpose();
-  return (c + c.transpose()) / 2;
+  std::vector<double*> poses;
+  for (auto& pose : s.poses) poses.push_back(pose.data());
+  return detail::covariance_of(&problem, {s.model.data(), s.center.data(), &s.ay}, poses);
 }
 
 // How far corners, read as a cols x rows grid in board order, are from a grid: the
@@ -362,28 +255,6 @@ void check_distinct_poses(const CalibrationResult& r) {
     throw Error("calibrate: the " + std::to_string(r.poses.size()) + " boards show " + std::to_string(distinct.size()) +
                 " distinct pose(s) (within 2 deg and 5 % of their distance); a calibration needs at least 3, tilted "
                 "differently and spread over the image");
-  }
-}
-
-// A solve whose result cannot be right is an error, not a camera.
-void check_solution(const CalibrationResult& r, int width, int height, const std::string& model) {
-  const std::string what = "calibrate (" + model + "): ";
-  const auto& p = r.camera.principal_point;
-  if (!std::isfinite(r.rms_px) ||
-      !std::all_of(r.parameters.begin(), r.parameters.end(), [](double v) { return std::isfinite(v); })) {
-    throw Error(what + "the solve ended without a finite cost or parameters (check --board, --imagersize and the "
-                       "corners)");
-  }
-  char text[160];
-  if (!(p.x() >= 0 && p.x() <= width - 1 && p.y() >= 0 && p.y() <= height - 1)) {
-    std::snprintf(text, sizeof text, "the principal point (%.1f, %.1f) lies outside the %dx%d image", p.x(), p.y(),
-                  width, height);
-    throw Error(what + text + " (check --imagersize and --board; the data do not determine this model)");
-  }
-  const double ay = r.camera.pixel_scale.y();
-  if (!(ay >= 0.5 && ay <= 2.0)) {
-    std::snprintf(text, sizeof text, "the pixel aspect a_y = %.3g is outside [0.5, 2]", ay);
-    throw Error(what + text + " (check --imagersize and --board; the data do not determine this model)");
   }
 }
 
@@ -519,28 +390,6 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
   return outliers;
 }
 
-// "f, xi and alpha trade against each other", with a hint where a model is
-// degenerate (the unified family at xi ~ 0: xi then acts as a combination of f and
-// alpha).
-std::string undetermined_text(const std::vector<std::string>& names, bool poses, const std::string& model,
-                              const std::vector<double>& parameters) {
-  std::string text;
-  for (size_t i = 0; i < names.size(); ++i) {
-    text += (i == 0 ? "" : i + 1 == names.size() ? (poses ? ", " : " and ") : ", ") + names[i];
-  }
-  if (poses) text += names.empty() ? "the board poses" : " and the board poses";
-  text += names.size() + (poses ? 1 : 0) > 1 ? " trade against each other: the data determine "
-                                                "only a combination of them"
-                                              : " has no effect on the data";
-  const auto names_all = model_param_names(model, int(parameters.size()) - 3);
-  const auto xi = std::find(names_all.begin(), names_all.end(), "xi");
-  if (xi != names_all.end() && std::abs(parameters[size_t(xi - names_all.begin())]) < 0.05) {
-    text += " (xi ~ 0, where the " + model + " model's xi acts as a combination of its other parameters; a model "
-            "without xi, such as kannala-brandt, determines this lens)";
-  }
-  return text;
-}
-
 // Step 4, the final plain least squares without the outliers, its covariance, and
 // the report: per-image and overall RMS (2-D norm), parameters and their sigmas.
 template <template <typename> class Model>
@@ -674,306 +523,5 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
   return result;
 }
 
-namespace {
-
-// One corner of a rig camera at one instant: p[0..2] the camera's intrinsics, then
-// (cameras other than 0) camera 0 -> this camera, then the board -> camera 0.
-template <template <typename> class Model>
-struct RigCornerResidual {
-  Eigen::Vector3d point;
-  Eigen::Vector2d corner;
-  int params;
-  bool moved;  // false for camera 0, whose frame is the rig's
-
-  template <typename T>
-  bool operator()(T const* const* p, T* residuals) const {
-    const Model<T> model = detail::model_from_block<Model>(p[0], params);
-    const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
-    const T* board_pose = moved ? p[4] : p[3];
-    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
-    T in_rig[3], camera[3];
-    ceres::AngleAxisRotatePoint(board_pose, board, in_rig);
-    for (int k = 0; k < 3; ++k) in_rig[k] += board_pose[3 + k];
-    if (moved) {
-      ceres::AngleAxisRotatePoint(p[3], in_rig, camera);
-      for (int k = 0; k < 3; ++k) camera[k] += p[3][3 + k];
-    } else {
-      for (int k = 0; k < 3; ++k) camera[k] = in_rig[k];
-    }
-    T pixel[2];
-    project_radial(model, mapping, camera, pixel);
-    residuals[0] = pixel[0] - corner.x();
-    residuals[1] = pixel[1] - corner.y();
-    return true;
-  }
-};
-
-
-// The mean of rigid transforms: quaternions aligned in sign and averaged, translations averaged.
-Pose mean_pose(const std::vector<Pose>& poses) {
-  Eigen::Vector4d q = Eigen::Vector4d::Zero();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-  for (const Pose& p : poses) {
-    Eigen::Vector4d c = p.rotation.coeffs();
-    if (c.dot(poses.front().rotation.coeffs()) < 0) c = -c;
-    q += c, t += p.translation;
-  }
-  q.normalize();
-  return {Eigen::Quaterniond(q[3], q[0], q[1], q[2]), t / double(poses.size())};
-}
-
-std::string instant_of(const std::string& filename) { return std::filesystem::path(filename).filename().string(); }
-
-}  // namespace
-
-RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
-                                   const CalibrationOptions& options) {
-  const size_t n = cameras.size();
-  if (n < 2) throw Error("calibrate rig: needs at least 2 cameras, got " + std::to_string(n));
-  const auto camera_name = [](size_t k) { return "camera " + std::to_string(k); };
-  // 1. Each camera alone: intrinsics, its boards' poses, its outliers.
-  std::vector<CalibrationResult> singles;
-  for (size_t k = 0; k < n; ++k) {
-    try {
-      singles.push_back(calibrate(cameras[k].observations, board, cameras[k].width, cameras[k].height,
-                                  cameras[k].model, options));
-    } catch (const Error& e) {
-      throw Error(camera_name(k) + ": " + e.what());
-    }
-  }
-  // The instants, and which camera saw which board (in that camera's frame).
-  std::map<std::string, int> instant_index;
-  std::vector<std::map<int, Pose>> seen(n);
-  std::vector<std::map<int, const BoardObservation*>> observed(n);
-  for (size_t k = 0; k < n; ++k) {
-    std::map<std::string, const BoardObservation*> by_name;
-    for (const auto& o : cameras[k].observations) by_name[o.filename] = &o;
-    for (size_t b = 0; b < singles[k].used_images.size(); ++b) {
-      const std::string instant = instant_of(singles[k].used_images[b]);
-      const int i = instant_index.emplace(instant, int(instant_index.size())).first->second;
-      if (seen[k].count(i)) throw Error(camera_name(k) + ": two images of the instant " + instant);
-      seen[k][i] = singles[k].poses[b];
-      observed[k][i] = by_name.at(singles[k].used_images[b]);
-    }
-  }
-  // 2. Camera poses relative to camera 0 (cam0 -> cam k), through shared instants,
-  // breadth first from camera 0.
-  std::vector<std::optional<Pose>> from_rig(n);
-  from_rig[0] = Pose{};
-  for (bool grew = true; grew;) {
-    grew = false;
-    for (size_t b = 0; b < n; ++b) {
-      if (from_rig[b]) continue;
-      for (size_t a = 0; a < n && !from_rig[b]; ++a) {
-        if (!from_rig[a]) continue;
-        std::vector<Pose> estimates;
-        for (const auto& [i, pose_b] : seen[b]) {
-          if (const auto it = seen[a].find(i); it != seen[a].end()) {
-            estimates.push_back(compose(compose(pose_b, inverse(it->second)), *from_rig[a]));
-          }
-        }
-        if (!estimates.empty()) from_rig[b] = mean_pose(estimates), grew = true;
-      }
-    }
-  }
-  for (size_t k = 0; k < n; ++k) {
-    if (!from_rig[k]) {
-      throw Error(camera_name(k) + " shares no board instant with camera 0 or the cameras linked to it (images of "
-                                   "the same instant must have the same file name)");
-    }
-  }
-  // 3. The joint solve: every camera's intrinsics, cameras 1.. relative to camera 0,
-  // each instant's board relative to camera 0 (placed from the first camera that saw it).
-  const int instants = int(instant_index.size());
-  std::vector<Solve> intrinsics(n);
-  for (size_t k = 0; k < n; ++k) {
-    const auto& p = singles[k].camera;
-    intrinsics[k] = Solve{model_params(p.model), p.principal_point, p.pixel_scale.y(), {}};
-  }
-  std::vector<std::array<double, 6>> camera_blocks(n);
-  std::vector<std::array<double, 6>> board_blocks(static_cast<size_t>(instants));
-  for (size_t k = 0; k < n; ++k) camera_blocks[k] = pose_block(*from_rig[k]);
-  std::vector<bool> placed(size_t(instants), false);
-  for (size_t k = 0; k < n; ++k) {
-    for (const auto& [i, pose] : seen[k]) {
-      if (placed[size_t(i)]) continue;
-      board_blocks[size_t(i)] = pose_block(compose(inverse(*from_rig[k]), pose));
-      placed[size_t(i)] = true;
-    }
-  }
-  const auto points = board_points(board);
-  std::vector<std::set<std::pair<std::string, int>>> outliers(n);  // (image, corner) per camera, from step 1
-  for (size_t k = 0; k < n; ++k) {
-    for (const auto& o : singles[k].outliers) outliers[k].insert({o.filename, o.corner});
-  }
-  ceres::Problem problem;
-  std::vector<long> corners_of(n, 0);
-  for (size_t k = 0; k < n; ++k) {
-    const int params = int(intrinsics[k].model.size());
-    with_model_class(cameras[k].model.name, [&]<template <typename> class Model>() {
-      for (const auto& [i, o] : observed[k]) {
-        for (size_t c = 0; c < o->corners.size(); ++c) {
-          if (outliers[k].count({o->filename, int(c)})) continue;
-          auto* cost = new ceres::DynamicAutoDiffCostFunction<RigCornerResidual<Model>, 8>(
-              new RigCornerResidual<Model>{points[c], o->corners[c], params, k > 0});
-          cost->AddParameterBlock(params);
-          cost->AddParameterBlock(2);
-          cost->AddParameterBlock(1);
-          std::vector<double*> blocks = {intrinsics[k].model.data(), intrinsics[k].center.data(), &intrinsics[k].ay};
-          if (k > 0) cost->AddParameterBlock(6), blocks.push_back(camera_blocks[k].data());
-          cost->AddParameterBlock(6);
-          blocks.push_back(board_blocks[size_t(i)].data());
-          cost->SetNumResiduals(2);
-          problem.AddResidualBlock(cost, nullptr, blocks);
-          ++corners_of[k];
-        }
-      }
-      detail::bound_model_block<Model>(&problem, intrinsics[k].model.data(), params);
-    });
-  }
-  ceres::Solver::Summary summary;
-  ceres::Solve(detail::solver_options(ceres::SPARSE_SCHUR), &problem, &summary);
-  if (!summary.IsSolutionUsable()) throw Error("calibrate rig: the joint solve failed: " + summary.message);
-  // 4. Covariance of everything; the report per camera.
-  std::vector<double*> blocks;
-  std::vector<Eigen::Index> intrinsic_start(n), pose_start(n, -1);
-  Eigen::Index column = 0;
-  for (size_t k = 0; k < n; ++k) {
-    intrinsic_start[k] = column;
-    blocks.insert(blocks.end(), {intrinsics[k].model.data(), intrinsics[k].center.data(), &intrinsics[k].ay});
-    column += Eigen::Index(intrinsics[k].model.size()) + 3;
-  }
-  for (size_t k = 1; k < n; ++k) pose_start[k] = column, blocks.push_back(camera_blocks[k].data()), column += 6;
-  for (auto& b : board_blocks) blocks.push_back(b.data());
-  const ParameterCovariance full = covariance_of(&problem, blocks);
-
-  RigCalibrationResult out;
-  out.instants = instants;
-  out.rms_px = std::sqrt(2 * summary.final_cost / double(std::max(1L, std::accumulate(corners_of.begin(), corners_of.end(), 0L))));
-  for (size_t k = 0; k < n; ++k) {
-    CalibrationResult r = singles[k];
-    const Pose rig_to_camera = pose_of(camera_blocks[k]);
-    CameraParameters p = r.camera;
-    p.model = make_model(cameras[k].model.name, intrinsics[k].model);
-    p.principal_point = intrinsics[k].center;
-    p.pixel_scale = {1.0, intrinsics[k].ay};
-    p.pose = inverse(rig_to_camera);  // camera -> camera 0
-    const Camera camera(p);
-    // Reprojection, board poses (in this camera's frame) and observed angles from the joint solution.
-    r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();
-    double sum2 = 0;
-    CalibrationRecord& record = *p.calibration;
-    const Eigen::MatrixXd own_covariance = record.covariance;
-    record = CalibrationRecord::nothing_observed();
-    record.covariance = own_covariance;
-    for (const auto& [i, o] : observed[k]) {
-      const Pose board_pose = compose(rig_to_camera, pose_of(board_blocks[size_t(i)]));
-      double board_sum2 = 0;
-      long used = 0;
-      for (size_t c = 0; c < o->corners.size(); ++c) {
-        if (outliers[k].count({o->filename, int(c)})) continue;
-        const Eigen::Vector3d point = board_pose.rotation * points[c] + board_pose.translation;
-        Eigen::Vector2d q;
-        camera.project(point, &q);
-        board_sum2 += (q - o->corners[c]).squaredNorm(), ++used;
-        record.observe(point);
-      }
-      sum2 += board_sum2;
-      r.poses.push_back(board_pose);
-      r.used_images.push_back(o->filename);
-      r.per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max(1L, used))));
-    }
-    r.rms_px = std::sqrt(sum2 / double(std::max(1L, corners_of[k])));
-    r.observations = corners_of[k];
-    r.parameters = intrinsics[k].model;
-    r.parameters.insert(r.parameters.end(), {intrinsics[k].center.x(), intrinsics[k].center.y(), intrinsics[k].ay});
-    r.undetermined.clear();
-    for (size_t i = 0; i < r.parameters.size(); ++i) {
-      const Eigen::Index at = intrinsic_start[k] + Eigen::Index(i);
-      r.sigmas[i] = std::sqrt(full.covariance(at, at));
-    }
-    for (const Eigen::VectorXd& direction : full.undetermined) {
-      std::vector<std::string> names;
-      for (size_t i = 0; i < r.parameters.size(); ++i) {
-        if (std::abs(direction[intrinsic_start[k] + Eigen::Index(i)]) >= 0.1) {
-          names.push_back(r.parameter_names[i]);
-          r.sigmas[i] = std::numeric_limits<double>::quiet_NaN();
-        }
-      }
-      if (!names.empty()) r.undetermined.push_back(undetermined_text(names, false, cameras[k].model.name, r.parameters));
-    }
-    r.noise_px = std::sqrt(full.variance);
-    r.camera = p;
-    check_solution(r, cameras[k].width, cameras[k].height, camera_name(k) + " " + cameras[k].model.name);
-    double rotation = 0, translation = 0;
-    if (k > 0) {
-      for (int j = 0; j < 3; ++j) {
-        rotation = std::max(rotation, std::sqrt(full.covariance(pose_start[k] + j, pose_start[k] + j)));
-        translation = std::max(translation, std::sqrt(full.covariance(pose_start[k] + 3 + j, pose_start[k] + 3 + j)));
-      }
-    }
-    out.rotation_sigma_rad.push_back(rotation);
-    out.translation_sigma.push_back(translation);
-    for (const auto& w : r.warnings) out.warnings.push_back(camera_name(k) + ": " + w);
-    out.cameras.push_back(std::move(r));
-  }
-  for (const Eigen::VectorXd& direction : full.undetermined) {
-    bool intrinsic = false;
-    for (size_t k = 0; k < n; ++k) {
-      intrinsic = intrinsic || direction.segment(intrinsic_start[k], Eigen::Index(out.cameras[k].parameters.size())).norm() >= 0.1;
-    }
-    if (!intrinsic) out.warnings.push_back("the data do not determine the cameras' relative poses fully (a direction of the joint solve has no curvature)");
-  }
-  return out;
-}
-
-Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2d& pixel,
-                                      std::optional<double> distance) {
-  const auto& record = camera.parameters().calibration;
-  if (!record || record->covariance.size() == 0) {
-    throw Error("projection uncertainty: the camera carries no calibration covariance (fishcam calibrate writes one "
-                "into fishcam JSON)");
-  }
-  if (distance && !(*distance > 0 && std::isfinite(*distance))) {
-    throw Error("projection uncertainty: the distance must be finite and > 0");
-  }
-  Eigen::Vector3d ray;
-  if (!camera.unproject(pixel, &ray)) return Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  Eigen::Vector3d point = distance ? Eigen::Vector3d(*distance * ray) : ray;
-  std::vector<double> model = model_params(camera.model());
-  Eigen::Vector2d center = camera.principal_point();
-  double ay = camera.pixel_scale().y();
-  const int n = int(model.size());
-  Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> d_model(2, n);
-  Eigen::Matrix<double, 2, 2, Eigen::RowMajor> d_center;
-  Eigen::Matrix<double, 2, 1> d_ay;
-  Eigen::Matrix<double, 2, 3, Eigen::RowMajor> d_point;
-  const std::string name(model_name(camera.model()));
-  with_model_class(name, [&]<template <typename> class Model>() {
-    ceres::DynamicAutoDiffCostFunction<PointProjection<Model>, 8> f(
-        new PointProjection<Model>{n, camera.pixel_scale().x()});
-    f.AddParameterBlock(n);
-    f.AddParameterBlock(2);
-    f.AddParameterBlock(1);
-    f.AddParameterBlock(3);
-    f.SetNumResiduals(2);
-    const double* blocks[4] = {model.data(), center.data(), &ay, point.data()};
-    double* jacobians[4] = {d_model.data(), d_center.data(), d_ay.data(), d_point.data()};
-    double q[2];
-    f.Evaluate(blocks, q, jacobians);
-  });
-  // d pixel / d (model, cx, cy, a_y, w, t): a board-fixed point moves to p + w x p + t.
-  Eigen::MatrixXd jacobian(2, n + 9);
-  jacobian << d_model, d_center, d_ay, -d_point * cross_matrix(point), (distance ? d_point : Eigen::Matrix<double, 2, 3, Eigen::RowMajor>::Zero());
-  return jacobian * record->covariance * jacobian.transpose();
-}
-
-double projection_uncertainty(const Camera& camera, const Eigen::Vector2d& pixel, std::optional<double> distance) {
-  const Eigen::Matrix2d c = projection_covariance(camera, pixel, distance);
-  if (!c.allFinite()) return std::numeric_limits<double>::quiet_NaN();
-  // The larger eigenvalue of a symmetric 2x2.
-  const double mean = (c(0, 0) + c(1, 1)) / 2, half = (c(0, 0) - c(1, 1)) / 2;
-  return std::sqrt(std::max(0.0, mean + std::sqrt(half * half + c(0, 1) * c(0, 1))));
-}
 
 }  // namespace fishcam
