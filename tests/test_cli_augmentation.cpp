@@ -4,11 +4,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstring>
 #include <map>
 #include <set>
 #include <sstream>
 
 #include "fishcam/npy.hpp"
+#include "fishcam/scene.hpp"
 #include "test_support.hpp"
 
 namespace fishcam {
@@ -19,6 +21,35 @@ using test::run_fishcam;
 using test::quoted;
 
 std::string data(const char* name) { return quoted(test::data_path(name)); }
+
+// A seeded street with its range: the .npy holds the library's render, bit for bit;
+// outputs are checked before anything is drawn.
+TEST(CliAugmentation, RenderSeededStreetWithDepth) {
+  const auto dir = test::scratch_dir("cli_render_seeded");
+  const std::string base = "render " + data("equidistant.json") + " --mount " + data("woodscape_front.json") +
+                           " --scene-seed 17 --out-image " + quoted(dir / "s.png") + " --out-label " +
+                           quoted(dir / "l.png");
+  auto r = run_fishcam(base + " --out-depth " + quoted(dir / "d.npy") + " --supersampling 1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Camera camera = read_camera(test::data_path("equidistant.json"));
+  const SceneRender expected = StreetScene::generate(17).render(
+      camera, *read_camera(test::data_path("woodscape_front.json")).parameters().pose, 1);
+  const NpyArray depth = read_npy(dir / "d.npy");
+  ASSERT_EQ(depth.shape, (std::vector<size_t>{size_t(camera.height()), size_t(camera.width())}));
+  EXPECT_EQ(std::memcmp(depth.data.data(), expected.range.data, depth.data.size() * sizeof(float)), 0);
+  const cv::Mat labels = cv::imread((dir / "l.png").string(), cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(cv::norm(labels, expected.labels, cv::NORM_INF), 0);
+  // Refused, nothing written: a depth file that is not .npy, a supersampling out of range.
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {" --out-depth " + quoted(dir / "d2.png") + " --force", "is written as .npy"},
+           {" --out-depth " + quoted(dir / "d3.npy") + " --supersampling 5 --force", "--supersampling"}}) {
+    r = run_fishcam(base + args);
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "d2.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "d3.npy"));
+}
 
 TEST(CliAugmentation, RenderAugmentAndMap) {
   const auto dir = test::scratch_dir("cli_augment");

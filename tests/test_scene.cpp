@@ -3,6 +3,8 @@
 // how wrong each depth prior is.
 #include <opencv2/imgproc.hpp>
 
+#include <cstring>
+
 #include "fishcam/augmentation.hpp"
 #include "fishcam/scene.hpp"
 #include "test_support.hpp"
@@ -111,6 +113,107 @@ TEST(Scene, TranslationShowsWhatEachDepthPriorCosts) {
     }
   }
 }
+
+
+// --- Seeded streets (StreetScene::generate) ---
+
+Camera small_front() { return Camera(resized(front().parameters(), 320, 242)); }
+
+// Four cameras around the vehicle (front, left, rear, right), each looking out
+// and down like a surround-view rig's.
+std::vector<Pose> surround_mounts() {
+  const Pose front_mount = *front().parameters().pose;
+  std::vector<Pose> out;
+  for (const double yaw_deg : {0.0, 90.0, 180.0, 270.0}) {
+    const Eigen::Quaterniond yaw(Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitZ()));
+    out.push_back({yaw * front_mount.rotation, Eigen::Vector3d(1.5, 0, 0.8) + yaw * Eigen::Vector3d(1.0, 0, 0)});
+  }
+  return out;
+}
+
+TEST(SeededScene, TheSameSeedGivesTheSameBytesAndSeedsDiffer) {
+  const Camera camera = small_front();
+  const Pose mount = *camera.parameters().pose;
+  const SceneRender a = StreetScene::generate(11).render(camera, mount, 2);
+  const SceneRender b = StreetScene::generate(11).render(camera, mount, 2);
+  const SceneRender c = StreetScene::generate(12).render(camera, mount, 2);
+  EXPECT_EQ(cv::norm(a.image, b.image, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(a.labels, b.labels, cv::NORM_INF), 0);
+  EXPECT_EQ(std::memcmp(a.range.data, b.range.data, a.range.total() * sizeof(float)), 0);
+  EXPECT_GT(cv::countNonZero(a.labels != c.labels), int(a.labels.total() / 20)) << "seeds 11 and 12 draw the same street";
+  // The bundled street is not a seeded one.
+  const SceneRender bundled = StreetScene::bundled().render(camera, mount);
+  EXPECT_GT(cv::countNonZero(a.labels != bundled.labels), int(a.labels.total() / 20));
+}
+
+TEST(SeededScene, EveryWoodScapeClassOccursAcrossSeedsAndViews) {
+  const Camera camera = small_front();
+  std::array<long, woodscape_class::kCount> pixels{};
+  int renders = 0;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    const StreetScene scene = StreetScene::generate(seed);
+    for (const Pose& mount : surround_mounts()) {
+      const SceneRender r = scene.render(camera, mount);
+      for (int label = 0; label < woodscape_class::kCount; ++label) pixels[size_t(label)] += cv::countNonZero(r.labels == label);
+      ++renders;
+    }
+  }
+  EXPECT_EQ(renders, 24);
+  for (int label = 0; label < woodscape_class::kCount; ++label) {
+    EXPECT_GT(pixels[size_t(label)], 100) << woodscape_class_name(label);
+  }
+}
+
+// The range is the distance along each pixel's ray: road pixels' points lie on the road plane.
+TEST(SeededScene, RangePutsRoadPixelsOnTheRoadAndSupersamplingLeavesLabelsAlone) {
+  const Camera camera = small_front();
+  const Pose mount = *camera.parameters().pose;
+  const SceneRender one = StreetScene::generate(5).render(camera, mount, 1);
+  const SceneRender two = StreetScene::generate(5).render(camera, mount, 2);
+  EXPECT_EQ(cv::norm(one.labels, two.labels, cv::NORM_INF), 0);
+  EXPECT_EQ(std::memcmp(one.range.data, two.range.data, one.range.total() * sizeof(float)), 0);
+  cv::Mat difference;
+  cv::absdiff(one.image, two.image, difference);
+  EXPECT_LT(cv::mean(difference)[0], 8.0);
+  int checked = 0;
+  for (int v = 0; v < camera.height(); v += 3) {
+    for (int u = 0; u < camera.width(); u += 3) {
+      if (one.labels.at<uchar>(v, u) != woodscape_class::road) continue;
+      Eigen::Vector3d ray;
+      ASSERT_TRUE(camera.unproject(Eigen::Vector2d(u, v), &ray));
+      const Eigen::Vector3d point = mount.rotation * (double(one.range.at<float>(v, u)) * ray) + mount.translation;
+      EXPECT_NEAR(point.z(), 0.0, 2e-6 * double(one.range.at<float>(v, u)) + 1e-6) << u << "," << v;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 1000);
+}
+
+// For every registry model: a rotation-only augmentation of a seeded street's render
+// equals the render from the rotated camera away from label boundaries.
+class EveryModelSeededScene : public ::testing::TestWithParam<test::ModelCase> {};
+
+TEST_P(EveryModelSeededScene, RotationOnlyAugmentationEqualsTheRotatedRender) {
+  const Camera camera(resized(GetParam().second, 640, 483));
+  const Pose mount = *front().parameters().pose;  // the lens of every model, mounted as the front camera
+  const StreetScene scene = StreetScene::generate(21);
+  const SceneRender source = scene.render(camera, mount);
+  const ViewpointWarp warp(camera);
+  RandomPose pose = random_pose(*find_pose_preset("medium"), 3);
+  pose.translation.setZero();
+  const ViewpointChange change = pose.change();
+  const SceneRender truth = scene.render(camera, moved_camera(mount, change));
+  WarpMaps maps;
+  warp.compute(change, DepthPrior::infinity, &maps);
+  cv::Mat labels;
+  warp_labels(source.labels, maps, 255, &labels);
+  const cv::Mat where = away_from_boundaries(truth.labels, maps.validity());
+  ASSERT_GT(cv::countNonZero(where), 20000);
+  EXPECT_GE(agreement(labels, truth.labels, where), 0.995);
+}
+
+INSTANTIATE_TEST_SUITE_P(SeededScene, EveryModelSeededScene, ::testing::ValuesIn(test::every_model()),
+                         test::model_case_name);
 
 }  // namespace
 }  // namespace fishcam

@@ -494,6 +494,7 @@ void register_bench(CLI::App& app) {
   corners->add_option("--boards", *corners_boards, "Rendered images")->check(CLI::Range(1, 1000))->capture_default_str();
   corners->add_option("--repeats", *corners_repeats, "Passes over the images")->check(CLI::Range(1, 100))->capture_default_str();
   corners->callback([=] { run_corners(*corners_json, *corners_boards, *corners_repeats); });
+  register_bench_render(bench);
 
   augment->callback([=] {
     const std::string camera =

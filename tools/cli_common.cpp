@@ -135,6 +135,10 @@ void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std
 void write_images(const std::vector<std::pair<std::filesystem::path, cv::Mat>>& images, bool overwrite) {
   std::vector<std::pair<std::filesystem::path, std::string>> files;
   for (const auto& [path, image] : images) files.emplace_back(path, encode_image(path, image));
+  write_outputs(files, overwrite);
+}
+
+void write_outputs(const std::vector<std::pair<std::filesystem::path, std::string>>& files, bool overwrite) {
   try {
     write_files_atomically(files, overwrite);
   } catch (const Error& e) {

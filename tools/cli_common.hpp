@@ -65,6 +65,8 @@ std::string encode_image(const std::filesystem::path& path, const cv::Mat& image
 // Encodes all images first, then commits them together (fishcam/atomic_file.hpp).
 void write_images(const std::vector<std::pair<std::filesystem::path, cv::Mat>>& images, bool overwrite);
 void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite);
+// Commits files (path, bytes) together; a refusal to overwrite suggests --force.
+void write_outputs(const std::vector<std::pair<std::filesystem::path, std::string>>& files, bool overwrite);
 
 // A bundled file (data/NAME, or a helper script of tools/): next to an installed
 // binary (../share/fishcam) or in the source tree this binary was built from.

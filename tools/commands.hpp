@@ -9,6 +9,7 @@ void register_info(CLI::App& app);
 void register_project(CLI::App& app);
 void register_unproject(CLI::App& app);
 void register_bench(CLI::App& app);
+void register_bench_render(CLI::App* bench);  // under bench
 void register_render(CLI::App& app);
 void register_map(CLI::App& app);
 void register_augment(CLI::App& app);

@@ -14,7 +14,7 @@ namespace fishcam {
 
 static_assert(std::endian::native == std::endian::little, "the .npy code writes native little-endian floats");
 
-void write_npy(const std::filesystem::path& path, const NpyArray& array, bool overwrite) {
+std::string npy_bytes(const NpyArray& array, const std::string& name) {
   size_t count = 1;
   std::string shape = "(";
   for (size_t d : array.shape) {
@@ -23,7 +23,7 @@ void write_npy(const std::filesystem::path& path, const NpyArray& array, bool ov
   }
   if (array.shape.size() > 1) shape.erase(shape.size() - 1);  // "(3, 4)" and "(3,)"
   shape += ")";
-  if (count != array.data.size()) throw Error(path.string() + ": shape does not match the data size");
+  if (count != array.data.size()) throw Error(name + ": shape does not match the data size");
   std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape + ", }";
   // magic (6) + version (2) + header length (2) + header, padded with spaces and
   // ended by a newline to a multiple of 64 bytes.
@@ -35,7 +35,11 @@ void write_npy(const std::filesystem::path& path, const NpyArray& array, bool ov
   std::string bytes(reinterpret_cast<const char*>(preamble), sizeof preamble);
   bytes += header;
   bytes.append(reinterpret_cast<const char*>(array.data.data()), count * sizeof(float));
-  write_file_atomically(path, bytes, overwrite);
+  return bytes;
+}
+
+void write_npy(const std::filesystem::path& path, const NpyArray& array, bool overwrite) {
+  write_file_atomically(path, npy_bytes(array, path.string()), overwrite);
 }
 
 NpyArray read_npy(const std::filesystem::path& path) {

@@ -4,7 +4,7 @@ fishcam's C++ library (use the fishcam package, not this module)
 from __future__ import annotations
 import numpy
 import typing
-__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'sampling_names', 'set_num_threads']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'sampling_names', 'set_num_threads']
 class Error(ValueError):
     pass
 class ValidDomain:
@@ -718,6 +718,10 @@ def random_change_in(max_rotation_deg: float, max_translation: float, seed: int)
 def read_corners(path: str, board: tuple[int, int]) -> list[tuple[str, numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]]]:
     """
     A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners: a list of (filename, corners (N, 2) float64), N = 0 for an image without a board.
+    """
+def render(camera: Camera, scene_seed: int | None = None, change: ViewpointChange | None = None, supersampling: int = 2) -> dict[str, typing.Any]:
+    """
+    Ray-casts a street scene through `camera` at its pose (moved by `change` when given): the bundled street, or the random street of `scene_seed`. Returns {'image': (H, W, 3) uint8 RGB (supersampling^2 rays per pixel), 'mask': (H, W) uint8 WoodScape class ids, 'depth': (H, W) float32 range along each pixel's ray in metres (inf: sky, NaN: outside the camera's domain)}; mask and depth from one ray through each pixel centre.
     """
 def sampling_names() -> list[str]:
     """

@@ -72,6 +72,7 @@ void bind_camera(py::module_& m);
 void bind_augmentation(py::module_& m);
 void bind_metrics(py::module_& m);
 void bind_calibration(py::module_& m);
+void bind_scene(py::module_& m);
 // Camera's methods on its calibration record (calibration.cpp), added where Camera is bound.
 void bind_calibration_record(py::class_<Camera>& camera);
 

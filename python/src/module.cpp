@@ -1,6 +1,6 @@
 // fishcam._fishcam: the C++ library for Python. Thin: argument checks and array
 // plumbing only, the GIL released around every computation; one file per area
-// (camera.cpp, augmentation.cpp, metrics.cpp, calibration.cpp; shared plumbing in arrays.cpp). The
+// (camera.cpp, augmentation.cpp, metrics.cpp, calibration.cpp, scene.cpp; shared plumbing in arrays.cpp). The
 // package's Python modules (fishcam/__init__.py, transforms.py, torch.py,
 // albumentations.py) build the documented API on top.
 #include "bindings.hpp"
@@ -25,5 +25,6 @@ PYBIND11_MODULE(_fishcam, m) {
   fishcam::python::bind_augmentation(m);
   fishcam::python::bind_metrics(m);
   fishcam::python::bind_calibration(m);
+  fishcam::python::bind_scene(m);
 }
 

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace fishcam {
@@ -13,6 +14,8 @@ struct NpyArray {
   std::vector<float> data;  // C order
 };
 
+// The file's bytes; name (the file) is for the error message.
+std::string npy_bytes(const NpyArray& array, const std::string& name);
 // Writes atomically; refuses to replace an existing file unless overwrite is true.
 void write_npy(const std::filesystem::path& path, const NpyArray& array, bool overwrite = false);
 // Reads '<f4' C-order arrays only; throws Error naming the file and the problem.

@@ -1,10 +1,12 @@
-// A small deterministic street scene, ray-cast through any camera at any pose:
-// the bundled default input, test data and ground truth for the augmentation.
+// Deterministic street scenes -- the bundled one and seeded random streets --
+// ray-cast through any camera at any pose: the default input, test data, the
+// experiment's dataset and ground truth for the augmentation.
 #pragma once
 
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <string_view>
 
 #include "fishcam/camera.hpp"
@@ -36,14 +38,37 @@ cv::Vec3b woodscape_class_colour(int label);
 struct SceneRender {
   cv::Mat image;   // CV_8UC3, BGR
   cv::Mat labels;  // CV_8UC1, WoodScape classes
-  cv::Mat range;   // CV_32FC1, distance from the camera to the surface (m); +inf for the sky
+  cv::Mat range;   // CV_32FC1, distance from the camera to the surface (m); +inf for the sky, NaN outside the domain
 };
 
-// Renders the street scene. The scene lives in the vehicle frame of ISO 8855
-// (x forward, y left, z up; metres; the road at z = 0); camera_to_vehicle places
-// the camera (e.g. the WoodScape front camera's extrinsics). One ray per pixel
-// centre, no anti-aliasing, so labels are exact. Pixels outside the camera's
-// valid domain are black and background.
+// A street scene in the vehicle frame of ISO 8855 (x forward, y left, z up; metres;
+// the road at z = 0; the ego vehicle's rear axle at the origin), ray-cast through
+// any camera at any pose. Labels and range come from one ray through each pixel
+// centre, so they are exact; the RGB image averages supersampling^2 rays per pixel.
+// Pixels outside the camera's valid domain are black, background, NaN range.
+class StreetScene {
+ public:
+  // The bundled street: one fixed scene (render, compare and the tests draw it).
+  static const StreetScene& bundled();
+  // A street drawn from scene_seed: road width, lanes and curvature, solid or dashed
+  // markings, curbs, sidewalks, parked and moving vehicles (cars, vans, trucks),
+  // persons, riders on bicycles and motorcycles, signs on poles, buildings with
+  // varied facades, sky and lighting. Every WoodScape class occurs, with its id;
+  // the ego vehicle's footprint (and its cameras) stays clear. The same seed gives
+  // the same scene (drawn from mt19937_64's output, which the standard fixes).
+  static StreetScene generate(std::uint64_t scene_seed);
+
+  // supersampling in [1, 4].
+  SceneRender render(const Camera& camera, const Pose& camera_to_vehicle, int supersampling = 1) const;
+
+  struct Content;  // the objects, the road, the light (scene.cpp)
+  explicit StreetScene(std::shared_ptr<const Content> content);
+
+ private:
+  std::shared_ptr<const Content> content_;
+};
+
+// StreetScene::bundled().render(camera, camera_to_vehicle): one ray per pixel.
 SceneRender render_street_scene(const Camera& camera, const Pose& camera_to_vehicle);
 
 }  // namespace fishcam

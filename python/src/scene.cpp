@@ -1,0 +1,44 @@
+// Python bindings: the street scenes (fishcam.render).
+#include "bindings.hpp"
+#include "fishcam/scene.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+namespace fishcam::python {
+
+void bind_scene(py::module_& m) {
+  m.def(
+      "render",
+      [](const Camera& camera, std::optional<std::uint64_t> scene_seed, std::optional<RandomPose> change,
+         int supersampling) {
+        const auto& mount = camera.parameters().pose;
+        if (!mount) {
+          throw Error("render: the camera has no pose to place it in the scene (give the camera file an extrinsic "
+                      "pose, as data/woodscape_front.json has)");
+        }
+        const Pose pose = change ? moved_camera(*mount, change->change()) : *mount;
+        const int h = camera.height(), w = camera.width();
+        py::array_t<std::uint8_t> image({h, w, 3}), mask({h, w});
+        py::array_t<float> depth({h, w});
+        {
+          py::gil_scoped_release release;
+          const StreetScene scene = scene_seed ? StreetScene::generate(*scene_seed) : StreetScene::bundled();
+          const SceneRender render = scene.render(camera, pose, supersampling);
+          cv::Mat rgb(h, w, CV_8UC3, image.mutable_data());
+          cv::cvtColor(render.image, rgb, cv::COLOR_BGR2RGB);
+          render.labels.copyTo(cv::Mat(h, w, CV_8UC1, mask.mutable_data()));
+          render.range.copyTo(cv::Mat(h, w, CV_32FC1, depth.mutable_data()));
+        }
+        py::dict out;
+        out["image"] = image, out["mask"] = mask, out["depth"] = depth;
+        return out;
+      },
+      py::arg("camera"), py::arg("scene_seed") = py::none(), py::arg("change") = py::none(),
+      py::arg("supersampling") = 2,
+      "Ray-casts a street scene through `camera` at its pose (moved by `change` when given): the bundled street, "
+      "or the random street of `scene_seed`. Returns {'image': (H, W, 3) uint8 RGB (supersampling^2 rays per "
+      "pixel), 'mask': (H, W) uint8 WoodScape class ids, 'depth': (H, W) float32 range along each pixel's ray in "
+      "metres (inf: sky, NaN: outside the camera's domain)}; mask and depth from one ray through each pixel centre.");
+}
+
+}  // namespace fishcam::python
