@@ -215,5 +215,55 @@ TEST_P(EveryModelSeededScene, RotationOnlyAugmentationEqualsTheRotatedRender) {
 INSTANTIATE_TEST_SUITE_P(SeededScene, EveryModelSeededScene, ::testing::ValuesIn(test::every_model()),
                          test::model_case_name);
 
+// The depth-map prior (ViewpointWarp::compute_from_depth) with the renderer's own
+// range: a translated camera's view agrees with the re-render where it has a source,
+// and better than any sphere prior.
+TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
+  const Camera camera(resized(front().parameters(), 640, 483));
+  const Pose mount = *front().parameters().pose;
+  const ViewpointWarp warp(camera);
+  int compared = 0;
+  // Valid: the share of output pixels with a source. The depth map leaves out what the
+  // source never saw (disocclusions, ground the moved camera sees past the source's
+  // field of view); a sphere prior samples something there.
+  std::printf("  preset  seed  depth map: valid  agreement | sphere priors: best agreement, infinity's valid\n");
+  for (const char* preset : {"small", "medium", "large"}) {
+    for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+      const StreetScene scene = StreetScene::generate(30 + seed);
+      const SceneRender source = scene.render(camera, mount);
+      const ViewpointChange change = random_pose(*find_pose_preset(preset), seed).change();  // t in metres
+      const SceneRender truth = scene.render(camera, moved_camera(mount, change));
+      WarpMaps maps;
+      warp.compute_from_depth(change, source.range, DepthValues::range, &maps);
+      cv::Mat labels;
+      warp_labels(source.labels, maps, 255, &labels);
+      const cv::Mat where = away_from_boundaries(truth.labels, maps.validity());
+      ASSERT_GT(cv::countNonZero(where), 100000) << preset << " " << seed;
+      const double same = agreement(labels, truth.labels, where);
+      EXPECT_GE(same, 0.98) << preset << " seed " << seed;
+      double best_sphere = 0, infinity_valid = 0;
+      for (DepthPrior prior : {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity}) {
+        WarpMaps sphere;
+        warp.compute(change, prior, &sphere);
+        cv::Mat sphere_labels;
+        warp_labels(source.labels, sphere, 255, &sphere_labels);
+        if (prior == DepthPrior::infinity) infinity_valid = cv::countNonZero(sphere.validity()) / double(sphere.map_x.total());
+        best_sphere = std::max(best_sphere, agreement(sphere_labels, truth.labels,
+                                                      away_from_boundaries(truth.labels, sphere.validity())));
+      }
+      EXPECT_GT(same, best_sphere) << preset << " seed " << seed;
+      std::printf("  %-7s %4d  %15.1f%%  %8.2f%% | %.2f%%, %.1f%%\n", preset, int(seed),
+                  100.0 * cv::countNonZero(maps.validity()) / double(maps.map_x.total()), 100 * same, 100 * best_sphere,
+                  100 * infinity_valid);
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 6);
+  // Bad input: a depth map of the wrong size or type.
+  WarpMaps maps;
+  EXPECT_THROW(warp.compute_from_depth(ViewpointChange{}, cv::Mat(10, 10, CV_32FC1), DepthValues::range, &maps), Error);
+  EXPECT_THROW(warp.compute_from_depth(ViewpointChange{}, cv::Mat(483, 640, CV_64FC1), DepthValues::range, &maps), Error);
+}
+
 }  // namespace
 }  // namespace fishcam

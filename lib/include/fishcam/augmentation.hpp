@@ -148,6 +148,18 @@ class ViewpointWarp {
   void warp_depth(const ViewpointChange& change, DepthPrior prior, const cv::Mat& depth, DepthValues values,
                   cv::Mat* out, float fill = std::numeric_limits<float>::quiet_NaN()) const;
 
+  // The maps under a depth map of the source image instead of a prior (the paper's
+  // future work): every source pixel's scene point -- `depth` (CV_32FC1, source
+  // size; range or z per `values`, in the units of the change's translation) along
+  // its ray -- moves by the change; neighbouring source pixels form triangles, each
+  // rasterised into the output with a z-buffer (the nearest surface wins) and its
+  // source coordinates interpolated. A triangle whose corners' depths differ by more
+  // than `edge_ratio` (a depth edge) is not drawn, nor is one with a corner without
+  // depth, so pixels that nothing lands on (disocclusions) have no source: never
+  // invented. Infinite depths (the sky) move as directions. Throws Error for a
+  // depth map of the wrong type or size and for a non-finite change.
+  void compute_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values, WarpMaps* maps,
+                          MapKind kind = MapKind::sampling, double edge_ratio = 1.1) const;
   // The grid's node spacing (px) and its measured worst interpolation error (px)
   // against the per-pixel float map; 0 and 0 where there is no grid (no float
   // kernel, or no spacing from 16 down to 2 px interpolates 80 % of the cells within
