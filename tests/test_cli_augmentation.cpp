@@ -51,6 +51,59 @@ TEST(CliAugmentation, RenderSeededStreetWithDepth) {
   EXPECT_FALSE(std::filesystem::exists(dir / "d3.npy"));
 }
 
+// The surround-view dataset: splits by scene, true viewpoint test sets with their
+// changes, the same bytes for the same seed; and the fidelity of the augmentation
+// on it: exact for rotations under every prior, and the depth map exact with translations.
+TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
+  const auto dir = test::scratch_dir("cli_surround_view");
+  const std::string args = " --scenes 3 --size 200x151 --seed 9 --depth --splits 0.34,0,0.66 --test-sets small "
+                           "--supersampling 1";
+  auto r = run_fishcam("sample-dataset " + quoted(dir / "a") + args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_fishcam("sample-dataset " + quoted(dir / "b") + args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto count = [](const std::filesystem::path& folder) {
+    return std::distance(std::filesystem::directory_iterator(folder), std::filesystem::directory_iterator{});
+  };
+  EXPECT_EQ(count(dir / "a" / "train" / "rgb_images"), 4);  // 1 scene x FV, MVL, MVR, RV
+  EXPECT_EQ(count(dir / "a" / "val" / "rgb_images"), 0);
+  EXPECT_EQ(count(dir / "a" / "test" / "rgb_images"), 8);
+  EXPECT_EQ(count(dir / "a" / "test" / "depth"), 8);
+  EXPECT_EQ(count(dir / "a" / "test-small" / "rgb_images"), 8);
+  EXPECT_EQ(count(dir / "a" / "test-small-rotation" / "calibration"), 8);
+  for (const char* file : {"scenes.jsonl", "test-small/changes.jsonl", "test/rgb_images/00002_MVR.png",
+                           "test-small/depth/00001_RV.npy"}) {
+    EXPECT_EQ(test::read_file(dir / "a" / file), test::read_file(dir / "b" / file)) << file;
+  }
+  std::istringstream changes(test::read_file(dir / "a" / "test-small-rotation" / "changes.jsonl"));
+  int lines = 0;
+  for (std::string line; std::getline(changes, line); ++lines) {
+    const auto t = nlohmann::json::parse(line).at("translation").get<std::vector<double>>();
+    EXPECT_EQ(t, std::vector<double>(3, 0.0)) << line;
+  }
+  EXPECT_EQ(lines, 8);
+  // Samples are never replaced.
+  r = run_fishcam("sample-dataset " + quoted(dir / "a") + args);
+  EXPECT_NE(r.exit_code, 0);
+  // Fidelity: 2 sets x (3 priors + the depth map).
+  r = run_fishcam("fidelity " + quoted(dir / "a") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = nlohmann::json::parse(r.out).at("rows");
+  ASSERT_EQ(rows.size(), 8u) << r.out;
+  for (const auto& row : rows) {
+    EXPECT_EQ(row.at("samples").get<int>(), 8);
+    const double agreement = row.at("label_agreement").get<double>();
+    const bool exact = row.at("test_set") == "test-small-rotation" || row.at("prior") == "map";
+    if (exact) {
+      EXPECT_GE(agreement, 0.99) << row.dump();
+    }
+    EXPECT_TRUE(std::isfinite(row.at("psnr_db").get<double>())) << row.dump();
+  }
+  r = run_fishcam("fidelity " + quoted(dir / "a" / "train"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("no test/ folder"), std::string::npos) << r.err;
+}
+
 TEST(CliAugmentation, RenderAugmentAndMap) {
   const auto dir = test::scratch_dir("cli_augment");
   auto r = run_fishcam("render " + data("woodscape_front.json") + " --out-image " + quoted(dir / "render.png") +

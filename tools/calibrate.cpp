@@ -17,13 +17,6 @@
 namespace fishcam::cli {
 namespace {
 
-std::vector<std::string> split_commas(const std::string& text) {
-  std::vector<std::string> parts;
-  std::stringstream stream(text);
-  for (std::string part; std::getline(stream, part, ',');) parts.push_back(part);
-  return parts;
-}
-
 // --images PATTERN[,PATTERN...]: the observations whose file name (as the corners
 // file gives it, or its last component) matches one of the shell patterns
 // (fnmatch); a pattern that matches nothing is an error (a typo must not calibrate

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <cstdlib>
 #include <numbers>
 #include <fcntl.h>
@@ -149,6 +150,13 @@ void write_outputs(const std::vector<std::pair<std::filesystem::path, std::strin
 
 void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite) {
   write_images({{path, image}}, overwrite);
+}
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream stream(text);
+  for (std::string part; std::getline(stream, part, ',');) parts.push_back(part);
+  return parts;
 }
 
 std::filesystem::path bundled_data(const std::string& name) {

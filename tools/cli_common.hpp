@@ -41,6 +41,8 @@ struct CameraInputs {
 };
 // Adds those options to cmd (after any --format of its own) and returns where they land.
 std::shared_ptr<const CameraInputs> add_camera_input_options(CLI::App* cmd);
+// "a,b,c" -> {"a", "b", "c"} (empty parts kept).
+std::vector<std::string> split_commas(const std::string& text);
 // "W,H" or "WxH" as positive integers; throws Error naming the option.
 std::pair<int, int> parse_image_size(const std::string& text, const std::string& option);
 

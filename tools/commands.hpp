@@ -26,5 +26,6 @@ void register_sample_dataset(CLI::App& app);
 void register_evaluate(CLI::App& app);
 void register_compare(CLI::App& app);
 void register_uncertainty(CLI::App& app);
+void register_fidelity(CLI::App& app);
 
 }  // namespace fishcam::cli
