@@ -5,6 +5,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fishcam/npy.hpp"
 
 namespace fishcam::cli {
 
@@ -12,7 +13,8 @@ namespace {
 
 struct AugmentOptions {
   std::string source, target, image, label, out_image, out_label, out_mask, preset, method = "viewpoint",
-                                                                               sampling = "grid";
+                                                                               sampling = "grid", depth_file,
+                                                                               depth_values = "range";
   std::vector<double> affine;
   PoseOptions pose;
   std::uint64_t seed = 0;
@@ -69,6 +71,19 @@ void print_change(const AugmentOptions& o, const AugmentChange& c, bool affine) 
   std::printf("%s\n", j.dump().c_str());  // nlohmann writes doubles round-trip exact
 }
 
+// --depth map: the maps from the source image's depth map (.npy, H x W float32).
+void augment_from_depth_file(const ViewpointWarp& warp, const ViewpointChange& change, const AugmentOptions& o,
+                             const AugmentIO& io) {
+  const NpyArray array = read_npy(o.depth_file);
+  const size_t h = size_t(warp.source().height()), w = size_t(warp.source().width());
+  if (array.shape != std::vector<size_t>{h, w}) {
+    throw Error(path_for_message(o.depth_file) + ": expected a " + std::to_string(h) + " x " + std::to_string(w) +
+                " depth map (the source camera's size)");
+  }
+  const cv::Mat depth(int(h), int(w), CV_32FC1, const_cast<float*>(array.data.data()));
+  warp.augment_from_depth(change, depth, *parse_depth_values(o.depth_values), io);
+}
+
 void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, const CLI::App& cmd,
                          bool out_label_given) {
   if (out_label_given && o.label.empty()) throw Error("--out-label needs --label");
@@ -80,7 +95,14 @@ void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, co
   } else if (!o.affine.empty()) {
     throw Error("--affine needs --method affine");
   }
-  check_outputs({{o.out_image}, {o.out_label, true}, {o.out_mask}}, {o.source, o.target, o.image, o.label}, o.force);
+  const bool depth_map = o.pose.depth == kDepthMapName;
+  if (depth_map && o.depth_file.empty()) throw Error("--depth map needs --depth-file D.npy (the source image's depth)");
+  if (!depth_map && (!o.depth_file.empty() || cmd.count("--depth-values"))) {
+    throw Error(std::string(o.depth_file.empty() ? "--depth-values" : "--depth-file") + " needs --depth map");
+  }
+  if (depth_map && cmd.count("--sampling")) throw Error("--sampling: not used by --depth map (its maps are exact)");
+  check_outputs({{o.out_image}, {o.out_label, true}, {o.out_mask}}, {o.source, o.target, o.image, o.label, o.depth_file},
+                o.force);
   const ViewpointWarp warp = make_warp(inputs, o.source, o.target);
   const AugmentChange change = change_of(o, affine);
   const cv::Mat image = read_image(o.image, cv::IMREAD_UNCHANGED);
@@ -95,6 +117,8 @@ void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, co
   try {
     if (affine) {
       affine_augment(change.affine, cv::Size(warp.source().width(), warp.source().height()), io);
+    } else if (depth_map) {
+      augment_from_depth_file(warp, change.pose.change(), o, io);
     } else {
       warp.augment(change.pose.change(), o.pose.prior(), io, *parse_sampling(o.sampling));
     }
@@ -123,7 +147,12 @@ void register_augment(CLI::App& app) {
   cmd->add_option("--out-image", o->out_image, "Output image")->required();
   auto* out_label = cmd->add_option("--out-label", o->out_label, "Output label image (needs --label)");
   cmd->add_option("--out-mask", o->out_mask, "Output validity mask (255 = has a source inside the source image)");
-  add_pose_options(cmd, &o->pose);
+  add_pose_options(cmd, &o->pose, /*with_depth=*/true, /*with_depth_map=*/true);
+  cmd->add_option("--depth-file", o->depth_file,
+                  "--depth map: the source image's depth (.npy, H x W float32; units of --translate; inf: sky)");
+  cmd->add_option("--depth-values", o->depth_values, "--depth map: what the depth file holds")
+      ->check(CLI::IsMember(depth_values_names()))
+      ->capture_default_str();
   cmd->add_option("--method", o->method,
                   "viewpoint: the camera-aware augmentation; affine: the paper's baseline (rotation about the image "
                   "centre, translation, scale; no camera model)")

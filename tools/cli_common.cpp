@@ -23,7 +23,7 @@ ViewpointChange PoseOptions::change() const {
 
 DepthPrior PoseOptions::prior() const { return depth_prior(depth, "--depth"); }
 
-void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth) {
+void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth, bool with_depth_map) {
   cmd->add_option("--rotate", options->rotate, "Rotation rx,ry,rz in degrees about the camera x, y, z axes "
                                                "(R = Rz Ry Rx, acting on the points)")
       ->delimiter(',')
@@ -32,8 +32,9 @@ void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth) {
       ->delimiter(',')
       ->expected(3);
   if (with_depth) {
-    cmd->add_option("--depth", options->depth, "Depth prior")
-        ->check(CLI::IsMember(depth_prior_names()))
+    cmd->add_option("--depth", options->depth,
+                    with_depth_map ? "Depth prior, or map: the source image's depth map (--depth-file)" : "Depth prior")
+        ->check(CLI::IsMember(with_depth_map ? depth_prior_and_map_names() : depth_prior_names()))
         ->capture_default_str();
   }
 }

@@ -29,7 +29,8 @@ struct PoseOptions {
   ViewpointChange change() const;
   DepthPrior prior() const;
 };
-void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth = true);
+// with_depth_map: --depth also takes "map" (the caller then reads a depth map).
+void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth = true, bool with_depth_map = false);
 
 // How a subcommand reads its camera files: --camera NAME|INDEX, --imagersize W,H
 // (or WxH), --format (--input-format where --format names the output) and

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "fishcam/augmentation.hpp"
@@ -114,6 +115,96 @@ void ViewpointWarp::compute_from_depth(const ViewpointChange& change, const cv::
   map_x.setTo(kOutsideSource, written == 0);
   map_y.setTo(kOutsideSource, written == 0);
   maps->map_x = map_x, maps->map_y = map_y;
+}
+
+
+void ViewpointWarp::augment_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
+                                       const AugmentIO& io) const {
+  WarpMaps maps;
+  compute_from_depth(change, depth, values, &maps);
+  if (io.image) warp_image(*io.image, maps, io.out_image, io.fill);
+  if (io.labels) warp_labels(*io.labels, maps, io.label_fill, io.out_labels);
+  if (io.valid) maps.validity().copyTo(*io.valid);  // in place: the caller may have allocated it
+}
+
+namespace {
+
+// The scene point of source pixel p (subpixel) at its depth value (range or z along the ray).
+std::optional<Eigen::Vector3d> point_at(const Camera& source, const Eigen::Vector2d& p, double value,
+                                        DepthValues values) {
+  Eigen::Vector3d ray;
+  if (!(value > 0) || !std::isfinite(value) || !source.unproject(p, &ray)) return std::nullopt;
+  const double along = values == DepthValues::range ? value : value / ray.z();
+  if (!(along > 0) || !std::isfinite(along)) return std::nullopt;
+  return along * ray;
+}
+
+}  // namespace
+
+void ViewpointWarp::forward_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
+                                       std::span<const Eigen::Vector2d> source_pixels,
+                                       std::span<Eigen::Vector2d> pixels, std::span<std::uint8_t> visible) const {
+  if (pixels.size() != source_pixels.size() || visible.size() != source_pixels.size()) {
+    throw Error("ViewpointWarp::forward_from_depth: outputs of the wrong size");
+  }
+  WarpMaps maps;
+  compute_from_depth(change, depth, values, &maps, MapKind::geometric);
+  for (size_t i = 0; i < source_pixels.size(); ++i) {
+    pixels[i] = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    visible[i] = 0;
+    const Eigen::Vector2d& p = source_pixels[i];
+    const long u = std::lround(p.x()), v = std::lround(p.y());
+    if (!(u >= 0 && v >= 0 && u < depth.cols && v < depth.rows)) continue;
+    const double value = depth.at<float>(int(v), int(u));
+    Eigen::Vector3d moved;
+    if (std::isinf(value) && value > 0) {  // the sky: a direction
+      Eigen::Vector3d ray;
+      if (!source_.unproject(p, &ray)) continue;
+      moved = change.rotation * ray;
+    } else {
+      const auto point = point_at(source_, p, value, values);
+      if (!point) continue;
+      moved = change.rotation * *point + change.translation;
+    }
+    Eigen::Vector2d q;
+    if (!target_.project(moved, &q)) continue;
+    pixels[i] = q;
+    const long x = std::lround(q.x()), y = std::lround(q.y());
+    if (x < 0 || y < 0 || x >= maps.map_x.cols || y >= maps.map_x.rows || !maps.valid.at<uchar>(int(y), int(x))) continue;
+    const Eigen::Vector2d sampled(maps.map_x.at<float>(int(y), int(x)), maps.map_y.at<float>(int(y), int(x)));
+    visible[i] = (sampled - p).norm() <= 1.5;
+  }
+}
+
+void ViewpointWarp::warp_depth_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
+                                          cv::Mat* out, float fill) const {
+  WarpMaps maps;
+  compute_from_depth(change, depth, values, &maps, MapKind::geometric);
+  out->create(maps.map_x.size(), CV_32FC1);
+  cv::parallel_for_(cv::Range(0, out->rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      float* row = out->ptr<float>(y);
+      for (int x = 0; x < out->cols; ++x) {
+        row[x] = fill;
+        if (!maps.valid.at<uchar>(y, x)) continue;
+        const Eigen::Vector2d p(maps.map_x.at<float>(y, x), maps.map_y.at<float>(y, x));
+        const int u = std::clamp(int(std::lround(p.x())), 0, depth.cols - 1);
+        const int v = std::clamp(int(std::lround(p.y())), 0, depth.rows - 1);
+        const double value = depth.at<float>(v, u);
+        if (!(value > 0) || !std::isfinite(value)) {
+          row[x] = float(value);  // no-depth markers and the sky's infinity as they are
+          continue;
+        }
+        const auto point = point_at(source_, p, value, values);
+        if (!point) {
+          row[x] = std::numeric_limits<float>::quiet_NaN();
+          continue;
+        }
+        const Eigen::Vector3d moved = change.rotation * *point + change.translation;
+        row[x] = float(values == DepthValues::z ? moved.z() : moved.norm());
+      }
+    }
+  });
 }
 
 }  // namespace fishcam

@@ -50,6 +50,15 @@ const std::vector<std::string>& depth_prior_names() {
   return names;
 }
 
+const std::vector<std::string>& depth_prior_and_map_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out = depth_prior_names();
+    out.emplace_back(kDepthMapName);
+    return out;
+  }();
+  return names;
+}
+
 DepthPrior depth_prior(std::string_view name, std::string_view what) {
   if (const auto prior = parse_depth_prior(name)) return *prior;
   throw Error(std::string(what) + ": expected " + choices_for_message(depth_prior_names()) + ", got " + quoted_for_message(name));

@@ -4,7 +4,7 @@ fishcam's C++ library (use the fishcam package, not this module)
 from __future__ import annotations
 import numpy
 import typing
-__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'sampling_names', 'set_num_threads']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_priors_and_map', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'sampling_names', 'set_num_threads']
 class Error(ValueError):
     pass
 class ValidDomain:
@@ -320,7 +320,7 @@ class ViewpointWarp:
     """
     The viewpoint augmentation of one calibration (source camera -> target camera, the same by default): caches the target's rays and the grid plan, so keep one per calibration.
     """
-    def __call__(self, *, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, labels: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, change: ViewpointChange, depth: str = 'source-sphere', fill: float = 0.0, label_fill: int = 0, return_valid: bool = False, sampling: str = 'grid') -> dict[str, typing.Any]:
+    def __call__(self, *, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, labels: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, change: ViewpointChange, depth: str = 'source-sphere', fill: float = 0.0, label_fill: int = 0, return_valid: bool = False, sampling: str = 'grid', depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, depth_values: str = 'range') -> dict[str, typing.Any]:
         """
         warp(...): one augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when asked.
         """
@@ -332,7 +332,7 @@ class ViewpointWarp:
         """
     def __setstate__(self, arg0: tuple[typing.Any, ...]) -> None:
         ...
-    def forward(self, points: typing.Any, change: ViewpointChange, depth: str = 'source-sphere') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
+    def forward(self, points: typing.Any, change: ViewpointChange, depth: str = 'source-sphere', depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, depth_values: str = 'range') -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:
         """
         Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; visible (N,) bool: inside the output and not hidden)
         """
@@ -344,13 +344,13 @@ class ViewpointWarp:
         """
         The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): (grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)
         """
-    def warp(self, *, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, labels: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, change: ViewpointChange, depth: str = 'source-sphere', fill: float = 0.0, label_fill: int = 0, return_valid: bool = False, sampling: str = 'grid') -> dict[str, typing.Any]:
+    def warp(self, *, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, labels: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, change: ViewpointChange, depth: str = 'source-sphere', fill: float = 0.0, label_fill: int = 0, return_valid: bool = False, sampling: str = 'grid', depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | None = None, depth_values: str = 'range') -> dict[str, typing.Any]:
         """
-        One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when asked.
+        One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when asked. depth: a prior, or "map" with depth_map (the source's HxW float32 range or z, depth_values; exact, no source where the source never saw the scene).
         """
     def warp_depth(self, depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: ViewpointChange, depth: str = 'source-sphere', values: str = 'range', fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
         """
-        A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values re-expressed in the moved camera (exact for rotations); fill where there is no source
+        A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values re-expressed in the moved camera (exact for rotations; with depth="map", the map is the prior: exact); fill where there is no source
         """
     @property
     def float_kernel(self) -> bool:
@@ -692,6 +692,10 @@ def convert(camera: Camera, to: str, method: str = 'lsq', max_angle: float | Non
 def depth_priors() -> list[str]:
     """
     The depth priors' names.
+    """
+def depth_priors_and_map() -> list[str]:
+    """
+    The depth priors' names and "map" (the source image's depth map in place of a prior).
     """
 def depth_values_names() -> list[str]:
     """

@@ -68,7 +68,8 @@ class _FishcamDualTransform(_DualTransform):
         camera = data.get("camera")
         if camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
-        return {"source_camera": camera}
+        # The depth target, for depth="map" (the scene points of the whole sample).
+        return {"source_camera": camera, "source_depth": data.get("depth")}
 
     def _change(self, params: Params) -> _transforms.SampleChange:
         raise NotImplementedError
@@ -151,7 +152,7 @@ class RandomViewpoint(_FishcamDualTransform):
         height, width = params["shape"][:2]
         if (camera.width, camera.height) != (width, height):
             raise Error(f"image: is {width}x{height} but the camera is {camera.width}x{camera.height}")
-        return self._viewpoint.draw(camera, params["seed"])
+        return self._viewpoint.draw(camera, params["seed"], params.get("source_depth"))
 
 
 class RandomAffine(_FishcamDualTransform):

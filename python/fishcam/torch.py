@@ -354,7 +354,14 @@ class RandomViewpoint(_FishcamTransform):
         camera = cameras[0] if cameras else self.numpy_transform.camera
         if camera is None:
             raise Error("camera: none given (pass one to the constructor or put a fishcam.Camera in the sample)")
-        return self.numpy_transform.draw(camera, self._seed())
+        depth_map = None
+        if self.numpy_transform.depth == "map":  # the sample's DepthMap places the scene points
+            maps = [x for x in flat_inputs if isinstance(x, DepthMap)]
+            if len(maps) != 1:
+                raise Error(f"depth='map' needs exactly one fishcam.torch.DepthMap in the sample, got {len(maps)}")
+            tensor = _cpu(maps[0], "depth map")
+            depth_map = (tensor.reshape(tensor.shape[-2:]) if tensor.ndim == 3 and tensor.shape[0] == 1 else tensor).numpy()
+        return self.numpy_transform.draw(camera, self._seed(), depth_map)
 
     def extra_repr(self) -> str:
         return repr(self.numpy_transform)[len("RandomViewpoint("):-1] + f", min_visibility={self.min_visibility}"

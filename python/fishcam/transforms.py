@@ -293,7 +293,9 @@ class RandomViewpoint:
     preset: "small", "medium", "large" or "train"; or give max_rotation_deg and
         max_translation instead (uniform per axis in [-max, max]).
     depth: the depth prior, "source-sphere" (default), "target-sphere" or "infinity":
-        where a pixel's scene point is assumed to be when the camera moves.
+        where a pixel's scene point is assumed to be when the camera moves; or "map":
+        at the sample's own depth map (``depth_map=``, in the units of the change's
+        translation; exact, and pixels the source never saw get no source).
     p: probability of applying a change (else the identity, still reported).
     fill: image value where the new view has no source; fill_mask: the label there.
     rng: a numpy Generator to draw seeds from (default: numpy's global generator).
@@ -325,7 +327,8 @@ class RandomViewpoint:
                 raise Error(f"max_translation: must be finite and >= 0, got {max_translation}")
         else:
             _fishcam.check_preset(str(preset))
-        _fishcam.check_depth_prior(depth)
+        if depth not in _fishcam.depth_priors_and_map():
+            raise Error(f"depth: expected {', '.join(_fishcam.depth_priors_and_map())}, got {depth!r}")
         _check_p_and_fill(p, fill)
         self.camera = camera
         self.preset = preset
@@ -348,9 +351,11 @@ class RandomViewpoint:
         assert self.max_rotation_deg is not None and self.max_translation is not None
         return _fishcam.random_change_in(self.max_rotation_deg, self.max_translation, seed)
 
-    def draw(self, camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None) -> SampleChange:
+    def draw(self, camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None,
+             depth_map: typing.Optional[Array] = None) -> SampleChange:
         """The SampleChange of one call: the change of ``seed`` (drawn when None) for
-        images of ``camera`` (default: the constructor's)."""
+        images of ``camera`` (default: the constructor's); with depth="map", the
+        sample's depth map (HxW float32) places every pixel's scene point."""
         camera = camera if camera is not None else self.camera
         if camera is None:
             raise Error("camera: none given (pass camera= to the constructor or the call)")
@@ -361,14 +366,23 @@ class RandomViewpoint:
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.ViewpointChange()
         warp = self._warps.get(camera)
+        if self.depth == "map":
+            if depth_map is None:
+                raise Error("depth='map' needs the sample's depth map (depth_map=, HxW float32)")
+            if not isinstance(depth_map, np.ndarray) or depth_map.dtype != np.float32 or depth_map.ndim != 2:
+                got = f"{depth_map.dtype} {depth_map.shape}" if isinstance(depth_map, np.ndarray) else type(depth_map).__name__
+                raise Error(f"depth_map: expected an HxW float32 array, got {got}")
+        maps_depth = depth_map if self.depth == "map" else None
 
         def resample(image: typing.Optional[Array], labels: typing.Optional[Array]) -> typing.Dict[str, Array]:
             return warp.warp(image=image, labels=labels, change=change, depth=self.depth, fill=self.fill,
-                             label_fill=self.fill_mask, sampling=self.sampling)
+                             label_fill=self.fill_mask, sampling=self.sampling, depth_map=maps_depth,
+                             depth_values=self.depth_values)
 
         return SampleChange(
             record=change_to_dict(change, seed, self.depth),
-            forward=lambda points: warp.forward(points, change, self.depth),
+            forward=lambda points: warp.forward(points, change, self.depth, depth_map=maps_depth,
+                                                depth_values=self.depth_values),
             resample=resample,
             depth_map=lambda depth_map: warp.warp_depth(depth_map, change, self.depth, self.depth_values),
             camera=lambda c: c.augmented(change),
@@ -381,7 +395,7 @@ class RandomViewpoint:
         """One change for every target given (module docstring); a dict with the same
         keys, ``change`` (the record) and the visibility of keypoints and boxes."""
         # The augmented camera is returned for a camera given with the sample.
-        return _apply(self.draw(camera, seed), image, mask, camera, targets)
+        return _apply(self.draw(camera, seed, targets.get("depth_map")), image, mask, camera, targets)
 
     def __repr__(self) -> str:
         what = (f"preset={self.preset!r}" if self.preset is not None else

@@ -75,16 +75,52 @@ Sampling sampling_of(const std::string& name) {
   return *sampling;
 }
 
+// depth=: a prior's name, or "map" with the source image's depth map (depth_map=,
+// HxW float32, range or z per depth_values=).
+struct DepthChoice {
+  std::optional<DepthPrior> prior;  // none: the map
+  cv::Mat map;                      // a header on the numpy array (kept alive by the caller)
+  DepthValues values = DepthValues::range;
+};
+
+DepthChoice depth_choice(const std::string& depth, std::optional<py::array>& depth_map, const std::string& values) {
+  DepthChoice choice;
+  const auto kind = parse_depth_values(values);
+  if (!kind) {
+    throw Error("depth_values: expected " + choices_for_message(depth_values_names()) + ", got " +
+                quoted_for_message(values));
+  }
+  choice.values = *kind;
+  if (depth != kDepthMapName) {
+    choice.prior = depth_prior(depth, "depth");
+    if (depth_map) throw Error("depth_map: only used with depth=\"map\"");
+    return choice;
+  }
+  if (!depth_map) throw Error("depth=\"map\" needs depth_map= (the source image's HxW float32 depth)");
+  if (!py::isinstance<py::array_t<float>>(*depth_map) || depth_map->ndim() != 2) {
+    throw Error("depth_map: expected an HxW float32 array, got " + std::string(py::str(depth_map->dtype())) + " with " +
+                std::to_string(depth_map->ndim()) + " dimensions");
+  }
+  choice.map = as_mat(*depth_map, "depth_map", false);
+  return choice;
+}
+
 // One augmented sample, what `fishcam augment` writes (ViewpointWarp.warp and __call__).
 py::dict augment_sample(const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
                         const RandomPose& change, const std::string& depth, double fill, int label_fill,
-                        bool return_valid, const std::string& sampling) {
-  const DepthPrior prior = depth_prior(depth);
+                        bool return_valid, const std::string& sampling, std::optional<py::array> depth_map,
+                        const std::string& depth_values) {
+  const DepthChoice choice = depth_choice(depth, depth_map, depth_values);
   const Sampling how = sampling_of(sampling);
   const cv::Size source(warp.source().width(), warp.source().height());
   const cv::Size target(warp.target().width(), warp.target().height());
-  return resample(image, labels, source, target, fill, label_fill, return_valid,
-                  [&](const AugmentIO& io) { warp.augment(change.change(), prior, io, how); });
+  return resample(image, labels, source, target, fill, label_fill, return_valid, [&](const AugmentIO& io) {
+    if (choice.prior) {
+      warp.augment(change.change(), *choice.prior, io, how);
+    } else {
+      warp.augment_from_depth(change.change(), choice.map, choice.values, io);
+    }
+  });
 }
 
 
@@ -146,6 +182,8 @@ void bind_augmentation(py::module_& m) {
     return out;
   });
   m.def("depth_priors", [] { return depth_prior_names(); }, "The depth priors' names.");
+  m.def("depth_priors_and_map", [] { return depth_prior_and_map_names(); },
+        "The depth priors' names and \"map\" (the source image's depth map in place of a prior).");
   m.def("sampling_names", [] { return sampling_names(); }, "The sampling modes' names.");
   m.def("depth_values_names", [] { return depth_values_names(); }, "What depth maps' values can be.");
   m.def("check_depth_prior", [](const std::string& name) { depth_prior(name); },
@@ -215,10 +253,12 @@ void bind_augmentation(py::module_& m) {
           &augment_sample,
           py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
-          py::arg("return_valid") = false, py::arg("sampling") = "grid",
+          py::arg("return_valid") = false, py::arg("sampling") = "grid", py::arg("depth_map") = py::none(),
+          py::arg("depth_values") = "range",
           "One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; "
           "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
-          "asked.")
+          "asked. depth: a prior, or \"map\" with depth_map (the source's HxW float32 range or z, "
+          "depth_values; exact, no source where the source never saw the scene).")
       .def(
           "sampling_grid",
           [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth) {
@@ -255,20 +295,27 @@ void bind_augmentation(py::module_& m) {
           "(grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)")
       .def(
           "forward",
-          [](const ViewpointWarp& warp, const py::handle& points, const RandomPose& change, const std::string& depth) {
-            const DepthPrior prior = depth_prior(depth);
+          [](const ViewpointWarp& warp, const py::handle& points, const RandomPose& change, const std::string& depth,
+             std::optional<py::array> depth_map, const std::string& depth_values) {
+            const DepthChoice choice = depth_choice(depth, depth_map, depth_values);
             return batch<2, 2>(points, "points", [&](auto in, auto out, auto ok) {
-              warp.forward(change.change(), prior, in, out, ok);
+              if (choice.prior) {
+                warp.forward(change.change(), *choice.prior, in, out, ok);
+              } else {
+                warp.forward_from_depth(change.change(), choice.map, choice.values, in, out, ok);
+              }
             });
           },
-          py::arg("points"), py::arg("change"), py::arg("depth") = "source-sphere",
+          py::arg("points"), py::arg("change"), py::arg("depth") = "source-sphere", py::arg("depth_map") = py::none(),
+          py::arg("depth_values") = "range",
           "Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; "
           "visible (N,) bool: inside the output and not hidden)")
       .def(
           "warp_depth",
           [](const ViewpointWarp& warp, py::array depth_map, const RandomPose& change, const std::string& depth,
              const std::string& values, float fill) {
-            const DepthPrior prior = depth_prior(depth);
+            const bool map = depth == kDepthMapName;  // the depth map is its own prior
+            const DepthPrior prior = map ? DepthPrior::source_sphere : depth_prior(depth);  // unused with the map
             const auto kind = parse_depth_values(values);
             if (!kind) {
               throw Error("values: expected " + choices_for_message(depth_values_names()) + ", got " +
@@ -284,7 +331,11 @@ void bind_augmentation(py::module_& m) {
             const uchar* before = out_header.data;
             {
               py::gil_scoped_release release;
-              warp.warp_depth(change.change(), prior, in, *kind, &out_header, fill);
+              if (!map) {
+                warp.warp_depth(change.change(), prior, in, *kind, &out_header, fill);
+              } else {
+                warp.warp_depth_from_depth(change.change(), in, *kind, &out_header, fill);
+              }
             }
             if (out_header.data != before) throw Error("internal: an output was reallocated");
             return out;
@@ -292,13 +343,15 @@ void bind_augmentation(py::module_& m) {
           py::arg("depth_map"), py::arg("change"), py::arg("depth") = "source-sphere", py::arg("values") = "range",
           py::arg("fill") = std::numeric_limits<float>::quiet_NaN(),
           "A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values "
-          "re-expressed in the moved camera (exact for rotations); fill where there is no source")
+          "re-expressed in the moved camera (exact for rotations; with depth=\"map\", the map is the prior: exact); "
+          "fill where there is no source")
       .def(
           "__call__",
           &augment_sample,
           py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
           py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
-          py::arg("return_valid") = false, py::arg("sampling") = "grid",
+          py::arg("return_valid") = false, py::arg("sampling") = "grid", py::arg("depth_map") = py::none(),
+          py::arg("depth_values") = "range",
           "warp(...): one augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; "
           "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
           "asked.")

@@ -160,6 +160,19 @@ class ViewpointWarp {
   // depth map of the wrong type or size and for a non-finite change.
   void compute_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values, WarpMaps* maps,
                           MapKind kind = MapKind::sampling, double edge_ratio = 1.1) const;
+  // augment(), forward() and warp_depth() under a depth map of the source image
+  // (compute_from_depth's maps; `fishcam augment --depth map`, Python depth="map").
+  // forward: each point at the depth of its nearest source pixel; visible where it
+  // lands inside the output and the output pixel there samples it (within 1.5 px),
+  // not a nearer surface. warp_depth_from_depth: `depth` itself seen from the moved
+  // camera (nearest neighbour, re-expressed along the source ray the output samples).
+  void augment_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
+                          const AugmentIO& io) const;
+  void forward_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
+                          std::span<const Eigen::Vector2d> source_pixels, std::span<Eigen::Vector2d> pixels,
+                          std::span<std::uint8_t> visible) const;
+  void warp_depth_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values, cv::Mat* out,
+                             float fill = std::numeric_limits<float>::quiet_NaN()) const;
   // The grid's node spacing (px) and its measured worst interpolation error (px)
   // against the per-pixel float map; 0 and 0 where there is no grid (no float
   // kernel, or no spacing from 16 down to 2 px interpolates 80 % of the cells within
