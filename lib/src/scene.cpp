@@ -29,6 +29,7 @@ struct Box {
   // Material details: body: windows above this height; facade: storey height and
   // window spacing; sign: the plate's border share.
   double detail_a = 1.0, detail_b = 4.0;
+  double cos_yaw = 1, sin_yaw = 0;  // of yaw, set once per scene (with_trigonometry): rays test boxes per pixel
 };
 
 struct Cylinder {  // vertical
@@ -316,7 +317,7 @@ StreetScene::Content generated_content(std::uint64_t seed) {
 
 void intersect_box(const Box& b, const Eigen::Vector3d& o, const Eigen::Vector3d& w, Hit* hit) {
   Eigen::Vector3d lo = o, lw = w;  // the ray in the box's frame
-  const double c = std::cos(b.yaw), sn = std::sin(b.yaw);
+  const double c = b.cos_yaw, sn = b.sin_yaw;
   if (b.yaw != 0 || b.origin.x() != 0 || b.origin.y() != 0) {
     const double x = o.x() - b.origin.x(), y = o.y() - b.origin.y();
     lo = {c * x + sn * y, -sn * x + c * y, o.z()};
@@ -455,7 +456,7 @@ std::vector<Bound> bounds_of(const StreetScene::Content& scene) {
   std::vector<Bound> out;
   for (const Box& b : scene.boxes) {
     const Eigen::Vector3d mid = (b.lo + b.hi) / 2;
-    const double c = std::cos(b.yaw), s = std::sin(b.yaw);
+    const double c = b.cos_yaw, s = b.sin_yaw;
     out.push_back({{b.origin.x() + c * mid.x() - s * mid.y(), b.origin.y() + s * mid.x() + c * mid.y(), mid.z()},
                    (b.hi - b.lo).norm() / 2});
   }
@@ -529,13 +530,22 @@ void trace_grid(const StreetScene::Content& scene, const std::vector<float>& ray
 
 StreetScene::StreetScene(std::shared_ptr<const Content> content) : content_(std::move(content)) {}
 
+namespace {
+
+std::shared_ptr<const StreetScene::Content> with_trigonometry(StreetScene::Content content) {
+  for (Box& b : content.boxes) b.cos_yaw = std::cos(b.yaw), b.sin_yaw = std::sin(b.yaw);
+  return std::make_shared<const StreetScene::Content>(std::move(content));
+}
+
+}  // namespace
+
 const StreetScene& StreetScene::bundled() {
-  static const StreetScene scene(std::make_shared<const Content>(bundled_content()));
+  static const StreetScene scene(with_trigonometry(bundled_content()));
   return scene;
 }
 
 StreetScene StreetScene::generate(std::uint64_t scene_seed) {
-  return StreetScene(std::make_shared<const Content>(generated_content(scene_seed)));
+  return StreetScene(with_trigonometry(generated_content(scene_seed)));
 }
 
 SceneRender StreetScene::render(const Camera& camera, const Pose& camera_to_vehicle, int supersampling) const {
