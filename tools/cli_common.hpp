@@ -17,6 +17,7 @@
 #include "fishcam/camera_io.hpp"
 #include "fishcam/calibration.hpp"
 #include "fishcam/fit.hpp"
+#include "fishcam/image_io.hpp"
 #include "fishcam/viewpoint.hpp"
 
 namespace fishcam::cli {
@@ -50,8 +51,6 @@ std::pair<int, int> parse_image_size(const std::string& text, const std::string&
 // The warp from SOURCE to TARGET (TARGET empty: the source camera again).
 ViewpointWarp make_warp(const CameraInputs& inputs, const std::string& source, const std::string& target);
 
-// Reads an image or fails with "PATH: cannot read image".
-cv::Mat read_image(const std::string& path, int flags);
 // Whether labels survive the format of path's extension (PNG, TIFF, PGM; not JPEG).
 bool lossless_label_format(const std::filesystem::path& path);
 // A file a command will write (empty path: not requested); labels need a lossless format.

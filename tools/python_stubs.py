@@ -37,6 +37,7 @@ def generate(extension_dir):
     # pybind11 2.10 names py::dict, py::tuple and py::list without their items:
     # what the functions document, in the types mypy --strict asks for.
     text = re.sub(r"-> dict:", "-> dict[str, typing.Any]:", text)
+    text = re.sub(r"-> list\[dict\]:", "-> list[dict[str, typing.Any]]:", text)
     text = re.sub(r"-> tuple:", "-> tuple[typing.Any, ...]:", text)
     text = re.sub(r"-> typing.Iterator:", "-> typing.Iterator[typing.Any]:", text)
     text = re.sub(r": list([,)])", r": list[typing.Any]\1", text)

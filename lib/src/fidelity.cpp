@@ -1,9 +1,18 @@
 #include "fishcam/fidelity.hpp"
 
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
+#include <map>
+
+#include "fishcam/camera_io.hpp"
+#include "fishcam/image_io.hpp"
+#include "fishcam/npy.hpp"
 
 namespace fishcam {
 
@@ -55,6 +64,106 @@ Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange&
   const double mse = (sum[0] + sum[1] + sum[2]) / (3.0 * double(f.compared));
   f.psnr_db = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
   return f;
+}
+
+}  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+namespace fs = std::filesystem;
+
+// One sample of a WoodScape-layout folder: image, labels and (when asked) the range.
+struct SampleFiles {
+  cv::Mat image, labels, depth;
+};
+
+SampleFiles read_sample(const fs::path& root, const std::string& name, bool depth) {
+  const fs::path label_path = root / "semantic_annotations" / "gtLabels" / (name + ".png");
+  SampleFiles f{read_image(root / "rgb_images" / (name + ".png"), cv::IMREAD_COLOR),
+                read_image(label_path, cv::IMREAD_UNCHANGED), {}};
+  if (f.labels.type() != CV_8UC1) throw Error(path_for_message(label_path) + ": expected 8-bit single-channel labels");
+  if (depth) {
+    const fs::path depth_path = root / "depth" / (name + ".npy");
+    const NpyArray range = read_npy(depth_path);
+    if (range.shape != std::vector<size_t>{size_t(f.image.rows), size_t(f.image.cols)}) {
+      throw Error(path_for_message(depth_path) + ": not the image's size");
+    }
+    f.depth = cv::Mat(f.image.rows, f.image.cols, CV_32FC1, const_cast<float*>(range.data.data())).clone();
+  }
+  return f;
+}
+
+ViewpointChange change_of(const nlohmann::json& entry, const fs::path& file, std::string* name) {
+  try {
+    *name = entry.at("name").get<std::string>();
+    const auto r = entry.at("rotation_deg").get<std::vector<double>>();
+    const auto t = entry.at("translation").get<std::vector<double>>();
+    if (r.size() != 3 || t.size() != 3) throw Error(path_for_message(file) + ": " + *name + ": expected 3 values");
+    return ViewpointChange::from_euler_deg({r[0], r[1], r[2]}, {t[0], t[1], t[2]});
+  } catch (const nlohmann::json::exception&) {
+    throw Error(path_for_message(file) + ": a line lacks name, rotation_deg or translation");
+  }
+}
+
+}  // namespace
+
+std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
+  if (!fs::is_directory(root / "test")) {
+    throw Error(path_for_message(root) + ": no test/ folder (expected a dataset of fishcam sample-dataset --scenes N)");
+  }
+  const bool depth = fs::is_directory(root / "test" / "depth");
+  std::vector<fs::path> sets;
+  for (const auto& entry : fs::directory_iterator(root)) {
+    if (entry.is_directory() && entry.path().filename().string().starts_with("test-") &&
+        fs::exists(entry.path() / "changes.jsonl")) {
+      sets.push_back(entry.path());
+    }
+  }
+  std::sort(sets.begin(), sets.end());
+  if (sets.empty()) throw Error(path_for_message(root) + ": no true viewpoint test sets (test-PRESET/changes.jsonl)");
+  std::vector<std::pair<std::string, std::optional<DepthPrior>>> priors;
+  for (DepthPrior p : {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity}) {
+    priors.emplace_back(std::string(to_string(p)), p);
+  }
+  if (depth) priors.emplace_back(std::string(kDepthMapName), std::nullopt);
+  std::map<std::string, ViewpointWarp> warps;  // per calibration file
+  std::vector<DatasetFidelity> rows;
+  for (const fs::path& set : sets) {
+    std::vector<DatasetFidelity> set_rows;
+    for (const auto& [prior_name, prior] : priors) set_rows.push_back({set.filename().string(), prior_name, 0, 0, 0, 0});
+    const fs::path changes = set / "changes.jsonl";
+    std::ifstream lines(changes);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.empty()) continue;
+      nlohmann::json entry;
+      try {
+        entry = nlohmann::json::parse(line);
+      } catch (const nlohmann::json::exception&) {
+        throw Error(path_for_message(changes) + ": a line is not JSON");
+      }
+      std::string name;
+      const ViewpointChange change = change_of(entry, changes, &name);
+      const fs::path calibration = root / "test" / "calibration" / (name + ".json");
+      auto warp = warps.find(calibration.string());
+      if (warp == warps.end()) warp = warps.emplace(calibration.string(), ViewpointWarp(read_camera(calibration))).first;
+      const SampleFiles source = read_sample(root / "test", name, depth);
+      const SampleFiles truth = read_sample(set, name, false);
+      for (size_t k = 0; k < priors.size(); ++k) {
+        const Fidelity f = augmentation_fidelity(warp->second, change, priors[k].second, source.image, source.labels,
+                                                 source.depth, truth.image, truth.labels);
+        DatasetFidelity& row = set_rows[k];
+        row.valid_share += f.valid_share, row.label_agreement += f.label_agreement, row.psnr_db += f.psnr_db;
+        ++row.samples;
+      }
+    }
+    for (DatasetFidelity& row : set_rows) {
+      if (row.samples == 0) continue;
+      row.valid_share /= row.samples, row.label_agreement /= row.samples, row.psnr_db /= row.samples;
+      rows.push_back(row);
+    }
+  }
+  return rows;
 }
 
 }  // namespace fishcam

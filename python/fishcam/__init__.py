@@ -29,17 +29,19 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
     RigCalibration,
     calibrate,
     calibrate_rig,
+    dataset_fidelity,
     derive_seed,
     get_num_threads,
     random_change_in,
     read_corners,
     render,
+    woodscape_classes,
 )
 from . import _fishcam
 
 __all__ = [
     "AngleBin", "Calibration", "Camera", "RigCalibration", "calibrate", "calibrate_rig", "read_corners", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
-    "random_change", "render", "set_num_threads", "presets", "change_to_dict", "__version__",
+    "random_change", "render", "woodscape_classes", "dataset_fidelity", "set_num_threads", "presets", "change_to_dict", "__version__",
 ]
 
 DEPTH_PRIORS = tuple(_fishcam.depth_priors())  # the library's names

@@ -4,7 +4,7 @@ fishcam's C++ library (use the fishcam package, not this module)
 from __future__ import annotations
 import numpy
 import typing
-__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'depth_priors', 'depth_priors_and_map', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'sampling_names', 'set_num_threads']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'dataset_fidelity', 'depth_priors', 'depth_priors_and_map', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'sampling_names', 'set_num_threads', 'woodscape_classes']
 class Error(ValueError):
     pass
 class ValidDomain:
@@ -689,6 +689,10 @@ def convert(camera: Camera, to: str, method: str = 'lsq', max_angle: float | Non
     """
     Fits model `to` to `camera` as `fishcam convert` does (method 'lsq' or 'paper'; max_angle in degrees): a Conversion (camera, report).
     """
+def dataset_fidelity(dataset: str) -> list[dict[str, typing.Any]]:
+    """
+    How faithful the augmentation is to the truth on a dataset of `fishcam sample-dataset --scenes N [--depth]` (as `fishcam fidelity`): each test sample augmented by the change of each true viewpoint test set (test-*/changes.jsonl) under every depth prior, and its depth map when the dataset has test/depth/, against the re-render from the moved camera. One dict per test set and prior: test_set, prior, samples, valid_share (pixels with a source), label_agreement (away from class boundaries), psnr_db; means over the samples.
+    """
 def depth_priors() -> list[str]:
     """
     The depth priors' names.
@@ -733,4 +737,8 @@ def sampling_names() -> list[str]:
     """
 def set_num_threads(arg0: int) -> None:
     ...
+def woodscape_classes() -> list[tuple[str, tuple[int, int, int]]]:
+    """
+    The WoodScape classes the renderer labels, by id: [(name, (r, g, b) display colour), ...].
+    """
 __version__: str = '0.1.0'

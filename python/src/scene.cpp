@@ -1,5 +1,7 @@
-// Python bindings: the street scenes (fishcam.render).
+// Python bindings: the street scenes (fishcam.render, woodscape_classes) and the
+// augmentation's fidelity against their re-renders (dataset_fidelity).
 #include "bindings.hpp"
+#include "fishcam/fidelity.hpp"
 #include "fishcam/scene.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -39,6 +41,43 @@ void bind_scene(py::module_& m) {
       "or the random street of `scene_seed`. Returns {'image': (H, W, 3) uint8 RGB (supersampling^2 rays per "
       "pixel), 'mask': (H, W) uint8 WoodScape class ids, 'depth': (H, W) float32 range along each pixel's ray in "
       "metres (inf: sky, NaN: outside the camera's domain)}; mask and depth from one ray through each pixel centre.");
+
+  m.def(
+      "woodscape_classes",
+      [] {
+        std::vector<std::pair<std::string, std::tuple<int, int, int>>> out;
+        for (int c = 0; c < woodscape_class::kCount; ++c) {
+          const cv::Vec3b bgr = woodscape_class_colour(c);
+          out.emplace_back(woodscape_class_name(c), std::tuple<int, int, int>{bgr[2], bgr[1], bgr[0]});
+        }
+        return out;
+      },
+      "The WoodScape classes the renderer labels, by id: [(name, (r, g, b) display colour), ...].");
+
+  m.def(
+      "dataset_fidelity",
+      [](const std::string& dataset) {
+        std::vector<DatasetFidelity> rows;
+        {
+          py::gil_scoped_release release;
+          rows = fishcam::dataset_fidelity(dataset);
+        }
+        std::vector<py::dict> out;
+        for (const DatasetFidelity& r : rows) {
+          py::dict row;
+          row["test_set"] = r.test_set, row["prior"] = r.prior, row["samples"] = r.samples;
+          row["valid_share"] = r.valid_share, row["label_agreement"] = r.label_agreement, row["psnr_db"] = r.psnr_db;
+          out.push_back(row);
+        }
+        return out;
+      },
+      py::arg("dataset"),
+      "How faithful the augmentation is to the truth on a dataset of `fishcam sample-dataset --scenes N [--depth]` "
+      "(as `fishcam fidelity`): each test sample augmented by the change of each true viewpoint test set "
+      "(test-*/changes.jsonl) under every depth prior, and its depth map when the dataset has test/depth/, against "
+      "the re-render from the moved camera. One dict per test set and prior: test_set, prior, samples, "
+      "valid_share (pixels with a source), label_agreement (away from class boundaries), psnr_db; means over the "
+      "samples.");
 }
 
 }  // namespace fishcam::python

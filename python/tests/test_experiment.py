@@ -1,5 +1,6 @@
 """fishcam.experiment end to end on a tiny synthetic dataset: --quick, resuming, the
-same numbers from the same seeds, bad input, and two DDP processes (gloo)."""
+same numbers from the same seeds, the fidelity table and the figures, bad input, and
+two DDP processes (gloo); fishcam.dataset_fidelity."""
 
 import json
 import math
@@ -9,6 +10,8 @@ import subprocess
 import sys
 
 import pytest
+
+import fishcam
 
 torch = pytest.importorskip("torch")
 experiment = pytest.importorskip("fishcam.experiment")
@@ -22,7 +25,7 @@ def dataset(tmp_path_factory):
         pytest.skip("FISHCAM_BINARY not set (run through CTest)")
     root = tmp_path_factory.mktemp("experiment") / "sv"
     subprocess.run([BINARY, "sample-dataset", str(root), "--scenes", "4", "--size", "96x73", "--seed", "5",
-                    "--splits", "0.5,0,0.5", "--test-sets", "small,large", "--supersampling", "1"],
+                    "--splits", "0.5,0,0.5", "--test-sets", "small,large", "--supersampling", "1", "--depth"],
                    check=True, capture_output=True)
     return root
 
@@ -42,9 +45,18 @@ def test_quick_run_writes_the_tables_and_reproduces(dataset, tmp_path):
     assert len(mious) == 2 * 2 * 5
     assert all(math.isfinite(v) and 0 <= v <= 1 for v in mious.values())
     tables = (out / "tables.md").read_text()
-    for heading in ("Table 2", "Table 3", "Table 5"):
+    for heading in ("Table 2", "Table 3", "Table 5", "Fidelity"):
         assert heading in tables
     assert "| none |" in tables and "large-rotation" in tables
+    assert "| test set | mIoU | degrades (%) | background | road |" in tables
+    with open(out / "results.json") as f:
+        results = json.load(f)
+    # 4 test sets (small, large, each with its rotation-only variant) x 4 priors.
+    assert len(results["fidelity"]) == 4 * 4
+    assert len(results["class_weights"]) == 10
+    for name in ("miou_vs_change.png", "predictions.png"):
+        assert (out / "figures" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "runs" / "viewpoint-seed1.pt").stat().st_size > 0
     # Resuming: stored runs are not repeated (a changed run file is taken as it is).
     run_file = out / "runs" / "none-seed0.json"
     stored = json.loads(run_file.read_text())
@@ -59,6 +71,32 @@ def test_quick_run_writes_the_tables_and_reproduces(dataset, tmp_path):
     for key, value in _mious(tmp_path / "a").items():
         if key != ("none", 0, "original"):
             assert b[key] == pytest.approx(value, abs=1e-9), key
+
+
+def test_dataset_fidelity(dataset, tmp_path):
+    rows = fishcam.dataset_fidelity(str(dataset))
+    assert [(r["test_set"], r["prior"]) for r in rows] == [
+        (s, p) for s in ("test-large", "test-large-rotation", "test-small", "test-small-rotation")
+        for p in ("source-sphere", "target-sphere", "infinity", "map")]
+    for r in rows:
+        assert r["samples"] == 8 and 0.5 < r["valid_share"] <= 1
+        # Rotations are exact under every prior; the depth map is exact for translations too.
+        if r["test_set"].endswith("-rotation") or r["prior"] == "map":
+            assert r["label_agreement"] >= 0.995, r
+    with pytest.raises(fishcam.Error, match="no test/ folder"):
+        fishcam.dataset_fidelity(str(tmp_path))
+    broken = tmp_path / "broken"
+    shutil.copytree(dataset, broken)
+    (broken / "test-small" / "changes.jsonl").write_text('{"name": "00002_FV"}\n')
+    with pytest.raises(fishcam.Error, match="changes.jsonl: a line lacks name, rotation_deg or translation"):
+        fishcam.dataset_fidelity(str(broken))
+
+
+def test_figures_need_matplotlib(dataset, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib raises ImportError
+    assert experiment.main([str(dataset), str(tmp_path / "out"), "--quick"]) == 2
+    assert "the figures need matplotlib" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
 
 
 def test_bad_input(dataset, tmp_path, capsys):

@@ -5,7 +5,10 @@
 
 #include <opencv2/core.hpp>
 
+#include <filesystem>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "fishcam/augmentation.hpp"
 
@@ -30,5 +33,21 @@ Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange&
                                std::optional<DepthPrior> prior, const cv::Mat& source_image,
                                const cv::Mat& source_labels, const cv::Mat& source_depth,
                                const cv::Mat& truth_image, const cv::Mat& truth_labels);
+
+// One row of a dataset's fidelity: a true viewpoint test set under one prior ("map":
+// the sample's depth map), means over the set's samples.
+struct DatasetFidelity {
+  std::string test_set;  // the folder's name: test-small, test-small-rotation, ...
+  std::string prior;     // source-sphere, target-sphere, infinity, map
+  int samples = 0;
+  double valid_share = 0, label_agreement = 0, psnr_db = 0;
+};
+
+// Every test-*/changes.jsonl of a dataset of `fishcam sample-dataset --scenes N`:
+// each test sample (test/) augmented by its change under every depth prior -- and
+// its depth map when the dataset has test/depth/ -- against the re-render in that
+// folder. Rows by test set (sorted by name), then prior. Throws Error naming the
+// file for a missing or malformed dataset.
+std::vector<DatasetFidelity> dataset_fidelity(const std::filesystem::path& root);
 
 }  // namespace fishcam
