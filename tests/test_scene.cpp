@@ -259,6 +259,19 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
     }
   }
   EXPECT_EQ(compared, 6);
+  // A pure rotation needs no depth: the maps are the priors', complete at depth edges
+  // (the triangles would drop a band there), whatever the depth map holds.
+  {
+    const StreetScene scene = StreetScene::generate(31);
+    const SceneRender source = scene.render(camera, mount);
+    const ViewpointChange rotation = ViewpointChange::from_euler_deg({4, -9, 3}, {0, 0, 0});
+    WarpMaps from_depth, prior;
+    warp.compute_from_depth(rotation, source.range, DepthValues::range, &from_depth, MapKind::geometric);
+    warp.compute(rotation, DepthPrior::source_sphere, &prior, MapKind::geometric);
+    EXPECT_EQ(from_depth.invalid_count, prior.invalid_count);
+    EXPECT_LE(cv::norm(from_depth.map_x, prior.map_x, cv::NORM_INF, prior.validity()), 1e-3);
+    EXPECT_LE(cv::norm(from_depth.map_y, prior.map_y, cv::NORM_INF, prior.validity()), 1e-3);
+  }
   // Bad input: a depth map of the wrong size or type.
   WarpMaps maps;
   EXPECT_THROW(warp.compute_from_depth(ViewpointChange{}, cv::Mat(10, 10, CV_32FC1), DepthValues::range, &maps), Error);

@@ -33,6 +33,13 @@ void ViewpointWarp::compute_from_depth(const ViewpointChange& change, const cv::
                 std::to_string(sh));
   }
   if (!(edge_ratio > 1)) throw Error("compute_from_depth: edge_ratio must be > 1");
+  if (change.translation.isZero(0)) {
+    // A rotation moves every point along with its direction, whatever its depth: the
+    // priors' maps are exact and complete, where the triangles below would drop a
+    // band at every depth edge.
+    compute(change, DepthPrior::infinity, maps, kind);
+    return;
+  }
   const Eigen::Matrix3d& r = change.rotation;
   const Eigen::Vector3d t = change.translation;
   std::vector<float> rays(3 * size_t(sw) * size_t(sh));

@@ -397,7 +397,7 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     parser.add_argument("out", help="output folder (runs/, results.json, tables.md); existing runs are kept")
     parser.add_argument("--configs", default=",".join(CONFIGS), help="comma-separated configurations")
     parser.add_argument("--seeds", type=int, default=3, help="training seeds per configuration")
-    parser.add_argument("--epochs", type=int, default=12)
+    parser.add_argument("--epochs", type=int, default=10)
     parser.add_argument("--batch-size", type=int, default=8)
     parser.add_argument("--width", type=int, default=16, help="the U-Net's channels at full resolution")
     parser.add_argument("--workers", type=int, default=0, help="DataLoader workers")

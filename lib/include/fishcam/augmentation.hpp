@@ -156,8 +156,10 @@ class ViewpointWarp {
   // source coordinates interpolated. A triangle whose corners' depths differ by more
   // than `edge_ratio` (a depth edge) is not drawn, nor is one with a corner without
   // depth, so pixels that nothing lands on (disocclusions) have no source: never
-  // invented. Infinite depths (the sky) move as directions. Throws Error for a
-  // depth map of the wrong type or size and for a non-finite change.
+  // invented. Infinite depths (the sky) move as directions. A pure rotation needs no
+  // depth: its maps are compute()'s (exact, and without the bands the triangles lose
+  // at depth edges). Throws Error for a depth map of the wrong type or size and for
+  // a non-finite change.
   void compute_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values, WarpMaps* maps,
                           MapKind kind = MapKind::sampling, double edge_ratio = 1.1) const;
   // augment(), forward() and warp_depth() under a depth map of the source image
