@@ -50,7 +50,7 @@ TEST_P(EveryModel, NoiseFreeBoardsRecoverTheParameters) {
   EXPECT_LT(result.rms_px, 1e-6);
   EXPECT_EQ(result.observations, 25L * kBoard.corners());
   EXPECT_TRUE(result.outliers.empty());
-  EXPECT_TRUE(result.warnings.empty());
+  EXPECT_TRUE(result.warnings.empty()) << ::testing::PrintToString(result.warnings);
 }
 
 INSTANTIATE_TEST_SUITE_P(Calibration, EveryModel, ::testing::ValuesIn(test::every_model()), test::model_case_name);

@@ -90,7 +90,7 @@ TEST(CameraIo, FormatsRefuseCamerasTheyCannotHold) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
   };
-  expect_error(CameraFormat::mrcal, "the mrcal format holds pinhole and stereographic");
+  expect_error(CameraFormat::mrcal, "the mrcal format holds pinhole, stereographic and opencv");
   expect_error(CameraFormat::opencv, "kannala-brandt");
   p.model = Stereographic<double>(300);
   expect_error(CameraFormat::woodscape, "polynomial");
@@ -194,8 +194,8 @@ const Malformed kMalformed[] = {
     {"fc_limit", replaced(kFishcam, "\"parameters\"", "\"theta_limit_deg\": 200, \"parameters\""), "theta_limit: must be in (0, 180]"},
     {"fc_pp_type", replaced(kFishcam, "[643.442, 479.407]", "\"centre\""), "principal_point: expected a list"},
     // mrcal
-    {"mr_lensmodel", replaced(kMrcal, "'LENSMODEL_STEREOGRAPHIC'", "'LENSMODEL_OPENCV8'"),
-     "lensmodel: unsupported lens model 'LENSMODEL_OPENCV8'"},
+    {"mr_lensmodel", replaced(kMrcal, "'LENSMODEL_STEREOGRAPHIC'", "'LENSMODEL_CAHVOR'"),
+     "lensmodel: unsupported lens model 'LENSMODEL_CAHVOR'"},
     {"mr_intrinsics_short", replaced(kMrcal, "330, ", ""), "intrinsics: expected 4 numbers, got 3"},
     {"mr_nan", replaced(kMrcal, "330", "nan"), "intrinsics[0]: must be finite"},
     {"mr_truncated", kMrcal.substr(0, kMrcal.size() - 40), "not a valid mrcal .cameramodel"},

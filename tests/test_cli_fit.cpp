@@ -28,11 +28,17 @@ TEST(CliFit, ConvertReportsAndWritesEveryFormat) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = run_fishcam("convert " + source + " --to polynomial:5 --out " + quoted(dir / "ws.json") + " --format woodscape");
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Radial -> OpenCV's rational model (mrcal's OPENCV8 with p1 = p2 = 0) where it can hold the field of view.
+  r = run_fishcam("convert " + source + " --to opencv --max-angle 75 --out " + quoted(dir / "cv8.cameramodel") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_LT(nlohmann::json::parse(r.out)["max_px"].get<double>(), 1.0);
+  EXPECT_EQ(read_camera(dir / "cv8.cameramodel").parameters().model.index(), RadialModel(OpenCV<double>()).index());
+  EXPECT_NE(test::read_file(dir / "cv8.cameramodel").find("LENSMODEL_OPENCV8"), std::string::npos);
 
   const struct {
     std::string args, expected;
   } bad[] = {
-      {"--to polynomial --out " + quoted(dir / "p.cameramodel"), "the mrcal format holds pinhole and stereographic"},
+      {"--to polynomial --out " + quoted(dir / "p.cameramodel"), "the mrcal format holds pinhole, stereographic and opencv"},
       {"--to fisheye --out " + quoted(dir / "x.json"), "unknown model 'fisheye'"},
       {"--to pinhole --out " + quoted(dir / "x.json"), "--max-angle"},
       {"--to kannala-brandt --method paper --out " + quoted(dir / "x.json"), "eqs. 13-14"},

@@ -20,9 +20,9 @@ TEST_P(EveryModelCornerCost, JacobiansMatchAutomaticDifferentiation) {
   Eigen::Vector2d center = p.principal_point;
   double ay = p.pixel_scale.y();
   const int n = int(model.size());
-  // Camera-frame points: random rays up to 100 deg, and rays near and on the axis
-  // (where the closed form hands over to automatic derivatives).
-  std::vector<Eigen::Vector3d> rays = test::random_rays(300, 100 * M_PI / 180, 11);
+  // Camera-frame points: random rays up to 100 deg (or the model's limit), and rays
+  // near and on the axis (where the closed form hands over to automatic derivatives).
+  std::vector<Eigen::Vector3d> rays = test::random_rays(300, std::min(100 * M_PI / 180, camera.domain().theta_max), 11);
   for (const double off_axis : {0.0, 1e-6, 1e-5, 1e-4, 1e-2}) rays.push_back(Eigen::Vector3d(off_axis, -off_axis / 3, 1).normalized());
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);

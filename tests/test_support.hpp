@@ -101,6 +101,10 @@ inline std::vector<ModelExample> model_examples() {
       {"double_sphere_fold", DoubleSphere<double>(370.0, -0.18, 0.6), {1.0, 1.002}},
       {"double_sphere_pole", DoubleSphere<double>(370.0, 0.1, 0.4), {1.0, 0.999}},
       {"mei", Mei<double>(640.0, 0.9, -0.05, 0.01), {1.0, 1.001}},
+      // mrcal_cam0.opencv8.cameramodel's k1..k6 (../shared/data/external), f for this image
+      // as that camera's (its image reaches 3/4 of the radius of the distortion's fold).
+      {"opencv_rational", OpenCV<double>(700.0, -0.01266096516, 0.03590794372, 0.01968883397, 0.01482863541,
+                                         -0.0562239888, 0.0500223357), {1.0, 1.00004}},
   };
 }
 

@@ -83,12 +83,13 @@ std::optional<SourceParams> kernel_model(const Model& m) {
     for (size_t i = 0; i < c.size(); ++i) p.c[i] = static_cast<float>(c[i]);
   } else if constexpr (HasUnifiedForm<Model>) {
     const UnifiedForm u = m.unified_form();
-    for (double x : {u.f, u.xi, u.alpha, u.beta, u.k1, u.k2}) {
+    for (double x : {u.f, u.xi, u.alpha, u.beta, u.k1, u.k2, u.k3, u.k4, u.k5, u.k6}) {
       if (!float_exact_enough(x)) return std::nullopt;
     }
     p.kind = SourceParams::Kind::unified;
     p.f = float(u.f), p.xi = float(u.xi), p.alpha = float(u.alpha), p.beta = float(u.beta);
-    p.k1 = float(u.k1), p.k2 = float(u.k2);
+    p.k1 = float(u.k1), p.k2 = float(u.k2), p.k3 = float(u.k3);
+    p.k4 = float(u.k4), p.k5 = float(u.k5), p.k6 = float(u.k6);
   } else {
     return std::nullopt;
   }

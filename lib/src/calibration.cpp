@@ -471,9 +471,21 @@ template <template <typename> class Model>
 CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boards, const BoardSpec& board, int width,
                                  int height, const ModelSpec& spec, const CalibrationOptions& options) {
   const Observations o(boards, board, width, height, options.threads);
-  const Solve robust = robust_solve<Model>(o, initial_solve(o, board), spec);
+  Solve robust = robust_solve<Model>(o, initial_solve(o, board), spec);
   CalibrationResult result;
   result.outliers = find_outliers(o, Camera(o.camera(robust, make_model(spec.name, robust.model))), robust);
+  if (!result.outliers.empty()) {
+    // The robust loss can settle where a whole board near the rim is ignored (a local
+    // minimum: seen with the rational `opencv` and with `mei`); the plain solve from
+    // there is taken when it leaves fewer corners as outliers.
+    Solve plain = robust;
+    solve<Model>(&plain, o.all_points, o.corners, false, nullptr, 1000, 1e-12);
+    try {
+      auto outliers = find_outliers(o, Camera(o.camera(plain, make_model(spec.name, plain.model))), plain);
+      if (outliers.size() < result.outliers.size()) robust = std::move(plain), result.outliers = std::move(outliers);
+    } catch (const Error&) {  // the plain solve left the model's valid parameters: keep the robust one
+    }
+  }
   final_solve<Model>(o, robust, spec, &result);
   return result;
 }

@@ -16,7 +16,7 @@ namespace fishcam::detail {
 struct SourceParams {
   // polynomial: rho(theta) as a polynomial; unified: the unified-camera form
   // (fishcam::UnifiedForm: pinhole, stereographic, unified, extended-unified,
-  // double-sphere, mei).
+  // double-sphere, mei, opencv).
   enum class Kind { polynomial, unified };
   // Polynomials up to this degree are evaluated in float (16 coefficients: its
   // fixed array); higher ones take the exact path.
@@ -24,7 +24,7 @@ struct SourceParams {
   Kind kind = Kind::polynomial;
   float c[kMaxDegree + 1] = {};  // rho = c[1] theta + ... + c[n] theta^n, 1 <= n <= kMaxDegree
   int n = 0;
-  float f = 0, xi = 0, alpha = 0, beta = 1, k1 = 0, k2 = 0;  // unified
+  float f = 0, xi = 0, alpha = 0, beta = 1, k1 = 0, k2 = 0, k3 = 0, k4 = 0, k5 = 0, k6 = 0;  // unified
   float cx = 0, cy = 0, ax = 1, ay = 1;
   float cos_theta_max = -1;
   bool closed = true;

@@ -50,7 +50,8 @@ using ModelRegistry = ModelList<Polynomial,       //
                                 Unified,          //
                                 ExtendedUnified,  //
                                 DoubleSphere,     //
-                                Mei>;
+                                Mei,              //
+                                OpenCV>;
 
 using RadialModel = ModelRegistry::Variant;
 

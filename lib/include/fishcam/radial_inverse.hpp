@@ -41,9 +41,7 @@ const char* to_string(ValidDomain::Limit limit);
 // from the eigenvalues of the companion matrix.
 std::vector<std::complex<double>> polynomial_roots(std::span<const double> coefficients);
 
-// The smallest root in (0, limit] of sum_i c[i] x^i, exactly (companion-matrix roots
-// polished by bracketed Newton, cross-checked by a sign scan); nullopt if none.
-std::optional<double> first_positive_root(std::span<const double> coefficients, double limit);
+// first_positive_root (radial_models.hpp): the smallest root in (0, limit].
 
 // The first theta in (0, limit) where drho/dtheta stops being positive, found
 // numerically (a scan of 4096 steps, then bisection to adjacent doubles): the fold

@@ -39,7 +39,7 @@ std::vector<NamedCamera> read(const Content& c) {
     const double fx = k.number("fx");
     set_focal(&p, fx, k.number("fy"), [&](std::string_view problem) { k.fail("fx", problem); });
     p.principal_point = {k.number("cx"), k.number("cy")};
-    p.model = pinhole_from_radial_tangential({d.number("k1"), d.number("k2"), d.number("p1"), d.number("p2")}, fx,
+    p.model = radial_tangential_model({d.number("k1"), d.number("k2"), d.number("p1"), d.number("p2")}, fx,
                                              [&](std::string_view problem) { d.fail("k1", problem); });
   } else if (type == "SCARAMUZZA") {
     f.fail("model_type", "SCARAMUZZA (OCamCalib) has an affine term and is not radially symmetric; fishcam reads "

@@ -85,7 +85,18 @@ std::vector<NamedCamera> read(const Content& c) {
       focal(q[0], q[0], q[1], q[2]), p.model = KannalaBrandt<double>(q[0], q[3], 0, 0, 0);
     } else if (name == "RADIAL_FISHEYE") {
       focal(q[0], q[0], q[1], q[2]), p.model = KannalaBrandt<double>(q[0], q[3], q[4], 0, 0);
-    } else if (name == "SIMPLE_RADIAL" || name == "RADIAL" || name == "FOV") {
+    } else if (name == "SIMPLE_RADIAL" || name == "RADIAL" || name == "OPENCV" || name == "FULL_OPENCV") {
+      // OpenCV's pinhole distortion in COLMAP's parameter order (k1[, k2[, p1, p2[, k3, k4, k5, k6]]]).
+      const bool one_focal = name == "SIMPLE_RADIAL" || name == "RADIAL";
+      if (one_focal) {
+        focal(q[0], q[0], q[1], q[2]);
+      } else {
+        focal(q[0], q[1], q[2], q[3]);
+      }
+      std::vector<double> d(q.begin() + (one_focal ? 3 : 4), q.end());
+      d.resize(d.size() <= 4 ? 4 : 8, 0.0);
+      p.model = radial_tangential_model(d, q[0], [&](std::string_view problem) { fail(text_for_message(name) + ": " + std::string(problem)); });
+    } else if (name == "FOV") {
       fail(text_for_message(name) + " is radially symmetric but fishcam has no such model");
     } else {
       fail(text_for_message(name) + " is not radially symmetric (fishcam reads radially symmetric models only)");

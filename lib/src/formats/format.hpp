@@ -150,11 +150,19 @@ struct KannalaBrandtOrPinhole {
   std::array<double, 4> k{};
 };
 KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, CameraFormat format);
-// Radial-tangential coefficients (k1, k2, p1, p2[, k3, ...]) that are all zero are
-// a pinhole with focal length f; anything else is refused naming why (tangential
-// terms: not radially symmetric; radial terms only: a model fishcam lacks).
-RadialModel pinhole_from_radial_tangential(const std::vector<double>& d, double f,
-                                           const std::function<void(std::string_view)>& fail);
+// OpenCV's radial-tangential coefficients in its order (k1, k2, p1, p2[, k3[, k4,
+// k5, k6[, s1, s2, s3, s4[, tau_x, tau_y]]]]: 0, 4, 5, 8, 12 or 14 of them) with
+// focal length f: `pinhole` when all are zero, else `opencv` (k1..k6). Terms that
+// are not radially symmetric (p1, p2, s1..s4, the tilt) are refused naming them.
+RadialModel radial_tangential_model(const std::vector<double>& d, double f,
+                                    const std::function<void(std::string_view)>& fail);
+// The writers' side: an `opencv` model as f and OpenCV's eight rational coefficients
+// (k1, k2, p1 = 0, p2 = 0, k3, k4, k5, k6); nullopt for any other model.
+struct OpenCVRational {
+  double f = 0;
+  std::array<double, 8> d{};
+};
+std::optional<OpenCVRational> opencv_rational(const RadialModel& model);
 
 // Poses: rt_cam_ref (mrcal, OpenCV YAML) and 4x4 row-major transforms.
 Pose pose_from_rt_cam_ref(const std::vector<double>& rt);

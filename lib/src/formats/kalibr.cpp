@@ -86,7 +86,7 @@ std::vector<NamedCamera> read(const Content& c) {
       } else if (distortion == "none") {
         p.model = Pinhole<double>(fx);
       } else if (distortion == "radtan") {
-        p.model = pinhole_from_radial_tangential(d, fx, fail_d);
+        p.model = radial_tangential_model(d, fx, fail_d);
       } else {
         f.fail("distortion_model", "unsupported " + quoted_for_message(distortion) + " (expected equidistant, radtan or none)");
       }

@@ -21,15 +21,21 @@ std::vector<NamedCamera> read(const Content& c) {
   const DocFields f(*root, c.source());
   const std::string lensmodel = f.string("lensmodel");
   const bool pinhole = lensmodel == "LENSMODEL_PINHOLE";
-  if (!pinhole && lensmodel != "LENSMODEL_STEREOGRAPHIC") {
-    const bool asymmetric = lensmodel.rfind("LENSMODEL_OPENCV", 0) == 0 || lensmodel.rfind("LENSMODEL_SPLINED", 0) == 0 ||
-                            lensmodel.rfind("LENSMODEL_CAHVOR", 0) == 0;
+  // LENSMODEL_OPENCVn: n radial-tangential coefficients in OpenCV's order after fx, fy, cx, cy.
+  size_t opencv_coefficients = 0;
+  for (size_t n : {4, 5, 8, 12}) {
+    if (lensmodel == "LENSMODEL_OPENCV" + std::to_string(n)) opencv_coefficients = n;
+  }
+  if (!pinhole && lensmodel != "LENSMODEL_STEREOGRAPHIC" && opencv_coefficients == 0) {
+    const bool asymmetric = lensmodel.rfind("LENSMODEL_SPLINED", 0) == 0 || lensmodel.rfind("LENSMODEL_CAHVOR", 0) == 0;
     f.fail("lensmodel", "unsupported lens model " + quoted_for_message(lensmodel) +
                             (asymmetric ? " (not radially symmetric: fishcam reads radially symmetric models only; "
-                                          "mrcal files: LENSMODEL_PINHOLE and LENSMODEL_STEREOGRAPHIC)"
-                                        : " (fishcam reads LENSMODEL_PINHOLE and LENSMODEL_STEREOGRAPHIC)"));
+                                          "mrcal files: LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC, LENSMODEL_OPENCV4/5/8/12)"
+                                        : " (fishcam reads LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC and "
+                                          "LENSMODEL_OPENCV4/5/8/12)"));
   }
-  const auto k = f.numbers("intrinsics", 4, 4);  // fx, fy, cx, cy
+  const size_t count = 4 + opencv_coefficients;
+  const auto k = f.numbers("intrinsics", count, count);  // fx, fy, cx, cy[, distortion]
   const auto size = f.numbers("imagersize", 2, 2);
   for (int i = 0; i < 2; ++i) {
     if (!(size[i] >= 1 && size[i] <= (1 << 16)) || size[i] != std::floor(size[i])) {
@@ -41,18 +47,31 @@ std::vector<NamedCamera> read(const Content& c) {
   p.width = static_cast<int>(size[0]);
   p.height = static_cast<int>(size[1]);
   p.principal_point = {k[2], k[3]};
-  p.model = pinhole ? RadialModel(Pinhole<double>(k[0])) : RadialModel(Stereographic<double>(k[0]));
+  if (opencv_coefficients > 0) {
+    p.model = radial_tangential_model(std::vector<double>(k.begin() + 4, k.end()), k[0], [&](std::string_view problem) {
+      f.fail("intrinsics", lensmodel + ": " + std::string(problem));
+    });
+  } else {
+    p.model = pinhole ? RadialModel(Pinhole<double>(k[0])) : RadialModel(Stereographic<double>(k[0]));
+  }
   if (f.has("extrinsics")) p.pose = pose_from_rt_cam_ref(f.numbers("extrinsics", 6, 6));
   return {{"0", p, {}}};
 }
 
 std::string write(const CameraParameters& p) {
   double f = 0;
-  std::string lensmodel;
+  std::string lensmodel, distortion;
   if (const auto* m = std::get_if<Stereographic<double>>(&p.model)) {
     f = m->f(), lensmodel = "LENSMODEL_STEREOGRAPHIC";
   } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
     f = m->f(), lensmodel = "LENSMODEL_PINHOLE";
+  } else if (const std::optional<OpenCVRational> r = opencv_rational(p.model)) {
+    f = r->f, lensmodel = "LENSMODEL_OPENCV8";
+    for (double d : r->d) {
+      char number[32];
+      std::snprintf(number, sizeof number, " %.17g,", d);
+      distortion += number;
+    }
   } else {
     cannot_hold(p, CameraFormat::mrcal);
   }
@@ -61,20 +80,20 @@ std::string write(const CameraParameters& p) {
   std::snprintf(buffer, sizeof buffer,
                 "{\n"
                 "    'lensmodel':  '%s',\n\n"
-                "    # intrinsics are fx,fy,cx,cy\n"
-                "    'intrinsics': [ %.17g, %.17g, %.17g, %.17g,],\n\n"
+                "    # intrinsics are fx,fy,cx,cy%s\n"
+                "    'intrinsics': [ %.17g, %.17g, %.17g, %.17g,%s],\n\n"
                 "    # extrinsics are rt_fromref (rt_cam_ref)\n"
                 "    'extrinsics': [ %.17g, %.17g, %.17g, %.17g, %.17g, %.17g,],\n\n"
                 "    'imagersize': [ %d, %d,],\n"
                 "}\n",
-                lensmodel.c_str(), f * p.pixel_scale.x(), f * p.pixel_scale.y(), p.principal_point.x(),
-                p.principal_point.y(), rt[0], rt[1], rt[2], rt[3], rt[4], rt[5], p.width, p.height);
+                lensmodel.c_str(), distortion.empty() ? "" : ",distortion0,distortion1,....", f * p.pixel_scale.x(),
+                f * p.pixel_scale.y(), p.principal_point.x(), p.principal_point.y(), distortion.c_str(), rt[0], rt[1], rt[2], rt[3], rt[4], rt[5], p.width, p.height);
   return buffer;
 }
 
 }  // namespace
 
 extern const FormatSpec mrcal_format{CameraFormat::mrcal, "mrcal", "mrcal .cameramodel", {".cameramodel"},
-                                     {"pinhole", "stereographic"}, score, read, write};
+                                     {"pinhole", "stereographic", "opencv"}, score, read, write};
 
 }  // namespace fishcam::detail

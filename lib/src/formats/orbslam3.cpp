@@ -34,7 +34,7 @@ std::vector<NamedCamera> read(const Content& c) {
     } else {
       std::vector<double> d = {f.number(pre + "k1"), f.number(pre + "k2"), f.number(pre + "p1"), f.number(pre + "p2")};
       if (f.has(pre + "k3")) d.push_back(f.number(pre + "k3"));
-      p.model = pinhole_from_radial_tangential(d, fx, [&](std::string_view problem) { f.fail(pre + "k1", problem); });
+      p.model = radial_tangential_model(d, fx, [&](std::string_view problem) { f.fail(pre + "k1", problem); });
     }
     if (f.has("Camera.width") || f.has("Camera.height")) {
       p.width = f.positive_integer("Camera.width");
