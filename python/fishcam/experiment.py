@@ -449,6 +449,7 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
                    "epochs": args.epochs, "width": args.width, "batch_size": args.batch_size,
                    "class_weights": None if weights is None else [float(w) for w in weights],
                    "fishcam": fishcam.__version__, "torch": torch.__version__, "seconds": time.perf_counter() - start,
+                   "train_seconds_total": sum(r["train_seconds"] for r in results),
                    "runs": results, "fidelity": fidelity}
         with open(os.path.join(args.out, "results.json"), "w") as f:
             json.dump(summary, f, indent=1)
