@@ -425,6 +425,36 @@ TEST(Formats, ConversionReportsAgreeWithTheTargetsOwnFormula) {
   }
 }
 
+// COLMAP's pinhole distortion models are OpenCV's: x = X/Z, r^2 = x^2 + y^2,
+// u = fx x (1 + k1 r^2 + k2 r^4) + cx - 0.5 (COLMAP's pixel centres at 0.5), read as `opencv`;
+// tangential terms are refused.
+TEST(Formats, ColmapRadialModelsAreOpenCVs) {
+  const Camera radial(parse_camera("1 RADIAL 640 480 500 320 240 -0.2 0.05\n", "cameras.txt"));
+  const Camera full(parse_camera("1 FULL_OPENCV 640 480 500 505 320 240 -0.2 0.05 0 0 0.01 0.02 -0.01 0.003\n",
+                                   "cameras.txt"));
+  int checked = 0;
+  for (const auto& ray : test::random_rays(2000, 40 * M_PI / 180, 3)) {
+    const double x = ray.x() / ray.z(), y = ray.y() / ray.z(), r2 = x * x + y * y;
+    Eigen::Vector2d q;
+    ASSERT_TRUE(radial.project(ray, &q));
+    const double d = 1 + r2 * (-0.2 + r2 * 0.05);
+    EXPECT_LT((q - Eigen::Vector2d(500 * x * d + 319.5, 500 * y * d + 239.5)).norm(), 1e-9);
+    ASSERT_TRUE(full.project(ray, &q));
+    const double e = (1 + r2 * (-0.2 + r2 * (0.05 + r2 * 0.01))) / (1 + r2 * (0.02 + r2 * (-0.01 + r2 * 0.003)));
+    EXPECT_LT((q - Eigen::Vector2d(500 * x * e + 319.5, 505 * y * e + 239.5)).norm(), 1e-9);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2000);
+  EXPECT_EQ(model_name(radial.model()), "opencv");
+  try {
+    parse_camera("1 OPENCV 640 480 500 505 320 240 -0.2 0.05 0.001 0\n", "cameras.txt");
+    ADD_FAILURE() << "tangential terms were read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("camera 1: OPENCV: radial-tangential distortion with p1, p2 != 0 is not radially symmetric"),
+              std::string::npos) << e.what();
+  }
+}
+
 TEST(Formats, DetectionScoresTheFormatsOwnKeys) {
   const CameraParameters p = test::every_model()[5].second;  // kannala-brandt
   for (CameraFormat f : {CameraFormat::opencv, CameraFormat::kalibr, CameraFormat::basalt, CameraFormat::colmap,

@@ -108,12 +108,20 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
-  const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::colmap);
-  const bool pinhole = kb.pinhole;
-  std::vector<double> params = {kb.fx, kb.fy, kb.cx + 0.5, kb.cy + 0.5};
-  if (!pinhole) params.insert(params.end(), kb.k.begin(), kb.k.end());
+  std::vector<double> params;
+  std::string model;
+  if (const std::optional<OpenCVRational> r = opencv_rational(p.model)) {
+    model = "FULL_OPENCV";
+    params = {r->f, r->f * p.pixel_scale.y(), p.principal_point.x() + 0.5, p.principal_point.y() + 0.5};
+    params.insert(params.end(), r->d.begin(), r->d.end());
+  } else {
+    const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::colmap);
+    model = kb.pinhole ? "PINHOLE" : "OPENCV_FISHEYE";
+    params = {kb.fx, kb.fy, kb.cx + 0.5, kb.cy + 0.5};
+    if (!kb.pinhole) params.insert(params.end(), kb.k.begin(), kb.k.end());
+  }
   std::string out = "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n";
-  out += pinhole ? "1 PINHOLE " : "1 OPENCV_FISHEYE ";
+  out += "1 " + model + " ";
   out += std::to_string(p.width);
   out += " ";
   out += std::to_string(p.height);
@@ -127,6 +135,6 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 }  // namespace
 
 extern const FormatSpec colmap_format{CameraFormat::colmap, "colmap", "COLMAP cameras.txt", {".txt"},
-                                      {"kannala-brandt", "equidistant", "pinhole"}, score, read, write};
+                                      {"kannala-brandt", "equidistant", "pinhole", "opencv"}, score, read, write};
 
 }  // namespace fishcam::detail
