@@ -35,6 +35,29 @@ TEST(Cli, InfoTextForEveryBundledCamera) {
   }
 }
 
+// How unprojection inverts rho: a table (closed domains), a closed form, or for an
+// open domain without one (opencv) the robust solver -- info says which.
+TEST(Cli, InfoSaysHowUnprojectionInverts) {
+  const auto dir = test::scratch_dir("cli_info_inverse");
+  CameraParameters p = test::woodscape_front();
+  p.model = OpenCV<double>(700.0, 0.1, 0.01, 0, 0, 0, 0);  // rho grows without a fold: an open domain
+  write_camera(p, dir / "cv.json", CameraFormat::fishcam);
+  const struct {
+    std::string file;
+    bool closed_form;
+    const char* text;
+  } cases[] = {{data("stereographic.cameramodel"), true, "none (closed-form inverse)"},
+               {test::quoted(dir / "cv.json"), false, "none (open domain: the robust solver per point)"},
+               {data("woodscape_front.json"), false, "2048 cells"}};
+  for (const auto& c : cases) {
+    auto r = run_fishcam("info --json " + c.file);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["inverse_table"]["closed_form"].get<bool>(), c.closed_form) << c.file;
+    r = run_fishcam("info " + c.file);
+    EXPECT_NE(r.out.find(c.text), std::string::npos) << c.file << "\n" << r.out;
+  }
+}
+
 TEST(Cli, ProjectThenUnprojectRoundTrips) {
   const auto projected = run_fishcam("project " + data("woodscape_front.json"),
                                      "1 0.5 2\n# a comment\n\n1 -1 -0.5\n0 0 -1\n0 0 0\nnan 1 1\n");

@@ -36,8 +36,10 @@ void print_text(const nlohmann::json& j) {
     std::printf("inverse table     %d cells, worst error %.3g px, %d cells use the robust solver\n",
                 table["cells"].get<int>(), table["worst_error_px"].get<double>(),
                 table["fallback_cells"].get<int>());
-  } else {
+  } else if (table["closed_form"].get<bool>()) {
     std::printf("inverse table     none (closed-form inverse)\n");
+  } else {
+    std::printf("inverse table     none (open domain: the robust solver per point)\n");
   }
   if (const auto& observed = j["observed"]; observed.is_null()) {
     std::printf("observed angles   unknown (no calibration record: only fishcam calibrate writes one)\n");

@@ -324,7 +324,10 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
       {"fov_deg", {{"horizontal", fov.horizontal}, {"vertical", fov.vertical}, {"diagonal", fov.diagonal}}},
       {"inverse_table", {{"cells", camera.inverse_table().cells()},
                          {"fallback_cells", camera.inverse_table().fallback_cells()},
-                         {"worst_error_px", camera.inverse_table().worst_error_px()}}},
+                         {"worst_error_px", camera.inverse_table().worst_error_px()},
+                         // Without a table (an open domain): a closed form, or the robust solver per point.
+                         {"closed_form", std::visit([](const auto& m) { return ClosedFormInverse<std::decay_t<decltype(m)>>; },
+                                                    p.model)}}},
   };
   if (p.pose) {
     const auto& q = p.pose->rotation;
