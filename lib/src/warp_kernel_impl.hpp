@@ -93,16 +93,19 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
       d = mul_add(alpha, root, (cv::vx_setall_f32(1.0f) - alpha) * w);
     }
     scale = cv::vx_setall_f32(src.f) / d;
-    if (src.k1 != 0 || src.k2 != 0 || src.k3 != 0) {  // mei, opencv: radial distortion of r = chi / D
+    const bool numerator = src.k1 != 0 || src.k2 != 0 || src.k3 != 0;
+    const bool denominator = src.k4 != 0 || src.k5 != 0 || src.k6 != 0;
+    if (numerator || denominator) {  // mei, opencv: radial distortion of r = chi / D
       const v_float32 r2 = chi2 / (d * d);
-      v_float32 inner = cv::vx_setall_f32(src.k2);
-      if (src.k3 != 0) inner = mul_add(r2, cv::vx_setall_f32(src.k3), inner);
-      scale = scale * mul_add(r2, mul_add(r2, inner, cv::vx_setall_f32(src.k1)), cv::vx_setall_f32(1.0f));
-    }
-    if (src.k4 != 0 || src.k5 != 0 || src.k6 != 0) {  // opencv's rational denominator
-      const v_float32 r2 = chi2 / (d * d);
-      const v_float32 k6_term = mul_add(r2, cv::vx_setall_f32(src.k6), cv::vx_setall_f32(src.k5));
-      scale = scale / mul_add(r2, mul_add(r2, k6_term, cv::vx_setall_f32(src.k4)), cv::vx_setall_f32(1.0f));
+      if (numerator) {
+        v_float32 inner = cv::vx_setall_f32(src.k2);
+        if (src.k3 != 0) inner = mul_add(r2, cv::vx_setall_f32(src.k3), inner);
+        scale = scale * mul_add(r2, mul_add(r2, inner, cv::vx_setall_f32(src.k1)), cv::vx_setall_f32(1.0f));
+      }
+      if (denominator) {  // opencv's rational denominator
+        const v_float32 k6_term = mul_add(r2, cv::vx_setall_f32(src.k6), cv::vx_setall_f32(src.k5));
+        scale = scale / mul_add(r2, mul_add(r2, k6_term, cv::vx_setall_f32(src.k4)), cv::vx_setall_f32(1.0f));
+      }
     }
   } else {
     const v_float32 chi = cv::v_sqrt(chi2);
