@@ -66,9 +66,6 @@ Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange&
   return f;
 }
 
-}  // namespace fishcam
-
-namespace fishcam {
 namespace {
 
 namespace fs = std::filesystem;
