@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   cmake g++ make pkg-config
-  libeigen3-dev libceres-dev libopencv-dev nlohmann-json3-dev
+  libeigen3-dev libceres-dev libopencv-dev libopencv-contrib-dev nlohmann-json3-dev
   libmrcal-dev mrcal python3-mrcal python3-numpy python3-opencv
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   pybind11-dev python3-pybind11 python3-pytest python3-torch

@@ -44,6 +44,17 @@ inline Eigen::Vector2d mei(const Intrinsics& k, double xi, double k1, double k2,
   const double g = 1 + k1 * r2 + k2 * r2 * r2;
   return {k.fx * mx * g + k.cx, k.fy * my * g + k.cy};
 }
+// Mei & Rives 2007 with its tangential terms (camodocal MEI, Kalibr omni-radtan):
+// the point on the unit sphere, shifted by xi, projected, distorted by k1, k2, p1, p2.
+inline Eigen::Vector2d mei_radtan(const Intrinsics& k, double xi, const std::array<double, 4>& d,
+                                  const Eigen::Vector3d& p) {
+  const Eigen::Vector3d s = p.normalized();
+  const double mx = s.x() / (s.z() + xi), my = s.y() / (s.z() + xi);
+  const double r2 = mx * mx + my * my, g = 1 + d[0] * r2 + d[1] * r2 * r2;
+  const double dx = 2 * d[2] * mx * my + d[3] * (r2 + 2 * mx * mx);
+  const double dy = d[2] * (r2 + 2 * my * my) + 2 * d[3] * mx * my;
+  return {k.fx * (mx * g + dx) + k.cx, k.fy * (my * g + dy) + k.cy};
+}
 // valeoai/WoodScape scripts/calibration/projection.py.
 inline Eigen::Vector2d woodscape(const std::vector<double>& k, double width, double height, double cx_offset,
                                  double cy_offset, double aspect, const Eigen::Vector3d& p) {

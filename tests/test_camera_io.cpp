@@ -215,7 +215,8 @@ const Malformed kMalformed[] = {
     {"cv_yaml_deep", "%YAML:1.0\n---\nK: " + std::string(100000, '['), "nested deeper than"},
     {"cv_newline_in_value", replaced(kOpenCV, "image_width: 1280", "image_width: \"12\\n80\\r\\x01\""),
      "image_width: expected an integer, got '12\\n80\\r\\x01'"},
-    {"cv_model", replaced(kOpenCV, "distortion_model: fisheye", "distortion_model: plumb_bob"), "not radially symmetric"},
+    {"cv_model", replaced(kOpenCV, "distortion_model: fisheye", "distortion_model: fisheye2"),
+     "distortion_model: expected fisheye, plumb_bob or rational_polynomial, got 'fisheye2'"},
     // anything else
     {"empty", "", "empty file"},
     {"unknown", "hello world\n", "unrecognised camera file"},

@@ -1,6 +1,6 @@
 // Agreement with libmrcal's C API (mrcal_project / mrcal_unproject) for the lens
-// models both libraries have (pinhole, stereographic, OPENCV8 with p1 = p2 = 0 as
-// `opencv`), with fx != fy, behind the camera too for stereographic.
+// models both libraries have (pinhole, stereographic, OPENCV8 as `opencv` with its
+// tangential terms), with fx != fy, behind the camera too for stereographic.
 extern "C" {  // mrcal 2.2's headers have no extern "C" of their own
 #include <mrcal/mrcal.h>
 }
@@ -91,6 +91,35 @@ TEST(Mrcal, OpenCV8WithoutTangentialTermsAgreesWithLibmrcal) {
   const auto k = model_params(camera.model());
   check_against_mrcal({"opencv8", MRCAL_LENSMODEL_OPENCV8, std::min(camera.domain().theta_max * 0.999, 80 * M_PI / 180),
                        camera, {k[1], k[2], 0, 0, k[3], k[4], k[5], k[6]}});
+}
+
+// The real OPENCV8 calibrations of ../shared (tangential terms and all), read by our
+// reader and by libmrcal's own, against mrcal_project / mrcal_unproject.
+TEST(Mrcal, RealOpenCV8FilesAgreeWithLibmrcal) {
+  const std::filesystem::path external = std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external";
+  if (!std::filesystem::exists(external / "README.md")) GTEST_SKIP() << "no ../shared checkout";
+  struct File {
+    const char* name;
+    double theta_max_deg;  // inside the valid domain, where pixels stay within ~1e4 px (1e-9 px is a double's reach)
+  };
+  int checked = 0;
+  for (const File& file : {File{"mrcal_cam0.opencv8.cameramodel", 61}, File{"mrcal_figueroa_opencv8-0.cameramodel", 70},
+                           File{"photonvision_camera-0.cameramodel", 63}}) {
+    const std::string path = (external / file.name).string();
+    const Camera camera = read_camera(path);
+    ASSERT_FALSE(camera.radial()) << file.name;
+    mrcal_cameramodel_t* model = mrcal_read_cameramodel_file(path.c_str());
+    ASSERT_NE(model, nullptr) << path;
+    ASSERT_EQ(model->lensmodel.type, MRCAL_LENSMODEL_OPENCV8);
+    EXPECT_EQ(model->intrinsics[0], model_params(camera.model())[0]);
+    EXPECT_EQ(model->intrinsics[2], camera.principal_point().x());
+    const std::vector<double> distortion(model->intrinsics + 4, model->intrinsics + 12);
+    mrcal_free_cameramodel(&model);
+    ASSERT_GE(camera.domain().theta_max, file.theta_max_deg * M_PI / 180) << file.name;
+    check_against_mrcal({file.name, MRCAL_LENSMODEL_OPENCV8, file.theta_max_deg * M_PI / 180, camera, distortion});
+    ++checked;
+  }
+  EXPECT_EQ(checked, 3);
 }
 
 TEST(Mrcal, LibmrcalReadsOurCameramodelFiles) {

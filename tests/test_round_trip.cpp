@@ -20,7 +20,7 @@ std::vector<Eigen::Vector2d> every_pixel(const Camera& camera) {
 }
 
 std::vector<std::pair<std::string, CameraParameters>> cameras() {
-  auto all = test::every_model();
+  auto all = test::every_camera();
   // A fold inside the image: only the pixels inside the image circle are valid.
   all.emplace_back("polynomial_fold", test::with_model(test::woodscape_front(), Polynomial<double>({300, 0, 0, -40})));
   return all;

@@ -126,6 +126,40 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_model() {
   return out;
 }
 
+// Cameras that are not radially symmetric: tangential (and, on opencv, thin-prism)
+// terms on the examples of every registry model with an undistorted plane (the
+// models CameraParameters::tangential takes), labelled EXAMPLE_tangential; a plane
+// model without one fails the test that asks.
+inline std::vector<std::pair<std::string, CameraParameters>> every_tangential_camera() {
+  std::vector<std::pair<std::string, CameraParameters>> out;
+  for (const auto& [label, p] : every_model()) {
+    const bool has_plane = std::visit([](const auto& m) { return HasUndistortedPlane<std::decay_t<decltype(m)>>; }, p.model);
+    if (!has_plane) continue;
+    CameraParameters q = p;
+    const std::string_view name = model_name(p.model);
+    if (name == "pinhole") {
+      q.tangential = {0.001, 0.0005, {}};
+    } else if (name == "mei") {  // vinsfusion_t265_fisheye1_MEI.yaml's p1, p2
+      q.tangential = {0.00501238, 0.00039633, {}};
+    } else if (name == "opencv") {  // mrcal_cam0's p1, p2 ten times over, and thin-prism terms
+      q.tangential = {-0.002547, 0.005276, {0.001, -0.0005, -0.0008, 0.0003}};
+    } else {
+      ADD_FAILURE() << "model " << name << " takes tangential terms but has no example in every_tangential_camera()";
+      continue;
+    }
+    out.emplace_back(label + "_tangential", q);
+  }
+  return out;
+}
+
+// Every camera kind: every_model() and every_tangential_camera(), for the tests of
+// what any camera does (project, unproject, formats, augmentation).
+inline std::vector<std::pair<std::string, CameraParameters>> every_camera() {
+  auto out = every_model();
+  for (auto& c : every_tangential_camera()) out.push_back(std::move(c));
+  return out;
+}
+
 // Parameterised every-model tests: INSTANTIATE_TEST_SUITE_P(..., ValuesIn(every_model()),
 // model_case_name) gives each example its own test, named by its label.
 using ModelCase = std::pair<std::string, CameraParameters>;

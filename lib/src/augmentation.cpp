@@ -101,6 +101,16 @@ std::optional<SourceParams> kernel_model(const Model& m) {
 std::optional<SourceParams> float_source_params(const Camera& camera) {
   std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
   if (!p) return std::nullopt;
+  if (!camera.radial()) {  // tangential terms on the unified form's plane m = P_xy / D: alpha = 0 only
+    if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return std::nullopt;
+    const TangentialTerms& t = camera.tangential();
+    for (double x : t.values()) {
+      if (!float_exact_enough(x)) return std::nullopt;
+    }
+    p->tangential = true;
+    p->p1 = float(t.p1), p->p2 = float(t.p2);
+    p->s1 = float(t.s[0]), p->s2 = float(t.s[1]), p->s3 = float(t.s[2]), p->s4 = float(t.s[3]);
+  }
   const double cx = camera.principal_point().x(), cy = camera.principal_point().y();
   // Every coordinate the kernel adds up must have float spacing well below the tolerance.
   const double magnitude = std::max({std::abs(cx), std::abs(cy), double(camera.width()), double(camera.height())});

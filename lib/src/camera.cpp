@@ -111,6 +111,188 @@ bool ray_of(const Model& model, const ValidDomain& domain, const InverseTable& t
   return true;
 }
 
+// ---- cameras with tangential terms (fishcam/tangential.hpp)
+
+// The plane radius u(theta) as a radial "model", so project_one gives m and dm/dP.
+template <class Model>
+struct PlaneRadius {
+  const Model& model;
+  double rho(double theta) const {
+    double derivative;
+    return model.plane_radius(theta, &derivative);
+  }
+  double drho(double theta) const {
+    double derivative;
+    model.plane_radius(theta, &derivative);
+    return derivative;
+  }
+};
+
+// D(m) = m R(|m|^2) + T(m), with dD/dm on request.
+template <class Model>
+Eigen::Vector2d distorted(const Model& model, const TangentialTerms& terms, const Eigen::Vector2d& m,
+                          Eigen::Matrix2d* jacobian = nullptr) {
+  double dr;
+  const double r = model.radial_factor(m.squaredNorm(), &dr);
+  if (!jacobian) return m * r + terms.offset(m);
+  Eigen::Matrix2d dt;
+  const Eigen::Vector2d d = m * r + terms.offset(m, &dt);
+  *jacobian = r * Eigen::Matrix2d::Identity() + 2 * dr * m * m.transpose() + dt;
+  return d;
+}
+
+template <bool kWithJacobian, class Model>
+bool project_tangential(const Model& model, const double* mapping, const ValidDomain& domain,
+                        const TangentialTerms& terms, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                        Eigen::Matrix<double, 2, 3>* jacobian) {
+  if constexpr (!HasUndistortedPlane<Model>) {
+    throw Error("internal: tangential terms on a model without an undistorted plane");  // the constructor refuses
+  } else {
+    if (!project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian)) return false;
+    const double plane_mapping[4] = {0, 0, 1, 1};
+    Eigen::Vector2d m;
+    Eigen::Matrix<double, 2, 3> dm_dp;
+    project_one<kWithJacobian>(PlaneRadius<Model>{model}, plane_mapping, domain, point, &m, &dm_dp);
+    const double f = model.focal();
+    const Eigen::Vector2d a(mapping[2], mapping[3]);
+    Eigen::Matrix2d dt;
+    *pixel += f * a.cwiseProduct(terms.offset(m, kWithJacobian ? &dt : nullptr));
+    if constexpr (kWithJacobian) *jacobian += f * a.asDiagonal() * dt * dm_dp;
+    return pixel->allFinite();
+  }
+}
+
+// The unit ray of normalized image coordinates (x, y) = ((u - cx) / a_x, (v - cy) / a_y):
+// D(m) = (x, y) / f solved by Newton with backtracking from the radial inverse; false
+// unless the solution lies in the domain and reprojects to within 1e-7 px (relative
+// 1e-15 for pixels beyond 1e8 px).
+template <class Model>
+bool tangential_ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table,
+                       const TangentialTerms& terms, const Eigen::Vector2d& pixel_scale, double x, double y,
+                       double* ray) {
+  if constexpr (!HasUndistortedPlane<Model>) {
+    throw Error("internal: tangential terms on a model without an undistorted plane");
+  } else {
+    const double f = model.focal();
+    const Eigen::Vector2d target(x / f, y / f);
+    if (!target.allFinite()) return false;
+    const double rho = std::hypot(x, y);
+    if (rho == 0) return ray[0] = 0, ray[1] = 0, ray[2] = 1, true;  // T(0) = 0
+    double derivative;
+    const double theta0 =
+        domain.contains_rho(rho) ? theta_of(model, domain, table, rho, InversePath::table) : domain.theta_max;
+    if (!std::isfinite(theta0)) return false;
+    Eigen::Vector2d m = target * (model.plane_radius(theta0, &derivative) / target.norm());
+    if (!m.allFinite()) return false;
+    Eigen::Matrix2d jacobian;
+    Eigen::Vector2d residual = distorted(model, terms, m, &jacobian) - target;
+    double error = residual.norm();
+    const double tolerance = 1e-15 * std::max(1.0, target.norm());
+    for (int iteration = 0; iteration < 100 && error > tolerance; ++iteration) {
+      const double det = jacobian.determinant();
+      if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
+      const Eigen::Vector2d step = jacobian.inverse() * residual;
+      // Backtracking: a full Newton step unless it makes the residual worse.
+      double lambda = 1;
+      Eigen::Vector2d next;
+      Eigen::Matrix2d next_jacobian;
+      Eigen::Vector2d next_residual;
+      double next_error = kNaN;
+      for (int halving = 0; halving < 40; ++halving, lambda *= 0.5) {
+        next = m - lambda * step;
+        next_residual = distorted(model, terms, next, &next_jacobian) - target;
+        next_error = next_residual.norm();
+        if (next_error < error) break;
+      }
+      if (!(next_error < error)) break;  // no progress: as close as doubles get
+      m = next, residual = next_residual, jacobian = next_jacobian, error = next_error;
+    }
+    // 1e-7 px, or what doubles can resolve for pixels 1e8 px and more off the image centre.
+    if (!(f * pixel_scale.cwiseProduct(residual).norm() <= 1e-7 + 1e-15 * rho * pixel_scale.maxCoeff())) return false;
+    const double u = m.norm();
+    double theta = model.theta_of_plane_radius(u);
+    // A point projected at theta_max may come back a few ulps past it: it is valid.
+    if (domain.closed && theta > domain.theta_max && theta <= domain.theta_max * (1 + 1e-12)) theta = domain.theta_max;
+    if (!domain.contains_theta(theta)) return false;
+    if (u == 0) return ray[0] = 0, ray[1] = 0, ray[2] = 1, true;
+    const double s = std::sin(theta) / u;
+    ray[0] = m.x() * s, ray[1] = m.y() * s, ray[2] = std::cos(theta);
+    return true;
+  }
+}
+
+// The largest theta* <= the radial domain's theta_max below which the distortion map
+// D is one-to-one on the disk |m| <= u(theta*): det(dD/dm) > 0 on every ring and each
+// ring's image star-shaped (its angle increasing), which together make D injective.
+// Rings are scanned, the first failing one bisected. nullopt: no ring fails.
+template <class Model>
+std::optional<double> tangential_fold(const Model& model, const TangentialTerms& terms, const ValidDomain& radial) {
+  if constexpr (!HasUndistortedPlane<Model>) {
+    return std::nullopt;
+  } else {
+    constexpr int kRings = 1024, kAzimuths = 360;
+    std::array<Eigen::Vector2d, kAzimuths> directions;
+    for (int k = 0; k < kAzimuths; ++k) {
+      const double phi = 2 * std::numbers::pi * k / kAzimuths;
+      directions[size_t(k)] = {std::cos(phi), std::sin(phi)};
+    }
+    const auto ring_ok = [&](double theta) {
+      double derivative;
+      const double u = model.plane_radius(theta, &derivative);
+      if (!std::isfinite(u)) return false;
+      Eigen::Vector2d first, previous;
+      for (int k = 0; k < kAzimuths; ++k) {
+        Eigen::Matrix2d jacobian;
+        const Eigen::Vector2d d = distorted(model, terms, u * directions[size_t(k)], &jacobian);
+        if (!(jacobian.determinant() > 0)) return false;
+        if (k == 0) {
+          first = d;
+        } else if (!(previous.x() * d.y() - previous.y() * d.x() > 0)) {
+          return false;
+        }
+        previous = d;
+      }
+      return previous.x() * first.y() - previous.y() * first.x() > 0;
+    };
+    const double end = radial.closed ? radial.theta_max : radial.theta_max * (1 - 1e-9);
+    double good = 0;
+    for (int j = 1; j <= kRings; ++j) {
+      const double theta = end * j / kRings;
+      if (ring_ok(theta)) {
+        good = theta;
+        continue;
+      }
+      double bad = theta;
+      for (int bisection = 0; bisection < 60 && bad - good > 1e-15; ++bisection) {
+        const double mid = 0.5 * (good + bad);
+        (ring_ok(mid) ? good : bad) = mid;
+      }
+      return good;
+    }
+    return std::nullopt;
+  }
+}
+
+// A camera's projection and unprojection: radial, or with its tangential terms.
+template <bool kWithJacobian, class Model>
+bool project_point(const Model& model, const CameraParameters& params, const double* mapping,
+                   const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                   Eigen::Matrix<double, 2, 3>* jacobian) {
+  if (params.tangential.any()) {
+    return project_tangential<kWithJacobian>(model, mapping, domain, params.tangential, point, pixel, jacobian);
+  }
+  return project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian);
+}
+
+template <class Model>
+bool ray_of_point(const Model& model, const CameraParameters& params, const ValidDomain& domain,
+                  const InverseTable& table, double x, double y, InversePath path, double* ray) {
+  if (params.tangential.any()) {
+    return tangential_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray);
+  }
+  return ray_of(model, domain, table, x, y, path, ray);
+}
+
 // Runs body(begin, end) over [0, n) on the installed thread pool, in chunks worth a thread.
 template <class Body>
 void parallel_chunks(size_t n, const Body& body) {
@@ -138,7 +320,7 @@ void unproject_pixels(const CameraParameters& params, const ValidDomain& domain,
             for (size_t col = 0; col < w; ++col) {
               const double u = (double(col) - c.x()) * inv_scale.x();
               double ray[3] = {kNaN, kNaN, kNaN};
-              ray_of(m, domain, table, u, v, path, ray);
+              ray_of_point(m, params, domain, table, u, v, path, ray);
               const size_t i = (first + col) * kStride;
               x[i] = float(ray[0]), y[i] = float(ray[1]), z[i] = float(ray[2]);
             }
@@ -262,7 +444,29 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   }
   if (params_.calibration) check_calibration_record(*params_.calibration, model_params(params_.model).size());
   domain_ = std::visit([&](const auto& m) { return compute_domain(m, params_.theta_limit); }, params_.model);
+  if (params_.tangential.any()) limit_to_tangential_fold();
   table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
+}
+
+void Camera::limit_to_tangential_fold() {
+  const TangentialTerms& terms = params_.tangential;
+  for (size_t i = 0; i < terms.kNames.size(); ++i) {
+    if (!std::isfinite(terms.values()[i])) fail("tangential.", terms.kNames[i], ": must be finite");
+  }
+  const bool has_plane = std::visit([](const auto& m) { return HasUndistortedPlane<std::decay_t<decltype(m)>>; },
+                                    params_.model);
+  if (!has_plane) {
+    fail("tangential: the ", model_name(params_.model),
+         " model has no undistorted plane to add tangential terms on (pinhole, opencv and mei have one)");
+  }
+  const std::optional<double> fold =
+      std::visit([&](const auto& m) { return tangential_fold(m, terms, domain_); }, params_.model);
+  if (!fold || *fold >= domain_.theta_max * (1 - 1e-12)) return;  // the radial limit comes first
+  if (!(*fold > 0)) fail("tangential: the distortion is not one-to-one even next to the principal point");
+  domain_.theta_max = *fold;
+  domain_.closed = true;
+  domain_.limited_by = ValidDomain::Limit::tangential_fold;
+  domain_.rho_max = rho(*fold);
 }
 
 double Camera::rho(double theta) const {
@@ -293,8 +497,8 @@ bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                                       params_.pixel_scale.x(), params_.pixel_scale.y()};
   return std::visit(
       [&](const auto& m) {
-        return jacobian ? project_one<true>(m, mapping.data(), domain_, point, pixel, jacobian)
-                        : project_one<false>(m, mapping.data(), domain_, point, pixel, nullptr);
+        return jacobian ? project_point<true>(m, params_, mapping.data(), domain_, point, pixel, jacobian)
+                        : project_point<false>(m, params_, mapping.data(), domain_, point, pixel, nullptr);
       },
       params_.model);
 }
@@ -303,7 +507,7 @@ bool Camera::unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const
   const double x = (pixel.x() - params_.principal_point.x()) / params_.pixel_scale.x();
   const double y = (pixel.y() - params_.principal_point.y()) / params_.pixel_scale.y();
   const bool ok =
-      std::visit([&](const auto& m) { return ray_of(m, domain_, table_, x, y, InversePath::robust, ray->data()); },
+      std::visit([&](const auto& m) { return ray_of_point(m, params_, domain_, table_, x, y, InversePath::robust, ray->data()); },
                  params_.model);
   if (!ok) ray->setConstant(kNaN);
   return ok;
@@ -320,7 +524,7 @@ void Camera::project(std::span<const Eigen::Vector3d> points, std::span<Eigen::V
       [&](const auto& m) {
         parallel_chunks(points.size(), [&](size_t begin, size_t end) {
           for (size_t i = begin; i < end; ++i) {
-            const bool ok = project_one<false>(m, mapping.data(), domain_, points[i], &pixels[i], nullptr);
+            const bool ok = project_point<false>(m, params_, mapping.data(), domain_, points[i], &pixels[i], nullptr);
             if (!valid.empty()) valid[i] = ok;
           }
         });
@@ -339,7 +543,7 @@ void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen:
         parallel_chunks(pixels.size(), [&](size_t begin, size_t end) {
           for (size_t i = begin; i < end; ++i) {
             const double x = (pixels[i].x() - c.x()) * inv_scale.x(), y = (pixels[i].y() - c.y()) * inv_scale.y();
-            const bool ok = ray_of(m, domain_, table_, x, y, path, rays[i].data());
+            const bool ok = ray_of_point(m, params_, domain_, table_, x, y, path, rays[i].data());
             if (!ok) rays[i].setConstant(kNaN);
             if (!valid.empty()) valid[i] = ok;
           }
@@ -366,6 +570,10 @@ Camera::FieldOfView Camera::field_of_view_deg() const {
   const double w = params_.width - 0.5, h = params_.height - 0.5, cx = params_.principal_point.x(),
                cy = params_.principal_point.y();
   auto theta_at = [&](double u, double v) {
+    if (!radial()) {
+      Eigen::Vector3d ray;
+      return unproject({u, v}, &ray) ? std::acos(std::clamp(ray.z(), -1.0, 1.0)) : domain_.theta_max;
+    }
     const double rho = rho_of_pixel({u, v});
     return domain_.contains_rho(rho) ? theta_from_rho(rho) : domain_.theta_max;
   };

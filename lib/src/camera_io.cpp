@@ -329,6 +329,12 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
                          {"closed_form", std::visit([](const auto& m) { return ClosedFormInverse<std::decay_t<decltype(m)>>; },
                                                     p.model)}}},
   };
+  j["tangential"] = nullptr;  // radially symmetric
+  if (p.tangential.any()) {
+    for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
+      j["tangential"][std::string(TangentialTerms::kNames[i])] = p.tangential.values()[i];
+    }
+  }
   if (p.pose) {
     const auto& q = p.pose->rotation;
     const auto& t = p.pose->translation;
@@ -349,6 +355,24 @@ std::vector<std::string> camera_format_models(CameraFormat format) {
   return out;
 }
 
+namespace {
+// "" when the format holds the terms, else why not.
+std::string cannot_hold_tangential(const detail::FormatSpec& spec, const TangentialTerms& terms) {
+  const bool prism = terms.any_thin_prism();
+  if (!terms.any() || (spec.holds_tangential && (!prism || spec.holds_thin_prism))) return "";
+  std::string holders;
+  for (const auto* s : detail::format_table()) {
+    if (prism ? s->holds_thin_prism : s->holds_tangential) holders += std::string(holders.empty() ? "" : ", ") + std::string(s->name);
+  }
+  return "tangential: the " + std::string(spec.name) + " format cannot hold " +
+         (prism ? "thin-prism terms s1..s4" : "tangential terms p1, p2") + " (" + holders + " can)";
+}
+}  // namespace
+
+bool camera_format_holds(CameraFormat format, const TangentialTerms& terms) {
+  return cannot_hold_tangential(format_spec(format), terms).empty();
+}
+
 std::string format_camera(const CameraParameters& camera, CameraFormat format) {
   Camera check(camera);  // never write a camera we would refuse to read
   const detail::FormatSpec& spec = format_spec(format);
@@ -359,6 +383,7 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
                 " format cannot store a user field-of-view limit (fishcam JSON can)");
   }
   if (!spec.holds(model_name(camera.model))) detail::cannot_hold(camera, format);
+  if (const std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) throw Error(why);
   CameraParameters written = spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera);
   if (!spec.holds_calibration_record) written.calibration.reset();
   std::string content = spec.write(written);
@@ -368,7 +393,8 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
     CameraReadOptions options;
     options.format = format;
     options.image_size = std::pair{camera.width, camera.height};
-    parse_camera(content, "", options);
+    const CameraParameters back = parse_camera(content, "", options);
+    if (back.tangential != camera.tangential) throw Error(": its tangential terms do not read back");
   } catch (const Error& e) {
     std::string why = e.what();
     if (why.rfind(": ", 0) == 0) why = why.substr(2);
@@ -399,6 +425,7 @@ std::string format_rig(const std::vector<CameraParameters>& cameras, CameraForma
       throw Error(which + "theta_limit: the " + std::string(spec.name) +
                   " format cannot store a user field-of-view limit (fishcam JSON can)");
     }
+    if (const std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) throw Error(which + why);
     if (!spec.holds(model_name(camera.model))) {
       try {
         detail::cannot_hold(camera, format);

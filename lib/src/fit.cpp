@@ -216,6 +216,7 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
   fitted.principal_point = center;
   fitted.pixel_scale.y() = ay;
   fitted.model = make_model(spec.name, params);
+  fitted.tangential = {};  // the fit is radial: what it cannot represent is its residual
   fitted.theta_limit.reset();
   drop_covariance(&fitted);
   try {
@@ -234,6 +235,7 @@ CameraParameters paper_camera(const Camera& source, const ModelSpec& spec) {
   const double rho = source.width() / 2.0;
   const double theta = source.field_of_view_deg().horizontal / 2 / kDeg;
   CameraParameters p = source.parameters();
+  p.tangential = {};
   p.theta_limit.reset();
   drop_covariance(&p);
   p.model = with_model_class(spec.name, [&]<template <typename> class Model>() -> RadialModel {

@@ -25,6 +25,9 @@ struct SourceParams {
   float c[kMaxDegree + 1] = {};  // rho = c[1] theta + ... + c[n] theta^n, 1 <= n <= kMaxDegree
   int n = 0;
   float f = 0, xi = 0, alpha = 0, beta = 1, k1 = 0, k2 = 0, k3 = 0, k4 = 0, k5 = 0, k6 = 0;  // unified
+  // Tangential and thin-prism terms on the plane m = P_xy / D (unified with alpha = 0).
+  bool tangential = false;
+  float p1 = 0, p2 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0;
   float cx = 0, cy = 0, ax = 1, ay = 1;
   float cos_theta_max = -1;
   bool closed = true;

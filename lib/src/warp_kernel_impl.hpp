@@ -74,6 +74,7 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
   const v_float32 cos_limit = cv::vx_setall_f32(src.cos_theta_max) * norm;
   valid = valid & (src.closed ? pz >= cos_limit : pz > cos_limit) & ((chi2 > zero) | (pz > zero));
   v_float32 scale;  // rho(theta) / chi
+  v_float32 tangential_x = zero, tangential_y = zero;  // f T(m), fishcam/tangential.hpp
   if constexpr (kKind == SourceParams::Kind::unified) {
     // w = xi |P| + Pz; behind the camera (Pz < 0, xi > 0) as
     // (xi^2 chi^2 + (xi^2 - 1) Pz^2) / (xi |P| - Pz), without the cancellation
@@ -107,6 +108,17 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
         scale = scale / mul_add(r2, mul_add(r2, k6_term, cv::vx_setall_f32(src.k4)), cv::vx_setall_f32(1.0f));
       }
     }
+    if (src.tangential) {  // the plane is m = P_xy / D (alpha = 0: D = w)
+      const v_float32 inverse = cv::vx_setall_f32(1.0f) / d;
+      const v_float32 mx = px * inverse, my = py * inverse;
+      const v_float32 r2 = mul_add(mx, mx, my * my), mxy2 = cv::vx_setall_f32(2.0f) * mx * my;
+      const v_float32 p1 = cv::vx_setall_f32(src.p1), p2 = cv::vx_setall_f32(src.p2), f = cv::vx_setall_f32(src.f);
+      // T_x = 2 p1 x y + p2 (r2 + 2 x^2) + (s1 + s2 r2) r2, T_y = p1 (r2 + 2 y^2) + 2 p2 x y + (s3 + s4 r2) r2
+      const v_float32 prism_x = mul_add(cv::vx_setall_f32(src.s2), r2, cv::vx_setall_f32(src.s1)) * r2;
+      const v_float32 prism_y = mul_add(cv::vx_setall_f32(src.s4), r2, cv::vx_setall_f32(src.s3)) * r2;
+      tangential_x = f * mul_add(p1, mxy2, mul_add(p2, mul_add(cv::vx_setall_f32(2.0f) * mx, mx, r2), prism_x));
+      tangential_y = f * mul_add(p2, mxy2, mul_add(p1, mul_add(cv::vx_setall_f32(2.0f) * my, my, r2), prism_y));
+    }
   } else {
     const v_float32 chi = cv::v_sqrt(chi2);
     const v_float32 theta = atan2_nonnegative_y(chi, pz);
@@ -117,8 +129,12 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     scale = cv::v_select(chi > zero, rho / chi, cv::vx_setall_f32(src.c[1]) / pz);
   }
   const v_float32 nan = cv::vx_setall_f32(kNaNf);
-  const v_float32 u = mul_add(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
-  const v_float32 v = mul_add(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
+  v_float32 u = mul_add(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
+  v_float32 v = mul_add(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
+  if (kKind == SourceParams::Kind::unified && src.tangential) {
+    u = mul_add(cv::vx_setall_f32(src.ax), tangential_x, u);
+    v = mul_add(cv::vx_setall_f32(src.ay), tangential_y, v);
+  }
   valid = valid & (u == u) & (v == v);
   *out_x = cv::v_select(valid, u, nan);
   *out_y = cv::v_select(valid, v, nan);

@@ -20,8 +20,8 @@ std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
 
 
 // The camera's numbers as bytes: equal exactly when the cameras are (model, its
-// parameters, size, principal point, pixel scale, theta limit and, with_pose, the
-// pose). A cache key that costs microseconds, where to_json() formats and reads
+// parameters, size, principal point, pixel scale, tangential terms, theta limit
+// and, with_pose, the pose). A cache key that costs microseconds, where to_json() formats and reads
 // back a file (milliseconds).
 std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
   std::string key(model_name(p.model));
@@ -29,6 +29,8 @@ std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
   std::vector<double> numbers = model_params(p.model);
   numbers.insert(numbers.end(), {double(p.width), double(p.height), p.principal_point.x(), p.principal_point.y(),
                                  p.pixel_scale.x(), p.pixel_scale.y(), p.theta_limit.value_or(-1.0)});
+  const auto terms = p.tangential.values();
+  numbers.insert(numbers.end(), terms.begin(), terms.end());
   if (with_pose && p.pose) {
     const auto& q = p.pose->rotation;
     numbers.insert(numbers.end(), {q.w(), q.x(), q.y(), q.z(), p.pose->translation.x(), p.pose->translation.y(),
@@ -57,19 +59,20 @@ py::object camera_pickle_state(const Camera& c) {
   }
   return py::make_tuple(std::string(model_name(p.model)), model_params(p.model), p.width, p.height,
                         p.principal_point.x(), p.principal_point.y(), p.pixel_scale.x(), p.pixel_scale.y(),
-                        p.theta_limit ? py::cast(*p.theta_limit) : py::none(), pose);
+                        p.theta_limit ? py::cast(*p.theta_limit) : py::none(), pose, p.tangential.values());
 }
 
 Camera camera_from_pickle_state(const py::object& state) {
   if (py::isinstance<py::str>(state)) return camera_from_state(state.cast<std::string>());  // earlier pickles
   const py::tuple t = state.cast<py::tuple>();
-  if (t.size() != 10) throw Error("pickled camera: expected 10 fields, got " + std::to_string(t.size()));
+  if (t.size() != 10 && t.size() != 11) throw Error("pickled camera: expected 11 fields, got " + std::to_string(t.size()));
   CameraParameters p;
   p.model = make_model(t[0].cast<std::string>(), t[1].cast<std::vector<double>>());
   p.width = t[2].cast<int>(), p.height = t[3].cast<int>();
   p.principal_point = {t[4].cast<double>(), t[5].cast<double>()};
   p.pixel_scale = {t[6].cast<double>(), t[7].cast<double>()};
   if (!t[8].is_none()) p.theta_limit = t[8].cast<double>();
+  if (t.size() == 11) p.tangential = TangentialTerms::from_values(t[10].cast<std::array<double, 6>>());
   std::optional<Pose> pose;
   if (!t[9].is_none()) {
     const auto v = t[9].cast<std::array<double, 7>>();
@@ -123,7 +126,8 @@ void bind_camera(py::module_& m) {
       });
 
   py::class_<Camera>(m, "Camera",
-                     "A calibrated camera: a radial model rho(theta), principal point, pixel scale, image size and "
+                     "A calibrated camera: a radial model rho(theta) (with tangential terms for some models), principal "
+                     "point, pixel scale, image size and "
                      "an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z "
                      "forward. Immutable; equal cameras compare equal and hash alike.")
       .def_static(
@@ -175,6 +179,20 @@ void bind_camera(py::module_& m) {
           "parameters", [](const Camera& c) { return model_params(c.model()); },
           "The model's parameters (list of float), in the order docs/models.md gives.")
       .def_property_readonly(
+          "tangential",
+          [](const Camera& c) {
+            std::map<std::string, double> terms;
+            for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
+              terms[std::string(TangentialTerms::kNames[i])] = c.tangential().values()[i];
+            }
+            return terms;
+          },
+          "The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's "
+          "undistorted plane (docs/models.md); all 0 for a radially symmetric camera.")
+      .def_property_readonly("radial", &Camera::radial,
+                             "Whether the camera is radially symmetric (no tangential terms): only then do rho and "
+                             "theta_from_rho describe its whole projection.")
+      .def_property_readonly(
           "principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); },
           "(cx, cy) in pixels, float64 array (2,).")
       .def_property_readonly(
@@ -217,7 +235,9 @@ void bind_camera(py::module_& m) {
             return theta;
           },
           py::arg("rho"),
-          "theta (radians) of radii rho (pixels, any shape, float64; same shape out); NaN outside the valid domain.")
+          "theta (radians) of radii rho (pixels, any shape, float64; same shape out) under the radial model; NaN "
+          "outside the valid domain. For a camera with tangential terms (radial is False) that is its radial part "
+          "only: unproject pixels instead.")
       .def("info_json", [](const Camera& c) { return camera_info_json(c); },
            "What `fishcam info --json` prints (str); the same values typed: model, parameters, principal_point, "
            "pixel_scale, domain, field_of_view_deg, pose.")

@@ -20,6 +20,7 @@
 #include "fishcam/radial_inverse.hpp"
 #include "fishcam/model_registry.hpp"
 #include "fishcam/radial_models.hpp"
+#include "fishcam/tangential.hpp"
 
 namespace fishcam {
 
@@ -87,6 +88,9 @@ struct CameraParameters {
   Eigen::Vector2d principal_point = Eigen::Vector2d::Zero();  // (cx, cy), pixels
   Eigen::Vector2d pixel_scale = Eigen::Vector2d::Ones();      // (a_x, a_y)
   RadialModel model;
+  // Non-radial terms on the model's undistorted plane (fishcam/tangential.hpp); all
+  // zero for a radial camera. Only models with a plane (pinhole, opencv, mei) take them.
+  TangentialTerms tangential;
   std::optional<double> theta_limit;  // radians; a user cap on the valid domain
   std::optional<Pose> pose;
   std::optional<CalibrationRecord> calibration;
@@ -129,9 +133,14 @@ class Camera {
   const Eigen::Vector2d& principal_point() const { return params_.principal_point; }
   const Eigen::Vector2d& pixel_scale() const { return params_.pixel_scale; }
   const RadialModel& model() const { return params_.model; }
+  const TangentialTerms& tangential() const { return params_.tangential; }
+  // Whether the camera is radially symmetric (no tangential terms): only then do
+  // rho, theta_from_rho and rho_of_pixel describe its whole projection.
+  bool radial() const { return !params_.tangential.any(); }
   const ValidDomain& domain() const { return domain_; }
   const InverseTable& inverse_table() const { return table_; }
 
+  // The radial model (for a camera with tangential terms, its radial part).
   double rho(double theta) const;
   double drho(double theta) const;
   // The unique theta in the valid domain with rho(theta) = rho (robust solver or
@@ -172,6 +181,7 @@ class Camera {
   FieldOfView field_of_view_deg() const;
 
  private:
+  void limit_to_tangential_fold();  // validates the terms, lowers domain_ to where D stays one-to-one
   CameraParameters params_;
   ValidDomain domain_;
   InverseTable table_;

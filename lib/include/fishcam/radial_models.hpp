@@ -242,6 +242,15 @@ class Pinhole {
   std::vector<Scalar> params() const { return {f_}; }
   const Scalar& f() const { return f_; }
   UnifiedForm unified_form() const { return {double(f_), 0, 0, 1, 0, 0}; }
+  // The undistorted plane m = (X, Y) / Z (fishcam/tangential.hpp).
+  double focal() const { return double(f_); }
+  static double plane_radius(double theta, double* derivative) {
+    const double c = std::cos(theta);
+    *derivative = 1 / (c * c);
+    return std::tan(theta);
+  }
+  static double theta_of_plane_radius(double r) { return std::atan(r); }
+  static double radial_factor(double, double* derivative) { return *derivative = 0, 1.0; }
 
   static std::vector<double> initial_params(double f, int) { return {f}; }
   static void basis(double theta, int, double* g) { g[0] = std::tan(theta); }
@@ -312,6 +321,18 @@ class OpenCV {
   UnifiedForm unified_form() const {
     return {double(p_[0]), 0, 0, 1, double(p_[1]), double(p_[2]), double(p_[3]), double(p_[4]), double(p_[5]),
             double(p_[6])};
+  }
+
+  // The undistorted plane m = (X, Y) / Z (fishcam/tangential.hpp): R = N / D.
+  double focal() const { return double(p_[0]); }
+  static double plane_radius(double theta, double* derivative) { return Pinhole<double>::plane_radius(theta, derivative); }
+  static double theta_of_plane_radius(double r) { return std::atan(r); }
+  double radial_factor(double s, double* derivative) const {
+    const double k[7] = {double(p_[0]), double(p_[1]), double(p_[2]), double(p_[3]), double(p_[4]), double(p_[5]), double(p_[6])};
+    const double n = 1 + s * (k[1] + s * (k[2] + s * k[3])), d = 1 + s * (k[4] + s * (k[5] + s * k[6]));
+    const double dn = k[1] + s * (2 * k[2] + s * 3 * k[3]), dd = k[4] + s * (2 * k[5] + s * 3 * k[6]);
+    *derivative = (dn * d - n * dd) / (d * d);
+    return n / d;
   }
 
   static std::vector<double> initial_params(double f, int) { return {f, 0, 0, 0, 0, 0, 0}; }
@@ -681,6 +702,19 @@ class Mei {
   std::vector<Scalar> params() const { return {f_, xi_, k1_, k2_}; }
   UnifiedForm unified_form() const { return {double(f_), double(xi_), 0, 1, double(k1_), double(k2_)}; }
 
+  // The undistorted plane m = (X, Y) / (Z + xi |P|) (fishcam/tangential.hpp): R = 1 + k1 s + k2 s^2.
+  double focal() const { return double(f_); }
+  double plane_radius(double theta, double* derivative) const {
+    const Unified<double> ucm(1.0, double(xi_));
+    *derivative = ucm.drho(theta);
+    return ucm.rho(theta);
+  }
+  double theta_of_plane_radius(double r) const { return Unified<double>::theta_from_radius(r, double(xi_)); }
+  double radial_factor(double s, double* derivative) const {
+    *derivative = double(k1_) + 2 * double(k2_) * s;
+    return 1 + s * (double(k1_) + s * double(k2_));
+  }
+
   static std::vector<double> initial_params(double f, int) { return {2 * f, 1, 0, 0}; }
   static std::vector<std::vector<double>> fit_starts(double f) {
     return {{1.5 * f, 0.5, 0, 0}, {2 * f, 1, 0, 0}, {3 * f, 2, 0, 0}};
@@ -725,5 +759,17 @@ concept LinearInParams = requires(double t, double* g, const double* p) {
 
 template <class Model>
 concept HasUnifiedForm = requires(const Model& m) { m.unified_form(); };
+
+// Models with an undistorted plane on which tangential terms can be added
+// (fishcam/tangential.hpp): rho(theta) = f u(theta) R(u(theta)^2) with u the plane
+// radius (plane_radius gives u and du/dtheta, theta_of_plane_radius inverts it on
+// the model's domain) and R the radial factor (radial_factor gives R and dR/ds).
+template <class Model>
+concept HasUndistortedPlane = requires(const Model& m, double x, double* d) {
+  m.focal();
+  m.plane_radius(x, d);
+  m.theta_of_plane_radius(x);
+  m.radial_factor(x, d);
+};
 
 }  // namespace fishcam

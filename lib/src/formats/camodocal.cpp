@@ -29,17 +29,15 @@ std::vector<NamedCamera> read(const Content& c) {
     const double gamma1 = k.number("gamma1");
     set_focal(&p, gamma1, k.number("gamma2"), [&](std::string_view problem) { k.fail("gamma1", problem); });
     p.principal_point = {k.number("u0"), k.number("v0")};
-    if (d.number("p1") != 0 || d.number("p2") != 0) {
-      d.fail("p1", "MEI with tangential terms p1, p2 != 0 is not radially symmetric (fishcam reads mei with p1 = p2 = 0)");
-    }
     p.model = Mei<double>(gamma1, f.object("mirror_parameters").number("xi"), d.number("k1"), d.number("k2"));
+    p.tangential = {d.number("p1"), d.number("p2"), {}};
   } else if (type == "PINHOLE") {
     const DocFields k = f.object("projection_parameters");
     const DocFields d = f.object("distortion_parameters");
     const double fx = k.number("fx");
     set_focal(&p, fx, k.number("fy"), [&](std::string_view problem) { k.fail("fx", problem); });
     p.principal_point = {k.number("cx"), k.number("cy")};
-    p.model = radial_tangential_model({d.number("k1"), d.number("k2"), d.number("p1"), d.number("p2")}, fx,
+    set_radial_tangential(&p, {d.number("k1"), d.number("k2"), d.number("p1"), d.number("p2")}, fx,
                                              [&](std::string_view problem) { d.fail("k1", problem); });
   } else if (type == "SCARAMUZZA") {
     f.fail("model_type", "SCARAMUZZA (OCamCalib) has an affine term and is not radially symmetric; fishcam reads "
@@ -53,6 +51,7 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
+  const double p1 = p.tangential.p1, p2 = p.tangential.p2;
   const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
   std::string out = "%YAML:1.0\n---\n";
   const KannalaBrandtLike kb = kannala_brandt_of(p);
@@ -72,13 +71,13 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
     out += "mirror_parameters:\n";
     line("xi", q[1]);
     out += "distortion_parameters:\n";
-    line("k1", q.size() > 2 ? q[2] : 0.0), line("k2", q.size() > 2 ? q[3] : 0.0), line("p1", 0), line("p2", 0);
+    line("k1", q.size() > 2 ? q[2] : 0.0), line("k2", q.size() > 2 ? q[3] : 0.0), line("p1", p1), line("p2", p2);
     out += "projection_parameters:\n";
     line("gamma1", q[0]), line("gamma2", q[0] * ay), line("u0", cx), line("v0", cy);
   } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
     header("PINHOLE");
     out += "distortion_parameters:\n";
-    line("k1", 0), line("k2", 0), line("p1", 0), line("p2", 0);
+    line("k1", 0), line("k2", 0), line("p1", p1), line("p2", p2);
     out += "projection_parameters:\n";
     line("fx", m->f()), line("fy", m->f() * ay), line("cx", cx), line("cy", cy);
   } else {
@@ -91,6 +90,6 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 extern const FormatSpec camodocal_format{CameraFormat::camodocal, "camodocal", "camodocal YAML", {".yaml", ".yml"},
                                          {"kannala-brandt", "equidistant", "mei", "unified", "pinhole"}, score, read,
-                                         write};
+                                         write, false, false, false, nullptr, true};
 
 }  // namespace fishcam::detail

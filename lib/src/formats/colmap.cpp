@@ -95,7 +95,7 @@ std::vector<NamedCamera> read(const Content& c) {
       }
       std::vector<double> d(q.begin() + (one_focal ? 3 : 4), q.end());
       d.resize(d.size() <= 4 ? 4 : 8, 0.0);
-      p.model = radial_tangential_model(d, q[0], [&](std::string_view problem) { fail(text_for_message(name) + ": " + std::string(problem)); });
+      set_radial_tangential(&p, d, q[0], [&](std::string_view problem) { fail(text_for_message(name) + ": " + std::string(problem)); });
     } else if (name == "FOV") {
       fail(text_for_message(name) + " is radially symmetric but fishcam has no such model");
     } else {
@@ -110,8 +110,10 @@ std::vector<NamedCamera> read(const Content& c) {
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   std::vector<double> params;
   std::string model;
-  if (const std::optional<OpenCVRational> r = opencv_rational(p.model)) {
+  std::optional<RadialTangential> r = radial_tangential_of(p);
+  if (r && (r->rational || p.tangential.any())) {
     model = "FULL_OPENCV";
+    r->d.resize(8, 0.0);
     params = {r->f, r->f * p.pixel_scale.y(), p.principal_point.x() + 0.5, p.principal_point.y() + 0.5};
     params.insert(params.end(), r->d.begin(), r->d.end());
   } else {
@@ -135,6 +137,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 }  // namespace
 
 extern const FormatSpec colmap_format{CameraFormat::colmap, "colmap", "COLMAP cameras.txt", {".txt"},
-                                      {"kannala-brandt", "equidistant", "pinhole", "opencv"}, score, read, write};
+                                      {"kannala-brandt", "equidistant", "pinhole", "opencv"}, score, read, write,
+                                      false, false, false, nullptr, true};
 
 }  // namespace fishcam::detail

@@ -317,33 +317,45 @@ KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, Came
   return out;
 }
 
-std::optional<OpenCVRational> opencv_rational(const RadialModel& model) {
-  const auto* m = std::get_if<OpenCV<double>>(&model);
-  if (!m) return std::nullopt;
-  const std::vector<double> q = m->params();
-  return OpenCVRational{q[0], {q[1], q[2], 0, 0, q[3], q[4], q[5], q[6]}};
+std::optional<RadialTangential> radial_tangential_of(const CameraParameters& p) {
+  RadialTangential out;
+  const TangentialTerms& t = p.tangential;
+  if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
+    out.f = m->f();
+    out.d = {0, 0, t.p1, t.p2, 0};
+    out.rational = false;
+  } else if (const auto* m = std::get_if<OpenCV<double>>(&p.model)) {
+    const std::vector<double> q = m->params();
+    out.f = q[0];
+    out.d = {q[1], q[2], t.p1, t.p2, q[3], q[4], q[5], q[6]};
+    out.rational = true;
+  } else {
+    return std::nullopt;
+  }
+  if (t.any_thin_prism()) {
+    out.d.resize(8, 0.0);
+    out.d.insert(out.d.end(), t.s.begin(), t.s.end());
+  }
+  return out;
 }
 
-RadialModel radial_tangential_model(const std::vector<double>& d, double f,
-                                    const std::function<void(std::string_view)>& fail) {
+void set_radial_tangential(CameraParameters* p, const std::vector<double>& d, double f,
+                           const std::function<void(std::string_view)>& fail) {
   const size_t n = d.size();
   if (n != 0 && n != 4 && n != 5 && n != 8 && n != 12 && n != 14) {
     fail("expected 4, 5, 8, 12 or 14 radial-tangential coefficients (OpenCV's order k1, k2, p1, p2, k3, k4, k5, k6, "
          "s1, s2, s3, s4, tau_x, tau_y), got " + std::to_string(n));
   }
   const auto coefficient = [&](size_t i) { return i < n ? d[i] : 0.0; };
-  if (coefficient(2) != 0 || coefficient(3) != 0) {
-    fail("radial-tangential distortion with p1, p2 != 0 is not radially symmetric (fishcam reads radially symmetric "
-         "models only)");
-  }
-  for (size_t i = 8; i < 12; ++i) {
-    if (coefficient(i) != 0) fail("thin-prism terms s1..s4 != 0 are not radially symmetric (fishcam reads radially symmetric models only)");
-  }
   if (coefficient(12) != 0 || coefficient(13) != 0) fail("a tilted sensor (tau_x, tau_y != 0) is not supported");
   const std::array<double, 6> k{coefficient(0), coefficient(1), coefficient(4), coefficient(5), coefficient(6),
                                 coefficient(7)};
-  if (std::all_of(k.begin(), k.end(), [](double x) { return x == 0; })) return Pinhole<double>(f);
-  return OpenCV<double>(f, k[0], k[1], k[2], k[3], k[4], k[5]);
+  if (std::all_of(k.begin(), k.end(), [](double x) { return x == 0; })) {
+    p->model = Pinhole<double>(f);
+  } else {
+    p->model = OpenCV<double>(f, k[0], k[1], k[2], k[3], k[4], k[5]);
+  }
+  p->tangential = {coefficient(2), coefficient(3), {coefficient(8), coefficient(9), coefficient(10), coefficient(11)}};
 }
 
 Pose pose_from_rt_cam_ref(const std::vector<double>& rt) {

@@ -1,4 +1,5 @@
 // fishcam's own JSON: every model of the registry, as it is.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -59,6 +60,21 @@ nlohmann::json calibration_json(const CalibrationRecord& r) {
   return j;
 }
 
+// "tangential": {"p1", "p2", "s1", "s2", "s3", "s4"} (fishcam/tangential.hpp); absent terms are 0.
+TangentialTerms read_tangential(const DocFields& f) {
+  if (f.node().kind != DocNode::Kind::map) f.fail("", "expected an object of p1, p2, s1..s4");
+  for (const std::string& key : f.node().keys) {
+    if (std::find(TangentialTerms::kNames.begin(), TangentialTerms::kNames.end(), key) == TangentialTerms::kNames.end()) {
+      f.fail(key, "unknown tangential term (expected p1, p2, s1, s2, s3, s4)");
+    }
+  }
+  std::array<double, 6> values{};
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (f.has(TangentialTerms::kNames[i])) values[i] = f.number(TangentialTerms::kNames[i]);
+  }
+  return TangentialTerms::from_values(values);
+}
+
 CameraParameters read_camera_fields(const DocFields& f) {
   CameraParameters p;
   p.width = f.positive_integer("width");
@@ -74,6 +90,7 @@ CameraParameters read_camera_fields(const DocFields& f) {
   } catch (const Error& e) {
     f.fail("model", e.what());
   }
+  if (f.has("tangential")) p.tangential = read_tangential(f.object("tangential"));
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
   if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
   if (f.has("calibration")) p.calibration = read_calibration(f.object("calibration"));
@@ -107,6 +124,12 @@ nlohmann::json camera_json(const CameraParameters& p) {
                          {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
                          {"model", model_name(p.model)},
                          {"parameters", model_params(p.model)}};
+  if (p.tangential.any()) {
+    nlohmann::json& terms = root["tangential"];
+    for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
+      terms[std::string(TangentialTerms::kNames[i])] = p.tangential.values()[i];
+    }
+  }
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
   if (p.calibration) root["calibration"] = calibration_json(*p.calibration);
@@ -132,6 +155,6 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 }  // namespace
 
 extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
-                                       {}, score, read, write, true, true, true, write_rig};
+                                       {}, score, read, write, true, true, true, write_rig, true, true};
 
 }  // namespace fishcam::detail

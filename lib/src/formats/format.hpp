@@ -83,6 +83,11 @@ struct FormatSpec {
   // Several cameras with their poses relative to the first (camera -> camera 0), in
   // one file; nullptr for formats that hold one camera.
   std::string (*write_rig)(const std::vector<CameraParameters>&) = nullptr;
+  // Holds tangential terms p1, p2, and the thin-prism terms s1..s4; format_camera
+  // refuses a camera with terms its format cannot hold. Which models take them:
+  // CameraParameters::tangential.
+  bool holds_tangential = false;
+  bool holds_thin_prism = false;
 
   bool holds(std::string_view model) const;
 };
@@ -152,17 +157,19 @@ struct KannalaBrandtOrPinhole {
 KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, CameraFormat format);
 // OpenCV's radial-tangential coefficients in its order (k1, k2, p1, p2[, k3[, k4,
 // k5, k6[, s1, s2, s3, s4[, tau_x, tau_y]]]]: 0, 4, 5, 8, 12 or 14 of them) with
-// focal length f: `pinhole` when all are zero, else `opencv` (k1..k6). Terms that
-// are not radially symmetric (p1, p2, s1..s4, the tilt) are refused naming them.
-RadialModel radial_tangential_model(const std::vector<double>& d, double f,
-                                    const std::function<void(std::string_view)>& fail);
-// The writers' side: an `opencv` model as f and OpenCV's eight rational coefficients
-// (k1, k2, p1 = 0, p2 = 0, k3, k4, k5, k6); nullopt for any other model.
-struct OpenCVRational {
+// focal length f, as p's model (`pinhole` when k1..k6 are zero, else `opencv`) and
+// tangential terms (p1, p2, s1..s4). A tilted sensor is refused.
+void set_radial_tangential(CameraParameters* p, const std::vector<double>& d, double f,
+                           const std::function<void(std::string_view)>& fail);
+// The writers' side: a pinhole or opencv camera (with its tangential terms) as f
+// and OpenCV's coefficients k1, k2, p1, p2, k3[, k4, k5, k6[, s1, s2, s3, s4]]: 5 for
+// a pinhole, 8 for opencv, 12 with thin-prism terms; nullopt for any other model.
+struct RadialTangential {
   double f = 0;
-  std::array<double, 8> d{};
+  std::vector<double> d;
+  bool rational = false;  // k4..k6 are there (opencv): OpenCV's rational_polynomial
 };
-std::optional<OpenCVRational> opencv_rational(const RadialModel& model);
+std::optional<RadialTangential> radial_tangential_of(const CameraParameters& p);
 
 // Poses: rt_cam_ref (mrcal, OpenCV YAML) and 4x4 row-major transforms.
 Pose pose_from_rt_cam_ref(const std::vector<double>& rt);

@@ -86,7 +86,7 @@ std::vector<NamedCamera> read(const Content& c) {
       } else if (distortion == "none") {
         p.model = Pinhole<double>(fx);
       } else if (distortion == "radtan") {
-        p.model = radial_tangential_model(d, fx, fail_d);
+        set_radial_tangential(&p, d, fx, fail_d);
       } else {
         f.fail("distortion_model", "unsupported " + quoted_for_message(distortion) + " (expected equidistant, radtan or none)");
       }
@@ -97,10 +97,8 @@ std::vector<NamedCamera> read(const Content& c) {
         p.model = Unified<double>(fx, k[0]);
       } else if (distortion == "radtan") {
         if (d.size() != 4) fail_d("radtan has 4 coefficients (k1, k2, p1, p2)");
-        if (d[2] != 0 || d[3] != 0) {
-          fail_d("omni-radtan with p1, p2 != 0 is not radially symmetric (fishcam reads mei: k1, k2 with p1 = p2 = 0)");
-        }
         p.model = Mei<double>(fx, k[0], d[0], d[1]);
+        p.tangential = {d[2], d[3], {}};
       } else {
         f.fail("distortion_model", "omni with " + quoted_for_message(distortion) +
                                    " is radially symmetric but fishcam has no such model (it reads omni-none and omni-radtan)");
@@ -144,18 +142,20 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const auto focal = [&](double f) { return std::vector<double>{f, f * ay, cx, cy}; };
   std::string model, distortion = "none";
   std::vector<double> intrinsics, coeffs;
+  const double p1 = p.tangential.p1, p2 = p.tangential.p2;
   const KannalaBrandtLike kb = kannala_brandt_of(p);
   if (kb.ok) {
     model = "pinhole", distortion = "equidistant", intrinsics = focal(kb.f), coeffs = {kb.k.begin(), kb.k.end()};
   } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
     model = "pinhole", intrinsics = focal(m->f());
+    if (p.tangential.any()) distortion = "radtan", coeffs = {0, 0, p1, p2};
   } else if (const auto* m = std::get_if<Unified<double>>(&p.model)) {
     const auto q = m->params();
     model = "omni", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), q[1]);
   } else if (const auto* m = std::get_if<Mei<double>>(&p.model)) {
     const auto q = m->params();
     model = "omni", distortion = "radtan", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), q[1]);
-    coeffs = {q[2], q[3], 0, 0};
+    coeffs = {q[2], q[3], p1, p2};
   } else if (const auto* m = std::get_if<DoubleSphere<double>>(&p.model)) {
     const auto q = m->params();
     model = "ds", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), {q[1], q[2]});
@@ -207,6 +207,6 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 extern const FormatSpec kalibr_format{CameraFormat::kalibr, "kalibr", "Kalibr camchain YAML", {".yaml", ".yml"},
                                       {"kannala-brandt", "equidistant", "pinhole", "unified", "mei", "double-sphere",
                                        "extended-unified"},
-                                      score, read, write, false, false, false, write_rig};
+                                      score, read, write, false, false, false, write_rig, true};
 
 }  // namespace fishcam::detail

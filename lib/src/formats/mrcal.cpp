@@ -48,7 +48,7 @@ std::vector<NamedCamera> read(const Content& c) {
   p.height = static_cast<int>(size[1]);
   p.principal_point = {k[2], k[3]};
   if (opencv_coefficients > 0) {
-    p.model = radial_tangential_model(std::vector<double>(k.begin() + 4, k.end()), k[0], [&](std::string_view problem) {
+    set_radial_tangential(&p, std::vector<double>(k.begin() + 4, k.end()), k[0], [&](std::string_view problem) {
       f.fail("intrinsics", lensmodel + ": " + std::string(problem));
     });
   } else {
@@ -63,10 +63,11 @@ std::string write(const CameraParameters& p) {
   std::string lensmodel, distortion;
   if (const auto* m = std::get_if<Stereographic<double>>(&p.model)) {
     f = m->f(), lensmodel = "LENSMODEL_STEREOGRAPHIC";
-  } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
+  } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model); m && !p.tangential.any()) {
     f = m->f(), lensmodel = "LENSMODEL_PINHOLE";
-  } else if (const std::optional<OpenCVRational> r = opencv_rational(p.model)) {
-    f = r->f, lensmodel = "LENSMODEL_OPENCV8";
+  } else if (std::optional<RadialTangential> r = radial_tangential_of(p)) {
+    r->d.resize(std::max<size_t>(r->d.size(), 8), 0.0);  // OPENCV8 or OPENCV12
+    f = r->f, lensmodel = "LENSMODEL_OPENCV" + std::to_string(r->d.size());
     for (double d : r->d) {
       char number[32];
       std::snprintf(number, sizeof number, " %.17g,", d);
@@ -94,6 +95,7 @@ std::string write(const CameraParameters& p) {
 }  // namespace
 
 extern const FormatSpec mrcal_format{CameraFormat::mrcal, "mrcal", "mrcal .cameramodel", {".cameramodel"},
-                                     {"pinhole", "stereographic", "opencv"}, score, read, write};
+                                     {"pinhole", "stereographic", "opencv"}, score, read, write, false, false, false,
+                                     nullptr, true, true};
 
 }  // namespace fishcam::detail

@@ -57,7 +57,7 @@ std::vector<NamedCamera> read(const Content& c) {
     if (d.size() != 4) f.fail(keys->distortion, "a fisheye model has 4 coefficients, got " + std::to_string(d.size()));
     p.model = KannalaBrandt<double>(k[0], d[0], d[1], d[2], d[3]);
   } else if (model == "plumb_bob" || model == "radtan" || model == "rational_polynomial") {
-    p.model = radial_tangential_model(d, k[0], [&](std::string_view problem) { f.fail(keys->distortion, problem); });
+    set_radial_tangential(&p, d, k[0], [&](std::string_view problem) { f.fail(keys->distortion, problem); });
   } else {
     f.fail("distortion_model", "expected fisheye, plumb_bob or rational_polynomial, got " + quoted_for_message(model));
   }
@@ -81,21 +81,17 @@ std::vector<NamedCamera> read(const Content& c) {
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
-  if (const std::optional<OpenCVRational> r = opencv_rational(p.model)) {
-    fs << "distortion_model" << "rational_polynomial";
+  if (const std::optional<RadialTangential> r = radial_tangential_of(p)) {
+    fs << "distortion_model" << (r->d.size() == 5 ? "plumb_bob" : "rational_polynomial");
     fs << "image_width" << p.width << "image_height" << p.height;
     fs << "K" << cv::Mat(cv::Matx33d(r->f, 0, p.principal_point.x(), 0, r->f * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1));
-    fs << "D" << cv::Mat(cv::Matx<double, 8, 1>(r->d.data()));
+    fs << "D" << cv::Mat(r->d, true);
   } else {
     const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::opencv);
-    fs << "distortion_model" << (kb.pinhole ? "plumb_bob" : "fisheye");
+    fs << "distortion_model" << "fisheye";
     fs << "image_width" << p.width << "image_height" << p.height;
     fs << "K" << cv::Mat(cv::Matx33d(kb.fx, 0, kb.cx, 0, kb.fy, kb.cy, 0, 0, 1));
-    if (kb.pinhole) {
-      fs << "D" << cv::Mat(cv::Matx<double, 5, 1>::zeros());
-    } else {
-      fs << "D" << cv::Mat(cv::Matx41d(kb.k[0], kb.k[1], kb.k[2], kb.k[3]));
-    }
+    fs << "D" << cv::Mat(cv::Matx41d(kb.k[0], kb.k[1], kb.k[2], kb.k[3]));
   }
   if (p.pose) {
     const auto rt = rt_cam_ref_from_pose(*p.pose);
@@ -109,6 +105,6 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 extern const FormatSpec opencv_format{CameraFormat::opencv, "opencv", "OpenCV FileStorage YAML/XML",
                                       {".yaml", ".yml", ".xml"}, {"kannala-brandt", "equidistant", "pinhole", "opencv"},
-                                      score, read, write};
+                                      score, read, write, false, false, false, nullptr, true, true};
 
 }  // namespace fishcam::detail

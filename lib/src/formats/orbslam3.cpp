@@ -34,7 +34,7 @@ std::vector<NamedCamera> read(const Content& c) {
     } else {
       std::vector<double> d = {f.number(pre + "k1"), f.number(pre + "k2"), f.number(pre + "p1"), f.number(pre + "p2")};
       if (f.has(pre + "k3")) d.push_back(f.number(pre + "k3"));
-      p.model = radial_tangential_model(d, fx, [&](std::string_view problem) { f.fail(pre + "k1", problem); });
+      set_radial_tangential(&p, d, fx, [&](std::string_view problem) { f.fail(pre + "k1", problem); });
     }
     if (f.has("Camera.width") || f.has("Camera.height")) {
       p.width = f.positive_integer("Camera.width");
@@ -54,7 +54,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   auto line = [&](const std::string& key, double v) { out += "Camera." + key + ": " + yaml_number(v) + "\n"; };
   line("fx", kb.fx), line("fy", kb.fy), line("cx", kb.cx), line("cy", kb.cy);
   if (pinhole) {
-    line("k1", 0), line("k2", 0), line("p1", 0), line("p2", 0);
+    line("k1", 0), line("k2", 0), line("p1", p.tangential.p1), line("p2", p.tangential.p2);
   } else {
     line("k1", kb.k[0]), line("k2", kb.k[1]), line("k3", kb.k[2]), line("k4", kb.k[3]);
   }
@@ -65,6 +65,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 }  // namespace
 
 extern const FormatSpec orbslam3_format{CameraFormat::orbslam3, "orbslam3", "ORB-SLAM3 settings YAML", {".yaml", ".yml"},
-                                        {"kannala-brandt", "equidistant", "pinhole"}, score, read, write};
+                                        {"kannala-brandt", "equidistant", "pinhole"}, score, read, write, false,
+                                        false, false, nullptr, true};
 
 }  // namespace fishcam::detail

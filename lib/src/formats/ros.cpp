@@ -26,7 +26,7 @@ std::vector<NamedCamera> read(const Content& c) {
     if (d.size() != 4) f.fail("distortion_coefficients", "equidistant (Kannala-Brandt) has 4 coefficients");
     p.model = KannalaBrandt<double>(k[0], d[0], d[1], d[2], d[3]);
   } else if (model == "plumb_bob" || model == "rational_polynomial") {
-    p.model = radial_tangential_model(d, k[0], [&](std::string_view problem) { f.fail("distortion_coefficients", problem); });
+    set_radial_tangential(&p, d, k[0], [&](std::string_view problem) { f.fail("distortion_coefficients", problem); });
   } else {
     f.fail("distortion_model", "unsupported " + quoted_for_message(model) + " (expected equidistant or plumb_bob)");
   }
@@ -36,10 +36,9 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
-  const std::optional<OpenCVRational> rational = opencv_rational(p.model);
-  const KannalaBrandtOrPinhole kb = rational ? KannalaBrandtOrPinhole{} : kannala_brandt_or_pinhole(p, CameraFormat::ros);
-  const bool pinhole = kb.pinhole;
-  const double fx = rational ? rational->f : kb.fx, fy = rational ? rational->f * p.pixel_scale.y() : kb.fy;
+  const std::optional<RadialTangential> radtan = radial_tangential_of(p);
+  const KannalaBrandtOrPinhole kb = radtan ? KannalaBrandtOrPinhole{} : kannala_brandt_or_pinhole(p, CameraFormat::ros);
+  const double fx = radtan ? radtan->f : kb.fx, fy = radtan ? radtan->f * p.pixel_scale.y() : kb.fy;
   const double cx = p.principal_point.x(), cy = p.principal_point.y();
   auto matrix = [](int rows, int cols, const std::vector<double>& data) {
     return "\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: " + yaml_list(data) + "\n";
@@ -48,12 +47,10 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   out += "image_width: " + std::to_string(p.width) + "\nimage_height: " + std::to_string(p.height) + "\n";
   out += "camera_name: camera\n";
   out += "camera_matrix:" + matrix(3, 3, {fx, 0, cx, 0, fy, cy, 0, 0, 1});
-  out += std::string("distortion_model: ") + (rational ? "rational_polynomial" : pinhole ? "plumb_bob" : "equidistant") +
-         "\n";
-  out += "distortion_coefficients:" +
-         (rational  ? matrix(1, 8, {rational->d.begin(), rational->d.end()})
-          : pinhole ? matrix(1, 5, {0, 0, 0, 0, 0})
-                    : matrix(1, 4, {kb.k[0], kb.k[1], kb.k[2], kb.k[3]}));
+  out += std::string("distortion_model: ") +
+         (!radtan ? "equidistant" : radtan->rational ? "rational_polynomial" : "plumb_bob") + "\n";
+  out += "distortion_coefficients:" + (radtan ? matrix(1, int(radtan->d.size()), radtan->d)
+                                              : matrix(1, 4, {kb.k[0], kb.k[1], kb.k[2], kb.k[3]}));
   out += "rectification_matrix:" + matrix(3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
   out += "projection_matrix:" + matrix(3, 4, {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0});
   return out;
@@ -62,6 +59,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 }  // namespace
 
 extern const FormatSpec ros_format{CameraFormat::ros, "ros", "ROS camera_info YAML", {".yaml", ".yml"},
-                                   {"kannala-brandt", "equidistant", "pinhole", "opencv"}, score, read, write};
+                                   {"kannala-brandt", "equidistant", "pinhole", "opencv"}, score, read, write,
+                                   false, false, false, nullptr, true};
 
 }  // namespace fishcam::detail

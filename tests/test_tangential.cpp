@@ -1,0 +1,231 @@
+// Cameras with tangential (and thin-prism) terms, fishcam/tangential.hpp: projection
+// against OpenCV's own code (cv::projectPoints for pinhole/opencv, cv::omnidir for
+// mei), Jacobians against finite differences, unprojection that reprojects onto its
+// pixel or says NaN, the valid domain where the distortion stops being one-to-one,
+// and the refusals.
+#include <opencv2/calib3d.hpp>
+#include <opencv2/ccalib/omnidir.hpp>
+
+#include "test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+// OpenCV's projection of points through a camera with a_x = 1 (f = fx).
+std::vector<Eigen::Vector2d> opencv_projection(const CameraParameters& p, const std::vector<Eigen::Vector3d>& points) {
+  const std::vector<double> q = model_params(p.model);
+  const cv::Matx33d K(q[0], 0, p.principal_point.x(), 0, q[0] * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1);
+  std::vector<cv::Point3d> in;
+  for (const auto& x : points) in.emplace_back(x.x(), x.y(), x.z());
+  std::vector<cv::Point2d> out;
+  const TangentialTerms& t = p.tangential;
+  const std::string_view name = model_name(p.model);
+  if (name == "mei") {
+    cv::omnidir::projectPoints(in, out, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, q[1], cv::Vec4d(q[2], q[3], t.p1, t.p2));
+  } else {
+    std::vector<double> d = {0, 0, t.p1, t.p2, 0, 0, 0, 0, t.s[0], t.s[1], t.s[2], t.s[3]};
+    if (name == "opencv") d[0] = q[1], d[1] = q[2], d[4] = q[3], d[5] = q[4], d[6] = q[5], d[7] = q[6];
+    cv::projectPoints(in, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, d, out);
+  }
+  std::vector<Eigen::Vector2d> pixels;
+  for (const auto& x : out) pixels.emplace_back(x.x, x.y);
+  return pixels;
+}
+
+class EveryTangentialCamera : public ::testing::TestWithParam<test::ModelCase> {};
+
+TEST_P(EveryTangentialCamera, ProjectionIsOpenCVsAndTheJacobianItsDerivative) {
+  const auto& [name, params] = GetParam();
+  ASSERT_EQ(params.pixel_scale.x(), 1.0);
+  const Camera camera(params);
+  ASSERT_FALSE(camera.radial());
+  const ValidDomain& d = camera.domain();
+  // Up to just inside the domain, and below 89 deg for the pinhole models (OpenCV divides by z).
+  const double limit = std::min(d.closed ? d.theta_max : d.theta_max - 1e-3, 89 * M_PI / 180);
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& ray : test::random_rays(5000, limit, 7)) points.push_back((0.5 + double(points.size() % 9)) * ray);
+  const std::vector<Eigen::Vector2d> expected = opencv_projection(params, points);
+  double worst = 0, worst_jacobian = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    Eigen::Vector2d pixel;
+    Eigen::Matrix<double, 2, 3> jacobian;
+    ASSERT_TRUE(camera.project(points[i], &pixel, &jacobian)) << name << " " << points[i].transpose();
+    const double scale = 1 + 1e-3 * (expected[i] - camera.principal_point()).norm();  // relative far out
+    worst = std::max(worst, (pixel - expected[i]).norm() / scale);
+    if (i % 10) continue;
+    Eigen::Matrix<double, 2, 3> numeric;
+    for (int k = 0; k < 3; ++k) {
+      const double h = 1e-6 * points[i].norm();
+      Eigen::Vector2d plus, minus;
+      ASSERT_TRUE(camera.project(points[i] + h * Eigen::Vector3d::Unit(k), &plus));
+      ASSERT_TRUE(camera.project(points[i] - h * Eigen::Vector3d::Unit(k), &minus));
+      numeric.col(k) = (plus - minus) / (2 * h);
+    }
+    worst_jacobian = std::max(worst_jacobian, (numeric - jacobian).cwiseAbs().maxCoeff() / (1 + jacobian.cwiseAbs().maxCoeff()));
+  }
+  EXPECT_LE(worst, 1e-9) << name;
+  EXPECT_LE(worst_jacobian, 1e-6) << name;
+  std::printf("  %-28s up to %.1f deg: worst %.2e px against OpenCV, Jacobian %.2e (relative)\n", name.c_str(),
+              limit * 180 / M_PI, worst, worst_jacobian);
+}
+
+// Unprojection reprojects onto its pixel (<= 1e-6 px) or gives NaN, over the image and
+// far around it, and every ray of the domain comes back.
+TEST_P(EveryTangentialCamera, UnprojectionReprojectsOntoItsPixelOrIsNaN) {
+  const auto& [name, params] = GetParam();
+  const Camera camera(params);
+  long valid = 0, invalid = 0;
+  double worst = 0;
+  for (int v = -2 * camera.height(); v < 3 * camera.height(); v += 7) {
+    for (int u = -2 * camera.width(); u < 3 * camera.width(); u += 7) {
+      const Eigen::Vector2d pixel(u, v);
+      Eigen::Vector3d ray;
+      if (!camera.unproject(pixel, &ray)) {
+        EXPECT_TRUE(ray.array().isNaN().all());
+        ++invalid;
+        continue;
+      }
+      ++valid;
+      Eigen::Vector2d back;
+      ASSERT_TRUE(camera.project(ray, &back)) << name << " " << pixel.transpose();
+      worst = std::max(worst, (back - pixel).norm());
+    }
+  }
+  EXPECT_LE(worst, 1e-6) << name;
+  EXPECT_GT(valid, 0);
+  const ValidDomain& d = camera.domain();
+  int rays = 0;
+  for (const auto& ray : test::random_rays(20000, d.closed ? d.theta_max : d.theta_max - 1e-3, 11)) {
+    Eigen::Vector2d pixel;
+    Eigen::Vector3d back;
+    ASSERT_TRUE(camera.project(ray, &pixel));
+    if (!pixel.allFinite() || (pixel - camera.principal_point()).norm() > 1e7) continue;  // past double's 1e-9 rad
+    ASSERT_TRUE(camera.unproject(pixel, &back)) << name << " theta " << std::acos(ray.z()) * 180 / M_PI;
+    EXPECT_LT(test::angle_between(ray, back), 1e-9) << name;
+    ++rays;
+  }
+  EXPECT_GT(rays, 15000);
+  std::printf("  %-28s %ld pixels with a ray, %ld without; worst reprojection %.2e px; %d rays back\n", name.c_str(),
+              valid, invalid, worst, rays);
+}
+
+INSTANTIATE_TEST_SUITE_P(Tangential, EveryTangentialCamera, ::testing::ValuesIn(test::every_tangential_camera()),
+                         test::model_case_name);
+
+TEST(Tangential, EveryModelWithAnUndistortedPlaneHasATangentialCase) {
+  int planes = 0;
+  ModelRegistry::for_each([&]<template <typename> class Model>() { planes += HasUndistortedPlane<Model<double>>; });
+  EXPECT_EQ(planes, 3);  // pinhole, opencv, mei
+  EXPECT_EQ(test::every_tangential_camera().size(), size_t(planes));
+}
+
+// Strong terms fold the distortion map inside the model's own domain: the camera's
+// domain ends there (limited by the tangential fold), rays past it do not project and
+// the pixels past it have no ray.
+TEST(Tangential, TheDomainEndsWhereTheDistortionStopsBeingOneToOne) {
+  CameraParameters p = test::woodscape_front();
+  p.model = Pinhole<double>(400.0);
+  p.tangential = {0.05, -0.03, {}};
+  const Camera camera(p);
+  const ValidDomain& d = camera.domain();
+  EXPECT_EQ(d.limited_by, ValidDomain::Limit::tangential_fold);
+  EXPECT_TRUE(d.closed);
+  EXPECT_LT(d.theta_max, 80 * M_PI / 180);
+  EXPECT_GT(d.theta_max, 10 * M_PI / 180);
+  // Past theta_max: no pixel. Below it: every direction round trips.
+  int checked = 0;
+  for (int k = 0; k < 360; k += 5) {
+    const double phi = k * M_PI / 180;
+    const auto ray_at = [&](double theta) {
+      return Eigen::Vector3d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    };
+    Eigen::Vector2d pixel;
+    EXPECT_FALSE(camera.project(ray_at(d.theta_max * 1.001), &pixel));
+    ASSERT_TRUE(camera.project(ray_at(d.theta_max * 0.999), &pixel));
+    Eigen::Vector3d back;
+    ASSERT_TRUE(camera.unproject(pixel, &back)) << k;
+    EXPECT_LT(test::angle_between(back, ray_at(d.theta_max * 0.999)), 1e-9);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 72);
+  // One-to-one up to there: the plane map's determinant (finite differences of the
+  // pixel over the undistorted plane) stays positive on the domain's rim ...
+  const auto pixel_of_plane = [&](double x, double y) {
+    Eigen::Vector2d q;
+    camera.project(Eigen::Vector3d(x, y, 1), &q);
+    return q;
+  };
+  const double u_max = std::tan(d.theta_max);
+  double smallest = std::numeric_limits<double>::infinity(), smallest_past = smallest;
+  for (int k = 0; k < 3600; ++k) {
+    const double phi = 2 * M_PI * k / 3600, h = 1e-7;
+    for (const double scale : {0.999, 1.02}) {
+      const double x = scale * u_max * std::cos(phi), y = scale * u_max * std::sin(phi);
+      if (scale > 1) {  // past the domain: the bare formula (a radial-free pinhole: pixel = c + f a (m + T(m)))
+        Eigen::Matrix2d jt;
+        p.tangential.offset({x, y}, &jt);
+        smallest_past = std::min(smallest_past, (Eigen::Matrix2d::Identity() + jt).determinant());
+        continue;
+      }
+      Eigen::Matrix2d j;
+      j.col(0) = (pixel_of_plane(x + h, y) - pixel_of_plane(x - h, y)) / (2 * h);
+      j.col(1) = (pixel_of_plane(x, y + h) - pixel_of_plane(x, y - h)) / (2 * h);
+      smallest = std::min(smallest, j.determinant());
+    }
+  }
+  EXPECT_GT(smallest, 0);
+  // ... and turns negative just past it (the fold itself, not a margin of safety).
+  EXPECT_LT(smallest_past, 0);
+}
+
+TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
+  const auto refused = [](CameraParameters p, const std::string& expected) {
+    try {
+      Camera camera(p);
+      ADD_FAILURE() << "accepted: " << expected;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  CameraParameters p = test::woodscape_front();
+  p.tangential = {0.001, 0, {}};
+  refused(p, "tangential: the polynomial model has no undistorted plane to add tangential terms on (pinhole, opencv and mei have one)");
+  p.model = Mei<double>(640.0, 0.9, 0, 0);
+  p.tangential.p2 = std::numeric_limits<double>::quiet_NaN();
+  refused(p, "tangential.p2: must be finite");
+  p.tangential = {0, 0, {0, 0, std::numeric_limits<double>::infinity(), 0}};
+  refused(p, "tangential.s3: must be finite");
+}
+
+// What fishcam's own file holds and what the other formats say when they cannot.
+TEST(Tangential, FormatsHoldTheTermsTheyCanAndRefuseTheRestInOneLine) {
+  CameraParameters p = test::every_tangential_camera().back().second;  // opencv with thin-prism terms
+  ASSERT_EQ(model_name(p.model), "opencv");
+  ASSERT_TRUE(p.tangential.any_thin_prism());
+  const Camera back(parse_camera(format_camera(p, CameraFormat::fishcam), "fishcam.json"));
+  EXPECT_EQ(back.tangential(), p.tangential);
+  try {
+    format_camera(p, CameraFormat::ros);
+    ADD_FAILURE() << "ros took thin-prism terms";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "tangential: the ros format cannot hold thin-prism terms s1..s4 (opencv, fishcam, mrcal can)");
+  }
+  p.tangential.s = {};
+  EXPECT_NE(format_camera(p, CameraFormat::ros).find("rational_polynomial"), std::string::npos);
+  EXPECT_TRUE(camera_format_holds(CameraFormat::colmap, p.tangential));
+  EXPECT_FALSE(camera_format_holds(CameraFormat::basalt, p.tangential));
+  EXPECT_FALSE(camera_format_holds(CameraFormat::woodscape, p.tangential));
+  // An unknown term in fishcam JSON is an error, not a silent zero.
+  try {
+    parse_camera(R"({"fishcam_camera": 1, "width": 640, "height": 480, "principal_point": [320, 240],
+                     "pixel_scale": [1, 1], "model": "pinhole", "parameters": [300],
+                     "tangential": {"p1": 0.001, "k3": 0.1}})",
+                 "bad.json");
+    ADD_FAILURE() << "an unknown tangential term was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("k3: unknown tangential term"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace fishcam
