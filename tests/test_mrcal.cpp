@@ -38,6 +38,7 @@ void check_against_mrcal(const Case& c) {
   ASSERT_TRUE(mrcal_project(expected.data(), nullptr, nullptr, points.data(), int(points.size()), &lensmodel,
                             intrinsics.data()));
   double worst_project = 0, worst_unproject = 0, worst_mrcal_unproject = 0, widest = 0;
+  int mrcal_failed = 0;
   std::vector<mrcal_point3_t> mrcal_rays(points.size());
   ASSERT_TRUE(mrcal_unproject(mrcal_rays.data(), expected.data(), int(expected.size()), &lensmodel, intrinsics.data()));
   for (size_t i = 0; i < points.size(); ++i) {
@@ -52,20 +53,29 @@ void check_against_mrcal(const Case& c) {
     const mrcal_point3_t ours = {{ray.x(), ray.y(), ray.z()}};
     mrcal_point2_t q_ours, q_theirs;
     ASSERT_TRUE(mrcal_project(&q_ours, nullptr, nullptr, &ours, 1, &lensmodel, intrinsics.data()));
-    ASSERT_TRUE(mrcal_project(&q_theirs, nullptr, nullptr, &mrcal_rays[i], 1, &lensmodel, intrinsics.data()));
     worst_unproject = std::max(worst_unproject, std::hypot(q_ours.x - q.x(), q_ours.y - q.y()));
-    worst_mrcal_unproject = std::max(worst_mrcal_unproject, std::hypot(q_theirs.x - q.x(), q_theirs.y - q.y()));
+    widest = std::max(widest, std::acos(ray.z()));
     const Eigen::Vector3d theirs(mrcal_rays[i].x, mrcal_rays[i].y, mrcal_rays[i].z);
+    if (!theirs.allFinite()) {  // mrcal's iterative unprojection gave up (far out on a real OPENCV8)
+      ++mrcal_failed;
+      continue;
+    }
+    ASSERT_TRUE(mrcal_project(&q_theirs, nullptr, nullptr, &mrcal_rays[i], 1, &lensmodel, intrinsics.data()));
+    worst_mrcal_unproject = std::max(worst_mrcal_unproject, std::hypot(q_theirs.x - q.x(), q_theirs.y - q.y()));
     // mrcal's iterative unprojection of OPENCV8 stops at ~1e-7 px (a few 1e-9 rad); its
     // closed forms are exact. Ours reprojects onto the pixel in every case.
     EXPECT_LT(test::angle_between(ray, theirs.normalized()), c.distortion.empty() ? 1e-12 : 1e-8);
-    widest = std::max(widest, std::acos(ray.z()));
   }
+  // Only where mrcal's own solver stops: never on the closed-form models (photonvision's OPENCV8: 3.4 % of the
+  // rays up to 63 deg, all of which ours unprojects).
+  EXPECT_LE(mrcal_failed, c.distortion.empty() ? 0 : int(points.size() / 20)) << c.file;
   EXPECT_LE(worst_project, 1e-9) << c.file;
   EXPECT_LE(worst_unproject, 1e-9) << c.file;
   EXPECT_LE(worst_mrcal_unproject, c.distortion.empty() ? 1e-9 : 1e-6) << c.file;
-  std::printf("  %s: %zu points up to %.1f deg, worst project %.2e px, unproject %.2e px (mrcal's own: %.2e px)\n",
-              c.file, points.size(), widest * 180 / M_PI, worst_project, worst_unproject, worst_mrcal_unproject);
+  std::printf("  %s: %zu points up to %.1f deg, worst project %.2e px, unproject %.2e px (mrcal's own: %.2e px, "
+              "no ray for %d)\n",
+              c.file, points.size(), widest * 180 / M_PI, worst_project, worst_unproject, worst_mrcal_unproject,
+              mrcal_failed);
 }
 
 TEST(Mrcal, StereographicAgreesWithLibmrcalBehindTheCameraToo) {

@@ -208,7 +208,7 @@ TEST(Tangential, FormatsHoldTheTermsTheyCanAndRefuseTheRestInOneLine) {
     format_camera(p, CameraFormat::ros);
     ADD_FAILURE() << "ros took thin-prism terms";
   } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "tangential: the ros format cannot hold thin-prism terms s1..s4 (opencv, fishcam, mrcal can)");
+    EXPECT_STREQ(e.what(), "tangential: the ros format cannot hold thin-prism terms s1..s4 (mrcal, opencv, fishcam can)");
   }
   p.tangential.s = {};
   EXPECT_NE(format_camera(p, CameraFormat::ros).find("rational_polynomial"), std::string::npos);
