@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "fishcam/camera_io.hpp"
 #include "fishcam/fit.hpp"
+#include "fishcam/npy.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -19,7 +20,7 @@ void register_convert(CLI::App& app) {
   auto* cmd = app.add_subcommand("convert", "Fit another projection model to a camera and report the pixel error "
                                             "it costs");
   struct Options {
-    std::string source, to, method = "lsq", theta_limit;
+    std::string source, to, method = "lsq", theta_limit, error_map;
     double max_angle = 0;
     bool fit_center = false, fit_aspect = false;
     CameraOutputOptions output;
@@ -36,10 +37,13 @@ void register_convert(CLI::App& app) {
   cmd->add_option("--max-angle", o->max_angle, "Fit and report only rays up to this angle of incidence (degrees)")
       ->check(CLI::Range(0.1, 180.0));
   add_theta_limit_option(cmd, &o->theta_limit);
+  cmd->add_option("--error-map", o->error_map,
+                  "Also write the pixel error at every pixel of the source image (H x W float32 .npy, NaN where the "
+                  "source has no ray or the new model none)");
   add_camera_output_options(cmd, &o->output);
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([o, fit_center, fit_aspect, inputs] {
-    check_outputs({{o->output.out}}, {o->source}, o->output.force);
+    check_outputs({{o->output.out}, {o->error_map}}, {o->source}, o->output.force);
     const auto started = std::chrono::steady_clock::now();
     const Camera source = inputs->read(o->source);
     const ModelSpec spec = parse_model_spec(o->to);
@@ -66,6 +70,11 @@ void register_convert(CLI::App& app) {
       warning = buffer;
     }
     write_camera_file(fitted, o->output.out, format, o->output.force);
+    if (!o->error_map.empty()) {
+      const std::vector<float> map = reprojection_error_map(source, Camera(fitted));
+      write_npy(o->error_map, {{size_t(source.height()), size_t(source.width())}, map}, o->output.force);
+    }
+    const Conversion::NonRadial& non_radial = conversion.non_radial;
     if (!warning.empty()) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
     if (o->output.json) {
       nlohmann::json j = nlohmann::json::parse(fit_report_json(fitted, report));
@@ -74,12 +83,24 @@ void register_convert(CLI::App& app) {
       j["format"] = to_string(format);
       j["fit_ms"] = fit_ms;
       if (!warning.empty()) j["warning"] = warning;
+      j["center_and_aspect_fitted"] = conversion.center_and_aspect_fitted;
+      j["non_radial"] = source.radial() ? nlohmann::json(nullptr)
+                                        : nlohmann::json{{"samples", non_radial.samples},
+                                                         {"rms_px", non_radial.rms_px},
+                                                         {"max_px", non_radial.max_px}};
+      if (!o->error_map.empty()) j["error_map"] = o->error_map;
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
     std::printf("%s -> %s (%s), wrote %s (%s)\n", o->source.c_str(), o->to.c_str(), o->method.c_str(), o->output.out.c_str(),
                 std::string(to_string(format)).c_str());
     print_fit_report(fitted, report, "pixels of the source's valid image");
+    if (!source.radial()) {
+      std::printf("the source is not radially symmetric: its tangential terms move its pixels by rms %.4f, max %.4f px "
+                  "from its own radial part (what no radial model represents); principal point and a_y were fitted\n",
+                  non_radial.rms_px, non_radial.max_px);
+    }
+    if (!o->error_map.empty()) std::printf("wrote %s (pixel error per pixel)\n", o->error_map.c_str());
   });
 }
 

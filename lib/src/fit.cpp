@@ -1,6 +1,7 @@
 #include "fishcam/error.hpp"
 #include "fishcam/fit.hpp"
 #include "fishcam/calibration.hpp"
+#include "fishcam/parallel.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -385,8 +386,11 @@ Conversion convert_camera(const Camera& source, const ModelSpec& model, std::str
     if (options.fit_center || options.fit_aspect) throw Error("fit_center/fit_aspect apply to the lsq method only");
     out.camera = paper_camera(source, model);
   } else {
+    FitOptions fit_options = options;
+    if (!source.radial()) fit_options.fit_center = fit_options.fit_aspect = true;
+    out.center_and_aspect_fitted = fit_options.fit_center && fit_options.fit_aspect;
     // Every 4th pixel, weighted as images are (per pixel).
-    out.camera = fit_camera(sample_image(source, 4, 1, max_theta), model, source.parameters(), options);
+    out.camera = fit_camera(sample_image(source, 4, 1, max_theta), model, source.parameters(), fit_options);
   }
   const Camera result(out.camera);
   const auto evaluation = sample_image(source, 2, 0, max_theta);  // denser than the fit saw
@@ -394,7 +398,42 @@ Conversion convert_camera(const Camera& source, const ModelSpec& model, std::str
   for (const auto& s : evaluation) {
     out.widest_theta = std::max(out.widest_theta, std::atan2(s.ray.head<2>().norm(), s.ray.z()));
   }
+  if (!source.radial()) {
+    CameraParameters radial_part = source.parameters();
+    radial_part.tangential = {};
+    if (source.domain().closed) radial_part.theta_limit = source.domain().theta_max;  // the source's domain
+    const Camera radial(radial_part);
+    double sum2 = 0;
+    for (const auto& s : evaluation) {
+      Eigen::Vector2d q;
+      if (!radial.project(s.ray, &q)) continue;
+      const double d = (q - s.pixel).norm();
+      sum2 += d * d;
+      out.non_radial.max_px = std::max(out.non_radial.max_px, d);
+      ++out.non_radial.samples;
+    }
+    if (out.non_radial.samples > 0) out.non_radial.rms_px = std::sqrt(sum2 / double(out.non_radial.samples));
+  }
   return out;
+}
+
+std::vector<float> reprojection_error_map(const Camera& source, const Camera& fitted) {
+  if (source.width() != fitted.width() || source.height() != fitted.height()) {
+    throw Error("error map: the fitted camera's image size differs from the source's");
+  }
+  const size_t w = size_t(source.width()), h = size_t(source.height());
+  std::vector<float> map(w * h, std::numeric_limits<float>::quiet_NaN());
+  parallel_for(int(h), [&](int first, int end) {
+    for (size_t v = size_t(first); v < size_t(end); ++v) {
+      for (size_t u = 0; u < w; ++u) {
+        const Eigen::Vector2d pixel{double(u), double(v)};
+        Eigen::Vector3d ray;
+        Eigen::Vector2d q;
+        if (source.unproject(pixel, &ray) && fitted.project(ray, &q)) map[v * w + u] = float((q - pixel).norm());
+      }
+    }
+  });
+  return map;
 }
 
 std::string fit_report_json(const CameraParameters& fitted, const ErrorReport& r) {

@@ -76,10 +76,21 @@ ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspond
 // What `fishcam convert` does: the model fitted to the source camera ("lsq": least
 // squares over every 4th pixel of its valid image, up to max_theta when given;
 // "paper": eqs. 13-14), and its error over a denser grid (every 2nd pixel).
+// A source that is not radially symmetric (tangential terms) has its principal point
+// and a_y fitted too, whatever the options say: a radial model about the source's
+// principal point is not the best radial model. `non_radial` then measures, over the
+// same evaluation rays, how far the source's tangential terms move its pixels from
+// its own radial part: the part of the error no radial model can represent (zero for
+// a radial source).
 struct Conversion {
   CameraParameters camera;
   ErrorReport report;
   double widest_theta = 0;  // radians: the widest ray of the evaluation grid
+  struct NonRadial {
+    long samples = 0;
+    double rms_px = 0, max_px = 0;
+  } non_radial;
+  bool center_and_aspect_fitted = false;
 };
 // The conversion methods' names ("lsq", "paper"): the CLI's choices and messages.
 const std::vector<std::string>& conversion_method_names();
@@ -87,6 +98,11 @@ const std::vector<std::string>& conversion_method_names();
 void check_conversion_method(std::string_view name);
 Conversion convert_camera(const Camera& source, const ModelSpec& model, std::string_view method = "lsq",
                           std::optional<double> max_theta = std::nullopt, const FitOptions& options = {});
+
+// The error of `fitted` at every pixel of the source's image: |fitted(ray) - pixel|
+// for the ray of the pixel's centre, row-major W x H; NaN where the source has no
+// ray or `fitted` cannot project it. The images must have the same size.
+std::vector<float> reprojection_error_map(const Camera& source, const Camera& fitted);
 
 // An error report as one JSON object: rms_px, p99_px, max_px, samples, unprojectable,
 // below_90_deg, by_angle, and the fitted model, parameters, principal_point, pixel_scale.
