@@ -35,12 +35,13 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
     random_change_in,
     read_corners,
     render,
+    reprojection_error_map,
     woodscape_classes,
 )
 from . import _fishcam
 
 __all__ = [
-    "AngleBin", "Calibration", "Camera", "RigCalibration", "calibrate", "calibrate_rig", "read_corners", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "derive_seed", "get_num_threads",
+    "AngleBin", "Calibration", "Camera", "RigCalibration", "calibrate", "calibrate_rig", "read_corners", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "reprojection_error_map", "derive_seed", "get_num_threads",
     "random_change", "render", "woodscape_classes", "dataset_fidelity", "set_num_threads", "presets", "change_to_dict", "__version__",
 ]
 
@@ -95,11 +96,13 @@ def convert(camera: Camera, to: str, method: str = "lsq", max_angle: _typing.Opt
             fit_center: bool = False, fit_aspect: bool = False) -> Conversion:
     """Fits model ``to`` to ``camera`` as ``fishcam convert`` does (method "lsq" or
     "paper"; max_angle in degrees; fit_center / fit_aspect free the principal point
-    and a_y).
+    and a_y, which a camera with tangential terms always has fitted).
 
     Returns a ``fishcam.Conversion``: ``camera`` (the fitted one), ``report`` (a
     ``FitReport``: rms_px, p99_px, max_px, the rays below 90 degrees, by_angle),
-    ``widest_theta_deg`` and ``to_json()`` (what ``fishcam convert --json`` prints);
+    ``widest_theta_deg``, ``non_radial_px`` (for a source with tangential terms: the
+    rms and max pixels no radial model can represent) and ``to_json()`` (what
+    ``fishcam convert --json`` prints);
     it unpacks as ``camera, report = fishcam.convert(...)``.
     """
     return _fishcam.convert(camera, to, method, max_angle, fit_center, fit_aspect)

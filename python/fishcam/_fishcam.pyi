@@ -4,7 +4,7 @@ fishcam's C++ library (use the fishcam package, not this module)
 from __future__ import annotations
 import numpy
 import typing
-__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'dataset_fidelity', 'depth_priors', 'depth_priors_and_map', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'sampling_names', 'set_num_threads', 'woodscape_classes']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'dataset_fidelity', 'depth_priors', 'depth_priors_and_map', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'reprojection_error_map', 'sampling_names', 'set_num_threads', 'woodscape_classes']
 class Error(ValueError):
     pass
 class ValidDomain:
@@ -56,7 +56,7 @@ class FieldOfView:
         """
 class Camera:
     """
-    A calibrated camera: a radial model rho(theta), principal point, pixel scale, image size and an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z forward. Immutable; equal cameras compare equal and hash alike.
+    A calibrated camera: a radial model rho(theta) (with tangential terms for some models), principal point, pixel scale, image size and an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z forward. Immutable; equal cameras compare equal and hash alike.
     """
     @staticmethod
     def from_json(text: str) -> Camera:
@@ -116,7 +116,7 @@ class Camera:
         """
     def theta_from_rho(self, rho: numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]:
         """
-        theta (radians) of radii rho (pixels, any shape, float64; same shape out); NaN outside the valid domain.
+        theta (radians) of radii rho (pixels, any shape, float64; same shape out) under the radial model; NaN outside the valid domain. For a camera with tangential terms (radial is False) that is its radial part only: unproject pixels instead.
         """
     def to_json(self) -> str:
         """
@@ -174,6 +174,16 @@ class Camera:
     def principal_point(self) -> numpy.ndarray[tuple[typing.Literal[2], typing.Literal[1]], numpy.dtype[numpy.float64]]:
         """
         (cx, cy) in pixels, float64 array (2,).
+        """
+    @property
+    def radial(self) -> bool:
+        """
+        Whether the camera is radially symmetric (no tangential terms): only then do rho and theta_from_rho describe its whole projection.
+        """
+    @property
+    def tangential(self) -> dict[str, float]:
+        """
+        The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's undistorted plane (docs/models.md); all 0 for a radially symmetric camera.
         """
     @property
     def width(self) -> int:
@@ -276,6 +286,16 @@ class Conversion:
     def camera(self) -> Camera:
         """
         The fitted camera.
+        """
+    @property
+    def center_and_aspect_fitted(self) -> bool:
+        """
+        Whether the principal point and a_y were fitted (always for a source with tangential terms).
+        """
+    @property
+    def non_radial_px(self) -> tuple[float, float] | None:
+        """
+        For a source with tangential terms: (rms, max) pixels by which they move its pixels from its own radial part, the error no radial model can represent; None for a radial source.
         """
     @property
     def report(self) -> FitReport:
@@ -730,6 +750,10 @@ def read_corners(path: str, board: tuple[int, int]) -> list[tuple[str, numpy.nda
 def render(camera: Camera, scene_seed: int | None = None, change: ViewpointChange | None = None, supersampling: int = 2) -> dict[str, typing.Any]:
     """
     Ray-casts a street scene through `camera` at its pose (moved by `change` when given): the bundled street, or the random street of `scene_seed`. Returns {'image': (H, W, 3) uint8 RGB (supersampling^2 rays per pixel), 'mask': (H, W) uint8 WoodScape class ids, 'depth': (H, W) float32 range along each pixel's ray in metres (inf: sky, NaN: outside the camera's domain)}; mask and depth from one ray through each pixel centre.
+    """
+def reprojection_error_map(source: Camera, fitted: Camera) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.float32]]:
+    """
+    The pixel error of `fitted` at every pixel of `source`'s image (float32 (H, W), NaN where the source has no ray or `fitted` none): what `fishcam convert --error-map` writes.
     """
 def sampling_names() -> list[str]:
     """

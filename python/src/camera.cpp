@@ -306,6 +306,16 @@ void bind_camera(py::module_& m) {
       .def_property_readonly(
           "widest_theta_deg", [](const Conversion& c) { return c.widest_theta * 180 / std::numbers::pi; },
           "The widest ray of the evaluation grid (degrees).")
+      .def_readonly("center_and_aspect_fitted", &Conversion::center_and_aspect_fitted,
+                    "Whether the principal point and a_y were fitted (always for a source with tangential terms).")
+      .def_property_readonly(
+          "non_radial_px",
+          [](const Conversion& c) -> std::optional<std::pair<double, double>> {
+            if (c.non_radial.samples == 0) return std::nullopt;
+            return std::pair(c.non_radial.rms_px, c.non_radial.max_px);
+          },
+          "For a source with tangential terms: (rms, max) pixels by which they move its pixels from its own radial "
+          "part, the error no radial model can represent; None for a radial source.")
       .def(
           "to_json", [](const Conversion& c) { return fit_report_json(c.camera, c.report); },
           "What `fishcam convert --json` prints (str).")
@@ -333,6 +343,21 @@ void bind_camera(py::module_& m) {
       py::arg("fit_center") = false, py::arg("fit_aspect") = false,
       "Fits model `to` to `camera` as `fishcam convert` does (method 'lsq' or 'paper'; max_angle in degrees): "
       "a Conversion (camera, report).");
+  m.def(
+      "reprojection_error_map",
+      [](const Camera& source, const Camera& fitted) {
+        std::vector<float> map;
+        {
+          py::gil_scoped_release release;
+          map = reprojection_error_map(source, fitted);
+        }
+        py::array_t<float> out({py::ssize_t(source.height()), py::ssize_t(source.width())});
+        std::copy(map.begin(), map.end(), out.mutable_data());
+        return out;
+      },
+      py::arg("source"), py::arg("fitted"),
+      "The pixel error of `fitted` at every pixel of `source`'s image (float32 (H, W), NaN where the source has no "
+      "ray or `fitted` none): what `fishcam convert --error-map` writes.");
 }
 
 }  // namespace fishcam::python

@@ -1,0 +1,117 @@
+"""Cameras with tangential terms from Python: real files against numpy's Mei formula
+and cv2.projectPoints, unprojection that reprojects, pickling and keys that carry the
+terms, and conversion to a radial model with its non-radial part."""
+
+import json
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fishcam
+
+EXTERNAL = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "external"
+needs_shared = pytest.mark.skipif(not (EXTERNAL / "README.md").exists(), reason="no ../shared/data/external")
+
+
+def rays(n, theta_max_deg, seed):
+    rng = np.random.default_rng(seed)
+    z = rng.uniform(np.cos(np.radians(theta_max_deg)), 1, n)
+    phi = rng.uniform(0, 2 * np.pi, n)
+    s = np.sqrt(1 - z * z)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
+
+
+def mei(points, fx, fy, cx, cy, xi, k1, k2, p1, p2):
+    """Mei & Rives 2007 (camodocal MEI), written from the paper."""
+    s = points / np.linalg.norm(points, axis=1, keepdims=True)
+    mx, my = s[:, 0] / (s[:, 2] + xi), s[:, 1] / (s[:, 2] + xi)
+    r2 = mx * mx + my * my
+    g = 1 + k1 * r2 + k2 * r2 * r2
+    dx = 2 * p1 * mx * my + p2 * (r2 + 2 * mx * mx)
+    dy = p1 * (r2 + 2 * my * my) + 2 * p2 * mx * my
+    return np.stack([fx * (mx * g + dx) + cx, fy * (my * g + dy) + cy], axis=1)
+
+
+@pytest.fixture(scope="module")
+def mei_camera(tmp_path_factory):
+    """The T265 fisheye's MEI calibration (vinsfusion_t265_fisheye1_MEI.yaml) as fishcam JSON."""
+    path = tmp_path_factory.mktemp("tangential") / "mei.json"
+    path.write_text(json.dumps({
+        "fishcam_camera": 1, "width": 848, "height": 800, "principal_point": [426.05865129, 400.00487828],
+        "pixel_scale": [1.0, 841.73955011 / 840.35417863], "model": "mei",
+        "parameters": [840.35417863, 2.00109674298, 0.26251514, -0.85422959],
+        "tangential": {"p1": 0.00501238, "p2": 0.00039633}}))
+    return fishcam.Camera.read(str(path))
+
+
+MEI_ARGS = (840.35417863, 841.73955011, 426.05865129, 400.00487828, 2.00109674298, 0.26251514, -0.85422959,
+            0.00501238, 0.00039633)
+
+
+def test_a_mei_camera_with_tangential_terms_projects_as_the_paper_says(mei_camera):
+    assert not mei_camera.radial
+    assert mei_camera.tangential == {"p1": 0.00501238, "p2": 0.00039633, "s1": 0.0, "s2": 0.0, "s3": 0.0, "s4": 0.0}
+    points = rays(20000, mei_camera.domain.theta_max_deg, 1) * np.linspace(0.5, 20, 20000)[:, None]
+    pixels, ok = mei_camera.project(points)
+    assert ok.all()
+    assert np.abs(pixels - mei(points, *MEI_ARGS)).max() < 1e-7
+    back, ok = mei_camera.unproject(pixels)
+    assert ok.all()
+    again, _ = mei_camera.project(back)
+    assert np.abs(again - pixels).max() < 1e-6
+    assert np.abs(back - points / np.linalg.norm(points, axis=1, keepdims=True)).max() < 1e-9
+
+
+def test_pickles_and_keys_carry_the_tangential_terms(mei_camera, tmp_path):
+    copy = pickle.loads(pickle.dumps(mei_camera))
+    assert copy == mei_camera and copy.tangential == mei_camera.tangential
+    radial_json = json.loads(mei_camera.to_json())
+    del radial_json["tangential"]
+    path = tmp_path / "radial.json"
+    path.write_text(json.dumps(radial_json))
+    radial = fishcam.Camera.read(str(path))
+    assert radial.radial
+    assert radial != mei_camera
+    assert radial.parameters_key(False) != mei_camera.parameters_key(False)
+    assert json.loads(mei_camera.info_json())["tangential"]["p1"] == 0.00501238
+    assert json.loads(radial.info_json())["tangential"] is None
+
+
+def test_conversion_to_a_radial_model_reports_the_non_radial_part(mei_camera):
+    small = mei_camera.resized(212, 200)
+    conversion = fishcam.convert(small, "kannala-brandt")
+    assert conversion.center_and_aspect_fitted
+    rms, worst = conversion.non_radial_px
+    assert 0 < rms <= worst
+    assert conversion.camera.radial
+    errors = fishcam.reprojection_error_map(small, conversion.camera)
+    assert errors.shape == (200, 212) and errors.dtype == np.float32
+    every_other = errors[::2, ::2]
+    assert np.sqrt(np.nanmean(every_other.astype(np.float64) ** 2)) == pytest.approx(conversion.report.rms_px, abs=1e-5)
+    assert fishcam.convert(fishcam.Camera.read(str(Path(__file__).resolve().parents[2] / "data" / "kannala_brandt.yaml")),
+                           "equidistant").non_radial_px is None
+
+
+@needs_shared
+def test_real_radial_tangential_files_agree_with_cv2_project_points():
+    cv2 = pytest.importorskip("cv2")
+    camera = fishcam.Camera.read(str(EXTERNAL / "openvins_euroc_mav_kalibr_imucam_chain.yaml"), camera="cam0")
+    assert camera.model == "opencv" and camera.tangential["p1"] == 0.00019359
+    points = rays(5000, 70, 2)
+    K = np.array([[458.654, 0, 367.215], [0, 457.296, 248.375], [0, 0, 1]])
+    expected, _ = cv2.projectPoints(points, np.zeros(3), np.zeros(3), K,
+                                    np.array([-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]))
+    pixels, ok = camera.project(points)
+    assert ok.all()
+    assert np.abs(pixels - expected[:, 0]).max() < 1e-7
+
+
+@needs_shared
+def test_real_mei_file_agrees_with_the_paper():
+    camera = fishcam.Camera.read(str(EXTERNAL / "vinsfusion_t265_fisheye1_MEI.yaml"))
+    points = rays(5000, camera.domain.theta_max_deg, 3)
+    pixels, ok = camera.project(points)
+    assert ok.all()
+    assert np.abs(pixels - mei(points, *MEI_ARGS)).max() < 1e-7
