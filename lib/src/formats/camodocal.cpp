@@ -1,5 +1,5 @@
-// camodocal YAML (as VINS-Mono / VINS-Fusion keep it): KANNALA_BRANDT, MEI (with
-// zero tangential terms) and PINHOLE (without distortion).
+// camodocal YAML (as VINS-Mono / VINS-Fusion keep it): KANNALA_BRANDT, MEI and
+// PINHOLE (k1, k2, p1, p2), tangential terms included.
 #include "format.hpp"
 
 namespace fishcam::detail {

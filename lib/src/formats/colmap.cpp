@@ -99,7 +99,7 @@ std::vector<NamedCamera> read(const Content& c) {
     } else if (name == "FOV") {
       fail(text_for_message(name) + " is radially symmetric but fishcam has no such model");
     } else {
-      fail(text_for_message(name) + " is not radially symmetric (fishcam reads radially symmetric models only)");
+      fail(text_for_message(name) + " is not a model fishcam reads (it reads the OpenCV, pinhole and fisheye ones)");
     }
     out.push_back(std::move(named));
   }

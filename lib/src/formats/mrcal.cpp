@@ -1,4 +1,5 @@
-// mrcal .cameramodel (a Python literal): LENSMODEL_PINHOLE and LENSMODEL_STEREOGRAPHIC.
+// mrcal .cameramodel (a Python literal): LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC and
+// LENSMODEL_OPENCV4/5/8/12 (tangential terms included).
 #include <cmath>
 #include <cstdio>
 
@@ -29,8 +30,8 @@ std::vector<NamedCamera> read(const Content& c) {
   if (!pinhole && lensmodel != "LENSMODEL_STEREOGRAPHIC" && opencv_coefficients == 0) {
     const bool asymmetric = lensmodel.rfind("LENSMODEL_SPLINED", 0) == 0 || lensmodel.rfind("LENSMODEL_CAHVOR", 0) == 0;
     f.fail("lensmodel", "unsupported lens model " + quoted_for_message(lensmodel) +
-                            (asymmetric ? " (not radially symmetric: fishcam reads radially symmetric models only; "
-                                          "mrcal files: LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC, LENSMODEL_OPENCV4/5/8/12)"
+                            (asymmetric ? " (fishcam has no splined or CAHVOR camera yet; mrcal files: "
+                                          "LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC, LENSMODEL_OPENCV4/5/8/12)"
                                         : " (fishcam reads LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC and "
                                           "LENSMODEL_OPENCV4/5/8/12)"));
   }
