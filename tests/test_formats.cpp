@@ -158,6 +158,13 @@ std::vector<Readable> readable_files() {
        opencv_omnidir({840.7517267665538, 753.2509367205932, 640.3867187257891, 483.95547527295696}, 1.7668989774186101,
                       {-0.0982253999263517, 0.11694029405469884, -0.00011437603929821573, -0.00489509708490966}),
        kFull, {}},
+      // BoofCV's omnidirectional_universal with t1 = t2 = 0: Mei's model (BoofCV's UniOmniStoP).
+      {"mei_omnidir_universal_fisheye.yaml", "", "boofcv", "mei", 3840, 2160,
+       [](const Eigen::Vector3d& p) {
+         return test::mei({2151.6168117931597, 2161.652781357435, 1894.179700702442, 968.7551405752832},
+                          2.2268230796296904, 0.3207260522384846, 1.311770851988966, p);
+       },
+       kFull, {}},
       {"synwoodscape_FV.json", "", "woodscape", "polynomial", 1280, 966,
        [](const Eigen::Vector3d& p) {
          return test::woodscape({341.725, -26.4448, 32.7864, 0.50499}, 1280, 966, 0.329055, -3.5506, 1.00021, p);
@@ -192,7 +199,6 @@ TEST(Formats, EveryExternalFileIsReadAgainstAReferenceOrRefused) {
   std::set<std::string> checked;
   for (const auto& r : readable_files()) checked.insert(r.file);
   for (const char* refused : {"mrcal_cam0.splined.cameramodel", "ocamcalib_calib_results.txt",
-                              "mei_omnidir_universal_fisheye.yaml",
                               "opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml"}) {
     checked.insert(refused);  // FilesFishcamCannotHoldAreRefusedNamingWhy
   }
@@ -255,7 +261,6 @@ TEST(Formats, FilesFishcamCannotHoldAreRefusedNamingWhy) {
   const std::vector<std::pair<std::string, std::string>> refused = {
       {"mrcal_cam0.splined.cameramodel", "LENSMODEL_SPLINED_STEREOGRAPHIC"},
       {"ocamcalib_calib_results.txt", "OCamCalib calib_results.txt: Scaramuzza's model has an affine term"},
-      {"mei_omnidir_universal_fisheye.yaml", "omnidirectional_universal"},
       {"opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml", "distortion_model: missing: 4 distortion coefficients could be"},
   };
   for (const auto& [file, expected] : refused) {

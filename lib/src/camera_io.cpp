@@ -131,10 +131,6 @@ CameraFormat detect_camera_format(std::string_view content, std::string_view sou
     throw Error(std::string(source_name) + ": an OCamCalib calib_results.txt: Scaramuzza's model has an affine "
                 "term (c, d, e) and is not radially symmetric; fishcam reads radially symmetric models only");
   }
-  if (const detail::DocNode* root = c.yaml(); root && root->find("model") && root->find("mirror_offset")) {
-    throw Error(std::string(source_name) + ": model: a YAML with 'model' and 'mirror_offset' (omnidirectional_universal: "
-                "Mei's model) is not a layout fishcam reads; camodocal MEI and Kalibr omni-radtan hold the same model");
-  }
   // Where the text does not even parse, the reader of the
   // syntax it tries to be says why (the parse error, with its line).
   if (content.find("lensmodel") != std::string_view::npos && !c.python_literal()) return CameraFormat::mrcal;

@@ -18,4 +18,5 @@
   X(colmap)                       \
   X(ros)                          \
   X(camodocal)                    \
-  X(orbslam3)
+  X(orbslam3)                     \
+  X(boofcv)
