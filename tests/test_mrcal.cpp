@@ -16,6 +16,7 @@ struct Case {
   double theta_max;  // where to draw test rays
   std::optional<Camera> camera = std::nullopt;  // instead of the file
   std::vector<double> distortion = {};          // mrcal's intrinsics after fx, fy, cx, cy
+  std::string configured = {};                  // a configured lens model's name (splined)
 };
 
 void check_against_mrcal(const Case& c) {
@@ -27,6 +28,9 @@ void check_against_mrcal(const Case& c) {
   ASSERT_NE(intrinsics[0], intrinsics[1]) << "the test needs fx != fy";
   mrcal_lensmodel_t lensmodel{};
   lensmodel.type = c.type;
+  if (!c.configured.empty()) {
+    ASSERT_TRUE(mrcal_lensmodel_from_name(&lensmodel, c.configured.c_str()));
+  }
 
   const auto rays = test::random_rays(20000, c.theta_max, 31);
   std::vector<mrcal_point3_t> points(rays.size());
@@ -101,6 +105,32 @@ TEST(Mrcal, OpenCV8WithoutTangentialTermsAgreesWithLibmrcal) {
   const auto k = model_params(camera.model());
   check_against_mrcal({"opencv8", MRCAL_LENSMODEL_OPENCV8, std::min(camera.domain().theta_max * 0.999, 80 * M_PI / 180),
                        camera, {k[1], k[2], 0, 0, k[3], k[4], k[5], k[6]}});
+}
+
+// A stereographic camera with mrcal's spline (fishcam/mrcal_spline.hpp), projected and
+// unprojected against libmrcal's own LENSMODEL_SPLINED_STEREOGRAPHIC: the synthetic
+// one of the tests, and the real cam0.splined of ../shared (read by our reader and by
+// libmrcal's).
+TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
+  const Camera synthetic(test::spline_camera().second);
+  const MrcalSpline& spline = *synthetic.parameters().spline;
+  ASSERT_GT(synthetic.domain().theta_max, 60 * M_PI / 180);
+  check_against_mrcal({"spline (synthetic)", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC, 60 * M_PI / 180, synthetic,
+                       spline.values(), spline.lensmodel()});
+  const std::filesystem::path file =
+      std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external/mrcal_cam0.splined.cameramodel";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no ../shared checkout";
+  const Camera camera = read_camera(file.string());
+  mrcal_cameramodel_t* model = mrcal_read_cameramodel_file(file.c_str());
+  ASSERT_NE(model, nullptr);
+  ASSERT_EQ(model->lensmodel.type, MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC);
+  const int n = mrcal_lensmodel_num_params(&model->lensmodel);
+  const std::vector<double> values(model->intrinsics + 4, model->intrinsics + n);
+  EXPECT_EQ(model->intrinsics[0], model_params(camera.model())[0]);
+  EXPECT_EQ(values, camera.parameters().spline->values());
+  mrcal_free_cameramodel(&model);
+  check_against_mrcal({"mrcal_cam0.splined.cameramodel", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC,
+                       camera.domain().theta_max, camera, values, camera.parameters().spline->lensmodel()});
 }
 
 // The real OPENCV8 calibrations of ../shared (tangential terms and all), read by our

@@ -133,7 +133,7 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_model() {
 inline std::vector<std::pair<std::string, CameraParameters>> every_tangential_camera() {
   std::vector<std::pair<std::string, CameraParameters>> out;
   for (const auto& [label, p] : every_model()) {
-    const bool has_plane = std::visit([](const auto& m) { return HasUndistortedPlane<std::decay_t<decltype(m)>>; }, p.model);
+    const bool has_plane = std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; }, p.model);
     if (!has_plane) continue;
     CameraParameters q = p;
     const std::string_view name = model_name(p.model);
@@ -152,11 +152,34 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_tangential_ca
   return out;
 }
 
-// Every camera kind: every_model() and every_tangential_camera(), for the tests of
-// what any camera does (project, unproject, formats, augmentation).
-inline std::vector<std::pair<std::string, CameraParameters>> every_camera() {
+// mrcal's spline on the stereographic example's plane (fishcam/mrcal_spline.hpp): a
+// smooth displacement of up to ~0.01 (a few pixels), labelled stereographic_spline.
+inline std::pair<std::string, CameraParameters> spline_camera() {
+  for (auto [label, p] : every_model()) {
+    if (model_name(p.model) != "stereographic") continue;
+    constexpr int nx = 8, ny = 6;
+    std::vector<double> values;
+    for (int y = 0; y < ny; ++y) {
+      for (int x = 0; x < nx; ++x) {
+        values.push_back(0.004 * std::cos(0.7 * x + 0.3 * y) + 0.001 * x);
+        values.push_back(0.003 * std::sin(0.5 * x - 0.9 * y) - 0.0015 * y);
+      }
+    }
+    p.spline = std::make_shared<const MrcalSpline>("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
+                                                   values);
+    return {label + "_spline", p};
+  }
+  ADD_FAILURE() << "no stereographic example for the spline camera";
+  return {};
+}
+
+// Every camera kind: every_model(), every_tangential_camera() and with_spline the
+// spline camera, for the tests of what any camera does (project, unproject, formats;
+// the float kernel and the grid path do not take mrcal's spline).
+inline std::vector<std::pair<std::string, CameraParameters>> every_camera(bool with_spline = true) {
   auto out = every_model();
   for (auto& c : every_tangential_camera()) out.push_back(std::move(c));
+  if (with_spline) out.push_back(spline_camera());
   return out;
 }
 

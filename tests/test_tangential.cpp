@@ -114,9 +114,9 @@ TEST_P(EveryTangentialCamera, UnprojectionReprojectsOntoItsPixelOrIsNaN) {
 INSTANTIATE_TEST_SUITE_P(Tangential, EveryTangentialCamera, ::testing::ValuesIn(test::every_tangential_camera()),
                          test::model_case_name);
 
-TEST(Tangential, EveryModelWithAnUndistortedPlaneHasATangentialCase) {
+TEST(Tangential, EveryModelThatTakesTangentialTermsHasATangentialCase) {
   int planes = 0;
-  ModelRegistry::for_each([&]<template <typename> class Model>() { planes += HasUndistortedPlane<Model<double>>; });
+  ModelRegistry::for_each([&]<template <typename> class Model>() { planes += TakesTangentialTerms<Model<double>>; });
   EXPECT_EQ(planes, 3);  // pinhole, opencv, mei
   EXPECT_EQ(test::every_tangential_camera().size(), size_t(planes));
 }
@@ -191,12 +191,35 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
   };
   CameraParameters p = test::woodscape_front();
   p.tangential = {0.001, 0, {}};
-  refused(p, "tangential: the polynomial model has no undistorted plane to add tangential terms on (pinhole, opencv and mei have one)");
+  refused(p, "tangential: the polynomial model takes no tangential terms (pinhole, opencv and mei do, on their undistorted plane)");
   p.model = Mei<double>(640.0, 0.9, 0, 0);
   p.tangential.p2 = std::numeric_limits<double>::quiet_NaN();
   refused(p, "tangential.p2: must be finite");
   p.tangential = {0, 0, {0, 0, std::numeric_limits<double>::infinity(), 0}};
   refused(p, "tangential.s3: must be finite");
+  // mrcal's spline: on a stereographic model only, never with tangential terms, its
+  // configuration and value count checked.
+  CameraParameters s = test::spline_camera().second;
+  s.tangential = {0.001, 0, {}};
+  refused(s, "tangential: a camera has tangential terms or a spline, not both");
+  s.tangential = {};
+  s.model = Equidistant<double>(330.0);
+  refused(s, "spline: mrcal's spline displaces the stereographic plane: the model must be stereographic");
+  const auto spline_refused = [](const std::string& lensmodel, std::vector<double> values, const std::string& expected) {
+    try {
+      MrcalSpline spline(lensmodel, std::move(values));
+      ADD_FAILURE() << "accepted: " << expected;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", std::vector<double>(95, 0.0),
+                 "has 96 control values, got 95");
+  spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8", std::vector<double>(96, 0.0), "is not a configured");
+  spline_refused("LENSMODEL_OPENCV8", std::vector<double>(8, 0.0), "is not a configured");
+  std::vector<double> values(96, 0.0);
+  values[5] = std::numeric_limits<double>::quiet_NaN();
+  spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", values, "must be finite");
 }
 
 // What fishcam's own file holds and what the other formats say when they cannot.

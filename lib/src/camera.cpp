@@ -111,7 +111,8 @@ bool ray_of(const Model& model, const ValidDomain& domain, const InverseTable& t
   return true;
 }
 
-// ---- cameras with tangential terms (fishcam/tangential.hpp)
+// ---- cameras that are not radially symmetric: T(m) on the model's undistorted plane,
+// OpenCV's tangential terms (fishcam/tangential.hpp) or mrcal's spline (fishcam/mrcal_spline.hpp)
 
 // The plane radius u(theta) as a radial "model", so project_one gives m and dm/dP.
 template <class Model>
@@ -129,8 +130,8 @@ struct PlaneRadius {
 };
 
 // D(m) = m R(|m|^2) + T(m), with dD/dm on request.
-template <class Model>
-Eigen::Vector2d distorted(const Model& model, const TangentialTerms& terms, const Eigen::Vector2d& m,
+template <class Model, class Distortion>
+Eigen::Vector2d distorted(const Model& model, const Distortion& terms, const Eigen::Vector2d& m,
                           Eigen::Matrix2d* jacobian = nullptr) {
   double dr;
   const double r = model.radial_factor(m.squaredNorm(), &dr);
@@ -141,9 +142,9 @@ Eigen::Vector2d distorted(const Model& model, const TangentialTerms& terms, cons
   return d;
 }
 
-template <bool kWithJacobian, class Model>
+template <bool kWithJacobian, class Model, class Distortion>
 bool project_tangential(const Model& model, const double* mapping, const ValidDomain& domain,
-                        const TangentialTerms& terms, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                        const Distortion& terms, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                         Eigen::Matrix<double, 2, 3>* jacobian) {
   if constexpr (!HasUndistortedPlane<Model>) {
     throw Error("internal: tangential terms on a model without an undistorted plane");  // the constructor refuses
@@ -166,54 +167,70 @@ bool project_tangential(const Model& model, const double* mapping, const ValidDo
 // D(m) = (x, y) / f solved by Newton with backtracking from the radial inverse; false
 // unless the solution lies in the domain and reprojects to within 1e-7 px (relative
 // 1e-15 for pixels beyond 1e8 px).
-template <class Model>
+template <class Model, class Distortion>
 bool tangential_ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table,
-                       const TangentialTerms& terms, const Eigen::Vector2d& pixel_scale, double x, double y,
+                       const Distortion& terms, const Eigen::Vector2d& pixel_scale, double x, double y,
                        double* ray) {
   if constexpr (!HasUndistortedPlane<Model>) {
     throw Error("internal: tangential terms on a model without an undistorted plane");
   } else {
     const double f = model.focal();
     const Eigen::Vector2d target(x / f, y / f);
-    if (!target.allFinite()) return false;
+    if (!target.allFinite() || target.norm() > domain.plane_reach) return false;
     const double rho = std::hypot(x, y);
-    if (rho == 0) return ray[0] = 0, ray[1] = 0, ray[2] = 1, true;  // T(0) = 0
     double derivative;
     const double theta0 =
         domain.contains_rho(rho) ? theta_of(model, domain, table, rho, InversePath::table) : domain.theta_max;
     if (!std::isfinite(theta0)) return false;
-    Eigen::Vector2d m = target * (model.plane_radius(theta0, &derivative) / target.norm());
-    if (!m.allFinite()) return false;
-    Eigen::Matrix2d jacobian;
-    Eigen::Vector2d residual = distorted(model, terms, m, &jacobian) - target;
-    double error = residual.norm();
-    const double tolerance = 1e-15 * std::max(1.0, target.norm());
-    for (int iteration = 0; iteration < 100 && error > tolerance; ++iteration) {
-      const double det = jacobian.determinant();
-      if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
-      const Eigen::Vector2d step = jacobian.inverse() * residual;
-      // Backtracking: a full Newton step unless it makes the residual worse.
-      double lambda = 1;
-      Eigen::Vector2d next;
-      Eigen::Matrix2d next_jacobian;
-      Eigen::Vector2d next_residual;
-      double next_error = kNaN;
-      for (int halving = 0; halving < 40; ++halving, lambda *= 0.5) {
-        next = m - lambda * step;
-        next_residual = distorted(model, terms, next, &next_jacobian) - target;
-        next_error = next_residual.norm();
-        if (next_error < error) break;
+    // Newton with backtracking (a step that does not lower |D(m) - goal| is halved) from m.
+    Eigen::Vector2d residual;
+    const auto newton = [&](Eigen::Vector2d* m, const Eigen::Vector2d& goal, int iterations) {
+      Eigen::Matrix2d jacobian;
+      residual = distorted(model, terms, *m, &jacobian) - goal;
+      double error = residual.norm();
+      const double tolerance = 1e-15 * std::max(1.0, goal.norm());
+      for (int iteration = 0; iteration < iterations && error > tolerance; ++iteration) {
+        const double det = jacobian.determinant();
+        if (!(std::abs(det) > 0) || !std::isfinite(det)) return;
+        const Eigen::Vector2d step = jacobian.inverse() * residual;
+        double lambda = 1, next_error = kNaN;
+        Eigen::Vector2d next, next_residual;
+        Eigen::Matrix2d next_jacobian;
+        for (int halving = 0; halving < 40; ++halving, lambda *= 0.5) {
+          next = *m - lambda * step;
+          next_residual = distorted(model, terms, next, &next_jacobian) - goal;
+          next_error = next_residual.norm();
+          if (next_error < error) break;
+        }
+        if (!(next_error < error)) return;  // no progress: as close as doubles get
+        *m = next, residual = next_residual, jacobian = next_jacobian, error = next_error;
       }
-      if (!(next_error < error)) break;  // no progress: as close as doubles get
-      m = next, residual = next_residual, jacobian = next_jacobian, error = next_error;
-    }
-    // 1e-7 px, or what doubles can resolve for pixels 1e8 px and more off the image centre.
-    if (!(f * pixel_scale.cwiseProduct(residual).norm() <= 1e-7 + 1e-15 * rho * pixel_scale.maxCoeff())) return false;
-    const double u = m.norm();
-    double theta = model.theta_of_plane_radius(u);
+    };
+    const double tolerance_px = 1e-7 + 1e-15 * rho * pixel_scale.maxCoeff();  // what doubles resolve 1e8 px out
     // A point projected at theta_max may come back a few ulps past it: it is valid.
-    if (domain.closed && theta > domain.theta_max && theta <= domain.theta_max * (1 + 1e-12)) theta = domain.theta_max;
-    if (!domain.contains_theta(theta)) return false;
+    const auto theta_in_domain = [&](double theta) {
+      if (domain.closed && theta > domain.theta_max && theta <= domain.theta_max * (1 + 1e-12)) theta = domain.theta_max;
+      return domain.contains_theta(theta) ? theta : kNaN;
+    };
+    const auto solved = [&](const Eigen::Vector2d& m) {
+      return m.allFinite() && f * pixel_scale.cwiseProduct(residual).norm() <= tolerance_px &&
+             !std::isnan(theta_in_domain(model.theta_of_plane_radius(m.norm())));
+    };
+    // From the radial inverse (the centre itself for the principal point) ...
+    Eigen::Vector2d m = rho > 0 ? Eigen::Vector2d(target * (model.plane_radius(theta0, &derivative) / target.norm()))
+                                : Eigen::Vector2d::Zero();
+    if (m.allFinite()) newton(&m, target, 100);
+    if (!solved(m)) {
+      // ... else along the segment from D(0) to the pixel, which the domain's image
+      // contains (star-shaped about D(0)): Newton from each point's solution to the next.
+      const Eigen::Vector2d centre = distorted(model, terms, Eigen::Vector2d::Zero());
+      m = Eigen::Vector2d::Zero();
+      constexpr int kSteps = 16;
+      for (int k = 1; k <= kSteps; ++k) newton(&m, centre + (target - centre) * (double(k) / kSteps), k < kSteps ? 20 : 100);
+    }
+    if (!solved(m)) return false;
+    const double u = m.norm();
+    const double theta = theta_in_domain(model.theta_of_plane_radius(u));
     if (u == 0) return ray[0] = 0, ray[1] = 0, ray[2] = 1, true;
     const double s = std::sin(theta) / u;
     ray[0] = m.x() * s, ray[1] = m.y() * s, ray[2] = std::cos(theta);
@@ -223,10 +240,11 @@ bool tangential_ray_of(const Model& model, const ValidDomain& domain, const Inve
 
 // The largest theta* <= the radial domain's theta_max below which the distortion map
 // D is one-to-one on the disk |m| <= u(theta*): det(dD/dm) > 0 on every ring and each
-// ring's image star-shaped (its angle increasing), which together make D injective.
+// ring's image star-shaped about D(0) (its angle increasing), which together make D
+// injective. (T(0) = 0 for tangential terms; mrcal's spline moves the centre.)
 // Rings are scanned, the first failing one bisected. nullopt: no ring fails.
-template <class Model>
-std::optional<double> tangential_fold(const Model& model, const TangentialTerms& terms, const ValidDomain& radial) {
+template <class Model, class Distortion>
+std::optional<double> tangential_fold(const Model& model, const Distortion& terms, const ValidDomain& radial) {
   if constexpr (!HasUndistortedPlane<Model>) {
     return std::nullopt;
   } else {
@@ -236,6 +254,7 @@ std::optional<double> tangential_fold(const Model& model, const TangentialTerms&
       const double phi = 2 * std::numbers::pi * k / kAzimuths;
       directions[size_t(k)] = {std::cos(phi), std::sin(phi)};
     }
+    const Eigen::Vector2d centre = distorted(model, terms, Eigen::Vector2d::Zero());
     const auto ring_ok = [&](double theta) {
       double derivative;
       const double u = model.plane_radius(theta, &derivative);
@@ -243,7 +262,7 @@ std::optional<double> tangential_fold(const Model& model, const TangentialTerms&
       Eigen::Vector2d first, previous;
       for (int k = 0; k < kAzimuths; ++k) {
         Eigen::Matrix2d jacobian;
-        const Eigen::Vector2d d = distorted(model, terms, u * directions[size_t(k)], &jacobian);
+        const Eigen::Vector2d d = distorted(model, terms, u * directions[size_t(k)], &jacobian) - centre;
         if (!(jacobian.determinant() > 0)) return false;
         if (k == 0) {
           first = d;
@@ -273,11 +292,14 @@ std::optional<double> tangential_fold(const Model& model, const TangentialTerms&
   }
 }
 
-// A camera's projection and unprojection: radial, or with its tangential terms.
+// A camera's projection and unprojection: radial, or with its non-radial part.
 template <bool kWithJacobian, class Model>
 bool project_point(const Model& model, const CameraParameters& params, const double* mapping,
                    const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                    Eigen::Matrix<double, 2, 3>* jacobian) {
+  if (params.spline) {
+    return project_tangential<kWithJacobian>(model, mapping, domain, *params.spline, point, pixel, jacobian);
+  }
   if (params.tangential.any()) {
     return project_tangential<kWithJacobian>(model, mapping, domain, params.tangential, point, pixel, jacobian);
   }
@@ -287,6 +309,7 @@ bool project_point(const Model& model, const CameraParameters& params, const dou
 template <class Model>
 bool ray_of_point(const Model& model, const CameraParameters& params, const ValidDomain& domain,
                   const InverseTable& table, double x, double y, InversePath path, double* ray) {
+  if (params.spline) return tangential_ray_of(model, domain, table, *params.spline, params.pixel_scale, x, y, ray);
   if (params.tangential.any()) {
     return tangential_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray);
   }
@@ -444,29 +467,60 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   }
   if (params_.calibration) check_calibration_record(*params_.calibration, model_params(params_.model).size());
   domain_ = std::visit([&](const auto& m) { return compute_domain(m, params_.theta_limit); }, params_.model);
-  if (params_.tangential.any()) limit_to_tangential_fold();
+  if (!params_.radially_symmetric()) limit_to_plane_fold(), bound_plane_reach();
   table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
 }
 
-void Camera::limit_to_tangential_fold() {
+void Camera::limit_to_plane_fold() {
   const TangentialTerms& terms = params_.tangential;
   for (size_t i = 0; i < terms.kNames.size(); ++i) {
     if (!std::isfinite(terms.values()[i])) fail("tangential.", terms.kNames[i], ": must be finite");
   }
-  const bool has_plane = std::visit([](const auto& m) { return HasUndistortedPlane<std::decay_t<decltype(m)>>; },
-                                    params_.model);
-  if (!has_plane) {
-    fail("tangential: the ", model_name(params_.model),
-         " model has no undistorted plane to add tangential terms on (pinhole, opencv and mei have one)");
+  std::optional<double> fold;
+  if (params_.spline) {
+    if (terms.any()) fail("tangential: a camera has tangential terms or a spline, not both");
+    const auto* stereographic = std::get_if<Stereographic<double>>(&params_.model);
+    if (!stereographic) fail("spline: mrcal's spline displaces the stereographic plane: the model must be stereographic");
+    fold = tangential_fold(*stereographic, *params_.spline, domain_);
+  } else {
+    const bool takes = std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; },
+                                  params_.model);
+    if (!takes) {
+      fail("tangential: the ", model_name(params_.model),
+           " model takes no tangential terms (pinhole, opencv and mei do, on their undistorted plane)");
+    }
+    fold = std::visit([&](const auto& m) { return tangential_fold(m, terms, domain_); }, params_.model);
   }
-  const std::optional<double> fold =
-      std::visit([&](const auto& m) { return tangential_fold(m, terms, domain_); }, params_.model);
   if (!fold || *fold >= domain_.theta_max * (1 - 1e-12)) return;  // the radial limit comes first
   if (!(*fold > 0)) fail("tangential: the distortion is not one-to-one even next to the principal point");
   domain_.theta_max = *fold;
   domain_.closed = true;
   domain_.limited_by = ValidDomain::Limit::tangential_fold;
   domain_.rho_max = rho(*fold);
+}
+
+void Camera::bound_plane_reach() {
+  if (!domain_.closed) return;
+  // |D| is largest on the image of the domain's rim (the image is star-shaped about
+  // D(0), |.| convex): sampled densely, with a 1 % margin for what lies between samples.
+  const auto reach = [&](const auto& model, const auto& terms) {
+    double derivative, largest = 0;
+    const double u = model.plane_radius(domain_.theta_max, &derivative);
+    for (int k = 0; k < 1440; ++k) {
+      const double phi = 2 * std::numbers::pi * k / 1440;
+      largest = std::max(largest, distorted(model, terms, u * Eigen::Vector2d(std::cos(phi), std::sin(phi))).norm());
+    }
+    return 1.01 * largest;
+  };
+  if (params_.spline) {
+    domain_.plane_reach = reach(std::get<Stereographic<double>>(params_.model), *params_.spline);
+  } else {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (TakesTangentialTerms<std::decay_t<decltype(m)>>) domain_.plane_reach = reach(m, params_.tangential);
+        },
+        params_.model);
+  }
 }
 
 double Camera::rho(double theta) const {

@@ -325,6 +325,8 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
                          {"closed_form", std::visit([](const auto& m) { return ClosedFormInverse<std::decay_t<decltype(m)>>; },
                                                     p.model)}}},
   };
+  j["spline"] = p.spline ? json{{"lensmodel", p.spline->lensmodel()}, {"values", p.spline->values().size()}}
+                         : json(nullptr);
   j["tangential"] = nullptr;  // radially symmetric
   if (p.tangential.any()) {
     for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
@@ -363,6 +365,13 @@ std::string cannot_hold_tangential(const detail::FormatSpec& spec, const Tangent
   return "tangential: the " + std::string(spec.name) + " format cannot hold " +
          (prism ? "thin-prism terms s1..s4" : "tangential terms p1, p2") + " (" + holders + " can)";
 }
+std::string cannot_hold_spline(const detail::FormatSpec& spec) {
+  std::string holders;
+  for (const auto* s : detail::format_table()) {
+    if (s->holds_spline) holders += std::string(holders.empty() ? "" : ", ") + std::string(s->name);
+  }
+  return "spline: the " + std::string(spec.name) + " format cannot hold mrcal's splined surface (" + holders + " can)";
+}
 }  // namespace
 
 bool camera_format_holds(CameraFormat format, const TangentialTerms& terms) {
@@ -380,6 +389,7 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
   }
   if (!spec.holds(model_name(camera.model))) detail::cannot_hold(camera, format);
   if (const std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) throw Error(why);
+  if (camera.spline && !spec.holds_spline) throw Error(cannot_hold_spline(spec));
   CameraParameters written = spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera);
   if (!spec.holds_calibration_record) written.calibration.reset();
   std::string content = spec.write(written);
@@ -391,6 +401,9 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
     options.image_size = std::pair{camera.width, camera.height};
     const CameraParameters back = parse_camera(content, "", options);
     if (back.tangential != camera.tangential) throw Error(": its tangential terms do not read back");
+    if (bool(back.spline) != bool(camera.spline) || (back.spline && !(*back.spline == *camera.spline))) {
+      throw Error(": its spline does not read back");
+    }
   } catch (const Error& e) {
     std::string why = e.what();
     if (why.rfind(": ", 0) == 0) why = why.substr(2);
@@ -422,6 +435,7 @@ std::string format_rig(const std::vector<CameraParameters>& cameras, CameraForma
                   " format cannot store a user field-of-view limit (fishcam JSON can)");
     }
     if (const std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) throw Error(which + why);
+    if (camera.spline && !spec.holds_spline) throw Error(which + cannot_hold_spline(spec));
     if (!spec.holds(model_name(camera.model))) {
       try {
         detail::cannot_hold(camera, format);

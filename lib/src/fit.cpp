@@ -218,6 +218,7 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
   fitted.pixel_scale.y() = ay;
   fitted.model = make_model(spec.name, params);
   fitted.tangential = {};  // the fit is radial: what it cannot represent is its residual
+  fitted.spline.reset();
   fitted.theta_limit.reset();
   drop_covariance(&fitted);
   try {
@@ -237,6 +238,7 @@ CameraParameters paper_camera(const Camera& source, const ModelSpec& spec) {
   const double theta = source.field_of_view_deg().horizontal / 2 / kDeg;
   CameraParameters p = source.parameters();
   p.tangential = {};
+  p.spline.reset();
   p.theta_limit.reset();
   drop_covariance(&p);
   p.model = with_model_class(spec.name, [&]<template <typename> class Model>() -> RadialModel {
@@ -401,6 +403,7 @@ Conversion convert_camera(const Camera& source, const ModelSpec& model, std::str
   if (!source.radial()) {
     CameraParameters radial_part = source.parameters();
     radial_part.tangential = {};
+    radial_part.spline.reset();
     if (source.domain().closed) radial_part.theta_limit = source.domain().theta_max;  // the source's domain
     const Camera radial(radial_part);
     double sum2 = 0;

@@ -178,12 +178,17 @@ class Camera:
     @property
     def radial(self) -> bool:
         """
-        Whether the camera is radially symmetric (no tangential terms): only then do rho and theta_from_rho describe its whole projection.
+        Whether the camera is radially symmetric (no tangential terms, no spline): only then do rho and theta_from_rho describe its whole projection.
+        """
+    @property
+    def spline(self) -> tuple[str, list[float]] | None:
+        """
+        mrcal's splined surface on the stereographic plane (LENSMODEL_SPLINED_STEREOGRAPHIC): (lensmodel, control values), or None.
         """
     @property
     def tangential(self) -> dict[str, float]:
         """
-        The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's undistorted plane (docs/models.md); all 0 for a radially symmetric camera.
+        The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's undistorted plane (docs/conventions.md); all 0 for a radially symmetric camera.
         """
     @property
     def width(self) -> int:

@@ -31,6 +31,11 @@ std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
                                  p.pixel_scale.x(), p.pixel_scale.y(), p.theta_limit.value_or(-1.0)});
   const auto terms = p.tangential.values();
   numbers.insert(numbers.end(), terms.begin(), terms.end());
+  if (p.spline) {  // its lensmodel, then its values after the other numbers
+    key += p.spline->lensmodel();
+    key.push_back('\0');
+    numbers.insert(numbers.end(), p.spline->values().begin(), p.spline->values().end());
+  }
   if (with_pose && p.pose) {
     const auto& q = p.pose->rotation;
     numbers.insert(numbers.end(), {q.w(), q.x(), q.y(), q.z(), p.pose->translation.x(), p.pose->translation.y(),
@@ -50,7 +55,8 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
 // table, milliseconds), given the pickled pose (microseconds).
 py::object camera_pickle_state(const Camera& c) {
   const CameraParameters& p = c.parameters();
-  if (p.calibration) return py::str(format_camera(p, CameraFormat::fishcam));  // the record travels too
+  // The record or the spline travel as fishcam JSON.
+  if (p.calibration || p.spline) return py::str(format_camera(p, CameraFormat::fishcam));
   py::object pose = py::none();
   if (p.pose) {
     const auto& q = p.pose->rotation;
@@ -188,9 +194,17 @@ void bind_camera(py::module_& m) {
             return terms;
           },
           "The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's "
-          "undistorted plane (docs/models.md); all 0 for a radially symmetric camera.")
+          "undistorted plane (docs/conventions.md); all 0 for a radially symmetric camera.")
+      .def_property_readonly(
+          "spline",
+          [](const Camera& c) -> std::optional<std::pair<std::string, std::vector<double>>> {
+            if (!c.parameters().spline) return std::nullopt;
+            return std::pair(c.parameters().spline->lensmodel(), c.parameters().spline->values());
+          },
+          "mrcal's splined surface on the stereographic plane (LENSMODEL_SPLINED_STEREOGRAPHIC): (lensmodel, "
+          "control values), or None.")
       .def_property_readonly("radial", &Camera::radial,
-                             "Whether the camera is radially symmetric (no tangential terms): only then do rho and "
+                             "Whether the camera is radially symmetric (no tangential terms, no spline): only then do rho and "
                              "theta_from_rho describe its whole projection.")
       .def_property_readonly(
           "principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); },

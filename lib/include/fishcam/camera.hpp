@@ -9,6 +9,7 @@
 #include <array>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -19,6 +20,7 @@
 #include "fishcam/error.hpp"
 #include "fishcam/radial_inverse.hpp"
 #include "fishcam/model_registry.hpp"
+#include "fishcam/mrcal_spline.hpp"
 #include "fishcam/radial_models.hpp"
 #include "fishcam/tangential.hpp"
 
@@ -91,9 +93,15 @@ struct CameraParameters {
   // Non-radial terms on the model's undistorted plane (fishcam/tangential.hpp); all
   // zero for a radial camera. Only models with a plane (pinhole, opencv, mei) take them.
   TangentialTerms tangential;
+  // Or mrcal's splined surface on the plane of a `stereographic` model
+  // (LENSMODEL_SPLINED_STEREOGRAPHIC; fishcam/mrcal_spline.hpp); null for none.
+  std::shared_ptr<const MrcalSpline> spline;
   std::optional<double> theta_limit;  // radians; a user cap on the valid domain
   std::optional<Pose> pose;
   std::optional<CalibrationRecord> calibration;
+
+  // No tangential terms and no spline: rho(theta) is the whole projection.
+  bool radially_symmetric() const { return !tangential.any() && !spline; }
 };
 
 // The same lens for the image resized to width x height: with pixel centres at
@@ -136,7 +144,7 @@ class Camera {
   const TangentialTerms& tangential() const { return params_.tangential; }
   // Whether the camera is radially symmetric (no tangential terms): only then do
   // rho, theta_from_rho and rho_of_pixel describe its whole projection.
-  bool radial() const { return !params_.tangential.any(); }
+  bool radial() const { return params_.radially_symmetric(); }
   const ValidDomain& domain() const { return domain_; }
   const InverseTable& inverse_table() const { return table_; }
 
@@ -181,7 +189,8 @@ class Camera {
   FieldOfView field_of_view_deg() const;
 
  private:
-  void limit_to_tangential_fold();  // validates the terms, lowers domain_ to where D stays one-to-one
+  void limit_to_plane_fold();  // validates the non-radial part, lowers domain_ to where it stays one-to-one
+  void bound_plane_reach();    // domain_.plane_reach
   CameraParameters params_;
   ValidDomain domain_;
   InverseTable table_;

@@ -30,6 +30,10 @@ struct ValidDomain {
   double rho_max = 0;     // rho(theta_max); +inf when the model diverges there
   bool closed = true;     // theta_max itself is valid (false: theta < theta_max only)
   Limit limited_by = Limit::model;
+  // Cameras with a non-radial part (Camera): an upper bound on |D(m)| over the domain
+  // (normalized plane units; +inf when open), so unprojection refuses what lies beyond
+  // without solving.
+  double plane_reach = std::numeric_limits<double>::infinity();
 
   bool contains_theta(double theta) const {
     return theta >= 0 && (closed ? theta <= theta_max : theta < theta_max);

@@ -195,6 +195,16 @@ class Stereographic {
   static constexpr double theta_limit() { return std::numbers::pi; }
   static constexpr bool limit_is_open() { return true; }
   Stereographic scaled(const Scalar& s) const { return Stereographic(f_ * s); }
+  // The plane of the stereographic projection, u = 2 tan(theta / 2) (mrcal's splined
+  // models displace it; fishcam/mrcal_spline.hpp).
+  double focal() const { return double(f_); }
+  static double plane_radius(double theta, double* derivative) {
+    const double c = std::cos(theta / 2);
+    *derivative = 1 / (c * c);
+    return 2 * std::tan(theta / 2);
+  }
+  static double theta_of_plane_radius(double r) { return 2 * std::atan(r / 2); }
+  static double radial_factor(double, double* derivative) { return *derivative = 0, 1.0; }
   // Eq. 14: f = rho / (2 tan(theta / 2)).
   static Stereographic from_paper(double rho, double theta) {
     return Stereographic(Scalar(rho / (2 * std::tan(theta / 2))));
@@ -243,6 +253,7 @@ class Pinhole {
   const Scalar& f() const { return f_; }
   UnifiedForm unified_form() const { return {double(f_), 0, 0, 1, 0, 0}; }
   // The undistorted plane m = (X, Y) / Z (fishcam/tangential.hpp).
+  static constexpr bool kTakesTangentialTerms = true;
   double focal() const { return double(f_); }
   static double plane_radius(double theta, double* derivative) {
     const double c = std::cos(theta);
@@ -324,6 +335,7 @@ class OpenCV {
   }
 
   // The undistorted plane m = (X, Y) / Z (fishcam/tangential.hpp): R = N / D.
+  static constexpr bool kTakesTangentialTerms = true;
   double focal() const { return double(p_[0]); }
   static double plane_radius(double theta, double* derivative) { return Pinhole<double>::plane_radius(theta, derivative); }
   static double theta_of_plane_radius(double r) { return std::atan(r); }
@@ -703,6 +715,7 @@ class Mei {
   UnifiedForm unified_form() const { return {double(f_), double(xi_), 0, 1, double(k1_), double(k2_)}; }
 
   // The undistorted plane m = (X, Y) / (Z + xi |P|) (fishcam/tangential.hpp): R = 1 + k1 s + k2 s^2.
+  static constexpr bool kTakesTangentialTerms = true;
   double focal() const { return double(f_); }
   double plane_radius(double theta, double* derivative) const {
     const Unified<double> ucm(1.0, double(xi_));
@@ -771,5 +784,10 @@ concept HasUndistortedPlane = requires(const Model& m, double x, double* d) {
   m.theta_of_plane_radius(x);
   m.radial_factor(x, d);
 };
+
+// The models whose plane takes OpenCV's tangential terms (pinhole, opencv, mei; the
+// stereographic plane takes mrcal's spline instead).
+template <class Model>
+concept TakesTangentialTerms = HasUndistortedPlane<Model> && requires { Model::kTakesTangentialTerms; };
 
 }  // namespace fishcam

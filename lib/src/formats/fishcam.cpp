@@ -91,6 +91,14 @@ CameraParameters read_camera_fields(const DocFields& f) {
     f.fail("model", e.what());
   }
   if (f.has("tangential")) p.tangential = read_tangential(f.object("tangential"));
+  if (f.has("spline")) {  // {"lensmodel": "LENSMODEL_SPLINED_STEREOGRAPHIC_...", "values": [...]}
+    const DocFields s = f.object("spline");
+    try {
+      p.spline = std::make_shared<const MrcalSpline>(s.string("lensmodel"), s.numbers("values", 1, kMaxDocumentNodes));
+    } catch (const Error& e) {
+      f.fail("spline", e.what());
+    }
+  }
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
   if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
   if (f.has("calibration")) p.calibration = read_calibration(f.object("calibration"));
@@ -130,6 +138,7 @@ nlohmann::json camera_json(const CameraParameters& p) {
       terms[std::string(TangentialTerms::kNames[i])] = p.tangential.values()[i];
     }
   }
+  if (p.spline) root["spline"] = {{"lensmodel", p.spline->lensmodel()}, {"values", p.spline->values()}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
   if (p.calibration) root["calibration"] = calibration_json(*p.calibration);
@@ -155,6 +164,6 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 }  // namespace
 
 extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
-                                       {}, score, read, write, true, true, true, write_rig, true, true};
+                                       {}, score, read, write, true, true, true, write_rig, true, true, true};
 
 }  // namespace fishcam::detail

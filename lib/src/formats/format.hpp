@@ -88,6 +88,7 @@ struct FormatSpec {
   // CameraParameters::tangential.
   bool holds_tangential = false;
   bool holds_thin_prism = false;
+  bool holds_spline = false;  // mrcal's splined surface (CameraParameters::spline)
 
   bool holds(std::string_view model) const;
 };

@@ -1,5 +1,6 @@
-// mrcal .cameramodel (a Python literal): LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC and
-// LENSMODEL_OPENCV4/5/8/12 (tangential terms included).
+// mrcal .cameramodel (a Python literal): LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC,
+// LENSMODEL_OPENCV4/5/8/12 (tangential terms included) and LENSMODEL_SPLINED_STEREOGRAPHIC
+// (a stereographic camera with mrcal's spline).
 #include <cmath>
 #include <cstdio>
 
@@ -27,16 +28,15 @@ std::vector<NamedCamera> read(const Content& c) {
   for (size_t n : {4, 5, 8, 12}) {
     if (lensmodel == "LENSMODEL_OPENCV" + std::to_string(n)) opencv_coefficients = n;
   }
-  if (!pinhole && lensmodel != "LENSMODEL_STEREOGRAPHIC" && opencv_coefficients == 0) {
-    const bool asymmetric = lensmodel.rfind("LENSMODEL_SPLINED", 0) == 0 || lensmodel.rfind("LENSMODEL_CAHVOR", 0) == 0;
+  const bool splined = lensmodel.rfind("LENSMODEL_SPLINED_STEREOGRAPHIC", 0) == 0;
+  if (!pinhole && !splined && lensmodel != "LENSMODEL_STEREOGRAPHIC" && opencv_coefficients == 0) {
     f.fail("lensmodel", "unsupported lens model " + quoted_for_message(lensmodel) +
-                            (asymmetric ? " (fishcam has no splined or CAHVOR camera yet; mrcal files: "
-                                          "LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC, LENSMODEL_OPENCV4/5/8/12)"
-                                        : " (fishcam reads LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC and "
-                                          "LENSMODEL_OPENCV4/5/8/12)"));
+                            " (fishcam reads LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC, LENSMODEL_OPENCV4/5/8/12 and "
+                            "LENSMODEL_SPLINED_STEREOGRAPHIC)");
   }
+  // fx, fy, cx, cy[, distortion]; a spline's count is checked against its configuration below.
   const size_t count = 4 + opencv_coefficients;
-  const auto k = f.numbers("intrinsics", count, count);  // fx, fy, cx, cy[, distortion]
+  const auto k = f.numbers("intrinsics", count, splined ? kMaxDocumentNodes : count);
   const auto size = f.numbers("imagersize", 2, 2);
   for (int i = 0; i < 2; ++i) {
     if (!(size[i] >= 1 && size[i] <= (1 << 16)) || size[i] != std::floor(size[i])) {
@@ -55,48 +55,60 @@ std::vector<NamedCamera> read(const Content& c) {
   } else {
     p.model = pinhole ? RadialModel(Pinhole<double>(k[0])) : RadialModel(Stereographic<double>(k[0]));
   }
+  std::vector<std::string> notes;
+  if (splined) {
+    try {
+      p.spline = std::make_shared<const MrcalSpline>(lensmodel, std::vector<double>(k.begin() + 4, k.end()));
+    } catch (const Error& e) {
+      f.fail("intrinsics", e.what());
+    }
+    if (f.has("valid_intrinsics_region")) {
+      notes.push_back("valid_intrinsics_region is not read (the valid domain is where the projection is one-to-one)");
+    }
+  }
   if (f.has("extrinsics")) p.pose = pose_from_rt_cam_ref(f.numbers("extrinsics", 6, 6));
-  return {{"0", p, {}}};
+  return {{"0", p, notes}};
+}
+
+std::string number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", x);
+  return text;
 }
 
 std::string write(const CameraParameters& p) {
   double f = 0;
-  std::string lensmodel, distortion;
+  std::string lensmodel;
+  std::vector<double> distortion;
   if (const auto* m = std::get_if<Stereographic<double>>(&p.model)) {
     f = m->f(), lensmodel = "LENSMODEL_STEREOGRAPHIC";
+    if (p.spline) lensmodel = p.spline->lensmodel(), distortion = p.spline->values();
   } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model); m && !p.tangential.any()) {
     f = m->f(), lensmodel = "LENSMODEL_PINHOLE";
   } else if (std::optional<RadialTangential> r = radial_tangential_of(p)) {
     r->d.resize(std::max<size_t>(r->d.size(), 8), 0.0);  // OPENCV8 or OPENCV12
-    f = r->f, lensmodel = "LENSMODEL_OPENCV" + std::to_string(r->d.size());
-    for (double d : r->d) {
-      char number[32];
-      std::snprintf(number, sizeof number, " %.17g,", d);
-      distortion += number;
-    }
+    f = r->f, lensmodel = "LENSMODEL_OPENCV" + std::to_string(r->d.size()), distortion = r->d;
   } else {
     cannot_hold(p, CameraFormat::mrcal);
   }
   const std::array<double, 6> rt = p.pose ? rt_cam_ref_from_pose(*p.pose) : std::array<double, 6>{};
-  char buffer[1024];
-  std::snprintf(buffer, sizeof buffer,
-                "{\n"
-                "    'lensmodel':  '%s',\n\n"
-                "    # intrinsics are fx,fy,cx,cy%s\n"
-                "    'intrinsics': [ %.17g, %.17g, %.17g, %.17g,%s],\n\n"
-                "    # extrinsics are rt_fromref (rt_cam_ref)\n"
-                "    'extrinsics': [ %.17g, %.17g, %.17g, %.17g, %.17g, %.17g,],\n\n"
-                "    'imagersize': [ %d, %d,],\n"
-                "}\n",
-                lensmodel.c_str(), distortion.empty() ? "" : ",distortion0,distortion1,....", f * p.pixel_scale.x(),
-                f * p.pixel_scale.y(), p.principal_point.x(), p.principal_point.y(), distortion.c_str(), rt[0], rt[1], rt[2], rt[3], rt[4], rt[5], p.width, p.height);
-  return buffer;
+  std::string out = "{\n    'lensmodel':  '" + lensmodel + "',\n\n";
+  out += std::string("    # intrinsics are fx,fy,cx,cy") + (distortion.empty() ? "" : ",distortion0,distortion1,....") + "\n";
+  out += "    'intrinsics': [";
+  for (double x : {f * p.pixel_scale.x(), f * p.pixel_scale.y(), p.principal_point.x(), p.principal_point.y()}) {
+    out += ' ', out += number(x), out += ',';
+  }
+  for (double x : distortion) out += ' ', out += number(x), out += ',';
+  out += "],\n\n    # extrinsics are rt_fromref (rt_cam_ref)\n    'extrinsics': [";
+  for (double x : rt) out += ' ', out += number(x), out += ',';
+  out += "],\n\n    'imagersize': [ " + std::to_string(p.width) + ", " + std::to_string(p.height) + ",],\n}\n";
+  return out;
 }
 
 }  // namespace
 
 extern const FormatSpec mrcal_format{CameraFormat::mrcal, "mrcal", "mrcal .cameramodel", {".cameramodel"},
                                      {"pinhole", "stereographic", "opencv"}, score, read, write, false, false, false,
-                                     nullptr, true, true};
+                                     nullptr, true, true, true};
 
 }  // namespace fishcam::detail
