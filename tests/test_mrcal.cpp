@@ -5,6 +5,7 @@ extern "C" {  // mrcal 2.2's headers have no extern "C" of their own
 #include <mrcal/mrcal.h>
 }
 
+#include "fishcam/fit.hpp"
 #include "test_support.hpp"
 
 namespace fishcam {
@@ -131,6 +132,45 @@ TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
   mrcal_free_cameramodel(&model);
   check_against_mrcal({"mrcal_cam0.splined.cameramodel", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC,
                        camera.domain().theta_max, camera, values, camera.parameters().spline->lensmodel()});
+}
+
+// Converting a splined camera to a radial model (the case: mrcal's splined
+// calibration to a WoodScape polynomial): the report is reproduced by libmrcal's
+// projection of the source and the polynomial's formula for the result.
+TEST(Mrcal, ConvertingASplinedCameraReportsWhatLibmrcalAndThePolynomialFind) {
+  const Camera source(resized(test::spline_camera().second, 320, 242));
+  const Conversion conversion = convert_camera(source, parse_model_spec("polynomial:4"));
+  EXPECT_TRUE(conversion.center_and_aspect_fitted);
+  EXPECT_FALSE(conversion.camera.spline);
+  const auto samples = sample_image(source, 2, 0);
+  ASSERT_EQ(conversion.report.samples, long(samples.size()));
+  const MrcalSpline& spline = *source.parameters().spline;
+  mrcal_lensmodel_t lensmodel{};
+  ASSERT_TRUE(mrcal_lensmodel_from_name(&lensmodel, spline.lensmodel().c_str()));
+  const double f = model_params(source.model())[0];
+  std::vector<double> intrinsics = {f * source.pixel_scale().x(), f * source.pixel_scale().y(),
+                                    source.principal_point().x(), source.principal_point().y()};
+  intrinsics.insert(intrinsics.end(), spline.values().begin(), spline.values().end());
+  const auto k = model_params(conversion.camera.model);
+  const Eigen::Vector2d c = conversion.camera.principal_point, a = conversion.camera.pixel_scale;
+  double sum2 = 0, worst = 0;
+  for (const auto& s : samples) {
+    const mrcal_point3_t p = {{s.ray.x(), s.ray.y(), s.ray.z()}};
+    mrcal_point2_t q;
+    ASSERT_TRUE(mrcal_project(&q, nullptr, nullptr, &p, 1, &lensmodel, intrinsics.data()));
+    // WoodScape's polynomial: rho = k1 theta + ... + k4 theta^4 along the ray's azimuth.
+    const double chi = s.ray.head<2>().norm(), theta = std::atan2(chi, s.ray.z());
+    const double rho = theta * (k[0] + theta * (k[1] + theta * (k[2] + theta * k[3])));
+    const Eigen::Vector2d ours = chi > 0 ? Eigen::Vector2d(c + a.cwiseProduct(s.ray.head<2>()) * (rho / chi)) : c;
+    const double e = (ours - Eigen::Vector2d(q.x, q.y)).norm();
+    sum2 += e * e, worst = std::max(worst, e);
+  }
+  EXPECT_NEAR(std::sqrt(sum2 / double(samples.size())), conversion.report.rms_px, 1e-6);
+  EXPECT_NEAR(worst, conversion.report.max_px, 1e-6);
+  EXPECT_GT(conversion.non_radial.rms_px, 0.1);
+  EXPECT_LE(conversion.non_radial.rms_px, conversion.report.rms_px);
+  std::printf("  spline -> polynomial:4: rms %.4f px, max %.4f px (libmrcal and the formula: the same); floor %.4f px\n",
+              conversion.report.rms_px, conversion.report.max_px, conversion.non_radial.rms_px);
 }
 
 // The real OPENCV8 calibrations of ../shared (tangential terms and all), read by our

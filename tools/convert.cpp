@@ -96,8 +96,8 @@ void register_convert(CLI::App& app) {
                 std::string(to_string(format)).c_str());
     print_fit_report(fitted, report, "pixels of the source's valid image");
     if (!source.radial()) {
-      std::printf("the source is not radially symmetric: its tangential terms move its pixels by rms %.4f, max %.4f px "
-                  "from its own radial part (what no radial model represents); principal point and a_y were fitted\n",
+      std::printf("the source is not radially symmetric (principal point and a_y were fitted): about them no radial "
+                  "model gets below rms %.4f px (max %.4f px), the error of the best free-form rho(theta)\n",
                   non_radial.rms_px, non_radial.max_px);
     }
     if (!o->error_map.empty()) std::printf("wrote %s (pixel error per pixel)\n", o->error_map.c_str());

@@ -9,6 +9,7 @@
 
 #include <Eigen/QR>
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -377,6 +378,53 @@ void check_conversion_method(std::string_view name) {
   }
 }
 
+namespace {
+
+// The error no radial model can avoid, about the fitted camera's principal point and
+// pixel scale: the best free-form rho(theta) (per 0.25-degree band of theta, a line in
+// theta fitted to the samples' radial offsets along their rays' azimuths) leaves each
+// sample's offset across its azimuth and its radial offset from that line.
+Conversion::NonRadial non_radial_floor(std::span<const Correspondence> samples, const CameraParameters& fitted) {
+  constexpr double kBand = 0.25 / kDeg;
+  struct Sample {
+    int band;
+    double theta, along, across;
+    Eigen::Vector2d direction;
+  };
+  std::vector<Sample> kept;
+  for (const auto& s : samples) {
+    const double chi = s.ray.head<2>().norm();
+    if (!(chi > 0)) continue;
+    const Eigen::Vector2d e = s.ray.head<2>() / chi;
+    const Eigen::Vector2d q = (s.pixel - fitted.principal_point).cwiseQuotient(fitted.pixel_scale);
+    const double theta = std::atan2(chi, s.ray.z());
+    kept.push_back({int(theta / kBand), theta, q.dot(e), e.x() * q.y() - e.y() * q.x(), e});
+  }
+  std::map<int, std::array<double, 5>> sums;  // n, sum theta, sum theta^2, sum along, sum theta along
+  for (const Sample& s : kept) {
+    auto& b = sums[s.band];
+    b[0] += 1, b[1] += s.theta, b[2] += s.theta * s.theta, b[3] += s.along, b[4] += s.theta * s.along;
+  }
+  Conversion::NonRadial out;
+  double sum2 = 0;
+  for (const Sample& s : kept) {
+    const auto& b = sums[s.band];
+    const double n = b[0], det = n * b[2] - b[1] * b[1];
+    const double slope = n >= 3 && det > 1e-30 * n * n ? (n * b[4] - b[1] * b[3]) / det : 0;
+    const double rho = (b[3] - slope * b[1]) / n + slope * s.theta;
+    const Eigen::Vector2d normal(-s.direction.y(), s.direction.x());
+    const Eigen::Vector2d error = (s.along - rho) * s.direction + s.across * normal;
+    const double d = error.cwiseProduct(fitted.pixel_scale).norm();
+    sum2 += d * d;
+    out.max_px = std::max(out.max_px, d);
+    ++out.samples;
+  }
+  if (out.samples > 0) out.rms_px = std::sqrt(sum2 / double(out.samples));
+  return out;
+}
+
+}  // namespace
+
 Conversion convert_camera(const Camera& source, const ModelSpec& model, std::string_view method,
                           std::optional<double> max_theta, const FitOptions& options) {
   check_conversion_method(method);
@@ -400,23 +448,7 @@ Conversion convert_camera(const Camera& source, const ModelSpec& model, std::str
   for (const auto& s : evaluation) {
     out.widest_theta = std::max(out.widest_theta, std::atan2(s.ray.head<2>().norm(), s.ray.z()));
   }
-  if (!source.radial()) {
-    CameraParameters radial_part = source.parameters();
-    radial_part.tangential = {};
-    radial_part.spline.reset();
-    if (source.domain().closed) radial_part.theta_limit = source.domain().theta_max;  // the source's domain
-    const Camera radial(radial_part);
-    double sum2 = 0;
-    for (const auto& s : evaluation) {
-      Eigen::Vector2d q;
-      if (!radial.project(s.ray, &q)) continue;
-      const double d = (q - s.pixel).norm();
-      sum2 += d * d;
-      out.non_radial.max_px = std::max(out.non_radial.max_px, d);
-      ++out.non_radial.samples;
-    }
-    if (out.non_radial.samples > 0) out.non_radial.rms_px = std::sqrt(sum2 / double(out.non_radial.samples));
-  }
+  if (!source.radial()) out.non_radial = non_radial_floor(evaluation, out.camera);
   return out;
 }
 

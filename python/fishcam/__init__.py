@@ -100,8 +100,8 @@ def convert(camera: Camera, to: str, method: str = "lsq", max_angle: _typing.Opt
 
     Returns a ``fishcam.Conversion``: ``camera`` (the fitted one), ``report`` (a
     ``FitReport``: rms_px, p99_px, max_px, the rays below 90 degrees, by_angle),
-    ``widest_theta_deg``, ``non_radial_px`` (for a source with tangential terms: the
-    rms and max pixels no radial model can represent) and ``to_json()`` (what
+    ``widest_theta_deg``, ``non_radial_px`` (for a source that is not radially
+    symmetric: the rms and max pixels no radial model gets below) and ``to_json()`` (what
     ``fishcam convert --json`` prints);
     it unpacks as ``camera, report = fishcam.convert(...)``.
     """

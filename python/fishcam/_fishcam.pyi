@@ -300,7 +300,7 @@ class Conversion:
     @property
     def non_radial_px(self) -> tuple[float, float] | None:
         """
-        For a source with tangential terms: (rms, max) pixels by which they move its pixels from its own radial part, the error no radial model can represent; None for a radial source.
+        For a source that is not radially symmetric: (rms, max) pixels no radial model gets below about the fitted principal point (the best free-form rho(theta)'s error); None for a radial source.
         """
     @property
     def report(self) -> FitReport:

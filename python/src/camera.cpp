@@ -328,8 +328,8 @@ void bind_camera(py::module_& m) {
             if (c.non_radial.samples == 0) return std::nullopt;
             return std::pair(c.non_radial.rms_px, c.non_radial.max_px);
           },
-          "For a source with tangential terms: (rms, max) pixels by which they move its pixels from its own radial "
-          "part, the error no radial model can represent; None for a radial source.")
+          "For a source that is not radially symmetric: (rms, max) pixels no radial model gets below about the "
+          "fitted principal point (the best free-form rho(theta)'s error); None for a radial source.")
       .def(
           "to_json", [](const Conversion& c) { return fit_report_json(c.camera, c.report); },
           "What `fishcam convert --json` prints (str).")

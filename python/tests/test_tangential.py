@@ -115,3 +115,47 @@ def test_real_mei_file_agrees_with_the_paper():
     pixels, ok = camera.project(points)
     assert ok.all()
     assert np.abs(pixels - mei(points, *MEI_ARGS)).max() < 1e-7
+
+
+def spline_camera_json():
+    """A stereographic camera with mrcal's spline on its plane (LENSMODEL_SPLINED_STEREOGRAPHIC)."""
+    values = []
+    for y in range(6):
+        for x in range(8):
+            values += [0.004 * np.cos(0.7 * x + 0.3 * y) + 0.001 * x, 0.003 * np.sin(0.5 * x - 0.9 * y) - 0.0015 * y]
+    return {"fishcam_camera": 1, "width": 640, "height": 483, "principal_point": [321.5, 240.0],
+            "pixel_scale": [1.0, 1.0045], "model": "stereographic", "parameters": [165.0],
+            "spline": {"lensmodel": "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
+                       "values": [float(v) for v in values]}}
+
+
+def test_a_splined_camera_is_mrcals_projection(tmp_path):
+    path = tmp_path / "spline.json"
+    path.write_text(json.dumps(spline_camera_json()))
+    camera = fishcam.Camera.read(str(path))
+    assert not camera.radial and camera.model == "stereographic"
+    lensmodel, values = camera.spline
+    assert lensmodel.startswith("LENSMODEL_SPLINED_STEREOGRAPHIC") and len(values) == 96
+    assert json.loads(camera.info_json())["spline"]["values"] == 96
+    copy = pickle.loads(pickle.dumps(camera))
+    assert copy == camera and copy.spline == camera.spline
+    plain = dict(spline_camera_json())
+    del plain["spline"]
+    plain_path = tmp_path / "plain.json"
+    plain_path.write_text(json.dumps(plain))
+    assert fishcam.Camera.read(str(plain_path)).parameters_key(False) != camera.parameters_key(False)
+    points = rays(5000, 60, 4)
+    pixels, ok = camera.project(points)
+    assert ok.all()
+    back, ok = camera.unproject(pixels)
+    assert ok.all() and np.abs(back - points).max() < 1e-9
+    mrcal = pytest.importorskip("mrcal")
+    intrinsics = np.array([165.0, 165.0 * 1.0045, 321.5, 240.0] + list(values))
+    expected = mrcal.project(points, lensmodel, intrinsics)
+    assert np.abs(pixels - expected).max() < 1e-9
+    camera.write(str(tmp_path / "spline.cameramodel"))
+    back = fishcam.Camera.read(str(tmp_path / "spline.cameramodel"))
+    assert back.spline == camera.spline
+    assert np.abs(back.project(points)[0] - pixels).max() < 1e-9
+    with pytest.raises(fishcam.Error, match="not stereographic"):
+        camera.write(str(tmp_path / "spline.yaml"), format="opencv")

@@ -76,12 +76,14 @@ ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspond
 // What `fishcam convert` does: the model fitted to the source camera ("lsq": least
 // squares over every 4th pixel of its valid image, up to max_theta when given;
 // "paper": eqs. 13-14), and its error over a denser grid (every 2nd pixel).
-// A source that is not radially symmetric (tangential terms) has its principal point
-// and a_y fitted too, whatever the options say: a radial model about the source's
-// principal point is not the best radial model. `non_radial` then measures, over the
-// same evaluation rays, how far the source's tangential terms move its pixels from
-// its own radial part: the part of the error no radial model can represent (zero for
-// a radial source).
+// A source that is not radially symmetric (tangential terms, mrcal's spline) has its
+// principal point and a_y fitted too, whatever the options say: a radial model about
+// the source's principal point is not the best radial model. `non_radial` then
+// measures, over the same evaluation rays, the error no radial model can avoid about
+// the fitted principal point and pixel scale: what remains after the best free-form
+// rho(theta) (fitted per 0.25-degree band), i.e. each pixel's offset across its ray's
+// azimuth and the spread of its radius within its band (not computed for a radial
+// source, where it is ~0).
 struct Conversion {
   CameraParameters camera;
   ErrorReport report;
