@@ -58,6 +58,34 @@ TEST(Cli, InfoSaysHowUnprojectionInverts) {
   }
 }
 
+// A camera that is not radially symmetric says what its non-radial part is, in text
+// and JSON; a radial one has null there.
+TEST(Cli, InfoSaysWhatIsNotRadiallySymmetric) {
+  const auto dir = test::scratch_dir("cli_info_non_radial");
+  const CameraParameters tangential = test::every_tangential_camera().front().second;  // pinhole + p1, p2
+  write_camera(tangential, dir / "tangential.json", CameraFormat::fishcam);
+  write_camera(test::spline_camera().second, dir / "spline.json", CameraFormat::fishcam);
+  auto r = run_fishcam("info --json " + test::quoted(dir / "tangential.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["tangential"]["p1"].get<double>(), tangential.tangential.p1);
+  EXPECT_TRUE(j["spline"].is_null());
+  r = run_fishcam("info --json " + test::quoted(dir / "spline.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["spline"]["values"].get<int>(), 96);
+  EXPECT_TRUE(j["tangential"].is_null());
+  r = run_fishcam("info --json " + data("woodscape_front.json"));
+  j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["tangential"].is_null() && j["spline"].is_null());
+  for (const char* file : {"tangential.json", "spline.json"}) {
+    r = run_fishcam("info " + test::quoted(dir / file));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("not radially symmetric"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("unprojection      2-D Newton"), std::string::npos) << r.out;
+  }
+}
+
 TEST(Cli, ProjectThenUnprojectRoundTrips) {
   const auto projected = run_fishcam("project " + data("woodscape_front.json"),
                                      "1 0.5 2\n# a comment\n\n1 -1 -0.5\n0 0 -1\n0 0 0\nnan 1 1\n");

@@ -130,7 +130,7 @@ TEST(Tangential, TheDomainEndsWhereTheDistortionStopsBeingOneToOne) {
   p.tangential = {0.05, -0.03, {}};
   const Camera camera(p);
   const ValidDomain& d = camera.domain();
-  EXPECT_EQ(d.limited_by, ValidDomain::Limit::tangential_fold);
+  EXPECT_EQ(d.limited_by, ValidDomain::Limit::distortion_fold);
   EXPECT_TRUE(d.closed);
   EXPECT_LT(d.theta_max, 80 * M_PI / 180);
   EXPECT_GT(d.theta_max, 10 * M_PI / 180);
@@ -217,6 +217,14 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
                  "has 96 control values, got 95");
   spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8", std::vector<double>(96, 0.0), "is not a configured");
   spline_refused("LENSMODEL_OPENCV8", std::vector<double>(8, 0.0), "is not a configured");
+  // Configurations libmrcal would abort on, or parse wrapped (uint16), never reach it.
+  const std::string prefix = "LENSMODEL_SPLINED_STEREOGRAPHIC_";
+  spline_refused(prefix + "order=7_Nx=4_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "order must be 2 or 3");
+  spline_refused(prefix + "order=3_Nx=1_Ny=1_fov_x_deg=120", std::vector<double>(2, 0.0), "Nx and Ny must be in [4, 200]");
+  spline_refused(prefix + "order=3_Nx=-4_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "is not written as mrcal");
+  spline_refused(prefix + "order=3_Nx=99999999_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "is not written as mrcal");
+  spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=0", std::vector<double>(32, 0.0), "fov_x_deg must be in [1, 359]");
+  spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=120_extra", std::vector<double>(32, 0.0), "is not a configured");
   std::vector<double> values(96, 0.0);
   values[5] = std::numeric_limits<double>::quiet_NaN();
   spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", values, "must be finite");

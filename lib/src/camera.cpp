@@ -143,11 +143,11 @@ Eigen::Vector2d distorted(const Model& model, const Distortion& terms, const Eig
 }
 
 template <bool kWithJacobian, class Model, class Distortion>
-bool project_tangential(const Model& model, const double* mapping, const ValidDomain& domain,
+bool project_distorted(const Model& model, const double* mapping, const ValidDomain& domain,
                         const Distortion& terms, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                         Eigen::Matrix<double, 2, 3>* jacobian) {
   if constexpr (!HasUndistortedPlane<Model>) {
-    throw Error("internal: tangential terms on a model without an undistorted plane");  // the constructor refuses
+    throw Error("internal: a non-radial part on a model without an undistorted plane");  // the constructor refuses
   } else {
     if (!project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian)) return false;
     const double plane_mapping[4] = {0, 0, 1, 1};
@@ -168,11 +168,11 @@ bool project_tangential(const Model& model, const double* mapping, const ValidDo
 // unless the solution lies in the domain and reprojects to within 1e-7 px (relative
 // 1e-15 for pixels beyond 1e8 px).
 template <class Model, class Distortion>
-bool tangential_ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table,
+bool distorted_ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table,
                        const Distortion& terms, const Eigen::Vector2d& pixel_scale, double x, double y,
                        double* ray) {
   if constexpr (!HasUndistortedPlane<Model>) {
-    throw Error("internal: tangential terms on a model without an undistorted plane");
+    throw Error("internal: a non-radial part on a model without an undistorted plane");
   } else {
     const double f = model.focal();
     const Eigen::Vector2d target(x / f, y / f);
@@ -244,7 +244,7 @@ bool tangential_ray_of(const Model& model, const ValidDomain& domain, const Inve
 // injective. (T(0) = 0 for tangential terms; mrcal's spline moves the centre.)
 // Rings are scanned, the first failing one bisected. nullopt: no ring fails.
 template <class Model, class Distortion>
-std::optional<double> tangential_fold(const Model& model, const Distortion& terms, const ValidDomain& radial) {
+std::optional<double> distortion_fold(const Model& model, const Distortion& terms, const ValidDomain& radial) {
   if constexpr (!HasUndistortedPlane<Model>) {
     return std::nullopt;
   } else {
@@ -298,10 +298,10 @@ bool project_point(const Model& model, const CameraParameters& params, const dou
                    const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                    Eigen::Matrix<double, 2, 3>* jacobian) {
   if (params.spline) {
-    return project_tangential<kWithJacobian>(model, mapping, domain, *params.spline, point, pixel, jacobian);
+    return project_distorted<kWithJacobian>(model, mapping, domain, *params.spline, point, pixel, jacobian);
   }
   if (params.tangential.any()) {
-    return project_tangential<kWithJacobian>(model, mapping, domain, params.tangential, point, pixel, jacobian);
+    return project_distorted<kWithJacobian>(model, mapping, domain, params.tangential, point, pixel, jacobian);
   }
   return project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian);
 }
@@ -309,9 +309,9 @@ bool project_point(const Model& model, const CameraParameters& params, const dou
 template <class Model>
 bool ray_of_point(const Model& model, const CameraParameters& params, const ValidDomain& domain,
                   const InverseTable& table, double x, double y, InversePath path, double* ray) {
-  if (params.spline) return tangential_ray_of(model, domain, table, *params.spline, params.pixel_scale, x, y, ray);
+  if (params.spline) return distorted_ray_of(model, domain, table, *params.spline, params.pixel_scale, x, y, ray);
   if (params.tangential.any()) {
-    return tangential_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray);
+    return distorted_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray);
   }
   return ray_of(model, domain, table, x, y, path, ray);
 }
@@ -481,7 +481,7 @@ void Camera::limit_to_plane_fold() {
     if (terms.any()) fail("tangential: a camera has tangential terms or a spline, not both");
     const auto* stereographic = std::get_if<Stereographic<double>>(&params_.model);
     if (!stereographic) fail("spline: mrcal's spline displaces the stereographic plane: the model must be stereographic");
-    fold = tangential_fold(*stereographic, *params_.spline, domain_);
+    fold = distortion_fold(*stereographic, *params_.spline, domain_);
   } else {
     const bool takes = std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; },
                                   params_.model);
@@ -489,13 +489,15 @@ void Camera::limit_to_plane_fold() {
       fail("tangential: the ", model_name(params_.model),
            " model takes no tangential terms (pinhole, opencv and mei do, on their undistorted plane)");
     }
-    fold = std::visit([&](const auto& m) { return tangential_fold(m, terms, domain_); }, params_.model);
+    fold = std::visit([&](const auto& m) { return distortion_fold(m, terms, domain_); }, params_.model);
   }
   if (!fold || *fold >= domain_.theta_max * (1 - 1e-12)) return;  // the radial limit comes first
-  if (!(*fold > 0)) fail("tangential: the distortion is not one-to-one even next to the principal point");
+  if (!(*fold > 0)) {
+    fail(params_.spline ? "spline" : "tangential", ": the distortion is not one-to-one even next to the principal point");
+  }
   domain_.theta_max = *fold;
   domain_.closed = true;
-  domain_.limited_by = ValidDomain::Limit::tangential_fold;
+  domain_.limited_by = ValidDomain::Limit::distortion_fold;
   domain_.rho_max = rho(*fold);
 }
 

@@ -129,7 +129,7 @@ CameraFormat detect_camera_format(std::string_view content, std::string_view sou
   // Nothing recognised it. Files of models fishcam cannot hold are named.
   if (content.find("#polynomial coefficients for the DIRECT mapping function") != std::string_view::npos) {
     throw Error(std::string(source_name) + ": an OCamCalib calib_results.txt: Scaramuzza's model has an affine "
-                "term (c, d, e) and is not radially symmetric; fishcam reads radially symmetric models only");
+                "term (c, d, e) that fishcam's pixel scale (a_x, a_y) cannot hold; fishcam has no OCamCalib camera yet");
   }
   // Where the text does not even parse, the reader of the
   // syntax it tries to be says why (the parse error, with its line).

@@ -19,16 +19,29 @@ MrcalSpline::MrcalSpline(std::string lensmodel, std::vector<double> values)
   if (lensmodel_.rfind("LENSMODEL_SPLINED_STEREOGRAPHIC", 0) != 0 ||
       !mrcal_lensmodel_from_name(&parsed_->model, lensmodel_.c_str()) ||
       parsed_->model.type != MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC) {
-    throw Error("spline: '" + lensmodel_.substr(0, 80) +
+    throw Error("'" + lensmodel_.substr(0, 80) +
                 "' is not a configured LENSMODEL_SPLINED_STEREOGRAPHIC_order=O_Nx=X_Ny=Y_fov_x_deg=F");
   }
+  // libmrcal asserts (aborts) on configurations it does not support, and parses its
+  // integers as uint16 (wrapping): checked here, and the name must be what mrcal
+  // itself writes for the configuration it parsed.
+  const auto& config = parsed_->model.LENSMODEL_SPLINED_STEREOGRAPHIC__config;
+  char canonical[256];
+  if (!mrcal_lensmodel_name(canonical, sizeof canonical, &parsed_->model) || lensmodel_ != canonical) {
+    throw Error("'" + lensmodel_.substr(0, 80) + "' is not written as mrcal writes its configuration");
+  }
+  if (config.order != 2 && config.order != 3) throw Error("order must be 2 or 3 (mrcal's splines)");
+  if (config.Nx < 4 || config.Ny < 4 || config.Nx > 200 || config.Ny > 200) {
+    throw Error("Nx and Ny must be in [4, 200]");
+  }
+  if (config.fov_x_deg < 1 || config.fov_x_deg > 359) throw Error("fov_x_deg must be in [1, 359]");
   const int count = mrcal_lensmodel_num_params(&parsed_->model) - 4;
   if (int(values_.size()) != count) {
-    throw Error("spline: " + lensmodel_ + " has " + std::to_string(count) + " control values, got " +
+    throw Error(lensmodel_ + " has " + std::to_string(count) + " control values, got " +
                 std::to_string(values_.size()));
   }
   for (double v : values_) {
-    if (!std::isfinite(v)) throw Error("spline: control values must be finite");
+    if (!std::isfinite(v)) throw Error("the control values must be finite");
   }
   intrinsics_ = {1, 1, 0, 0};
   intrinsics_.insert(intrinsics_.end(), values_.begin(), values_.end());

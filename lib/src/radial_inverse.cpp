@@ -10,7 +10,7 @@ const char* to_string(ValidDomain::Limit limit) {
     case ValidDomain::Limit::model: return "model";
     case ValidDomain::Limit::fold: return "fold";
     case ValidDomain::Limit::user: return "user";
-    case ValidDomain::Limit::tangential_fold: return "tangential-fold";
+    case ValidDomain::Limit::distortion_fold: return "distortion-fold";
   }
   return "?";
 }
