@@ -144,8 +144,8 @@ Eigen::Vector2d distorted(const Model& model, const Distortion& terms, const Eig
 
 template <bool kWithJacobian, class Model, class Distortion>
 bool project_distorted(const Model& model, const double* mapping, const ValidDomain& domain,
-                        const Distortion& terms, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
-                        Eigen::Matrix<double, 2, 3>* jacobian) {
+                       const Distortion& terms, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                       Eigen::Matrix<double, 2, 3>* jacobian) {
   if constexpr (!HasUndistortedPlane<Model>) {
     throw Error("internal: a non-radial part on a model without an undistorted plane");  // the constructor refuses
   } else {
@@ -159,18 +159,21 @@ bool project_distorted(const Model& model, const double* mapping, const ValidDom
     Eigen::Matrix2d dt;
     *pixel += f * a.cwiseProduct(terms.offset(m, kWithJacobian ? &dt : nullptr));
     if constexpr (kWithJacobian) *jacobian += f * a.asDiagonal() * dt * dm_dp;
-    return pixel->allFinite();
+    if (pixel->allFinite()) return true;
+    pixel->setConstant(kNaN);
+    if constexpr (kWithJacobian) jacobian->setConstant(kNaN);
+    return false;
   }
 }
 
 // The unit ray of normalized image coordinates (x, y) = ((u - cx) / a_x, (v - cy) / a_y):
-// D(m) = (x, y) / f solved by Newton with backtracking from the radial inverse; false
-// unless the solution lies in the domain and reprojects to within 1e-7 px (relative
-// 1e-15 for pixels beyond 1e8 px).
+// D(m) = (x, y) / f solved by Newton with backtracking from the radial inverse, else by
+// continuation from D(0); false unless the solution lies in the domain and reprojects
+// to within 1e-7 px (relative 1e-15 for pixels beyond 1e8 px).
 template <class Model, class Distortion>
 bool distorted_ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table,
-                       const Distortion& terms, const Eigen::Vector2d& pixel_scale, double x, double y,
-                       double* ray) {
+                      const Distortion& terms, const Eigen::Vector2d& pixel_scale, double x, double y,
+                      double* ray) {
   if constexpr (!HasUndistortedPlane<Model>) {
     throw Error("internal: a non-radial part on a model without an undistorted plane");
   } else {
