@@ -65,4 +65,48 @@ inline Eigen::Vector2d woodscape(const std::vector<double>& k, double width, dou
   return {cx + rho * p.x() / chi, cy + rho * p.y() / chi * aspect};
 }
 
+// OCamCalib (Scaramuzza's ocam_functions.c), in its own frame: a point (x, y, z)
+// with x along rows, y along columns, the camera looking along -z; pixels as
+// (row, column) from 0. `pol` is a0..aN, `invpol` world2cam's polynomial.
+struct OCamCalib {
+  std::vector<double> pol, invpol;
+  double xc, yc, c, d, e;  // centre (row, column); affine
+};
+// cam2world: the ray (x, y, pol(rho)) of the pixel (row, column), not normalised.
+inline Eigen::Vector3d ocam_cam2world(const OCamCalib& o, double row, double column) {
+  const double inv_det = 1 / (o.c - o.d * o.e);
+  const double xp = inv_det * ((row - o.xc) - o.d * (column - o.yc));
+  const double yp = inv_det * (-o.e * (row - o.xc) + o.c * (column - o.yc));
+  const double r = std::hypot(xp, yp);
+  double z = 0, power = 1;
+  for (double a : o.pol) z += a * power, power *= r;
+  return {xp, yp, z};
+}
+// world2cam with invpol (OCamCalib's fast projection; invpol approximates pol's inverse).
+inline Eigen::Vector2d ocam_world2cam(const OCamCalib& o, const Eigen::Vector3d& p) {
+  const double norm = std::hypot(p.x(), p.y());
+  const double theta = std::atan(p.z() / norm);
+  double rho = 0, power = 1;
+  for (double a : o.invpol) rho += a * power, power *= theta;
+  const double x = p.x() / norm * rho, y = p.y() / norm * rho;
+  return {x * o.c + y * o.d + o.xc, x * o.e + y + o.yc};  // (row, column)
+}
+// world2cam with pol's exact inverse: the rho whose cam2world ray has the point's
+// elevation, by bisection on [0, rho_hi] (pol's elevation increasing there).
+inline Eigen::Vector2d ocam_world2cam_exact(const OCamCalib& o, const Eigen::Vector3d& p, double rho_hi) {
+  const double norm = std::hypot(p.x(), p.y()), elevation = std::atan2(p.z(), norm);
+  const auto elevation_of = [&](double r) {
+    double z = 0, power = 1;
+    for (double a : o.pol) z += a * power, power *= r;
+    return std::atan2(z, r);
+  };
+  double lo = 0, hi = rho_hi;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (elevation_of(mid) > elevation ? hi : lo) = mid;  // the elevation rises from -90 deg as rho grows
+  }
+  const double rho = 0.5 * (lo + hi), x = p.x() / norm * rho, y = p.y() / norm * rho;
+  return {x * o.c + y * o.d + o.xc, x * o.e + y + o.yc};
+}
+
 }  // namespace fishcam::test

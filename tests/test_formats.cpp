@@ -59,6 +59,13 @@ double worst_against_opencv(const Camera& camera, const Intrinsics& k, const std
   return worst;
 }
 
+// ocamcalib_calib_results.txt's numbers.
+const test::OCamCalib kOCamCalibFile{
+    {-7.463674e+02, 0.000000e+00, 8.872435e-04, -1.024379e-06, 9.406640e-10},
+    {976.011496, 423.799439, -71.005688, 109.822387, 14.864652, -10.577479, -103.634310, -135.380427, 365.628459,
+     832.263016, 646.459114, 228.199663, 31.134605},
+    630.102940, 958.314910, 0.996974, -0.014257, 0.013102};
+
 struct Readable {
   std::string file;
   std::string camera;  // empty: the default (first)
@@ -165,6 +172,13 @@ std::vector<Readable> readable_files() {
                           2.2268230796296904, 0.3207260522384846, 1.311770851988966, p);
        },
        kFull, {}},
+      // OCamCalib: pol's exact inverse in OCamCalib's frame (x rows, y columns, looking along -z).
+      {"ocamcalib_calib_results.txt", "", "ocamcalib", "ocam", 1920, 1208,
+       [](const Eigen::Vector3d& p) {
+         const Eigen::Vector2d row_column = test::ocam_world2cam_exact(kOCamCalibFile, {p.y(), p.x(), -p.z()}, 5000);
+         return Eigen::Vector2d(row_column.y(), row_column.x());
+       },
+       120 * M_PI / 180, {}},  // the image's corners see 115 deg
       {"synwoodscape_FV.json", "", "woodscape", "polynomial", 1280, 966,
        [](const Eigen::Vector3d& p) {
          return test::woodscape({341.725, -26.4448, 32.7864, 0.50499}, 1280, 966, 0.329055, -3.5506, 1.00021, p);
@@ -199,8 +213,7 @@ TEST(Formats, EveryExternalFileIsReadAgainstAReferenceOrRefused) {
   std::set<std::string> checked;
   for (const auto& r : readable_files()) checked.insert(r.file);
   checked.insert("mrcal_cam0.splined.cameramodel");  // against libmrcal: Mrcal.SplinedStereographicAgreesWithLibmrcal
-  for (const char* refused : {"ocamcalib_calib_results.txt",
-                              "opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml"}) {
+  for (const char* refused : {"opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml"}) {
     checked.insert(refused);  // FilesFishcamCannotHoldAreRefusedNamingWhy
   }
   // WoodScape-layout JSON: the WoodScape formula with the numbers as the file has them.
@@ -257,10 +270,117 @@ TEST(Formats, PosesAreReadInFishcamsConvention) {
                                                                      -0.046315428444919249)).norm(), 1e-15);
 }
 
+// OCamCalib's own functions on the real file: our unprojection is cam2world (pol)
+// exactly; our projection is world2cam up to invpol's own error (invpol only
+// approximates pol's inverse); written back, the file reads as the same camera.
+TEST(Formats, OCamCalibFileIsCam2worldAndWorld2cam) {
+  if (!std::filesystem::exists(external("README.md"))) GTEST_SKIP() << "no ../shared checkout";
+  const Camera camera = read_camera(external("ocamcalib_calib_results.txt"));
+  const test::OCamCalib& o = kOCamCalibFile;
+  double worst_angle = 0, worst_invpol = 0, worst_round_trip = 0;
+  int pixels = 0;
+  for (int v = 0; v < camera.height(); v += 16) {
+    for (int u = 0; u < camera.width(); u += 16) {
+      const Eigen::Vector3d ocam = test::ocam_cam2world(o, v, u);  // (row, column)
+      const Eigen::Vector3d expected = Eigen::Vector3d(ocam.y(), ocam.x(), -ocam.z()).normalized();
+      Eigen::Vector3d ray;
+      ASSERT_TRUE(camera.unproject({double(u), double(v)}, &ray)) << u << ", " << v;
+      worst_angle = std::max(worst_angle, std::atan2(ray.cross(expected).norm(), ray.dot(expected)));
+      Eigen::Vector2d pixel;
+      ASSERT_TRUE(camera.project(ray, &pixel));
+      worst_round_trip = std::max(worst_round_trip, (pixel - Eigen::Vector2d(u, v)).norm());
+      const Eigen::Vector2d row_column = test::ocam_world2cam(o, ocam);
+      worst_invpol = std::max(worst_invpol, (pixel - Eigen::Vector2d(row_column.y(), row_column.x())).norm());
+      ++pixels;
+    }
+  }
+  EXPECT_EQ(pixels, 120 * 76);
+  EXPECT_LE(worst_angle, 1e-13);
+  EXPECT_LE(worst_round_trip, 1e-9);
+  EXPECT_LE(worst_invpol, 0.1);  // the file's invpol against its pol: measured 0.02 px
+  EXPECT_GT(worst_invpol, 1e-4);  // (so this is not comparing pol with itself)
+  EXPECT_EQ(camera.skew().xy, 0.013102);
+  EXPECT_NEAR(camera.skew().yx, -0.014257 / 0.996974, 1e-15);
+
+  // Written and read back: the same camera, with an invpol fitted to 1e-3 px.
+  const std::string written = format_camera(camera.parameters(), CameraFormat::ocamcalib);
+  const Camera back(parse_camera(written, "back.txt"));
+  EXPECT_EQ(model_params(back.model()), model_params(camera.model()));
+  EXPECT_EQ(back.principal_point(), camera.principal_point());
+  EXPECT_EQ(back.pixel_scale(), camera.pixel_scale());
+  EXPECT_NEAR(back.skew().yx, camera.skew().yx, 1e-15);
+  std::istringstream lines(written);
+  test::OCamCalib w = o;
+  w.invpol.clear();
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("inverse mapping") == std::string::npos) continue;
+    std::getline(lines, line), std::getline(lines, line);
+    std::istringstream numbers(line);
+    int n = 0;
+    numbers >> n;
+    w.invpol.resize(size_t(n));
+    for (double& x : w.invpol) numbers >> x;
+  }
+  ASSERT_FALSE(w.invpol.empty());
+  double worst_fit = 0;
+  for (int v = 0; v < camera.height(); v += 16) {
+    for (int u = 0; u < camera.width(); u += 16) {
+      const Eigen::Vector3d ocam = test::ocam_cam2world(w, v, u);
+      const Eigen::Vector2d row_column = test::ocam_world2cam(w, ocam);
+      worst_fit = std::max(worst_fit, (row_column - Eigen::Vector2d(v, u)).norm());
+    }
+  }
+  EXPECT_LE(worst_fit, 2e-3);
+}
+
+TEST(Formats, OCamCalibFilesThatCannotBeRightAreRefused) {
+  CameraParameters p = test::every_model()[0].second;
+  p.model = OCam<double>({-340.0, 0, 1 / 1020.0, 0, 0});
+  p.skew = {0.01, -0.02};
+  const std::string good = format_camera(p, CameraFormat::ocamcalib);
+  const Camera camera(parse_camera(good, "good.txt"));
+  EXPECT_EQ(camera.skew(), p.skew);
+  const auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string text = good;
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return at == std::string::npos ? text : text.replace(at, from.size(), to);
+  };
+  const std::string pol_line = good.substr(good.find("\n\n") + 2, good.find('\n', good.find("\n\n") + 2) - good.find("\n\n") - 2);
+  const size_t invpol_at = good.find("\n\n", good.find("inverse mapping")) + 2;
+  const std::string invpol_line = good.substr(invpol_at, good.find('\n', invpol_at) - invpol_at);
+  const std::string invpol_first = invpol_line.substr(invpol_line.find(' ') + 1, invpol_line.find(' ', invpol_line.find(' ') + 1) - invpol_line.find(' ') - 1);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {replaced(", starting from 0 (C convention)", ""), "does not say where its rows and columns start"},
+      {replaced(pol_line, "6 -340 0 0.001 0 0 1e-12"), "degree up to 4"},
+      {replaced(pol_line, "5 340 0 0.001 0 0"), "a0 must be < 0"},
+      {replaced(invpol_line, invpol_line.substr(0, invpol_line.find(' ')) + " 1" + invpol_first +
+                                 invpol_line.substr(invpol_line.find(' ', invpol_line.find(' ') + 1))),
+       "invpol: misses pol's inverse by"},
+      {good.substr(0, good.find("#image size")), "expected 5 blocks"},
+      {replaced("966 1280", "966"), "image size (height width): expected 2 numbers"},
+      {replaced(pol_line, "3 -340 0"), "pol: expected its count"},
+      {replaced(pol_line, "5 -340 0 x 0 0"), "data line 1"},
+  };
+  int refused = 0;
+  for (const auto& [text, expected] : cases) {
+    try {
+      parse_camera(text, "bad.txt");
+      ADD_FAILURE() << "read: " << text;
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(expected), std::string::npos) << what;
+      EXPECT_EQ(what.rfind("bad.txt: ", 0), 0u) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+      ++refused;
+    }
+  }
+  EXPECT_EQ(refused, int(cases.size()));
+}
+
 TEST(Formats, FilesFishcamCannotHoldAreRefusedNamingWhy) {
   if (!std::filesystem::exists(external("README.md"))) GTEST_SKIP() << "no ../shared checkout";
   const std::vector<std::pair<std::string, std::string>> refused = {
-      {"ocamcalib_calib_results.txt", "OCamCalib calib_results.txt: Scaramuzza's model has an affine term"},
       {"opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml", "distortion_model: missing: 4 distortion coefficients could be"},
   };
   for (const auto& [file, expected] : refused) {

@@ -105,6 +105,11 @@ inline std::vector<ModelExample> model_examples() {
       // as that camera's (its image reaches 3/4 of the radius of the distortion's fold).
       {"opencv_rational", OpenCV<double>(700.0, -0.01266096516, 0.03590794372, 0.01968883397, 0.01482863541,
                                          -0.0562239888, 0.0500223357), {1.0, 1.00004}},
+      // ocamcalib_calib_results.txt's pol (../shared/data/external), scaled to f = 340 px
+      // (its domain is open up to 180 degrees), and one whose theta(rho) turns back (a fold
+      // at rho = 1208, past the image's corners).
+      {"ocam", OCam<double>({-746.3674, 0, 8.872435e-04, -1.024379e-06, 9.406640e-10}).scaled(340 / 746.3674), {1.0, 1.003}},
+      {"ocam_fold", OCam<double>({-340.0, 0, 1 / 1020.0, -5.0e-7, 0}), {1.0, 0.999}},
   };
 }
 
@@ -171,6 +176,19 @@ inline std::pair<std::string, CameraParameters> spline_camera() {
   }
   ADD_FAILURE() << "no stereographic example for the spline camera";
   return {};
+}
+
+// Whether the float warp kernel can evaluate the camera: a model with the unified
+// form or polynomial in theta, no spline, no skew. The others (ocam; skewed grids;
+// mrcal's spline) take the exact path, by design.
+inline bool float_kernel_form(const CameraParameters& p) {
+  const bool form = std::visit(
+      [](const auto& m) {
+        using M = std::decay_t<decltype(m)>;
+        return HasUnifiedForm<M> || PolynomialInTheta<M>;
+      },
+      p.model);
+  return form && !p.spline && !p.skew.any();
 }
 
 // Every camera kind: every_model(), every_tangential_camera() and with_spline the

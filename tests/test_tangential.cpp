@@ -180,6 +180,80 @@ TEST(Tangential, TheDomainEndsWhereTheDistortionStopsBeingOneToOne) {
   EXPECT_LT(smallest_past, 0);
 }
 
+// A skewed pixel grid on every kind of camera (every registry example, every
+// tangential camera, the spline): pixel = c + a (.) (S q) with q the same camera's
+// projection without c, a and skew; its Jacobian by finite differences; unprojection
+// undoing it to 1e-9 px.
+TEST(Tangential, SkewedGridsProjectThroughTheSkewAndUnprojectBack) {
+  const PixelSkew skew{0.013102, -0.0143};
+  int cameras = 0;
+  for (auto [name, params] : test::every_camera(true)) {
+    CameraParameters unit = params;
+    unit.principal_point.setZero(), unit.pixel_scale.setOnes();
+    params.skew = skew;
+    const Camera camera(params), plain(unit);
+    ASSERT_FALSE(camera.radial()) << name;
+    const ValidDomain& d = camera.domain();
+    const double limit = std::min(d.closed ? d.theta_max : d.theta_max - 1e-3, 100 * M_PI / 180);
+    const Eigen::Matrix2d as = params.pixel_scale.asDiagonal() * skew.matrix();
+    double worst = 0, worst_jacobian = 0, worst_back = 0;
+    int n = 0;
+    for (const auto& ray : test::random_rays(2000, limit, 11)) {
+      const Eigen::Vector3d p = (0.5 + double(n++ % 7)) * ray;
+      Eigen::Vector2d pixel, q;
+      Eigen::Matrix<double, 2, 3> jacobian;
+      ASSERT_TRUE(camera.project(p, &pixel, &jacobian)) << name;
+      ASSERT_TRUE(plain.project(p, &q)) << name;
+      const double scale = 1 + 1e-3 * q.norm();
+      worst = std::max(worst, (pixel - (params.principal_point + as * q)).norm() / scale);
+      Eigen::Vector3d back;
+      ASSERT_TRUE(camera.unproject(pixel, &back)) << name;
+      Eigen::Vector2d again;
+      ASSERT_TRUE(camera.project(back, &again));
+      worst_back = std::max(worst_back, (again - pixel).norm() / scale);
+      if (n % 10) continue;
+      Eigen::Matrix<double, 2, 3> numeric;
+      for (int k = 0; k < 3; ++k) {
+        const double h = 1e-6 * p.norm();
+        Eigen::Vector2d plus, minus;
+        ASSERT_TRUE(camera.project(p + h * Eigen::Vector3d::Unit(k), &plus));
+        ASSERT_TRUE(camera.project(p - h * Eigen::Vector3d::Unit(k), &minus));
+        numeric.col(k) = (plus - minus) / (2 * h);
+      }
+      worst_jacobian = std::max(worst_jacobian, (numeric - jacobian).cwiseAbs().maxCoeff() / (1 + jacobian.cwiseAbs().maxCoeff()));
+    }
+    EXPECT_LE(worst, 1e-12) << name;
+    EXPECT_LE(worst_back, 1e-9) << name;
+    EXPECT_LE(worst_jacobian, 1e-6) << name;
+    ++cameras;
+  }
+  EXPECT_EQ(cameras, int(test::every_camera(true).size()));
+  EXPECT_GE(cameras, 20);  // 16 models + 3 tangential + the spline
+}
+
+TEST(Tangential, SkewsThatCannotBeAGridAreRefused) {
+  CameraParameters p = test::every_model()[0].second;
+  for (const PixelSkew& bad : {PixelSkew{1, 1}, PixelSkew{2, 0.5}, PixelSkew{NAN, 0}, PixelSkew{0, INFINITY}}) {
+    p.skew = bad;
+    try {
+      Camera camera(p);
+      ADD_FAILURE() << "accepted " << bad.xy << " " << bad.yx;
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("skew: ", 0), 0u) << e.what();
+    }
+  }
+  p.skew = {0.5, 0.5};  // det 0.75: a valid (if odd) grid
+  EXPECT_NO_THROW(Camera{p});
+  // Formats without a skew say so and name the ones with.
+  p.skew = {0.01, 0};
+  try {
+    format_camera(p, CameraFormat::woodscape);
+    ADD_FAILURE() << "woodscape wrote a skew";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "skew: the woodscape format cannot hold a skewed pixel grid (fishcam, ocamcalib can)");
+  }
+}
+
 TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
   const auto refused = [](CameraParameters p, const std::string& expected) {
     try {

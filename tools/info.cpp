@@ -25,6 +25,10 @@ void print_text(const nlohmann::json& j) {
                 t["p1"].get<double>(), t["p2"].get<double>(), t["s1"].get<double>(), t["s2"].get<double>(),
                 t["s3"].get<double>(), t["s4"].get<double>());
   }
+  if (const auto& k = j["skew"]; !k.is_null()) {
+    std::printf("\nskew              xy %.10g, yx %.10g (pixel grid [1 xy; yx 1]; not radially symmetric)",
+                k["xy"].get<double>(), k["yx"].get<double>());
+  }
   std::printf("\nimage             %d x %d\n", j["width"].get<int>(), j["height"].get<int>());
   std::printf("principal point   (%.6f, %.6f)\n", j["cx"].get<double>(), j["cy"].get<double>());
   std::printf("pixel scale       (%.10g, %.10g)\n", j["pixel_scale"][0].get<double>(),
@@ -32,7 +36,8 @@ void print_text(const nlohmann::json& j) {
   std::printf("theta_max         %.6f deg%s (limited by %s)\n", j["theta_max_deg"].get<double>(),
               j["theta_max_closed"].get<bool>() ? "" : ", exclusive",
               j["theta_max_limited_by"].get<std::string>().c_str());
-  const char* radial_part = j["tangential"].is_null() && j["spline"].is_null() ? "" : " (radial part)";
+  const char* radial_part =
+      j["tangential"].is_null() && j["spline"].is_null() && j["skew"].is_null() ? "" : " (radial part)";
   if (j["rho_max_px"].is_null()) {
     std::printf("rho_max           unbounded%s\n", radial_part);
   } else {

@@ -102,6 +102,7 @@ std::optional<SourceParams> float_source_params(const Camera& camera) {
   std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
   if (!p) return std::nullopt;
   if (camera.parameters().spline) return std::nullopt;  // mrcal's spline: libmrcal evaluates it, the exact path
+  if (camera.skew().any()) return std::nullopt;          // a skewed pixel grid: the exact path
   if (!camera.radial()) {  // tangential terms on the unified form's plane m = P_xy / D: alpha = 0 only
     if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return std::nullopt;
     const TangentialTerms& t = camera.tangential();

@@ -295,11 +295,12 @@ std::optional<double> distortion_fold(const Model& model, const Distortion& term
   }
 }
 
-// A camera's projection and unprojection: radial, or with its non-radial part.
+// A camera's projection and unprojection: radial, or with its non-radial part on
+// the plane, then its pixel skew (CameraParameters::skew) if any.
 template <bool kWithJacobian, class Model>
-bool project_point(const Model& model, const CameraParameters& params, const double* mapping,
-                   const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
-                   Eigen::Matrix<double, 2, 3>* jacobian) {
+bool project_unskewed(const Model& model, const CameraParameters& params, const double* mapping,
+                      const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                      Eigen::Matrix<double, 2, 3>* jacobian) {
   if (params.spline) {
     return project_distorted<kWithJacobian>(model, mapping, domain, *params.spline, point, pixel, jacobian);
   }
@@ -309,9 +310,35 @@ bool project_point(const Model& model, const CameraParameters& params, const dou
   return project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian);
 }
 
+template <bool kWithJacobian, class Model>
+bool project_point(const Model& model, const CameraParameters& params, const double* mapping,
+                   const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                   Eigen::Matrix<double, 2, 3>* jacobian) {
+  if (!params.skew.any()) return project_unskewed<kWithJacobian>(model, params, mapping, domain, point, pixel, jacobian);
+  // q with c = 0, a = 1, then pixel = c + a (.) (S q).
+  const double unit[4] = {0, 0, 1, 1};
+  Eigen::Vector2d q;
+  Eigen::Matrix<double, 2, 3> dq;
+  if (!project_unskewed<kWithJacobian>(model, params, unit, domain, point, &q, &dq)) {
+    pixel->setConstant(kNaN);
+    if constexpr (kWithJacobian) jacobian->setConstant(kNaN);
+    return false;
+  }
+  const Eigen::Matrix2d as = Eigen::Vector2d(mapping[2], mapping[3]).asDiagonal() * params.skew.matrix();
+  *pixel = Eigen::Vector2d(mapping[0], mapping[1]) + as * q;
+  if constexpr (kWithJacobian) *jacobian = as * dq;
+  return true;
+}
+
+// (x, y) = ((u - cx) / a_x, (v - cy) / a_y), which is S q for a skewed grid.
 template <class Model>
 bool ray_of_point(const Model& model, const CameraParameters& params, const ValidDomain& domain,
                   const InverseTable& table, double x, double y, InversePath path, double* ray) {
+  if (params.skew.any()) {
+    const double xy = params.skew.xy, yx = params.skew.yx, det = 1 - xy * yx;
+    const double qx = (x - xy * y) / det, qy = (y - yx * x) / det;
+    x = qx, y = qy;
+  }
   if (params.spline) return distorted_ray_of(model, domain, table, *params.spline, params.pixel_scale, x, y, ray);
   if (params.tangential.any()) {
     return distorted_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray);
@@ -470,7 +497,12 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   }
   if (params_.calibration) check_calibration_record(*params_.calibration, model_params(params_.model).size());
   domain_ = std::visit([&](const auto& m) { return compute_domain(m, params_.theta_limit); }, params_.model);
-  if (!params_.radially_symmetric()) limit_to_plane_fold(), bound_plane_reach();
+  const PixelSkew& skew = params_.skew;
+  if (!std::isfinite(skew.xy) || !std::isfinite(skew.yx)) fail("skew: xy and yx must be finite");
+  if (!(1 - skew.xy * skew.yx > 0)) {
+    fail("skew: the pixel grid must keep its orientation (1 - xy yx > 0), got xy ", skew.xy, ", yx ", skew.yx);
+  }
+  if (params_.distorted_plane()) limit_to_plane_fold(), bound_plane_reach();
   table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
 }
 

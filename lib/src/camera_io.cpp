@@ -126,11 +126,7 @@ CameraFormat detect_camera_format(std::string_view content, std::string_view sou
     if (score > best_score) best = spec, best_score = score;
   }
   if (best) return best->id;
-  // Nothing recognised it. Files of models fishcam cannot hold are named.
-  if (content.find("#polynomial coefficients for the DIRECT mapping function") != std::string_view::npos) {
-    throw Error(std::string(source_name) + ": an OCamCalib calib_results.txt: Scaramuzza's model has an affine "
-                "term (c, d, e) that fishcam's pixel scale (a_x, a_y) cannot hold; fishcam has no OCamCalib camera yet");
-  }
+  // Nothing recognised it.
   // Where the text does not even parse, the reader of the
   // syntax it tries to be says why (the parse error, with its line).
   if (content.find("lensmodel") != std::string_view::npos && !c.python_literal()) return CameraFormat::mrcal;
@@ -333,6 +329,7 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
       j["tangential"][std::string(TangentialTerms::kNames[i])] = p.tangential.values()[i];
     }
   }
+  j["skew"] = p.skew.any() ? json{{"xy", p.skew.xy}, {"yx", p.skew.yx}} : json(nullptr);
   if (p.pose) {
     const auto& q = p.pose->rotation;
     const auto& t = p.pose->translation;
@@ -354,23 +351,36 @@ std::vector<std::string> camera_format_models(CameraFormat format) {
 }
 
 namespace {
+// "F1, F2" : the formats whose spec says yes.
+template <class Predicate>
+std::string formats_that(const Predicate& holds) {
+  std::string names;
+  for (const auto* s : detail::format_table()) {
+    if (holds(*s)) names += std::string(names.empty() ? "" : ", ") + std::string(s->name);
+  }
+  return names;
+}
 // "" when the format holds the terms, else why not.
 std::string cannot_hold_tangential(const detail::FormatSpec& spec, const TangentialTerms& terms) {
   const bool prism = terms.any_thin_prism();
   if (!terms.any() || (spec.holds_tangential && (!prism || spec.holds_thin_prism))) return "";
-  std::string holders;
-  for (const auto* s : detail::format_table()) {
-    if (prism ? s->holds_thin_prism : s->holds_tangential) holders += std::string(holders.empty() ? "" : ", ") + std::string(s->name);
-  }
   return "tangential: the " + std::string(spec.name) + " format cannot hold " +
-         (prism ? "thin-prism terms s1..s4" : "tangential terms p1, p2") + " (" + holders + " can)";
+         (prism ? "thin-prism terms s1..s4" : "tangential terms p1, p2") + " (" +
+         formats_that([&](const detail::FormatSpec& s) { return prism ? s.holds_thin_prism : s.holds_tangential; }) +
+         " can)";
 }
-std::string cannot_hold_spline(const detail::FormatSpec& spec) {
-  std::string holders;
-  for (const auto* s : detail::format_table()) {
-    if (s->holds_spline) holders += std::string(holders.empty() ? "" : ", ") + std::string(s->name);
+// "" when the format holds the camera's non-radial parts, else why not.
+std::string cannot_hold_non_radial(const detail::FormatSpec& spec, const CameraParameters& camera) {
+  if (std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) return why;
+  if (camera.spline && !spec.holds_spline) {
+    return "spline: the " + std::string(spec.name) + " format cannot hold mrcal's splined surface (" +
+           formats_that([](const detail::FormatSpec& s) { return s.holds_spline; }) + " can)";
   }
-  return "spline: the " + std::string(spec.name) + " format cannot hold mrcal's splined surface (" + holders + " can)";
+  if (camera.skew.any() && !spec.holds_skew) {
+    return "skew: the " + std::string(spec.name) + " format cannot hold a skewed pixel grid (" +
+           formats_that([](const detail::FormatSpec& s) { return s.holds_skew; }) + " can)";
+  }
+  return "";
 }
 }  // namespace
 
@@ -388,8 +398,7 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
                 " format cannot store a user field-of-view limit (fishcam JSON can)");
   }
   if (!spec.holds(model_name(camera.model))) detail::cannot_hold(camera, format);
-  if (const std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) throw Error(why);
-  if (camera.spline && !spec.holds_spline) throw Error(cannot_hold_spline(spec));
+  if (const std::string why = cannot_hold_non_radial(spec, camera); !why.empty()) throw Error(why);
   CameraParameters written = spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera);
   if (!spec.holds_calibration_record) written.calibration.reset();
   std::string content = spec.write(written);
@@ -401,6 +410,7 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
     options.image_size = std::pair{camera.width, camera.height};
     const CameraParameters back = parse_camera(content, "", options);
     if (back.tangential != camera.tangential) throw Error(": its tangential terms do not read back");
+    if (!(back.skew == camera.skew)) throw Error(": its skew does not read back");
     if (bool(back.spline) != bool(camera.spline) || (back.spline && !(*back.spline == *camera.spline))) {
       throw Error(": its spline does not read back");
     }
@@ -434,8 +444,7 @@ std::string format_rig(const std::vector<CameraParameters>& cameras, CameraForma
       throw Error(which + "theta_limit: the " + std::string(spec.name) +
                   " format cannot store a user field-of-view limit (fishcam JSON can)");
     }
-    if (const std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) throw Error(which + why);
-    if (camera.spline && !spec.holds_spline) throw Error(which + cannot_hold_spline(spec));
+    if (const std::string why = cannot_hold_non_radial(spec, camera); !why.empty()) throw Error(which + why);
     if (!spec.holds(model_name(camera.model))) {
       try {
         detail::cannot_hold(camera, format);

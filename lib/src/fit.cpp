@@ -24,6 +24,13 @@ void drop_covariance(CameraParameters* p) {
   if (p->calibration) p->calibration->covariance.resize(0, 0);
 }
 
+// A fitted radial model replaces the whole projection: tangential terms, spline and skew go.
+void drop_non_radial(CameraParameters* p) {
+  p->tangential = {};
+  p->spline.reset();
+  p->skew = {};
+}
+
 constexpr double kDeg = 180 / std::numbers::pi;
 
 double theta_of(const Eigen::Vector3d& ray) { return std::atan2(ray.head<2>().norm(), ray.z()); }
@@ -218,8 +225,7 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
   fitted.principal_point = center;
   fitted.pixel_scale.y() = ay;
   fitted.model = make_model(spec.name, params);
-  fitted.tangential = {};  // the fit is radial: what it cannot represent is its residual
-  fitted.spline.reset();
+  drop_non_radial(&fitted);  // the fit is radial: what it cannot represent is its residual
   fitted.theta_limit.reset();
   drop_covariance(&fitted);
   try {
@@ -238,8 +244,7 @@ CameraParameters paper_camera(const Camera& source, const ModelSpec& spec) {
   const double rho = source.width() / 2.0;
   const double theta = source.field_of_view_deg().horizontal / 2 / kDeg;
   CameraParameters p = source.parameters();
-  p.tangential = {};
-  p.spline.reset();
+  drop_non_radial(&p);
   p.theta_limit.reset();
   drop_covariance(&p);
   p.model = with_model_class(spec.name, [&]<template <typename> class Model>() -> RadialModel {

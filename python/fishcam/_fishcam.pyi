@@ -178,7 +178,12 @@ class Camera:
     @property
     def radial(self) -> bool:
         """
-        Whether the camera is radially symmetric (no tangential terms, no spline): only then do rho and theta_from_rho describe its whole projection.
+        Whether the camera is radially symmetric (no tangential terms, spline or skew): only then do rho and theta_from_rho describe its whole projection.
+        """
+    @property
+    def skew(self) -> tuple[float, float]:
+        """
+        The pixel grid's skew (xy, yx): pixel = c + a * ([[1, xy], [yx, 1]] q) with q the model's image offset (docs/conventions.md); (0, 0) for the usual grid.
         """
     @property
     def spline(self) -> tuple[str, list[float]] | None:

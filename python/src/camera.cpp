@@ -20,7 +20,7 @@ std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
 
 
 // The camera's numbers as bytes: equal exactly when the cameras are (model, its
-// parameters, size, principal point, pixel scale, tangential terms, theta limit
+// parameters, size, principal point, pixel scale, tangential terms, skew, theta limit
 // and, with_pose, the pose). A cache key that costs microseconds, where to_json() formats and reads
 // back a file (milliseconds).
 std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
@@ -31,6 +31,7 @@ std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
                                  p.pixel_scale.x(), p.pixel_scale.y(), p.theta_limit.value_or(-1.0)});
   const auto terms = p.tangential.values();
   numbers.insert(numbers.end(), terms.begin(), terms.end());
+  numbers.insert(numbers.end(), {p.skew.xy, p.skew.yx});
   if (p.spline) {  // its lensmodel, then its values after the other numbers
     key += p.spline->lensmodel();
     key.push_back('\0');
@@ -55,8 +56,8 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
 // table, milliseconds), given the pickled pose (microseconds).
 py::object camera_pickle_state(const Camera& c) {
   const CameraParameters& p = c.parameters();
-  // The record or the spline travel as fishcam JSON.
-  if (p.calibration || p.spline) return py::str(format_camera(p, CameraFormat::fishcam));
+  // The record, the spline or a skew travel as fishcam JSON.
+  if (p.calibration || p.spline || p.skew.any()) return py::str(format_camera(p, CameraFormat::fishcam));
   py::object pose = py::none();
   if (p.pose) {
     const auto& q = p.pose->rotation;
@@ -203,8 +204,12 @@ void bind_camera(py::module_& m) {
           },
           "mrcal's splined surface on the stereographic plane (LENSMODEL_SPLINED_STEREOGRAPHIC): (lensmodel, "
           "control values), or None.")
+      .def_property_readonly(
+          "skew", [](const Camera& c) { return std::pair(c.skew().xy, c.skew().yx); },
+          "The pixel grid's skew (xy, yx): pixel = c + a * ([[1, xy], [yx, 1]] q) with q the model's image offset "
+          "(docs/conventions.md); (0, 0) for the usual grid.")
       .def_property_readonly("radial", &Camera::radial,
-                             "Whether the camera is radially symmetric (no tangential terms, no spline): only then do rho and "
+                             "Whether the camera is radially symmetric (no tangential terms, spline or skew): only then do rho and "
                              "theta_from_rho describe its whole projection.")
       .def_property_readonly(
           "principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); },

@@ -159,3 +159,48 @@ def test_a_splined_camera_is_mrcals_projection(tmp_path):
     assert np.abs(back.project(points)[0] - pixels).max() < 1e-9
     with pytest.raises(fishcam.Error, match="not stereographic"):
         camera.write(str(tmp_path / "spline.yaml"), format="opencv")
+
+
+def ocam_cam2world(pixels, pol, xc, yc, c, d, e):
+    """OCamCalib's cam2world (ocam_functions.c), written from the toolbox: pixels as
+    (column, row) in, rays in fishcam's frame out (OCamCalib's x runs along rows and
+    its camera looks along -z: fishcam's (X, Y, Z) = (y, x, -z))."""
+    row, column = pixels[:, 1] - xc, pixels[:, 0] - yc
+    inv_det = 1 / (c - d * e)
+    xp = inv_det * (row - d * column)
+    yp = inv_det * (-e * row + c * column)
+    z = np.polynomial.polynomial.polyval(np.hypot(xp, yp), pol)
+    rays = np.stack([yp, xp, -z], axis=1)
+    return rays / np.linalg.norm(rays, axis=1, keepdims=True)
+
+
+@needs_shared
+def test_the_real_ocamcalib_file_is_cam2world(tmp_path):
+    camera = fishcam.Camera.read(str(EXTERNAL / "ocamcalib_calib_results.txt"))
+    assert camera.model == "ocam" and not camera.radial
+    assert camera.skew == (0.013102, pytest.approx(-0.014257 / 0.996974, abs=1e-15))
+    u, v = np.meshgrid(np.arange(0, camera.width, 7.0), np.arange(0, camera.height, 7.0))
+    pixels = np.stack([u.ravel(), v.ravel()], axis=1)
+    rays, ok = camera.unproject(pixels)
+    assert ok.all()
+    expected = ocam_cam2world(pixels, [-7.463674e+02, 0.0, 8.872435e-04, -1.024379e-06, 9.406640e-10],
+                              630.102940, 958.314910, 0.996974, -0.014257, 0.013102)
+    assert np.abs(rays - expected).max() < 1e-13
+    again, ok = camera.project(rays)
+    assert ok.all() and np.abs(again - pixels).max() < 1e-9
+    # A skewed camera pickles (as fishcam JSON) and keys on its skew.
+    copy = pickle.loads(pickle.dumps(camera))
+    assert copy == camera and copy.skew == camera.skew
+    unskewed_json = json.loads(camera.to_json())
+    assert unskewed_json["skew"] == {"xy": 0.013102, "yx": camera.skew[1]}
+    del unskewed_json["skew"]
+    path = tmp_path / "unskewed.json"
+    path.write_text(json.dumps(unskewed_json))
+    unskewed = fishcam.Camera.read(str(path))
+    assert unskewed.radial and unskewed.skew == (0.0, 0.0)
+    assert unskewed.parameters_key(False) != camera.parameters_key(False)
+    assert json.loads(camera.info_json())["skew"]["xy"] == 0.013102
+    # Converted to a radial model: the skew is part of what no radial model represents.
+    conversion = fishcam.convert(camera.resized(480, 302), "polynomial:4")
+    assert conversion.center_and_aspect_fitted and conversion.camera.radial
+    assert 0 < conversion.non_radial_px[0] <= conversion.report.rms_px

@@ -84,6 +84,18 @@ struct CalibrationRecord {
   bool observed(const Eigen::Vector3d& ray) const;
 };
 
+// A pixel grid whose axes are not perpendicular (OCamCalib's affine c, d, e; the skew of
+// BoofCV and of Bouguet's toolbox, alpha_c = xy): with q the model's image offset
+// (rho(theta) along the ray's azimuth, plus any tangential terms or spline),
+//   pixel = c + a (.) (S q),   S = [1 xy; yx 1],   det S = 1 - xy yx > 0.
+// Both zero: the usual grid, pixel = c + a (.) q.
+struct PixelSkew {
+  double xy = 0, yx = 0;
+  bool any() const { return xy != 0 || yx != 0; }
+  Eigen::Matrix2d matrix() const { return (Eigen::Matrix2d() << 1, xy, yx, 1).finished(); }
+  bool operator==(const PixelSkew&) const = default;
+};
+
 struct CameraParameters {
   int width = 0;
   int height = 0;
@@ -96,12 +108,16 @@ struct CameraParameters {
   // Or mrcal's splined surface on the plane of a `stereographic` model
   // (LENSMODEL_SPLINED_STEREOGRAPHIC; fishcam/mrcal_spline.hpp); null for none.
   std::shared_ptr<const MrcalSpline> spline;
+  // A skewed pixel grid (any model, with or without the above); zero for none.
+  PixelSkew skew;
   std::optional<double> theta_limit;  // radians; a user cap on the valid domain
   std::optional<Pose> pose;
   std::optional<CalibrationRecord> calibration;
 
-  // No tangential terms and no spline: rho(theta) is the whole projection.
-  bool radially_symmetric() const { return !tangential.any() && !spline; }
+  // No tangential terms, no spline, no skew: rho(theta) is the whole projection.
+  bool radially_symmetric() const { return !tangential.any() && !spline && !skew.any(); }
+  // Tangential terms or a spline: a displacement on the model's undistorted plane.
+  bool distorted_plane() const { return tangential.any() || spline; }
 };
 
 // The same lens for the image resized to width x height: with pixel centres at
@@ -142,7 +158,8 @@ class Camera {
   const Eigen::Vector2d& pixel_scale() const { return params_.pixel_scale; }
   const RadialModel& model() const { return params_.model; }
   const TangentialTerms& tangential() const { return params_.tangential; }
-  // Whether the camera is radially symmetric (no tangential terms): only then do
+  const PixelSkew& skew() const { return params_.skew; }
+  // Whether the camera is radially symmetric (no tangential terms, spline or skew): only then do
   // rho, theta_from_rho and rho_of_pixel describe its whole projection.
   bool radial() const { return params_.radially_symmetric(); }
   const ValidDomain& domain() const { return domain_; }

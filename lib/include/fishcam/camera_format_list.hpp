@@ -19,4 +19,5 @@
   X(ros)                          \
   X(camodocal)                    \
   X(orbslam3)                     \
-  X(boofcv)
+  X(boofcv)                       \
+  X(ocamcalib)

@@ -51,7 +51,8 @@ using ModelRegistry = ModelList<Polynomial,       //
                                 ExtendedUnified,  //
                                 DoubleSphere,     //
                                 Mei,              //
-                                OpenCV>;
+                                OpenCV,           //
+                                OCam>;
 
 using RadialModel = ModelRegistry::Variant;
 

@@ -40,8 +40,9 @@ std::vector<NamedCamera> read(const Content& c) {
     set_radial_tangential(&p, {d.number("k1"), d.number("k2"), d.number("p1"), d.number("p2")}, fx,
                                              [&](std::string_view problem) { d.fail("k1", problem); });
   } else if (type == "SCARAMUZZA") {
-    f.fail("model_type", "SCARAMUZZA (OCamCalib) has an affine term (c, d, e) that fishcam's pixel scale cannot "
-                         "hold; fishcam has no OCamCalib camera yet");
+    f.fail("model_type", "SCARAMUZZA: camodocal's projection and unprojection disagree for an affine c, d, e other "
+                         "than the identity, and its forks differ in inv_poly's length; give fishcam OCamCalib's "
+                         "calib_results.txt (format ocamcalib)");
   } else {
     f.fail("model_type", "unsupported " + quoted_for_message(type) + " (expected KANNALA_BRANDT, MEI or PINHOLE)");
   }

@@ -99,6 +99,14 @@ CameraParameters read_camera_fields(const DocFields& f) {
       f.fail("spline", e.what());
     }
   }
+  if (f.has("skew")) {  // {"xy": ..., "yx": ...} (CameraParameters::skew); an absent one is 0
+    const DocFields s = f.object("skew");
+    if (s.node().kind != DocNode::Kind::map) s.fail("", "expected an object of xy, yx");
+    for (const std::string& key : s.node().keys) {
+      if (key != "xy" && key != "yx") s.fail(key, "unknown skew term (expected xy, yx)");
+    }
+    p.skew = {s.has("xy") ? s.number("xy") : 0.0, s.has("yx") ? s.number("yx") : 0.0};
+  }
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
   if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
   if (f.has("calibration")) p.calibration = read_calibration(f.object("calibration"));
@@ -139,6 +147,7 @@ nlohmann::json camera_json(const CameraParameters& p) {
     }
   }
   if (p.spline) root["spline"] = {{"lensmodel", p.spline->lensmodel()}, {"values", p.spline->values()}};
+  if (p.skew.any()) root["skew"] = {{"xy", p.skew.xy}, {"yx", p.skew.yx}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
   if (p.calibration) root["calibration"] = calibration_json(*p.calibration);
@@ -164,6 +173,6 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 }  // namespace
 
 extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
-                                       {}, score, read, write, true, true, true, write_rig, true, true, true};
+                                       {}, score, read, write, true, true, true, write_rig, true, true, true, true};
 
 }  // namespace fishcam::detail
