@@ -250,7 +250,7 @@ TEST(Tangential, SkewsThatCannotBeAGridAreRefused) {
     format_camera(p, CameraFormat::woodscape);
     ADD_FAILURE() << "woodscape wrote a skew";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "skew: the woodscape format cannot hold a skewed pixel grid (fishcam, ocamcalib can)");
+    EXPECT_EQ(std::string(e.what()), "skew: the woodscape format cannot hold a skewed pixel grid (fishcam, boofcv, ocamcalib can)");
   }
 }
 

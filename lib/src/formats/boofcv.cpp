@@ -1,6 +1,6 @@
 // BoofCV's intrinsic calibration YAML (CalibrationIO): `model` with a `pinhole` map
-// (fx, fy, cx, cy, width, height, skew) and, for omnidirectional_universal (Mei's
-// model) and pinhole_radial_tangential, `radial_tangential` {radial: [...], t1, t2}
+// (fx, fy, cx, cy, width, height, skew: the pixel skew xy = skew / fx) and, for
+// omnidirectional_universal (Mei's model) and pinhole_radial_tangential, `radial_tangential` {radial: [...], t1, t2}
 // and `mirror_offset` (xi).
 #include "format.hpp"
 
@@ -27,7 +27,8 @@ std::vector<NamedCamera> read(const Content& c) {
   CameraParameters& p = named.camera;
   const double fx = k.number("fx");
   set_focal(&p, fx, k.number("fy"), [&](std::string_view problem) { k.fail("fx", problem); });
-  if (k.number("skew") != 0) k.fail("skew", "a skewed pixel grid is not supported (fishcam's pixel axes are orthogonal)");
+  // u = fx x + skew y + cx: the pixel skew xy = skew / fx (CameraParameters::skew).
+  p.skew.xy = k.number("skew") / fx;
   p.principal_point = {k.number("cx"), k.number("cy")};
   p.width = k.positive_integer("width");
   p.height = k.positive_integer("height");
@@ -65,6 +66,7 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
+  if (p.skew.yx != 0) throw Error("skew: BoofCV's skew is one number (xy, K's [0, 1] entry / fx): yx must be 0");
   std::string out = "# BoofCV intrinsic calibration (CalibrationIO), written by fishcam\n";
   const std::vector<double> q = model_params(p.model);
   const bool omni = std::holds_alternative<Mei<double>>(p.model) || std::holds_alternative<Unified<double>>(p.model);
@@ -72,7 +74,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   out += std::string("model: ") + (omni ? "omnidirectional_universal" : "pinhole") + "\nversion: 0\npinhole:\n";
   const auto line = [&](const char* key, double v) { out += std::string("  ") + key + ": " + yaml_number(v) + "\n"; };
   line("fx", q[0]), line("fy", q[0] * p.pixel_scale.y()), line("cx", p.principal_point.x()),
-      line("cy", p.principal_point.y()), line("skew", 0);
+      line("cy", p.principal_point.y()), line("skew", p.skew.xy * q[0]);
   out += "  width: " + std::to_string(p.width) + "\n  height: " + std::to_string(p.height) + "\n";
   if (omni) {
     out += "mirror_offset: " + yaml_number(q[1]) + "\nradial_tangential:\n";
@@ -84,6 +86,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 }  // namespace
 
 extern const FormatSpec boofcv_format{CameraFormat::boofcv, "boofcv", "BoofCV calibration YAML", {".yaml", ".yml"},
-                                      {"mei", "unified", "pinhole"}, score, read, write};
+                                      {"mei", "unified", "pinhole"}, score, read, write, false, false, false,
+                                      nullptr, false, false, false, true};
 
 }  // namespace fishcam::detail
