@@ -331,7 +331,7 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
     EXPECT_EQ(ViewpointWarp(Camera(p)).float_kernel(), test::float_kernel_form(p)) << name;
     kernels += test::float_kernel_form(p);
   }
-  EXPECT_GE(kernels, 17);
+  EXPECT_GE(kernels, 20);  // every example but the spline
   // mrcal's spline is libmrcal's to evaluate: such a camera takes the exact path, never a kernel without it.
   EXPECT_FALSE(ViewpointWarp(Camera(test::spline_camera().second)).float_kernel());
 }

@@ -179,25 +179,39 @@ inline std::pair<std::string, CameraParameters> spline_camera() {
 }
 
 // Whether the float warp kernel can evaluate the camera: a model with the unified
-// form or polynomial in theta, no spline, no skew. The others (ocam; skewed grids;
-// mrcal's spline) take the exact path, by design.
+// form, polynomial in theta or with a ray polynomial, and no spline (libmrcal's to
+// evaluate: the exact path, by design).
 inline bool float_kernel_form(const CameraParameters& p) {
   const bool form = std::visit(
       [](const auto& m) {
         using M = std::decay_t<decltype(m)>;
-        return HasUnifiedForm<M> || PolynomialInTheta<M>;
+        return HasUnifiedForm<M> || PolynomialInTheta<M> || HasRayPolynomial<M>;
       },
       p.model);
-  return form && !p.spline && !p.skew.any();
+  return form && !p.spline;
 }
 
-// Every camera kind: every_model(), every_tangential_camera() and with_spline the
+// The ocam example with ocamcalib_calib_results.txt's affine as its pixel skew
+// (CameraParameters::skew: a = (1, c), xy = e, yx = d / c), labelled ocam_skew.
+inline std::pair<std::string, CameraParameters> skewed_camera() {
+  for (auto [label, p] : every_model()) {
+    if (label != "ocam") continue;
+    p.pixel_scale.y() = 0.996974;
+    p.skew = {0.013102, -0.014257 / 0.996974};
+    return {label + "_skew", p};
+  }
+  ADD_FAILURE() << "no ocam example for the skewed camera";
+  return {};
+}
+
+// Every camera kind: every_model(), every_tangential_camera(), skewed_camera() and with_spline the
 // spline camera, for the tests of what any camera does (project, unproject, formats;
 // the float kernel and the grid path do not take mrcal's spline).
 inline std::vector<std::pair<std::string, CameraParameters>> every_camera(bool with_spline = true) {
   auto out = every_model();
   for (auto& c : every_tangential_camera()) out.push_back(std::move(c));
   if (with_spline) out.push_back(spline_camera());
+  out.push_back(skewed_camera());
   return out;
 }
 

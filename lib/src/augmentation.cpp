@@ -1,5 +1,6 @@
 #include "fishcam/augmentation.hpp"
 
+#include <Eigen/QR>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -90,10 +91,52 @@ std::optional<SourceParams> kernel_model(const Model& m) {
     p.f = float(u.f), p.xi = float(u.xi), p.alpha = float(u.alpha), p.beta = float(u.beta);
     p.k1 = float(u.k1), p.k2 = float(u.k2), p.k3 = float(u.k3);
     p.k4 = float(u.k4), p.k5 = float(u.k5), p.k6 = float(u.k6);
+  } else if constexpr (HasRayPolynomial<Model>) {
+    p.kind = SourceParams::Kind::ray_polynomial;  // the start polynomial: ray_polynomial_start()
+    for (size_t i = 0; i < 5; ++i) {
+      if (!float_exact_enough(m.ray_polynomial()[i])) return std::nullopt;
+      p.a[i] = float(m.ray_polynomial()[i]);
+    }
   } else {
     return std::nullopt;
   }
   return p;
+}
+
+// The ray-polynomial kernel's Newton start: rho(theta) fitted by a polynomial in theta
+// (least squares, degree 10) on [0, theta_fit], theta_fit being where rho reaches 1.25
+// times the farthest image corner (so past it every ray lands outside the image), or
+// the domain's end. False when the fit misses by more than 5 % of that radius; the
+// kernel's three Newton steps and float_kernel_agrees decide the rest.
+bool ray_polynomial_start(const Camera& camera, SourceParams* p) {
+  const Eigen::Matrix2d unskew = camera.skew().matrix().inverse();
+  double reach = 0;
+  for (double u : {-0.5, camera.width() - 0.5}) {
+    for (double v : {-0.5, camera.height() - 0.5}) {
+      const Eigen::Vector2d offset = (Eigen::Vector2d(u, v) - camera.principal_point()).cwiseQuotient(camera.pixel_scale());
+      reach = std::max(reach, (unskew * offset).norm());
+    }
+  }
+  reach *= 1.25;
+  const ValidDomain& d = camera.domain();
+  const double theta_fit = d.contains_rho(reach) ? camera.theta_from_rho(reach) : d.theta_max;
+  if (!(theta_fit > 0)) return false;
+  constexpr int kSamples = 400, kDegree = 10;
+  Eigen::MatrixXd design(kSamples + 1, kDegree);
+  Eigen::VectorXd rho(kSamples + 1);
+  for (int i = 0; i <= kSamples; ++i) {
+    const double theta = theta_fit * i / kSamples;
+    double power = theta;
+    for (int j = 0; j < kDegree; ++j, power *= theta) design(i, j) = power;
+    rho[i] = camera.rho(theta);
+  }
+  const Eigen::VectorXd c = design.colPivHouseholderQr().solve(rho);
+  if (!((design * c - rho).cwiseAbs().maxCoeff() <= 0.05 * reach)) return false;
+  p->n = kDegree;
+  p->c[0] = 0;
+  for (int j = 0; j < kDegree; ++j) p->c[j + 1] = float(c[j]);
+  p->theta_fit = float(theta_fit), p->rho_fit = float(camera.rho(theta_fit));
+  return true;
 }
 
 // The source camera for the float kernel, or nullopt where float arithmetic
@@ -102,8 +145,15 @@ std::optional<SourceParams> float_source_params(const Camera& camera) {
   std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
   if (!p) return std::nullopt;
   if (camera.parameters().spline) return std::nullopt;  // mrcal's spline: libmrcal evaluates it, the exact path
-  if (camera.skew().any()) return std::nullopt;          // a skewed pixel grid: the exact path
-  if (!camera.radial()) {  // tangential terms on the unified form's plane m = P_xy / D: alpha = 0 only
+  if (p->kind == SourceParams::Kind::ray_polynomial && !ray_polynomial_start(camera, &*p)) return std::nullopt;
+  if (camera.skew().any()) {
+    for (double x : {camera.skew().xy, camera.skew().yx}) {
+      if (!float_exact_enough(x)) return std::nullopt;
+    }
+    p->skewed = true;
+    p->xy = float(camera.skew().xy), p->yx = float(camera.skew().yx);
+  }
+  if (camera.tangential().any()) {  // tangential terms on the unified form's plane m = P_xy / D: alpha = 0 only
     if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return std::nullopt;
     const TangentialTerms& t = camera.tangential();
     for (double x : t.values()) {

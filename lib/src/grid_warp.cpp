@@ -267,7 +267,12 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
   const int rows = (h + kRowStep - 1) / kRowStep;  // measured rows v = r kRowStep
   float fold_guard = std::numeric_limits<float>::infinity();
   if (source.domain().closed && std::isfinite(source.domain().rho_max)) {
-    fold_guard = float(0.95 * source.domain().rho_max * std::max(source.pixel_scale().x(), source.pixel_scale().y()));
+    // A skewed grid shrinks radii by up to S's smallest singular value:
+    // sigma^2 = (t - sqrt(t^2 - 4 det^2)) / 2 with t = |S|_F^2.
+    const Eigen::Matrix2d skew = source.skew().matrix();
+    const double t = skew.squaredNorm(), det = skew.determinant();
+    const double shrink = std::sqrt(std::max(0.0, 0.5 * (t - std::sqrt(std::max(0.0, t * t - 4 * det * det)))));
+    fold_guard = float(0.95 * shrink * source.domain().rho_max * std::max(source.pixel_scale().x(), source.pixel_scale().y()));
   }
   const std::size_t row_length = std::size_t(w) + kRowPadding;
   constexpr double kTolerance2 = kGridTolerancePx * kGridTolerancePx;

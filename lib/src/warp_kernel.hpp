@@ -16,8 +16,9 @@ namespace fishcam::detail {
 struct SourceParams {
   // polynomial: rho(theta) as a polynomial; unified: the unified-camera form
   // (fishcam::UnifiedForm: pinhole, stereographic, unified, extended-unified,
-  // double-sphere, mei, opencv).
-  enum class Kind { polynomial, unified };
+  // double-sphere, mei, opencv); ray_polynomial: rho the root of rho Pz + chi P(rho)
+  // (ocam: the ray (rho, -P(rho))), three Newton steps from a polynomial start in theta.
+  enum class Kind { polynomial, unified, ray_polynomial };
   // Polynomials up to this degree are evaluated in float (16 coefficients: its
   // fixed array); higher ones take the exact path.
   static constexpr int kMaxDegree = 15;
@@ -28,6 +29,13 @@ struct SourceParams {
   // Tangential and thin-prism terms on the plane m = P_xy / D (unified with alpha = 0).
   bool tangential = false;
   float p1 = 0, p2 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0;
+  // ray_polynomial: P's a0..a4, the start c[] (n) fitted on [0, theta_fit], past which
+  // rho is at least rho_fit (beyond the source image: no Newton start is trusted there).
+  float a[5] = {};
+  float theta_fit = 0, rho_fit = 0;
+  // A skewed pixel grid (CameraParameters::skew): pixel = c + a (.) ([1 xy; yx 1] q).
+  bool skewed = false;
+  float xy = 0, yx = 0;
   float cx = 0, cy = 0, ax = 1, ay = 1;
   float cos_theta_max = -1;
   bool closed = true;

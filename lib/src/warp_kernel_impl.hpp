@@ -121,19 +121,42 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     }
   } else {
     const v_float32 chi = cv::v_sqrt(chi2);
-    const v_float32 theta = atan2_nonnegative_y(chi, pz);
+    const v_float32 ray_theta = atan2_nonnegative_y(chi, pz);
+    v_float32 theta = ray_theta;
+    if constexpr (kKind == SourceParams::Kind::ray_polynomial) theta = cv::v_min(theta, cv::vx_setall_f32(src.theta_fit));
     v_float32 rho = cv::vx_setall_f32(src.c[src.n]);
     for (int i = src.n - 1; i >= 1; --i) rho = mul_add(rho, theta, cv::vx_setall_f32(src.c[i]));
     rho = rho * theta;
+    v_float32 slope0 = cv::vx_setall_f32(src.c[1]);  // rho'(0)
+    if constexpr (kKind == SourceParams::Kind::ray_polynomial) {
+      // Newton on g(rho) = rho Pz + chi P(rho) (zero where the ray (rho, -P(rho)) has P's direction).
+      for (int step = 0; step < 3; ++step) {  // from a start within a few px: float precision
+        v_float32 p = cv::vx_setall_f32(src.a[4]), dp = zero;
+        for (int i = 3; i >= 0; --i) dp = mul_add(dp, rho, p), p = mul_add(p, rho, cv::vx_setall_f32(src.a[i]));
+        rho = rho - mul_add(chi, p, rho * pz) / mul_add(chi, dp, pz);
+      }
+      // Past theta_fit the start is not trusted; the root lies beyond rho_fit, outside the image.
+      rho = cv::v_select(ray_theta > cv::vx_setall_f32(src.theta_fit),
+                         cv::v_max(rho, cv::vx_setall_f32(src.rho_fit)), rho);
+      slope0 = cv::vx_setall_f32(-src.a[0]);
+    }
     // On the axis rho / chi -> rho'(0) / Pz.
-    scale = cv::v_select(chi > zero, rho / chi, cv::vx_setall_f32(src.c[1]) / pz);
+    scale = cv::v_select(chi > zero, rho / chi, slope0 / pz);
   }
   const v_float32 nan = cv::vx_setall_f32(kNaNf);
-  v_float32 u = mul_add(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
-  v_float32 v = mul_add(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
-  if (kKind == SourceParams::Kind::unified && src.tangential) {
-    u = mul_add(cv::vx_setall_f32(src.ax), tangential_x, u);
-    v = mul_add(cv::vx_setall_f32(src.ay), tangential_y, v);
+  v_float32 u, v;
+  if (src.skewed) {  // pixel = c + a (.) (S q)
+    v_float32 qx = scale * px, qy = scale * py;
+    if (kKind == SourceParams::Kind::unified && src.tangential) qx = qx + tangential_x, qy = qy + tangential_y;
+    u = mul_add(cv::vx_setall_f32(src.ax), mul_add(cv::vx_setall_f32(src.xy), qy, qx), cv::vx_setall_f32(src.cx));
+    v = mul_add(cv::vx_setall_f32(src.ay), mul_add(cv::vx_setall_f32(src.yx), qx, qy), cv::vx_setall_f32(src.cy));
+  } else {
+    u = mul_add(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
+    v = mul_add(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
+    if (kKind == SourceParams::Kind::unified && src.tangential) {
+      u = mul_add(cv::vx_setall_f32(src.ax), tangential_x, u);
+      v = mul_add(cv::vx_setall_f32(src.ay), tangential_y, v);
+    }
   }
   valid = valid & (u == u) & (v == v);
   *out_x = cv::v_select(valid, u, nan);
@@ -190,6 +213,8 @@ RangeKernel kernel_for_kind(SourceParams::Kind kind) {
       return warp_range<kPrior, kInsideSphere, SourceParams::Kind::polynomial, kSampling>;
     case SourceParams::Kind::unified:
       return warp_range<kPrior, kInsideSphere, SourceParams::Kind::unified, kSampling>;
+    case SourceParams::Kind::ray_polynomial:
+      return warp_range<kPrior, kInsideSphere, SourceParams::Kind::ray_polynomial, kSampling>;
   }
   return nullptr;
 }

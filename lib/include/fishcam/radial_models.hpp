@@ -818,6 +818,8 @@ class OCam {
     return OCam(a);
   }
   std::vector<Scalar> params() const { return {a_.begin(), a_.end()}; }
+  // P's coefficients a0..a4 (the float warp kernel's form: Newton on rho Pz + chi P(rho)).
+  const std::array<double, 5>& ray_polynomial() const { return v_; }
 
   // Equidistant-like (P = -f + r^2 / (3 f): theta = r / f to third order) and
   // stereographic (P = -f + r^2 / (4 f), exactly) starts.
@@ -919,6 +921,10 @@ concept LinearInParams = requires(double t, double* g, const double* p) {
 
 template <class Model>
 concept HasUnifiedForm = requires(const Model& m) { m.unified_form(); };
+
+// rho(theta) defined by a ray polynomial (ocam): the float kernel solves for it.
+template <class Model>
+concept HasRayPolynomial = requires(const Model& m) { m.ray_polynomial(); };
 
 // Models with an undistorted plane on which tangential terms can be added
 // (fishcam/tangential.hpp): rho(theta) = f u(theta) R(u(theta)^2) with u the plane
