@@ -189,7 +189,7 @@ TEST(Tangential, SkewedGridsProjectThroughTheSkewAndUnprojectBack) {
   int cameras = 0;
   for (auto [name, params] : test::every_camera(true)) {
     CameraParameters unit = params;
-    unit.principal_point.setZero(), unit.pixel_scale.setOnes();
+    unit.principal_point.setZero(), unit.pixel_scale.setOnes(), unit.skew = {};
     params.skew = skew;
     const Camera camera(params), plain(unit);
     ASSERT_FALSE(camera.radial()) << name;
