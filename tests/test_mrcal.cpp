@@ -134,6 +134,55 @@ TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
                        camera.domain().theta_max, camera, values, camera.parameters().spline->lensmodel()});
 }
 
+// MrcalSpline::polynomial_cells says where mrcal's spline is one polynomial (the float
+// warp kernel evaluates it per cell): along x and y inside a cell, and from inside an
+// outer cell out past the grid (mrcal extrapolates it), the (order + 1)-th finite
+// difference of delta_u vanishes; across a cell boundary it does not (so a grid off
+// by any fraction of a cell fails). Cubic and quadratic splines of the same values.
+TEST(Mrcal, SplineIsOnePolynomialOnEachOfItsCells) {
+  const MrcalSpline& cubic = *test::spline_camera().second.spline;
+  int cases = 0;
+  for (const char* lensmodel : {"LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
+                                "LENSMODEL_SPLINED_STEREOGRAPHIC_order=2_Nx=8_Ny=6_fov_x_deg=150"}) {
+    const MrcalSpline spline(lensmodel, cubic.values());
+    const MrcalSpline::PolynomialCells cells = spline.polynomial_cells();
+    ASSERT_EQ(cells.order, spline.lensmodel().find("order=3") != std::string::npos ? 3 : 2);
+    EXPECT_EQ(cells.nx, cells.order == 3 ? 5 : 6) << lensmodel;
+    EXPECT_EQ(cells.ny, cells.order == 3 ? 3 : 4) << lensmodel;
+    // The (order + 1)-th difference of delta_u at order + 2 points g + k step, k = 0 ..
+    const auto difference = [&](Eigen::Vector2d g, const Eigen::Vector2d& step) {
+      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+      const int n = cells.order + 1;
+      double binomial = 1;
+      for (int k = 0; k <= n; ++k) {
+        sum += ((n - k) % 2 ? -1.0 : 1.0) * binomial * spline.offset((g + k * step - cells.origin) / cells.cells_per_u);
+        binomial = binomial * (n - k) / (k + 1);
+      }
+      return sum.cwiseAbs().maxCoeff();
+    };
+    double inside = 0, outside = 0, across = 0;
+    for (int j = 0; j < cells.ny; ++j) {
+      for (int i = 0; i < cells.nx; ++i) {
+        const double h = 0.9 / (cells.order + 1);
+        const Eigen::Vector2d g(i + 0.05, j + 0.37);
+        inside = std::max({inside, difference(g, {h, 0}), difference({i + 0.61, j + 0.05}, {0, h})});
+        // Across the boundary to the next cell, whose polynomial differs.
+        if (i + 1 < cells.nx) across = std::max(across, difference({i + 0.5, j + 0.5}, {0.5, 0}));
+      }
+    }
+    // Past the grid on every side, from inside the outer cells.
+    for (double y : {0.3, cells.ny - 0.6}) outside = std::max(outside, difference({cells.nx - 0.5, y}, {0.8, 0}));
+    for (double y : {0.3, cells.ny - 0.6}) outside = std::max(outside, difference({0.5, y}, {-0.8, 0}));
+    for (double x : {0.4, cells.nx - 0.7}) outside = std::max(outside, difference({x, cells.ny - 0.5}, {0, 0.8}));
+    for (double x : {0.4, cells.nx - 0.7}) outside = std::max(outside, difference({x, 0.5}, {0, -0.8}));
+    EXPECT_LE(inside, 1e-14) << lensmodel;
+    EXPECT_LE(outside, 1e-13) << lensmodel;
+    EXPECT_GT(across, 1e-6) << lensmodel;
+    ++cases;
+  }
+  EXPECT_EQ(cases, 2);
+}
+
 // Converting a splined camera to a radial model (the case: mrcal's splined
 // calibration to a WoodScape polynomial): the report is reproduced by libmrcal's
 // projection of the source and the polynomial's formula for the result.

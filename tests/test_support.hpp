@@ -179,8 +179,8 @@ inline std::pair<std::string, CameraParameters> spline_camera() {
 }
 
 // Whether the float warp kernel can evaluate the camera: a model with the unified
-// form, polynomial in theta or with a ray polynomial, and no spline (libmrcal's to
-// evaluate: the exact path, by design).
+// form, polynomial in theta or with a ray polynomial (mrcal's spline rides on a
+// stereographic model, whose cells the kernel evaluates).
 inline bool float_kernel_form(const CameraParameters& p) {
   const bool form = std::visit(
       [](const auto& m) {
@@ -188,7 +188,7 @@ inline bool float_kernel_form(const CameraParameters& p) {
         return HasUnifiedForm<M> || PolynomialInTheta<M> || HasRayPolynomial<M>;
       },
       p.model);
-  return form && !p.spline;
+  return form;
 }
 
 // The ocam example with ocamcalib_calib_results.txt's affine as its pixel skew
@@ -204,13 +204,13 @@ inline std::pair<std::string, CameraParameters> skewed_camera() {
   return {};
 }
 
-// Every camera kind: every_model(), every_tangential_camera(), skewed_camera() and with_spline the
-// spline camera, for the tests of what any camera does (project, unproject, formats;
-// the float kernel and the grid path do not take mrcal's spline).
-inline std::vector<std::pair<std::string, CameraParameters>> every_camera(bool with_spline = true) {
+// Every camera kind: every_model(), every_tangential_camera(), the spline camera and
+// skewed_camera(), for the tests of what any camera does (project, unproject, formats,
+// the float kernel and the grid path).
+inline std::vector<std::pair<std::string, CameraParameters>> every_camera() {
   auto out = every_model();
   for (auto& c : every_tangential_camera()) out.push_back(std::move(c));
-  if (with_spline) out.push_back(spline_camera());
+  out.push_back(spline_camera());
   out.push_back(skewed_camera());
   return out;
 }

@@ -1,11 +1,13 @@
 #include "fishcam/augmentation.hpp"
 
+#include <Eigen/LU>
 #include <Eigen/QR>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <atomic>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <cstdlib>
 #include <cmath>
@@ -139,25 +141,78 @@ bool ray_polynomial_start(const Camera& camera, SourceParams* p) {
   return true;
 }
 
-// The source camera for the float kernel, or nullopt where float arithmetic
+// SourceParams with the arrays its pointers refer to.
+struct KernelSource {
+  SourceParams params;
+  std::vector<float> spline_cells;
+};
+
+// mrcal's spline as the kernel evaluates it (SourceParams::spline_cells): on each of
+// MrcalSpline's polynomial cells, the bicubic in the cell's local (t, s) that
+// interpolates f delta_u at 4 x 4 points — the spline itself, which is that polynomial
+// there (float_kernel_agrees checks the result against libmrcal's projection).
+std::vector<float> spline_kernel_cells(const MrcalSpline& spline, const MrcalSpline::PolynomialCells& cells,
+                                       double f) {
+  Eigen::Matrix4d vandermonde;  // rows: the nodes -1/2, -1/6, 1/6, 1/2 (t about the centre); columns: powers
+  for (int a = 0; a < 4; ++a) {
+    for (int i = 0; i < 4; ++i) vandermonde(a, i) = std::pow(a / 3.0 - 0.5, i);
+  }
+  const Eigen::Matrix4d inverse = vandermonde.inverse();
+  std::vector<float> out(size_t(cells.nx) * size_t(cells.ny) * 32);
+  Eigen::Matrix4d samples[2];
+  for (int cy = 0; cy < cells.ny; ++cy) {
+    for (int cx = 0; cx < cells.nx; ++cx) {
+      for (int a = 0; a < 4; ++a) {
+        for (int b = 0; b < 4; ++b) {  // t = a / 3 - 1/2 along x, s = b / 3 - 1/2 along y
+          const Eigen::Vector2d g(cx + a / 3.0, cy + b / 3.0);
+          const Eigen::Vector2d delta = f * spline.offset((g - cells.origin) / cells.cells_per_u);
+          samples[0](a, b) = delta.x(), samples[1](a, b) = delta.y();
+        }
+      }
+      float* cell = out.data() + 32 * (size_t(cy) * size_t(cells.nx) + size_t(cx));
+      for (int k = 0; k < 2; ++k) {
+        const Eigen::Matrix4d c = inverse * samples[k] * inverse.transpose();  // c(i, j): t^i s^j
+        for (int j = 0; j < 4; ++j) {
+          for (int i = 0; i < 4; ++i) cell[16 * k + 4 * j + i] = float(c(i, j));
+        }
+      }
+    }
+  }
+  return out;
+}
+
+// The source camera for the float kernel, or null where float arithmetic
 // cannot be trusted to kFloatTolerancePx: the one place that decides.
-std::optional<SourceParams> float_source_params(const Camera& camera) {
+std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
+  auto source = std::make_shared<KernelSource>();
   std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
-  if (!p) return std::nullopt;
-  if (camera.parameters().spline) return std::nullopt;  // mrcal's spline: libmrcal evaluates it, the exact path
-  if (p->kind == SourceParams::Kind::ray_polynomial && !ray_polynomial_start(camera, &*p)) return std::nullopt;
+  if (!p) return nullptr;
+  if (p->kind == SourceParams::Kind::ray_polynomial && !ray_polynomial_start(camera, &*p)) return nullptr;
+  if (const auto& spline = camera.parameters().spline) {  // on the stereographic plane: unified, xi = 1, alpha = 0
+    const auto* stereographic = std::get_if<Stereographic<double>>(&camera.model());
+    if (!stereographic || p->kind != SourceParams::Kind::unified || p->xi != 1 || p->alpha != 0) return nullptr;
+    const MrcalSpline::PolynomialCells cells = spline->polynomial_cells();
+    source->spline_cells = spline_kernel_cells(*spline, cells, stereographic->focal());
+    for (float x : source->spline_cells) {  // absolute values in pixels: only overflow matters
+      if (!std::isfinite(x)) return nullptr;
+    }
+    p->spline_nx = cells.nx, p->spline_ny = cells.ny;
+    p->spline_scale = float(2 * cells.cells_per_u);  // u = 2 m
+    p->spline_origin_x = float(cells.origin.x()), p->spline_origin_y = float(cells.origin.y());
+    p->spline_cells = source->spline_cells.data();
+  }
   if (camera.skew().any()) {
     for (double x : {camera.skew().xy, camera.skew().yx}) {
-      if (!float_exact_enough(x)) return std::nullopt;
+      if (!float_exact_enough(x)) return nullptr;
     }
     p->skewed = true;
     p->xy = float(camera.skew().xy), p->yx = float(camera.skew().yx);
   }
   if (camera.tangential().any()) {  // tangential terms on the unified form's plane m = P_xy / D: alpha = 0 only
-    if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return std::nullopt;
+    if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return nullptr;
     const TangentialTerms& t = camera.tangential();
     for (double x : t.values()) {
-      if (!float_exact_enough(x)) return std::nullopt;
+      if (!float_exact_enough(x)) return nullptr;
     }
     p->tangential = true;
     p->p1 = float(t.p1), p->p2 = float(t.p2);
@@ -166,13 +221,13 @@ std::optional<SourceParams> float_source_params(const Camera& camera) {
   const double cx = camera.principal_point().x(), cy = camera.principal_point().y();
   // Every coordinate the kernel adds up must have float spacing well below the tolerance.
   const double magnitude = std::max({std::abs(cx), std::abs(cy), double(camera.width()), double(camera.height())});
-  if (magnitude > kFloatCoordinateLimit) return std::nullopt;
+  if (magnitude > kFloatCoordinateLimit) return nullptr;
   for (double x : {cx, cy, camera.pixel_scale().x(), camera.pixel_scale().y()}) {
-    if (!float_exact_enough(x)) return std::nullopt;
+    if (!float_exact_enough(x)) return nullptr;
   }
   for (int i = 0; i <= p->n; ++i) {
     if (!std::isfinite(p->c[i]) || (p->c[i] != 0 && std::abs(p->c[i]) < std::numeric_limits<float>::min())) {
-      return std::nullopt;
+      return nullptr;
     }
   }
   p->cx = float(cx), p->cy = float(cy);
@@ -183,7 +238,8 @@ std::optional<SourceParams> float_source_params(const Camera& camera) {
                                                                    : float(std::cos(camera.domain().theta_max));
   p->closed = camera.domain().closed;
   p->width = float(camera.width()), p->height = float(camera.height());
-  return p;
+  source->params = *p;
+  return source;
 }
 
 void allocate(const Camera& source, const Camera& target, MapKind kind, WarpMaps* maps) {
@@ -326,9 +382,9 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
                   " pixels per side)");
     }
   }
-  const std::optional<SourceParams> src = float_source_params(source_);
-  if (!src || !float_kernel_agrees(source_, *src)) return;  // the exact path needs no cached rays
-  kernel_source_ = std::make_shared<const SourceParams>(*src);
+  const std::shared_ptr<KernelSource> src = float_source_params(source_);
+  if (!src || !float_kernel_agrees(source_, src->params)) return;  // the exact path needs no cached rays
+  kernel_source_ = std::shared_ptr<const SourceParams>(src, &src->params);  // which keeps its arrays
   const size_t n = size_t(target_.width()) * size_t(target_.height());
   const size_t padded = (n + 63) / 64 * 64 + 64;  // whole vectors, and one more for kernels started mid-row
   rays_.create(3, static_cast<int>(padded), CV_32FC1);

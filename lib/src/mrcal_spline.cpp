@@ -68,4 +68,23 @@ Eigen::Vector2d MrcalSpline::offset(const Eigen::Vector2d& m, Eigen::Matrix2d* j
   return {q.x - m.x(), q.y - m.y()};
 }
 
+MrcalSpline::PolynomialCells MrcalSpline::polynomial_cells() const {
+  const auto& config = parsed_->model.LENSMODEL_SPLINED_STEREOGRAPHIC__config;
+  std::vector<double> ux(config.Nx), uy(config.Ny);
+  if (!mrcal_knots_for_splined_models(ux.data(), uy.data(), &parsed_->model)) {
+    throw Error("spline: libmrcal gave no knots for " + lensmodel_);
+  }
+  // mrcal's segment coordinate is u * cells_per_u + (N - 1) / 2 (the knots' indices);
+  // a cubic segment [i, i + 1] needs knots i - 1 .. i + 2 (i = 1 .. N - 3), a quadratic
+  // one [i - 1/2, i + 1/2] knots i - 1 .. i + 1 (i = 1 .. N - 2).
+  PolynomialCells cells;
+  cells.order = config.order;
+  cells.cells_per_u = 1 / (ux[1] - ux[0]);
+  const double first = config.order == 3 ? 1 : 0.5;
+  cells.origin = {0.5 * (config.Nx - 1) - first, 0.5 * (config.Ny - 1) - first};
+  cells.nx = config.order == 3 ? config.Nx - 3 : config.Nx - 2;
+  cells.ny = config.order == 3 ? config.Ny - 3 : config.Ny - 2;
+  return cells;
+}
+
 }  // namespace fishcam

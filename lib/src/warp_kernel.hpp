@@ -33,6 +33,14 @@ struct SourceParams {
   // rho is at least rho_fit (beyond the source image: no Newton start is trusted there).
   float a[5] = {};
   float theta_fit = 0, rho_fit = 0;
+  // mrcal's spline on a stereographic camera (unified, xi = 1, alpha = 0; u = 2 m):
+  // f delta_u from its polynomial cells (MrcalSpline::polynomial_cells), cell
+  // coordinates g = m * spline_scale + spline_origin, the cell index clamped to the
+  // nx x ny grid (mrcal extrapolates its outer cells); per cell 32 floats, x's then y's
+  // bicubic in the cell's local (t, s): coefficient of t^i s^j at 4 j + i. Null: none.
+  const float* spline_cells = nullptr;
+  int spline_nx = 0, spline_ny = 0;
+  float spline_scale = 0, spline_origin_x = 0, spline_origin_y = 0;
   // A skewed pixel grid (CameraParameters::skew): pixel = c + a (.) ([1 xy; yx 1] q).
   bool skewed = false;
   float xy = 0, yx = 0;

@@ -73,8 +73,14 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
   const v_float32 norm = cv::v_sqrt(mul_add(pz, pz, chi2));
   const v_float32 cos_limit = cv::vx_setall_f32(src.cos_theta_max) * norm;
   valid = valid & (src.closed ? pz >= cos_limit : pz > cos_limit) & ((chi2 > zero) | (pz > zero));
+  if (!cv::v_check_any(valid)) {  // no ray in the domain (a view turned away from a narrow source): nothing to project
+    *out_x = *out_y = cv::vx_setall_f32(kNaNf);
+    *inside = zero;
+    return;
+  }
   v_float32 scale;  // rho(theta) / chi
-  v_float32 tangential_x = zero, tangential_y = zero;  // f T(m), fishcam/tangential.hpp
+  // f T(m) (fishcam/tangential.hpp) or f delta_u(2 m) (mrcal's spline), added before a and the skew.
+  v_float32 offset_x = zero, offset_y = zero;
   if constexpr (kKind == SourceParams::Kind::unified) {
     // w = xi |P| + Pz; behind the camera (Pz < 0, xi > 0) as
     // (xi^2 chi^2 + (xi^2 - 1) Pz^2) / (xi |P| - Pz), without the cancellation
@@ -116,8 +122,32 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
       // T_x = 2 p1 x y + p2 (r2 + 2 x^2) + (s1 + s2 r2) r2, T_y = p1 (r2 + 2 y^2) + 2 p2 x y + (s3 + s4 r2) r2
       const v_float32 prism_x = mul_add(cv::vx_setall_f32(src.s2), r2, cv::vx_setall_f32(src.s1)) * r2;
       const v_float32 prism_y = mul_add(cv::vx_setall_f32(src.s4), r2, cv::vx_setall_f32(src.s3)) * r2;
-      tangential_x = f * mul_add(p1, mxy2, mul_add(p2, mul_add(cv::vx_setall_f32(2.0f) * mx, mx, r2), prism_x));
-      tangential_y = f * mul_add(p2, mxy2, mul_add(p1, mul_add(cv::vx_setall_f32(2.0f) * my, my, r2), prism_y));
+      offset_x = f * mul_add(p1, mxy2, mul_add(p2, mul_add(cv::vx_setall_f32(2.0f) * mx, mx, r2), prism_x));
+      offset_y = f * mul_add(p2, mxy2, mul_add(p1, mul_add(cv::vx_setall_f32(2.0f) * my, my, r2), prism_y));
+    }
+    if (src.spline_cells) {  // the plane is m = P_xy / D = u / 2 (stereographic)
+      const v_float32 inverse = cv::vx_setall_f32(1.0f) / d;
+      const v_float32 scale_g = cv::vx_setall_f32(src.spline_scale);
+      const v_float32 gx = mul_add(px * inverse, scale_g, cv::vx_setall_f32(src.spline_origin_x));
+      const v_float32 gy = mul_add(py * inverse, scale_g, cv::vx_setall_f32(src.spline_origin_y));
+      // NaN and huge g floor to INT_MIN, which the clamp takes into the grid.
+      const cv::v_int32 ix = cv::v_min(cv::v_max(cv::v_floor(gx), cv::vx_setzero_s32()), cv::vx_setall_s32(src.spline_nx - 1));
+      const cv::v_int32 iy = cv::v_min(cv::v_max(cv::v_floor(gy), cv::vx_setzero_s32()), cv::vx_setall_s32(src.spline_ny - 1));
+      const v_float32 fx = cv::v_cvt_f32(ix), fy = cv::v_cvt_f32(iy);
+      const v_float32 half = cv::vx_setall_f32(0.5f), t = gx - fx - half, s = gy - fy - half;
+      // 32 (ny nx) < 2^24: the cell's first coefficient's index is exact in float.
+      const cv::v_int32 first = cv::v_round(mul_add(fy, cv::vx_setall_f32(float(src.spline_nx)), fx) * cv::vx_setall_f32(32.0f));
+      v_float32* outputs[2] = {&offset_x, &offset_y};
+      for (int k = 0; k < 2; ++k) {
+        const float* cells = src.spline_cells + 16 * k;
+        v_float32 value = zero;
+        for (int j = 3; j >= 0; --j) {
+          v_float32 row = cv::v_lut(cells + 4 * j + 3, first);
+          for (int i = 2; i >= 0; --i) row = mul_add(row, t, cv::v_lut(cells + 4 * j + i, first));
+          value = mul_add(value, s, row);
+        }
+        *outputs[k] = value;
+      }
     }
   } else {
     const v_float32 chi = cv::v_sqrt(chi2);
@@ -144,18 +174,20 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     scale = cv::v_select(chi > zero, rho / chi, slope0 / pz);
   }
   const v_float32 nan = cv::vx_setall_f32(kNaNf);
+  const bool plane_offset = src.tangential || src.spline_cells;
   v_float32 u, v;
   if (src.skewed) {  // pixel = c + a (.) (S q)
     v_float32 qx = scale * px, qy = scale * py;
-    if (kKind == SourceParams::Kind::unified && src.tangential) qx = qx + tangential_x, qy = qy + tangential_y;
+    if (kKind == SourceParams::Kind::unified && plane_offset) qx = qx + offset_x, qy = qy + offset_y;
     u = mul_add(cv::vx_setall_f32(src.ax), mul_add(cv::vx_setall_f32(src.xy), qy, qx), cv::vx_setall_f32(src.cx));
     v = mul_add(cv::vx_setall_f32(src.ay), mul_add(cv::vx_setall_f32(src.yx), qx, qy), cv::vx_setall_f32(src.cy));
   } else {
-    u = mul_add(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
-    v = mul_add(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
-    if (kKind == SourceParams::Kind::unified && src.tangential) {
-      u = mul_add(cv::vx_setall_f32(src.ax), tangential_x, u);
-      v = mul_add(cv::vx_setall_f32(src.ay), tangential_y, v);
+    if (kKind == SourceParams::Kind::unified && plane_offset) {  // the offset before c: one rounding at the image's scale
+      u = mul_add(cv::vx_setall_f32(src.ax), mul_add(scale, px, offset_x), cv::vx_setall_f32(src.cx));
+      v = mul_add(cv::vx_setall_f32(src.ay), mul_add(scale, py, offset_y), cv::vx_setall_f32(src.cy));
+    } else {
+      u = mul_add(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
+      v = mul_add(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
     }
   }
   valid = valid & (u == u) & (v == v);

@@ -33,6 +33,18 @@ class MrcalSpline {
   // delta_u(m) on the stereographic plane, with d delta_u / dm on request.
   Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const;
 
+  // Where mrcal's spline is one polynomial: in cell coordinates g = m * cells_per_u + origin
+  // it is a polynomial of degree `order` in each of g_x, g_y on every unit cell
+  // [i, i + 1) x [j, j + 1), 0 <= i < nx, 0 <= j < ny (cubic segments lie between knots,
+  // quadratic ones are centred on them); past the outer cells mrcal extrapolates the
+  // outer cells' polynomials (it clamps the segment index).
+  struct PolynomialCells {
+    double cells_per_u = 0;
+    Eigen::Vector2d origin = Eigen::Vector2d::Zero();
+    int nx = 0, ny = 0, order = 0;
+  };
+  PolynomialCells polynomial_cells() const;
+
  private:
   struct Lensmodel;  // mrcal_lensmodel_t (mrcal's headers stay in the .cpp)
   std::string lensmodel_;
