@@ -255,6 +255,28 @@ TEST(Inverse, FirstPositiveRootHandlesMissingAndEndpointRoots) {
   EXPECT_NEAR(first_positive_root(two_roots, 10.0).value(), 2.0, 1e-15);
 }
 
+// fit_power_series (the ocam kernel's Newton start, OCamCalib's invpol): a power series
+// through exact samples comes back to rounding, with powers from `first`; a lower
+// degree than the data's leaves the residual it must; bad arguments are refused.
+TEST(Inverse, PowerSeriesFitRecoversAPolynomialAndReportsItsResidual) {
+  std::vector<double> x, y;
+  for (int i = 0; i <= 200; ++i) {
+    const double t = -1 + i / 100.0;
+    x.push_back(t);
+    y.push_back(0.5 * t - 2 * t * t * t + 0.25 * t * t * t * t);  // powers 1..4
+  }
+  const PowerSeriesFit exact = fit_power_series(x, y, 1, 4);
+  ASSERT_EQ(exact.coefficients.size(), 4u);
+  const double expected[4] = {0.5, 0, -2, 0.25};
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(exact.coefficients[size_t(k)], expected[k], 1e-13) << k;
+  EXPECT_LE(exact.worst, 1e-13);
+  const PowerSeriesFit low = fit_power_series(x, y, 0, 2);  // misses the cubic and quartic terms
+  EXPECT_EQ(low.coefficients.size(), 3u);
+  EXPECT_GT(low.worst, 0.1);
+  EXPECT_THROW(fit_power_series(x, std::vector<double>(3, 0.0), 0, 2), Error);
+  EXPECT_THROW(fit_power_series(x, y, 3, 2), Error);
+}
+
 TEST(Projection, InvalidPoints) {
   const Camera camera(test::woodscape_front());
   Eigen::Vector2d pixel;

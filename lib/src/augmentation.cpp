@@ -1,7 +1,6 @@
 #include "fishcam/augmentation.hpp"
 
 #include <Eigen/LU>
-#include <Eigen/QR>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -124,19 +123,16 @@ bool ray_polynomial_start(const Camera& camera, SourceParams* p) {
   const double theta_fit = d.contains_rho(reach) ? camera.theta_from_rho(reach) : d.theta_max;
   if (!(theta_fit > 0)) return false;
   constexpr int kSamples = 400, kDegree = 10;
-  Eigen::MatrixXd design(kSamples + 1, kDegree);
-  Eigen::VectorXd rho(kSamples + 1);
+  std::vector<double> theta(kSamples + 1), rho(kSamples + 1);
   for (int i = 0; i <= kSamples; ++i) {
-    const double theta = theta_fit * i / kSamples;
-    double power = theta;
-    for (int j = 0; j < kDegree; ++j, power *= theta) design(i, j) = power;
-    rho[i] = camera.rho(theta);
+    theta[size_t(i)] = theta_fit * i / kSamples;
+    rho[size_t(i)] = camera.rho(theta[size_t(i)]);
   }
-  const Eigen::VectorXd c = design.colPivHouseholderQr().solve(rho);
-  if (!((design * c - rho).cwiseAbs().maxCoeff() <= 0.05 * reach)) return false;
+  const PowerSeriesFit fit = fit_power_series(theta, rho, 1, kDegree);
+  if (!(fit.worst <= 0.05 * reach)) return false;
   p->n = kDegree;
   p->c[0] = 0;
-  for (int j = 0; j < kDegree; ++j) p->c[j + 1] = float(c[j]);
+  for (int j = 0; j < kDegree; ++j) p->c[j + 1] = float(fit.coefficients[size_t(j)]);
   p->theta_fit = float(theta_fit), p->rho_fit = float(camera.rho(theta_fit));
   return true;
 }

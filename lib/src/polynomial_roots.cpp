@@ -1,11 +1,13 @@
 // Algebraic root tools for polynomial-type radial models: the exact fold of a
 // model (first root of its derivative) and an independent theta(rho) check.
+#include <Eigen/QR>
 #include <unsupported/Eigen/Polynomials>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "fishcam/error.hpp"
 #include "fishcam/radial_inverse.hpp"
 
 namespace fishcam {
@@ -50,6 +52,19 @@ double refine_in_bracket(std::span<const double> c, double lo, double hi) {
 }
 
 }  // namespace
+
+PowerSeriesFit fit_power_series(std::span<const double> x, std::span<const double> y, int first, int last) {
+  if (x.size() != y.size() || first < 0 || last < first) throw Error("fit_power_series: bad arguments");
+  const Eigen::Index n = Eigen::Index(x.size()), terms = last - first + 1;
+  Eigen::MatrixXd design(n, terms);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double power = std::pow(x[size_t(i)], first);
+    for (Eigen::Index j = 0; j < terms; ++j, power *= x[size_t(i)]) design(i, j) = power;
+  }
+  const Eigen::Map<const Eigen::VectorXd> values(y.data(), n);
+  const Eigen::VectorXd c = design.colPivHouseholderQr().solve(values);
+  return {std::vector<double>(c.data(), c.data() + terms), (design * c - values).cwiseAbs().maxCoeff()};
+}
 
 std::vector<std::complex<double>> polynomial_roots(std::span<const double> coefficients) {
   size_t n = coefficients.size();

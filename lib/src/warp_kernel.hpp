@@ -37,7 +37,8 @@ struct SourceParams {
   // f delta_u from its polynomial cells (MrcalSpline::polynomial_cells), cell
   // coordinates g = m * spline_scale + spline_origin, the cell index clamped to the
   // nx x ny grid (mrcal extrapolates its outer cells); per cell 32 floats, x's then y's
-  // bicubic in the cell's local (t, s): coefficient of t^i s^j at 4 j + i. Null: none.
+  // bicubic in (t, s) = g - cell - 1/2 (about the cell's centre, in pixels before a):
+  // coefficient of t^i s^j at 4 j + i. Null: none.
   const float* spline_cells = nullptr;
   int spline_nx = 0, spline_ny = 0;
   float spline_scale = 0, spline_origin_x = 0, spline_origin_y = 0;

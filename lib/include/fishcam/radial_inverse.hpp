@@ -47,6 +47,14 @@ const char* to_string(ValidDomain::Limit limit);
 // from the eigenvalues of the companion matrix.
 std::vector<std::complex<double>> polynomial_roots(std::span<const double> coefficients);
 
+// The least-squares y ~ sum_{k=first..last} c_k x^k over the samples (column-pivoting
+// QR), its coefficients c_first..c_last and its largest residual |fit - y|.
+struct PowerSeriesFit {
+  std::vector<double> coefficients;
+  double worst = 0;
+};
+PowerSeriesFit fit_power_series(std::span<const double> x, std::span<const double> y, int first, int last);
+
 // first_positive_root (radial_models.hpp): the smallest root in (0, limit].
 
 // The first theta in (0, limit) where drho/dtheta stops being positive, found

@@ -11,7 +11,6 @@
 // the skew xy = e, yx = d / c (CameraParameters::skew). fishcam projects with pol
 // (invpol only approximates its inverse): the reader checks that invpol agrees
 // with pol over the image and the writer fits invpol to pol (docs/formats.md).
-#include <Eigen/QR>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -148,23 +147,17 @@ std::vector<NamedCamera> read(const Content& c) {
 std::vector<double> fit_invpol(const Camera& camera, double* worst_px) {
   const double widest = std::min(widest_theta(camera), camera.domain().theta_max);
   constexpr int kSamples = 2000;
-  Eigen::VectorXd t(kSamples + 1), rho(kSamples + 1);
+  std::vector<double> t(kSamples + 1), rho(kSamples + 1);
   for (int i = 0; i <= kSamples; ++i) {
     const double theta = widest * i / kSamples;
-    t[i] = theta - std::numbers::pi / 2, rho[i] = camera.rho(theta);
+    t[size_t(i)] = theta - std::numbers::pi / 2, rho[size_t(i)] = camera.rho(theta);
   }
   std::vector<double> best;
   double best_error = std::numeric_limits<double>::infinity();
   for (int degree = 2; degree <= kMaxInvpolDegree; ++degree) {
-    Eigen::MatrixXd design(kSamples + 1, degree + 1);
-    for (int i = 0; i <= kSamples; ++i) {
-      double power = 1;
-      for (int j = 0; j <= degree; ++j, power *= t[i]) design(i, j) = power;
-    }
-    const Eigen::VectorXd coefficients = design.colPivHouseholderQr().solve(rho);
-    const double error = (design * coefficients - rho).cwiseAbs().maxCoeff();
-    if (error < best_error) best_error = error, best.assign(coefficients.data(), coefficients.data() + degree + 1);
-    if (error <= kInvpolFitPx) break;
+    PowerSeriesFit fit = fit_power_series(t, rho, 0, degree);
+    if (fit.worst < best_error) best_error = fit.worst, best = std::move(fit.coefficients);
+    if (best_error <= kInvpolFitPx) break;
   }
   *worst_px = best_error;
   return best;
