@@ -159,6 +159,13 @@ def test_a_splined_camera_is_mrcals_projection(tmp_path):
     assert np.abs(back.project(points)[0] - pixels).max() < 1e-9
     with pytest.raises(fishcam.Error, match="not stereographic"):
         camera.write(str(tmp_path / "spline.yaml"), format="opencv")
+    # The augmentation evaluates the spline in its float kernel and takes the grid path;
+    # the identity keeps every pixel of the image.
+    warp = fishcam.ViewpointWarp(camera)
+    assert warp.float_kernel and warp.grid_spacing > 0
+    image = (np.arange(camera.width * camera.height) % 251).astype(np.uint8).reshape(camera.height, camera.width)
+    out = warp(image=image, change=fishcam.ViewpointChange(), return_valid=True)
+    assert out["valid"].all() and np.array_equal(out["image"], image)
 
 
 def ocam_cam2world(pixels, pol, xc, yc, c, d, e):
