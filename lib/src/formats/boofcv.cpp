@@ -59,8 +59,9 @@ std::vector<NamedCamera> read(const Content& c) {
     set_radial_tangential(&p, {radial[0], radial[1], 0, 0, radial[2]}, fx,
                           [&](std::string_view problem) { f.fail("radial_tangential", problem); });
   } else {
-    f.fail("model", "BoofCV's " + model + " (with its asymmetric terms) is not a model fishcam reads (it reads pinhole, "
-                    "pinhole_radial_tangential and omnidirectional_universal)");
+    f.fail("model", "BoofCV's " + quoted_for_message(model) +
+                        " (with its asymmetric terms) is not a model fishcam reads (it reads pinhole, "
+                        "pinhole_radial_tangential and omnidirectional_universal)");
   }
   return {named};
 }
