@@ -254,7 +254,8 @@ GridChange prepare(const GridPlan& plan, const SourceParams& src, const Viewpoin
 // radius about the principal point (the disk then lies inside the domain's image:
 // it meets no rim point).
 double rim_distance(const Camera& source) {
-  const double theta = source.domain().theta_max, c = std::cos(theta), s = std::sin(theta);
+  // A hair inside: a ray built at theta_max itself may measure a few ulps past it.
+  const double theta = source.domain().theta_max * (1 - 1e-12), c = std::cos(theta), s = std::sin(theta);
   double nearest = std::numeric_limits<double>::infinity();
   for (int k = 0; k < 1440; ++k) {
     const double phi = 2 * std::numbers::pi * k / 1440;

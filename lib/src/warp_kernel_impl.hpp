@@ -130,10 +130,10 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
       const v_float32 scale_g = cv::vx_setall_f32(src.spline_scale);
       const v_float32 gx = mul_add(px * inverse, scale_g, cv::vx_setall_f32(src.spline_origin_x));
       const v_float32 gy = mul_add(py * inverse, scale_g, cv::vx_setall_f32(src.spline_origin_y));
-      // NaN and huge g floor to INT_MIN, which the clamp takes into the grid.
-      const cv::v_int32 ix = cv::v_min(cv::v_max(cv::v_floor(gx), cv::vx_setzero_s32()), cv::vx_setall_s32(src.spline_nx - 1));
-      const cv::v_int32 iy = cv::v_min(cv::v_max(cv::v_floor(gy), cv::vx_setzero_s32()), cv::vx_setall_s32(src.spline_ny - 1));
-      const v_float32 fx = cv::v_cvt_f32(ix), fy = cv::v_cvt_f32(iy);
+      // The cell: g clamped into the grid before the floor (so any g, huge or NaN, gives
+      // an index in it; max and min return their second operand for NaN).
+      const v_float32 fx = cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(src.spline_nx - 1)))));
+      const v_float32 fy = cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(src.spline_ny - 1)))));
       const v_float32 half = cv::vx_setall_f32(0.5f), t = gx - fx - half, s = gy - fy - half;
       // 32 (ny nx) < 2^24: the cell's first coefficient's index is exact in float.
       const cv::v_int32 first = cv::v_round(mul_add(fy, cv::vx_setall_f32(float(src.spline_nx)), fx) * cv::vx_setall_f32(32.0f));
