@@ -140,7 +140,8 @@ TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
 // difference of delta_u vanishes; across a cell boundary it does not (so a grid off
 // by any fraction of a cell fails). Cubic and quadratic splines of the same values.
 TEST(Mrcal, SplineIsOnePolynomialOnEachOfItsCells) {
-  const MrcalSpline& cubic = *test::spline_camera().second.spline;
+  const CameraParameters example = test::spline_camera().second;  // keeps the spline alive
+  const MrcalSpline& cubic = *example.spline;
   int cases = 0;
   for (const char* lensmodel : {"LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
                                 "LENSMODEL_SPLINED_STEREOGRAPHIC_order=2_Nx=8_Ny=6_fov_x_deg=150"}) {
