@@ -331,7 +331,7 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
     EXPECT_EQ(ViewpointWarp(Camera(p)).float_kernel(), test::float_kernel_form(p)) << name;
     kernels += test::float_kernel_form(p);
   }
-  EXPECT_GE(kernels, 21);  // every camera kind: 16 models, 3 tangential, the spline, the skewed ocam
+  EXPECT_GE(kernels, 21);  // 16 models, 3 tangential, the spline, the skewed ocam (not CAHVOR, LONLAT, LATLON)
 }
 
 
@@ -769,11 +769,11 @@ INSTANTIATE_TEST_SUITE_P(Augmentation, EveryModelSource, ::testing::ValuesIn(tes
 // libmrcal's projection) at its full 4000 x 2200; resized to 1000 x 550 and warped
 // into itself, the per-pixel maps agree with the exact ones to 1e-3 px and the grid's
 // to cv::remap's fixed-point step.
-TEST(Augmentation, MrcalSplinedSourceTakesTheKernelAndTheGrid) {
+TEST(Augmentation, MrcalLensdSourceTakesTheKernelAndTheGrid) {
   const auto path = std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external/mrcal_cam0.splined.cameramodel";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "no ../shared checkout";
   const Camera full = read_camera(path);
-  ASSERT_TRUE(full.parameters().spline);
+  ASSERT_TRUE(full.parameters().mrcal_lens);
   EXPECT_TRUE(ViewpointWarp(full, Camera(resized(full.parameters(), 400, 220))).float_kernel());
   const Camera camera(resized(full.parameters(), 1000, 550));
   const ViewpointWarp warp(camera, camera);

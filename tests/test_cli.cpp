@@ -64,25 +64,35 @@ TEST(Cli, InfoSaysWhatIsNotRadiallySymmetric) {
   const auto dir = test::scratch_dir("cli_info_non_radial");
   const CameraParameters tangential = test::every_tangential_camera().front().second;  // pinhole + p1, p2
   write_camera(tangential, dir / "tangential.json", CameraFormat::fishcam);
-  write_camera(test::spline_camera().second, dir / "spline.json", CameraFormat::fishcam);
   auto r = run_fishcam("info --json " + test::quoted(dir / "tangential.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["tangential"]["p1"].get<double>(), tangential.tangential.p1);
-  EXPECT_TRUE(j["spline"].is_null());
-  r = run_fishcam("info --json " + test::quoted(dir / "spline.json"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  j = nlohmann::json::parse(r.out);
-  EXPECT_EQ(j["spline"]["values"].get<int>(), 96);
-  EXPECT_TRUE(j["tangential"].is_null());
+  EXPECT_TRUE(j["mrcal_lens"].is_null());
+  std::vector<std::string> files = {"tangential.json"};
+  for (const auto& [label, p] : test::mrcal_lens_cameras()) {  // every mrcal lens kind
+    files.push_back(label + ".json");
+    write_camera(p, dir / files.back(), CameraFormat::fishcam);
+    r = run_fishcam("info --json " + test::quoted(dir / files.back()));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["mrcal_lens"]["lensmodel"], p.mrcal_lens->lensmodel());
+    EXPECT_EQ(j["mrcal_lens"]["base_model"], p.mrcal_lens->base_model());
+    EXPECT_EQ(j["mrcal_lens"]["values"].get<size_t>(), p.mrcal_lens->values().size());
+    EXPECT_TRUE(j["tangential"].is_null());
+  }
+  EXPECT_EQ(files.size(), 1 + MrcalLens::kinds().size());
   r = run_fishcam("info --json " + data("woodscape_front.json"));
   j = nlohmann::json::parse(r.out);
-  EXPECT_TRUE(j["tangential"].is_null() && j["spline"].is_null());
-  for (const char* file : {"tangential.json", "spline.json"}) {
+  EXPECT_TRUE(j["tangential"].is_null() && j["mrcal_lens"].is_null());
+  for (const std::string& file : files) {
     r = run_fishcam("info " + test::quoted(dir / file));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.out.find("not radially symmetric"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("unprojection      2-D Newton"), std::string::npos) << r.out;
+    if (file != "tangential.json") {
+      EXPECT_NE(r.out.find("mrcal lens        LENSMODEL_"), std::string::npos) << r.out;
+    }
   }
 }
 

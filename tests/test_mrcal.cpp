@@ -17,7 +17,9 @@ struct Case {
   double theta_max;  // where to draw test rays
   std::optional<Camera> camera = std::nullopt;  // instead of the file
   std::vector<double> distortion = {};          // mrcal's intrinsics after fx, fy, cx, cy
-  std::string configured = {};                  // a configured lens model's name (splined)
+  std::string configured = {};                  // an mrcal lens's name (then it decides the type)
+  double project_px = 1e-9;                     // ours against mrcal_project
+  double mrcal_unproject_px = 1e-6;             // mrcal's own iterative unprojection, reprojected
 };
 
 void check_against_mrcal(const Case& c) {
@@ -29,7 +31,7 @@ void check_against_mrcal(const Case& c) {
   ASSERT_NE(intrinsics[0], intrinsics[1]) << "the test needs fx != fy";
   mrcal_lensmodel_t lensmodel{};
   lensmodel.type = c.type;
-  if (!c.configured.empty()) {
+  if (!c.configured.empty()) {  // the name decides
     ASSERT_TRUE(mrcal_lensmodel_from_name(&lensmodel, c.configured.c_str()));
   }
 
@@ -74,9 +76,9 @@ void check_against_mrcal(const Case& c) {
   // Only where mrcal's own solver stops: never on the closed-form models (photonvision's OPENCV8: 3.4 % of the
   // rays up to 63 deg, all of which ours unprojects).
   EXPECT_LE(mrcal_failed, c.distortion.empty() ? 0 : int(points.size() / 20)) << c.file;
-  EXPECT_LE(worst_project, 1e-9) << c.file;
-  EXPECT_LE(worst_unproject, 1e-9) << c.file;
-  EXPECT_LE(worst_mrcal_unproject, c.distortion.empty() ? 1e-9 : 1e-6) << c.file;
+  EXPECT_LE(worst_project, c.project_px) << c.file;
+  EXPECT_LE(worst_unproject, c.project_px) << c.file;
+  EXPECT_LE(worst_mrcal_unproject, c.distortion.empty() ? 1e-9 : c.mrcal_unproject_px) << c.file;
   std::printf("  %s: %zu points up to %.1f deg, worst project %.2e px, unproject %.2e px (mrcal's own: %.2e px, "
               "no ray for %d)\n",
               c.file, points.size(), widest * 180 / M_PI, worst_project, worst_unproject, worst_mrcal_unproject,
@@ -108,13 +110,13 @@ TEST(Mrcal, OpenCV8WithoutTangentialTermsAgreesWithLibmrcal) {
                        camera, {k[1], k[2], 0, 0, k[3], k[4], k[5], k[6]}});
 }
 
-// A stereographic camera with mrcal's spline (fishcam/mrcal_spline.hpp), projected and
+// A stereographic camera with mrcal's spline (fishcam/mrcal_lens.hpp), projected and
 // unprojected against libmrcal's own LENSMODEL_SPLINED_STEREOGRAPHIC: the synthetic
 // one of the tests, and the real cam0.splined of ../shared (read by our reader and by
 // libmrcal's).
 TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
   const Camera synthetic(test::spline_camera().second);
-  const MrcalSpline& spline = *synthetic.parameters().spline;
+  const MrcalLens& spline = *synthetic.parameters().mrcal_lens;
   ASSERT_GT(synthetic.domain().theta_max, 60 * M_PI / 180);
   check_against_mrcal({"spline (synthetic)", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC, 60 * M_PI / 180, synthetic,
                        spline.values(), spline.lensmodel()});
@@ -128,25 +130,66 @@ TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
   const int n = mrcal_lensmodel_num_params(&model->lensmodel);
   const std::vector<double> values(model->intrinsics + 4, model->intrinsics + n);
   EXPECT_EQ(model->intrinsics[0], model_params(camera.model())[0]);
-  EXPECT_EQ(values, camera.parameters().spline->values());
+  EXPECT_EQ(values, camera.parameters().mrcal_lens->values());
   mrcal_free_cameramodel(&model);
   check_against_mrcal({"mrcal_cam0.splined.cameramodel", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC,
-                       camera.domain().theta_max, camera, values, camera.parameters().spline->lensmodel()});
+                       camera.domain().theta_max, camera, values, camera.parameters().mrcal_lens->lensmodel()});
 }
 
-// MrcalSpline::polynomial_cells says where mrcal's spline is one polynomial (the float
+// Every mrcal lens model fishcam evaluates (MrcalLens::kinds()), on its base model's
+// example, projected and unprojected against libmrcal's own model of that name.
+class EveryMrcalLens : public ::testing::TestWithParam<test::ModelCase> {};
+
+TEST_P(EveryMrcalLens, AgreesWithLibmrcal) {
+  const Camera camera(GetParam().second);
+  const MrcalLens& lens = *camera.parameters().mrcal_lens;
+  const double theta_max = camera.domain().theta_max;
+  if (lens.kind() == MrcalLens::Kind::lonlat || lens.kind() == MrcalLens::Kind::latlon) {
+    // The domain is a disk about the axis; these charts are singular at their poles (theta = 90 deg).
+    EXPECT_GT(theta_max, 89.9 * M_PI / 180);
+    EXPECT_LE(theta_max, M_PI / 2);
+    EXPECT_EQ(camera.domain().limited_by, ValidDomain::Limit::distortion_fold);
+  } else {
+    EXPECT_GT(theta_max, 60 * M_PI / 180);
+  }
+  Case c{GetParam().first.c_str(), MRCAL_LENSMODEL_PINHOLE, std::min(theta_max * 0.999, 85 * M_PI / 180), camera,
+         lens.values(), lens.lensmodel()};
+  if (lens.kind() == MrcalLens::Kind::cahvor) {
+    // libmrcal's CAHVOR is not scale-invariant to rounding: the same ray at 0.5 and 6.5
+    // times its length projects 1.3e-8 px apart at 80 deg (f = 640). Its iterative
+    // unprojection stops 2.7e-4 px short there (3 of 20000 rays: none).
+    c.project_px = 5e-8, c.mrcal_unproject_px = 1e-3;
+  }
+  check_against_mrcal(c);
+}
+
+INSTANTIATE_TEST_SUITE_P(Mrcal, EveryMrcalLens, ::testing::ValuesIn(test::mrcal_lens_cameras()), test::model_case_name);
+
+TEST(Mrcal, EveryLensKindHasAnExampleAndCahvoreIsRefusedWithItsReason) {
+  EXPECT_EQ(test::mrcal_lens_cameras().size(), MrcalLens::kinds().size());
+  EXPECT_EQ(MrcalLens::kinds().size(), 4u);
+  try {
+    MrcalLens cahvore("LENSMODEL_CAHVORE_linearity=0.00", std::vector<double>(8, 0.0));
+    ADD_FAILURE() << "CAHVORE accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("noncentral"), std::string::npos) << e.what();
+  }
+}
+
+// MrcalLens::polynomial_cells says where mrcal's spline is one polynomial (the float
 // warp kernel evaluates it per cell): along x and y inside a cell, and from inside an
 // outer cell out past the grid (mrcal extrapolates it), the (order + 1)-th finite
 // difference of delta_u vanishes; across a cell boundary it does not (so a grid off
 // by any fraction of a cell fails). Cubic and quadratic splines of the same values.
 TEST(Mrcal, SplineIsOnePolynomialOnEachOfItsCells) {
   const CameraParameters example = test::spline_camera().second;  // keeps the spline alive
-  const MrcalSpline& cubic = *example.spline;
+  const MrcalLens& cubic = *example.mrcal_lens;
   int cases = 0;
   for (const char* lensmodel : {"LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
                                 "LENSMODEL_SPLINED_STEREOGRAPHIC_order=2_Nx=8_Ny=6_fov_x_deg=150"}) {
-    const MrcalSpline spline(lensmodel, cubic.values());
-    const MrcalSpline::PolynomialCells cells = spline.polynomial_cells();
+    const MrcalLens spline(lensmodel, cubic.values());
+    ASSERT_TRUE(spline.polynomial_cells());
+    const MrcalLens::PolynomialCells cells = *spline.polynomial_cells();
     ASSERT_EQ(cells.order, spline.lensmodel().find("order=3") != std::string::npos ? 3 : 2);
     EXPECT_EQ(cells.nx, cells.order == 3 ? 5 : 6) << lensmodel;
     EXPECT_EQ(cells.ny, cells.order == 3 ? 3 : 4) << lensmodel;
@@ -191,10 +234,10 @@ TEST(Mrcal, ConvertingASplinedCameraReportsWhatLibmrcalAndThePolynomialFind) {
   const Camera source(resized(test::spline_camera().second, 320, 242));
   const Conversion conversion = convert_camera(source, parse_model_spec("polynomial:4"));
   EXPECT_TRUE(conversion.center_and_aspect_fitted);
-  EXPECT_FALSE(conversion.camera.spline);
+  EXPECT_FALSE(conversion.camera.mrcal_lens);
   const auto samples = sample_image(source, 2, 0);
   ASSERT_EQ(conversion.report.samples, long(samples.size()));
-  const MrcalSpline& spline = *source.parameters().spline;
+  const MrcalLens& spline = *source.parameters().mrcal_lens;
   mrcal_lensmodel_t lensmodel{};
   ASSERT_TRUE(mrcal_lensmodel_from_name(&lensmodel, spline.lensmodel().c_str()));
   const double f = model_params(source.model())[0];

@@ -157,7 +157,7 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_tangential_ca
   return out;
 }
 
-// mrcal's spline on the stereographic example's plane (fishcam/mrcal_spline.hpp): a
+// mrcal's spline on the stereographic example's plane (fishcam/mrcal_lens.hpp): a
 // smooth displacement of up to ~0.01 (a few pixels), labelled stereographic_spline.
 inline std::pair<std::string, CameraParameters> spline_camera() {
   for (auto [label, p] : every_model()) {
@@ -170,12 +170,39 @@ inline std::pair<std::string, CameraParameters> spline_camera() {
         values.push_back(0.003 * std::sin(0.5 * x - 0.9 * y) - 0.0015 * y);
       }
     }
-    p.spline = std::make_shared<const MrcalSpline>("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
+    p.mrcal_lens = std::make_shared<const MrcalLens>("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
                                                    values);
     return {label + "_spline", p};
   }
   ADD_FAILURE() << "no stereographic example for the spline camera";
   return {};
+}
+
+// One camera per mrcal lens model (MrcalLens::kinds(): fishcam/mrcal_lens.hpp) on its
+// base model's example, labelled base_lensmodel: the spline camera, CAHVOR with a tilted
+// axis and radial terms on the pinhole example, LONLAT and LATLON on the stereographic one.
+inline std::vector<std::pair<std::string, CameraParameters>> mrcal_lens_cameras() {
+  std::vector<std::pair<std::string, CameraParameters>> out;
+  for (const MrcalLens::KindInfo& kind : MrcalLens::kinds()) {
+    if (kind.kind == MrcalLens::Kind::splined_stereographic) {
+      out.push_back(spline_camera());
+      continue;
+    }
+    const std::vector<double> values =
+        kind.kind == MrcalLens::Kind::cahvor ? std::vector<double>{0.03, -0.02, 0.01, -0.05, 0.01} : std::vector<double>{};
+    bool found = false;
+    for (auto [label, p] : every_model()) {
+      if (model_name(p.model) != kind.base_model || found) continue;
+      // LONLAT's and LATLON's domains end at their poles (theta = 90 deg): the image inside them.
+      if (kind.base_model == std::string_view("stereographic")) p.model = Stereographic<double>(450.0);
+      p.mrcal_lens = std::make_shared<const MrcalLens>(kind.lensmodel, values);
+      std::string name = kind.lensmodel;
+      out.emplace_back(label + "_" + name.substr(std::string("LENSMODEL_").size()), p);
+      found = true;
+    }
+    if (!found) ADD_FAILURE() << kind.lensmodel << " has no example of its base model " << kind.base_model;
+  }
+  return out;
 }
 
 // Whether the float warp kernel can evaluate the camera: a model with the unified
@@ -188,7 +215,7 @@ inline bool float_kernel_form(const CameraParameters& p) {
         return HasUnifiedForm<M> || PolynomialInTheta<M> || HasRayPolynomial<M>;
       },
       p.model);
-  return form;
+  return form && (!p.mrcal_lens || p.mrcal_lens->polynomial_cells());  // of mrcal's lenses only the spline
 }
 
 // The ocam example with ocamcalib_calib_results.txt's affine as its pixel skew
@@ -204,13 +231,13 @@ inline std::pair<std::string, CameraParameters> skewed_camera() {
   return {};
 }
 
-// Every camera kind: every_model(), every_tangential_camera(), the spline camera and
+// Every camera kind: every_model(), every_tangential_camera(), mrcal_lens_cameras() and
 // skewed_camera(), for the tests of what any camera does (project, unproject, formats,
 // the float kernel and the grid path).
 inline std::vector<std::pair<std::string, CameraParameters>> every_camera() {
   auto out = every_model();
   for (auto& c : every_tangential_camera()) out.push_back(std::move(c));
-  out.push_back(spline_camera());
+  for (auto& c : mrcal_lens_cameras()) out.push_back(std::move(c));
   out.push_back(skewed_camera());
   return out;
 }

@@ -228,7 +228,7 @@ TEST(Tangential, SkewedGridsProjectThroughTheSkewAndUnprojectBack) {
     ++cameras;
   }
   EXPECT_EQ(cameras, int(test::every_camera().size()));
-  EXPECT_GE(cameras, 21);  // 16 models + 3 tangential + the spline + the skewed ocam
+  EXPECT_GE(cameras, 24);  // 16 models + 3 tangential + 4 mrcal lenses + the skewed ocam
 }
 
 TEST(Tangential, SkewsThatCannotBeAGridAreRefused) {
@@ -271,26 +271,33 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
   refused(p, "tangential.p2: must be finite");
   p.tangential = {0, 0, {0, 0, std::numeric_limits<double>::infinity(), 0}};
   refused(p, "tangential.s3: must be finite");
-  // mrcal's spline: on a stereographic model only, never with tangential terms, its
-  // configuration and value count checked.
+  // An mrcal lens: on its base model only, never with tangential terms, its name,
+  // configuration and value count checked; CAHVORE refused with its reason.
   CameraParameters s = test::spline_camera().second;
   s.tangential = {0.001, 0, {}};
-  refused(s, "tangential: a camera has tangential terms or a spline, not both");
+  refused(s, "tangential: a camera has tangential terms or an mrcal lens, not both");
   s.tangential = {};
   s.model = Equidistant<double>(330.0);
-  refused(s, "spline: mrcal's spline displaces the stereographic plane: the model must be stereographic");
+  refused(s, "mrcal_lens: LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150 displaces the stereographic "
+             "plane: the model must be stereographic, got equidistant");
+  s.mrcal_lens = std::make_shared<const MrcalLens>("LENSMODEL_CAHVOR", std::vector<double>(5, 0.0));
+  s.model = Stereographic<double>(330.0);
+  refused(s, "mrcal_lens: LENSMODEL_CAHVOR displaces the pinhole plane: the model must be pinhole, got stereographic");
   const auto spline_refused = [](const std::string& lensmodel, std::vector<double> values, const std::string& expected) {
     try {
-      MrcalSpline spline(lensmodel, std::move(values));
+      MrcalLens spline(lensmodel, std::move(values));
       ADD_FAILURE() << "accepted: " << expected;
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
   };
   spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", std::vector<double>(95, 0.0),
-                 "has 96 control values, got 95");
-  spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8", std::vector<double>(96, 0.0), "is not a configured");
-  spline_refused("LENSMODEL_OPENCV8", std::vector<double>(8, 0.0), "is not a configured");
+                 "has 96 values after fx, fy, cx, cy, got 95");
+  spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8", std::vector<double>(96, 0.0), "is not one of the mrcal lens");
+  spline_refused("LENSMODEL_OPENCV8", std::vector<double>(8, 0.0), "is not one of the mrcal lens models fishcam evaluates");
+  spline_refused("LENSMODEL_CAHVORE_linearity=0.00", std::vector<double>(8, 0.0), "is noncentral");
+  spline_refused("LENSMODEL_CAHVOR", std::vector<double>(4, 0.0), "has 5 values after fx, fy, cx, cy, got 4");
+  spline_refused("LENSMODEL_LONLAT", {1.0}, "has 0 values after fx, fy, cx, cy, got 1");
   // Configurations libmrcal would abort on, or parse wrapped (uint16), never reach it.
   const std::string prefix = "LENSMODEL_SPLINED_STEREOGRAPHIC_";
   spline_refused(prefix + "order=7_Nx=4_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "order must be 2 or 3");
@@ -298,7 +305,7 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
   spline_refused(prefix + "order=3_Nx=-4_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "is not written as mrcal");
   spline_refused(prefix + "order=3_Nx=99999999_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "is not written as mrcal");
   spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=0", std::vector<double>(32, 0.0), "fov_x_deg must be in [1, 359]");
-  spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=120_extra", std::vector<double>(32, 0.0), "is not a configured");
+  spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=120_extra", std::vector<double>(32, 0.0), "is not one of the mrcal lens");
   std::vector<double> values(96, 0.0);
   values[5] = std::numeric_limits<double>::quiet_NaN();
   spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", values, "must be finite");

@@ -16,9 +16,10 @@ void print_text(const nlohmann::json& j) {
   std::printf("model             %s\n", j["model"].get<std::string>().c_str());
   std::printf("parameters       ");
   for (double v : j["parameters"]) std::printf(" %.10g", v);
-  if (const auto& s = j["spline"]; !s.is_null()) {
-    std::printf("\nspline            %s (%zu control values, evaluated by libmrcal; not radially symmetric)",
-                s["lensmodel"].get<std::string>().c_str(), s["values"].get<size_t>());
+  if (const auto& s = j["mrcal_lens"]; !s.is_null()) {
+    std::printf("\nmrcal lens        %s (%zu values, on the %s plane, evaluated by libmrcal; not radially symmetric)",
+                s["lensmodel"].get<std::string>().c_str(), s["values"].get<size_t>(),
+                s["base_model"].get<std::string>().c_str());
   }
   if (const auto& t = j["tangential"]; !t.is_null()) {
     std::printf("\ntangential        p1 %.10g, p2 %.10g, s1..s4 %.10g %.10g %.10g %.10g (not radially symmetric)",
@@ -37,7 +38,7 @@ void print_text(const nlohmann::json& j) {
               j["theta_max_closed"].get<bool>() ? "" : ", exclusive",
               j["theta_max_limited_by"].get<std::string>().c_str());
   const char* radial_part =
-      j["tangential"].is_null() && j["spline"].is_null() && j["skew"].is_null() ? "" : " (radial part)";
+      j["tangential"].is_null() && j["mrcal_lens"].is_null() && j["skew"].is_null() ? "" : " (radial part)";
   if (j["rho_max_px"].is_null()) {
     std::printf("rho_max           unbounded%s\n", radial_part);
   } else {
@@ -47,7 +48,7 @@ void print_text(const nlohmann::json& j) {
   std::printf("field of view     %.3f deg horizontal, %.3f vertical, %.3f diagonal\n",
               fov["horizontal"].get<double>(), fov["vertical"].get<double>(), fov["diagonal"].get<double>());
   const auto& table = j["inverse_table"];
-  if (!j["tangential"].is_null() || !j["spline"].is_null()) {
+  if (!j["tangential"].is_null() || !j["mrcal_lens"].is_null()) {
     std::printf("unprojection      2-D Newton on the distortion map, checked to reproject within 1e-7 px\n");
   } else if (table["cells"].get<int>() > 0) {
     std::printf("inverse table     %d cells, worst error %.3g px, %d cells use the robust solver\n",

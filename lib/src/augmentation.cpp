@@ -144,10 +144,10 @@ struct KernelSource {
 };
 
 // mrcal's spline as the kernel evaluates it (SourceParams::spline_cells): on each of
-// MrcalSpline's polynomial cells, the bicubic in the cell's local (t, s) that
+// MrcalLens's polynomial cells, the bicubic in the cell's local (t, s) that
 // interpolates f delta_u at 4 x 4 points — the spline itself, which is that polynomial
 // there (float_kernel_agrees checks the result against libmrcal's projection).
-std::vector<float> spline_kernel_cells(const MrcalSpline& spline, const MrcalSpline::PolynomialCells& cells,
+std::vector<float> spline_kernel_cells(const MrcalLens& spline, const MrcalLens::PolynomialCells& cells,
                                        double f) {
   Eigen::Matrix4d vandermonde;  // rows: the nodes -1/2, -1/6, 1/6, 1/2 (t about the centre); columns: powers
   for (int a = 0; a < 4; ++a) {
@@ -184,11 +184,16 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
   std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
   if (!p) return nullptr;
   if (p->kind == SourceParams::Kind::ray_polynomial && !ray_polynomial_start(camera, &*p)) return nullptr;
-  if (const auto& spline = camera.parameters().spline) {  // on the stereographic plane: unified, xi = 1, alpha = 0
+  if (const auto& lens = camera.parameters().mrcal_lens) {
+    // mrcal's spline on the stereographic plane (unified, xi = 1, alpha = 0) is polynomial
+    // per cell; the other mrcal lenses have no form the kernel evaluates exactly.
+    const std::optional<MrcalLens::PolynomialCells> found = lens->polynomial_cells();
     const auto* stereographic = std::get_if<Stereographic<double>>(&camera.model());
-    if (!stereographic || p->kind != SourceParams::Kind::unified || p->xi != 1 || p->alpha != 0) return nullptr;
-    const MrcalSpline::PolynomialCells cells = spline->polynomial_cells();
-    source->spline_cells = spline_kernel_cells(*spline, cells, stereographic->focal());
+    if (!found || !stereographic || p->kind != SourceParams::Kind::unified || p->xi != 1 || p->alpha != 0) {
+      return nullptr;
+    }
+    const MrcalLens::PolynomialCells& cells = *found;
+    source->spline_cells = spline_kernel_cells(*lens, cells, stereographic->focal());
     for (float x : source->spline_cells) {  // absolute values in pixels: only overflow matters
       if (!std::isfinite(x)) return nullptr;
     }

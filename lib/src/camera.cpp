@@ -112,7 +112,7 @@ bool ray_of(const Model& model, const ValidDomain& domain, const InverseTable& t
 }
 
 // ---- cameras that are not radially symmetric: T(m) on the model's undistorted plane,
-// OpenCV's tangential terms (fishcam/tangential.hpp) or mrcal's spline (fishcam/mrcal_spline.hpp)
+// OpenCV's tangential terms (fishcam/tangential.hpp) or an mrcal lens (fishcam/mrcal_lens.hpp)
 
 // The plane radius u(theta) as a radial "model", so project_one gives m and dm/dP.
 template <class Model>
@@ -244,7 +244,7 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
 // The largest theta* <= the radial domain's theta_max below which the distortion map
 // D is one-to-one on the disk |m| <= u(theta*): det(dD/dm) > 0 on every ring and each
 // ring's image star-shaped about D(0) (its angle increasing), which together make D
-// injective. (T(0) = 0 for tangential terms; mrcal's spline moves the centre.)
+// injective. (T(0) = 0 for tangential terms; an mrcal lens may move the centre.)
 // Rings are scanned, the first failing one bisected. nullopt: no ring fails.
 template <class Model, class Distortion>
 std::optional<double> distortion_fold(const Model& model, const Distortion& terms, const ValidDomain& radial) {
@@ -301,8 +301,8 @@ template <bool kWithJacobian, class Model>
 bool project_unskewed(const Model& model, const CameraParameters& params, const double* mapping,
                       const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                       Eigen::Matrix<double, 2, 3>* jacobian) {
-  if (params.spline) {
-    return project_distorted<kWithJacobian>(model, mapping, domain, *params.spline, point, pixel, jacobian);
+  if (params.mrcal_lens) {
+    return project_distorted<kWithJacobian>(model, mapping, domain, *params.mrcal_lens, point, pixel, jacobian);
   }
   if (params.tangential.any()) {
     return project_distorted<kWithJacobian>(model, mapping, domain, params.tangential, point, pixel, jacobian);
@@ -339,7 +339,7 @@ bool ray_of_point(const Model& model, const CameraParameters& params, const Vali
     const double qx = (x - xy * y) / det, qy = (y - yx * x) / det;
     x = qx, y = qy;
   }
-  if (params.spline) return distorted_ray_of(model, domain, table, *params.spline, params.pixel_scale, x, y, ray);
+  if (params.mrcal_lens) return distorted_ray_of(model, domain, table, *params.mrcal_lens, params.pixel_scale, x, y, ray);
   if (params.tangential.any()) {
     return distorted_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray);
   }
@@ -512,11 +512,13 @@ void Camera::limit_to_plane_fold() {
     if (!std::isfinite(terms.values()[i])) fail("tangential.", terms.kNames[i], ": must be finite");
   }
   std::optional<double> fold;
-  if (params_.spline) {
-    if (terms.any()) fail("tangential: a camera has tangential terms or a spline, not both");
-    const auto* stereographic = std::get_if<Stereographic<double>>(&params_.model);
-    if (!stereographic) fail("spline: mrcal's spline displaces the stereographic plane: the model must be stereographic");
-    fold = distortion_fold(*stereographic, *params_.spline, domain_);
+  if (const auto& lens = params_.mrcal_lens) {
+    if (terms.any()) fail("tangential: a camera has tangential terms or an mrcal lens, not both");
+    if (model_name(params_.model) != lens->base_model()) {
+      fail("mrcal_lens: ", lens->lensmodel().substr(0, 80), " displaces the ", lens->base_model(),
+           " plane: the model must be ", lens->base_model(), ", got ", model_name(params_.model));
+    }
+    fold = std::visit([&](const auto& m) { return distortion_fold(m, *lens, domain_); }, params_.model);
   } else {
     const bool takes = std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; },
                                   params_.model);
@@ -528,7 +530,7 @@ void Camera::limit_to_plane_fold() {
   }
   if (!fold || *fold >= domain_.theta_max * (1 - 1e-12)) return;  // the radial limit comes first
   if (!(*fold > 0)) {
-    fail(params_.spline ? "spline" : "tangential", ": the distortion is not one-to-one even next to the principal point");
+    fail(params_.mrcal_lens ? "mrcal_lens" : "tangential", ": the distortion is not one-to-one even next to the principal point");
   }
   domain_.theta_max = *fold;
   domain_.closed = true;
@@ -549,15 +551,17 @@ void Camera::bound_plane_reach() {
     }
     return 1.01 * largest;
   };
-  if (params_.spline) {
-    domain_.plane_reach = reach(std::get<Stereographic<double>>(params_.model), *params_.spline);
-  } else {
-    std::visit(
-        [&](const auto& m) {
-          if constexpr (TakesTangentialTerms<std::decay_t<decltype(m)>>) domain_.plane_reach = reach(m, params_.tangential);
-        },
-        params_.model);
-  }
+  std::visit(
+      [&](const auto& m) {
+        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
+          if (params_.mrcal_lens) {
+            domain_.plane_reach = reach(m, *params_.mrcal_lens);
+          } else if constexpr (TakesTangentialTerms<std::decay_t<decltype(m)>>) {
+            domain_.plane_reach = reach(m, params_.tangential);
+          }
+        }
+      },
+      params_.model);
 }
 
 double Camera::rho(double theta) const {

@@ -321,8 +321,10 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
                          {"closed_form", std::visit([](const auto& m) { return ClosedFormInverse<std::decay_t<decltype(m)>>; },
                                                     p.model)}}},
   };
-  j["spline"] = p.spline ? json{{"lensmodel", p.spline->lensmodel()}, {"values", p.spline->values().size()}}
-                         : json(nullptr);
+  j["mrcal_lens"] = p.mrcal_lens ? json{{"lensmodel", p.mrcal_lens->lensmodel()},
+                                        {"base_model", p.mrcal_lens->base_model()},
+                                        {"values", p.mrcal_lens->values().size()}}
+                                  : json(nullptr);
   j["tangential"] = nullptr;  // radially symmetric
   if (p.tangential.any()) {
     for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
@@ -342,6 +344,8 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
 bool camera_format_holds_calibration_record(CameraFormat format) {
   return format_spec(format).holds_calibration_record;
 }
+
+bool camera_format_holds_mrcal_lens(CameraFormat format) { return format_spec(format).holds_mrcal_lens; }
 
 std::vector<std::string> camera_format_models(CameraFormat format) {
   const auto& listed = format_spec(format).models;
@@ -372,9 +376,10 @@ std::string cannot_hold_tangential(const detail::FormatSpec& spec, const Tangent
 // "" when the format holds the camera's non-radial parts, else why not.
 std::string cannot_hold_non_radial(const detail::FormatSpec& spec, const CameraParameters& camera) {
   if (std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) return why;
-  if (camera.spline && !spec.holds_spline) {
-    return "spline: the " + std::string(spec.name) + " format cannot hold mrcal's splined surface (" +
-           formats_that([](const detail::FormatSpec& s) { return s.holds_spline; }) + " can)";
+  if (camera.mrcal_lens && !spec.holds_mrcal_lens) {
+    return "mrcal_lens: the " + std::string(spec.name) + " format cannot hold mrcal's " +
+           camera.mrcal_lens->lensmodel().substr(0, 80) + " (" +
+           formats_that([](const detail::FormatSpec& s) { return s.holds_mrcal_lens; }) + " can)";
   }
   if (camera.skew.any() && !spec.holds_skew) {
     return "skew: the " + std::string(spec.name) + " format cannot hold a skewed pixel grid (" +
@@ -415,8 +420,8 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
     if (!near(back.skew.xy, camera.skew.xy) || !near(back.skew.yx, camera.skew.yx)) {
       throw Error(": its skew does not read back");
     }
-    if (bool(back.spline) != bool(camera.spline) || (back.spline && !(*back.spline == *camera.spline))) {
-      throw Error(": its spline does not read back");
+    if (bool(back.mrcal_lens) != bool(camera.mrcal_lens) || (back.mrcal_lens && !(*back.mrcal_lens == *camera.mrcal_lens))) {
+      throw Error(": its mrcal lens does not read back");
     }
   } catch (const Error& e) {
     std::string why = e.what();

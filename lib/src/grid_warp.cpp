@@ -249,7 +249,7 @@ GridChange prepare(const GridPlan& plan, const SourceParams& src, const Viewpoin
 // The smallest distance from the principal point, in normalised coordinates, of the
 // image of a closed domain's rim (theta = theta_max): rho_max for a radial camera,
 // less with a skew, more or less with a non-radial part (the rim's image is then no
-// circle; mrcal's spline moves its centre). Sampled at 1440 azimuths (the guard's 5 %
+// circle; an mrcal lens may move its centre). Sampled at 1440 azimuths (the guard's 5 %
 // covers what lies between); 0 unless the axis's pixel lies inside the disk of that
 // radius about the principal point (the disk then lies inside the domain's image:
 // it meets no rim point).

@@ -34,7 +34,7 @@ struct SourceParams {
   float a[5] = {};
   float theta_fit = 0, rho_fit = 0;
   // mrcal's spline on a stereographic camera (unified, xi = 1, alpha = 0; u = 2 m):
-  // f delta_u from its polynomial cells (MrcalSpline::polynomial_cells), cell
+  // f delta_u from its polynomial cells (MrcalLens::polynomial_cells), cell
   // coordinates g = m * spline_scale + spline_origin, the cell index clamped to the
   // nx x ny grid (mrcal extrapolates its outer cells); per cell 32 floats, x's then y's
   // bicubic in (t, s) = g - cell - 1/2 (about the cell's centre, in pixels before a):

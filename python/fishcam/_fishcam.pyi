@@ -151,6 +151,11 @@ class Camera:
         The model's name (docs/models.md), e.g. 'polynomial', 'kannala-brandt'.
         """
     @property
+    def mrcal_lens(self) -> tuple[str, list[float]] | None:
+        """
+        mrcal's lens model on the plane of the camera's model, evaluated by libmrcal (splined stereographic, CAHVOR on pinhole, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, cy), or None.
+        """
+    @property
     def observed_theta_max_deg(self) -> float | None:
         """
         The largest angle of incidence its calibration observed (degrees), or None for a camera without a calibration record.
@@ -178,17 +183,12 @@ class Camera:
     @property
     def radial(self) -> bool:
         """
-        Whether the camera is radially symmetric (no tangential terms, spline or skew): only then do rho and theta_from_rho describe its whole projection.
+        Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do rho and theta_from_rho describe its whole projection.
         """
     @property
     def skew(self) -> tuple[float, float]:
         """
         The pixel grid's skew (xy, yx): pixel = c + a * ([[1, xy], [yx, 1]] q) with q the model's image offset (docs/conventions.md); (0, 0) for the usual grid.
-        """
-    @property
-    def spline(self) -> tuple[str, list[float]] | None:
-        """
-        mrcal's splined surface on the stereographic plane (LENSMODEL_SPLINED_STEREOGRAPHIC): (lensmodel, control values), or None.
         """
     @property
     def tangential(self) -> dict[str, float]:

@@ -32,10 +32,10 @@ std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
   const auto terms = p.tangential.values();
   numbers.insert(numbers.end(), terms.begin(), terms.end());
   numbers.insert(numbers.end(), {p.skew.xy, p.skew.yx});
-  if (p.spline) {  // its lensmodel, then its values after the other numbers
-    key += p.spline->lensmodel();
+  if (p.mrcal_lens) {  // its lensmodel, then its values after the other numbers
+    key += p.mrcal_lens->lensmodel();
     key.push_back('\0');
-    numbers.insert(numbers.end(), p.spline->values().begin(), p.spline->values().end());
+    numbers.insert(numbers.end(), p.mrcal_lens->values().begin(), p.mrcal_lens->values().end());
   }
   if (with_pose && p.pose) {
     const auto& q = p.pose->rotation;
@@ -56,8 +56,8 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
 // table, milliseconds), given the pickled pose (microseconds).
 py::object camera_pickle_state(const Camera& c) {
   const CameraParameters& p = c.parameters();
-  // The record, the spline or a skew travel as fishcam JSON.
-  if (p.calibration || p.spline || p.skew.any()) return py::str(format_camera(p, CameraFormat::fishcam));
+  // The record, an mrcal lens or a skew travel as fishcam JSON.
+  if (p.calibration || p.mrcal_lens || p.skew.any()) return py::str(format_camera(p, CameraFormat::fishcam));
   py::object pose = py::none();
   if (p.pose) {
     const auto& q = p.pose->rotation;
@@ -197,19 +197,20 @@ void bind_camera(py::module_& m) {
           "The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's "
           "undistorted plane (docs/conventions.md); all 0 for a radially symmetric camera.")
       .def_property_readonly(
-          "spline",
+          "mrcal_lens",
           [](const Camera& c) -> std::optional<std::pair<std::string, std::vector<double>>> {
-            if (!c.parameters().spline) return std::nullopt;
-            return std::pair(c.parameters().spline->lensmodel(), c.parameters().spline->values());
+            if (!c.parameters().mrcal_lens) return std::nullopt;
+            return std::pair(c.parameters().mrcal_lens->lensmodel(), c.parameters().mrcal_lens->values());
           },
-          "mrcal's splined surface on the stereographic plane (LENSMODEL_SPLINED_STEREOGRAPHIC): (lensmodel, "
-          "control values), or None.")
+          "mrcal's lens model on the plane of the camera's model, evaluated by libmrcal (splined stereographic, "
+          "CAHVOR on pinhole, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, cy), "
+          "or None.")
       .def_property_readonly(
           "skew", [](const Camera& c) { return std::pair(c.skew().xy, c.skew().yx); },
           "The pixel grid's skew (xy, yx): pixel = c + a * ([[1, xy], [yx, 1]] q) with q the model's image offset "
           "(docs/conventions.md); (0, 0) for the usual grid.")
       .def_property_readonly("radial", &Camera::radial,
-                             "Whether the camera is radially symmetric (no tangential terms, spline or skew): only then do rho and "
+                             "Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do rho and "
                              "theta_from_rho describe its whole projection.")
       .def_property_readonly(
           "principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); },

@@ -125,7 +125,7 @@ def spline_camera_json():
             values += [0.004 * np.cos(0.7 * x + 0.3 * y) + 0.001 * x, 0.003 * np.sin(0.5 * x - 0.9 * y) - 0.0015 * y]
     return {"fishcam_camera": 1, "width": 640, "height": 483, "principal_point": [321.5, 240.0],
             "pixel_scale": [1.0, 1.0045], "model": "stereographic", "parameters": [165.0],
-            "spline": {"lensmodel": "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
+            "mrcal_lens": {"lensmodel": "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
                        "values": [float(v) for v in values]}}
 
 
@@ -134,13 +134,23 @@ def test_a_splined_camera_is_mrcals_projection(tmp_path):
     path.write_text(json.dumps(spline_camera_json()))
     camera = fishcam.Camera.read(str(path))
     assert not camera.radial and camera.model == "stereographic"
-    lensmodel, values = camera.spline
+    lensmodel, values = camera.mrcal_lens
     assert lensmodel.startswith("LENSMODEL_SPLINED_STEREOGRAPHIC") and len(values) == 96
-    assert json.loads(camera.info_json())["spline"]["values"] == 96
+    assert json.loads(camera.info_json())["mrcal_lens"]["values"] == 96
     copy = pickle.loads(pickle.dumps(camera))
-    assert copy == camera and copy.spline == camera.spline
+    assert copy == camera and copy.mrcal_lens == camera.mrcal_lens
+    # Files written before CAHVOR and LONLAT/LATLON were read call it "spline".
+    old = dict(spline_camera_json())
+    old["spline"] = old.pop("mrcal_lens")
+    old_path = tmp_path / "old.json"
+    old_path.write_text(json.dumps(old))
+    assert fishcam.Camera.read(str(old_path)) == camera
+    both = dict(spline_camera_json(), spline=old["spline"])
+    old_path.write_text(json.dumps(both))
+    with pytest.raises(fishcam.Error, match="give mrcal_lens only"):
+        fishcam.Camera.read(str(old_path))
     plain = dict(spline_camera_json())
-    del plain["spline"]
+    del plain["mrcal_lens"]
     plain_path = tmp_path / "plain.json"
     plain_path.write_text(json.dumps(plain))
     assert fishcam.Camera.read(str(plain_path)).parameters_key(False) != camera.parameters_key(False)
@@ -155,7 +165,7 @@ def test_a_splined_camera_is_mrcals_projection(tmp_path):
     assert np.abs(pixels - expected).max() < 1e-9
     camera.write(str(tmp_path / "spline.cameramodel"))
     back = fishcam.Camera.read(str(tmp_path / "spline.cameramodel"))
-    assert back.spline == camera.spline
+    assert back.mrcal_lens == camera.mrcal_lens
     assert np.abs(back.project(points)[0] - pixels).max() < 1e-9
     with pytest.raises(fishcam.Error, match="not stereographic"):
         camera.write(str(tmp_path / "spline.yaml"), format="opencv")
@@ -166,6 +176,65 @@ def test_a_splined_camera_is_mrcals_projection(tmp_path):
     image = (np.arange(camera.width * camera.height) % 251).astype(np.uint8).reshape(camera.height, camera.width)
     out = warp(image=image, change=fishcam.ViewpointChange(), return_valid=True)
     assert out["valid"].all() and np.array_equal(out["image"], image)
+
+
+MRCAL_LENSES = [  # (lensmodel, values, base model, fx, image)
+    ("LENSMODEL_CAHVOR", [0.03, -0.02, 0.01, -0.05, 0.01], "pinhole", 420.0, (1280, 966)),
+    ("LENSMODEL_LONLAT", [], "stereographic", 450.0, (1280, 966)),  # the image inside the poles
+    ("LENSMODEL_LATLON", [], "stereographic", 450.0, (1280, 966)),
+]
+
+
+@pytest.mark.parametrize("lensmodel, values, base, fx, size", MRCAL_LENSES, ids=[m[0] for m in MRCAL_LENSES])
+def test_mrcal_lenses_are_mrcals_projection(tmp_path, lensmodel, values, base, fx, size):
+    """CAHVOR on a pinhole plane, LONLAT and LATLON on a stereographic one, read from
+    .cameramodel files and compared with mrcal's own Python (mrcal.project)."""
+    intrinsics = [fx, fx * 1.004, size[0] / 2 - 3.5, size[1] / 2 + 2.0] + values
+    path = tmp_path / "lens.cameramodel"
+    path.write_text(repr({"lensmodel": lensmodel, "intrinsics": intrinsics, "imagersize": list(size)}))
+    camera = fishcam.Camera.read(str(path))
+    assert camera.model == base and not camera.radial
+    assert camera.mrcal_lens == (lensmodel, values)
+    info = json.loads(camera.info_json())
+    assert info["mrcal_lens"] == {"lensmodel": lensmodel, "base_model": base, "values": len(values)}
+    theta_max = info["theta_max_deg"]
+    if lensmodel != "LENSMODEL_CAHVOR":  # singular at the poles, 90 deg off the axis
+        assert 89.9 < theta_max <= 90
+    points = rays(4000, min(0.999 * theta_max, 85), 7) * np.linspace(0.5, 7, 4000)[:, None]
+    pixels, ok = camera.project(points)
+    assert ok.all()
+    back, ok = camera.unproject(pixels)
+    assert ok.all() and np.abs(camera.project(back)[0] - pixels).max() < 1e-7
+    mrcal = pytest.importorskip("mrcal")
+    expected = mrcal.project(points, lensmodel, np.array(intrinsics))
+    # mrcal's CAHVOR is not scale-invariant to rounding (the same ray at different lengths
+    # projects up to 1.3e-8 px apart at 80 deg): ours is one of those lengths.
+    assert np.abs(pixels - expected).max() < (5e-8 if lensmodel == "LENSMODEL_CAHVOR" else 1e-9)
+    assert np.abs(back - points / np.linalg.norm(points, axis=1, keepdims=True)).max() < 1e-9
+    # mrcal .cameramodel and fishcam JSON hold it; other formats refuse it in one line.
+    for name in ("again.cameramodel", "again.json"):
+        camera.write(str(tmp_path / name))
+        again = fishcam.Camera.read(str(tmp_path / name))
+        assert again.model == base and again.mrcal_lens == camera.mrcal_lens
+        assert np.abs(again.project(points)[0] - pixels).max() < 1e-9
+    refusal = "mrcal_lens: the opencv format cannot hold mrcal's " + lensmodel if base == "pinhole" else "not stereographic"
+    with pytest.raises(fishcam.Error, match=refusal):
+        camera.write(str(tmp_path / "lens.yaml"), format="opencv")
+    # Augmentation takes the exact path (no float kernel); the identity keeps the image.
+    small = camera.resized(320, 242)
+    warp = fishcam.ViewpointWarp(small)
+    assert not warp.float_kernel and warp.grid_spacing == 0
+    image = (np.arange(small.width * small.height) % 251).astype(np.uint8).reshape(small.height, small.width)
+    out = warp(image=image, change=fishcam.ViewpointChange(), return_valid=True)
+    assert out["valid"].all() and np.array_equal(out["image"], image)
+
+
+def test_cahvore_is_refused_with_its_reason(tmp_path):
+    path = tmp_path / "cahvore.cameramodel"
+    path.write_text(repr({"lensmodel": "LENSMODEL_CAHVORE_linearity=0.00",
+                          "intrinsics": [400.0, 400.0, 640.0, 480.0] + [0.0] * 8, "imagersize": [1280, 966]}))
+    with pytest.raises(fishcam.Error, match="lensmodel: 'LENSMODEL_CAHVORE_linearity=0.00' is noncentral"):
+        fishcam.Camera.read(str(path))
 
 
 def ocam_cam2world(pixels, pol, xc, yc, c, d, e):

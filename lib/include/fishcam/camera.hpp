@@ -20,7 +20,7 @@
 #include "fishcam/error.hpp"
 #include "fishcam/radial_inverse.hpp"
 #include "fishcam/model_registry.hpp"
-#include "fishcam/mrcal_spline.hpp"
+#include "fishcam/mrcal_lens.hpp"
 #include "fishcam/radial_models.hpp"
 #include "fishcam/tangential.hpp"
 
@@ -86,7 +86,7 @@ struct CalibrationRecord {
 
 // A pixel grid whose axes are not perpendicular (OCamCalib's affine c, d, e; the skew of
 // BoofCV and of Bouguet's toolbox, alpha_c = xy): with q the model's image offset
-// (rho(theta) along the ray's azimuth, plus any tangential terms or spline),
+// (rho(theta) along the ray's azimuth, plus any tangential terms or mrcal lens),
 //   pixel = c + a (.) (S q),   S = [1 xy; yx 1],   det S = 1 - xy yx > 0.
 // Both zero: the usual grid, pixel = c + a (.) q.
 struct PixelSkew {
@@ -105,19 +105,19 @@ struct CameraParameters {
   // Non-radial terms on the model's undistorted plane (fishcam/tangential.hpp); all
   // zero for a radial camera. Only models with a plane (pinhole, opencv, mei) take them.
   TangentialTerms tangential;
-  // Or mrcal's splined surface on the plane of a `stereographic` model
-  // (LENSMODEL_SPLINED_STEREOGRAPHIC; fishcam/mrcal_spline.hpp); null for none.
-  std::shared_ptr<const MrcalSpline> spline;
+  // Or one of mrcal's lens models on the plane of its base model (splined, CAHVOR,
+  // LONLAT, LATLON; fishcam/mrcal_lens.hpp), evaluated by libmrcal; null for none.
+  std::shared_ptr<const MrcalLens> mrcal_lens;
   // A skewed pixel grid (any model, with or without the above); zero for none.
   PixelSkew skew;
   std::optional<double> theta_limit;  // radians; a user cap on the valid domain
   std::optional<Pose> pose;
   std::optional<CalibrationRecord> calibration;
 
-  // No tangential terms, no spline, no skew: rho(theta) is the whole projection.
-  bool radially_symmetric() const { return !tangential.any() && !spline && !skew.any(); }
-  // Tangential terms or a spline: a displacement on the model's undistorted plane.
-  bool distorted_plane() const { return tangential.any() || spline; }
+  // No tangential terms, no mrcal lens, no skew: rho(theta) is the whole projection.
+  bool radially_symmetric() const { return !tangential.any() && !mrcal_lens && !skew.any(); }
+  // Tangential terms or an mrcal lens: a displacement on the model's undistorted plane.
+  bool distorted_plane() const { return tangential.any() || mrcal_lens; }
 };
 
 // The same lens for the image resized to width x height: with pixel centres at
@@ -159,7 +159,7 @@ class Camera {
   const RadialModel& model() const { return params_.model; }
   const TangentialTerms& tangential() const { return params_.tangential; }
   const PixelSkew& skew() const { return params_.skew; }
-  // Whether the camera is radially symmetric (no tangential terms, spline or skew): only then do
+  // Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do
   // rho, theta_from_rho and rho_of_pixel describe its whole projection.
   bool radial() const { return params_.radially_symmetric(); }
   const ValidDomain& domain() const { return domain_; }

@@ -76,7 +76,7 @@ ErrorReport reprojection_errors(const Camera& camera, std::span<const Correspond
 // What `fishcam convert` does: the model fitted to the source camera ("lsq": least
 // squares over every 4th pixel of its valid image, up to max_theta when given;
 // "paper": eqs. 13-14), and its error over a denser grid (every 2nd pixel).
-// A source that is not radially symmetric (tangential terms, mrcal's spline) has its
+// A source that is not radially symmetric (tangential terms, an mrcal lens) has its
 // principal point and a_y fitted too, whatever the options say: a radial model about
 // the source's principal point is not the best radial model. `non_radial` then
 // measures, over the same evaluation rays, the error no radial model can avoid about

@@ -24,7 +24,7 @@ namespace fishcam {
 
 struct ValidDomain {
   // model: the model's own limit; fold: rho' = 0; user: theta_limit; distortion_fold:
-  // where the non-radial part (tangential terms, a spline) stops being one-to-one (Camera).
+  // where the non-radial part (tangential terms, an mrcal lens) stops being one-to-one (Camera).
   enum class Limit { model, fold, user, distortion_fold };
   double theta_max = 0;   // radians
   double rho_max = 0;     // rho(theta_max); +inf when the model diverges there

@@ -209,7 +209,7 @@ class Stereographic {
   static constexpr bool limit_is_open() { return true; }
   Stereographic scaled(const Scalar& s) const { return Stereographic(f_ * s); }
   // The plane of the stereographic projection, u = 2 tan(theta / 2) (mrcal's splined
-  // models displace it; fishcam/mrcal_spline.hpp).
+  // models displace it; fishcam/mrcal_lens.hpp).
   double focal() const { return double(f_); }
   static double plane_radius(double theta, double* derivative) {
     const double c = std::cos(theta / 2);

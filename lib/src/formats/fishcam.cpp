@@ -91,12 +91,16 @@ CameraParameters read_camera_fields(const DocFields& f) {
     f.fail("model", e.what());
   }
   if (f.has("tangential")) p.tangential = read_tangential(f.object("tangential"));
-  if (f.has("spline")) {  // {"lensmodel": "LENSMODEL_SPLINED_STEREOGRAPHIC_...", "values": [...]}
-    const DocFields s = f.object("spline");
+  // {"lensmodel": "LENSMODEL_...", "values": [...]} (fishcam/mrcal_lens.hpp); files written
+  // before CAHVOR and LONLAT/LATLON were read call it "spline".
+  if (f.has("mrcal_lens") && f.has("spline")) f.fail("spline", "a camera has one mrcal lens: give mrcal_lens only");
+  for (const char* key : {"mrcal_lens", "spline"}) {
+    if (!f.has(key)) continue;
+    const DocFields s = f.object(key);
     try {
-      p.spline = std::make_shared<const MrcalSpline>(s.string("lensmodel"), s.numbers("values", 1, kMaxDocumentNodes));
+      p.mrcal_lens = std::make_shared<const MrcalLens>(s.string("lensmodel"), s.numbers("values", 0, kMaxDocumentNodes));
     } catch (const Error& e) {
-      f.fail("spline", e.what());
+      f.fail(key, e.what());
     }
   }
   if (f.has("skew")) {  // {"xy": ..., "yx": ...} (CameraParameters::skew); an absent one is 0
@@ -146,7 +150,7 @@ nlohmann::json camera_json(const CameraParameters& p) {
       terms[std::string(TangentialTerms::kNames[i])] = p.tangential.values()[i];
     }
   }
-  if (p.spline) root["spline"] = {{"lensmodel", p.spline->lensmodel()}, {"values", p.spline->values()}};
+  if (p.mrcal_lens) root["mrcal_lens"] = {{"lensmodel", p.mrcal_lens->lensmodel()}, {"values", p.mrcal_lens->values()}};
   if (p.skew.any()) root["skew"] = {{"xy", p.skew.xy}, {"yx", p.skew.yx}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");

@@ -88,7 +88,7 @@ struct FormatSpec {
   // CameraParameters::tangential.
   bool holds_tangential = false;
   bool holds_thin_prism = false;
-  bool holds_spline = false;  // mrcal's splined surface (CameraParameters::spline)
+  bool holds_mrcal_lens = false;  // an mrcal lens (CameraParameters::mrcal_lens)
   bool holds_skew = false;    // a skewed pixel grid (CameraParameters::skew)
 
   bool holds(std::string_view model) const;

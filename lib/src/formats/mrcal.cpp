@@ -1,6 +1,6 @@
 // mrcal .cameramodel (a Python literal): LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC,
-// LENSMODEL_OPENCV4/5/8/12 (tangential terms included) and LENSMODEL_SPLINED_STEREOGRAPHIC
-// (a stereographic camera with mrcal's spline).
+// LENSMODEL_OPENCV4/5/8/12 (tangential terms included), and the lens models evaluated by
+// libmrcal on a base model's plane (fishcam/mrcal_lens.hpp: splined, CAHVOR, LONLAT, LATLON).
 #include <cmath>
 #include <cstdio>
 
@@ -28,15 +28,20 @@ std::vector<NamedCamera> read(const Content& c) {
   for (size_t n : {4, 5, 8, 12}) {
     if (lensmodel == "LENSMODEL_OPENCV" + std::to_string(n)) opencv_coefficients = n;
   }
-  const bool splined = lensmodel.rfind("LENSMODEL_SPLINED_STEREOGRAPHIC", 0) == 0;
-  if (!pinhole && !splined && lensmodel != "LENSMODEL_STEREOGRAPHIC" && opencv_coefficients == 0) {
-    f.fail("lensmodel", "unsupported lens model " + quoted_for_message(lensmodel) +
-                            " (fishcam reads LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC, LENSMODEL_OPENCV4/5/8/12 and "
-                            "LENSMODEL_SPLINED_STEREOGRAPHIC)");
+  bool lens = false;  // one of the models libmrcal evaluates on a base model's plane
+  for (const MrcalLens::KindInfo& kind : MrcalLens::kinds()) {
+    const bool configured = kind.kind == MrcalLens::Kind::splined_stereographic;
+    lens = lens || (configured ? lensmodel.rfind(kind.lensmodel, 0) == 0 : lensmodel == kind.lensmodel);
   }
-  // fx, fy, cx, cy[, distortion]; a spline's count is checked against its configuration below.
+  const bool cahvore = lensmodel.rfind("LENSMODEL_CAHVORE", 0) == 0;  // MrcalLens refuses it, saying why
+  if (!pinhole && !lens && !cahvore && lensmodel != "LENSMODEL_STEREOGRAPHIC" && opencv_coefficients == 0) {
+    f.fail("lensmodel", "unsupported lens model " + quoted_for_message(lensmodel) +
+                            " (fishcam reads LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC, LENSMODEL_OPENCV4/5/8/12, " +
+                            MrcalLens::kind_names() + ")");
+  }
+  // fx, fy, cx, cy[, distortion]; a lens's count is checked against its model below.
   const size_t count = 4 + opencv_coefficients;
-  const auto k = f.numbers("intrinsics", count, splined ? kMaxDocumentNodes : count);
+  const auto k = f.numbers("intrinsics", count, lens || cahvore ? kMaxDocumentNodes : count);
   const auto size = f.numbers("imagersize", 2, 2);
   for (int i = 0; i < 2; ++i) {
     if (!(size[i] >= 1 && size[i] <= (1 << 16)) || size[i] != std::floor(size[i])) {
@@ -48,23 +53,24 @@ std::vector<NamedCamera> read(const Content& c) {
   p.width = static_cast<int>(size[0]);
   p.height = static_cast<int>(size[1]);
   p.principal_point = {k[2], k[3]};
+  std::vector<std::string> notes;
   if (opencv_coefficients > 0) {
     set_radial_tangential(&p, std::vector<double>(k.begin() + 4, k.end()), k[0], [&](std::string_view problem) {
       f.fail("intrinsics", lensmodel + ": " + std::string(problem));
     });
-  } else {
-    p.model = pinhole ? RadialModel(Pinhole<double>(k[0])) : RadialModel(Stereographic<double>(k[0]));
-  }
-  std::vector<std::string> notes;
-  if (splined) {
+  } else if (lens || cahvore) {
     try {
-      p.spline = std::make_shared<const MrcalSpline>(lensmodel, std::vector<double>(k.begin() + 4, k.end()));
+      p.mrcal_lens = std::make_shared<const MrcalLens>(lensmodel, std::vector<double>(k.begin() + 4, k.end()));
     } catch (const Error& e) {
-      f.fail("intrinsics", e.what());
+      f.fail(cahvore ? "lensmodel" : "intrinsics", e.what());
     }
     if (f.has("valid_intrinsics_region")) {
       notes.push_back("valid_intrinsics_region is not read (the valid domain is where the projection is one-to-one)");
     }
+  }
+  if (opencv_coefficients == 0) {  // LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC or a lens's base model
+    const bool on_pinhole = pinhole || (p.mrcal_lens && std::string_view(p.mrcal_lens->base_model()) == "pinhole");
+    p.model = on_pinhole ? RadialModel(Pinhole<double>(k[0])) : RadialModel(Stereographic<double>(k[0]));
   }
   if (f.has("extrinsics")) p.pose = pose_from_rt_cam_ref(f.numbers("extrinsics", 6, 6));
   return {{"0", p, notes}};
@@ -82,7 +88,6 @@ std::string write(const CameraParameters& p) {
   std::vector<double> distortion;
   if (const auto* m = std::get_if<Stereographic<double>>(&p.model)) {
     f = m->f(), lensmodel = "LENSMODEL_STEREOGRAPHIC";
-    if (p.spline) lensmodel = p.spline->lensmodel(), distortion = p.spline->values();
   } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model); m && !p.tangential.any()) {
     f = m->f(), lensmodel = "LENSMODEL_PINHOLE";
   } else if (std::optional<RadialTangential> r = radial_tangential_of(p)) {
@@ -91,6 +96,7 @@ std::string write(const CameraParameters& p) {
   } else {
     cannot_hold(p, CameraFormat::mrcal);
   }
+  if (p.mrcal_lens) lensmodel = p.mrcal_lens->lensmodel(), distortion = p.mrcal_lens->values();  // on its base model
   const std::array<double, 6> rt = p.pose ? rt_cam_ref_from_pose(*p.pose) : std::array<double, 6>{};
   std::string out = "{\n    'lensmodel':  '" + lensmodel + "',\n\n";
   out += std::string("    # intrinsics are fx,fy,cx,cy") + (distortion.empty() ? "" : ",distortion0,distortion1,....") + "\n";

@@ -1,0 +1,83 @@
+// mrcal's lens models that are a displacement of a radial model's plane, evaluated by
+// libmrcal itself (mrcal_project), so the projection is mrcal's exactly:
+//   pixel = c + a (.) f (m + delta(m)),   delta(m) = D(m) - m,
+// m being the base model's undistorted plane (u = 2 tan(theta / 2) along the azimuth
+// for `stereographic`, tan(theta) for `pinhole`) and D mrcal's projection of the ray
+// through m with fx = fy = 1, cx = cy = 0 and the model's own values after them.
+//
+//   mrcal lens model                                  base model     values
+//   LENSMODEL_SPLINED_STEREOGRAPHIC_order=O_Nx=X_Ny=Y_fov_x_deg=F
+//                                                     stereographic  2 X Y control values
+//   LENSMODEL_CAHVOR                                  pinhole        alpha, beta, r0, r1, r2
+//   LENSMODEL_LONLAT  (lon, lat)                      stereographic  none
+//   LENSMODEL_LATLON  (lat, lon)                      stereographic  none
+//
+// LENSMODEL_CAHVORE is not one of them: it is noncentral (its projection depends on the
+// point's distance, not only its direction) and libmrcal has no gradients for it.
+// Camera's valid domain stops where the map stops being one-to-one (docs/conventions.md):
+// for LONLAT and LATLON at their poles (theta = 90 degrees).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace fishcam {
+
+class MrcalLens {
+ public:
+  enum class Kind { splined_stereographic, cahvor, lonlat, latlon };
+  struct KindInfo {
+    Kind kind;
+    const char* lensmodel;   // mrcal's name (the splined one's prefix: it carries a configuration)
+    const char* base_model;  // the fishcam model whose plane it displaces (model_name)
+  };
+  // Every lens model this class evaluates: the one list readers, messages and tests use.
+  static const std::array<KindInfo, 4>& kinds();
+  // "LENSMODEL_SPLINED_STEREOGRAPHIC_..., LENSMODEL_CAHVOR, ..." for messages.
+  static std::string kind_names();
+
+  // Throws Error unless lensmodel is one of kinds(), written as mrcal writes it, and
+  // values holds exactly its finite values (mrcal's intrinsics after fx, fy, cx, cy).
+  MrcalLens(std::string lensmodel, std::vector<double> values);
+  ~MrcalLens();
+  MrcalLens(const MrcalLens&) = delete;
+  MrcalLens& operator=(const MrcalLens&) = delete;
+
+  const std::string& lensmodel() const { return lensmodel_; }
+  const std::vector<double>& values() const { return values_; }
+  Kind kind() const { return kind_; }
+  const char* base_model() const;
+  bool operator==(const MrcalLens& other) const {
+    return lensmodel_ == other.lensmodel_ && values_ == other.values_;
+  }
+
+  // delta(m) on the base model's plane, with d delta / dm on request; NaN where libmrcal
+  // gives no finite projection.
+  Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const;
+
+  // Where mrcal's spline is one polynomial: in cell coordinates g = m * cells_per_u + origin
+  // it is a polynomial of degree `order` in each of g_x, g_y on every unit cell
+  // [i, i + 1) x [j, j + 1), 0 <= i < nx, 0 <= j < ny (cubic segments lie between knots,
+  // quadratic ones are centred on them); past the outer cells mrcal extrapolates the
+  // outer cells' polynomials (it clamps the segment index). nullopt for the other kinds.
+  struct PolynomialCells {
+    double cells_per_u = 0;
+    Eigen::Vector2d origin = Eigen::Vector2d::Zero();
+    int nx = 0, ny = 0, order = 0;
+  };
+  std::optional<PolynomialCells> polynomial_cells() const;
+
+ private:
+  struct Lensmodel;  // mrcal_lensmodel_t (mrcal's headers stay in the .cpp)
+  std::string lensmodel_;
+  std::vector<double> values_;
+  Kind kind_ = Kind::splined_stereographic;
+  std::vector<double> intrinsics_;  // fx = fy = 1, cx = cy = 0, then values_
+  std::unique_ptr<Lensmodel> parsed_;
+};
+
+}  // namespace fishcam
