@@ -199,7 +199,7 @@ const Malformed kMalformed[] = {
     {"mr_cahvor_values", replaced(kMrcal, "'LENSMODEL_STEREOGRAPHIC'", "'LENSMODEL_CAHVOR'"),
      "intrinsics: LENSMODEL_CAHVOR has 5 values after fx, fy, cx, cy, got 0"},
     {"mr_cahvore", replaced(kMrcal, "'LENSMODEL_STEREOGRAPHIC'", "'LENSMODEL_CAHVORE_linearity=0.00'"),
-     "lensmodel: 'LENSMODEL_CAHVORE_linearity=0.00' is noncentral"},
+     "intrinsics: LENSMODEL_CAHVORE_linearity=0.00 has 8 values after fx, fy, cx, cy, got 0"},
     {"mr_intrinsics_short", replaced(kMrcal, "330, ", ""), "intrinsics: expected 4 numbers, got 3"},
     {"mr_nan", replaced(kMrcal, "330", "nan"), "intrinsics[0]: must be finite"},
     {"mr_truncated", kMrcal.substr(0, kMrcal.size() - 40), "not a valid mrcal .cameramodel"},

@@ -180,7 +180,8 @@ inline std::pair<std::string, CameraParameters> spline_camera() {
 
 // One camera per mrcal lens model (MrcalLens::kinds(): fishcam/mrcal_lens.hpp) on its
 // base model's example, labelled base_lensmodel: the spline camera, CAHVOR with a tilted
-// axis and radial terms on the pinhole example, LONLAT and LATLON on the stereographic one.
+// axis and radial terms on the pinhole example, CAHVORE with E terms too, LONLAT and
+// LATLON on the stereographic one.
 inline std::vector<std::pair<std::string, CameraParameters>> mrcal_lens_cameras() {
   std::vector<std::pair<std::string, CameraParameters>> out;
   for (const MrcalLens::KindInfo& kind : MrcalLens::kinds()) {
@@ -188,16 +189,19 @@ inline std::vector<std::pair<std::string, CameraParameters>> mrcal_lens_cameras(
       out.push_back(spline_camera());
       continue;
     }
-    const std::vector<double> values =
-        kind.kind == MrcalLens::Kind::cahvor ? std::vector<double>{0.03, -0.02, 0.01, -0.05, 0.01} : std::vector<double>{};
+    std::vector<double> values;
+    std::string name = kind.lensmodel;
+    if (kind.kind == MrcalLens::Kind::cahvor) values = {0.03, -0.02, 0.01, -0.05, 0.01};
+    if (kind.kind == MrcalLens::Kind::cahvore) values = {0.03, -0.02, 0.01, -0.05, 0.01, 0.2, 0.05, -0.03};
+    const std::string label_name = name.substr(std::string("LENSMODEL_").size());
+    if (kind.kind == MrcalLens::Kind::cahvore) name += "_linearity=0.50";
     bool found = false;
     for (auto [label, p] : every_model()) {
       if (model_name(p.model) != kind.base_model || found) continue;
       // LONLAT's and LATLON's domains end at their poles (theta = 90 deg): the image inside them.
       if (kind.base_model == std::string_view("stereographic")) p.model = Stereographic<double>(450.0);
-      p.mrcal_lens = std::make_shared<const MrcalLens>(kind.lensmodel, values);
-      std::string name = kind.lensmodel;
-      out.emplace_back(label + "_" + name.substr(std::string("LENSMODEL_").size()), p);
+      p.mrcal_lens = std::make_shared<const MrcalLens>(name, values);
+      out.emplace_back(label + "_" + label_name, p);
       found = true;
     }
     if (!found) ADD_FAILURE() << kind.lensmodel << " has no example of its base model " << kind.base_model;

@@ -272,7 +272,7 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
   p.tangential = {0, 0, {0, 0, std::numeric_limits<double>::infinity(), 0}};
   refused(p, "tangential.s3: must be finite");
   // An mrcal lens: on its base model only, never with tangential terms, its name,
-  // configuration and value count checked; CAHVORE refused with its reason.
+  // configuration and value count checked.
   CameraParameters s = test::spline_camera().second;
   s.tangential = {0.001, 0, {}};
   refused(s, "tangential: a camera has tangential terms or an mrcal lens, not both");
@@ -295,7 +295,8 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
                  "has 96 values after fx, fy, cx, cy, got 95");
   spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8", std::vector<double>(96, 0.0), "is not one of the mrcal lens");
   spline_refused("LENSMODEL_OPENCV8", std::vector<double>(8, 0.0), "is not one of the mrcal lens models fishcam evaluates");
-  spline_refused("LENSMODEL_CAHVORE_linearity=0.00", std::vector<double>(8, 0.0), "is noncentral");
+  spline_refused("LENSMODEL_CAHVORE_linearity=0.00", std::vector<double>(7, 0.0), "has 8 values after fx, fy, cx, cy, got 7");
+  spline_refused("LENSMODEL_CAHVORE_linearity=0.5", std::vector<double>(8, 0.0), "is not written as mrcal");
   spline_refused("LENSMODEL_CAHVOR", std::vector<double>(4, 0.0), "has 5 values after fx, fy, cx, cy, got 4");
   spline_refused("LENSMODEL_LONLAT", {1.0}, "has 0 values after fx, fy, cx, cy, got 1");
   // Configurations libmrcal would abort on, or parse wrapped (uint16), never reach it.

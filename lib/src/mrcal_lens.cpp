@@ -17,17 +17,20 @@ struct MrcalLens::Lensmodel {
 
 namespace {
 
-constexpr std::array<MrcalLens::KindInfo, 4> kKinds = {{
-    {MrcalLens::Kind::splined_stereographic, "LENSMODEL_SPLINED_STEREOGRAPHIC", "stereographic"},
-    {MrcalLens::Kind::cahvor, "LENSMODEL_CAHVOR", "pinhole"},
-    {MrcalLens::Kind::lonlat, "LENSMODEL_LONLAT", "stereographic"},
-    {MrcalLens::Kind::latlon, "LENSMODEL_LATLON", "stereographic"},
+constexpr std::array<MrcalLens::KindInfo, 5> kKinds = {{
+    {MrcalLens::Kind::splined_stereographic, "LENSMODEL_SPLINED_STEREOGRAPHIC", "_order=O_Nx=X_Ny=Y_fov_x_deg=F",
+     "stereographic"},
+    {MrcalLens::Kind::cahvor, "LENSMODEL_CAHVOR", "", "pinhole"},
+    {MrcalLens::Kind::cahvore, "LENSMODEL_CAHVORE", "_linearity=L", "stereographic"},
+    {MrcalLens::Kind::lonlat, "LENSMODEL_LONLAT", "", "stereographic"},
+    {MrcalLens::Kind::latlon, "LENSMODEL_LATLON", "", "stereographic"},
 }};
 
 std::optional<MrcalLens::Kind> kind_of(mrcal_lensmodel_type_t type) {
   switch (type) {
     case MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC: return MrcalLens::Kind::splined_stereographic;
     case MRCAL_LENSMODEL_CAHVOR: return MrcalLens::Kind::cahvor;
+    case MRCAL_LENSMODEL_CAHVORE: return MrcalLens::Kind::cahvore;
     case MRCAL_LENSMODEL_LONLAT: return MrcalLens::Kind::lonlat;
     case MRCAL_LENSMODEL_LATLON: return MrcalLens::Kind::latlon;
     default: return std::nullopt;
@@ -36,14 +39,21 @@ std::optional<MrcalLens::Kind> kind_of(mrcal_lensmodel_type_t type) {
 
 }  // namespace
 
-const std::array<MrcalLens::KindInfo, 4>& MrcalLens::kinds() { return kKinds; }
+const std::array<MrcalLens::KindInfo, 5>& MrcalLens::kinds() { return kKinds; }
+
+bool MrcalLens::names_a_kind(const std::string& lensmodel) {
+  for (const KindInfo& k : kKinds) {
+    if (*k.configuration ? lensmodel.rfind(k.lensmodel, 0) == 0 : lensmodel == k.lensmodel) return true;
+  }
+  return false;
+}
 
 std::string MrcalLens::kind_names() {
   std::string out;
   for (const KindInfo& k : kKinds) {
     if (!out.empty()) out += ", ";
     out += k.lensmodel;
-    if (k.kind == Kind::splined_stereographic) out += "_order=O_Nx=X_Ny=Y_fov_x_deg=F";
+    out += k.configuration;
   }
   return out;
 }
@@ -52,10 +62,6 @@ MrcalLens::MrcalLens(std::string lensmodel, std::vector<double> values)
     : lensmodel_(std::move(lensmodel)), values_(std::move(values)), parsed_(std::make_unique<Lensmodel>()) {
   std::string shown = "'";  // appended, not "'" + ...: g++ 12 warns falsely (-Wrestrict) on that
   shown.append(lensmodel_, 0, 80).push_back('\'');
-  if (lensmodel_.rfind("LENSMODEL_CAHVORE", 0) == 0) {
-    throw Error(shown + " is noncentral (its projection depends on the point's distance, not only its direction) "
-                        "and libmrcal has no gradients for it: fishcam cannot evaluate it");
-  }
   const bool parsed = mrcal_lensmodel_from_name(&parsed_->model, lensmodel_.c_str());
   const std::optional<Kind> kind = parsed ? kind_of(parsed_->model.type) : std::nullopt;
   if (!kind) throw Error(shown + " is not one of the mrcal lens models fishcam evaluates (" + kind_names() + ")");
@@ -100,6 +106,14 @@ Eigen::Vector2d MrcalLens::offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jac
   // The ray through m on the base model's plane (any length): (m, 1 - |m|^2 / 4) for the
   // stereographic one (|m| = 2 tan(theta / 2)), (m, 1) for the pinhole one.
   const bool stereographic = kind_ != Kind::cahvor;
+  if (jacobian && kind_ == Kind::cahvore) {  // libmrcal has no gradients for it: central differences
+    for (int k = 0; k < 2; ++k) {
+      const double h = 6e-6 * (1 + m.norm());  // ~ cbrt(epsilon): truncation and rounding balanced
+      const Eigen::Vector2d step = h * Eigen::Vector2d::Unit(k);
+      jacobian->col(k) = (offset(m + step) - offset(m - step)) / (2 * h);
+    }
+    return offset(m);
+  }
   const double dz = stereographic ? -0.5 : 0.0;  // dz/dm = dz * m^T
   const mrcal_point3_t p = {{m.x(), m.y(), stereographic ? 1 - 0.25 * m.squaredNorm() : 1.0}};
   mrcal_point2_t q;

@@ -153,7 +153,7 @@ class Camera:
     @property
     def mrcal_lens(self) -> tuple[str, list[float]] | None:
         """
-        mrcal's lens model on the plane of the camera's model, evaluated by libmrcal (splined stereographic, CAHVOR on pinhole, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, cy), or None.
+        mrcal's lens model on the plane of the camera's model, evaluated by libmrcal (splined stereographic, CAHVOR on pinhole, CAHVORE, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, cy), or None.
         """
     @property
     def observed_theta_max_deg(self) -> float | None:

@@ -203,7 +203,7 @@ void bind_camera(py::module_& m) {
             return std::pair(c.parameters().mrcal_lens->lensmodel(), c.parameters().mrcal_lens->values());
           },
           "mrcal's lens model on the plane of the camera's model, evaluated by libmrcal (splined stereographic, "
-          "CAHVOR on pinhole, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, cy), "
+          "CAHVOR on pinhole, CAHVORE, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, cy), "
           "or None.")
       .def_property_readonly(
           "skew", [](const Camera& c) { return std::pair(c.skew().xy, c.skew().yx); },

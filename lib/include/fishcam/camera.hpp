@@ -105,7 +105,7 @@ struct CameraParameters {
   // Non-radial terms on the model's undistorted plane (fishcam/tangential.hpp); all
   // zero for a radial camera. Only models with a plane (pinhole, opencv, mei) take them.
   TangentialTerms tangential;
-  // Or one of mrcal's lens models on the plane of its base model (splined, CAHVOR,
+  // Or one of mrcal's lens models on the plane of its base model (splined, CAHVOR(E),
   // LONLAT, LATLON; fishcam/mrcal_lens.hpp), evaluated by libmrcal; null for none.
   std::shared_ptr<const MrcalLens> mrcal_lens;
   // A skewed pixel grid (any model, with or without the above); zero for none.

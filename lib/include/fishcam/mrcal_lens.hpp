@@ -9,11 +9,16 @@
 //   LENSMODEL_SPLINED_STEREOGRAPHIC_order=O_Nx=X_Ny=Y_fov_x_deg=F
 //                                                     stereographic  2 X Y control values
 //   LENSMODEL_CAHVOR                                  pinhole        alpha, beta, r0, r1, r2
+//   LENSMODEL_CAHVORE_linearity=L                     stereographic  alpha, beta, r0, r1, r2, e0, e1, e2
 //   LENSMODEL_LONLAT  (lon, lat)                      stereographic  none
 //   LENSMODEL_LATLON  (lat, lon)                      stereographic  none
 //
-// LENSMODEL_CAHVORE is not one of them: it is noncentral (its projection depends on the
-// point's distance, not only its direction) and libmrcal has no gradients for it.
+// CAHVORE is noncentral by definition (its E terms move the entrance pupil with the
+// angle), but libmrcal's projection of it depends on the direction only, and that is
+// what fishcam evaluates; libmrcal has no gradients for it: its Jacobian here is a
+// central difference of libmrcal's projection (relative error ~1e-10). It rides on the
+// stereographic plane: its E terms make it a fisheye (linearity > 0) that reaches
+// 90 degrees, where the pinhole plane is singular.
 // Camera's valid domain stops where the map stops being one-to-one (docs/conventions.md):
 // for LONLAT and LATLON at their poles (theta = 90 degrees).
 #pragma once
@@ -29,14 +34,17 @@ namespace fishcam {
 
 class MrcalLens {
  public:
-  enum class Kind { splined_stereographic, cahvor, lonlat, latlon };
+  enum class Kind { splined_stereographic, cahvor, cahvore, lonlat, latlon };
   struct KindInfo {
     Kind kind;
-    const char* lensmodel;   // mrcal's name (the splined one's prefix: it carries a configuration)
-    const char* base_model;  // the fishcam model whose plane it displaces (model_name)
+    const char* lensmodel;       // mrcal's name, or its prefix for a configured one
+    const char* configuration;   // what follows the prefix ("" for none), for messages
+    const char* base_model;      // the fishcam model whose plane it displaces (model_name)
   };
   // Every lens model this class evaluates: the one list readers, messages and tests use.
-  static const std::array<KindInfo, 4>& kinds();
+  static const std::array<KindInfo, 5>& kinds();
+  // Whether the name is one of kinds() (its configuration unchecked).
+  static bool names_a_kind(const std::string& lensmodel);
   // "LENSMODEL_SPLINED_STEREOGRAPHIC_..., LENSMODEL_CAHVOR, ..." for messages.
   static std::string kind_names();
 

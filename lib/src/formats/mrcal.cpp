@@ -28,20 +28,15 @@ std::vector<NamedCamera> read(const Content& c) {
   for (size_t n : {4, 5, 8, 12}) {
     if (lensmodel == "LENSMODEL_OPENCV" + std::to_string(n)) opencv_coefficients = n;
   }
-  bool lens = false;  // one of the models libmrcal evaluates on a base model's plane
-  for (const MrcalLens::KindInfo& kind : MrcalLens::kinds()) {
-    const bool configured = kind.kind == MrcalLens::Kind::splined_stereographic;
-    lens = lens || (configured ? lensmodel.rfind(kind.lensmodel, 0) == 0 : lensmodel == kind.lensmodel);
-  }
-  const bool cahvore = lensmodel.rfind("LENSMODEL_CAHVORE", 0) == 0;  // MrcalLens refuses it, saying why
-  if (!pinhole && !lens && !cahvore && lensmodel != "LENSMODEL_STEREOGRAPHIC" && opencv_coefficients == 0) {
+  const bool lens = MrcalLens::names_a_kind(lensmodel);  // evaluated by libmrcal on a base model's plane
+  if (!pinhole && !lens && lensmodel != "LENSMODEL_STEREOGRAPHIC" && opencv_coefficients == 0) {
     f.fail("lensmodel", "unsupported lens model " + quoted_for_message(lensmodel) +
                             " (fishcam reads LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC, LENSMODEL_OPENCV4/5/8/12, " +
                             MrcalLens::kind_names() + ")");
   }
   // fx, fy, cx, cy[, distortion]; a lens's count is checked against its model below.
   const size_t count = 4 + opencv_coefficients;
-  const auto k = f.numbers("intrinsics", count, lens || cahvore ? kMaxDocumentNodes : count);
+  const auto k = f.numbers("intrinsics", count, lens ? kMaxDocumentNodes : count);
   const auto size = f.numbers("imagersize", 2, 2);
   for (int i = 0; i < 2; ++i) {
     if (!(size[i] >= 1 && size[i] <= (1 << 16)) || size[i] != std::floor(size[i])) {
@@ -58,11 +53,11 @@ std::vector<NamedCamera> read(const Content& c) {
     set_radial_tangential(&p, std::vector<double>(k.begin() + 4, k.end()), k[0], [&](std::string_view problem) {
       f.fail("intrinsics", lensmodel + ": " + std::string(problem));
     });
-  } else if (lens || cahvore) {
+  } else if (lens) {
     try {
       p.mrcal_lens = std::make_shared<const MrcalLens>(lensmodel, std::vector<double>(k.begin() + 4, k.end()));
     } catch (const Error& e) {
-      f.fail(cahvore ? "lensmodel" : "intrinsics", e.what());
+      f.fail("intrinsics", e.what());
     }
     if (f.has("valid_intrinsics_region")) {
       notes.push_back("valid_intrinsics_region is not read (the valid domain is where the projection is one-to-one)");
