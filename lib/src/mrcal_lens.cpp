@@ -13,6 +13,7 @@ namespace fishcam {
 
 struct MrcalLens::Lensmodel {
   mrcal_lensmodel_t model;
+  bool projects_behind = false;  // mrcal's metadata: whether rays with z <= 0 have a projection
 };
 
 namespace {
@@ -66,6 +67,7 @@ MrcalLens::MrcalLens(std::string lensmodel, std::vector<double> values)
   const std::optional<Kind> kind = parsed ? kind_of(parsed_->model.type) : std::nullopt;
   if (!kind) throw Error(shown + " is not one of the mrcal lens models fishcam evaluates (" + kind_names() + ")");
   kind_ = *kind;
+  parsed_->projects_behind = mrcal_lensmodel_metadata(&parsed_->model).can_project_behind_camera;
   // libmrcal asserts (aborts) on configurations it does not support, and parses its
   // integers as uint16 (wrapping): checked here, and the name must be what mrcal
   // itself writes for the configuration it parsed.
@@ -107,18 +109,26 @@ Eigen::Vector2d MrcalLens::offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jac
   // stereographic one (|m| = 2 tan(theta / 2)), (m, 1) for the pinhole one.
   const bool stereographic = kind_ != Kind::cahvor;
   if (jacobian && kind_ == Kind::cahvore) {  // libmrcal has no gradients for it: central differences
+    const Eigen::Vector2d at = offset(m);
     for (int k = 0; k < 2; ++k) {
       const double h = 6e-6 * (1 + m.norm());  // ~ cbrt(epsilon): truncation and rounding balanced
       const Eigen::Vector2d step = h * Eigen::Vector2d::Unit(k);
-      jacobian->col(k) = (offset(m + step) - offset(m - step)) / (2 * h);
+      const Eigen::Vector2d plus = offset(m + step), minus = offset(m - step);
+      // One-sided next to the domain's end (90 degrees), where one side has no projection.
+      jacobian->col(k) = plus.allFinite() && minus.allFinite() ? Eigen::Vector2d((plus - minus) / (2 * h))
+                         : plus.allFinite()                    ? Eigen::Vector2d((plus - at) / h)
+                                                               : Eigen::Vector2d((at - minus) / h);
     }
-    return offset(m);
+    return at;
   }
   const double dz = stereographic ? -0.5 : 0.0;  // dz/dm = dz * m^T
   const mrcal_point3_t p = {{m.x(), m.y(), stereographic ? 1 - 0.25 * m.squaredNorm() : 1.0}};
   mrcal_point2_t q;
   mrcal_point3_t dq_dp[2];
-  if (!mrcal_project(&q, jacobian ? dq_dp : nullptr, nullptr, &p, 1, &parsed_->model, intrinsics_.data())) {
+  // mrcal_project returns numbers behind a model that cannot project there (CAHVORE on the
+  // stereographic plane past 90 degrees): none, so the domain stops at 90 degrees.
+  if ((!parsed_->projects_behind && !(p.z >= 0)) ||
+      !mrcal_project(&q, jacobian ? dq_dp : nullptr, nullptr, &p, 1, &parsed_->model, intrinsics_.data())) {
     if (jacobian) jacobian->setConstant(std::numeric_limits<double>::quiet_NaN());
     return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   }

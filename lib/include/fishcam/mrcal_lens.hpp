@@ -64,7 +64,8 @@ class MrcalLens {
   }
 
   // delta(m) on the base model's plane, with d delta / dm on request; NaN where libmrcal
-  // gives no finite projection.
+  // gives no projection (and behind the camera for a model mrcal cannot project there:
+  // CAHVOR(E)), so the valid domain stops there.
   Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const;
 
   // Where mrcal's spline is one polynomial: in cell coordinates g = m * cells_per_u + origin
