@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string_view>
 
 #include "fishcam/error.hpp"
 
@@ -14,6 +15,7 @@ namespace fishcam {
 struct MrcalLens::Lensmodel {
   mrcal_lensmodel_t model;
   bool projects_behind = false;  // mrcal's metadata: whether rays with z <= 0 have a projection
+  bool stereographic_plane = false;  // the base model (kinds()): stereographic, else pinhole
 };
 
 namespace {
@@ -67,6 +69,7 @@ MrcalLens::MrcalLens(std::string lensmodel, std::vector<double> values)
   const std::optional<Kind> kind = parsed ? kind_of(parsed_->model.type) : std::nullopt;
   if (!kind) throw Error(shown + " is not one of the mrcal lens models fishcam evaluates (" + kind_names() + ")");
   kind_ = *kind;
+  parsed_->stereographic_plane = std::string_view(base_model()) == "stereographic";
   parsed_->projects_behind = mrcal_lensmodel_metadata(&parsed_->model).can_project_behind_camera;
   // libmrcal asserts (aborts) on configurations it does not support, and parses its
   // integers as uint16 (wrapping): checked here, and the name must be what mrcal
@@ -107,7 +110,7 @@ const char* MrcalLens::base_model() const {
 Eigen::Vector2d MrcalLens::offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian) const {
   // The ray through m on the base model's plane (any length): (m, 1 - |m|^2 / 4) for the
   // stereographic one (|m| = 2 tan(theta / 2)), (m, 1) for the pinhole one.
-  const bool stereographic = kind_ != Kind::cahvor;
+  const bool stereographic = parsed_->stereographic_plane;
   if (jacobian && kind_ == Kind::cahvore) {  // libmrcal has no gradients for it: central differences
     const Eigen::Vector2d at = offset(m);
     for (int k = 0; k < 2; ++k) {

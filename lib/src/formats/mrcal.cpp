@@ -1,9 +1,11 @@
 // mrcal .cameramodel (a Python literal): LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC,
 // LENSMODEL_OPENCV4/5/8/12 (tangential terms included), and the lens models evaluated by
-// libmrcal on a base model's plane (fishcam/mrcal_lens.hpp: splined, CAHVOR, LONLAT, LATLON).
+// libmrcal on a base model's plane (fishcam/mrcal_lens.hpp: splined, CAHVOR, CAHVORE, LONLAT, LATLON).
 #include <cmath>
 #include <cstdio>
+#include <span>
 
+#include "fishcam/model_registry.hpp"
 #include "format.hpp"
 
 namespace fishcam::detail {
@@ -64,8 +66,8 @@ std::vector<NamedCamera> read(const Content& c) {
     }
   }
   if (opencv_coefficients == 0) {  // LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC or a lens's base model
-    const bool on_pinhole = pinhole || (p.mrcal_lens && std::string_view(p.mrcal_lens->base_model()) == "pinhole");
-    p.model = on_pinhole ? RadialModel(Pinhole<double>(k[0])) : RadialModel(Stereographic<double>(k[0]));
+    const std::string_view base = p.mrcal_lens ? p.mrcal_lens->base_model() : pinhole ? "pinhole" : "stereographic";
+    p.model = make_model(base, std::span<const double>(k.data(), 1));
   }
   if (f.has("extrinsics")) p.pose = pose_from_rt_cam_ref(f.numbers("extrinsics", 6, 6));
   return {{"0", p, notes}};
