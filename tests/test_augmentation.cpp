@@ -296,7 +296,12 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
   CameraParameters far_centre = small;
   far_centre.principal_point = {1e6, 1e6};
   far_centre.model = Equidistant<double>(1e6);
+  // LATLON whose image reaches next to its pole (76 deg at the sides), where the chart is
+  // singular: no table of its offsets (kLensTableMaxCells) holds 1e-4 px.
+  CameraParameters latlon = test::with_model(small, Stereographic<double>(60.0));
+  latlon.mrcal_lens = std::make_shared<const MrcalLens>("LENSMODEL_LATLON", std::vector<double>{});
   const std::pair<const char*, CameraParameters> cases[] = {
+      {"LATLON next to its pole", latlon},
       {"degree 17", test::with_model(small, Polynomial<double>(k17))},
       {"principal point at 1e6", far_centre},
       {"f = 1e39", test::with_model(small, Equidistant<double>(1e39))},
@@ -769,7 +774,7 @@ INSTANTIATE_TEST_SUITE_P(Augmentation, EveryModelSource, ::testing::ValuesIn(tes
 // libmrcal's projection) at its full 4000 x 2200; resized to 1000 x 550 and warped
 // into itself, the per-pixel maps agree with the exact ones to 1e-3 px and the grid's
 // to cv::remap's fixed-point step.
-TEST(Augmentation, MrcalLensdSourceTakesTheKernelAndTheGrid) {
+TEST(Augmentation, MrcalSplinedSourceTakesTheKernelAndTheGrid) {
   const auto path = std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external/mrcal_cam0.splined.cameramodel";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "no ../shared checkout";
   const Camera full = read_camera(path);
@@ -795,6 +800,45 @@ TEST(Augmentation, MrcalLensdSourceTakesTheKernelAndTheGrid) {
     }
   }
   EXPECT_EQ(checked, 6);
+}
+
+// The lens tables (CAHVOR, CAHVORE, LONLAT and LATLON sources, docs/augmentation.md)
+// hold over the source image and 16 px around it; past them the kernel's geometric
+// coordinates are approximate, and none of those pixels has a source in the image:
+// under a large turn, wherever the per-pixel map leaves the exact one by more than the
+// float tolerance, both lie outside the source image, the exact one past the margin.
+TEST(Augmentation, LensTablesEndOutsideTheImage) {
+  int tables = 0;
+  for (const auto& [name, p] : test::mrcal_lens_cameras()) {
+    if (p.mrcal_lens->polynomial_cells()) continue;  // the spline: its own cells, extrapolated as mrcal does
+    const Camera source(resized(p, 320, 242));
+    const ViewpointWarp warp(source, source);
+    ASSERT_TRUE(warp.float_kernel()) << name;
+    ++tables;
+    WarpMaps fast, exact;
+    const ViewpointChange change = ViewpointChange::from_euler_deg({25, -30, 10});
+    warp.compute(change, DepthPrior::infinity, &fast, MapKind::geometric);
+    warp.compute_exact(change, DepthPrior::infinity, &exact);
+    const auto outside_by = [&](double x, double y) {
+      return std::max({-0.5 - x, x - (source.width() - 0.5), -0.5 - y, y - (source.height() - 0.5)});
+    };
+    long approximate = 0;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int v = 0; v < exact.map_x.rows; ++v) {
+      for (int u = 0; u < exact.map_x.cols; ++u) {
+        const double ex = exact.map_x.at<float>(v, u), ey = exact.map_y.at<float>(v, u);
+        const double fx = fast.map_x.at<float>(v, u), fy = fast.map_y.at<float>(v, u);
+        if (!std::isfinite(ex) || !std::isfinite(fx) || std::hypot(fx - ex, fy - ey) <= 1e-3) continue;
+        ++approximate;
+        nearest = std::min(nearest, outside_by(ex, ey));
+        EXPECT_GT(outside_by(fx, fy), 0) << name << " at " << u << ", " << v;
+        EXPECT_EQ(fast.valid.at<uchar>(v, u), 0) << name << " at " << u << ", " << v;
+      }
+    }
+    EXPECT_GT(approximate, 1000) << name << ": the turn should reach past the table";
+    EXPECT_GT(nearest, 16) << name;  // the margin (measured: 21-23 px, the 2 % widening beyond it)
+  }
+  EXPECT_EQ(tables, 4);
 }
 
 // Where float arithmetic is weakest: a full-circle fisheye whose image reaches

@@ -181,7 +181,7 @@ inline std::pair<std::string, CameraParameters> spline_camera() {
 // One camera per mrcal lens model (MrcalLens::kinds(): fishcam/mrcal_lens.hpp) on its
 // base model's example, labelled base_lensmodel: the spline camera, CAHVOR with a tilted
 // axis and radial terms on the pinhole example, CAHVORE with E terms too, LONLAT and
-// LATLON on the stereographic one.
+// LATLON on a stereographic one with f = 560.
 inline std::vector<std::pair<std::string, CameraParameters>> mrcal_lens_cameras() {
   std::vector<std::pair<std::string, CameraParameters>> out;
   for (const MrcalLens::KindInfo& kind : MrcalLens::kinds()) {
@@ -198,8 +198,9 @@ inline std::vector<std::pair<std::string, CameraParameters>> mrcal_lens_cameras(
     bool found = false;
     for (auto [label, p] : every_model()) {
       if (model_name(p.model) != kind.base_model || found) continue;
-      // LONLAT's and LATLON's domains end at their poles (theta = 90 deg): the image inside them.
-      if (kind.base_model == std::string_view("stereographic")) p.model = Stereographic<double>(450.0);
+      // LONLAT's and LATLON's domains end at their poles (theta = 90 deg): the image well
+      // inside them (65 and 49 deg from the axis at the sides): the kernel's table holds there.
+      if (kind.base_model == std::string_view("stereographic")) p.model = Stereographic<double>(560.0);
       p.mrcal_lens = std::make_shared<const MrcalLens>(name, values);
       out.emplace_back(label + "_" + label_name, p);
       found = true;
@@ -210,8 +211,8 @@ inline std::vector<std::pair<std::string, CameraParameters>> mrcal_lens_cameras(
 }
 
 // Whether the float warp kernel can evaluate the camera: a model with the unified
-// form, polynomial in theta or with a ray polynomial (mrcal's spline rides on a
-// stereographic model, whose cells the kernel evaluates).
+// form, polynomial in theta or with a ray polynomial (an mrcal lens rides on a
+// stereographic or pinhole model: its cells or its table, augmentation.cpp).
 inline bool float_kernel_form(const CameraParameters& p) {
   const bool form = std::visit(
       [](const auto& m) {
@@ -219,7 +220,7 @@ inline bool float_kernel_form(const CameraParameters& p) {
         return HasUnifiedForm<M> || PolynomialInTheta<M> || HasRayPolynomial<M>;
       },
       p.model);
-  return form && (!p.mrcal_lens || p.mrcal_lens->polynomial_cells());  // of mrcal's lenses only the spline
+  return form;  // mrcal's lenses too: the spline's cells, the others' tables
 }
 
 // The ocam example with ocamcalib_calib_results.txt's affine as its pixel skew

@@ -1,5 +1,6 @@
 #include "fishcam/augmentation.hpp"
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <opencv2/imgproc.hpp>
 
@@ -140,41 +141,168 @@ bool ray_polynomial_start(const Camera& camera, SourceParams* p) {
 // SourceParams with the arrays its pointers refer to.
 struct KernelSource {
   SourceParams params;
-  std::vector<float> spline_cells;
+  std::vector<float> lens_cells;
 };
 
-// mrcal's spline as the kernel evaluates it (SourceParams::spline_cells): on each of
-// MrcalLens's polynomial cells, the bicubic in the cell's local (t, s) that
-// interpolates f delta_u at 4 x 4 points — the spline itself, which is that polynomial
-// there (float_kernel_agrees checks the result against libmrcal's projection).
-std::vector<float> spline_kernel_cells(const MrcalLens& spline, const MrcalLens::PolynomialCells& cells,
-                                       double f) {
-  Eigen::Matrix4d vandermonde;  // rows: the nodes -1/2, -1/6, 1/6, 1/2 (t about the centre); columns: powers
-  for (int a = 0; a < 4; ++a) {
-    for (int i = 0; i < 4; ++i) vandermonde(a, i) = std::pow(a / 3.0 - 0.5, i);
-  }
-  const Eigen::Matrix4d inverse = vandermonde.inverse();
-  std::vector<float> out(size_t(cells.nx) * size_t(cells.ny) * 32);
+// Where a lens table must hold: the source image and this margin around it.
+constexpr double kLensTableMarginPx = 16;
+
+// The bicubic on the cell (cx, cy) of the layout that interpolates f delta_u at 4 x 4
+// points (t, s in -1/2, -1/6, 1/6, 1/2 about the cell's centre; g = u * cells_per_u +
+// origin): 32 floats as SourceParams::lens_cells keeps them, NaN where a point has no
+// projection. On mrcal's spline cells (MrcalLens::polynomial_cells) it is the spline
+// itself, which is that polynomial there. Returns whether a point's pixel lies in the
+// image or its margin (always true without an image).
+bool lens_kernel_cell(const MrcalLens& lens, const MrcalLens::PolynomialCells& layout, double f, const Camera* image,
+                      int cx, int cy, float* cell) {
+  static const Eigen::Matrix4d inverse = [] {
+    Eigen::Matrix4d vandermonde;  // rows: the nodes; columns: powers of t
+    for (int a = 0; a < 4; ++a) {
+      for (int i = 0; i < 4; ++i) vandermonde(a, i) = std::pow(a / 3.0 - 0.5, i);
+    }
+    return Eigen::Matrix4d(vandermonde.inverse());
+  }();
   Eigen::Matrix4d samples[2];
-  for (int cy = 0; cy < cells.ny; ++cy) {
-    for (int cx = 0; cx < cells.nx; ++cx) {
-      for (int a = 0; a < 4; ++a) {
-        for (int b = 0; b < 4; ++b) {  // t = a / 3 - 1/2 along x, s = b / 3 - 1/2 along y
-          const Eigen::Vector2d g(cx + a / 3.0, cy + b / 3.0);
-          const Eigen::Vector2d delta = f * spline.offset((g - cells.origin) / cells.cells_per_u);
-          samples[0](a, b) = delta.x(), samples[1](a, b) = delta.y();
-        }
-      }
-      float* cell = out.data() + 32 * (size_t(cy) * size_t(cells.nx) + size_t(cx));
-      for (int k = 0; k < 2; ++k) {
-        const Eigen::Matrix4d c = inverse * samples[k] * inverse.transpose();  // c(i, j): t^i s^j
-        for (int j = 0; j < 4; ++j) {
-          for (int i = 0; i < 4; ++i) cell[16 * k + 4 * j + i] = float(c(i, j));
-        }
+  bool seen = !image;
+  for (int a = 0; a < 4; ++a) {
+    for (int b = 0; b < 4; ++b) {  // t = a / 3 - 1/2 along x, s = b / 3 - 1/2 along y
+      const Eigen::Vector2d g(cx + a / 3.0, cy + b / 3.0);
+      const Eigen::Vector2d u = (g - layout.origin) / layout.cells_per_u;
+      const Eigen::Vector2d delta = f * lens.offset(u);
+      samples[0](a, b) = delta.x(), samples[1](a, b) = delta.y();
+      if (!seen) {  // the point's pixel, c + a (.) (S f (u + delta))
+        const Eigen::Vector2d pixel = image->principal_point() +
+                                      image->pixel_scale().cwiseProduct(image->skew().matrix() * (f * u + delta));
+        seen = pixel.x() >= -0.5 - kLensTableMarginPx && pixel.y() >= -0.5 - kLensTableMarginPx &&
+               pixel.x() < image->width() - 0.5 + kLensTableMarginPx &&
+               pixel.y() < image->height() - 0.5 + kLensTableMarginPx;
       }
     }
   }
+  if (!samples[0].allFinite() || !samples[1].allFinite()) {
+    std::fill(cell, cell + 32, std::numeric_limits<float>::quiet_NaN());
+    return seen;
+  }
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::Matrix4d c = inverse * samples[k] * inverse.transpose();  // c(i, j): t^i s^j
+    for (int j = 0; j < 4; ++j) {
+      for (int i = 0; i < 4; ++i) cell[16 * k + 4 * j + i] = float(c(i, j));
+    }
+  }
+  return seen;
+}
+
+// Every cell of the layout (lens_kernel_cell), row by row; seen (given an image) says
+// which cells have a point in it or its margin.
+std::vector<float> lens_kernel_cells(const MrcalLens& lens, const MrcalLens::PolynomialCells& layout, double f,
+                                     const Camera* image = nullptr, std::vector<unsigned char>* seen = nullptr) {
+  std::vector<float> out(size_t(layout.nx) * size_t(layout.ny) * 32);
+  if (seen) seen->assign(size_t(layout.nx) * size_t(layout.ny), 0);
+  cv::parallel_for_(cv::Range(0, layout.ny), [&](const cv::Range& rows) {
+    for (int cy = rows.start; cy < rows.end; ++cy) {
+      for (int cx = 0; cx < layout.nx; ++cx) {
+        const size_t i = size_t(cy) * size_t(layout.nx) + size_t(cx);
+        const bool in_image = lens_kernel_cell(lens, layout, f, image, cx, cy, out.data() + 32 * i);
+        if (seen) (*seen)[i] = in_image;
+      }
+    }
+  });
   return out;
+}
+
+// The table of an mrcal lens without polynomial cells (CAHVOR, CAHVORE, LONLAT,
+// LATLON): it must hold where the kernel can need it, the plane points m of the
+// source image and kLensTableMarginPx around it (sampled every 1/128 of the image,
+// their bounding box widened by 2 % per side; past it a ray lands outside the image:
+// float_kernel_agrees checks that), in square cells, 32 across the longer side and
+// doubled until the bicubics meet kLensTableTolerancePx at 3 x 3 points between their
+// nodes in every cell that sees the image; a cell that does not see it and misses
+// the tolerance (next to LONLAT's pole, where the chart is singular) becomes NaN (no
+// source). nullopt when kLensTableMaxCells per side do not do, or no pixel has a ray.
+constexpr double kLensTableTolerancePx = 1e-4;
+constexpr int kLensTableMaxCells = 256;
+
+struct LensTable {
+  MrcalLens::PolynomialCells layout;
+  std::vector<float> cells;
+};
+
+std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens, double focal, double xi,
+                                    double plane_per_m) {
+  constexpr int kSteps = 128;
+  const double x0 = -0.5 - kLensTableMarginPx, y0 = -0.5 - kLensTableMarginPx;
+  const double dx = (camera.width() + 2 * kLensTableMarginPx) / kSteps;
+  const double dy = (camera.height() + 2 * kLensTableMarginPx) / kSteps;
+  std::vector<Eigen::Vector2d> pixels;
+  for (int j = 0; j <= kSteps; ++j) {
+    for (int i = 0; i <= kSteps; ++i) pixels.emplace_back(x0 + i * dx, y0 + j * dy);
+  }
+  std::vector<Eigen::Vector3d> rays(pixels.size());
+  camera.unproject(pixels, rays);
+  Eigen::AlignedBox2d box;
+  for (const Eigen::Vector3d& r : rays) {
+    const Eigen::Vector2d m = r.head<2>() / (xi * r.norm() + r.z());
+    if (m.allFinite()) box.extend(m);
+  }
+  if (box.isEmpty()) return std::nullopt;
+  const Eigen::Vector2d widen = 0.02 * box.sizes();
+  box.min() -= widen, box.max() += widen;
+  const double longer = box.sizes().maxCoeff();
+  if (!(longer > 0)) return std::nullopt;
+  const double pixels_per_f = camera.pixel_scale().cwiseAbs().maxCoeff();
+  const auto max_nan_first = [](double a, double b) { return std::isnan(a) || a >= b ? a : b; };
+  for (int across = 32; across <= kLensTableMaxCells; across *= 2) {
+    LensTable table;
+    const double h = longer / across;  // the cell's side in m
+    MrcalLens::PolynomialCells& layout = table.layout;
+    layout.cells_per_u = 1 / (h * plane_per_m);
+    layout.origin = -box.min() / h;
+    layout.nx = std::max(1, int(std::ceil(box.sizes().x() / h)));
+    layout.ny = std::max(1, int(std::ceil(box.sizes().y() / h)));
+    std::vector<unsigned char> seen;
+    table.cells = lens_kernel_cells(lens, layout, focal, &camera, &seen);
+    std::vector<double> row_worst(size_t(layout.ny), 0);
+    cv::parallel_for_(cv::Range(0, layout.ny), [&](const cv::Range& rows) {
+      for (int cy = rows.start; cy < rows.end; ++cy) {
+        double worst = 0;
+        for (int cx = 0; cx < layout.nx; ++cx) {
+          const size_t index = size_t(cy) * size_t(layout.nx) + size_t(cx);
+          float* cell = table.cells.data() + 32 * index;
+          if (std::isnan(cell[0])) continue;  // no projection: no source there
+          double error = 0;
+          for (double t : {-1.0 / 3, 0.0, 1.0 / 3}) {
+            for (double s : {-1.0 / 3, 0.0, 1.0 / 3}) {
+              const Eigen::Vector2d g(cx + 0.5 + t, cy + 0.5 + s);
+              const Eigen::Vector2d exact = focal * lens.offset((g - layout.origin) / layout.cells_per_u);
+              Eigen::Vector2d interpolated = Eigen::Vector2d::Zero();
+              for (int k = 0; k < 2; ++k) {
+                for (int j = 3; j >= 0; --j) {
+                  double row = 0;
+                  for (int i = 3; i >= 0; --i) row = row * t + cell[16 * k + 4 * j + i];
+                  interpolated[k] = interpolated[k] * s + row;
+                }
+              }
+              // A point between the nodes without a projection: NaN, which fails.
+              error = max_nan_first(error, pixels_per_f * (interpolated - exact).norm());
+            }
+          }
+          if (seen[index]) {
+            worst = max_nan_first(worst, error);
+          } else if (!(error <= kLensTableTolerancePx)) {
+            std::fill(cell, cell + 32, std::numeric_limits<float>::quiet_NaN());
+          }
+        }
+        row_worst[size_t(cy)] = worst;
+      }
+    });
+    double worst = 0;
+    for (double e : row_worst) worst = max_nan_first(worst, e);
+    if (worst <= kLensTableTolerancePx) return table;
+    // A bicubic's error falls 16-fold per halving of the cells where the offsets are
+    // smooth; one that cannot reach the tolerance so (near a chart's pole) stops here.
+    if (!(worst <= kLensTableTolerancePx * std::pow(16.0, std::log2(double(kLensTableMaxCells) / across)))) break;
+  }
+  return std::nullopt;
 }
 
 // The source camera for the float kernel, or null where float arithmetic
@@ -185,22 +313,42 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
   if (!p) return nullptr;
   if (p->kind == SourceParams::Kind::ray_polynomial && !ray_polynomial_start(camera, &*p)) return nullptr;
   if (const auto& lens = camera.parameters().mrcal_lens) {
-    // mrcal's spline on the stereographic plane (unified, xi = 1, alpha = 0) is polynomial
-    // per cell; the other mrcal lenses have no form the kernel evaluates exactly.
-    const std::optional<MrcalLens::PolynomialCells> found = lens->polynomial_cells();
-    const auto* stereographic = std::get_if<Stereographic<double>>(&camera.model());
-    if (!found || !stereographic || p->kind != SourceParams::Kind::unified || p->xi != 1 || p->alpha != 0) {
-      return nullptr;
+    // On the stereographic or pinhole plane (unified, alpha = 0): u = m * plane_per_m.
+    if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return nullptr;
+    std::optional<double> focal, plane_per_m;
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
+            const auto ratio = [&](double theta) {
+              double derivative;
+              return m.plane_radius(theta, &derivative) * (p->xi + std::cos(theta)) / std::sin(theta);
+            };
+            focal = m.focal(), plane_per_m = ratio(0.5);
+            if (!(std::abs(ratio(1.0) - *plane_per_m) <= 1e-12 * *plane_per_m)) plane_per_m.reset();
+          }
+        },
+        camera.model());
+    if (!focal || !plane_per_m) return nullptr;
+    std::optional<MrcalLens::PolynomialCells> layout = lens->polynomial_cells();
+    if (layout) {
+      source->lens_cells = lens_kernel_cells(*lens, *layout, *focal);
+      for (float x : source->lens_cells) {  // absolute values in pixels: only overflow matters
+        if (!std::isfinite(x)) return nullptr;
+      }
+    } else {
+      std::optional<LensTable> table = lens_table(camera, *lens, *focal, p->xi, *plane_per_m);
+      if (!table) return nullptr;
+      for (float& x : table->cells) {  // overflow: no projection the kernel can trust
+        if (std::isinf(x)) x = std::numeric_limits<float>::quiet_NaN();
+      }
+      layout = table->layout;
+      source->lens_cells = std::move(table->cells);
+      p->lens_bounded = true;
     }
-    const MrcalLens::PolynomialCells& cells = *found;
-    source->spline_cells = spline_kernel_cells(*lens, cells, stereographic->focal());
-    for (float x : source->spline_cells) {  // absolute values in pixels: only overflow matters
-      if (!std::isfinite(x)) return nullptr;
-    }
-    p->spline_nx = cells.nx, p->spline_ny = cells.ny;
-    p->spline_scale = float(2 * cells.cells_per_u);  // u = 2 m
-    p->spline_origin_x = float(cells.origin.x()), p->spline_origin_y = float(cells.origin.y());
-    p->spline_cells = source->spline_cells.data();
+    p->lens_nx = layout->nx, p->lens_ny = layout->ny;
+    p->lens_scale = float(*plane_per_m * layout->cells_per_u);
+    p->lens_origin_x = float(layout->origin.x()), p->lens_origin_y = float(layout->origin.y());
+    p->lens_cells = source->lens_cells.data();
   }
   if (camera.skew().any()) {
     for (double x : {camera.skew().xy, camera.skew().yx}) {

@@ -33,15 +33,20 @@ struct SourceParams {
   // rho is at least rho_fit (beyond the source image: no Newton start is trusted there).
   float a[5] = {};
   float theta_fit = 0, rho_fit = 0;
-  // mrcal's spline on a stereographic camera (unified, xi = 1, alpha = 0; u = 2 m):
-  // f delta_u from its polynomial cells (MrcalLens::polynomial_cells), cell
-  // coordinates g = m * spline_scale + spline_origin, the cell index clamped to the
-  // nx x ny grid (mrcal extrapolates its outer cells); per cell 32 floats, x's then y's
-  // bicubic in (t, s) = g - cell - 1/2 (about the cell's centre, in pixels before a):
-  // coefficient of t^i s^j at 4 j + i. Null: none.
-  const float* spline_cells = nullptr;
-  int spline_nx = 0, spline_ny = 0;
-  float spline_scale = 0, spline_origin_x = 0, spline_origin_y = 0;
+  // An mrcal lens (fishcam/mrcal_lens.hpp) on a stereographic or pinhole camera
+  // (unified, xi = 1 or 0, alpha = 0): f delta_u per cell, cell coordinates
+  // g = m * lens_scale + lens_origin (m = P_xy / D, the plane u = m * lens_scale /
+  // cells_per_u); per cell 32 floats, x's then y's bicubic in (t, s) = g - cell - 1/2
+  // (about the cell's centre, in pixels before a): coefficient of t^i s^j at 4 j + i;
+  // NaN cells have no projection. mrcal's spline (its polynomial cells,
+  // MrcalLens::polynomial_cells): the cell index clamped to the nx x ny grid (mrcal
+  // extrapolates its outer cells). The other lenses (lens_bounded): a table over the
+  // plane around the source image, no source for g outside [0, nx) x [0, ny).
+  // Null: none.
+  const float* lens_cells = nullptr;
+  int lens_nx = 0, lens_ny = 0;
+  bool lens_bounded = false;
+  float lens_scale = 0, lens_origin_x = 0, lens_origin_y = 0;
   // A skewed pixel grid (CameraParameters::skew): pixel = c + a (.) ([1 xy; yx 1] q).
   bool skewed = false;
   float xy = 0, yx = 0;

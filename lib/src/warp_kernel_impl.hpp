@@ -79,8 +79,9 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     return;
   }
   v_float32 scale;  // rho(theta) / chi
-  // f T(m) (fishcam/tangential.hpp) or f delta_u(2 m) (mrcal's spline), added before a and the skew.
+  // f T(m) (fishcam/tangential.hpp) or f delta_u (an mrcal lens), added before a and the skew.
   v_float32 offset_x = zero, offset_y = zero;
+  v_float32 on_table = zero == zero;  // a lens table (lens_bounded): whether g lies on it
   if constexpr (kKind == SourceParams::Kind::unified) {
     // w = xi |P| + Pz; behind the camera (Pz < 0, xi > 0) as
     // (xi^2 chi^2 + (xi^2 - 1) Pz^2) / (xi |P| - Pz), without the cancellation
@@ -125,21 +126,29 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
       offset_x = f * mul_add(p1, mxy2, mul_add(p2, mul_add(cv::vx_setall_f32(2.0f) * mx, mx, r2), prism_x));
       offset_y = f * mul_add(p2, mxy2, mul_add(p1, mul_add(cv::vx_setall_f32(2.0f) * my, my, r2), prism_y));
     }
-    if (src.spline_cells) {  // the plane is m = P_xy / D = u / 2 (stereographic)
+    if (src.lens_cells) {  // the plane is m = P_xy / D (alpha = 0: D = w)
       const v_float32 inverse = cv::vx_setall_f32(1.0f) / d;
-      const v_float32 scale_g = cv::vx_setall_f32(src.spline_scale);
-      const v_float32 gx = mul_add(px * inverse, scale_g, cv::vx_setall_f32(src.spline_origin_x));
-      const v_float32 gy = mul_add(py * inverse, scale_g, cv::vx_setall_f32(src.spline_origin_y));
+      const v_float32 scale_g = cv::vx_setall_f32(src.lens_scale);
+      v_float32 gx = mul_add(px * inverse, scale_g, cv::vx_setall_f32(src.lens_origin_x));
+      v_float32 gy = mul_add(py * inverse, scale_g, cv::vx_setall_f32(src.lens_origin_y));
+      if (src.lens_bounded) {
+        // A table: past it the offset is its nearest edge's (NaN g: a corner's), and the
+        // source outside the image (below); the coordinates stay continuous for the grid.
+        const v_float32 cx = cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(src.lens_nx)));
+        const v_float32 cy = cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(src.lens_ny)));
+        on_table = (cx == gx) & (cy == gy);
+        gx = cx, gy = cy;
+      }
       // The cell: g clamped into the grid before the floor (so any g, huge or NaN, gives
       // an index in it; max and min return their second operand for NaN).
-      const v_float32 fx = cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(src.spline_nx - 1)))));
-      const v_float32 fy = cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(src.spline_ny - 1)))));
+      const v_float32 fx = cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(src.lens_nx - 1)))));
+      const v_float32 fy = cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(src.lens_ny - 1)))));
       const v_float32 half = cv::vx_setall_f32(0.5f), t = gx - fx - half, s = gy - fy - half;
       // 32 (ny nx) < 2^24: the cell's first coefficient's index is exact in float.
-      const cv::v_int32 first = cv::v_round(mul_add(fy, cv::vx_setall_f32(float(src.spline_nx)), fx) * cv::vx_setall_f32(32.0f));
+      const cv::v_int32 first = cv::v_round(mul_add(fy, cv::vx_setall_f32(float(src.lens_nx)), fx) * cv::vx_setall_f32(32.0f));
       v_float32* outputs[2] = {&offset_x, &offset_y};
       for (int k = 0; k < 2; ++k) {
-        const float* cells = src.spline_cells + 16 * k;
+        const float* cells = src.lens_cells + 16 * k;
         v_float32 value = zero;
         for (int j = 3; j >= 0; --j) {
           v_float32 row = cv::v_lut(cells + 4 * j + 3, first);
@@ -174,7 +183,7 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     scale = cv::v_select(chi > zero, rho / chi, slope0 / pz);
   }
   const v_float32 nan = cv::vx_setall_f32(kNaNf);
-  const bool plane_offset = src.tangential || src.spline_cells;
+  const bool plane_offset = src.tangential || src.lens_cells;
   v_float32 u, v;
   if (src.skewed) {  // pixel = c + a (.) (S q)
     v_float32 qx = scale * px, qy = scale * py;
@@ -191,11 +200,18 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     }
   }
   valid = valid & (u == u) & (v == v);
+  const v_float32 half = cv::vx_setall_f32(-0.5f);
+  v_float32 in_image = valid & (u >= half) & (v >= half) & (u < cv::vx_setall_f32(src.width - 0.5f)) &
+                       (v < cv::vx_setall_f32(src.height - 0.5f));
+  if (kKind == SourceParams::Kind::unified && src.lens_bounded) {
+    // Past the table the ray lands outside the image and its margin: coordinates that
+    // say otherwise are none.
+    valid = valid & (on_table | ~in_image);
+    in_image = in_image & on_table;
+  }
   *out_x = cv::v_select(valid, u, nan);
   *out_y = cv::v_select(valid, v, nan);
-  const v_float32 half = cv::vx_setall_f32(-0.5f);
-  *inside = valid & (u >= half) & (v >= half) & (u < cv::vx_setall_f32(src.width - 0.5f)) &
-            (v < cv::vx_setall_f32(src.height - 0.5f));
+  *inside = in_image;
 }
 
 // Pixels [begin, end) of the flat output image. The ray planes are padded to a

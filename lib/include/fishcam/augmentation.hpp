@@ -31,8 +31,9 @@ enum class MapKind {
   // cv::remap with BORDER_CONSTANT yields exactly the fill value there.
   sampling,
   // For inspection and export (`fishcam map`, the mrcal check): the source
-  // coordinates as computed, also outside the source image; NaN where there is
-  // no valid source; plus `valid`.
+  // coordinates as computed, also outside the source image (a source with a
+  // tabulated mrcal lens: approximate past ~16 px outside, docs/augmentation.md);
+  // NaN where there is no valid source; plus `valid`.
   geometric,
 };
 
