@@ -169,16 +169,21 @@ bool project_distorted(const Model& model, const double* mapping, const ValidDom
 // The unit ray of normalized image coordinates (x, y) = ((u - cx) / a_x, (v - cy) / a_y):
 // D(m) = (x, y) / f solved by Newton with backtracking from the radial inverse, else by
 // continuation from D(0); false unless the solution lies in the domain and reprojects
-// to within 1e-7 px (relative 1e-15 for pixels beyond 1e8 px).
+// to within 1e-7 px (relative 1e-15 for pixels beyond 1e8 px). start (optional): a
+// first guess for m tried before those (a neighbouring pixel's, for whole images), and
+// on return this pixel's m (NaN without one). The domain holds one solution only: the
+// guess changes the cost, not the ray (but for rounding).
 template <class Model, class Distortion>
 bool distorted_ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table,
                       const Distortion& terms, const Eigen::Vector2d& pixel_scale, double x, double y,
-                      double* ray) {
+                      double* ray, Eigen::Vector2d* start = nullptr) {
   if constexpr (!HasUndistortedPlane<Model>) {
     throw Error("internal: a non-radial part on a model without an undistorted plane");
   } else {
     const double f = model.focal();
     const Eigen::Vector2d target(x / f, y / f);
+    const Eigen::Vector2d guess = start ? *start : Eigen::Vector2d::Constant(kNaN);
+    if (start) start->setConstant(kNaN);
     if (!target.allFinite() || target.norm() > domain.plane_reach) return false;
     const double rho = std::hypot(x, y);
     double derivative;
@@ -219,10 +224,14 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
       return m.allFinite() && f * pixel_scale.cwiseProduct(residual).norm() <= tolerance_px &&
              !std::isnan(theta_in_domain(model.theta_of_plane_radius(m.norm())));
     };
-    // From the radial inverse (the centre itself for the principal point) ...
-    Eigen::Vector2d m = rho > 0 ? Eigen::Vector2d(target * (model.plane_radius(theta0, &derivative) / target.norm()))
-                                : Eigen::Vector2d::Zero();
+    // From the guess, else from the radial inverse (the centre itself for the principal point) ...
+    Eigen::Vector2d m = guess;
     if (m.allFinite()) newton(&m, target, 100);
+    if (!solved(m)) {
+      m = rho > 0 ? Eigen::Vector2d(target * (model.plane_radius(theta0, &derivative) / target.norm()))
+                  : Eigen::Vector2d::Zero();
+      if (m.allFinite()) newton(&m, target, 100);
+    }
     if (!solved(m)) {
       // ... else along the segment from D(0) to the pixel, which the domain's image
       // contains (star-shaped about D(0)): Newton from each point's solution to the next.
@@ -232,6 +241,7 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
       for (int k = 1; k <= kSteps; ++k) newton(&m, centre + (target - centre) * (double(k) / kSteps), k < kSteps ? 20 : 100);
     }
     if (!solved(m)) return false;
+    if (start) *start = m;
     const double u = m.norm();
     const double theta = theta_in_domain(model.theta_of_plane_radius(u));
     if (u == 0) return ray[0] = 0, ray[1] = 0, ray[2] = 1, true;
@@ -277,19 +287,29 @@ std::optional<double> distortion_fold(const Model& model, const Distortion& term
       return previous.x() * first.y() - previous.y() * first.x() > 0;
     };
     const double end = radial.closed ? radial.theta_max : radial.theta_max * (1 - 1e-9);
+    // Rings in blocks, each block's rings in parallel (an mrcal lens costs libmrcal
+    // calls per point); the first failing ring is the same as in a serial scan.
+    constexpr int kBlock = 64;
+    std::array<unsigned char, kBlock> ok;
     double good = 0;
-    for (int j = 1; j <= kRings; ++j) {
-      const double theta = end * j / kRings;
-      if (ring_ok(theta)) {
-        good = theta;
-        continue;
+    for (int first = 1; first <= kRings; first += kBlock) {
+      const int count = std::min(kBlock, kRings + 1 - first);
+      parallel_for(count, [&](int begin, int stop) {
+        for (int i = begin; i < stop; ++i) ok[size_t(i)] = ring_ok(end * (first + i) / kRings);
+      });
+      for (int i = 0; i < count; ++i) {
+        const double theta = end * (first + i) / kRings;
+        if (ok[size_t(i)]) {
+          good = theta;
+          continue;
+        }
+        double bad = theta;
+        for (int bisection = 0; bisection < 60 && bad - good > 1e-15; ++bisection) {
+          const double mid = 0.5 * (good + bad);
+          (ring_ok(mid) ? good : bad) = mid;
+        }
+        return good;
       }
-      double bad = theta;
-      for (int bisection = 0; bisection < 60 && bad - good > 1e-15; ++bisection) {
-        const double mid = 0.5 * (good + bad);
-        (ring_ok(mid) ? good : bad) = mid;
-      }
-      return good;
     }
     return std::nullopt;
   }
@@ -331,17 +351,21 @@ bool project_point(const Model& model, const CameraParameters& params, const dou
 }
 
 // (x, y) = ((u - cx) / a_x, (v - cy) / a_y), which is S q for a skewed grid.
+// start: distorted_ray_of's guess, for a camera with a non-radial part.
 template <class Model>
 bool ray_of_point(const Model& model, const CameraParameters& params, const ValidDomain& domain,
-                  const InverseTable& table, double x, double y, InversePath path, double* ray) {
+                  const InverseTable& table, double x, double y, InversePath path, double* ray,
+                  Eigen::Vector2d* start = nullptr) {
   if (params.skew.any()) {
     const double xy = params.skew.xy, yx = params.skew.yx, det = 1 - xy * yx;
     const double qx = (x - xy * y) / det, qy = (y - yx * x) / det;
     x = qx, y = qy;
   }
-  if (params.mrcal_lens) return distorted_ray_of(model, domain, table, *params.mrcal_lens, params.pixel_scale, x, y, ray);
+  if (params.mrcal_lens) {
+    return distorted_ray_of(model, domain, table, *params.mrcal_lens, params.pixel_scale, x, y, ray, start);
+  }
   if (params.tangential.any()) {
-    return distorted_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray);
+    return distorted_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray, start);
   }
   return ray_of(model, domain, table, x, y, path, ray);
 }
@@ -370,10 +394,13 @@ void unproject_pixels(const CameraParameters& params, const ValidDomain& domain,
           for (int row = first_row; row < end_row; ++row) {
             const double v = (row - c.y()) * inv_scale.y();
             const size_t first = w * static_cast<size_t>(row);
+            // Along a row, a non-radial camera's Newton starts from the pixel before's
+            // solution (the row on one thread: the rays do not depend on the threads).
+            Eigen::Vector2d start = Eigen::Vector2d::Constant(kNaN);
             for (size_t col = 0; col < w; ++col) {
               const double u = (double(col) - c.x()) * inv_scale.x();
               double ray[3] = {kNaN, kNaN, kNaN};
-              ray_of_point(m, params, domain, table, u, v, path, ray);
+              ray_of_point(m, params, domain, table, u, v, path, ray, &start);
               const size_t i = (first + col) * kStride;
               x[i] = float(ray[0]), y[i] = float(ray[1]), z[i] = float(ray[2]);
             }
