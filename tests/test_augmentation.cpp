@@ -841,6 +841,44 @@ TEST(Augmentation, LensTablesEndOutsideTheImage) {
   EXPECT_EQ(tables, 4);
 }
 
+// Lenses far from the examples: the warp takes the kernel only where it agrees with the
+// exact maps, never a table that misses them. Strong CAHVOR terms and a LATLON image
+// 2 degrees wide take it; CAHVORE with strong E terms folds inside its image (table
+// cells straddle the domain's end, where half their points have no projection) and a
+// LONLAT image reaches past its poles: the exact path.
+TEST(Augmentation, ExtremeMrcalLensesTakeTheKernelOnlyWhereItAgrees) {
+  CameraParameters small = test::woodscape_front();
+  small.width = 160, small.height = 121;
+  small.principal_point = {79.5, 60.5};
+  const auto lens = [&](double f, bool pinhole, const char* lensmodel, std::vector<double> values) {
+    CameraParameters p = pinhole ? test::with_model(small, Pinhole<double>(f)) : test::with_model(small, Stereographic<double>(f));
+    p.mrcal_lens = std::make_shared<const MrcalLens>(lensmodel, std::move(values));
+    return p;
+  };
+  struct Case {
+    const char* name;
+    CameraParameters camera;
+    bool kernel;
+  };
+  const Case cases[] = {
+      {"strong CAHVOR", lens(100, true, "LENSMODEL_CAHVOR", {0.3, -0.2, 0.05, -0.5, 0.3}), true},
+      {"CAHVORE folding in its image", lens(60, false, "LENSMODEL_CAHVORE_linearity=1.00", {0, 0, 0, 0, 0, 2.0, 1.0, -0.5}),
+       false},
+      {"LONLAT past its poles", lens(30, false, "LENSMODEL_LONLAT", {}), false},
+      {"LATLON 2 degrees wide", lens(4500, false, "LENSMODEL_LATLON", {}), true},
+  };
+  int ran = 0;
+  for (const auto& [name, p, kernel] : cases) {
+    const ViewpointWarp warp{Camera(p)};
+    EXPECT_EQ(warp.float_kernel(), kernel) << name;
+    long differs = 0;
+    EXPECT_LE(worst_fast_vs_exact(warp, random_pose(pose_preset("large"), 3).change(), &differs), 1e-3) << name;
+    EXPECT_LE(differs, 20) << name;
+    ++ran;
+  }
+  EXPECT_EQ(ran, 4);
+}
+
 // Where float arithmetic is weakest: a full-circle fisheye whose image reaches
 // theta = 180 deg (the azimuth of a ray next to -z rests on components a rotation
 // leaves with a float's absolute error; rho / chi multiplies it), and strongly

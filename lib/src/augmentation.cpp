@@ -248,7 +248,7 @@ std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens,
   const Eigen::Vector2d widen = 0.02 * box.sizes();
   box.min() -= widen, box.max() += widen;
   const double longer = box.sizes().maxCoeff();
-  if (!(longer > 0)) return std::nullopt;
+  if (!(longer > 0) || !std::isfinite(longer)) return std::nullopt;
   const double pixels_per_f = camera.pixel_scale().cwiseAbs().maxCoeff();
   const auto max_nan_first = [](double a, double b) { return std::isnan(a) || a >= b ? a : b; };
   for (int across = 32; across <= kLensTableMaxCells; across *= 2) {
