@@ -146,13 +146,21 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
       const v_float32 half = cv::vx_setall_f32(0.5f), t = gx - fx - half, s = gy - fy - half;
       // 32 (ny nx) < 2^24: the cell's first coefficient's index is exact in float.
       const cv::v_int32 first = cv::v_round(mul_add(fy, cv::vx_setall_f32(float(src.lens_nx)), fx) * cv::vx_setall_f32(32.0f));
+      // Neighbouring pixels mostly share a cell: then its coefficients are broadcast,
+      // else gathered per lane (the same values either way).
+      alignas(64) int firsts[cv::v_int32::nlanes];
+      cv::v_store_aligned(firsts, first);
+      const bool one_cell = cv::v_check_all(first == cv::vx_setall_s32(firsts[0]));
+      const auto coefficient = [&](const float* at) {
+        return one_cell ? cv::vx_setall_f32(at[firsts[0]]) : cv::v_lut(at, first);
+      };
       v_float32* outputs[2] = {&offset_x, &offset_y};
       for (int k = 0; k < 2; ++k) {
         const float* cells = src.lens_cells + 16 * k;
         v_float32 value = zero;
         for (int j = 3; j >= 0; --j) {
-          v_float32 row = cv::v_lut(cells + 4 * j + 3, first);
-          for (int i = 2; i >= 0; --i) row = mul_add(row, t, cv::v_lut(cells + 4 * j + i, first));
+          v_float32 row = coefficient(cells + 4 * j + 3);
+          for (int i = 2; i >= 0; --i) row = mul_add(row, t, coefficient(cells + 4 * j + i));
           value = mul_add(value, s, row);
         }
         *outputs[k] = value;
