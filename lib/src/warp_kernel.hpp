@@ -41,8 +41,8 @@ struct SourceParams {
   // NaN cells have no projection. mrcal's spline (its polynomial cells,
   // MrcalLens::polynomial_cells): the cell index clamped to the nx x ny grid (mrcal
   // extrapolates its outer cells). The other lenses (lens_bounded): a table over the
-  // plane around the source image, no source for g outside [0, nx) x [0, ny).
-  // Null: none.
+  // plane around the source image; for g outside [0, nx] x [0, ny] the offset of the
+  // table's nearest edge, and no source in the image. Null: none.
   const float* lens_cells = nullptr;
   int lens_nx = 0, lens_ny = 0;
   bool lens_bounded = false;
