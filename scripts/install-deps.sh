@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  cmake g++ make pkg-config
+  cmake g++ make pkg-config ccache
   libeigen3-dev libceres-dev libopencv-dev libopencv-contrib-dev nlohmann-json3-dev
   libmrcal-dev mrcal python3-mrcal python3-numpy python3-opencv
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev

@@ -9,6 +9,7 @@ cd "$(dirname "$0")/.."
 ./scripts/python-env.sh build/venv
 ./scripts/build.sh -DFISHCAM_TEST_PYTHON="$PWD/build/venv/bin/python" -DFISHCAM_TEST_INSTALLED_PACKAGE=ON
 # Debian's CMake first on PATH (the first cmake may be another): pip's build uses it.
-PATH=/usr/bin:$PATH build/venv/bin/python -m pip install --quiet --no-deps --disable-pip-version-check . 2>&1 |
+# CMAKE_BUILD_PARALLEL_LEVEL: pip's CMake build on every core (it builds serially otherwise).
+PATH=/usr/bin:$PATH CMAKE_BUILD_PARALLEL_LEVEL="$(nproc)" build/venv/bin/python -m pip install --quiet --no-deps --disable-pip-version-check . 2>&1 |
   { grep -v "^WARNING: Location 'file:" || true; }
 /usr/bin/ctest --test-dir build --output-on-failure -j "$(nproc)"

@@ -192,7 +192,13 @@ TEST(Calibration, TheProgramWritesNothingForATransposedBoard) {
 TEST(Calibration, BoardsInOnePoseAreRefused) {
   const auto one = testing::synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 1, 0.2, 5);
   std::vector<BoardObservation> same;
-  for (int i = 0; i < 5; ++i) same.push_back({"img" + std::to_string(i) + ".png", one.observations[0].corners});
+  for (int i = 0; i < 5; ++i) {
+    // The same pose, each photo with noise of its own (the same corners twice are
+    // refused as the same photo: DuplicateViewsAreRefused).
+    std::vector<Eigen::Vector2d> corners = one.observations[0].corners;
+    for (size_t c = 0; c < corners.size(); ++c) corners[c] += Eigen::Vector2d(0.05 * std::sin(double(c + 7 * i)), 0.05 * std::cos(double(3 * c + i)));
+    same.push_back({"img" + std::to_string(i) + ".png", corners});
+  }
   for (const char* model : {"polynomial", "equidistant", "kannala-brandt", "double-sphere"}) {
     try {
       calibrate(same, kBoard, 1280, 966, parse_model_spec(model));
@@ -209,6 +215,77 @@ TEST(Calibration, BoardsInOnePoseAreRefused) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("distinct pose"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "cal.json"));
+}
+
+// A board size with the right corner count but another row length (2x27 for a 9x6
+// board) keeps most of a row's corners in a row, so the median bend passes; the
+// wraps between rows do not. Refused naming the board that fits.
+TEST(Calibration, ABoardSizeThatDoesNotExplainTheCornersIsRefused) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  const BoardSpec board{9, 6, 0.1};
+  const auto boards = testing::synthesize_boards(camera, board, 20, 0.3, 8).observations;
+  int refused = 0;
+  for (const BoardSpec wrong : {BoardSpec{2, 27, 0.1}, BoardSpec{27, 2, 0.1}, BoardSpec{3, 18, 0.1}, BoardSpec{18, 3, 0.1}}) {
+    try {
+      calibrate(boards, wrong, 1280, 966, {"polynomial", 4});
+      ADD_FAILURE() << wrong.cols << "x" << wrong.rows << " was calibrated";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("ordered as a 9x6 board, not " + std::to_string(wrong.cols) + "x" +
+                                           std::to_string(wrong.rows) + " (rows of 9): pass --board 9x6"),
+                std::string::npos)
+          << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_EQ(refused, 4);
+}
+
+// Corners outside the image size given cannot have been detected in that image;
+// a principal point far from the centre of a larger size is warned about, then
+// refused. The 1280x966 boards given as other sizes.
+TEST(Calibration, AnImageSizeTheCornersDoNotFitIsRefused) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  const auto boards = testing::synthesize_boards(camera, kBoard, 20, 0.2, 9).observations;
+  try {
+    calibrate(boards, kBoard, 640, 483, {"polynomial", 4});
+    ADD_FAILURE() << "corners outside a 640x483 image were calibrated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("corners lie outside the 640x483 image (first: image"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("check --imagersize"), std::string::npos) << e.what();
+  }
+  // 16-17 % of the size from the centre: solved, with a warning.
+  const CalibrationResult wide = calibrate(boards, kBoard, 1920, 1450, {"polynomial", 4});
+  int warned = 0;
+  for (const std::string& w : wide.warnings) warned += w.find("principal point lies 1") != std::string::npos;
+  EXPECT_EQ(warned, 1);
+  // 25 %: refused.
+  try {
+    calibrate(boards, kBoard, 2560, 1932, {"polynomial", 4});
+    ADD_FAILURE() << "a principal point 25 % off the centre was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("check --imagersize"), std::string::npos) << e.what();
+  }
+  // The right size: no such warning.
+  for (const std::string& w : calibrate(boards, kBoard, 1280, 966, {"polynomial", 4}).warnings) {
+    EXPECT_EQ(w.find("principal point"), std::string::npos) << w;
+  }
+}
+
+// One photo under two names would count its corners twice (sigmas shrink, the
+// solution moves): refused naming both.
+TEST(Calibration, DuplicateViewsAreRefused) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  auto boards = testing::synthesize_boards(camera, kBoard, 12, 0.2, 10).observations;
+  boards.push_back({"copy-of-4.png", boards[4].corners});
+  try {
+    calibrate(boards, kBoard, 1280, 966, {"polynomial", 4});
+    ADD_FAILURE() << "a duplicated view was calibrated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("images " + boards[4].filename + " and copy-of-4.png have the same corners"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // The real photos (../shared): the detected corners, given transposed, are refused too.

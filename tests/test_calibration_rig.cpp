@@ -1,5 +1,6 @@
 // Camera rigs: a synthetic four-camera surround view (the WoodScape layout: front,
 // rear, left and right mirrors) recovered from boards seen at shared instants.
+#include <algorithm>
 #include <random>
 
 #include "fishcam/calibration.hpp"
@@ -121,6 +122,100 @@ TEST(Rig, ACameraSharingNoInstantIsRefused) {
     EXPECT_NE(std::string(e.what()).find("camera 2 shares no board instant"), std::string::npos) << e.what();
   }
   EXPECT_THROW(calibrate_rig({rig.cameras[0]}, kBoard), Error);
+}
+
+// A stereo pair looking forward, 0.12 m apart: every board of camera 0 that camera
+// 1 sees whole is observed by both at that instant.
+SyntheticRig stereo_rig(double noise_px, std::uint64_t seed) {
+  const CameraParameters full = read_camera(test::data_path("kannala_brandt.yaml")).parameters();
+  const Camera lens(resized(full, 640, 483));
+  SyntheticRig rig;
+  rig.truth = {pose(0, {0, 0, 0}), {Eigen::Quaterniond(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY())), {0.12, 0.003, 0}}};
+  rig.cameras.resize(2, RigCamera{{}, lens.width(), lens.height(), {"kannala-brandt"}});
+  std::mt19937_64 random(seed);
+  std::normal_distribution<double> noise(0, noise_px);
+  const auto points = board_points(kBoard);
+  int instant = 0;
+  for (const BoardPose& in_0 : testing::synthesize_boards(lens, kBoard, 24, 0.0, seed).poses) {
+    const Pose in_rig = compose(rig.truth[0], in_0);
+    const std::string name = "instant-" + std::to_string(instant++) + ".png";
+    std::vector<std::vector<Eigen::Vector2d>> seen(2);
+    for (size_t j = 0; j < 2; ++j) {
+      for (const auto& p : points) {
+        Eigen::Vector2d q;
+        const Eigen::Vector3d in_j = inverse(rig.truth[j]).rotation * (in_rig.rotation * p + in_rig.translation) +
+                                     inverse(rig.truth[j]).translation;
+        if (!lens.project(in_j, &q) || q.x() < 0 || q.y() < 0 || q.x() > lens.width() - 1 || q.y() > lens.height() - 1) break;
+        seen[j].push_back(q + Eigen::Vector2d(noise(random), noise(random)));
+      }
+    }
+    if (seen[0].size() != points.size() || seen[1].size() != points.size()) continue;
+    for (size_t j = 0; j < 2; ++j) rig.cameras[j].observations.push_back({"cam" + std::to_string(j) + "/" + name, seen[j]});
+  }
+  return rig;
+}
+
+void expect_rig_truth(const RigCalibrationResult& r, const SyntheticRig& rig, double angle_rad, double metres) {
+  const Pose expected = relative(rig.truth, 1);
+  const Pose& got = *r.cameras[1].camera.pose;
+  EXPECT_LT(got.rotation.angularDistance(expected.rotation), angle_rad);
+  EXPECT_LT((got.translation - expected.translation).norm(), metres);
+}
+
+// The same corners given for both cameras (one file twice) would make a rig with no
+// baseline: refused naming both cameras.
+TEST(Rig, IdenticalCamerasAreRefused) {
+  SyntheticRig rig = stereo_rig(0.1, 5);
+  ASSERT_GE(rig.cameras[0].observations.size(), 8u);
+  rig.cameras[1].observations = rig.cameras[0].observations;
+  for (auto& o : rig.cameras[1].observations) o.filename = "cam1/" + o.filename.substr(5);
+  try {
+    calibrate_rig(rig.cameras, kBoard);
+    ADD_FAILURE() << "a rig of one camera's corners twice was calibrated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("camera 1 has the same corners as camera 0"), std::string::npos) << e.what();
+  }
+}
+
+// A chessboard looks the same turned by 180 degrees: one camera's detector numbered
+// some boards from the other end. Each such view is renumbered (and said), and the
+// rig is the one the consistently numbered corners give.
+TEST(Rig, BoardsNumberedFromTheOtherEndAreRenumbered) {
+  const SyntheticRig rig = stereo_rig(0.1, 6);
+  const RigCalibrationResult reference = calibrate_rig(rig.cameras, kBoard);
+  expect_rig_truth(reference, rig, 2e-3, 2e-3);
+  EXPECT_TRUE(reference.warnings.empty()) << reference.warnings.front();
+  SyntheticRig flipped = rig;
+  const std::vector<size_t> views{1, 4, 7};
+  for (size_t v : views) {
+    auto& corners = flipped.cameras[1].observations.at(v).corners;
+    std::reverse(corners.begin(), corners.end());
+  }
+  const RigCalibrationResult r = calibrate_rig(flipped.cameras, kBoard);
+  expect_rig_truth(r, rig, 2e-3, 2e-3);
+  EXPECT_NEAR(r.rms_px, reference.rms_px, 1e-5);
+  int said = 0;
+  for (const std::string& w : r.warnings) said += w.find("numbered from the other end") != std::string::npos;
+  EXPECT_EQ(said, int(views.size()));
+}
+
+// Camera 1's images paired with the next instant's of camera 0 (an unsynchronised
+// or mismatched pair list): refused saying so, not blamed on a camera's board.
+TEST(Rig, UnsynchronisedPairsAreRefusedSayingSo) {
+  SyntheticRig rig = stereo_rig(0.1, 7);
+  auto& views = rig.cameras[1].observations;
+  ASSERT_GE(views.size(), 8u);
+  const std::string first = views.front().filename;
+  for (size_t v = 0; v + 1 < views.size(); ++v) views[v].filename = views[v + 1].filename;
+  views.back().filename = first;
+  try {
+    calibrate_rig(rig.cameras, kBoard);
+    ADD_FAILURE() << "unsynchronised pairs were calibrated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("camera 1 and camera 0 disagree on their relative pose"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("unsynchronised"), std::string::npos) << e.what();
+  }
 }
 
 // Through the program: one --corners per camera, one file for the rig in each

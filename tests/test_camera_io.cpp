@@ -316,7 +316,9 @@ TEST(CameraIo, WritersRefuseWhatTheReadersWouldRefuse) {
   p.model = Equidistant<double>(1e300);
   p.pixel_scale = {1e10, 1e10};
   ASSERT_NO_THROW(Camera{p});
-  for (CameraFormat format : {CameraFormat::woodscape, CameraFormat::opencv}) {
+  // Readers refuse magnitudes no camera has (a pixel scale past 1e6), so every
+  // writer refuses to write them, fishcam JSON too.
+  for (CameraFormat format : {CameraFormat::woodscape, CameraFormat::opencv, CameraFormat::fishcam}) {
     try {
       format_camera(p, format);
       ADD_FAILURE() << to_string(format) << ": wrote it";
@@ -324,7 +326,6 @@ TEST(CameraIo, WritersRefuseWhatTheReadersWouldRefuse) {
       EXPECT_NE(std::string(e.what()).find("format cannot hold this camera"), std::string::npos) << e.what();
     }
   }
-  EXPECT_NO_THROW(parse_camera(format_camera(p, CameraFormat::fishcam), "p.json"));
 }
 
 }  // namespace

@@ -82,9 +82,13 @@ TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
     EXPECT_EQ(t, std::vector<double>(3, 0.0)) << line;
   }
   EXPECT_EQ(lines, 8);
-  // Samples are never replaced.
+  // Samples are never replaced: the same settings resume, writing nothing.
+  const auto sample = dir / "a" / "test" / "rgb_images" / "00002_MVR.png";
+  ASSERT_TRUE(std::filesystem::exists(sample));
+  const auto written = std::filesystem::last_write_time(sample);
   r = run_fishcam("sample-dataset " + quoted(dir / "a") + args);
-  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(std::filesystem::last_write_time(sample), written);
   // Fidelity: 2 sets x (3 priors + the depth map).
   r = run_fishcam("fidelity " + quoted(dir / "a") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -221,8 +225,12 @@ TEST(CliAugmentation, DatasetIsMirroredResumableAndReportsBadFiles) {
       }
     }
     const std::string manifest = test::read_file(dir / "manifest.jsonl");
-    EXPECT_EQ(std::count(manifest.begin(), manifest.end(), '\n'), 4);
-    const auto first = nlohmann::json::parse(manifest.substr(0, manifest.find('\n')));
+    EXPECT_EQ(std::count(manifest.begin(), manifest.end(), '\n'), 5);  // the settings record, then 4 outputs
+    const auto record = nlohmann::json::parse(manifest.substr(0, manifest.find('\n')));
+    EXPECT_EQ(record["fishcam"], "augment-dataset");
+    EXPECT_EQ(record["settings"]["--seed"], "5");
+    const size_t second = manifest.find('\n') + 1;
+    const auto first = nlohmann::json::parse(manifest.substr(second, manifest.find('\n', second) - second));
     for (const char* key : {"image", "copy", "seed", "rotation_deg", "translation", "depth"}) {
       EXPECT_TRUE(first.contains(key)) << key;
     }
@@ -235,7 +243,7 @@ TEST(CliAugmentation, DatasetIsMirroredResumableAndReportsBadFiles) {
   EXPECT_NE(r.out.find("0 written, 12 already there"), std::string::npos) << r.out;
   EXPECT_EQ(std::filesystem::last_write_time(out / "small/rgb_images/frame0_small0.png"), before);
   const std::string manifest = test::read_file(out / "small/manifest.jsonl");
-  EXPECT_EQ(std::count(manifest.begin(), manifest.end(), '\n'), 4);
+  EXPECT_EQ(std::count(manifest.begin(), manifest.end(), '\n'), 5);
   // Never inside ROOT.
   r = run_fishcam("augment-dataset " + quoted(root) + " --preset small --seed 1 --out " + quoted(root / "augmented"));
   EXPECT_NE(r.exit_code, 0);
@@ -276,9 +284,11 @@ TEST(CliAugmentation, ShardsTogetherEqualOneRun) {
   const auto dir = test::scratch_dir("shards");
   auto r = run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 7 --seed 3 --size 160x121");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(test::files_below(dir / "root").size(), 21u);
+  const auto samples = test::files_below(dir / "root");
+  EXPECT_EQ(samples.size(), 22u);  // 7 x (image, labels, camera) and the settings record
   r = run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 7 --seed 3 --size 160x121");
-  EXPECT_NE(r.exit_code, 0) << "never replaces samples";
+  EXPECT_EQ(r.exit_code, 0) << "the same settings resume: " << r.err;
+  EXPECT_TRUE(test::files_below(dir / "root") == samples) << "never replaces samples";
 
   const std::string common = "augment-dataset " + quoted(dir / "root") + " --preset small --seed 9 --copies 2";
   r = run_fishcam(common + " --out " + quoted(dir / "whole"));
@@ -293,12 +303,21 @@ TEST(CliAugmentation, ShardsTogetherEqualOneRun) {
   for (int k = 0; k < 3; ++k) {
     const std::string name = "manifest-" + std::to_string(k) + "-of-3.jsonl";
     ASSERT_TRUE(sharded.count(name)) << name;
-    for (const auto& line : lines(sharded[name])) EXPECT_TRUE(shard_lines.insert(line).second) << "twice: " << line;
+    for (const auto& line : lines(sharded[name])) {
+      // Each manifest starts with the run's settings record, the same in all.
+      if (line.starts_with("{\"fishcam\":")) {
+        EXPECT_TRUE(whole_lines.count(line)) << line;
+        continue;
+      }
+      EXPECT_TRUE(shard_lines.insert(line).second) << "twice: " << line;
+    }
     sharded.erase(name);
   }
   whole.erase("manifest.jsonl");
-  EXPECT_EQ(whole_lines.size(), 14u);
-  EXPECT_TRUE(shard_lines == whole_lines);
+  EXPECT_EQ(whole_lines.size(), 15u);
+  std::set<std::string> whole_outputs = whole_lines;
+  std::erase_if(whole_outputs, [](const std::string& line) { return line.starts_with("{\"fishcam\":"); });
+  EXPECT_TRUE(shard_lines == whole_outputs);
   EXPECT_TRUE(sharded == whole) << "the shards' files differ from the unsharded run's";
 
   for (const char* bad : {"3/3", "-1/3", "1/0", "a/b", "1/3/4"}) {
@@ -317,15 +336,17 @@ TEST(CliAugmentation, AffineDatasetAndOptions) {
   r = run_fishcam(common + quoted(dir / "affine") + " --method affine");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto files = test::files_below(dir / "affine");
-  EXPECT_EQ(files.size(), 5u);  // 2 images, 2 labels, the manifest
+  EXPECT_EQ(files.size(), 6u);  // 2 images, 2 labels, the manifest, the settings record
   for (const auto& line : lines(files.at("manifest.jsonl"))) {
     const auto j = nlohmann::json::parse(line);
+    if (j.contains("settings")) continue;
     EXPECT_EQ(j["method"], "affine");
     EXPECT_TRUE(j.contains("scale") && j["translation"].size() == 2) << line;
   }
   r = run_fishcam(common + quoted(dir / "affine"));
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.err.find("written with --method 'affine', not viewpoint"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--method: this folder was written with 'affine', this run has 'viewpoint'"), std::string::npos)
+      << r.err;
   r = run_fishcam(common + quoted(dir / "viewpoint"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string viewpoint_manifest = test::read_file(dir / "viewpoint/manifest.jsonl");
@@ -365,7 +386,13 @@ TEST(CliAugmentation, ResumeAfterACutManifestLine) {
   ASSERT_EQ(run_fishcam(command).exit_code, 0);
   const auto manifest_path = dir / "out" / "manifest.jsonl";
   const std::string full = test::read_file(manifest_path);
-  test::write_file(manifest_path, full.substr(0, full.size() - 20));  // power loss mid-line
+  // Killed while appending the last output's line: its files had not landed yet
+  // (a line is appended before its files).
+  test::write_file(manifest_path, full.substr(0, full.size() - 20));
+  for (const char* file : {"rgb_images/00001_FV_small0.png", "semantic_annotations/gtLabels/00001_FV_small0.png",
+                           "calibration/00001_FV_small0.json"}) {
+    ASSERT_TRUE(std::filesystem::remove(dir / "out" / file)) << file;
+  }
   const auto r = run_fishcam(command);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("dropped an incomplete last line"), std::string::npos) << r.err;

@@ -101,7 +101,7 @@ void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, co
     throw Error(std::string(o.depth_file.empty() ? "--depth-values" : "--depth-file") + " needs --depth map");
   }
   if (depth_map && cmd.count("--sampling")) throw Error("--sampling: not used by --depth map (its maps are exact)");
-  check_outputs({{o.out_image}, {o.out_label, true}, {o.out_mask}}, {o.source, o.target, o.image, o.label, o.depth_file},
+  check_outputs({{o.out_image}, {o.out_label, true}, {o.out_mask, true}}, {o.source, o.target, o.image, o.label, o.depth_file},
                 o.force);
   const ViewpointWarp warp = make_warp(inputs, o.source, o.target);
   const AugmentChange change = change_of(o, affine);

@@ -19,6 +19,8 @@
 #include "commands.hpp"
 #include "fishcam/atomic_file.hpp"
 #include "fishcam/camera_io.hpp"
+#include "fishcam/file_input.hpp"
+#include "fishcam/output_settings.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -72,13 +74,48 @@ class WarpCache {
   std::map<std::string, std::shared_ptr<const ViewpointWarp>> warps_;
 };
 
-// A preset's manifest (manifest.jsonl, or manifest-K-of-N.jsonl for a shard),
-// locked for the whole run: a second run on the same manifest (the same --out and
-// --shard) is refused instead of interleaving duplicate lines; shards have their
+constexpr const char* kCommand = "augment-dataset";
+// Manifests hold a line per output; far larger than any dataset fishcam augments.
+constexpr std::size_t kMaxManifestBytes = std::size_t(1) << 30;
+
+// The outputs a manifest lists, read without locking it (another shard may be
+// appending: a last line without its newline is not counted). A manifest whose first
+// line is not this run's settings record was not written by this run's settings, or
+// not by fishcam: refused, never touched.
+std::set<std::string> listed_outputs(const fs::path& path, const std::string& record) {
+  std::set<std::string> listed;
+  const std::string content = read_bounded_file(path, kMaxManifestBytes, "a manifest");
+  // Another shard's, just created: its record is being written (a file of someone
+  // else's without a full line lists nothing either: nothing is taken for ours).
+  if (content.find('\n') == std::string::npos) return listed;
+  std::istringstream lines(content);
+  std::string line;
+  if (!std::getline(lines, line) || line != record) {
+    throw Error(path_for_message(path) + ": " +
+                (OutputSettings::is_record(line, kCommand) ? "written with other settings than this run's"
+                                                          : "not a manifest of fishcam augment-dataset") +
+                " (refusing to touch it: use another --out)");
+  }
+  while (std::getline(lines, line)) {
+    if (lines.eof()) break;  // cut: being written, or an interrupted run's
+    const nlohmann::json entry = nlohmann::json::parse(line, nullptr, false);
+    if (!entry.is_object() || !entry.contains("output") || !entry["output"].is_string()) {
+      throw Error(path_for_message(path) + ": unreadable line (not written by fishcam?)");
+    }
+    listed.insert(entry["output"].get<std::string>());
+  }
+  return listed;
+}
+
+// A preset's manifest (manifest.jsonl, or manifest-K-of-N.jsonl for a shard): the
+// settings record, then a line per output, appended before the output's files land
+// (so every file this command writes is listed, and a later run knows it as its
+// own). Locked for the whole run: a second run on the same manifest (the same --out
+// and --shard) is refused instead of interleaving duplicate lines; shards have their
 // own manifests and run in parallel. The lock goes with the process, killed or not.
 class Manifest {
  public:
-  Manifest(const fs::path& path, const std::string& method, Progress& progress) : path_(path) {
+  Manifest(const fs::path& path, const std::string& record, Progress& progress) : path_(path) {
     fd_ = open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0666);
     if (fd_ < 0) throw Error(path_for_message(path) + ": cannot write (" + std::strerror(errno) + ")");
     if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
@@ -87,7 +124,12 @@ class Manifest {
                   ": another run is writing this manifest (wait for it; parallel runs into one --out need "
                   "--shard K/N each)");
     }
-    read_lines(method, progress);
+    try {
+      read_lines(record, progress);
+    } catch (...) {
+      close(fd_);
+      throw;
+    }
   }
   ~Manifest() { close(fd_); }
   Manifest(const Manifest&) = delete;
@@ -96,45 +138,47 @@ class Manifest {
   bool lists(const std::string& output) const { return listed_.count(output) != 0; }
   // Appends one line in one write (a kill leaves at most a cut last line, which the
   // next run drops).
-  void append(const nlohmann::json& line) {
-    const std::string text = line.dump() + "\n";
+  void append(const nlohmann::json& line) { append_text(line.dump() + "\n"); listed_.insert(line.at("output").get<std::string>()); }
+
+ private:
+  void append_text(const std::string& text) {
     if (write(fd_, text.data(), text.size()) != ssize_t(text.size())) {
       throw Error(path_for_message(path_) + ": write failed (" + std::strerror(errno) + ")");
     }
-    listed_.insert(line.at("output").get<std::string>());
   }
 
- private:
-  // The lines already there (a resumed run appends only what is new). A last line
-  // cut short (a crash or power loss mid-write) is dropped, and said.
-  void read_lines(const std::string& method, Progress& progress) {
+  // The lines already there (a resumed run appends only what is new). A new manifest
+  // starts with the settings record; an existing one must start with it (checked
+  // before the lock by listed_outputs too). Only then is a last line cut short (a
+  // crash or power loss mid-write) dropped, and said.
+  void read_lines(const std::string& record, Progress& progress) {
     std::string content;
     char buffer[1 << 16];
     for (ssize_t n; (n = pread(fd_, buffer, sizeof buffer, off_t(content.size()))) != 0;) {
       if (n < 0) throw Error(path_for_message(path_) + ": cannot read (" + std::strerror(errno) + ")");
       content.append(buffer, std::size_t(n));
+      if (content.size() > kMaxManifestBytes) throw Error(path_for_message(path_) + ": larger than a manifest can be");
     }
-    size_t start = 0;
+    if (content.empty()) return append_text(record + "\n");
+    if (!content.starts_with(record + "\n")) {
+      throw Error(path_for_message(path_) + ": not this run's manifest (its first line is not this run's settings "
+                  "record; refusing to touch it: use another --out)");
+    }
+    size_t start = record.size() + 1;
     while (start < content.size()) {
       const size_t end = content.find('\n', start);
-      std::string line_method;
-      try {
-        if (end == std::string::npos) throw std::runtime_error("cut");
-        const nlohmann::json entry = nlohmann::json::parse(content.substr(start, end - start));
-        listed_.insert(entry.at("output").get<std::string>());
-        line_method = entry.value("method", "viewpoint");  // manifests before the affine baseline: viewpoint
-      } catch (const std::exception&) {
-        if (end != std::string::npos) throw Error(path_for_message(path_) + ": unreadable line (not written by fishcam?)");
+      if (end == std::string::npos) {
         progress.report(path_for_message(path_) + ": dropped an incomplete last line (an interrupted run)");
         if (ftruncate(fd_, off_t(start)) != 0) {
           throw Error(path_for_message(path_) + ": cannot truncate (" + std::strerror(errno) + ")");
         }
         break;
       }
-      if (line_method != method) {
-        throw Error(path_for_message(path_) + ": written with --method " + quoted_for_message(line_method) +
-                    ", not " + method + " (use another --out)");
+      const nlohmann::json entry = nlohmann::json::parse(content.substr(start, end - start), nullptr, false);
+      if (!entry.is_object() || !entry.contains("output") || !entry["output"].is_string()) {
+        throw Error(path_for_message(path_) + ": unreadable line (not written by fishcam?)");
       }
+      listed_.insert(entry["output"].get<std::string>());
       start = end + 1;
     }
   }
@@ -148,6 +192,7 @@ struct DatasetOptions {
   std::string root, out, presets = "train", depth = "source-sphere", shard, method = "viewpoint", sampling = "grid";
   std::uint64_t seed = 0;
   int copies = 1, threads = 0, label_fill = 0;
+  bool force = false;
 };
 
 // --shard K/N: images K, K+N, ... of the name-ordered list, with a manifest of its own.
@@ -220,18 +265,26 @@ class DatasetAugmentation {
 
   void run() {
     const Shard shard = parse_shard(o_.shard);
+    if (o_.out.empty()) throw Error("--out: expected a folder, got ''");
     check_output_not_input(out_, {root_}, true);
-    std::stringstream list(o_.presets);
     std::vector<PosePreset> presets;
-    for (std::string name; std::getline(list, name, ',');) presets.push_back(pose_preset(name, "--preset"));
+    for (const std::string& name : distinct_names(o_.presets, "--preset")) presets.push_back(pose_preset(name, "--preset"));
     if (o_.threads > 0) cv::setNumThreads(o_.threads);
     const std::vector<fs::path> images = list_images(root_, shard);
     if (images.empty()) {
       std::printf("shard %d/%d: no images (the dataset has fewer than %d)\n", shard.index, shard.count, shard.index + 1);
       return;
     }
+    // Before anything is written: the folder's settings are this run's, and no file
+    // this run would write is one it did not write before (unless --force).
+    const OutputSettings settings = settings_of(presets);
+    check_output_folders(presets);
+    claim_output_settings(settings_path(), settings, false);
+    check_foreign_files(presets, images, settings.record(), shard.manifest_name());
+    fs::create_directories(out_);
+    claim_output_settings(settings_path(), settings, true);
     Progress progress(images.size() * presets.size());
-    std::vector<PresetOutput> outputs = prepare_outputs(presets, shard, progress);
+    std::vector<PresetOutput> outputs = prepare_outputs(presets, shard, settings.record(), progress);
     for (PresetOutput& output : outputs) {
       for (const fs::path& image_path : images) {
         const std::string stem = image_path.stem().string();
@@ -252,23 +305,118 @@ class DatasetAugmentation {
   }
 
  private:
-  // Every output folder is checked (symlinks inside --out included) before any is
-  // created, then created, cleared of killed runs' temporaries, and its manifest locked.
-  std::vector<PresetOutput> prepare_outputs(const std::vector<PosePreset>& presets, const Shard& shard,
-                                            Progress& progress) const {
-    std::vector<PresetOutput> outputs;
+  fs::path settings_path() const { return out_ / "augment-dataset.json"; }
+  fs::path preset_dir(const PosePreset& preset, std::size_t presets) const {
+    return presets > 1 ? out_ / std::string(preset.name) : out_;
+  }
+
+  // Everything the outputs depend on (not --shard or --threads: the N shards of a
+  // run equal the unsharded run, and so do runs on any number of threads).
+  OutputSettings settings_of(const std::vector<PosePreset>& presets) const {
+    std::string preset_names;
+    for (const PosePreset& preset : presets) preset_names += (preset_names.empty() ? "" : ",") + std::string(preset.name);
+    return {kCommand,
+            {{"ROOT", fs::weakly_canonical(fs::absolute(root_)).string()},
+             {"--preset", preset_names},
+             {"--seed", std::to_string(o_.seed)},
+             {"--copies", std::to_string(o_.copies)},
+             {"--method", o_.method},
+             {"--depth", affine_ ? "" : o_.depth},
+             {"--sampling", affine_ ? "" : o_.sampling},
+             {"--label-fill", std::to_string(o_.label_fill)}}};
+  }
+
+  // The files an output of one image copy lands in (no camera file for affine copies).
+  std::vector<fs::path> copy_files(const fs::path& dir, const std::string& name, const fs::path& image_path) const {
+    std::vector<fs::path> files{dir / "rgb_images" / (name + image_path.extension().string()),
+                                dir / "semantic_annotations" / "gtLabels" / (name + ".png")};
+    if (!affine_) files.push_back(dir / "calibration" / (name + ".json"));
+    return files;
+  }
+  static std::string copy_name(const fs::path& image_path, const PosePreset& preset, int copy) {
+    return image_path.stem().string() + "_" + std::string(preset.name) + std::to_string(copy);
+  }
+
+  // Refuses, before anything is written, to replace a file that no manifest of this
+  // run's settings lists (the user's, or another command's) unless --force.
+  void check_foreign_files(const std::vector<PosePreset>& presets, const std::vector<fs::path>& images,
+                           const std::string& record, const std::string& own_manifest) {
+    std::size_t foreign = 0;
+    fs::path first;
     for (const PosePreset& preset : presets) {
-      outputs.push_back({preset, presets.size() > 1 ? out_ / std::string(preset.name) : out_, nullptr});
-      for (const char* sub : {"", "rgb_images", "semantic_annotations", "semantic_annotations/gtLabels", "calibration"}) {
-        check_output_not_input(outputs.back().dir / sub, {root_}, true);
+      const fs::path dir = preset_dir(preset, presets.size());
+      std::error_code ec;
+      if (!fs::is_directory(dir, ec)) continue;
+      check_own_manifest(dir / own_manifest, record);
+      std::set<std::string> listed;
+      for (const auto& entry : fs::directory_iterator(dir)) {
+        const std::string name = entry.path().filename().string();
+        if (name.starts_with("manifest") && name.ends_with(".jsonl")) listed.merge(listed_outputs(entry.path(), record));
+      }
+      listed_before_[dir] = listed;
+      for (const fs::path& image_path : images) {
+        for (int copy = 0; copy < o_.copies; ++copy) {
+          const std::vector<fs::path> files = copy_files(dir, copy_name(image_path, preset, copy), image_path);
+          if (listed.count(fs::relative(files[0], dir).string())) continue;
+          for (const fs::path& file : files) {
+            if (!fs::exists(fs::symlink_status(file, ec))) continue;
+            if (foreign++ == 0) first = file;
+          }
+        }
       }
     }
+    if (foreign > 0 && !o_.force) {
+      throw Error(path_for_message(first) + ": exists and no manifest of this run lists it (" + std::to_string(foreign) +
+                  " such file(s) where this run would write: not written by augment-dataset with these settings); "
+                  "nothing written (--force replaces them)");
+    }
+  }
+
+  // The manifest this run will append to, before anything is written: unlocked (no
+  // run is writing it), it must be empty or start with this run's settings record; a
+  // file of someone else's (one line without its newline looks like an interrupted
+  // run's) is refused, never truncated.
+  static void check_own_manifest(const fs::path& path, const std::string& record) {
+    const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) return;  // not there yet (or not readable: the lock's open says why)
+    const bool locked = flock(fd, LOCK_SH | LOCK_NB) != 0;
+    close(fd);
+    if (locked) {
+      throw Error(path_for_message(path) +
+                  ": another run is writing this manifest (wait for it; parallel runs into one --out need "
+                  "--shard K/N each)");
+    }
+    const std::string content = read_bounded_file(path, kMaxManifestBytes, "a manifest");
+    if (!content.empty() && !content.starts_with(record + "\n")) {
+      throw Error(path_for_message(path) + ": " +
+                  (OutputSettings::is_record(content.substr(0, content.find('\n')), kCommand)
+                       ? "written with other settings than this run's"
+                       : "not a manifest of fishcam augment-dataset") +
+                  " (refusing to touch it: use another --out)");
+    }
+  }
+
+  // Every output folder is checked (symlinks inside --out included) before any is
+  // created or anything read or written there.
+  void check_output_folders(const std::vector<PosePreset>& presets) const {
+    for (const PosePreset& preset : presets) {
+      for (const char* sub : {"", "rgb_images", "semantic_annotations", "semantic_annotations/gtLabels", "calibration"}) {
+        check_output_not_input(preset_dir(preset, presets.size()) / sub, {root_}, true);
+      }
+    }
+  }
+
+  // Every output folder created, cleared of killed runs' temporaries, and its manifest locked.
+  std::vector<PresetOutput> prepare_outputs(const std::vector<PosePreset>& presets, const Shard& shard,
+                                            const std::string& record, Progress& progress) const {
+    std::vector<PresetOutput> outputs;
+    for (const PosePreset& preset : presets) outputs.push_back({preset, preset_dir(preset, presets.size()), nullptr});
     for (PresetOutput& output : outputs) {
       for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
         fs::create_directories(output.dir / sub);
         remove_stale_temporaries(output.dir / sub);  // of killed runs; parallel runs' stay
       }
-      output.manifest = std::make_unique<Manifest>(output.dir / shard.manifest_name(), o_.method, progress);
+      output.manifest = std::make_unique<Manifest>(output.dir / shard.manifest_name(), record, progress);
     }
     return outputs;
   }
@@ -285,29 +433,33 @@ class DatasetAugmentation {
                         root_ / "calibration" / (stem + ".json"), std::nullopt, nullptr, {}, {}};
     const std::string preset_name(output.preset.name);
     for (int copy = 0; copy < o_.copies; ++copy) {
-      const std::string name = stem + "_" + preset_name + std::to_string(copy);
-      const fs::path out_image = output.dir / "rgb_images" / (name + image_path.extension().string());
-      const fs::path out_label = output.dir / "semantic_annotations" / "gtLabels" / (name + ".png");
-      const fs::path out_calibration = output.dir / "calibration" / (name + ".json");
+      const std::vector<fs::path> files = copy_files(output.dir, copy_name(image_path, output.preset, copy), image_path);
       const std::uint64_t seed = derive_seed(o_.seed, stem + "/" + preset_name, copy);
       const RandomPose pose = random_pose(output.preset, seed);
       const AffineChange affine_change = affine_ ? random_affine(affine_preset(preset_name), seed) : AffineChange{};
-      if (fs::exists(out_image) && fs::exists(out_label) && (affine_ || fs::exists(out_calibration))) {
+      const std::string listed = fs::relative(files[0], output.dir).string();
+      // Its own manifest's, or another run's of the same settings (the unsharded run
+      // before this shard, another shard count).
+      const bool ours = output.manifest->lists(listed) || listed_before_[output.dir].count(listed) != 0;
+      if (ours && std::all_of(files.begin(), files.end(), [](const fs::path& f) { return fs::exists(f); })) {
         ++skipped_;
-      } else {
-        source.load(warps_);
-        write_copy(source, pose, affine_change, out_image, out_label, out_calibration);
-        ++written_;
+        continue;
       }
-      const std::string listed = fs::relative(out_image, output.dir).string();
-      if (!output.manifest->lists(listed)) {
-        output.manifest->append(manifest_line(image_path, listed, copy, output.preset, seed, pose, affine_change));
-      }
+      source.load(warps_);
+      std::vector<std::pair<fs::path, std::string>> contents = render_copy(source, pose, affine_change, files);
+      // Listed before its files land: a kill in between leaves a listed output whose
+      // files the next run writes, never a file of ours that no manifest lists.
+      if (!ours) output.manifest->append(manifest_line(image_path, listed, copy, output.preset, seed, pose, affine_change));
+      // The files land together (a killed run leaves none of them); they replace only
+      // files this run's manifest lists, or any with --force.
+      write_files_atomically(contents, ours || o_.force);
+      ++written_;
     }
   }
 
-  void write_copy(const DatasetImage& source, const RandomPose& pose, const AffineChange& affine_change,
-                  const fs::path& out_image, const fs::path& out_label, const fs::path& out_calibration) const {
+  std::vector<std::pair<fs::path, std::string>> render_copy(const DatasetImage& source, const RandomPose& pose,
+                                                            const AffineChange& affine_change,
+                                                            const std::vector<fs::path>& files) const {
     cv::Mat out_pixels, out_labels;
     const AugmentIO io{&source.image, &out_pixels, 0, &source.labels, &out_labels, o_.label_fill, nullptr};
     if (affine_) {
@@ -315,17 +467,15 @@ class DatasetAugmentation {
     } else {
       source.warp->augment(pose.change(), prior_, io, sampling_);
     }
-    std::vector<std::pair<fs::path, std::string>> files{{out_image, encode_image(out_image, out_pixels)},
-                                                         {out_label, encode_image(out_label, out_labels)}};
+    std::vector<std::pair<fs::path, std::string>> contents{{files[0], encode_image(files[0], out_pixels)},
+                                                            {files[1], encode_image(files[1], out_labels)}};
     if (!affine_) {
       // The output camera: same intrinsics, the moved pose (translation in
       // unit-sphere units, written as metres).
-      files.emplace_back(out_calibration,
-                         format_camera(augmented_camera(source.camera->parameters(), pose.change()),
-                                       CameraFormat::woodscape));
+      contents.emplace_back(files[2], format_camera(augmented_camera(source.camera->parameters(), pose.change()),
+                                                    CameraFormat::woodscape));
     }
-    // The files land together (a killed run leaves none of them).
-    write_files_atomically(files, true);
+    return contents;
   }
 
   nlohmann::json manifest_line(const fs::path& image_path, const std::string& output, int copy,
@@ -356,6 +506,7 @@ class DatasetAugmentation {
   const Sampling sampling_;
   const bool affine_;
   WarpCache warps_;
+  std::map<fs::path, std::set<std::string>> listed_before_;  // per output folder: what its manifests listed
   long written_ = 0, skipped_ = 0;
   std::vector<std::string> failures_;
 };
@@ -391,6 +542,9 @@ void register_augment_dataset(CLI::App& app) {
       ->check(CLI::IsMember(sampling_names()))
       ->capture_default_str();
   cmd->add_option("--label-fill", o->label_fill, "Label for pixels without a source")->capture_default_str();
+  cmd->add_flag("--force", o->force,
+                "Replace files in --out that no manifest of a run with these settings lists (without it they are "
+                "refused before anything is written)");
   cmd->add_option("--shard", o->shard,
                   "K/N: only images K, K+N, K+2N, ... (in name order, K in [0, N)), manifest-K-of-N.jsonl; the N "
                   "shards together equal one unsharded run");

@@ -1,3 +1,4 @@
+#include <charconv>
 #include "cli_common.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -114,6 +115,19 @@ std::vector<std::string> split_commas(const std::string& text) {
   std::stringstream stream(text);
   for (std::string part; std::getline(stream, part, ',');) parts.push_back(part);
   return parts;
+}
+
+std::vector<std::string> distinct_names(const std::string& text, const std::string& option) {
+  std::vector<std::string> names = split_commas(text);
+  if (!text.empty() && text.back() == ',') names.emplace_back();
+  if (names.empty()) throw Error(option + ": expected one or more names separated by commas, got ''");
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i].empty()) throw Error(option + ": an empty name in " + quoted_for_message(text));
+    for (std::size_t j = 0; j < i; ++j) {
+      if (names[j] == names[i]) throw Error(option + ": " + quoted_for_message(names[i]) + " is given twice");
+    }
+  }
+  return names;
 }
 
 std::filesystem::path bundled_data(const std::string& name) {

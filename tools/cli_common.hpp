@@ -45,6 +45,9 @@ struct CameraInputs {
 std::shared_ptr<const CameraInputs> add_camera_input_options(CLI::App* cmd);
 // "a,b,c" -> {"a", "b", "c"} (empty parts kept).
 std::vector<std::string> split_commas(const std::string& text);
+// The names of a comma-separated list option (--preset, --cameras, --test-sets):
+// refuses an empty list, an empty name and a name given twice, naming the option.
+std::vector<std::string> distinct_names(const std::string& text, const std::string& option);
 // "W,H" or "WxH" as positive integers; throws Error naming the option.
 std::pair<int, int> parse_image_size(const std::string& text, const std::string& option);
 

@@ -4,11 +4,12 @@
 
 #include <charconv>
 #include <cmath>
-#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "fishcam/error.hpp"
+#include "fishcam/file_input.hpp"
 
 namespace fishcam::cli {
 
@@ -21,8 +22,7 @@ struct CorrespondenceFile {
 };
 
 inline CorrespondenceFile read_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open");
+  std::istringstream in(read_bounded_file(path, std::size_t(64) << 20, "a correspondence CSV file"));
   CorrespondenceFile file{};
   size_t columns = 0;
   std::string line;

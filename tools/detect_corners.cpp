@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdio>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -35,6 +36,18 @@ void register_detect_corners(CLI::App& app) {
     {
       std::vector<OutputFile> outputs{{o->out}};
       check_outputs(outputs, o->images, o->force);
+    }
+    // One photo under two spellings (x.png, ./x.png, a symlink) would count twice:
+    // the corners file would hold the same board twice, which calibrate refuses.
+    std::map<std::filesystem::path, size_t> seen;
+    for (size_t k = 0; k < o->images.size(); ++k) {
+      std::error_code ec;
+      const auto resolved = std::filesystem::weakly_canonical(std::filesystem::absolute(o->images[k]), ec);
+      const auto [at, fresh] = seen.emplace(ec ? std::filesystem::path(o->images[k]) : resolved, k);
+      if (!fresh) {
+        throw Error(path_for_message(o->images[k]) + ": the same image as " + path_for_message(o->images[at->second]) +
+                    " (given twice)");
+      }
     }
     const BoardSpec board = parse_board(o->board, 1.0);
     // OpenCV's detector needs more than 2 corners per side.

@@ -18,7 +18,7 @@ void register_diff(CLI::App& app) {
   struct Options {
     std::string a, b, region = "auto", weights = "auto", corners, board;
     int step = 8;
-    bool no_rotation = false, json = false;
+    bool no_rotation = false, json = false, resize = false;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("CAMERA_A", o->a, "First camera file")->required();
@@ -37,12 +37,26 @@ void register_diff(CLI::App& app) {
       ->check(CLI::IsMember({"auto", "uncertainty", "none"}))
       ->capture_default_str();
   cmd->add_flag("--no-rotation", o->no_rotation, "Do not fit a rotation between the frames");
+  cmd->add_flag("--resize", o->resize,
+                "Compare CAMERA_B resized to CAMERA_A's image size (the same lens, its pixels scaled) when the sizes "
+                "differ (refused otherwise)");
   cmd->add_flag("--json", o->json, "Print one JSON object");
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([o, inputs] {
     if (o->corners.empty() != o->board.empty()) throw Error("--corners and --board go together");
     if (!o->corners.empty() && o->region == "all") throw Error("--corners defines a data region: not with --region all");
-    const Camera a = inputs->read(o->a), b = inputs->read(o->b);
+    const Camera a = inputs->read(o->a);
+    Camera b = inputs->read(o->b);
+    // Pixels of two sizes are not the same pixels: comparing them measures the resize.
+    if (a.width() != b.width() || a.height() != b.height()) {
+      if (!o->resize) {
+        throw Error("CAMERA_A is " + std::to_string(a.width()) + "x" + std::to_string(a.height()) + ", CAMERA_B " +
+                    std::to_string(b.width()) + "x" + std::to_string(b.height()) +
+                    ": cameras of different image sizes are not compared (--resize compares CAMERA_B resized to "
+                    "CAMERA_A's size)");
+      }
+      b = Camera(resized(b.parameters(), a.width(), a.height()));
+    }
     const auto& record_a = a.parameters().calibration;
     const auto& record_b = b.parameters().calibration;
     ProjectionDiffOptions options;

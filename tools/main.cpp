@@ -1,3 +1,4 @@
+#include <charconv>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -17,7 +18,8 @@ namespace {
 
 // Every number option of every subcommand, whoever declared it: floating-point
 // values must be finite (a NaN rotation used to write a black image) and unsigned
-// integers must not be negative (CLI11 reads -1 as 2^64 - 1).
+// integers must be integers in their range (CLI11 reads -1 as 2^64 - 1 and clamps
+// 2^64 and more to 2^64 - 1: a seed no one gave).
 void guard_number_options(CLI::App* app) {
   static const CLI::Validator finite(
       [](std::string& text) -> std::string {
@@ -28,7 +30,13 @@ void guard_number_options(CLI::App* app) {
       "", "finite");
   static const CLI::Validator non_negative(
       [](std::string& text) -> std::string {
-        return text.find('-') == std::string::npos ? "" : "must not be negative, got " + fishcam::quoted_for_message(text);
+        if (text.find('-') != std::string::npos) return "must not be negative, got " + fishcam::quoted_for_message(text);
+        std::uint64_t value = 0;
+        const char* end = text.data() + text.size();
+        const auto [next, error] = std::from_chars(text.data(), end, value);
+        return !text.empty() && error == std::errc() && next == end
+                   ? ""
+                   : "must be an integer in [0, 2^64), got " + fishcam::quoted_for_message(text);
       },
       "", "non-negative");
   for (CLI::Option* option : app->get_options()) {

@@ -25,6 +25,9 @@ void register_map(CLI::App& app) {
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([o, inputs] {
     check_outputs({{o->out}}, {o->source, o->target}, o->force);
+    if (std::filesystem::path(o->out).extension() != ".npy") {
+      throw Error("--out: " + path_for_message(o->out) + ": a map is written as .npy (float32 H x W x 2); name it .npy");
+    }
     const ViewpointWarp warp = make_warp(*inputs, o->source, o->target);
     WarpMaps maps;
     if (o->exact) {

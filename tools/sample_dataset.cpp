@@ -15,6 +15,7 @@
 #include "commands.hpp"
 #include "fishcam/atomic_file.hpp"
 #include "fishcam/npy.hpp"
+#include "fishcam/output_settings.hpp"
 #include "fishcam/scene.hpp"
 
 namespace fishcam::cli {
@@ -28,24 +29,69 @@ void make_layout(const fs::path& root, bool depth) {
   if (depth) fs::create_directories(root / "depth");
 }
 
-// One sample's files (image, labels, calibration, optionally the range as .npy),
-// landing together or not at all; existing files are never replaced.
-void write_sample(const fs::path& root, const std::string& name, const SceneRender& render,
-                  const CameraParameters& camera, bool depth) {
-  const auto image_path = root / "rgb_images" / (name + ".png");
-  const auto label_path = root / "semantic_annotations" / "gtLabels" / (name + ".png");
-  std::vector<std::pair<fs::path, std::string>> files = {
-      {image_path, encode_image(image_path, render.image)},
-      {label_path, encode_image(label_path, render.labels)},
-      {root / "calibration" / (name + ".json"), format_camera(camera, CameraFormat::woodscape)}};
-  if (depth) {
-    NpyArray range{{size_t(render.range.rows), size_t(render.range.cols)}, {}};
-    range.data.assign(render.range.begin<float>(), render.range.end<float>());
-    const auto depth_path = root / "depth" / (name + ".npy");
-    files.emplace_back(depth_path, npy_bytes(range, depth_path.string()));
-  }
-  write_files_atomically(files, false);
+// The files of one sample: image, labels, calibration, optionally the range (.npy).
+std::vector<fs::path> sample_files(const fs::path& root, const std::string& name, bool depth) {
+  std::vector<fs::path> files{root / "rgb_images" / (name + ".png"),
+                              root / "semantic_annotations" / "gtLabels" / (name + ".png"),
+                              root / "calibration" / (name + ".json")};
+  if (depth) files.push_back(root / "depth" / (name + ".npy"));
+  return files;
 }
+
+// Where a run writes, in two passes over the same loop: the first (check) looks at
+// every sample's files before anything is written, the second (write) renders and
+// writes the samples not already there. A sample's files land together, so a sample
+// whose files all exist in a folder this command's settings record claims is done
+// (a resume); any other existing file is not this run's and is refused in the first
+// pass, before anything is written.
+class SampleWriter {
+ public:
+  SampleWriter(bool depth, bool resuming) : depth_(depth), resuming_(resuming) {}
+  void start_writing() { writing_ = true; }
+  bool writing() const { return writing_; }
+
+  template <class Render>
+  void sample(const fs::path& root, const std::string& name, const CameraParameters& camera, const Render& render) {
+    const std::vector<fs::path> files = sample_files(root, name, depth_);
+    std::size_t existing = 0;
+    std::error_code ec;
+    for (const fs::path& file : files) existing += fs::exists(fs::symlink_status(file, ec));
+    if (!writing_) {
+      if (existing > 0 && !(resuming_ && existing == files.size()) && foreign_++ == 0) first_foreign_ = files[0];
+      return;
+    }
+    if (existing == files.size()) {
+      ++skipped_;
+      return;
+    }
+    const SceneRender r = render();
+    std::vector<std::pair<fs::path, std::string>> contents = {{files[0], encode_image(files[0], r.image)},
+                                                              {files[1], encode_image(files[1], r.labels)},
+                                                              {files[2], format_camera(camera, CameraFormat::woodscape)}};
+    if (depth_) {
+      NpyArray range{{size_t(r.range.rows), size_t(r.range.cols)}, {}};
+      range.data.assign(r.range.begin<float>(), r.range.end<float>());
+      contents.emplace_back(files[3], npy_bytes(range, files[3].string()));
+    }
+    write_files_atomically(contents, false);
+    ++written_;
+  }
+
+  // After the check pass: refuses files this run did not write.
+  void check() const {
+    if (foreign_ == 0) return;
+    throw Error(path_for_message(first_foreign_) + ": exists and is not a sample of a run with these settings (" +
+                std::to_string(foreign_) + " such sample(s)); nothing written (use another OUT)");
+  }
+  long written() const { return written_; }
+  long skipped() const { return skipped_; }
+
+ private:
+  bool depth_, resuming_, writing_ = false;
+  std::size_t foreign_ = 0;
+  fs::path first_foreign_;
+  long written_ = 0, skipped_ = 0;
+};
 
 Camera sized(Camera camera, const std::string& size) {
   if (size.empty()) return camera;
@@ -61,31 +107,78 @@ struct Options {
   bool depth = false;
 };
 
+// Everything the samples depend on, recorded in OUT/sample-dataset.json.
+OutputSettings settings_of(const Options& o, const fs::path& camera_path) {
+  OutputSettings settings{"sample-dataset",
+                          {{"--seed", std::to_string(o.seed)},
+                           {"--size", o.size},
+                           {"--supersampling", std::to_string(o.supersampling)},
+                           {"--depth", o.depth ? "yes" : "no"}}};
+  if (o.scenes > 0) {
+    settings.values.insert(settings.values.end(), {{"--scenes", std::to_string(o.scenes)},
+                                                   {"--cameras", o.cameras},
+                                                   {"--splits", o.splits},
+                                                   {"--test-sets", o.test_sets}});
+  } else {
+    settings.values.insert(settings.values.end(), {{"--images", std::to_string(o.images)},
+                                                   {"--camera", fs::weakly_canonical(fs::absolute(camera_path)).string()}});
+  }
+  return settings;
+}
+
+// Checks OUT's settings record (or that OUT holds none of this run's files, the
+// manifests of --scenes included), records the settings, then writes the samples not
+// already there. Returns how many were there.
+template <class Loop>
+long write_samples(const fs::path& out, const OutputSettings& settings, bool depth,
+                   const std::vector<fs::path>& manifests, const Loop& loop) {
+  const fs::path record = out / "sample-dataset.json";
+  const bool resuming = claim_output_settings(record, settings, false);
+  SampleWriter writer(depth, resuming);
+  loop(writer);
+  writer.check();
+  std::error_code ec;
+  for (const fs::path& manifest : manifests) {
+    if (!resuming && fs::exists(fs::symlink_status(manifest, ec))) {
+      throw Error(path_for_message(manifest) + ": exists and is not a run's with these settings; nothing written (use "
+                  "another OUT)");
+    }
+  }
+  fs::create_directories(out);
+  claim_output_settings(record, settings, true);
+  writer.start_writing();
+  loop(writer);
+  return writer.skipped();
+}
+
 void bundled_street_dataset(const Options& o) {
   const fs::path camera_path = o.camera.empty() ? bundled_data("woodscape_front.json") : fs::path(o.camera);
   const Camera camera = sized(read_camera(camera_path), o.size);
   if (!camera.parameters().pose) throw Error(camera_path.string() + ": has no pose to place it in the scene");
   const fs::path out = o.out;
   check_output_not_input(out, {camera_path}, true);
-  make_layout(out, o.depth);
   // Mount perturbations: up to 3 degrees about each axis, 5 cm along each.
   const PosePreset mount{"mount", 3.0, 0.05};
-  for (int i = 0; i < o.images; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof name, "%05d_FV", i);
-    const RandomPose perturbation = random_pose(mount, derive_seed(o.seed, "sample-dataset", std::uint64_t(i)));
-    CameraParameters p = camera.parameters();
-    p.pose = moved_camera(*p.pose, perturbation.change());
-    write_sample(out, name, StreetScene::bundled().render(camera, *p.pose, o.supersampling), p, o.depth);
-  }
-  std::printf("wrote %d samples (%dx%d) to %s\n", o.images, camera.width(), camera.height(), out.c_str());
+  const long skipped = write_samples(out, settings_of(o, camera_path), o.depth, {}, [&](SampleWriter& writer) {
+    if (writer.writing()) make_layout(out, o.depth);
+    for (int i = 0; i < o.images; ++i) {
+      char name[32];
+      std::snprintf(name, sizeof name, "%05d_FV", i);
+      const RandomPose perturbation = random_pose(mount, derive_seed(o.seed, "sample-dataset", std::uint64_t(i)));
+      CameraParameters p = camera.parameters();
+      p.pose = moved_camera(*p.pose, perturbation.change());
+      writer.sample(out, name, p, [&] { return StreetScene::bundled().render(camera, *p.pose, o.supersampling); });
+    }
+  });
+  std::printf("wrote %ld samples (%dx%d) to %s%s\n", o.images - skipped, camera.width(), camera.height(), out.c_str(),
+              skipped > 0 ? (" (" + std::to_string(skipped) + " already there)").c_str() : "");
 }
 
 void surround_view_dataset(const Options& o) {
   const fs::path out = o.out;
   std::vector<std::pair<std::string, Camera>> cameras;
   std::vector<fs::path> inputs;
-  for (const std::string& name : split_commas(o.cameras)) {
+  for (const std::string& name : distinct_names(o.cameras, "--cameras")) {
     const fs::path path = bundled_data("synwoodscape_" + name + ".json");
     cameras.emplace_back(name, sized(read_camera(path), o.size));
     inputs.push_back(path);
@@ -109,57 +202,77 @@ void surround_view_dataset(const Options& o) {
   const auto split_of = [&](int k) { return k < train ? "train" : k < train + val ? "val" : "test"; };
   std::vector<PosePreset> test_sets;
   if (o.test_sets != "none") {
-    for (const std::string& name : split_commas(o.test_sets)) {
+    for (const std::string& name : distinct_names(o.test_sets, "--test-sets")) {
       test_sets.push_back(pose_preset(name, "--test-sets"));
     }
   }
-  for (const char* split : {"train", "val", "test"}) make_layout(out / split, o.depth);
-  for (const PosePreset& preset : test_sets) {
-    make_layout(out / ("test-" + std::string(preset.name)), o.depth);
-    make_layout(out / ("test-" + std::string(preset.name) + "-rotation"), o.depth);
-  }
   std::string scenes_manifest;
   std::map<std::string, std::string> changes;  // test set -> its changes.jsonl
-  int samples = 0;
-  for (int k = 0; k < o.scenes; ++k) {
-    const std::uint64_t scene_seed = derive_seed(o.seed, "scene", std::uint64_t(k));
-    const StreetScene scene = StreetScene::generate(scene_seed);
-    const std::string split = split_of(k);
-    for (const auto& [camera_name, camera] : cameras) {
-      char name[48];
-      std::snprintf(name, sizeof name, "%05d_%s", k, camera_name.c_str());
-      const CameraParameters& p = camera.parameters();
-      write_sample(out / split, name, scene.render(camera, *p.pose, o.supersampling), p, o.depth);
-      scenes_manifest += nlohmann::json{{"name", name}, {"split", split}, {"scene_seed", scene_seed},
-                                        {"camera", camera_name}}.dump() + "\n";
-      ++samples;
-      if (split != std::string("test")) continue;
-      // The true viewpoint test sets: the camera really moved (t read as metres), and
-      // the same change without its translation.
+  std::vector<fs::path> manifest_paths{out / "scenes.jsonl"};
+  for (const PosePreset& preset : test_sets) {
+    manifest_paths.push_back(out / ("test-" + std::string(preset.name)) / "changes.jsonl");
+    manifest_paths.push_back(out / ("test-" + std::string(preset.name) + "-rotation") / "changes.jsonl");
+  }
+  const bool resuming = claim_output_settings(out / "sample-dataset.json", settings_of(o, {}), false);
+  const long skipped = write_samples(out, settings_of(o, {}), o.depth, manifest_paths, [&](SampleWriter& writer) {
+    if (writer.writing()) {
+      for (const char* split : {"train", "val", "test"}) make_layout(out / split, o.depth);
       for (const PosePreset& preset : test_sets) {
-        const std::string set = "test-" + std::string(preset.name);
-        const std::uint64_t seed = derive_seed(o.seed, set, std::uint64_t(samples));
-        const RandomPose full = random_pose(preset, seed);
-        RandomPose rotation = full;
-        rotation.translation.setZero();
-        for (const auto& [folder, change] : {std::pair{set, full}, std::pair{set + "-rotation", rotation}}) {
-          CameraParameters moved = p;
-          moved.pose = moved_camera(*p.pose, change.change());
-          write_sample(out / folder, name, scene.render(camera, *moved.pose, o.supersampling), moved, o.depth);
-          const auto& r = change.rotation_deg;
-          const auto& t = change.translation;
-          changes[folder] += nlohmann::json{{"name", name}, {"preset", preset.name}, {"seed", seed},
-                                            {"rotation_deg", {r.x(), r.y(), r.z()}},
-                                            {"translation", {t.x(), t.y(), t.z()}}}.dump() + "\n";
+        make_layout(out / ("test-" + std::string(preset.name)), o.depth);
+        make_layout(out / ("test-" + std::string(preset.name) + "-rotation"), o.depth);
+      }
+    }
+    scenes_manifest.clear();
+    changes.clear();
+    int samples = 0;
+    for (int k = 0; k < o.scenes; ++k) {
+      const std::uint64_t scene_seed = derive_seed(o.seed, "scene", std::uint64_t(k));
+      std::optional<StreetScene> scene;  // generated when a sample of it is rendered
+      const auto scene_of = [&]() -> const StreetScene& {
+        if (!scene) scene = StreetScene::generate(scene_seed);
+        return *scene;
+      };
+      const std::string split = split_of(k);
+      for (const auto& [camera_name, camera] : cameras) {
+        char name[48];
+        std::snprintf(name, sizeof name, "%05d_%s", k, camera_name.c_str());
+        const CameraParameters& p = camera.parameters();
+        writer.sample(out / split, name, p, [&] { return scene_of().render(camera, *p.pose, o.supersampling); });
+        scenes_manifest += nlohmann::json{{"name", name}, {"split", split}, {"scene_seed", scene_seed},
+                                          {"camera", camera_name}}.dump() + "\n";
+        ++samples;
+        if (split != std::string("test")) continue;
+        // The true viewpoint test sets: the camera really moved (t read as metres), and
+        // the same change without its translation.
+        for (const PosePreset& preset : test_sets) {
+          const std::string set = "test-" + std::string(preset.name);
+          const std::uint64_t seed = derive_seed(o.seed, set, std::uint64_t(samples));
+          const RandomPose full = random_pose(preset, seed);
+          RandomPose rotation = full;
+          rotation.translation.setZero();
+          for (const auto& [folder, change] : {std::pair{set, full}, std::pair{set + "-rotation", rotation}}) {
+            CameraParameters moved = p;
+            moved.pose = moved_camera(*p.pose, change.change());
+            writer.sample(out / folder, name, moved,
+                          [&] { return scene_of().render(camera, *moved.pose, o.supersampling); });
+            const auto& r = change.rotation_deg;
+            const auto& t = change.translation;
+            changes[folder] += nlohmann::json{{"name", name}, {"preset", preset.name}, {"seed", seed},
+                                              {"rotation_deg", {r.x(), r.y(), r.z()}},
+                                              {"translation", {t.x(), t.y(), t.z()}}}.dump() + "\n";
+          }
         }
       }
     }
-  }
+  });
+  // The manifests describe every sample (those of an earlier, interrupted run of the
+  // same settings too): written last, replacing only a resumed run's own.
   std::vector<std::pair<fs::path, std::string>> manifests = {{out / "scenes.jsonl", scenes_manifest}};
   for (const auto& [folder, text] : changes) manifests.emplace_back(out / folder / "changes.jsonl", text);
-  write_outputs(manifests, false);
-  std::printf("wrote %d scenes x %zu cameras (%d train, %d val, %d test scenes; %zu true viewpoint test sets) to %s\n",
-              o.scenes, cameras.size(), train, val, o.scenes - train - val, test_sets.size(), out.c_str());
+  write_outputs(manifests, resuming);
+  std::printf("wrote %d scenes x %zu cameras (%d train, %d val, %d test scenes; %zu true viewpoint test sets) to %s%s\n",
+              o.scenes, cameras.size(), train, val, o.scenes - train - val, test_sets.size(), out.c_str(),
+              skipped > 0 ? (" (" + std::to_string(skipped) + " samples already there)").c_str() : "");
 }
 
 }  // namespace
@@ -191,6 +304,7 @@ void register_sample_dataset(CLI::App& app) {
   cmd->add_option("--supersampling", o->supersampling, "RGB rays per pixel side")->check(CLI::Range(1, 4))->capture_default_str();
   cmd->add_flag("--depth", o->depth, "Also write each sample's range (depth/NAME.npy, float32, metres along the ray)");
   cmd->callback([o] {
+    if (o->out.empty()) throw Error("OUT: expected a folder, got ''");
     if (o->scenes > 0) return surround_view_dataset(*o);
     if (o->images == 0) o->images = 8;
     bundled_street_dataset(*o);

@@ -185,6 +185,12 @@ std::size_t remove_stale_temporaries(const fs::path& folder) {
         !std::all_of(pid_text.begin(), pid_text.end(), [](char c) { return c >= '0' && c <= '9'; })) {
       continue;
     }
+    // The random part exactly as temporary_path writes it: 16 lowercase hex digits.
+    const std::string random_text = fields.substr(random_at + 1);
+    if (random_text.size() != 16 ||
+        !std::all_of(random_text.begin(), random_text.end(), [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); })) {
+      continue;
+    }
     const pid_t pid = pid_t(std::stol(pid_text));
     if (pid == getpid() || pid <= 0 || kill(pid, 0) == 0 || errno != ESRCH) continue;  // running (or not ours to judge)
     if (unlink(it->path().c_str()) == 0) ++removed;

@@ -11,7 +11,12 @@ void check_board(const BoardSpec& board) {
     throw Error("board: needs 2 to 1000 corners per side, got " + std::to_string(board.cols) + "x" +
                 std::to_string(board.rows));
   }
-  if (!(board.spacing > 0) || !std::isfinite(board.spacing)) throw Error("board: the corner spacing must be finite and > 0");
+  // In any unit (metres, millimetres): a spacing outside [1e-6, 1e4] is a typo, and
+  // its solve under- or overflows (Ceres then logs pages of warnings).
+  if (!(board.spacing >= 1e-6 && board.spacing <= 1e4)) {
+    throw Error("board: the corner spacing must lie within [1e-06, 10000] (any unit), got " +
+                number_for_message(board.spacing));
+  }
 }
 
 std::vector<Eigen::Vector3d> board_points(const BoardSpec& board) {

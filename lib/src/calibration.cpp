@@ -26,6 +26,10 @@ BoardPose pose_of(const std::array<double, 6>& b) {
   return pose;
 }
 
+double principal_point_offset(const Eigen::Vector2d& p, int width, int height) {
+  return std::max(std::abs(p.x() - (width - 1) / 2.0) / width, std::abs(p.y() - (height - 1) / 2.0) / height);
+}
+
 // A solve whose result cannot be right is an error, not a camera.
 void check_solution(const CalibrationResult& r, int width, int height, const std::string& model) {
   const std::string what = "calibrate (" + model + "): ";
@@ -35,11 +39,19 @@ void check_solution(const CalibrationResult& r, int width, int height, const std
     throw Error(what + "the solve ended without a finite cost or parameters (check --board, --imagersize and the "
                        "corners)");
   }
-  char text[160];
+  char text[200];
   if (!(p.x() >= 0 && p.x() <= width - 1 && p.y() >= 0 && p.y() <= height - 1)) {
     std::snprintf(text, sizeof text, "the principal point (%.1f, %.1f) lies outside the %dx%d image", p.x(), p.y(),
                   width, height);
     throw Error(what + text + " (check --imagersize and --board; the data do not determine this model)");
+  }
+  const double off = principal_point_offset(p, width, height);
+  if (off > kPrincipalPointRefused) {
+    std::snprintf(text, sizeof text,
+                  "the principal point (%.1f, %.1f) lies %.0f %% of the image size from the centre of the %dx%d "
+                  "image (more than %.0f %%)",
+                  p.x(), p.y(), 100 * off, width, height, 100 * kPrincipalPointRefused);
+    throw Error(what + text + ": check --imagersize (the size the corners were detected in)");
   }
   const double ay = r.camera.pixel_scale.y();
   if (!(ay >= 0.5 && ay <= 2.0)) {
@@ -192,7 +204,7 @@ ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<
 // neighbouring steps along a row or a column stay alike (well under 0.25 even at a
 // fisheye's rim); corners read with the wrong row length jump back and forth
 // between rows along the columns and give 1 or more.
-double grid_disorder(const std::vector<Eigen::Vector2d>& corners, int cols, int rows) {
+std::vector<double> grid_bends(const std::vector<Eigen::Vector2d>& corners, int cols, int rows) {
   const auto at = [&](int i, int j) { return corners[size_t(j * cols + i)]; };
   const auto bend = [](const Eigen::Vector2d& before, const Eigen::Vector2d& here, const Eigen::Vector2d& after) {
     const double step = ((here - before).norm() + (after - here).norm()) / 2;
@@ -207,35 +219,112 @@ double grid_disorder(const std::vector<Eigen::Vector2d>& corners, int cols, int 
       if (worst >= 0) points.push_back(worst);
     }
   }
-  if (points.empty()) return 0;  // a 2 x 2 board: nothing to tell
-  std::nth_element(points.begin(), points.begin() + long(points.size() / 2), points.end());
-  return points[points.size() / 2];
+  return points;
 }
 
+double median_of(std::vector<double> values) {
+  if (values.empty()) return 0;
+  std::nth_element(values.begin(), values.begin() + long(values.size() / 2), values.end());
+  return values[values.size() / 2];
+}
+
+// The median over boards of their median bend (a 2 x 2 board: nothing to tell, 0).
 double median_grid_disorder(const std::vector<const BoardObservation*>& boards, int cols, int rows) {
   std::vector<double> disorder;
-  for (const auto* b : boards) disorder.push_back(grid_disorder(b->corners, cols, rows));
-  std::nth_element(disorder.begin(), disorder.begin() + long(disorder.size() / 2), disorder.end());
-  return disorder[disorder.size() / 2];
+  for (const auto* b : boards) disorder.push_back(median_of(grid_bends(b->corners, cols, rows)));
+  return median_of(disorder);
+}
+
+// The median over boards of the share of corners that bend by more than half a step.
+// A board read with a row length that divides neither its rows nor its corner count
+// evenly (2 x 27 for a 9 x 6 board) keeps a low median bend -- most triples lie in one
+// row -- but every wrap from one row to the next bends by a step or more.
+double median_disordered_share(const std::vector<const BoardObservation*>& boards, int cols, int rows) {
+  std::vector<double> shares;
+  for (const auto* b : boards) {
+    const std::vector<double> bends = grid_bends(b->corners, cols, rows);
+    const auto bent = std::count_if(bends.begin(), bends.end(), [](double v) { return !(v <= 0.5); });
+    shares.push_back(bends.empty() ? 0 : double(bent) / double(bends.size()));
+  }
+  return median_of(shares);
 }
 
 // Refuses corners whose order contradicts the board: most often a W x H board given
 // as --board HxW, which has the same corner count and so reads without complaint.
 void check_board_order(const std::vector<const BoardObservation*>& boards, const BoardSpec& board) {
   constexpr double kOrdered = 0.25, kDisordered = 0.5;
+  // A board size with the right corner count but another row length (2x27 for 9x6)
+  // keeps most triples in a row, so its median bend may pass; the wraps between rows
+  // (the share of corners bent by more than half a step) do not.
+  constexpr double kWrapped = 0.1, kClean = 0.02;
   const double given = median_grid_disorder(boards, board.cols, board.rows);
-  if (given <= kDisordered) return;
+  const double share = given > kDisordered ? 1.0 : median_disordered_share(boards, board.cols, board.rows);
+  if (share <= kWrapped) return;
   const std::string as_given = std::to_string(board.cols) + "x" + std::to_string(board.rows);
-  const std::string swapped = std::to_string(board.rows) + "x" + std::to_string(board.cols);
-  if (board.cols != board.rows && median_grid_disorder(boards, board.rows, board.cols) <= kOrdered) {
-    throw Error("calibrate: the corners are ordered as a " + swapped + " board, not " + as_given +
-                " (rows of " + std::to_string(board.rows) + "): pass --board " + swapped);
+  const int n = board.cols * board.rows;
+  for (int cols = 2; cols <= n / 2; ++cols) {  // the row length that explains the corners
+    if (n % cols != 0 || cols == board.cols || n / cols < 2) continue;
+    if (median_grid_disorder(boards, cols, n / cols) <= kOrdered && median_disordered_share(boards, cols, n / cols) <= kClean) {
+      const std::string fits = std::to_string(cols) + "x" + std::to_string(n / cols);
+      throw Error("calibrate: the corners are ordered as a " + fits + " board, not " + as_given + " (rows of " +
+                  std::to_string(cols) + "): pass --board " + fits);
+    }
   }
-  char measure[32];
-  std::snprintf(measure, sizeof measure, "%.2f", given);
-  throw Error("calibrate: the corners are not in the board order of a " + as_given +
-              " board (median cell distortion " + measure +
-              ", a grid gives < 0.25): check --board and that each image lists its corners row by row");
+  char measure[64];
+  if (given > kDisordered) {
+    std::snprintf(measure, sizeof measure, "median cell distortion %.2f", given);
+  } else {
+    std::snprintf(measure, sizeof measure, "%.0f %% of corners off the grid", 100 * share);
+  }
+  throw Error("calibrate: the corners are not in the board order of a " + as_given + " board (" + measure +
+              ", a grid gives < 0.25 and none): check --board and that each image lists its corners row by row");
+}
+
+// Corners outside the image cannot have been detected in it: the image size given
+// is not the one the corners were found in (a resized image, another camera's size).
+void check_corners_in_image(const std::vector<BoardObservation>& observations, int width, int height) {
+  long outside = 0, total = 0;
+  const BoardObservation* first_image = nullptr;
+  Eigen::Vector2d first{};
+  for (const auto& o : observations) {
+    for (const auto& c : o.corners) {
+      ++total;
+      if (c.x() >= -detail::kCornerMarginPx && c.x() <= width - 1 + detail::kCornerMarginPx && c.y() >= -detail::kCornerMarginPx &&
+          c.y() <= height - 1 + detail::kCornerMarginPx) {
+        continue;
+      }
+      if (outside++ == 0) first_image = &o, first = c;
+    }
+  }
+  if (outside == 0) return;
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "calibrate: %ld of %ld corners lie outside the %dx%d image (first: image %s at (%.1f, %.1f)): "
+                "check --imagersize (the size of the images the corners were detected in)",
+                outside, total, width, height, text_for_message(first_image->filename).c_str(), first.x(), first.y());
+  throw Error(text);
+}
+
+// The same photo under two names (or the same corners file lines twice) would count
+// its corners twice: the solve then claims more certainty than the data hold.
+void check_no_duplicate_views(const std::vector<const BoardObservation*>& boards) {
+  // Sorted by the first corner, so only neighbours in that order are compared.
+  std::vector<const BoardObservation*> order(boards);
+  std::sort(order.begin(), order.end(), [](const auto* a, const auto* b) { return a->corners[0].x() < b->corners[0].x(); });
+  for (size_t a = 0; a < order.size(); ++a) {
+    for (size_t b = a + 1; b < order.size() && order[b]->corners[0].x() - order[a]->corners[0].x() <= 0.01; ++b) {
+      bool same = order[a]->corners.size() == order[b]->corners.size();
+      for (size_t c = 0; same && c < order[a]->corners.size(); ++c) {
+        same = (order[a]->corners[c] - order[b]->corners[c]).cwiseAbs().maxCoeff() <= 0.01;
+      }
+      if (same) {
+        const bool in_order = order[a] < order[b];
+        throw Error("calibrate: images " + text_for_message((in_order ? order[a] : order[b])->filename) + " and " +
+                    text_for_message((in_order ? order[b] : order[a])->filename) +
+                    " have the same corners (within 0.01 px): the same photo twice? (remove one)");
+      }
+    }
+  }
 }
 
 // Boards seen in one pose only (the same view several times) determine no camera:
@@ -496,6 +585,7 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
                             int height, const ModelSpec& spec, const CalibrationOptions& options) {
   check_board(board);
   if (options.threads < 1) throw Error("calibrate: threads must be >= 1, got " + std::to_string(options.threads));
+  check_corners_in_image(observations, width, height);
   std::vector<const BoardObservation*> boards;
   for (const auto& o : observations) {
     if (o.corners.empty()) continue;
@@ -512,11 +602,21 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
                 "more, spread over the whole image, for a good calibration)");
   }
   check_board_order(boards, board);
+  check_no_duplicate_views(boards);
   CalibrationResult result = with_model_class(spec.name, [&]<template <typename> class Model>() {
     return calibrate_with<Model>(boards, board, width, height, spec, options);
   });
   check_solution(result, width, height, spec.name);
   check_distinct_poses(result);
+  if (const double off = detail::principal_point_offset(result.camera.principal_point, width, height);
+      off > detail::kPrincipalPointWarned) {
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "the principal point lies %.0f %% of the image size from the image centre (lenses are centred "
+                  "within %.0f %%): check --imagersize",
+                  100 * off, 100 * detail::kPrincipalPointWarned);
+    result.warnings.push_back(text);
+  }
   // Coverage: the share of an 8 x 6 grid over the image that holds corners. A lens
   // calibrated from its centre only is extrapolated at the rim.
   bool cell[6][8] = {};

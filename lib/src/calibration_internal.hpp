@@ -157,6 +157,14 @@ std::string undetermined_text(const std::vector<std::string>& names, bool poses,
                               const std::vector<double>& parameters);
 
 // A solve whose result cannot be right is an error, not a camera.
+// How far the principal point lies from the image centre, as the larger share of the
+// image's width or height. Lenses are centred within a few per cent; past
+// kPrincipalPointWarned a calibration says so, past kPrincipalPointRefused
+// (check_solution) the image size is not the one the corners came from.
+constexpr double kPrincipalPointWarned = 0.1, kPrincipalPointRefused = 0.2;
+double principal_point_offset(const Eigen::Vector2d& principal_point, int width, int height);
+// Corners may lie this far outside the image (sub-pixel refinement at the border).
+constexpr double kCornerMarginPx = 2;
 void check_solution(const CalibrationResult& r, int width, int height, const std::string& model);
 
 }  // namespace fishcam::detail

@@ -1,6 +1,9 @@
 #include "fishcam/calibration.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <deque>
+#include <numbers>
 #include <filesystem>
 #include <map>
 #include <numeric>
@@ -68,6 +71,103 @@ Pose mean_pose(const std::vector<Pose>& poses) {
 
 std::string instant_of(const std::string& filename) { return std::filesystem::path(filename).filename().string(); }
 
+// Two views of one board with the same corners (within 0.5 px everywhere).
+bool same_corners(const BoardObservation& a, const BoardObservation& b) {
+  if (a.corners.size() != b.corners.size()) return false;
+  for (size_t c = 0; c < a.corners.size(); ++c) {
+    if (!((a.corners[c] - b.corners[c]).cwiseAbs().maxCoeff() < 0.5)) return false;
+  }
+  return true;
+}
+
+// Two cameras of a rig see one board from different places: the same corners at
+// most of their shared instants are one camera's corners given twice.
+void check_distinct_cameras(const std::vector<std::map<int, const BoardObservation*>>& observed) {
+  for (size_t b = 1; b < observed.size(); ++b) {
+    for (size_t a = 0; a < b; ++a) {
+      long shared = 0, same = 0;
+      for (const auto& [i, view] : observed[b]) {
+        const auto other = observed[a].find(i);
+        if (other == observed[a].end()) continue;
+        ++shared;
+        same += same_corners(*view, *other->second);
+      }
+      if (shared > 0 && 2 * same >= shared) {
+        throw Error("calibrate rig: camera " + std::to_string(b) + " has the same corners as camera " +
+                    std::to_string(a) + " at " + std::to_string(same) + " of their " + std::to_string(shared) +
+                    " shared instants: the same corners given for both cameras? (each camera needs its own)");
+      }
+    }
+  }
+}
+
+// A chessboard looks the same turned by 180 deg about its normal, so a detector may
+// number its corners from either end: corner m is then the board's point N-1-m, the
+// board's points moved by this half turn about the board's centre.
+Pose board_half_turn(const BoardSpec& board) {
+  return {Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitZ())),
+          Eigen::Vector3d((board.cols - 1) * board.spacing, (board.rows - 1) * board.spacing, 0)};
+}
+
+// Relative poses of one camera pair that describe the same mounting. A view numbered
+// from the other end gives an estimate a half turn away, far outside this.
+bool same_mounting(const Pose& a, const Pose& b) {
+  constexpr double kAngle = 10 * std::numbers::pi / 180, kShare = 0.25;
+  return a.rotation.angularDistance(b.rotation) < kAngle &&
+         (a.translation - b.translation).norm() <= kShare * std::max(a.translation.norm(), b.translation.norm());
+}
+
+// What the instants camera k shares with camera 0 say about their relative pose.
+struct InstantConsensus {
+  std::vector<int> renumbered;  // instants whose board camera k numbers from the other end
+  std::vector<int> disagreeing;  // instants that agree with the consensus in neither numbering
+  long shared = 0;
+};
+
+// The per-instant relative poses (camera 0 -> k) agree with each other only when
+// both cameras number each board alike and saw it at the same time; the estimate
+// with the most agreeing instants (as given or renumbered) is the consensus.
+InstantConsensus instant_consensus(const std::map<int, Pose>& seen0, const std::map<int, Pose>& seen_k,
+                                   const Pose& half_turn) {
+  InstantConsensus out;
+  std::vector<int> instants;
+  std::vector<Pose> as_given, renumbered;
+  for (const auto& [i, pose_k] : seen_k) {
+    const auto pose_0 = seen0.find(i);
+    if (pose_0 == seen0.end()) continue;
+    instants.push_back(i);
+    as_given.push_back(compose(pose_k, inverse(pose_0->second)));
+    renumbered.push_back(compose(compose(pose_k, half_turn), inverse(pose_0->second)));
+  }
+  out.shared = long(instants.size());
+  if (instants.size() < 2) return out;
+  const auto support = [&](const Pose& candidate) {
+    long agreeing = 0;
+    for (size_t j = 0; j < instants.size(); ++j) {
+      agreeing += same_mounting(as_given[j], candidate) || same_mounting(renumbered[j], candidate);
+    }
+    return agreeing;
+  };
+  const Pose* best = &as_given[0];
+  long best_support = -1;
+  for (const auto* list : {&as_given, &renumbered}) {
+    for (const Pose& candidate : *list) {
+      if (const long s = support(candidate); s > best_support) best = &candidate, best_support = s;
+    }
+  }
+  for (size_t j = 0; j < instants.size(); ++j) {
+    const Pose* agreeing = same_mounting(as_given[j], *best) ? &as_given[j]
+                           : same_mounting(renumbered[j], *best) ? &renumbered[j]
+                                                                 : nullptr;
+    if (!agreeing) {
+      out.disagreeing.push_back(instants[j]);
+      continue;
+    }
+    if (agreeing == &renumbered[j]) out.renumbered.push_back(instants[j]);
+  }
+  return out;
+}
+
 }  // namespace
 
 RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
@@ -98,6 +198,46 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
       if (seen[k].count(i)) throw Error(camera_name(k) + ": two images of the instant " + instant);
       seen[k][i] = singles[k].poses[b];
       observed[k][i] = by_name.at(singles[k].used_images[b]);
+    }
+  }
+  check_distinct_cameras(observed);
+  // Views a camera numbers from the other end than camera 0: renumbered (corners
+  // reversed, pose turned, outliers' corner numbers mirrored), and said.
+  std::vector<std::string> warnings;
+  std::deque<BoardObservation> renumbered_views;
+  std::vector<std::set<std::string>> renumbered_images(n);
+  const Pose half_turn = board_half_turn(board);
+  std::map<int, std::string> instant_names;
+  for (const auto& [name, i] : instant_index) instant_names[i] = name;
+  for (size_t k = 1; k < n; ++k) {
+    const InstantConsensus consensus = instant_consensus(seen[0], seen[k], half_turn);
+    // Most instants disagreeing with each other: the images of one instant were not
+    // taken at the same time (or are not of one instant at all).
+    if (consensus.shared >= 3 && 2 * long(consensus.disagreeing.size()) > consensus.shared) {
+      throw Error("calibrate rig: " + camera_name(k) + " and camera 0 disagree on their relative pose at " +
+                  std::to_string(consensus.disagreeing.size()) + " of their " + std::to_string(consensus.shared) +
+                  " shared instants (more than 10 deg or 25 % of the baseline from the others): are images of the "
+                  "same name taken at the same time? (unsynchronised or mismatched pairs)");
+    }
+    if (!consensus.disagreeing.empty()) {
+      std::string names;
+      for (size_t j = 0; j < consensus.disagreeing.size() && j < 5; ++j) {
+        names += (j ? ", " : "") + instant_names[consensus.disagreeing[j]];
+      }
+      warnings.push_back(camera_name(k) + ": " + std::to_string(consensus.disagreeing.size()) + " instant(s) disagree " +
+                         "with the others on the pose relative to camera 0 (" + names +
+                         (consensus.disagreeing.size() > 5 ? ", ..." : "") + "): not synchronised?");
+    }
+    for (const int i : consensus.renumbered) {
+      BoardObservation view = *observed[k][i];
+      std::reverse(view.corners.begin(), view.corners.end());
+      renumbered_views.push_back(std::move(view));
+      observed[k][i] = &renumbered_views.back();
+      seen[k][i] = compose(seen[k][i], half_turn);
+      renumbered_images[k].insert(renumbered_views.back().filename);
+      warnings.push_back(camera_name(k) + ": image " + renumbered_views.back().filename +
+                         ": the board's corners are numbered from the other end than in camera 0 (a chessboard "
+                         "looks the same turned by 180 degrees): renumbered");
     }
   }
   // 2. Camera poses relative to camera 0 (cam0 -> cam k), through shared instants,
@@ -148,7 +288,10 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   const auto points = board_points(board);
   std::vector<std::set<std::pair<std::string, int>>> outliers(n);  // (image, corner) per camera, from step 1
   for (size_t k = 0; k < n; ++k) {
-    for (const auto& o : singles[k].outliers) outliers[k].insert({o.filename, o.corner});
+    const int last = board.corners() - 1;
+    for (const auto& o : singles[k].outliers) {
+      outliers[k].insert({o.filename, renumbered_images[k].count(o.filename) ? last - o.corner : o.corner});
+    }
   }
   ceres::Problem problem;
   std::vector<long> corners_of(n, 0);
@@ -193,6 +336,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   const ParameterCovariance full = detail::covariance_of(&problem, blocks, boards);
 
   RigCalibrationResult out;
+  out.warnings = warnings;
   out.instants = instants;
   out.rms_px = std::sqrt(2 * summary.final_cost / double(std::max(1L, std::accumulate(corners_of.begin(), corners_of.end(), 0L))));
   for (size_t k = 0; k < n; ++k) {

@@ -1,11 +1,14 @@
 #include "fishcam/error.hpp"
 #include "fishcam/camera.hpp"
+
+#include <Eigen/Eigenvalues>
 #include "fishcam/parallel.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 namespace fishcam {
@@ -450,6 +453,13 @@ void check_calibration_record(const CalibrationRecord& r, size_t model_params) {
   const double scale = c.cwiseAbs().maxCoeff();
   if ((c - c.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail("calibration.covariance: must be symmetric");
   if (c.diagonal().minCoeff() < 0) fail("calibration.covariance: variances (the diagonal) must be >= 0");
+  // A covariance is positive semi-definite: a negative eigenvalue (beyond rounding)
+  // would give negative variances along some direction, and uncertainties of any size.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(c, Eigen::EigenvaluesOnly);
+  if (eigen.info() != Eigen::Success || eigen.eigenvalues().minCoeff() < -1e-9 * scale) {
+    fail("calibration.covariance: must be positive semi-definite (smallest eigenvalue ",
+         eigen.eigenvalues().minCoeff(), ", largest ", eigen.eigenvalues().maxCoeff(), ")");
+  }
 }
 
 }  // namespace
@@ -691,16 +701,39 @@ void Camera::unproject_image(std::span<float> x, std::span<float> y, std::span<f
 Camera::FieldOfView Camera::field_of_view_deg() const {
   const double w = params_.width - 0.5, h = params_.height - 0.5, cx = params_.principal_point.x(),
                cy = params_.principal_point.y();
-  auto theta_at = [&](double u, double v) {
-    if (!radial()) {
-      Eigen::Vector3d ray;
-      return unproject({u, v}, &ray) ? std::acos(std::clamp(ray.z(), -1.0, 1.0)) : domain_.theta_max;
+  const bool centred = cx >= -0.5 && cx <= w && cy >= -0.5 && cy <= h;
+  // What the image sees between two points of its border, along the line between them
+  // (through the principal point when it lies in the image): the angles of the
+  // rays of the pixels that have one, never the model's domain where no pixel reaches.
+  constexpr int kSamples = 512;
+  const auto across = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    if (centred && radial()) {  // exact: the domain is a disk about the principal point
+      const auto theta_at = [&](const Eigen::Vector2d& q) {
+        const double rho = rho_of_pixel(q);
+        return domain_.contains_rho(rho) ? theta_from_rho(rho) : domain_.theta_max;
+      };
+      return theta_at(a) + theta_at(b);
     }
-    const double rho = rho_of_pixel({u, v});
-    return domain_.contains_rho(rho) ? theta_from_rho(rho) : domain_.theta_max;
+    std::optional<Eigen::Vector3d> first, last;
+    double theta_a = 0, theta_b = 0;
+    const Eigen::Vector2d centre(cx, cy);
+    for (int k = 0; k <= kSamples; ++k) {
+      const Eigen::Vector2d q = a + (b - a) * (double(k) / kSamples);
+      Eigen::Vector3d ray;
+      if (!unproject(q, &ray)) continue;
+      ray.normalize();
+      if (!first) first = ray;
+      last = ray;
+      const double theta = std::acos(std::clamp(ray.z(), -1.0, 1.0));
+      // Which side of the principal point the sample lies on.
+      ((q - centre).dot(b - a) < 0 ? theta_a : theta_b) = std::max((q - centre).dot(b - a) < 0 ? theta_a : theta_b, theta);
+    }
+    if (centred) return theta_a + theta_b;
+    return first ? std::acos(std::clamp(first->dot(*last), -1.0, 1.0)) : 0.0;
   };
-  return {kDeg * (theta_at(-0.5, cy) + theta_at(w, cy)), kDeg * (theta_at(cx, -0.5) + theta_at(cx, h)),
-          kDeg * std::max(theta_at(-0.5, -0.5) + theta_at(w, h), theta_at(w, -0.5) + theta_at(-0.5, h))};
+  const double row = std::clamp(cy, -0.5, h), column = std::clamp(cx, -0.5, w);
+  return {kDeg * across({-0.5, row}, {w, row}), kDeg * across({column, -0.5}, {column, h}),
+          kDeg * std::max(across({-0.5, -0.5}, {w, h}), across({w, -0.5}, {-0.5, h}))};
 }
 
 }  // namespace fishcam

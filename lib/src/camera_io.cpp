@@ -14,6 +14,7 @@
 
 #include "fishcam/atomic_file.hpp"
 #include "fishcam/error.hpp"
+#include "fishcam/file_input.hpp"
 #include "formats/format.hpp"
 
 namespace fishcam {
@@ -29,47 +30,57 @@ std::string_view without_byte_order_mark(std::string_view content) {
   return content.starts_with("\xEF\xBB\xBF") ? content.substr(3) : content;
 }
 
-// A camera file's bytes, bounded before anything is read: only regular files (a
-// device such as /dev/zero, a FIFO without a writer or a socket would grow or hang),
-// at most the documents' size limit. Opened without blocking (a FIFO's open waits
-// for a writer otherwise).
+// A camera file's bytes, bounded before anything is read (fishcam/file_input.hpp).
 std::string read_camera_file(const std::filesystem::path& path) {
-  const std::string name = path_for_message(path);
-  const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) throw Error(name + ": cannot open (" + std::strerror(errno) + ")");
-  struct Closer {
-    int fd;
-    ~Closer() { close(fd); }
-  } closer{fd};
-  struct stat info {};
-  if (fstat(fd, &info) != 0) throw Error(name + ": cannot open (" + std::strerror(errno) + ")");
-  if (S_ISDIR(info.st_mode)) throw Error(name + ": is a directory, not a camera file");
-  if (!S_ISREG(info.st_mode)) throw Error(name + ": not a regular file (devices, FIFOs and sockets are not read)");
-  constexpr auto limit = detail::kMaxDocumentBytes;
-  if (std::uintmax_t(info.st_size) > limit) {
-    throw Error(name + ": larger than " + std::to_string(limit >> 20) + " MiB, not a camera file");
+  return read_bounded_file(path, detail::kMaxDocumentBytes, "a camera file");
+}
+
+// Magnitudes no camera has: a file holding them is corrupt (or a fuzzer's), and its
+// numbers would overflow every computation downstream (round trips missed by 1e291 px).
+constexpr double kMaxPixels = 1e6;       // principal point, focal length (px)
+constexpr double kPixelScaleRange = 1e6;  // a_x, a_y within [1e-6, 1e6]
+
+std::string magnitude_problem(const Camera& camera) {
+  const CameraParameters& p = camera.parameters();
+  const auto pixels = [](double v) { return std::abs(v) <= kMaxPixels; };
+  if (!pixels(p.principal_point.x()) || !pixels(p.principal_point.y())) {
+    return "principal_point: expected within +-" + number_for_message(kMaxPixels) + " px, got (" +
+           number_for_message(p.principal_point.x()) + ", " + number_for_message(p.principal_point.y()) + ")";
   }
-  std::string content(std::size_t(info.st_size), '\0');
-  std::size_t done = 0;
-  while (true) {  // the file may have grown since fstat: read to its end, up to the limit
-    if (done == content.size()) {
-      if (content.size() > limit) throw Error(name + ": larger than " + std::to_string(limit >> 20) + " MiB, not a camera file");
-      content.resize(std::min<std::size_t>(content.size() * 2 + 4096, limit + 1));
+  for (double a : {p.pixel_scale.x(), p.pixel_scale.y()}) {
+    if (!(a >= 1 / kPixelScaleRange && a <= kPixelScaleRange)) {
+      return "pixel_scale: expected within [" + number_for_message(1 / kPixelScaleRange) + ", " +
+             number_for_message(kPixelScaleRange) + "], got " + number_for_message(a);
     }
-    const ssize_t n = read(fd, content.data() + done, content.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw Error(name + ": read error (" + std::strerror(errno) + ")");
-    if (n == 0) break;
-    done += std::size_t(n);
   }
-  content.resize(done);
-  return content;
+  const double focal = camera.drho(0) * std::max(p.pixel_scale.x(), p.pixel_scale.y());
+  if (!(focal <= kMaxPixels)) {
+    return "the focal length (rho'(0) a) must be at most " + number_for_message(kMaxPixels) + " px, got " +
+           number_for_message(focal);
+  }
+  // An image of which no pixel has a ray (a principal point far off the image, a
+  // domain that ends before the image begins) describes no camera.
+  const bool centred = p.principal_point.x() >= -0.5 && p.principal_point.y() >= -0.5 &&
+                       p.principal_point.x() <= p.width - 0.5 && p.principal_point.y() <= p.height - 0.5;
+  if (!centred) {
+    constexpr int kSamples = 32;
+    Eigen::Vector3d ray;
+    bool sees = false;
+    for (int j = 0; j <= kSamples && !sees; ++j) {
+      for (int i = 0; i <= kSamples && !sees; ++i) {
+        sees = camera.unproject({-0.5 + p.width * double(i) / kSamples, -0.5 + p.height * double(j) / kSamples}, &ray);
+      }
+    }
+    if (!sees) return "no pixel of the image has a ray (the principal point or the valid domain lies off the image)";
+  }
+  return "";
 }
 
 // Builds the camera so its own validation errors also name the file.
 CameraParameters validated(CameraParameters p, std::string_view source) {
   try {
-    Camera check(p);
+    const Camera check(p);
+    if (const std::string problem = magnitude_problem(check); !problem.empty()) throw Error(problem);
   } catch (const Error& e) {
     throw Error(std::string(source) + ": " + e.what());
   }

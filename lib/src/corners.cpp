@@ -9,12 +9,13 @@
 
 #include "fishcam/atomic_file.hpp"
 #include "fishcam/error.hpp"
+#include "fishcam/file_input.hpp"
 
 namespace fishcam {
 
 std::vector<BoardObservation> read_corners(const std::filesystem::path& path, const BoardSpec& board) {
-  std::ifstream in(path);
-  if (!in) throw Error(path.string() + ": cannot open");
+  // A corners file holds a line per corner: 64 MiB is hundreds of thousands of photos.
+  std::istringstream in(read_bounded_file(path, std::size_t(64) << 20, "a corners file"));
   std::vector<BoardObservation> out;
   std::map<std::string, long> seen;
   std::string line;

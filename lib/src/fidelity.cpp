@@ -6,11 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <sstream>
 #include <limits>
 #include <map>
 
 #include "fishcam/camera_io.hpp"
+#include "fishcam/file_input.hpp"
 #include "fishcam/image_io.hpp"
 #include "fishcam/npy.hpp"
 
@@ -97,6 +98,19 @@ ViewpointChange change_of(const nlohmann::json& entry, const fs::path& file, std
     const auto r = entry.at("rotation_deg").get<std::vector<double>>();
     const auto t = entry.at("translation").get<std::vector<double>>();
     if (r.size() != 3 || t.size() != 3) throw Error(path_for_message(file) + ": " + *name + ": expected 3 values");
+    // sample-dataset's presets turn by tens of degrees and move by metres at most.
+    for (double v : r) {
+      if (!(std::abs(v) <= 360)) {
+        throw Error(path_for_message(file) + ": " + text_for_message(*name) + ": rotation_deg: expected angles within "
+                    "[-360, 360], got " + number_for_message(v));
+      }
+    }
+    for (double v : t) {
+      if (!(std::abs(v) <= 1000)) {
+        throw Error(path_for_message(file) + ": " + text_for_message(*name) + ": translation: expected metres within "
+                    "[-1000, 1000], got " + number_for_message(v));
+      }
+    }
     return ViewpointChange::from_euler_deg({r[0], r[1], r[2]}, {t[0], t[1], t[2]});
   } catch (const nlohmann::json::exception&) {
     throw Error(path_for_message(file) + ": a line lacks name, rotation_deg or translation");
@@ -112,8 +126,13 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
   const bool depth = fs::is_directory(root / "test" / "depth");
   std::vector<fs::path> sets;
   for (const auto& entry : fs::directory_iterator(root)) {
-    if (entry.is_directory() && entry.path().filename().string().starts_with("test-") &&
-        fs::exists(entry.path() / "changes.jsonl")) {
+    if (entry.is_directory() && entry.path().filename().string().starts_with("test-")) {
+      // A test set without its changes cannot be scored: an interrupted sample-dataset
+      // or a folder of something else, never skipped in silence.
+      if (!fs::exists(entry.path() / "changes.jsonl")) {
+        throw Error(path_for_message(entry.path()) + ": a test set without changes.jsonl (incomplete: make the "
+                    "dataset again with fishcam sample-dataset, or move the folder out)");
+      }
       sets.push_back(entry.path());
     }
   }
@@ -130,7 +149,7 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
     std::vector<DatasetFidelity> set_rows;
     for (const auto& [prior_name, prior] : priors) set_rows.push_back({set.filename().string(), prior_name, 0, 0, 0, 0});
     const fs::path changes = set / "changes.jsonl";
-    std::ifstream lines(changes);
+    std::istringstream lines(read_bounded_file(changes, std::size_t(64) << 20, "a changes.jsonl file"));
     for (std::string line; std::getline(lines, line);) {
       if (line.empty()) continue;
       nlohmann::json entry;

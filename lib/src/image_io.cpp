@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "fishcam/error.hpp"
+#include "fishcam/file_input.hpp"
 
 namespace fishcam {
 namespace {
@@ -42,6 +43,9 @@ cv::Mat read_image(const std::filesystem::path& path, int flags) {
   if (ec && ec != std::errc::no_such_file_or_directory) throw Error(path_for_message(path) + ": " + ec.message());
   if (!std::filesystem::exists(status)) throw Error(path_for_message(path) + ": no such file");
   if (!std::filesystem::is_regular_file(status)) throw Error(path_for_message(path) + ": not a regular file");
+  // OpenCV's decoders read the file themselves: checked here for its kind and size
+  // (a 16384 x 16384 RGBA PNG stays well below the limit).
+  check_bounded_file(path, std::size_t(2) << 30, "an image file");
   cv::Mat image;
   {
     const SilencedStderr quiet;

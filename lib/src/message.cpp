@@ -2,8 +2,18 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 
 namespace fishcam {
+
+std::string number_for_message(double value) {
+  char buffer[32];
+  for (int precision = 6; precision <= 17; ++precision) {
+    std::snprintf(buffer, sizeof buffer, "%.*g", precision, value);
+    if (std::strtod(buffer, nullptr) == value || value != value) break;
+  }
+  return buffer;
+}
 
 std::string quoted_for_message(std::string_view text, size_t limit) {
   std::string out = "'";

@@ -86,6 +86,9 @@ MrcalLens::MrcalLens(std::string lensmodel, std::vector<double> values)
     }
     if (config.fov_x_deg < 1 || config.fov_x_deg > 359) throw Error("fov_x_deg must be in [1, 359]");
   }
+  if (kind_ == Kind::cahvore && !std::isfinite(parsed_->model.LENSMODEL_CAHVORE__config.linearity)) {
+    throw Error(shown + ": the linearity must be a finite number");
+  }
   const int count = mrcal_lensmodel_num_params(&parsed_->model) - 4;
   if (int(values_.size()) != count) {
     throw Error(lensmodel_ + " has " + std::to_string(count) + " values after fx, fy, cx, cy, got " +
@@ -93,6 +96,13 @@ MrcalLens::MrcalLens(std::string lensmodel, std::vector<double> values)
   }
   for (double v : values_) {
     if (!std::isfinite(v)) throw Error(lensmodel_ + ": the values must be finite");
+    // Every value is a small displacement or coefficient on the normalised plane
+    // (mrcal's fits give |v| < 1); past kMaxValue a lens folds everywhere, and its
+    // domain scan and tables take minutes to say so.
+    if (!(std::abs(v) <= kMaxValue)) {
+      throw Error(lensmodel_ + ": values must lie within [-" + number_for_message(kMaxValue) + ", " +
+                  number_for_message(kMaxValue) + "], got " + number_for_message(v));
+    }
   }
   intrinsics_ = {1, 1, 0, 0};
   intrinsics_.insert(intrinsics_.end(), values_.begin(), values_.end());

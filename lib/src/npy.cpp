@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
-#include <fstream>
+#include <sstream>
 #include <regex>
 #include <string>
 
 #include "fishcam/atomic_file.hpp"
 #include "fishcam/error.hpp"
+#include "fishcam/file_input.hpp"
 
 namespace fishcam {
 
@@ -43,8 +44,8 @@ void write_npy(const std::filesystem::path& path, const NpyArray& array, bool ov
 }
 
 NpyArray read_npy(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open");
+  // The largest array fishcam writes or reads is a map of an 8192 x 8192 image.
+  std::istringstream in(read_bounded_file(path, std::size_t(1) << 30, "a .npy file"), std::ios::binary);
   unsigned char preamble[10];
   if (!in.read(reinterpret_cast<char*>(preamble), 10) || std::memcmp(preamble, "\x93NUMPY", 6) != 0) {
     throw Error(path.string() + ": not a .npy file");
@@ -59,9 +60,7 @@ NpyArray read_npy(const std::filesystem::path& path) {
   NpyArray array;
   // The element count is checked against the file's size before anything is
   // allocated (a 128-byte header must not make us zero-fill gigabytes).
-  std::error_code ec;
-  const auto file_size = std::filesystem::file_size(path, ec);
-  if (ec) throw Error(path.string() + ": cannot tell its size");
+  const auto file_size = in.str().size();
   const size_t data_bytes = size_t(file_size) - std::min<size_t>(size_t(file_size), 10 + header.size());
   size_t count = 1;
   const std::string dims = match[1];

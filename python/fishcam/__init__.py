@@ -51,11 +51,23 @@ DEPTH_PRIORS = tuple(_fishcam.depth_priors())  # the library's names
 _F = _typing.TypeVar("_F", bound=_typing.Callable[..., _typing.Any])
 
 
+def _require_initialised(obj: _typing.Any, name: str) -> None:
+    """cls.__new__(cls) alone leaves the C++ object unmade: refused before a method or
+    property reads it (it read garbage or crashed)."""
+    if not _fishcam._initialised(obj):
+        raise Error(f"{name}: an object made without __init__ (cls.__new__ alone): make it with its constructor, "
+                    "a reader or pickle")
+
+
 def _one_line_argument_errors(function: _F, name: str, bound: bool = False) -> _F:
     """pybind11 reports arguments of the wrong type as a multi-line TypeError;
     fishcam's errors are one-line fishcam.Error naming the call."""
+    initialised = bound and "." in name  # a method (not a constructor: its name has no ".")
+
     @_functools.wraps(function)
     def call(*args: _typing.Any, **kwargs: _typing.Any) -> _typing.Any:
+        if initialised and args:
+            _require_initialised(args[0], name)
         try:
             return function(*args, **kwargs)
         except TypeError as e:
@@ -74,6 +86,15 @@ def _wrap_public_callables(cls: type) -> None:
     for attribute, value in list(vars(cls).items()):
         if attribute.startswith("_") and attribute not in ("__init__", "__call__"):
             continue
+        if isinstance(value, property) and value.fget is not None:
+            getter = value.fget
+            name = f"{cls.__name__}.{attribute}"
+
+            def checked(self: _typing.Any, getter: _typing.Any = getter, name: str = name) -> _typing.Any:
+                _require_initialised(self, name)
+                return getter(self)
+            setattr(cls, attribute, property(checked, value.fset, value.fdel, value.__doc__))
+            continue
         static = isinstance(value, staticmethod)
         function = value.__func__ if static else value
         if not callable(function) or isinstance(value, property):
@@ -83,11 +104,28 @@ def _wrap_public_callables(cls: type) -> None:
         setattr(cls, attribute, staticmethod(wrapped) if static else wrapped)
 
 
-for _cls in (Camera, ViewpointWarp, ViewpointChange, _fishcam.ConfusionMatrix):
+for _cls in (Camera, ViewpointWarp, ViewpointChange, _fishcam.ConfusionMatrix, _fishcam.AffineChange):
     _wrap_public_callables(_cls)
 for _name, _function in list(vars(_fishcam).items()):
     if not _name.startswith("_") and type(_function).__name__ == "builtin_function_or_method":
         setattr(_fishcam, _name, _one_line_argument_errors(_function, _name))
+
+
+def _restore(cls: type, state: _typing.Any) -> _typing.Any:
+    """Unpickles an extension object: its state through the class's __setstate__."""
+    restored = cls.__new__(cls)  # type: ignore[call-overload]
+    restored.__setstate__(state)
+    return restored
+
+
+def _reduce(self: _typing.Any) -> _typing.Tuple[_typing.Any, ...]:
+    # One reduction for every protocol: pybind11's own needs protocol 2 (0 and 1
+    # abort the interpreter in copyreg with "no registered base types").
+    return (_restore, (type(self), self.__getstate__()))
+
+
+for _pickled in (Camera, ViewpointWarp, ViewpointChange, _fishcam.AffineChange):
+    _pickled.__reduce__ = _reduce  # type: ignore[method-assign]
 derive_seed = _fishcam.derive_seed
 random_change_in = _fishcam.random_change_in
 

@@ -685,6 +685,8 @@ class RigCalibration:
         """
         What the user should know (list of str).
         """
+def _initialised(arg0: typing.Any) -> bool:
+    ...
 def _input_address(arg0: typing.Any, arg1: str) -> int:
     ...
 def affine_forward(points: typing.Any, change: AffineChange, width: int, height: int) -> tuple[numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]], numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]]:

@@ -12,10 +12,13 @@ only when it is installed).
 
 One change per call for every target: ``image``/``images`` (HxW or HxWxC uint8,
 uint16, float32; bilinear), ``mask``/``masks`` (any integer or bool dtype, kept;
-nearest), ``bboxes`` (the tight box of the densely transformed outline;
-albumentations then clips and applies ``min_visibility``), ``keypoints`` (mapped
-exactly; the angle and scale columns are kept as they are; hidden points become
-NaN, so ``remove_invisible`` drops them with those that left the view), and the
+nearest; where there is no source, ``mask`` (semantic labels) gets ``fill_mask``,
+or ``fill["mask"]``, while ``masks`` (albumentations' instance masks) and bool masks
+get 0 / False whatever it says), ``bboxes`` (the tight box of the densely
+transformed outline; albumentations then clips and applies ``min_visibility``),
+``keypoints`` (mapped exactly; the angle and scale columns are kept as they are;
+hidden points become NaN, so ``remove_invisible`` drops them with those that left
+the view), and the
 targets albumentations has no type for: ``depth`` (HxW float32 depth map, sampled
 without blending, values re-expressed in the moved camera), ``polygons`` (a list of
 (K, 2) vertex arrays, edges subdivided to follow the curved image within 0.5 px),
@@ -77,14 +80,18 @@ class _FishcamDualTransform(_DualTransform):
     def apply(self, img: Array, **params: typing.Any) -> Array:
         return self._change(params).image(img)
 
-    def apply_to_mask(self, mask: Array, **params: typing.Any) -> Array:
-        if mask.ndim == 3:  # albumentations' multi-channel mask: each channel a label plane
-            return np.stack([self.apply_to_mask(np.ascontiguousarray(mask[..., c]), **params)
+    def _mask(self, mask: Array, params: Params, instance: bool) -> Array:
+        if mask.ndim == 3:  # albumentations' multi-channel mask: each channel a plane
+            return np.stack([self._mask(np.ascontiguousarray(mask[..., c]), params, instance)
                              for c in range(mask.shape[2])], axis=-1)
-        return self._change(params).mask(mask)
+        return self._change(params).mask(mask, instance=instance)
+
+    def apply_to_mask(self, mask: Array, **params: typing.Any) -> Array:
+        return self._mask(mask, params, instance=False)  # semantic labels: fill_mask (bool: False)
 
     def apply_to_masks(self, masks: Array, **params: typing.Any) -> Array:
-        return np.stack([self.apply_to_mask(m, **params) for m in masks]) if len(masks) else masks
+        # albumentations' instance masks: 0 / False where there is no source, whatever fill_mask says.
+        return np.stack([self._mask(m, params, instance=True) for m in masks]) if len(masks) else masks
 
     def apply_to_images(self, images: Array, **params: typing.Any) -> Array:
         return np.stack([self.apply(x, **params) for x in images])
@@ -125,11 +132,13 @@ class _FishcamDualTransform(_DualTransform):
 class RandomViewpoint(_FishcamDualTransform):
     """fishcam.transforms.RandomViewpoint as an albumentations transform (see the
     module). The camera comes from the constructor or from ``camera=`` in the call;
-    ``p`` is albumentations' (its generator decides)."""
+    ``p`` is albumentations' (its generator decides). ``fill``: a number (the
+    images') or ``{"image": ..., "mask": ...}``; ``fill_mask``: the semantic masks'
+    (``mask``) label; ``masks`` and bool masks get 0 / False."""
 
     def __init__(self, camera: typing.Optional[Camera] = None, preset: str = "train",
                  max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
-                 depth: str = "source-sphere", fill: float = 0, fill_mask: int = 0, sampling: str = "grid",
+                 depth: str = "source-sphere", fill: _transforms.Fill = 0, fill_mask: int = 0, sampling: str = "grid",
                  depth_values: str = "range", p: float = 1.0) -> None:
         super().__init__(p)
         self._viewpoint = _transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
@@ -157,12 +166,13 @@ class RandomViewpoint(_FishcamDualTransform):
 
 class RandomAffine(_FishcamDualTransform):
     """fishcam.transforms.RandomAffine (the paper's affine baseline) as an
-    albumentations transform; depth maps keep their values, a camera is passed on."""
+    albumentations transform; depth maps keep their values, a camera is passed on;
+    ``fill`` and ``fill_mask`` as RandomViewpoint's."""
 
     def __init__(self, preset: str = "train", max_rotation_deg: typing.Optional[float] = None,
                  max_translation: typing.Optional[float] = None,
-                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, fill: float = 0, fill_mask: int = 0,
-                 p: float = 1.0) -> None:
+                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, fill: _transforms.Fill = 0,
+                 fill_mask: int = 0, p: float = 1.0) -> None:
         super().__init__(p)
         self._affine = _transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
                                                   max_translation=max_translation, scale_range=scale_range,

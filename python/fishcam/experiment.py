@@ -6,9 +6,11 @@ each augmentation configuration, for several training seeds, and evaluates every
 run on the original test split and on the true viewpoint test sets (the test scenes
 re-rendered from moved cameras). Writes ``runs/CONFIG-seedS.json`` and the trained
 weights ``runs/CONFIG-seedS.pt`` per run (a run already there is not repeated: the
-experiment resumes), ``results.json``, ``tables.md`` (the paper's Tables 2-5 as mean
-± std over the seeds, and the augmentation's fidelity against the re-renders) and
-``figures/`` (mIoU against change size; example predictions; needs matplotlib).
+experiment resumes; each run records its settings and the dataset's identity, and a
+stored run that differs is refused, or recomputed with ``--rerun``), ``results.json``,
+``tables.md`` (the paper's Tables 2-5 as mean ± std over the seeds, and the
+augmentation's fidelity against the re-renders) and ``figures/`` (mIoU against change
+size; example predictions; needs matplotlib).
 
     build/tools/fishcam sample-dataset sv --scenes 48 --size 192x145 --seed 1 --depth
     python -m fishcam.experiment sv results/ [--seeds 3] [--epochs 12] [--quick]
@@ -19,9 +21,11 @@ NCCL with ``--device cuda``); rank 0 evaluates and writes.
 """
 
 import argparse
+import hashlib
 import json
 import math
 import os
+import struct
 import sys
 import time
 import typing
@@ -42,6 +46,17 @@ from . import Error
 CLASSES = 10
 NO_SOURCE = 255
 TEST_SETS = ("small", "medium", "large")
+# --width's bound: 16 times the harness's default (the network's parameters grow as
+# 454 width^2: 30 M at 256, 0.5 GB with AdamW's state; its activations as 40 width
+# floats per pixel and image, checked against the memory available by
+# training_memory); far past what this CPU experiment can train in its budget.
+MAX_WIDTH = 256
+# What a run's result depends on besides its configuration and seed, in the order a
+# difference is reported (the dataset's identity is compared first); the option that
+# sets each.
+SETTINGS = (("epochs", "--epochs"), ("batch_size", "--batch-size"), ("width", "--width"),
+            ("class_weights", "--class-weights"), ("device", "--device"),
+            ("processes", "--nproc_per_node (torchrun's processes)"))
 
 # Augmentation configurations: Table 3 (none, base, viewpoint, base + viewpoint),
 # Table 4 (affine vs viewpoint), Table 5 (viewpoint computed with a model fitted to
@@ -51,6 +66,9 @@ CONFIGS = ("none", "base", "viewpoint", "base+viewpoint", "affine",
            "viewpoint:equidistant:paper", "viewpoint:equidistant:lsq",
            "viewpoint:stereographic:paper", "viewpoint:stereographic:lsq",
            "viewpoint:kannala-brandt:lsq")
+# --quick's settings, and the defaults without it (an option given explicitly wins).
+QUICK: typing.Dict[str, typing.Any] = {"configs": "none,viewpoint", "seeds": 2, "epochs": 1, "width": 4}
+DEFAULTS: typing.Dict[str, typing.Any] = {"configs": ",".join(CONFIGS), "seeds": 3, "epochs": 10, "width": 16}
 
 
 class UNet(torch.nn.Module):
@@ -133,18 +151,250 @@ def distributed() -> typing.Tuple[int, int]:
     return dist.get_rank(), dist.get_world_size()
 
 
-def class_weights(root: str) -> torch.Tensor:
+def class_weights(counts: npt.NDArray[np.int64]) -> torch.Tensor:
     """ENet's class weights 1 / ln(1.02 + p) from the label shares p of a split (the
-    un-augmented masks), so that the small classes (persons, riders, signs) are
-    learnt beside road and background; absent classes weigh 0."""
-    counts = np.zeros(CLASSES, np.int64)
-    dataset = ft.WoodScapeDataset(root)
-    for i in range(len(dataset)):
-        mask = np.asarray(dataset[i]["mask"]).ravel()
-        counts += np.bincount(mask[mask < CLASSES], minlength=CLASSES)[:CLASSES]
+    un-augmented masks' pixel counts per class, ``DatasetInfo.train_counts``), so that
+    the small classes (persons, riders, signs) are learnt beside road and background;
+    absent classes weigh 0."""
     share = counts / max(int(counts.sum()), 1)
     weights = np.where(counts > 0, 1.0 / np.log(1.02 + share), 0.0)
     return torch.tensor(weights, dtype=torch.float32)
+
+
+def evaluation_folders(dataset_root: str) -> typing.List[typing.Tuple[str, str]]:
+    """(test set, folder) of every split a run is scored on: ``original`` (test/), then
+    each true viewpoint test set present (test-PRESET/, test-PRESET-rotation/)."""
+    folders = [("original", os.path.join(dataset_root, "test"))]
+    for name in TEST_SETS:
+        for variant in (f"test-{name}", f"test-{name}-rotation"):
+            folder = os.path.join(dataset_root, variant)
+            if os.path.isdir(folder):
+                folders.append((variant[len("test-"):], folder))
+    return folders
+
+
+class DatasetInfo(typing.NamedTuple):
+    """What scan_dataset found: the identity of the files the runs read, the training
+    images' size and count, and the training labels' pixel count per class."""
+    sha256: str
+    files: int
+    image_size: typing.Tuple[int, int]  # (height, width)
+    train_images: int
+    train_counts: npt.NDArray[np.int64]
+
+    def record(self, root: str) -> typing.Dict[str, typing.Any]:
+        """As stored with each run (the path only informs: a moved dataset is the same)."""
+        return {"sha256": self.sha256, "files": self.files, "path": os.path.abspath(root)}
+
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _decode(data: bytes, path: str) -> npt.NDArray[typing.Any]:
+    image: typing.Optional[npt.NDArray[typing.Any]] = ft._cv2().imdecode(np.frombuffer(data, np.uint8),
+                                                                         ft._cv2().IMREAD_UNCHANGED)
+    if image is None:
+        raise Error(f"{path}: cannot read image")
+    return image
+
+
+def _image_size(data: bytes, path: str) -> typing.Tuple[int, int]:
+    """(height, width) of an image file's bytes: a PNG's header, else decoded."""
+    if data[:8] == PNG_SIGNATURE and data[12:16] == b"IHDR":
+        width, height = struct.unpack(">II", data[16:24])
+        return int(height), int(width)
+    shape = _decode(data, path).shape
+    return int(shape[0]), int(shape[1])
+
+
+def scan_dataset(root: str) -> DatasetInfo:
+    """Checks every file a run reads — each sample's RGB image, label image and
+    calibration in train/, test/ and the true viewpoint test sets — before anything
+    runs: present, readable, labels single-channel, of their image's size and in
+    0..CLASSES-1 or NO_SOURCE, a folder's images of one size (they are batched), the
+    calibration read by fishcam.Camera.read. Names the file at fault (fishcam.Error).
+
+    The dataset's identity: SHA-256 over ``relative path NUL size NUL SHA-256 of the
+    contents`` of each of those files, in order (splits, then sample names sorted):
+    contents, not times, so a copied or moved dataset is the same one and a
+    regenerated or edited one is not; val/, depth/ and the other files, which no run
+    reads, are left out."""
+    digest = hashlib.sha256()
+    files = 0
+    cameras: typing.Set[bytes] = set()
+    train_size, train_images = (0, 0), 0
+    train_counts = np.zeros(CLASSES, np.int64)
+    for split, folder in [("train", os.path.join(root, "train"))] + evaluation_folders(root):
+        images = os.path.join(folder, "rgb_images")
+        if not os.path.isdir(images):
+            raise Error(f"{images}: missing (expected the WoodScape layout)")
+        found = {os.path.splitext(f)[0]: f for f in os.listdir(images)
+                 if f.lower().endswith((".png", ".jpg", ".jpeg"))}
+        if not found:
+            raise Error(f"{images}: no images")
+        size: typing.Optional[typing.Tuple[int, int]] = None
+        first = ""
+        for name in sorted(found):
+            rgb = os.path.join(images, found[name])
+            label = os.path.join(folder, "semantic_annotations", "gtLabels", name + ".png")
+            calibration = os.path.join(folder, "calibration", name + ".json")
+            contents = {}
+            for path, what in ((rgb, "image"), (label, "label image"), (calibration, "calibration")):
+                if not os.path.isfile(path):
+                    raise Error(f"{path}: missing (the {what} of {found[name]})")
+                with open(path, "rb") as f:
+                    contents[path] = f.read()
+                data = contents[path]
+                digest.update(f"{os.path.relpath(path, root)}\0{len(data)}\0".encode())
+                digest.update(hashlib.sha256(data).hexdigest().encode() + b"\n")
+                files += 1
+            image_size = _image_size(contents[rgb], rgb)
+            if size is None:
+                size, first = image_size, rgb
+            elif image_size != size:
+                raise Error(f"{rgb}: {image_size[1]}x{image_size[0]}, but {first} is {size[1]}x{size[0]} (a folder's "
+                            "images are batched: one size)")
+            mask = _decode(contents[label], label)
+            if mask.ndim != 2:
+                raise Error(f"{label}: expected a single-channel label image")
+            if mask.shape != image_size:
+                raise Error(f"{label}: {mask.shape[1]}x{mask.shape[0]}, but its image is "
+                            f"{image_size[1]}x{image_size[0]}")
+            bad = np.unique(mask[(mask >= CLASSES) & (mask != NO_SOURCE)])
+            if bad.size:
+                raise Error(f"{label}: label {int(bad[0])} is outside the {CLASSES} classes (0-{CLASSES - 1}; "
+                            f"{NO_SOURCE} marks no label)")
+            if split == "train":
+                train_counts += np.bincount(mask[mask < CLASSES].ravel(), minlength=CLASSES)[:CLASSES]
+            if contents[calibration] not in cameras:
+                try:
+                    fishcam.Camera.read(calibration)
+                except Error as e:
+                    raise Error(str(e) if calibration in str(e) else f"{calibration}: {e}") from None
+                cameras.add(contents[calibration])
+        if split == "train":
+            assert size is not None
+            train_size, train_images = size, len(found)
+    return DatasetInfo(digest.hexdigest(), files, train_size, train_images, train_counts)
+
+
+def available_memory(device: torch.device) -> typing.Optional[int]:
+    """Bytes free for the training: the GPU's free memory (cuda); MemAvailable, and
+    the room left under a cgroup v2 limit (cpu). None when unknown."""
+    if device.type == "cuda":
+        return int(torch.cuda.mem_get_info(device)[0])
+    free: typing.List[int] = []
+    try:
+        with open("/proc/meminfo") as f:
+            free += [int(line.split()[1]) * 1024 for line in f if line.startswith("MemAvailable:")]
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        with open("/sys/fs/cgroup/memory.max") as f:
+            limit = f.read().strip()
+        with open("/sys/fs/cgroup/memory.current") as f:
+            current = int(f.read())
+        if limit != "max":
+            free.append(max(int(limit) - current, 0))
+    except (OSError, ValueError):
+        pass
+    return min(free) if free else None
+
+
+def training_memory(width: int, batch_size: int, image_size: typing.Tuple[int, int]) -> int:
+    """Bytes one training process needs, about: the parameters with their gradients and
+    AdamW's two moments (16 bytes each; counted on the meta device, nothing
+    allocated), and the activations autograd keeps, ~40 floats per pixel and channel
+    of ``width`` (measured: 27-41 for widths 8-64 at 192x145 and 640x483)."""
+    with torch.device("meta"):
+        parameters = sum(p.numel() for p in UNet(width).parameters())
+    height, image_width = image_size
+    pixels = (height + (-height) % 4) * (image_width + (-image_width) % 4)
+    return 16 * parameters + 4 * batch_size * pixels * (40 * width + 16)
+
+
+def parse_device(text: str) -> torch.device:
+    """--device: cpu, or cuda (cuda:N) when torch has that CUDA device."""
+    try:
+        device = torch.device(text)
+    except (RuntimeError, ValueError):
+        device = None
+    if device is None or device.type not in ("cpu", "cuda") or (device.type == "cpu" and device.index not in (None, 0)):
+        raise Error(f"--device {text!r}: expected cpu or cuda (cuda:N)")
+    if device.type == "cuda":
+        if not torch.cuda.is_available():
+            raise Error(f"--device {text}: no CUDA device (this torch {torch.__version__} sees none)")
+        if device.index is not None and device.index >= torch.cuda.device_count():
+            raise Error(f"--device {text}: there are {torch.cuda.device_count()} CUDA devices")
+    return device
+
+
+def parse_list(option: str, text: str, choices: typing.Sequence[str]) -> typing.List[str]:
+    """A comma-separated option: at least one name, none empty, none twice, each one of
+    ``choices``."""
+    names = text.split(",")
+    if not text.strip():
+        raise Error(f"{option}: empty (expected one or more of {', '.join(choices)}, comma-separated)")
+    for k, name in enumerate(names):
+        if not name:
+            raise Error(f"{option} {text!r}: an empty name (expected names separated by single commas)")
+        if name not in choices:
+            raise Error(f"{option}: expected one of {', '.join(choices)}, got {name!r}")
+        if name in names[:k]:
+            raise Error(f"{option} {text!r}: {name} is given twice")
+    return names
+
+
+def check_out(out: str, dataset: str) -> None:
+    """OUT: a folder (or none yet), and neither the dataset nor inside it (symlinks
+    resolved), where the runs would be written into the data they are scored on."""
+    if os.path.lexists(out) and not os.path.isdir(out):
+        raise Error(f"{out}: exists and is not a folder (OUT is the output folder)")
+    real_out, real_dataset = os.path.realpath(out), os.path.realpath(dataset)
+    if os.path.commonpath([real_out, real_dataset]) == real_dataset:
+        where = "is the dataset" if real_out == real_dataset else f"is inside the dataset {real_dataset}"
+        raise Error(f"{out}: OUT {where}; give an output folder outside it")
+
+
+def run_settings(args: argparse.Namespace, device: torch.device, processes: int) -> typing.Dict[str, typing.Any]:
+    """The settings a run's result depends on (SETTINGS), as stored with it."""
+    return {"epochs": args.epochs, "batch_size": args.batch_size, "width": args.width,
+            "class_weights": args.class_weights, "device": device.type, "processes": processes}
+
+
+def stored_run(path: str, settings: typing.Dict[str, typing.Any], dataset: typing.Dict[str, typing.Any],
+               rerun: bool) -> typing.Optional[typing.Dict[str, typing.Any]]:
+    """The result stored at ``path`` when it was made from this dataset with these
+    settings; None when there is none, or when it differs and ``rerun`` (it is
+    recomputed). Refuses one that differs otherwise, naming the dataset or the first
+    setting that differs."""
+    if not os.path.exists(path):
+        return None
+    hint = "give --rerun to recompute such runs, or another OUT"
+    try:
+        with open(path) as f:
+            result = json.load(f)
+        stored_settings, stored_dataset = result.get("settings"), result.get("dataset")
+    except (OSError, ValueError, AttributeError) as e:
+        if rerun:
+            return None
+        raise Error(f"{path}: cannot read the stored run ({e}); {hint}") from None
+    if not isinstance(stored_settings, dict) or not isinstance(stored_dataset, dict):
+        if rerun:
+            return None
+        raise Error(f"{path}: stored without its settings and dataset (an older harness); {hint}")
+    if stored_dataset.get("sha256") != dataset["sha256"]:
+        if rerun:
+            return None
+        raise Error(f"{path}: made from another dataset ({stored_dataset.get('path')}: {stored_dataset.get('files')} "
+                    f"files, sha256 {str(stored_dataset.get('sha256'))[:12]}; now {dataset['path']}: "
+                    f"{dataset['files']} files, sha256 {dataset['sha256'][:12]}); {hint}")
+    for key, option in SETTINGS:
+        if stored_settings.get(key) != settings[key]:
+            if rerun:
+                return None
+            raise Error(f"{path}: made with {option} {stored_settings.get(key)}, now {settings[key]}; {hint}")
+    return typing.cast(typing.Dict[str, typing.Any], result)
 
 
 def train(dataset_root: str, config: str, seed: int, epochs: int, batch_size: int, width: int, workers: int,
@@ -201,25 +451,24 @@ def run_path(out: str, config: str, seed: int) -> str:
 
 
 def run_one(args: argparse.Namespace, config: str, seed: int, device: torch.device,
-            weights: typing.Optional[torch.Tensor]) -> typing.Optional[typing.Dict[str, typing.Any]]:
-    """One training run and its evaluation, or the stored result of an earlier run."""
+            weights: typing.Optional[torch.Tensor], record: typing.Dict[str, typing.Any],
+            stored: typing.Optional[typing.Dict[str, typing.Any]]) -> typing.Optional[typing.Dict[str, typing.Any]]:
+    """One training run and its evaluation (stored with ``record``: the settings and the
+    dataset's identity), or ``stored``, the result of an earlier run that matches."""
+    if stored is not None:
+        return stored
     rank, _ = distributed()
     path = run_path(args.out, config, seed) + ".json"
-    if os.path.exists(path):
-        with open(path) as f:
-            return typing.cast(typing.Dict[str, typing.Any], json.load(f))
+    if rank == 0 and os.path.exists(path):  # --rerun: not complete until the new run is written
+        os.remove(path)
     start = time.perf_counter()
     net = train(args.dataset, config, seed, args.epochs, args.batch_size, args.width, args.workers, device, weights)
     if rank != 0:
         return None
-    result: typing.Dict[str, typing.Any] = {"config": config, "seed": seed, "train_seconds": time.perf_counter() - start,
-                                            "test": {"original": evaluate(net, os.path.join(args.dataset, "test"),
-                                                                          device, args.batch_size)}}
-    for name in TEST_SETS:
-        for variant in (f"test-{name}", f"test-{name}-rotation"):
-            folder = os.path.join(args.dataset, variant)
-            if os.path.isdir(folder):
-                result["test"][variant[len("test-"):]] = evaluate(net, folder, device, args.batch_size)
+    result: typing.Dict[str, typing.Any] = {"config": config, "seed": seed, **record,
+                                            "train_seconds": time.perf_counter() - start, "test": {}}
+    for test_set, folder in evaluation_folders(args.dataset):
+        result["test"][test_set] = evaluate(net, folder, device, args.batch_size)
     os.makedirs(os.path.dirname(path), exist_ok=True)
     weights_path = run_path(args.out, config, seed) + ".pt"
     torch.save(net.state_dict(), weights_path + ".tmp")
@@ -292,7 +541,8 @@ def tables(results: typing.List[typing.Dict[str, typing.Any]], configs: typing.S
             for k in range(CLASSES):
                 values = [x["iou"][k] for x in runs if x["iou"][k] is not None]
                 per_class.append(f"{100 * np.mean(values):.1f}" if values else "–")
-            lines.append(f"| {s} | {100 * m:.1f} | {100 * (original - m) / original:.1f} | " + " | ".join(per_class) + " |")
+            degrades = f"{100 * (original - m) / original:.1f}" if original > 0 else "–"  # 0 mIoU: no ratio
+            lines.append(f"| {s} | {100 * m:.1f} | {degrades} | " + " | ".join(per_class) + " |")
         lines.append("")
     if fidelity:
         lines += fidelity_table(fidelity)
@@ -383,57 +633,85 @@ def figures(args: argparse.Namespace, results: typing.List[typing.Dict[str, typi
 
 def main(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     """The command line (``python -m fishcam.experiment``, ``fishcam-experiment``): one
-    line on stderr and exit status 2 for bad input."""
+    line on stderr and exit status 2 for bad input; 1 for a failing file system or
+    too little memory."""
     try:
         return run(argv)
     except Error as e:
         print(f"fishcam-experiment: error: {e}", file=sys.stderr)
         return 2
+    except (OSError, MemoryError, torch.OutOfMemoryError) as e:
+        print(f"fishcam-experiment: error: {type(e).__name__}: {e}".splitlines()[0], file=sys.stderr)
+        return 1
 
 
 def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="fishcam-experiment", description=__doc__.split("\n")[0])
     parser.add_argument("dataset", help="a dataset of `fishcam sample-dataset --scenes N` (train/, test/, test-PRESET/)")
-    parser.add_argument("out", help="output folder (runs/, results.json, tables.md); existing runs are kept")
-    parser.add_argument("--configs", default=",".join(CONFIGS), help="comma-separated configurations")
-    parser.add_argument("--seeds", type=int, default=3, help="training seeds per configuration")
-    parser.add_argument("--epochs", type=int, default=10)
+    parser.add_argument("out", help="output folder (runs/, results.json, tables.md), outside the dataset; existing "
+                                    "runs are kept")
+    parser.add_argument("--configs", help="comma-separated configurations, each once (default: all of "
+                                          f"{', '.join(CONFIGS)})")
+    parser.add_argument("--seeds", type=int, help="training seeds per configuration (default: 3)")
+    parser.add_argument("--epochs", type=int, help="training epochs per run (default: 10)")
     parser.add_argument("--batch-size", type=int, default=8)
-    parser.add_argument("--width", type=int, default=16, help="the U-Net's channels at full resolution")
+    parser.add_argument("--width", type=int,
+                        help=f"the U-Net's channels at full resolution, 1-{MAX_WIDTH} (default: 16)")
     parser.add_argument("--workers", type=int, default=0, help="DataLoader workers")
-    parser.add_argument("--device", default="cpu", help="cpu or cuda")
+    parser.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
     parser.add_argument("--class-weights", choices=("balanced", "none"), default="balanced",
                         help="cross-entropy class weights: balanced (ENet's 1/ln(1.02 + share) from train/) or none")
     parser.add_argument("--no-figures", action="store_true", help="skip figures/ (they need matplotlib)")
     parser.add_argument("--no-fidelity", action="store_true", help="skip the fidelity table")
-    parser.add_argument("--quick", action="store_true", help="tiny settings: 2 configs, 2 seeds, 1 epoch, width 4")
+    parser.add_argument("--quick", action="store_true", help="tiny settings: configs none,viewpoint, 2 seeds, 1 epoch, "
+                                                             "width 4 (options given explicitly win)")
+    parser.add_argument("--rerun", action="store_true", help="recompute the stored runs made with other settings or "
+                                                             "from another dataset (refused without it)")
     args = parser.parse_args(argv)
-    configs = [c for c in args.configs.split(",") if c]
-    for c in configs:
-        transform_for(c)  # refuses unknown names before anything runs
-    if args.quick:
-        configs, args.seeds, args.epochs, args.width = ["none", "viewpoint"], 2, 1, 4
-    if args.seeds < 1 or args.epochs < 1 or args.batch_size < 1 or args.width < 1:
-        raise Error("--seeds, --epochs, --batch-size and --width must be >= 1")
+    for key, value in (QUICK if args.quick else DEFAULTS).items():
+        if getattr(args, key) is None:
+            setattr(args, key, value)
+    configs = parse_list("--configs", args.configs, CONFIGS)  # before anything runs or is written
+    for option, value, low in (("--seeds", args.seeds, 1), ("--epochs", args.epochs, 1),
+                               ("--batch-size", args.batch_size, 1), ("--width", args.width, 1),
+                               ("--workers", args.workers, 0)):
+        if value < low:
+            raise Error(f"{option} {value}: must be >= {low}")
+    if args.width > MAX_WIDTH:
+        raise Error(f"--width {args.width}: at most {MAX_WIDTH} (16 times the default; docs/experiment.md)")
+    device = parse_device(args.device)
     for sub in ("train", "test"):
         if not os.path.isdir(os.path.join(args.dataset, sub, "rgb_images")):
             raise Error(f"{args.dataset}: no {sub}/rgb_images (make it with fishcam sample-dataset --scenes N)")
-    if args.device == "cuda" and not torch.cuda.is_available():
-        raise Error("--device cuda: no CUDA device")
+    check_out(args.out, args.dataset)
     if not args.no_figures:
         try:
             import matplotlib  # noqa: F401
         except ImportError:
             raise Error("the figures need matplotlib (pip install matplotlib), or give --no-figures") from None
-    os.environ["FISHCAM_DEVICE"] = args.device
-    device = torch.device(args.device)
+    info = scan_dataset(args.dataset)
+    processes = int(os.environ.get("WORLD_SIZE", "1"))
+    local = int(os.environ.get("LOCAL_WORLD_SIZE", "1")) if device.type == "cpu" else 1
+    batch = min(args.batch_size, -(-info.train_images // processes))
+    need, free = local * training_memory(args.width, batch, info.image_size), available_memory(device)
+    if free is not None and need > free:
+        raise Error(f"--width {args.width} with --batch-size {args.batch_size} at {info.image_size[1]}x"
+                    f"{info.image_size[0]} needs about {need / 2**30:.1f} GiB to train"
+                    f"{f' ({local} processes)' if local > 1 else ''}, more than the {free / 2**30:.1f} GiB free on "
+                    f"{device.type}: lower --width or --batch-size")
+    settings, dataset_record = run_settings(args, device, processes), info.record(args.dataset)
+    record = {"settings": settings, "dataset": dataset_record}
+    # Every stored run is checked before the first one trains.
+    stored = {(config, seed): stored_run(run_path(args.out, config, seed) + ".json", settings, dataset_record,
+                                         args.rerun) for config in configs for seed in range(args.seeds)}
+    os.environ["FISHCAM_DEVICE"] = device.type
     rank, _ = distributed()
     start = time.perf_counter()
-    weights = class_weights(os.path.join(args.dataset, "train")) if args.class_weights == "balanced" else None
+    weights = class_weights(info.train_counts) if args.class_weights == "balanced" else None
     results = []
     for config in configs:
         for seed in range(args.seeds):
-            result = run_one(args, config, seed, device, weights)
+            result = run_one(args, config, seed, device, weights, record, stored[config, seed])
             if result is not None:
                 results.append(result)
                 if rank == 0:
@@ -445,8 +723,9 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
                             for name in TEST_SETS)
         fidelity = fishcam.dataset_fidelity(args.dataset) if has_test_sets and not args.no_fidelity else []
         written = [] if args.no_figures else figures(args, results, configs, device)
-        summary = {"dataset": os.path.abspath(args.dataset), "configs": configs, "seeds": args.seeds,
-                   "epochs": args.epochs, "width": args.width, "batch_size": args.batch_size,
+        summary = {"dataset": os.path.abspath(args.dataset), "dataset_identity": dataset_record, "configs": configs,
+                   "seeds": args.seeds, "epochs": args.epochs, "width": args.width, "batch_size": args.batch_size,
+                   "settings": settings,
                    "class_weights": None if weights is None else [float(w) for w in weights],
                    "fishcam": fishcam.__version__, "torch": torch.__version__, "seconds": time.perf_counter() - start,
                    "train_seconds_total": sum(r["train_seconds"] for r in results),

@@ -49,7 +49,7 @@ from . import Camera, Error, ViewpointChange, _check_seed, derive_seed, set_num_
 from . import transforms as _transforms
 
 __all__ = ["RandomViewpoint", "RandomAffine", "DepthMap", "Polygon", "WoodScapeDataset", "EpochSampler", "WarpedBatch",
-           "warp_batch", "collate", "sample_seed", "record_changes", "worker_init_fn", "torch_seed"]
+           "warp_batch", "collate", "sample_seed", "record_changes", "worker_init_fn", "torch_seed", "is_instance_mask"]
 
 
 Sample = typing.Any  # anything torchvision.transforms.v2 takes: a tensor, a tuple, a dict, ...
@@ -174,6 +174,49 @@ def _numpy_to_image(array: _transforms.Array, like: torch.Tensor) -> torch.Tenso
     return tv_tensors.wrap(out, like=like) if isinstance(like, tv_tensors.TVTensor) else out
 
 
+# The fill by target: a number (the images') or a dict keyed by tv_tensors.Image and/or tv_tensors.Mask.
+Fill = _transforms.Fill
+
+# The key under which a detection target ({"boxes", "labels", "masks"}, Mask R-CNN's)
+# holds its instance masks; and the ids of the masks found under it in the sample
+# being transformed (set by _FishcamTransform.forward for its make_params).
+_INSTANCE_MASKS_KEY = "masks"
+_instance_mask_ids: "contextvars.ContextVar[typing.FrozenSet[int]]" = contextvars.ContextVar(
+    "fishcam_instance_mask_ids", default=frozenset())
+
+
+def _split_fill(fill: object, fill_mask: object) -> typing.Tuple[typing.Any, int]:
+    """(the images' fill, the semantic masks' fill) of a torch transform's arguments."""
+    return _transforms._split_fill(fill, fill_mask, tv_tensors.Image, tv_tensors.Mask)
+
+
+def _masks_under_instance_keys(structure: typing.Any, inside: bool = False,
+                               found: typing.Optional[typing.Set[int]] = None) -> typing.Set[int]:
+    """The ids of the tv_tensors.Mask leaves of ``structure`` held under the key
+    "masks" of a dict, at any depth (the sample's own or a target's)."""
+    found = set() if found is None else found
+    if isinstance(structure, tv_tensors.Mask):
+        if inside:
+            found.add(id(structure))
+    elif isinstance(structure, typing.Mapping):
+        for key, value in structure.items():
+            _masks_under_instance_keys(value, inside or key == _INSTANCE_MASKS_KEY, found)
+    elif isinstance(structure, (list, tuple)):
+        for value in structure:
+            _masks_under_instance_keys(value, inside, found)
+    return found
+
+
+def is_instance_mask(mask: torch.Tensor, under_masks_key: bool = False) -> bool:
+    """Whether fishcam's torch transforms take ``mask`` for instance masks (0 / False
+    where there is no source, whatever ``fill_mask`` says) rather than a semantic
+    label map (``fill_mask``): a bool mask, an NxHxW mask with N >= 2, or any mask
+    under the key "masks" of a dict in the sample (``under_masks_key``: a detection
+    target, ``{"boxes", "labels", "masks"}``). HxW and 1xHxW masks of an integer
+    dtype elsewhere are semantic."""
+    return under_masks_key or mask.dtype == torch.bool or (mask.ndim == 3 and mask.shape[0] >= 2)
+
+
 def _size_of(flat_inputs: typing.List[typing.Any]) -> typing.Tuple[int, int]:
     """(width, height) of the sample's images, masks or depth maps."""
     for x in flat_inputs:
@@ -220,20 +263,30 @@ class _FishcamTransform(v2.Transform):
     def _draw(self, flat_inputs: typing.List[typing.Any]) -> _transforms.SampleChange:
         raise NotImplementedError
 
+    def forward(self, *inputs: typing.Any) -> typing.Any:
+        # The structure is flattened before make_params sees it: the masks under a
+        # "masks" key (instance masks) are found here, by id, for the call.
+        token = _instance_mask_ids.set(frozenset(_masks_under_instance_keys(inputs)))
+        try:
+            return super().forward(*inputs)
+        finally:
+            _instance_mask_ids.reset(token)
+
     def make_params(self, flat_inputs: typing.List[typing.Any]) -> Params:
         sample_change = self._draw(flat_inputs)
         records = _sample_records.get()
         if records is not None:
             records.append(sample_change.record)
+        instance_ids = _instance_mask_ids.get()
         boxes = [x for x in flat_inputs if isinstance(x, tv_tensors.BoundingBoxes)]
         instance_masks = [x for x in flat_inputs if isinstance(x, tv_tensors.Mask) and x.ndim == 3]
         pairs = [m for m in instance_masks if boxes and m.shape[0] == boxes[0].shape[0] and m.shape[0] > 0]
         return {"change": sample_change, "instance_masks": pairs[0] if pairs else None,
-                "done": self._image_and_mask(flat_inputs, sample_change)}
+                "instance_ids": instance_ids, "done": self._image_and_mask(flat_inputs, sample_change, instance_ids)}
 
     @staticmethod
-    def _image_and_mask(flat_inputs: typing.List[typing.Any],
-                        change: _transforms.SampleChange) -> typing.Dict[int, torch.Tensor]:
+    def _image_and_mask(flat_inputs: typing.List[typing.Any], change: _transforms.SampleChange,
+                        instance_ids: typing.AbstractSet[int] = frozenset()) -> typing.Dict[int, torch.Tensor]:
         """The sample's first image and first HxW mask resampled in one pass (the maps
         computed once for both), keyed by the inputs' ids for transform()."""
         images = [x for x in flat_inputs if isinstance(x, torch.Tensor) and x.ndim == 3 and (
@@ -242,7 +295,8 @@ class _FishcamTransform(v2.Transform):
         if not images or not masks:
             return {}
         image, mask = images[0], masks[0]
-        out_image, out_mask = change.image_and_mask(_image_to_numpy(image, "image"), _cpu(mask, "mask").numpy())
+        out_image, out_mask = change.image_and_mask(_image_to_numpy(image, "image"), _cpu(mask, "mask").numpy(),
+                                                    instance=is_instance_mask(mask, id(mask) in instance_ids))
         return {id(image): _numpy_to_image(out_image, image),
                 id(mask): tv_tensors.wrap(torch.from_numpy(out_mask), like=mask)}
 
@@ -271,18 +325,21 @@ class _FishcamTransform(v2.Transform):
             out = torch.from_numpy(change.depth_map(flat.numpy())).reshape(tensor.shape)
             return tv_tensors.wrap(out, like=inpt)
         if isinstance(inpt, tv_tensors.Mask):
-            return tv_tensors.wrap(self._masks(inpt, change), like=inpt)
+            instance = is_instance_mask(inpt, id(inpt) in params.get("instance_ids", ()))
+            return tv_tensors.wrap(self._masks(inpt, change, instance), like=inpt)
         if isinstance(inpt, tv_tensors.TVTensor) and not isinstance(inpt, (tv_tensors.Image, tv_tensors.Video)):
             raise Error(f"{type(inpt).__name__}: not a target fishcam's transforms know")
         return self._images(inpt, change)
 
     @staticmethod
-    def _masks(mask: torch.Tensor, change: _transforms.SampleChange) -> torch.Tensor:
+    def _masks(mask: torch.Tensor, change: _transforms.SampleChange, instance: bool) -> torch.Tensor:
+        """HxW or NxHxW masks resampled (each plane on its own); where there is no
+        source, 0 (False) for instance masks, else the semantic masks' fill."""
         tensor = _cpu(mask, "mask")
         if tensor.ndim == 2:
-            return torch.from_numpy(change.mask(tensor.numpy()))
-        if tensor.ndim == 3:  # instance masks (N, H, W): each resampled on its own
-            planes = [change.mask(plane.numpy(), f"mask[{i}]") for i, plane in enumerate(tensor)]
+            return torch.from_numpy(change.mask(tensor.numpy(), instance=instance))
+        if tensor.ndim == 3:  # instance masks (N, H, W), or a 1xHxW label map: each plane on its own
+            planes = [change.mask(plane.numpy(), f"mask[{i}]", instance) for i, plane in enumerate(tensor)]
             return torch.from_numpy(np.stack(planes)) if planes else tensor.clone()
         raise Error(f"mask: expected HxW or NxHxW, got shape {tuple(tensor.shape)}")
 
@@ -300,8 +357,8 @@ class _FishcamTransform(v2.Transform):
             raise Error(f"boxes: rotated boxes ({fmt}) are not supported; use keypoints for their corners")
         xyxy = v2.functional.convert_bounding_box_format(boxes.as_subclass(torch.Tensor), old_format=fmt,
                                                          new_format=tv_tensors.BoundingBoxFormat.XYXY)
-        if instance_masks is not None:  # the tight box of each transformed instance
-            warped = self._masks(instance_masks, change)
+        if instance_masks is not None:  # the tight box of each transformed instance (no-source pixels: none)
+            warped = self._masks(instance_masks, change, instance=True)
             out = torch.zeros((len(warped), 4), dtype=torch.float64)
             for i, plane in enumerate(warped):
                 ys, xs = torch.nonzero(plane, as_tuple=True)
@@ -326,7 +383,8 @@ class RandomViewpoint(_FishcamTransform):
 
     Targets: ``tv_tensors.Image`` or plain image tensors (CxHxW or a batch BxCxHxW
     sharing the camera; uint8, uint16, float32; bilinear), ``tv_tensors.Mask`` (HxW
-    class ids or NxHxW instance masks, any integer or bool dtype, kept; nearest),
+    class ids or NxHxW instance masks, any integer or bool dtype, kept; nearest;
+    no-source pixels as ``fill`` below),
     ``tv_tensors.BoundingBoxes`` (the tight box of each transformed instance mask
     when NxHxW masks pair with the N boxes, else of the densely transformed
     outline; clipped; boxes seen less than ``min_visibility`` collapse to zero size,
@@ -335,14 +393,28 @@ class RandomViewpoint(_FishcamTransform):
     NaN where they have no image), ``fishcam.torch.DepthMap``, ``fishcam.torch.Polygon``.
     Without a seeded dataset, the seed comes from torch's generator.
 
+    Fill, where the moved camera has no source, per target type as torchvision's
+    ``fill``: a number is the images' value; a dict, ``{tv_tensors.Image: 0,
+    tv_tensors.Mask: 255}``, gives the images' and the semantic masks' (either may
+    be left out; other keys, torchvision's "others" included, are refused).
+    Semantic masks (HxW or 1xHxW, integer dtype) get ``fill_mask`` (or
+    ``fill[tv_tensors.Mask]``; an integer in 0..65535 that fits the mask's dtype;
+    given both ways, they must agree), e.g. the loss's ``ignore_index``. Instance
+    masks get 0 (False) whatever either says, so no-source pixels join no instance
+    and the boxes taken from the masks stay tight: bool masks, NxHxW masks with
+    N >= 2, and the masks under the key "masks" of a dict (a detection target
+    ``{"boxes", "labels", "masks"}``; ``is_instance_mask``).
+
     Arguments as fishcam.transforms.RandomViewpoint, plus min_visibility (boxes).
     """
 
     def __init__(self, camera: typing.Optional[Camera] = None, preset: typing.Optional[str] = "train",
                  max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
-                 depth: str = "source-sphere", p: float = 1.0, fill: float = 0, fill_mask: int = 0,
+                 depth: str = "source-sphere", p: float = 1.0, fill: Fill = 0, fill_mask: int = 0,
                  sampling: str = "grid", depth_values: str = "range", min_visibility: float = 0.0) -> None:
         super().__init__(min_visibility)
+        if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
+            fill, fill_mask = _split_fill(fill, fill_mask)
         self.numpy_transform = _transforms.RandomViewpoint(
             camera, preset=preset, max_rotation_deg=max_rotation_deg, max_translation=max_translation, depth=depth,
             p=p, fill=fill, fill_mask=fill_mask, sampling=sampling, depth_values=depth_values)
@@ -370,13 +442,16 @@ class RandomViewpoint(_FishcamTransform):
 class RandomAffine(_FishcamTransform):
     """The paper's affine baseline (fishcam.transforms.RandomAffine) as a torchvision
     v2 transform, with the targets of RandomViewpoint (depth maps keep their values;
-    a camera in the sample is passed on unchanged: the baseline has no camera model)."""
+    a camera in the sample is passed on unchanged: the baseline has no camera model)
+    and its ``fill`` and ``fill_mask`` (instance masks get 0 / False)."""
 
     def __init__(self, preset: typing.Optional[str] = "train", max_rotation_deg: typing.Optional[float] = None,
                  max_translation: typing.Optional[float] = None,
-                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, p: float = 1.0, fill: float = 0,
+                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, p: float = 1.0, fill: Fill = 0,
                  fill_mask: int = 0, min_visibility: float = 0.0) -> None:
         super().__init__(min_visibility)
+        if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
+            fill, fill_mask = _split_fill(fill, fill_mask)
         self.numpy_transform = _transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
                                                         max_translation=max_translation, scale_range=scale_range,
                                                         p=p, fill=fill, fill_mask=fill_mask)
@@ -401,7 +476,7 @@ _batch_warps = _transforms._WarpCache()
 
 def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequence[Camera]],
                changes: typing.Sequence[ViewpointChange], masks: typing.Optional[torch.Tensor] = None,
-               depth: str = "source-sphere", fill: float = 0.0, fill_mask: int = 0) -> WarpedBatch:
+               depth: str = "source-sphere", fill: Fill = 0.0, fill_mask: int = 0) -> WarpedBatch:
     """Viewpoint changes for a batch of tensors on any device.
 
     The maps come from fishcam on the CPU (the grid path, geometric: within 1/32 px
@@ -413,9 +488,13 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
         images: (B, C, H, W) tensor, uint8, uint16 or floating point, on any device.
         cameras: one fishcam.Camera for the batch, or a sequence of B (one per sample).
         changes: a sequence of B fishcam.ViewpointChange (e.g. ``fishcam.random_change``).
-        masks: None or (B, H, W) integer or bool tensor on the images' device (nearest; dtype kept).
+        masks: None or (B, H, W) integer or bool tensor on the images' device (nearest; dtype kept):
+            one semantic label map per sample, or one bool mask per sample.
         depth: the depth prior ("source-sphere", "target-sphere", "infinity").
-        fill: the image value where the moved camera has no source; fill_mask: the mask value.
+        fill: where the moved camera has no source: the images' value (a number), or
+            ``{tv_tensors.Image: ..., tv_tensors.Mask: ...}`` as RandomViewpoint's.
+        fill_mask: the masks' value there (or ``fill[tv_tensors.Mask]``): an integer
+            the masks' dtype holds (within +-2^24); bool masks get False whatever it says.
 
     Returns:
         WarpedBatch(images, masks, valid): the images and masks in their dtypes and on
@@ -423,6 +502,10 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
     """
     if not isinstance(images, torch.Tensor) or images.ndim != 4:
         raise Error(f"images: expected a (B, C, H, W) tensor, got {getattr(images, 'shape', type(images).__name__)}")
+    image_fill: typing.Any = fill  # a number goes as it always did (NaN included, for float images)
+    if isinstance(fill, typing.Mapping):
+        image_fill, fill_mask = _transforms._split_fill(fill, fill_mask, tv_tensors.Image, tv_tensors.Mask,
+                                                        finite=False, label_range=None)
     batch, _, height, width = images.shape
     cameras = [cameras] * batch if isinstance(cameras, Camera) else list(cameras)
     changes = list(changes)
@@ -450,7 +533,8 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
     floating = images if images.is_floating_point() else images.float()
     sampled = torch.nn.functional.grid_sample(floating, grids.to(floating.dtype), mode="bilinear",
                                               padding_mode="border", align_corners=True)
-    sampled = torch.where(valid[:, None], sampled, torch.as_tensor(float(fill), dtype=sampled.dtype, device=device))
+    sampled = torch.where(valid[:, None], sampled,
+                          torch.as_tensor(float(image_fill), dtype=sampled.dtype, device=device))
     if not images.is_floating_point():
         info = torch.iinfo(images.dtype)
         sampled = sampled.round_().clamp_(info.min, info.max)
@@ -461,6 +545,13 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
         # float32 holds integers exactly up to 2^24: labels and instance ids.
         if masks.numel() and (int(masks.min()) < 0 or int(masks.max()) >= 2**24):
             raise Error("masks: values outside 0..2^24 cannot be sampled exactly")
+        if masks.dtype == torch.bool:
+            fill_mask = 0  # a bool mask is an instance's: no source, not in it
+        else:
+            info = torch.iinfo(masks.dtype)
+            low, high = max(info.min, -2**24), min(info.max, 2**24)
+            if not low <= fill_mask <= high:
+                raise Error(f"fill_mask: {fill_mask} does not fit the masks' dtype {masks.dtype} ({low}..{high})")
         picked = torch.nn.functional.grid_sample(masks[:, None].float(), grids, mode="nearest",
                                                  padding_mode="border", align_corners=True)[:, 0]
         out_masks = torch.where(valid, picked, torch.as_tensor(float(fill_mask), device=device)).to(masks.dtype)

@@ -8,14 +8,26 @@ to every target of the sample.
     out = t(image=image, depth_map=depth, keypoints=xy, boxes=xyxy, polygons=[p0, p1], camera=cam)
 
 Targets (docs/python.md, "Targets"): images HxW or HxWxC (uint8, uint16, float32;
-bilinear); masks HxW of any integer or bool dtype (nearest, dtype kept); depth maps
-HxW float32 (nearest, values re-expressed in the moved camera); keypoints (N, 2)
-pixels with a visibility flag; boxes (N, 4) x_min, y_min, x_max, y_max in pixel-edge
-coordinates (the tight box of the transformed outline) with the visible fraction;
-polygons (K, 2) with edges subdivided to stay within 0.5 px of the curved image;
-the camera (its pose moved by the change). Pixel coordinates put pixel centres at
-integers (keypoints, polygons; as torchvision and albumentations do), boxes span
-pixel edges (the whole image is 0, 0, W, H).
+bilinear); masks HxW of any integer or bool dtype (nearest, dtype kept; where
+there is no source, the label ``fill_mask``, but False for bool masks: "Fill"
+below); depth maps HxW float32 (nearest, values re-expressed in the moved camera);
+keypoints (N, 2) pixels with a visibility flag; boxes (N, 4) x_min, y_min, x_max,
+y_max in pixel-edge coordinates (the tight box of the transformed outline) with the
+visible fraction; polygons (K, 2) with edges subdivided to stay within 0.5 px of
+the curved image; the camera (its pose moved by the change). Pixel coordinates put
+pixel centres at integers (keypoints, polygons; as torchvision and albumentations
+do), boxes span pixel edges (the whole image is 0, 0, W, H).
+
+Fill (where the moved view has no source): ``fill`` is a number, the images' value,
+or a dict by target, ``{"image": 0, "mask": 255}`` (either key may be left out; any
+other key is refused). Semantic masks (HxW labels of an integer dtype) get the mask
+value, ``fill_mask`` or ``fill["mask"]``, e.g. the loss's ``ignore_index``: an
+integer in 0..65535 that fits the mask's dtype (a non-zero ``fill_mask`` and a
+``fill["mask"]`` that disagree are refused). Instance masks get 0 (False) whatever
+the mask value says, so that no-source pixels never join an instance: bool masks,
+and wherever an adapter knows a mask is an instance's (torch: NxHxW with N >= 2 and
+the "masks" of a detection target; albumentations: the ``masks`` target);
+``SampleChange.mask(..., instance=True)`` asks for it.
 
 Randomness: no generator lives inside the transform (or any C++ object). Without
 ``seed=``, one 64-bit seed is drawn per call from the ``rng`` given to the
@@ -65,28 +77,81 @@ def _integer(value: object, what: str) -> int:
     return int(value)
 
 
-def _check_p_and_fill(p: float, fill: float) -> None:
+def _check_p(p: float) -> None:
     if not (0 <= _number(p, "p") <= 1):
         raise Error(f"p: must be in [0, 1], got {p}")
-    if not np.isfinite(_number(fill, "fill")):
-        raise Error("fill: must be finite")
 
 
-def _labels_for_warp(mask: Array, fill_mask: int) -> typing.Tuple[Array, typing.Callable[[Array], Array]]:
+# What ``fill`` takes: a number (the images' fill) or a dict by target.
+Fill = typing.Union[float, typing.Mapping[typing.Any, float]]
+_LABEL_MAX = 65535  # the largest label the warp takes (uint16)
+
+
+def _key_name(key: object) -> str:
+    if isinstance(key, type):
+        return ("tv_tensors." if key.__module__.startswith("torchvision.tv_tensors") else "") + key.__name__
+    return repr(key)
+
+
+def _split_fill(fill: object, fill_mask: object, image_key: object = "image", mask_key: object = "mask",
+                finite: bool = True, label_range: typing.Optional[typing.Tuple[int, int]] = (0, _LABEL_MAX),
+                ) -> typing.Tuple[typing.Any, int]:
+    """(the images' fill, the semantic masks' fill) from ``fill`` (a number, or a
+    dict with ``image_key`` and/or ``mask_key``) and ``fill_mask``; fishcam.Error,
+    one line, for anything else: unknown keys (torchvision's "others" too: here a
+    number covers the images only), both mask fills given and disagreeing, values
+    that are not numbers (images; finite unless ``finite=False``) or integers in
+    ``label_range`` (masks)."""
+    mask_fill = _integer(fill_mask, "fill_mask")
+    if isinstance(fill, typing.Mapping):
+        names = {image_key: f"fill[{_key_name(image_key)}]", mask_key: f"fill[{_key_name(mask_key)}]"}
+        expected = f"{_key_name(image_key)} and/or {_key_name(mask_key)}"
+        for key in fill:
+            if key not in names:
+                why = " ('others' is ambiguous here: name the targets)" if key == "others" else ""
+                raise Error(f"fill: unknown key {_key_name(key)}{why}; expected {expected}")
+        image_fill = fill.get(image_key, 0)
+        image_name = names[image_key]
+        if mask_key in fill:
+            given = _integer(fill[mask_key], names[mask_key])
+            if mask_fill not in (0, given):
+                raise Error(f"{names[mask_key]}={given} and fill_mask={mask_fill} disagree: give the masks' fill once")
+            mask_fill, mask_name = given, names[mask_key]
+        else:
+            mask_name = "fill_mask"
+    else:
+        image_fill, image_name, mask_name = fill, "fill", "fill_mask"
+    value = _number(image_fill, image_name)
+    if finite and not np.isfinite(value):
+        raise Error(f"{image_name}: must be finite")
+    if label_range is not None and not label_range[0] <= mask_fill <= label_range[1]:
+        raise Error(f"{mask_name}: {mask_fill} outside {label_range[0]}..{label_range[1]} (the labels a mask can hold)")
+    return image_fill, mask_fill
+
+
+def _labels_for_warp(mask: Array, fill_mask: int,
+                     what: str = "mask") -> typing.Tuple[Array, typing.Callable[[Array], Array]]:
     """The mask as the warp takes it (uint8 or uint16: labels are sampled, never
     blended) and a function giving the warped mask its original dtype back. bool,
     int32 and int64 masks (torch's default for class ids) with values in 0..65535
-    are taken as uint16 and returned in their dtype; other values are refused."""
-    if mask is None or not isinstance(mask, np.ndarray) or mask.dtype in (np.uint8, np.uint16):
+    are taken as uint16 and returned in their dtype; other values are refused, and
+    so is a fill the mask's dtype cannot hold (bool masks: only 0)."""
+    if mask is None or not isinstance(mask, np.ndarray):
         return mask, lambda out: out
     if mask.dtype == np.bool_:
+        if fill_mask != 0:
+            raise Error(f"{what}: a bool mask's no-source fill is False, got {fill_mask}")
         return mask.view(np.uint8), lambda out: out.astype(np.bool_)
     if mask.dtype.kind not in "iu":
         raise Error(f"mask: expected an integer or bool label array, got dtype {mask.dtype}")
+    info = np.iinfo(mask.dtype)
+    low, high = max(int(info.min), 0), min(int(info.max), _LABEL_MAX)
+    if not low <= fill_mask <= high:
+        raise Error(f"{what}: the no-source fill {fill_mask} does not fit dtype {mask.dtype} ({low}..{high})")
+    if mask.dtype in (np.uint8, np.uint16):
+        return mask, lambda out: out
     if mask.size and (mask.min() < 0 or mask.max() > 65535):
         raise Error(f"mask: values {mask.min()}..{mask.max()} outside 0..65535 cannot be warped as labels")
-    if not 0 <= fill_mask <= 65535:
-        raise Error(f"fill_mask: {fill_mask} outside 0..65535")
     dtype = mask.dtype
     return mask.astype(np.uint16), lambda out: out.astype(dtype)
 
@@ -135,33 +200,42 @@ class SampleChange:
                  depth_map: typing.Callable[[Array], Array], camera: typing.Callable[[Camera], Camera],
                  size: typing.Tuple[int, int], fill_mask: int) -> None:
         self.record = record
-        self._fill_mask = fill_mask
+        self._fill_mask = fill_mask  # the semantic masks' no-source label
         self._forward = forward      # (N, 2) source pixels -> (pixels, visible)
-        self._resample = resample    # (image, labels) -> dict of the warp's outputs
+        self._resample = resample    # (image, labels, label_fill) -> dict of the warp's outputs
         self._depth_map = depth_map  # (depth map) -> depth map
         self._camera = camera        # Camera -> Camera
         self.size = size             # (width, height) of the output
 
     def image(self, image: Array, what: str = "image") -> Array:
         """An image resampled bilinearly (dtype and channels kept)."""
-        return self._resample(image=_image_array(image, what), labels=None)["image"]
+        return self._resample(image=_image_array(image, what), labels=None, label_fill=0)["image"]
 
-    def mask(self, mask: Array, what: str = "mask") -> Array:
-        """A label or instance-id mask resampled by nearest neighbour (never blended; dtype kept)."""
+    def mask_fill(self, mask: Array, instance: bool = False) -> int:
+        """The no-source value of ``mask``: 0 for an instance's mask (``instance``, or
+        any bool mask), else the semantic masks' fill (``fill_mask``)."""
+        return 0 if instance or (isinstance(mask, np.ndarray) and mask.dtype == np.bool_) else self._fill_mask
+
+    def mask(self, mask: Array, what: str = "mask", instance: bool = False) -> Array:
+        """A label or instance-id mask resampled by nearest neighbour (never blended; dtype
+        kept); where there is no source, ``mask_fill(mask, instance)``: the semantic
+        fill, or 0 (False) for an instance's mask (``instance=True``, or bool)."""
         if not isinstance(mask, np.ndarray):
             raise Error(f"{what}: expected a numpy array, got {type(mask).__name__}")
         if mask.ndim != 2:
             raise Error(f"{what}: expected an HxW array, got shape {mask.shape}")
-        labels, restore = _labels_for_warp(mask, self._fill_mask)
-        return restore(self._resample(image=None, labels=labels)["labels"])
+        fill = self.mask_fill(mask, instance)
+        labels, restore = _labels_for_warp(mask, fill, what)
+        return restore(self._resample(image=None, labels=labels, label_fill=fill)["labels"])
 
-    def image_and_mask(self, image: Array, mask: Array) -> typing.Tuple[Array, Array]:
-        """Both in one pass (the maps are computed once): (image, mask)."""
+    def image_and_mask(self, image: Array, mask: Array, instance: bool = False) -> typing.Tuple[Array, Array]:
+        """Both in one pass (the maps are computed once): (image, mask); the mask's fill as ``mask()``'s."""
         image = _image_array(image, "image")
         if not isinstance(mask, np.ndarray) or mask.ndim != 2:
             raise Error(f"mask: expected an HxW numpy array, got {getattr(mask, 'shape', type(mask).__name__)}")
-        labels, restore = _labels_for_warp(mask, self._fill_mask)
-        out = self._resample(image=image, labels=labels)
+        fill = self.mask_fill(mask, instance)
+        labels, restore = _labels_for_warp(mask, fill)
+        out = self._resample(image=image, labels=labels, label_fill=fill)
         return out["image"], restore(out["labels"])
 
     def depth_map(self, depth_map: Array, what: str = "depth_map") -> Array:
@@ -297,7 +371,11 @@ class RandomViewpoint:
         at the sample's own depth map (``depth_map=``, in the units of the change's
         translation; exact, and pixels the source never saw get no source).
     p: probability of applying a change (else the identity, still reported).
-    fill: image value where the new view has no source; fill_mask: the label there.
+    fill: where the new view has no source: the images' value (a number), or a dict
+        by target, ``{"image": 0, "mask": 255}``.
+    fill_mask: the semantic masks' label there (an integer in 0..65535 that fits the
+        mask's dtype; or ``fill["mask"]``). bool masks get False whatever it says
+        (the module docstring, "Fill").
     rng: a numpy Generator to draw seeds from (default: numpy's global generator).
     sampling: "grid" (default: maps interpolated from grid nodes, within 1/32 px of
         the per-pixel map, as ``fishcam augment``) or "exact".
@@ -306,7 +384,7 @@ class RandomViewpoint:
 
     def __init__(self, camera: typing.Optional[Camera] = None, preset: typing.Optional[str] = "train",
                  max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
-                 depth: str = "source-sphere", p: float = 1.0, fill: float = 0, fill_mask: int = 0,
+                 depth: str = "source-sphere", p: float = 1.0, fill: Fill = 0, fill_mask: int = 0,
                  rng: typing.Optional[np.random.Generator] = None, sampling: str = "grid",
                  depth_values: str = "range") -> None:
         if sampling not in _fishcam.sampling_names():
@@ -329,15 +407,14 @@ class RandomViewpoint:
             _fishcam.check_preset(str(preset))
         if depth not in _fishcam.depth_priors_and_map():
             raise Error(f"depth: expected {', '.join(_fishcam.depth_priors_and_map())}, got {depth!r}")
-        _check_p_and_fill(p, fill)
+        _check_p(p)
+        self.fill, self.fill_mask = _split_fill(fill, fill_mask)  # the images', the semantic masks'
         self.camera = camera
         self.preset = preset
         self.max_rotation_deg = max_rotation_deg
         self.max_translation = max_translation
         self.depth = depth
         self.p = float(p)
-        self.fill = fill
-        self.fill_mask = _integer(fill_mask, "fill_mask")
         self.rng = rng
         self.sampling = sampling
         self.depth_values = depth_values
@@ -374,9 +451,10 @@ class RandomViewpoint:
                 raise Error(f"depth_map: expected an HxW float32 array, got {got}")
         maps_depth = depth_map if self.depth == "map" else None
 
-        def resample(image: typing.Optional[Array], labels: typing.Optional[Array]) -> typing.Dict[str, Array]:
+        def resample(image: typing.Optional[Array], labels: typing.Optional[Array],
+                     label_fill: int) -> typing.Dict[str, Array]:
             return warp.warp(image=image, labels=labels, change=change, depth=self.depth, fill=self.fill,
-                             label_fill=self.fill_mask, sampling=self.sampling, depth_map=maps_depth,
+                             label_fill=label_fill, sampling=self.sampling, depth_map=maps_depth,
                              depth_values=self.depth_values)
 
         return SampleChange(
@@ -448,13 +526,13 @@ class RandomAffine:
         scale [0.5, 1.5]), "large" (the same), "medium" and "small" (2/3 and 1/3 of
         them); or give max_rotation_deg, max_translation and scale_range=(lo, hi).
     p, fill, fill_mask, rng: as RandomViewpoint. Resampled as RandomViewpoint does
-    (bilinear images, nearest labels, fill where there is no source); the same
+    (bilinear images, nearest labels, the fills where there is no source); the same
     seed gives the same change as ``fishcam augment --method affine --seed``.
     """
 
     def __init__(self, preset: typing.Optional[str] = "train", max_rotation_deg: typing.Optional[float] = None,
                  max_translation: typing.Optional[float] = None,
-                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, p: float = 1.0, fill: float = 0,
+                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, p: float = 1.0, fill: Fill = 0,
                  fill_mask: int = 0, rng: typing.Optional[np.random.Generator] = None) -> None:
         custom = (max_rotation_deg, max_translation, scale_range)
         if any(v is not None for v in custom) and not all(v is not None for v in custom):
@@ -471,13 +549,12 @@ class RandomAffine:
             self.scale_range = (low, high)
         elif preset not in _fishcam.affine_presets():
             _fishcam.random_affine(str(preset), 0)  # raises naming the presets
-        _check_p_and_fill(p, fill)
+        _check_p(p)
+        self.fill, self.fill_mask = _split_fill(fill, fill_mask)  # the images', the semantic masks'
         self.preset = preset
         self.max_rotation_deg = max_rotation_deg
         self.max_translation = max_translation
         self.p = float(p)
-        self.fill = fill
-        self.fill_mask = _integer(fill_mask, "fill_mask")
         self.rng = rng
 
     def change_for(self, seed: int) -> _fishcam.AffineChange:
@@ -499,14 +576,15 @@ class RandomAffine:
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.AffineChange()
 
-        def resample(image: typing.Optional[Array], labels: typing.Optional[Array]) -> typing.Dict[str, Array]:
+        def resample(image: typing.Optional[Array], labels: typing.Optional[Array],
+                     label_fill: int) -> typing.Dict[str, Array]:
             given = image if image is not None else labels
             assert given is not None
             if given.shape[:2] != (height, width):
                 raise Error(f"{'image' if image is not None else 'mask'}: is {given.shape[1]}x{given.shape[0]} "
                             f"but the sample is {width}x{height}")
             return _fishcam.affine_warp(image=image, labels=labels, change=change, fill=self.fill,
-                                        label_fill=self.fill_mask)
+                                        label_fill=label_fill)
 
         def depth_map(values: Array) -> Array:
             if values.shape != (height, width):

@@ -139,7 +139,12 @@ void bind_augmentation(py::module_& m) {
           "R of eq. 7: float64 array (3, 3).")
       .def(py::pickle(
           [](const RandomPose& p) { return py::make_tuple(p.rotation_deg, p.translation); },
-          [](const py::tuple& t) { return change_from(t[0].cast<Eigen::Vector3d>(), t[1].cast<Eigen::Vector3d>()); }))
+          [](const py::tuple& t) {
+            return from_pickle_state("pickled ViewpointChange", [&] {
+              if (t.size() != 2) throw Error("pickled ViewpointChange: expected 2 fields, got " + std::to_string(t.size()));
+              return change_from(t[0].cast<Eigen::Vector3d>(), t[1].cast<Eigen::Vector3d>());
+            });
+          }))
       .def("__repr__", [](const RandomPose& p) {
         char buffer[256];
         std::snprintf(buffer, sizeof buffer, "ViewpointChange(rotation_deg=(%.17g, %.17g, %.17g), translation=(%.17g, %.17g, %.17g))",
@@ -203,9 +208,9 @@ void bind_augmentation(py::module_& m) {
            }),
            py::arg("camera"), py::arg("target") = py::none(),
            "camera: the images' camera; target: the output camera (default: the same).")
-      .def_property_readonly("source", &ViewpointWarp::source, "The images' camera.")
-      .def_property_readonly("target", &ViewpointWarp::target, "The output camera.")
-      .def_property_readonly("float_kernel", &ViewpointWarp::float_kernel,
+      .def_property_readonly("source", [](const ViewpointWarp& self) -> decltype(auto) { return self.source(); }, "The images' camera.")
+      .def_property_readonly("target", [](const ViewpointWarp& self) -> decltype(auto) { return self.target(); }, "The output camera.")
+      .def_property_readonly("float_kernel", [](const ViewpointWarp& self) -> decltype(auto) { return self.float_kernel(); },
                              "Whether maps come from the float kernel (within 1e-3 px), else the exact path.")
       .def(
           "maps",
@@ -355,15 +360,17 @@ void bind_augmentation(py::module_& m) {
           "warp(...): one augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; "
           "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
           "asked.")
-      .def_property_readonly("grid_spacing", &ViewpointWarp::grid_spacing,
+      .def_property_readonly("grid_spacing", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_spacing(); },
                              "The grid path's node spacing in pixels (0: no grid, per-pixel maps).")
-      .def_property_readonly("grid_error_px", &ViewpointWarp::grid_error_px,
+      .def_property_readonly("grid_error_px", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_error_px(); },
                              "The grid's measured worst interpolation error against the per-pixel map (px).")
       .def(py::pickle(
           [](const ViewpointWarp& w) { return py::make_tuple(camera_state(w.source()), camera_state(w.target())); },
           [](const py::tuple& t) {
-            return ViewpointWarp(camera_from_state(t[0].cast<std::string>()),
-                                 camera_from_state(t[1].cast<std::string>()));
+            return from_pickle_state("pickled ViewpointWarp", [&] {
+              if (t.size() != 2) throw Error("pickled ViewpointWarp: expected 2 fields, got " + std::to_string(t.size()));
+              return ViewpointWarp(camera_from_state(t[0].cast<std::string>()), camera_from_state(t[1].cast<std::string>()));
+            });
           }));
 
   py::class_<AffineChange>(m, "AffineChange")
@@ -378,9 +385,12 @@ void bind_augmentation(py::module_& m) {
       .def_readonly("scale", &AffineChange::scale)
       .def(py::pickle([](const AffineChange& c) { return py::make_tuple(c.rotation_deg, c.translation, c.scale); },
                       [](const py::tuple& t) {
-                        AffineChange c{t[0].cast<double>(), t[1].cast<Eigen::Vector2d>(), t[2].cast<double>()};
-                        check_affine(c);
-                        return c;
+                        return from_pickle_state("pickled AffineChange", [&] {
+                          if (t.size() != 3) throw Error("pickled AffineChange: expected 3 fields, got " + std::to_string(t.size()));
+                          AffineChange c{t[0].cast<double>(), t[1].cast<Eigen::Vector2d>(), t[2].cast<double>()};
+                          check_affine(c);
+                          return c;
+                        });
                       }))
       .def("__repr__", [](const AffineChange& c) {
         char buffer[200];

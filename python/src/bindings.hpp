@@ -68,6 +68,20 @@ std::string shape_text(const py::array& a);
 std::string camera_state(const Camera& camera);
 Camera camera_from_state(const std::string& state);
 
+// A pickled state read by `read`: any state of the wrong shape or type (a tampered
+// or truncated pickle, a hand-made __setstate__ call) becomes a one-line Error
+// naming `what`, never a pybind11 cast or index error.
+template <class Read>
+auto from_pickle_state(const char* what, const Read& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const py::cast_error&) {
+    throw Error(std::string(what) + ": a field of the wrong type (not a state fishcam pickled)");
+  } catch (const py::error_already_set& e) {
+    throw Error(std::string(what) + ": not a state fishcam pickled (" + std::string(e.type().attr("__name__").cast<std::string>()) + ")");
+  }
+}
+
 void bind_camera(py::module_& m);
 void bind_augmentation(py::module_& m);
 void bind_metrics(py::module_& m);

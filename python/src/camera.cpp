@@ -177,8 +177,8 @@ void bind_camera(py::module_& m) {
           "Writes the camera in `format` (default: from the extension); refuses an existing file unless "
           "overwrite=True, and a format that cannot hold the model. Only fishcam JSON keeps a calibration record "
           "(a UserWarning says when it is left out).")
-      .def_property_readonly("width", &Camera::width, "Image width in pixels (int).")
-      .def_property_readonly("height", &Camera::height, "Image height in pixels (int).")
+      .def_property_readonly("width", [](const Camera& self) -> decltype(auto) { return self.width(); }, "Image width in pixels (int).")
+      .def_property_readonly("height", [](const Camera& self) -> decltype(auto) { return self.height(); }, "Image height in pixels (int).")
       .def_property_readonly(
           "model", [](const Camera& c) { return std::string(model_name(c.model())); },
           "The model's name (docs/models.md), e.g. 'polynomial', 'kannala-brandt'.")
@@ -209,7 +209,7 @@ void bind_camera(py::module_& m) {
           "skew", [](const Camera& c) { return std::pair(c.skew().xy, c.skew().yx); },
           "The pixel grid's skew (xy, yx): pixel = c + a * ([[1, xy], [yx, 1]] q) with q the model's image offset "
           "(docs/conventions.md); (0, 0) for the usual grid.")
-      .def_property_readonly("radial", &Camera::radial,
+      .def_property_readonly("radial", [](const Camera& self) -> decltype(auto) { return self.radial(); },
                              "Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do rho and "
                              "theta_from_rho describe its whole projection.")
       .def_property_readonly(
@@ -265,8 +265,8 @@ void bind_camera(py::module_& m) {
           "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
           py::arg("width"), py::arg("height"),
           "The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.")
-      .def_property_readonly("domain", &Camera::domain, "The model's valid domain (ValidDomain).")
-      .def_property_readonly("field_of_view_deg", &Camera::field_of_view_deg,
+      .def_property_readonly("domain", [](const Camera& self) -> decltype(auto) { return self.domain(); }, "The model's valid domain (ValidDomain).")
+      .def_property_readonly("field_of_view_deg", [](const Camera& self) -> decltype(auto) { return self.field_of_view_deg(); },
                              "The image's angular coverage (FieldOfView, degrees).")
       .def(
           "__eq__",
@@ -284,7 +284,9 @@ void bind_camera(py::module_& m) {
            "warp depends on); cheap, for caches and hashing")
       .def_static("from_json", &camera_from_state, py::arg("text"),
                   "The camera of fishcam JSON text (what to_json gives).")
-      .def(py::pickle(&camera_pickle_state, &camera_from_pickle_state))
+      .def(py::pickle(&camera_pickle_state, [](const py::object& state) {
+        return from_pickle_state("pickled camera", [&] { return camera_from_pickle_state(state); });
+      }))
       .def("__repr__", [](const Camera& c) {
         return "<fishcam.Camera " + std::string(model_name(c.model())) + " " + std::to_string(c.width()) + "x" +
                std::to_string(c.height()) + ">";

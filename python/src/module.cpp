@@ -18,9 +18,25 @@ PYBIND11_MODULE(_fishcam, m) {
       PyErr_SetString(error.ptr(), e.what());
     } catch (const cv::Exception& e) {
       PyErr_SetString(error.ptr(), ("OpenCV: " + e.err).c_str());
+    } catch (const py::reference_cast_error&) {
+      // pybind11's only way to meet an instance whose C++ object was never made
+      // (cls.__new__(cls) without __init__ or __setstate__).
+      PyErr_SetString(error.ptr(), "an object made without __init__ (cls.__new__ alone): make it with its constructor, "
+                                   "a reader or pickle");
     }
   });
   m.attr("__version__") = FISHCAM_VERSION;
+  // Whether obj's C++ object was made: cls.__new__(cls) alone leaves it unmade (its
+  // memory unset), and a method or property on it would read garbage or crash. The
+  // package checks this before every public method and property (fishcam/__init__.py).
+  m.def("_initialised", [](py::handle obj) {
+    if (!py::detail::get_type_info(Py_TYPE(obj.ptr()))) return true;  // not an extension class
+    auto* inst = reinterpret_cast<py::detail::instance*>(obj.ptr());
+    for (const auto& value_and_holder : py::detail::values_and_holders(inst)) {
+      if (!value_and_holder.holder_constructed()) return false;
+    }
+    return true;
+  });
   fishcam::python::bind_camera(m);
   fishcam::python::bind_augmentation(m);
   fishcam::python::bind_metrics(m);

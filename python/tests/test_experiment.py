@@ -103,7 +103,7 @@ def test_bad_input(dataset, tmp_path, capsys):
     assert experiment.main([str(tmp_path), str(tmp_path / "out"), "--quick"]) == 2
     assert "no train/rgb_images" in capsys.readouterr().err
     assert experiment.main([str(dataset), str(tmp_path / "out"), "--configs", "none,rotate"]) == 2
-    assert "config: expected one of" in capsys.readouterr().err
+    assert "--configs: expected one of" in capsys.readouterr().err
 
 
 def test_two_ddp_processes(dataset, tmp_path):

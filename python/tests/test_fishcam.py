@@ -285,6 +285,36 @@ def test_pickling_round_trips(cam):
     assert t.camera == cam and t.preset == "small"
 
 
+@pytest.mark.parametrize("protocol", range(pickle.HIGHEST_PROTOCOL + 1))
+def test_pickling_works_at_every_protocol(cam, protocol):
+    # Protocols 0 and 1 aborted the interpreter ("no registered base types").
+    assert pickle.loads(pickle.dumps(cam, protocol)) == cam
+    warp = pickle.loads(pickle.dumps(fishcam.ViewpointWarp(cam), protocol))
+    assert warp.source == cam
+    change = fishcam.random_change("medium", 9)
+    assert list(pickle.loads(pickle.dumps(change, protocol)).rotation_deg) == list(change.rotation_deg)
+    t = pickle.loads(pickle.dumps(RandomViewpoint(cam, preset="small"), protocol))
+    assert t.camera == cam and t.preset == "small"
+
+
+def test_objects_made_without_init_raise_instead_of_crashing(cam):
+    # cls.__new__(cls) alone: to_json segfaulted, width read uninitialised memory.
+    for cls, use in [(fishcam.Camera, lambda o: o.to_json()), (fishcam.Camera, lambda o: o.width),
+                     (fishcam.Camera, lambda o: o.domain), (fishcam.ViewpointWarp, lambda o: o.source),
+                     (fishcam.ViewpointChange, lambda o: o.rotation_deg)]:
+        with pytest.raises(fishcam.Error, match="made without __init__"):
+            use(cls.__new__(cls))
+
+
+def test_setstate_validates_its_input(cam):
+    for cls, state in [(fishcam.Camera, (1, 2)), (fishcam.Camera, "{not json"), (fishcam.Camera, 5),
+                       (fishcam.ViewpointChange, (1,)), (fishcam.ViewpointChange, ("a", "b")),
+                       (fishcam.ViewpointWarp, ("x",)), (fishcam.ViewpointWarp, (1, 2))]:
+        obj = cls.__new__(cls)
+        with pytest.raises(fishcam.Error):
+            obj.__setstate__(state)
+
+
 def test_bad_input_raises_fishcam_error(cam):
     warp = fishcam.ViewpointWarp(cam)
     change = fishcam.random_change("small", 1)

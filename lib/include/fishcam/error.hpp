@@ -29,6 +29,10 @@ std::string text_for_message(std::string_view text);
 // characters (the common case stays readable), else quoted_for_message's form.
 std::string path_for_message(const std::filesystem::path& path);
 
+// A number for a message: the shortest %g form that reads back as the same double
+// (90 is "90", 90 + 1e-9 is "90.000000001", the largest double "1.7976931348623157e+308").
+std::string number_for_message(double value);
+
 // "a, b or c" (or "a, b and c"): names for a message.
 std::string choices_for_message(const std::vector<std::string>& names, std::string_view conjunction = "or");
 

@@ -34,6 +34,8 @@ namespace fishcam {
 
 class MrcalLens {
  public:
+  // The largest |value| a lens may have (refused past it: no lens is that strong).
+  static constexpr double kMaxValue = 1e3;
   enum class Kind { splined_stereographic, cahvor, cahvore, lonlat, latlon };
   struct KindInfo {
     Kind kind;
