@@ -32,8 +32,10 @@ PYBIND11_MODULE(_fishcam, m) {
   m.def("_initialised", [](py::handle obj) {
     if (!py::detail::get_type_info(Py_TYPE(obj.ptr()))) return true;  // not an extension class
     auto* inst = reinterpret_cast<py::detail::instance*>(obj.ptr());
+    // An instance that refers to an object another owns (returned by reference) has
+    // no holder of its own; one that owns its object has it once the object is made.
     for (const auto& value_and_holder : py::detail::values_and_holders(inst)) {
-      if (!value_and_holder.holder_constructed()) return false;
+      if (!value_and_holder.value_ptr() || (inst->owned && !value_and_holder.holder_constructed())) return false;
     }
     return true;
   });
