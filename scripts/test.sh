@@ -12,4 +12,10 @@ cd "$(dirname "$0")/.."
 # CMAKE_BUILD_PARALLEL_LEVEL: pip's CMake build on every core (it builds serially otherwise).
 PATH=/usr/bin:$PATH CMAKE_BUILD_PARALLEL_LEVEL="$(nproc)" build/venv/bin/python -m pip install --quiet --no-deps --disable-pip-version-check . 2>&1 |
   { grep -v "^WARNING: Location 'file:" || true; }
+# Every test carries a label (tests/CMakeLists.txt): selections go by label.
+if /usr/bin/ctest --test-dir build -N -LE . | grep -q "Test *#"; then
+  echo "test.sh: tests without a label:" >&2
+  /usr/bin/ctest --test-dir build -N -LE . | grep "Test *#" >&2
+  exit 1
+fi
 /usr/bin/ctest --test-dir build --output-on-failure -j "$(nproc)"

@@ -329,6 +329,9 @@ TEST_F(CliReliability, ReadersRefuseMagnitudesNoCameraHas) {
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
+    // Through the program: one line on standard error, libmrcal's own lines not among them.
+    const auto file = put(dir_ / "lens.cameramodel", text);
+    expect_refused("info " + quoted(file), expected.substr(0, 40), dir_);
   }
 }
 

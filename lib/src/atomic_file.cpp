@@ -13,6 +13,7 @@
 #include <set>
 
 #include "fishcam/error.hpp"
+#include "file_descriptor.hpp"
 
 namespace fishcam {
 namespace {
@@ -36,13 +37,7 @@ std::string host_field() {
   return host;
 }
 
-// A file descriptor closed when the scope ends.
-struct FileDescriptor {
-  int fd = -1;
-  ~FileDescriptor() {
-    if (fd >= 0) close(fd);
-  }
-};
+using detail::FileDescriptor;
 
 // Creates the temporary for path exclusively (O_EXCL: never an existing file, never
 // through a symlink), writes bytes, closes it; returns its path. The random part

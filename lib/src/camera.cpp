@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include "fishcam/parallel.hpp"
+#include "stderr_capture.hpp"
 
 #include <algorithm>
 #include <array>
@@ -509,6 +510,35 @@ bool CalibrationRecord::observed(const Eigen::Vector3d& ray) const {
   return theta <= limit;  // false for NaN: no corner in that sector
 }
 
+namespace {
+
+// The domain's rays, 64 rings by 360 azimuths up to theta_max: libmrcal must evaluate
+// each without a complaint on standard error, or the lens is refused in one line (a
+// projection whose own iteration failed cannot be right).
+void check_lens_evaluates(const CameraParameters& p, double theta_max) {
+  detail::StderrCapture libmrcal;
+  std::visit(
+      [&](const auto& m) {
+        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
+          double derivative;
+          for (int ring = 1; ring <= 64; ++ring) {
+            const double u = m.plane_radius(theta_max * (1 - 1e-9) * ring / 64, &derivative);
+            for (int k = 0; k < 360; ++k) {
+              const double phi = 2 * std::numbers::pi * k / 360;
+              (void)distorted(m, *p.mrcal_lens, u * Eigen::Vector2d(std::cos(phi), std::sin(phi)));
+            }
+          }
+        }
+      },
+      p.model);
+  if (const std::string said = libmrcal.summary(); !said.empty()) {
+    fail("mrcal_lens: libmrcal cannot evaluate ", p.mrcal_lens->lensmodel().substr(0, 80),
+         " everywhere in its domain (it said: ", quoted_for_message(said, 200), ")");
+  }
+}
+
+}  // namespace
+
 Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_(std::move(parameters)) {
   if (params_.width <= 0 || params_.height <= 0 || params_.width > (1 << 16) || params_.height > (1 << 16)) {
     fail("width/height: must be in [1, 65536], got ", params_.width, "x", params_.height);
@@ -539,9 +569,21 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   if (!(1 - skew.xy * skew.yx > 0)) {
     fail("skew: the pixel grid must keep its orientation (1 - xy yx > 0), got xy ", skew.xy, ", yx ", skew.yx);
   }
-  if (params_.distorted_plane()) limit_to_plane_fold(), bound_plane_reach();
+  if (params_.distorted_plane()) {
+    // libmrcal says on standard error where its own projection fails (CAHVORE's
+    // iteration: "too many iterations"), never to the terminal from here: the scans
+    // meet such rays at and past the fold, so what it said is checked over the domain.
+    std::string libmrcal_said;
+    {
+      detail::StderrCapture libmrcal;
+      limit_to_plane_fold(), bound_plane_reach();
+      libmrcal_said = libmrcal.summary();
+    }
+    if (!libmrcal_said.empty() && params_.mrcal_lens) check_lens_evaluates(params_, domain_.theta_max);
+  }
   table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
 }
+
 
 void Camera::limit_to_plane_fold() {
   const TangentialTerms& terms = params_.tangential;
@@ -565,15 +607,18 @@ void Camera::limit_to_plane_fold() {
     }
     fold = std::visit([&](const auto& m) { return distortion_fold(m, terms, domain_); }, params_.model);
   }
-  if (!fold || *fold >= domain_.theta_max * (1 - 1e-12)) return;  // the radial limit comes first
-  if (!(*fold > 0)) {
-    fail(params_.mrcal_lens ? "mrcal_lens" : "tangential", ": the distortion is not one-to-one even next to the principal point");
+  if (fold && *fold < domain_.theta_max * (1 - 1e-12)) {  // else the radial limit comes first
+    if (!(*fold > 0)) {
+      fail(params_.mrcal_lens ? "mrcal_lens" : "tangential",
+           ": the distortion is not one-to-one even next to the principal point");
+    }
+    domain_.theta_max = *fold;
+    domain_.closed = true;
+    domain_.limited_by = ValidDomain::Limit::distortion_fold;
+    domain_.rho_max = rho(*fold);
   }
-  domain_.theta_max = *fold;
-  domain_.closed = true;
-  domain_.limited_by = ValidDomain::Limit::distortion_fold;
-  domain_.rho_max = rho(*fold);
 }
+
 
 void Camera::bound_plane_reach() {
   if (!domain_.closed) return;

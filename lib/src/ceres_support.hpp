@@ -3,6 +3,9 @@
 #pragma once
 
 #include <ceres/ceres.h>
+#include <glog/logging.h>
+
+#include <mutex>
 
 #include <string>
 #include <type_traits>
@@ -31,7 +34,16 @@ void bound_model_block(ceres::Problem* problem, double* block, int params) {
 }
 
 // Tight tolerances (the fits are checked to 1e-6 relative), silent, one thread.
+// Ceres reports through glog, whose warnings and errors go to standard error raw (a
+// near-degenerate problem printed ~40 lines): fishcam turns what they mean into its
+// own one-line errors and warnings, so below FATAL glog stays quiet in this process.
+inline void quiet_ceres_logging() {
+  static std::once_flag once;
+  std::call_once(once, [] { FLAGS_minloglevel = google::GLOG_FATAL; });
+}
+
 inline ceres::Solver::Options solver_options(ceres::LinearSolverType linear_solver) {
+  quiet_ceres_logging();
   ceres::Solver::Options options;
   options.linear_solver_type = linear_solver;
   options.max_num_iterations = 200;

@@ -9,16 +9,12 @@
 #include <cstring>
 
 #include "fishcam/error.hpp"
+#include "file_descriptor.hpp"
 
 namespace fishcam {
 namespace {
 
-struct FileDescriptor {
-  int fd = -1;
-  ~FileDescriptor() {
-    if (fd >= 0) close(fd);
-  }
-};
+using detail::FileDescriptor;
 
 // Opens path without blocking (a FIFO's open waits for a writer otherwise) and
 // checks it is a regular file within max_bytes; returns the descriptor and size.

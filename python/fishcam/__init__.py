@@ -59,10 +59,29 @@ def _require_initialised(obj: _typing.Any, name: str) -> None:
                     "a reader or pickle")
 
 
+# How to make the objects of classes without a constructor (pybind11's TypeError
+# "No constructor defined!" says nothing of it).
+_MADE_BY = {"Camera": "fishcam.Camera.read(path) or fishcam.Camera.from_json(text)"}
+
+
+def _shown(value: object, limit: int = 40) -> str:
+    """repr(value) on one line, shortened for a message (a 400-digit integer, an array...)."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= limit else f"{text[:limit // 2]}... ({len(text)} characters)"
+
+
+def _first_line(text: str) -> str:
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return lines[0] if lines else ""
+
+
 def _one_line_argument_errors(function: _F, name: str, bound: bool = False) -> _F:
-    """pybind11 reports arguments of the wrong type as a multi-line TypeError;
-    fishcam's errors are one-line fishcam.Error naming the call."""
-    initialised = bound and "." in name  # a method (not a constructor: its name has no ".")
+    """pybind11 reports arguments of the wrong type as a multi-line TypeError, and
+    the conversions of arguments raise TypeError or OverflowError (an integer past
+    64 bits, a float past float64); fishcam's errors are one-line fishcam.Error
+    naming the call."""
+    # A method (not a constructor, whose name has no ".", nor __setstate__, which makes the object).
+    initialised = bound and "." in name and not name.endswith(".__setstate__")
 
     @_functools.wraps(function)
     def call(*args: _typing.Any, **kwargs: _typing.Any) -> _typing.Any:
@@ -70,21 +89,29 @@ def _one_line_argument_errors(function: _F, name: str, bound: bool = False) -> _
             _require_initialised(args[0], name)
         try:
             return function(*args, **kwargs)
-        except TypeError as e:
-            text = str(e)
-            if "incompatible function arguments" not in text and "incompatible constructor arguments" not in text:
+        except Error as e:
+            if "\n" not in str(e):
                 raise
-            lines = [line.strip() for line in text.splitlines() if line.strip()]
-            expected = next((line.split(". ", 1)[1] for line in lines if line[:1].isdigit() and ". " in line), "")
+            # The promise is one line: a name given with a line break is quoted raw in some messages.
+            raise Error(str(e).replace("\r", "\\r").replace("\n", "\\n")) from None
+        except (TypeError, OverflowError) as e:
+            text = str(e)
             given = ", ".join([type(a).__name__ for a in args[1 if bound else 0:]] +
                               [f"{k}={type(v).__name__}" for k, v in kwargs.items()])
-            raise Error(f"{name}: arguments of the wrong type or range ({given}); expected {expected}") from None
+            if "incompatible function arguments" in text or "incompatible constructor arguments" in text:
+                lines = [line.strip() for line in text.splitlines() if line.strip()]
+                expected = next((line.split(". ", 1)[1] for line in lines if line[:1].isdigit() and ". " in line), "")
+                raise Error(f"{name}: arguments of the wrong type or range ({given}); expected {expected}") from None
+            if "No constructor defined" in text:
+                made_by = _MADE_BY.get(name, "its static methods")
+                raise Error(f"{name}: has no constructor; make one with {made_by}") from None
+            raise Error(f"{name}: arguments of the wrong type or range ({given}): {_first_line(text)}") from None
     return _typing.cast(_F, call)
 
 
 def _wrap_public_callables(cls: type) -> None:
     for attribute, value in list(vars(cls).items()):
-        if attribute.startswith("_") and attribute not in ("__init__", "__call__"):
+        if attribute.startswith("_") and attribute not in ("__init__", "__call__", "__setstate__"):
             continue
         if isinstance(value, property) and value.fget is not None:
             getter = value.fget
@@ -166,9 +193,9 @@ def compare(camera: Camera,
     """
     listed: _typing.List[_typing.Any] = [models] if isinstance(models, (str, Camera)) else list(models)
     if isinstance(seed, bool) or not isinstance(seed, (int, _np.integer)) or seed < 0:
-        raise Error(f"seed: expected a non-negative integer, got {seed!r}")
+        raise Error(f"seed: expected a non-negative integer, got {_shown(seed)}")
     if isinstance(samples, bool) or not isinstance(samples, (int, _np.integer)):
-        raise Error(f"samples: expected an integer, got {samples!r}")
+        raise Error(f"samples: expected an integer, got {_shown(samples)}")
     return _fishcam.compare(camera, listed, method, preset, int(samples), int(seed), depth, dict(labels or {}))
 
 

@@ -30,6 +30,7 @@ import contextlib
 import contextvars
 import typing
 import json
+import operator
 import os
 
 import numpy as np
@@ -45,7 +46,7 @@ except ImportError as error:  # pragma: no cover - the message is the point
 if not hasattr(tv_tensors, "KeyPoints"):  # pragma: no cover
     raise ImportError("fishcam.torch needs torchvision >= 0.23 (tv_tensors.KeyPoints); pip install -U torchvision")
 
-from . import Camera, Error, ViewpointChange, _check_seed, derive_seed, set_num_threads
+from . import Camera, Error, ViewpointChange, _check_seed, _shown, derive_seed, set_num_threads
 from . import transforms as _transforms
 
 __all__ = ["RandomViewpoint", "RandomAffine", "DepthMap", "Polygon", "WoodScapeDataset", "EpochSampler", "WarpedBatch",
@@ -74,6 +75,16 @@ def worker_init_fn(worker_id: int) -> None:
     set_num_threads(1)
 
 
+def _tensor_of(cls: typing.Type[tv_tensors.TVTensor], data: typing.Any, dtype: typing.Optional[torch.dtype],
+               device: typing.Optional[torch.device], requires_grad: typing.Optional[bool]) -> torch.Tensor:
+    """torch's tensor of ``data`` for a fishcam tv_tensor, or fishcam.Error naming the class."""
+    try:
+        return typing.cast(torch.Tensor, cls._to_tensor(data, dtype=dtype, device=device, requires_grad=requires_grad))
+    except (TypeError, ValueError, RuntimeError, OverflowError) as error:
+        raise Error(f"{cls.__name__}: not a tensor of numbers ({type(data).__name__}): "
+                    f"{str(error).splitlines()[0] if str(error) else type(error).__name__}") from None
+
+
 class DepthMap(tv_tensors.TVTensor):
     """A depth map (HxW or 1xHxW float32): the range along each pixel's ray, or its
     z (the transform's ``depth_values``). fishcam's transforms sample it without
@@ -88,8 +99,7 @@ class DepthMap(tv_tensors.TVTensor):
     def __new__(cls, data: typing.Any, *, dtype: typing.Optional[torch.dtype] = None,
                 device: typing.Optional[torch.device] = None,
                 requires_grad: typing.Optional[bool] = None) -> "DepthMap":
-        tensor = cls._to_tensor(data, dtype=dtype, device=device, requires_grad=requires_grad)
-        return cls._wrap(tensor)
+        return cls._wrap(_tensor_of(cls, data, dtype, device, requires_grad))
 
 
 class Polygon(tv_tensors.TVTensor):
@@ -105,7 +115,7 @@ class Polygon(tv_tensors.TVTensor):
     def __new__(cls, data: typing.Any, *, dtype: typing.Optional[torch.dtype] = None,
                 device: typing.Optional[torch.device] = None,
                 requires_grad: typing.Optional[bool] = None) -> "Polygon":
-        tensor = cls._to_tensor(data, dtype=dtype, device=device, requires_grad=requires_grad)
+        tensor = _tensor_of(cls, data, dtype, device, requires_grad)
         if tensor.ndim != 2 or tensor.shape[-1] != 2:
             raise Error(f"Polygon: expected shape (K, 2), got {tuple(tensor.shape)}")
         return cls._wrap(tensor)
@@ -154,6 +164,21 @@ def _cpu(tensor: torch.Tensor, what: str) -> torch.Tensor:
     return tensor.detach()
 
 
+def _numpy(tensor: torch.Tensor, what: str, expected: str) -> _transforms.Array:
+    """A CPU tensor as numpy (a view), or fishcam.Error naming ``expected`` for a
+    dtype numpy has not (bfloat16, complex32, float8, quantized...)."""
+    tensor = _cpu(tensor, what).resolve_conj().resolve_neg()
+    try:
+        array: _transforms.Array = tensor.numpy()
+    except (TypeError, RuntimeError):
+        raise Error(f"{what}: expected {expected}, got dtype {tensor.dtype}") from None
+    return array
+
+
+_IMAGE_DTYPES = "dtype uint8, uint16 or float32 (float64 is taken as float32)"
+_MASK_DTYPES = "an integer or bool dtype"
+
+
 def _image_to_numpy(tensor: torch.Tensor, what: str) -> _transforms.Array:
     """CHW (or HW) tensor -> HWC numpy (a view; the warp copies if it must), refusing
     what the warp cannot take with the layout in the message."""
@@ -162,7 +187,7 @@ def _image_to_numpy(tensor: torch.Tensor, what: str) -> _transforms.Array:
         raise Error(f"{what}: expected CxHxW or HxW, got shape {tuple(tensor.shape)}")
     if tensor.dtype == torch.float64:
         tensor = tensor.float()
-    array: _transforms.Array = tensor.numpy()
+    array = _numpy(tensor, what, _IMAGE_DTYPES)
     return np.moveaxis(array, 0, -1) if array.ndim == 3 else array
 
 
@@ -218,10 +243,15 @@ def is_instance_mask(mask: torch.Tensor, under_masks_key: bool = False) -> bool:
 
 
 def _size_of(flat_inputs: typing.List[typing.Any]) -> typing.Tuple[int, int]:
-    """(width, height) of the sample's images, masks or depth maps."""
+    """(width, height) of the sample's images, masks or depth maps (or plain tensors
+    of 2 or more dimensions, taken for images), else of its boxes or keypoints."""
     for x in flat_inputs:
         if isinstance(x, (tv_tensors.Image, tv_tensors.Mask, DepthMap)) or (
                 isinstance(x, torch.Tensor) and not isinstance(x, tv_tensors.TVTensor)):
+            if x.ndim < 2:
+                if isinstance(x, tv_tensors.TVTensor):
+                    raise Error(f"{type(x).__name__}: expected 2 or more dimensions, got shape {tuple(x.shape)}")
+                continue  # a plain scalar or vector (a label, an id): not an image
             return int(x.shape[-1]), int(x.shape[-2])
         if isinstance(x, (tv_tensors.BoundingBoxes, tv_tensors.KeyPoints)):
             return int(x.canvas_size[1]), int(x.canvas_size[0])
@@ -295,7 +325,7 @@ class _FishcamTransform(v2.Transform):
         if not images or not masks:
             return {}
         image, mask = images[0], masks[0]
-        out_image, out_mask = change.image_and_mask(_image_to_numpy(image, "image"), _cpu(mask, "mask").numpy(),
+        out_image, out_mask = change.image_and_mask(_image_to_numpy(image, "image"), _numpy(mask, "mask", _MASK_DTYPES),
                                                     instance=is_instance_mask(mask, id(mask) in instance_ids))
         return {id(image): _numpy_to_image(out_image, image),
                 id(mask): tv_tensors.wrap(torch.from_numpy(out_mask), like=mask)}
@@ -337,9 +367,10 @@ class _FishcamTransform(v2.Transform):
         source, 0 (False) for instance masks, else the semantic masks' fill."""
         tensor = _cpu(mask, "mask")
         if tensor.ndim == 2:
-            return torch.from_numpy(change.mask(tensor.numpy(), instance=instance))
+            return torch.from_numpy(change.mask(_numpy(tensor, "mask", _MASK_DTYPES), instance=instance))
         if tensor.ndim == 3:  # instance masks (N, H, W), or a 1xHxW label map: each plane on its own
-            planes = [change.mask(plane.numpy(), f"mask[{i}]", instance) for i, plane in enumerate(tensor)]
+            planes = [change.mask(_numpy(plane, f"mask[{i}]", _MASK_DTYPES), f"mask[{i}]", instance)
+                      for i, plane in enumerate(tensor)]
             return torch.from_numpy(np.stack(planes)) if planes else tensor.clone()
         raise Error(f"mask: expected HxW or NxHxW, got shape {tuple(tensor.shape)}")
 
@@ -432,7 +463,8 @@ class RandomViewpoint(_FishcamTransform):
             if len(maps) != 1:
                 raise Error(f"depth='map' needs exactly one fishcam.torch.DepthMap in the sample, got {len(maps)}")
             tensor = _cpu(maps[0], "depth map")
-            depth_map = (tensor.reshape(tensor.shape[-2:]) if tensor.ndim == 3 and tensor.shape[0] == 1 else tensor).numpy()
+            plane = tensor.reshape(tensor.shape[-2:]) if tensor.ndim == 3 and tensor.shape[0] == 1 else tensor
+            depth_map = _numpy(plane, "depth map", "HxW or 1xHxW float32")
         return self.numpy_transform.draw(camera, self._seed(), depth_map)
 
     def extra_repr(self) -> str:
@@ -491,8 +523,10 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
         masks: None or (B, H, W) integer or bool tensor on the images' device (nearest; dtype kept):
             one semantic label map per sample, or one bool mask per sample.
         depth: the depth prior ("source-sphere", "target-sphere", "infinity").
-        fill: where the moved camera has no source: the images' value (a number), or
-            ``{tv_tensors.Image: ..., tv_tensors.Mask: ...}`` as RandomViewpoint's.
+        fill: where the moved camera has no source: the images' value (a number: for
+            integer images one of their dtype's values, for floating point ones any
+            within its range, NaN too), or ``{tv_tensors.Image: ..., tv_tensors.Mask: ...}``
+            as RandomViewpoint's.
         fill_mask: the masks' value there (or ``fill[tv_tensors.Mask]``): an integer
             the masks' dtype holds (within +-2^24); bool masks get False whatever it says.
 
@@ -502,13 +536,26 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
     """
     if not isinstance(images, torch.Tensor) or images.ndim != 4:
         raise Error(f"images: expected a (B, C, H, W) tensor, got {getattr(images, 'shape', type(images).__name__)}")
-    image_fill: typing.Any = fill  # a number goes as it always did (NaN included, for float images)
+    if images.dtype == torch.bool or images.is_complex():
+        raise Error(f"images: expected an integer or floating point tensor, got {images.dtype}")
+    image_fill: typing.Any = fill  # a number (NaN included, for float images)
     if isinstance(fill, typing.Mapping):
         image_fill, fill_mask = _transforms._split_fill(fill, fill_mask, tv_tensors.Image, tv_tensors.Mask,
                                                         finite=False, label_range=None)
+    image_fill = _transforms._number(image_fill, "fill")
+    fill_mask = _transforms._integer(fill_mask, "fill_mask")
+    if images.is_floating_point():
+        if np.isfinite(image_fill) and abs(image_fill) > torch.finfo(images.dtype).max:
+            raise Error(f"images: the no-source fill {image_fill} is past the range of dtype {images.dtype}")
+    else:
+        info = torch.iinfo(images.dtype)
+        if not (image_fill.is_integer() and info.min <= image_fill <= info.max):
+            raise Error(f"images: the no-source fill {image_fill} is not a value of dtype {images.dtype} "
+                        f"(integers {info.min}..{info.max})")
     batch, _, height, width = images.shape
-    cameras = [cameras] * batch if isinstance(cameras, Camera) else list(cameras)
-    changes = list(changes)
+    cameras = [cameras] * batch if isinstance(cameras, Camera) else _transforms._sequence(
+        cameras, "cameras", "a fishcam.Camera or a sequence of them")
+    changes = _transforms._sequence(changes, "changes", "a sequence of fishcam.ViewpointChange")
     if len(cameras) != batch or len(changes) != batch:
         raise Error(f"cameras, changes: expected one per image ({batch}), got {len(cameras)} and {len(changes)}")
     if masks is not None and (not isinstance(masks, torch.Tensor) or tuple(masks.shape) != (batch, height, width)):
@@ -540,7 +587,7 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
         sampled = sampled.round_().clamp_(info.min, info.max)
     out_masks = None
     if masks is not None:
-        if masks.is_floating_point():
+        if masks.is_floating_point() or masks.is_complex():
             raise Error(f"masks: expected an integer or bool tensor, got {masks.dtype}")
         # float32 holds integers exactly up to 2^24: labels and instance ids.
         if masks.numel() and (int(masks.min()) < 0 or int(masks.max()) >= 2**24):
@@ -586,14 +633,14 @@ class EpochSampler(torch.utils.data.Sampler[typing.Tuple[int, int]]):
 
     def __init__(self, sampler: typing.Iterable[int], start_epoch: int = 0) -> None:
         if isinstance(start_epoch, bool) or not isinstance(start_epoch, int) or start_epoch < 0:
-            raise Error(f"EpochSampler: start_epoch must be a non-negative integer, got {start_epoch!r}")
+            raise Error(f"EpochSampler: start_epoch must be a non-negative integer, got {_shown(start_epoch)}")
         self.sampler = sampler
         self.next_epoch = start_epoch
 
     def set_epoch(self, epoch: int) -> None:
         """Makes the next pass epoch ``epoch``."""
         if isinstance(epoch, bool) or not isinstance(epoch, int) or epoch < 0:
-            raise Error(f"EpochSampler.set_epoch: expected a non-negative integer, got {epoch!r}")
+            raise Error(f"EpochSampler.set_epoch: expected a non-negative integer, got {_shown(epoch)}")
         self.next_epoch = epoch
 
     def __len__(self) -> int:
@@ -608,10 +655,21 @@ class EpochSampler(torch.utils.data.Sampler[typing.Tuple[int, int]]):
             yield (epoch, int(index))
 
 
+def _index(value: object, what: str) -> int:
+    """An integer index (int, numpy or 0-dimensional torch integer), or fishcam.Error."""
+    if isinstance(value, (bool, np.bool_)):
+        raise Error(f"{what}: expected an integer, got {type(value).__name__}")
+    try:
+        return operator.index(value)  # type: ignore[arg-type]
+    except TypeError:
+        raise Error(f"{what}: expected an integer, got {type(value).__name__}") from None
+
+
 class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
     """Samples of a WoodScape-layout folder: ``rgb_images/NAME.png``,
     ``semantic_annotations/gtLabels/NAME.png`` and ``calibration/NAME.json`` (one
-    calibration per image, as WoodScape has).
+    calibration per image, as WoodScape has). One image a name: ``NAME.png`` beside
+    ``NAME.jpg`` is refused (fishcam.Error naming both).
 
     Each item is a dict: ``image`` (``tv_tensors.Image``, 3xHxW uint8), ``mask``
     (``tv_tensors.Mask``, HxW ``mask_dtype``, int64 by default: what cross-entropy
@@ -644,24 +702,32 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
         images = os.path.join(self.root, "rgb_images")
         if not os.path.isdir(images):
             raise Error(f"{images}: missing (expected the WoodScape layout)")
-        self.names = sorted(os.path.splitext(f)[0] for f in os.listdir(images)
-                            if f.lower().endswith((".png", ".jpg", ".jpeg")))
+        # One image a name: NAME.png beside NAME.jpg would be one sample twice (or two
+        # images under one calibration and label image).
+        self._files: typing.Dict[str, str] = {}
+        for f in sorted(os.listdir(images)):
+            name, extension = os.path.splitext(f)
+            if extension.lower() not in (".png", ".jpg", ".jpeg"):
+                continue
+            if name in self._files:
+                raise Error(f"{images}: two images of sample {name!r}, {self._files[name]!r} and {f!r}: keep one")
+            self._files[name] = f
+        self.names = sorted(self._files)
         if not self.names:
             raise Error(f"{images}: no images")
-        self._files = {os.path.splitext(f)[0]: f for f in os.listdir(images)}
         self._cameras: typing.Dict[bytes, Camera] = {}
 
     def set_epoch(self, epoch: int) -> None:
         """The epoch of bare-index items in this process (DataLoader workers: use EpochSampler)."""
-        self.epoch = int(epoch)
+        self.epoch = _index(epoch, "WoodScapeDataset.set_epoch")
 
     def _epoch_and_index(self, key: typing.Union[int, typing.Tuple[int, int]]) -> typing.Tuple[typing.Optional[int], int]:
         if isinstance(key, tuple):
             if len(key) != 2:
-                raise Error(f"WoodScapeDataset: expected an index or (epoch, index), got {key!r}")
-            epoch, index = (int(k) for k in key)
+                raise Error(f"WoodScapeDataset: expected an index or (epoch, index), got {_shown(key)}")
+            epoch, index = (_index(k, "WoodScapeDataset: (epoch, index)") for k in key)
         else:
-            epoch, index = None, int(key)
+            epoch, index = None, _index(key, "WoodScapeDataset: index")
             if self.seed is not None and self.transform is not None:
                 if torch.utils.data.get_worker_info() is not None:
                     raise Error("WoodScapeDataset(seed=...) in a DataLoader worker needs the epoch with each index "

@@ -18,9 +18,11 @@ the curved image; the camera (its pose moved by the change). Pixel coordinates p
 pixel centres at integers (keypoints, polygons; as torchvision and albumentations
 do), boxes span pixel edges (the whole image is 0, 0, W, H).
 
-Fill (where the moved view has no source): ``fill`` is a number, the images' value,
-or a dict by target, ``{"image": 0, "mask": 255}`` (either key may be left out; any
-other key is refused). Semantic masks (HxW labels of an integer dtype) get the mask
+Fill (where the moved view has no source): ``fill`` is a number, the images' value
+(one their dtype holds: an integer in range for uint8 and uint16 images, refused at
+the call otherwise, rather than saturated or wrapped), or a dict by target,
+``{"image": 0, "mask": 255}`` (either key may be left out; any other key is
+refused). Semantic masks (HxW labels of an integer dtype) get the mask
 value, ``fill_mask`` or ``fill["mask"]``, e.g. the loss's ``ignore_index``: an
 integer in 0..65535 that fits the mask's dtype (a non-zero ``fill_mask`` and a
 ``fill["mask"]`` that disagree are refused). Instance masks get 0 (False) whatever
@@ -43,9 +45,10 @@ import typing
 import numpy as np
 import numpy.typing as npt
 
-from . import Camera, Error, ViewpointChange, ViewpointWarp, _check_seed, _fishcam, change_to_dict
+from . import Camera, Error, ViewpointChange, ViewpointWarp, _check_seed, _fishcam, _shown, change_to_dict
 
-__all__ = ["RandomViewpoint", "RandomAffine", "SampleChange", "POLYGON_TOLERANCE_PX", "affine_to_dict", "draw_seed"]
+__all__ = ["RandomViewpoint", "RandomAffine", "SampleChange", "POLYGON_TOLERANCE_PX", "BOX_MAX_POINTS",
+           "affine_to_dict", "draw_seed"]
 
 
 Array = npt.NDArray[typing.Any]
@@ -64,10 +67,13 @@ def draw_seed(rng: typing.Optional[np.random.Generator] = None) -> int:
 
 
 def _number(value: object, what: str) -> float:
-    """value as a float, or fishcam.Error naming the argument."""
+    """value as a float, or fishcam.Error naming the argument (an integer past float64 too)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise Error(f"{what}: expected a number, got {type(value).__name__}")
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:
+        raise Error(f"{what}: {_shown(value)} is out of range (past float64)") from None
 
 
 def _integer(value: object, what: str) -> int:
@@ -77,14 +83,57 @@ def _integer(value: object, what: str) -> int:
     return int(value)
 
 
+def _choice(value: object, choices: typing.Sequence[str], what: str, separator: str = " or ") -> str:
+    """value, one of the names ``choices``, or fishcam.Error listing them."""
+    if not isinstance(value, str) or value not in choices:
+        raise Error(f"{what}: expected {separator.join(choices)}, got {_shown(value)}")
+    return value
+
+
+def _preset_name(preset: object, presets: typing.Mapping[str, typing.Any]) -> str:
+    """preset if it is a string (the library refuses unknown names), else fishcam.Error."""
+    if not isinstance(preset, str):
+        raise Error(f"preset: expected a name ({', '.join(presets)}), got {_shown(preset)}")
+    return preset
+
+
 def _check_p(p: float) -> None:
     if not (0 <= _number(p, "p") <= 1):
         raise Error(f"p: must be in [0, 1], got {p}")
 
 
+def _check_rng(rng: object) -> None:
+    if rng is not None and not isinstance(rng, np.random.Generator):
+        raise Error(f"rng: expected a numpy.random.Generator or None, got {type(rng).__name__}")
+
+
+def _sequence(value: object, what: str, expected: str = "a list of arrays") -> typing.List[typing.Any]:
+    """A list given as any iterable (images=, polygons=, ...) as a list, or fishcam.Error."""
+    if isinstance(value, (str, bytes, typing.Mapping)) or not isinstance(value, typing.Iterable) or \
+            getattr(value, "ndim", 1) == 0:  # a 0-dimensional array or tensor does not iterate
+        raise Error(f"{what}: expected {expected}, got {type(value).__name__}")
+    return list(value)
+
+
+def _check_image_fill(fill: float, dtype: "np.dtype[typing.Any]", what: str) -> None:
+    """Refuses an images' fill that ``dtype`` cannot hold: for integer images an
+    integer in the dtype's range (300 or -1 for uint8, 1.5 for anything; OpenCV
+    would saturate, round, or wrap past 2^31), for float images one within the
+    dtype's finite range (NaN passes)."""
+    value = float(fill)
+    if dtype.kind in "iu":
+        info = np.iinfo(dtype)
+        if not (value.is_integer() and info.min <= fill <= info.max):
+            raise Error(f"{what}: the no-source fill {_shown(fill)} is not a value of dtype {dtype} "
+                        f"(integers {info.min}..{info.max})")
+    elif dtype.kind == "f" and np.isfinite(value) and abs(value) > float(np.finfo(dtype).max):
+        raise Error(f"{what}: the no-source fill {_shown(fill)} is past the range of dtype {dtype}")
+
+
 # What ``fill`` takes: a number (the images' fill) or a dict by target.
 Fill = typing.Union[float, typing.Mapping[typing.Any, float]]
 _LABEL_MAX = 65535  # the largest label the warp takes (uint16)
+_MAX_SIDE = 2**31 - 1  # the largest image side (OpenCV's int)
 
 
 def _key_name(key: object) -> str:
@@ -165,6 +214,8 @@ def _image_array(image: object, what: str) -> Array:
                     "(np.moveaxis(image, 0, -1))")
     if image.dtype == np.float64:
         raise Error(f"{what}: float64 images are not resampled; pass float32 (image.astype(np.float32))")
+    if image.ndim not in (2, 3):
+        raise Error(f"{what}: expected an HxW or HxWxC array, got shape {image.shape}")
     return image
 
 
@@ -172,8 +223,8 @@ def _points_array(points: object, what: str, k: int = 2) -> Array:
     """(N, k) float64 from any array-like of numbers, or fishcam.Error naming it."""
     try:
         array = np.asarray(points, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise Error(f"{what}: expected an array of numbers") from None
+    except (TypeError, ValueError, OverflowError):
+        raise Error(f"{what}: expected an array of numbers (float64)") from None
     if array.size == 0:
         return array.reshape(0, k)
     if array.ndim != 2 or array.shape[1] != k:
@@ -198,8 +249,9 @@ class SampleChange:
     def __init__(self, record: Record, forward: Forward,
                  resample: typing.Callable[..., typing.Dict[str, Array]],
                  depth_map: typing.Callable[[Array], Array], camera: typing.Callable[[Camera], Camera],
-                 size: typing.Tuple[int, int], fill_mask: int) -> None:
+                 size: typing.Tuple[int, int], fill_mask: int, fill: float = 0) -> None:
         self.record = record
+        self._fill = fill            # the images' no-source value
         self._fill_mask = fill_mask  # the semantic masks' no-source label
         self._forward = forward      # (N, 2) source pixels -> (pixels, visible)
         self._resample = resample    # (image, labels, label_fill) -> dict of the warp's outputs
@@ -208,8 +260,11 @@ class SampleChange:
         self.size = size             # (width, height) of the output
 
     def image(self, image: Array, what: str = "image") -> Array:
-        """An image resampled bilinearly (dtype and channels kept)."""
-        return self._resample(image=_image_array(image, what), labels=None, label_fill=0)["image"]
+        """An image resampled bilinearly (dtype and channels kept); fishcam.Error for
+        a fill the image's dtype cannot hold (``_check_image_fill``)."""
+        image = _image_array(image, what)
+        _check_image_fill(self._fill, image.dtype, what)
+        return self._resample(image=image, labels=None, label_fill=0)["image"]
 
     def mask_fill(self, mask: Array, instance: bool = False) -> int:
         """The no-source value of ``mask``: 0 for an instance's mask (``instance``, or
@@ -231,6 +286,7 @@ class SampleChange:
     def image_and_mask(self, image: Array, mask: Array, instance: bool = False) -> typing.Tuple[Array, Array]:
         """Both in one pass (the maps are computed once): (image, mask); the mask's fill as ``mask()``'s."""
         image = _image_array(image, "image")
+        _check_image_fill(self._fill, image.dtype, "image")
         if not isinstance(mask, np.ndarray) or mask.ndim != 2:
             raise Error(f"mask: expected an HxW numpy array, got {getattr(mask, 'shape', type(mask).__name__)}")
         fill = self.mask_fill(mask, instance)
@@ -252,27 +308,46 @@ class SampleChange:
 
     def boxes(self, boxes: object, what: str = "boxes", clip: bool = True) -> typing.Tuple[Array, Array]:
         """(N, 4) x_min, y_min, x_max, y_max (pixel edges) -> (boxes (N, 4), visible
-        fraction (N,)): the tight box of the densely transformed outline, clipped to
-        the image unless ``clip=False``; the fraction of it inside the image (0, and
-        an empty box, where nothing maps)."""
+        fraction (N,)): the tight box of the transformed box, clipped to the image
+        unless ``clip=False``; the fraction of it inside the image (0, and an empty
+        box, where nothing maps). A box is first clipped to the image plus one image
+        size on each side (what lies past that never comes into view); its outline is
+        then sampled adaptively, at most BOX_MAX_POINTS points a box (``_mapped_extents``),
+        and where part of it has no image (past the camera's field of view), lines
+        across the box's part of the image find the content that stays in view."""
         boxes = _points_array(boxes, what, 4)
-        out = np.zeros_like(boxes)
-        visibility = np.zeros(len(boxes))
+        bad = np.flatnonzero(~((boxes[:, 2] >= boxes[:, 0]) & (boxes[:, 3] >= boxes[:, 1])))
+        if len(bad):
+            raise Error(f"{what}[{bad[0]}]: expected x_min <= x_max and y_min <= y_max, got {boxes[bad[0]].tolist()}")
         width, height = self.size
-        for i, (x0, y0, x1, y1) in enumerate(boxes):
-            if not (x1 >= x0 and y1 >= y0):
-                raise Error(f"{what}[{i}]: expected x_min <= x_max and y_min <= y_max, got {boxes[i].tolist()}")
-            outline = _box_outline(x0 - 0.5, y0 - 0.5, x1 - 0.5, y1 - 0.5)  # pixel centres at integers
-            mapped, _ = self._forward(outline)
-            mapped = mapped[np.isfinite(mapped).all(axis=1)] + 0.5
-            if len(mapped) == 0:
-                continue
-            lo, hi = mapped.min(axis=0), mapped.max(axis=0)
-            clipped_lo, clipped_hi = np.maximum(lo, 0), np.minimum(hi, (width, height))
-            area = np.prod(hi - lo)
-            inside = np.prod(np.maximum(clipped_hi - clipped_lo, 0))
-            visibility[i] = inside / area if area > 0 else float(inside >= 0 and (clipped_hi >= clipped_lo).all())
-            out[i] = [*np.minimum(clipped_lo, (width, height)), *np.maximum(clipped_hi, 0)] if clip else [*lo, *hi]
+        # Pixel edges -> pixel centres at integers, within the image plus one image size.
+        low, high = np.array([-width, -height]) - 0.5, np.array([2 * width, 2 * height]) - 0.5
+        corners = np.clip(boxes.reshape(-1, 2, 2) - 0.5, low, high)
+        # The outline leaves the interior lines' first samples of the budget.
+        first = (4 + 2 * _BOX_INTERIOR_LINES) * (_BOX_FIRST_STEPS + 1)
+        lo, hi, missed, used = _mapped_extents(self._forward, *_box_lines(corners), len(boxes),
+                                               np.full(len(boxes), BOX_MAX_POINTS - first))
+        if missed.any():  # the content that stays in view: lines across the box's part of the image
+            inner = np.clip(corners[missed], -0.5, np.array([width, height]) - 0.5)
+            seen = (inner[:, 1] >= inner[:, 0]).all(axis=1)
+            owners = np.flatnonzero(missed)[seen]
+            starts, ends, owner = _box_lines(inner[seen], _BOX_INTERIOR_LINES)
+            more_lo, more_hi, _, _ = _mapped_extents(self._forward, starts, ends, owners[owner], len(boxes),
+                                                     BOX_MAX_POINTS - used)
+            lo, hi = np.fmin(lo, more_lo), np.fmax(hi, more_hi)
+        found = np.isfinite(lo).all(axis=1)
+        lo, hi = lo + 0.5, hi + 0.5
+        size = np.array([width, height], dtype=np.float64)
+        clipped_lo, clipped_hi = np.maximum(lo, 0), np.minimum(hi, size)
+        area = np.prod(hi - lo, axis=1)
+        inside = np.prod(np.maximum(clipped_hi - clipped_lo, 0), axis=1)
+        point_inside = (clipped_hi >= clipped_lo).all(axis=1).astype(np.float64)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            visibility = np.where(area > 0, inside / np.where(area > 0, area, 1), point_inside)
+        out = (np.concatenate([np.minimum(clipped_lo, size), np.maximum(clipped_hi, 0)], axis=1) if clip
+               else np.concatenate([lo, hi], axis=1))
+        out[~found] = 0
+        visibility[~found] = 0
         return out, visibility
 
     def polygon(self, polygon: object, what: str = "polygon") -> Array:
@@ -290,14 +365,89 @@ class SampleChange:
         return self._camera(camera)
 
 
-def _box_outline(x0: float, y0: float, x1: float, y1: float, step: float = 0.25) -> Array:
-    """Points every `step` px around the box (corners included)."""
-    nx = max(int(np.ceil((x1 - x0) / step)), 1)
-    ny = max(int(np.ceil((y1 - y0) / step)), 1)
-    xs = np.linspace(x0, x1, nx + 1)
-    ys = np.linspace(y0, y1, ny + 1)
-    return np.concatenate([np.stack([xs, np.full_like(xs, y0)], 1), np.stack([xs, np.full_like(xs, y1)], 1),
-                           np.stack([np.full_like(ys, x0), ys], 1), np.stack([np.full_like(ys, x1), ys], 1)])
+# Box outlines (SampleChange.boxes): at most BOX_MAX_POINTS mapped points a box; an
+# outline is sampled at first _BOX_FIRST_STEPS intervals a side, then each interval
+# halved while the image of its midpoint lies farther than _BOX_TOLERANCE_PX from the
+# chord (or the outline leaves the field of view in it), down to _BOX_MIN_STEP_PX.
+BOX_MAX_POINTS = 4096
+_BOX_FIRST_STEPS = 16
+_BOX_TOLERANCE_PX = 0.05
+_BOX_MIN_STEP_PX = 0.25
+_BOX_INTERIOR_LINES = 15  # a direction, across a box whose outline partly has no image
+
+
+def _box_lines(corners: Array, interior: int = 0) -> typing.Tuple[Array, Array, Array]:
+    """The sides of boxes ((N, 2, 2): (x0, y0), (x1, y1)), and ``interior`` lines
+    across each in both directions: (starts (L, 2), ends (L, 2), box of each (L,))."""
+    (x0, y0), (x1, y1) = corners[:, 0].T, corners[:, 1].T
+    starts = [np.stack(p, axis=1) for p in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))]
+    ends = [np.stack(p, axis=1) for p in ((x1, y0), (x1, y1), (x0, y1), (x0, y0))]
+    for k in range(1, interior + 1):
+        x, y = x0 + (x1 - x0) * k / (interior + 1), y0 + (y1 - y0) * k / (interior + 1)
+        starts += [np.stack((x0, y), axis=1), np.stack((x, y0), axis=1)]
+        ends += [np.stack((x1, y), axis=1), np.stack((x, y1), axis=1)]
+    owner = np.tile(np.arange(len(corners)), len(starts))
+    return np.concatenate(starts), np.concatenate(ends), owner
+
+
+def _mapped_extents(forward: Forward, starts: Array, ends: Array, owner: Array, count: int,
+                    budget: Array) -> typing.Tuple[Array, Array, Array, Array]:
+    """The bounding boxes (lo (count, 2), hi (count, 2); NaN where nothing maps) of
+    the images of the straight lines starts[k] -> ends[k], line k belonging to box
+    owner[k]; whether a sample of a box's lines had no image (count,); the points
+    mapped a box (count,). Each line is sampled adaptively (the constants above): at
+    first _BOX_FIRST_STEPS + 1 points, then at most ``budget[box]`` points a box in
+    all: where that runs out, the intervals bending most are halved first."""
+    lo = np.full((count, 2), np.inf)
+    hi = np.full((count, 2), -np.inf)
+    missed = np.zeros(count, dtype=bool)
+    used = np.zeros(count, dtype=np.int64)
+
+    def record(mapped: Array, boxes: Array) -> Array:
+        finite: Array = np.isfinite(mapped).all(axis=1)
+        np.minimum.at(lo, boxes[finite], mapped[finite])
+        np.maximum.at(hi, boxes[finite], mapped[finite])
+        missed[boxes[~finite]] = True
+        np.add.at(used, boxes, 1)
+        return finite
+
+    steps = np.linspace(0.0, 1.0, _BOX_FIRST_STEPS + 1)[None, :, None]
+    points = starts[:, None] + (ends - starts)[:, None] * steps  # (L, S + 1, 2)
+    if len(points):
+        mapped = forward(points.reshape(-1, 2))[0].reshape(points.shape)
+        record(mapped.reshape(-1, 2), np.repeat(owner, points.shape[1]))
+    else:
+        mapped = points
+    a, b = points[:, :-1].reshape(-1, 2), points[:, 1:].reshape(-1, 2)
+    fa, fb = mapped[:, :-1].reshape(-1, 2), mapped[:, 1:].reshape(-1, 2)
+    box = np.repeat(owner, _BOX_FIRST_STEPS)
+    priority = np.full(len(a), np.inf)
+    while len(a):
+        # Halve what is long enough, within each box's budget, the most bent first.
+        keep = np.flatnonzero(np.hypot(*(b - a).T) >= 2 * _BOX_MIN_STEP_PX)
+        order = keep[np.lexsort((-priority[keep], box[keep]))]
+        first = np.searchsorted(box[order], box[order], side="left")
+        order = order[np.arange(len(order)) - first < (budget - used)[box[order]]]
+        if len(order) == 0:
+            break
+        a, b, fa, fb, box = a[order], b[order], fa[order], fb[order], box[order]
+        m = (a + b) / 2
+        fm = forward(m)[0]
+        finite_m = record(fm, box)
+        finite_a, finite_b = np.isfinite(fa).all(axis=1), np.isfinite(fb).all(axis=1)
+        with np.errstate(invalid="ignore"):
+            bend = np.hypot(*(fm - (fa + fb) / 2).T)
+        # Where the line leaves (or enters) the field of view: halved down to the finest step.
+        edge = (finite_a != finite_b) | (finite_a & finite_b & ~finite_m) | (~finite_a & ~finite_b & finite_m)
+        split = edge | (finite_a & finite_b & finite_m & (bend > _BOX_TOLERANCE_PX))
+        level = np.where(edge, np.inf, np.nan_to_num(bend))[split]
+        a, b = np.concatenate([a[split], m[split]]), np.concatenate([m[split], b[split]])
+        fa, fb = np.concatenate([fa[split], fm[split]]), np.concatenate([fm[split], fb[split]])
+        box = np.concatenate([box[split], box[split]])
+        priority = np.concatenate([level, level])
+    lo[~np.isfinite(lo).all(axis=1)] = np.nan
+    hi[~np.isfinite(hi).all(axis=1)] = np.nan
+    return lo, hi, missed, used
 
 
 def _subdivided(forward: Forward, starts: Array, ends: Array) -> Array:
@@ -387,10 +537,8 @@ class RandomViewpoint:
                  depth: str = "source-sphere", p: float = 1.0, fill: Fill = 0, fill_mask: int = 0,
                  rng: typing.Optional[np.random.Generator] = None, sampling: str = "grid",
                  depth_values: str = "range") -> None:
-        if sampling not in _fishcam.sampling_names():
-            raise Error(f"sampling: expected {' or '.join(_fishcam.sampling_names())}, got {sampling!r}")
-        if depth_values not in _fishcam.depth_values_names():
-            raise Error(f"depth_values: expected {' or '.join(_fishcam.depth_values_names())}, got {depth_values!r}")
+        _choice(sampling, _fishcam.sampling_names(), "sampling")
+        _choice(depth_values, _fishcam.depth_values_names(), "depth_values")
         if camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
         if (max_rotation_deg is None) != (max_translation is None):
@@ -404,10 +552,10 @@ class RandomViewpoint:
             if not (np.isfinite(translation) and translation >= 0):
                 raise Error(f"max_translation: must be finite and >= 0, got {max_translation}")
         else:
-            _fishcam.check_preset(str(preset))
-        if depth not in _fishcam.depth_priors_and_map():
-            raise Error(f"depth: expected {', '.join(_fishcam.depth_priors_and_map())}, got {depth!r}")
+            _fishcam.check_preset(_preset_name(preset, _fishcam.presets()))
+        _choice(depth, _fishcam.depth_priors_and_map(), "depth", ", ")
         _check_p(p)
+        _check_rng(rng)
         self.fill, self.fill_mask = _split_fill(fill, fill_mask)  # the images', the semantic masks'
         self.camera = camera
         self.preset = preset
@@ -465,7 +613,7 @@ class RandomViewpoint:
             depth_map=lambda depth_map: warp.warp_depth(depth_map, change, self.depth, self.depth_values),
             camera=lambda c: c.augmented(change),
             size=(camera.width, camera.height),
-            fill_mask=self.fill_mask)
+            fill_mask=self.fill_mask, fill=self.fill)
 
     def __call__(self, image: typing.Optional[Array] = None, mask: typing.Optional[Array] = None,
                  camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None,
@@ -503,7 +651,8 @@ def _apply(sample_change: SampleChange, image: typing.Optional[Array], mask: typ
     elif mask is not None:
         out["mask"] = sample_change.mask(mask)
     if targets.get("images") is not None:
-        out["images"] = [sample_change.image(x, f"images[{i}]") for i, x in enumerate(targets["images"])]
+        out["images"] = [sample_change.image(x, f"images[{i}]")
+                         for i, x in enumerate(_sequence(targets["images"], "images"))]
     if targets.get("depth_map") is not None:
         out["depth_map"] = sample_change.depth_map(targets["depth_map"])
     if targets.get("keypoints") is not None:
@@ -511,7 +660,8 @@ def _apply(sample_change: SampleChange, image: typing.Optional[Array], mask: typ
     if targets.get("boxes") is not None:
         out["boxes"], out["boxes_visibility"] = sample_change.boxes(targets["boxes"])
     if targets.get("polygons") is not None:
-        out["polygons"] = [sample_change.polygon(x, f"polygons[{i}]") for i, x in enumerate(targets["polygons"])]
+        out["polygons"] = [sample_change.polygon(x, f"polygons[{i}]")
+                           for i, x in enumerate(_sequence(targets["polygons"], "polygons"))]
     if camera is not None:
         out["camera"] = sample_change.camera(camera)
     return out
@@ -540,16 +690,18 @@ class RandomAffine:
         self.scale_range: typing.Optional[typing.Tuple[float, float]] = None
         if max_rotation_deg is not None:
             preset = None
-            try:
-                low, high = (float(v) for v in typing.cast(typing.Iterable[float], scale_range))
-            except (TypeError, ValueError):
-                raise Error(f"scale_range: expected (low, high), got {scale_range!r}") from None
+            scales = [_number(v, "scale_range") for v in _sequence(scale_range, "scale_range", "(low, high)")]
+            if len(scales) != 2:
+                raise Error(f"scale_range: expected (low, high), got {_shown(scale_range)}")
+            low, high = scales
             # The library checks the ranges (one message for every binding).
-            _fishcam.random_affine_in(max_rotation_deg, _number(max_translation, "max_translation"), low, high, 0)
+            _fishcam.random_affine_in(_number(max_rotation_deg, "max_rotation_deg"),
+                                      _number(max_translation, "max_translation"), low, high, 0)
             self.scale_range = (low, high)
-        elif preset not in _fishcam.affine_presets():
-            _fishcam.random_affine(str(preset), 0)  # raises naming the presets
+        elif _preset_name(preset, _fishcam.affine_presets()) not in _fishcam.affine_presets():
+            _fishcam.random_affine(typing.cast(str, preset), 0)  # raises naming the presets
         _check_p(p)
+        _check_rng(rng)
         self.fill, self.fill_mask = _split_fill(fill, fill_mask)  # the images', the semantic masks'
         self.preset = preset
         self.max_rotation_deg = max_rotation_deg
@@ -567,10 +719,10 @@ class RandomAffine:
 
     def draw(self, size: typing.Tuple[int, int], seed: typing.Optional[int] = None) -> SampleChange:
         """The SampleChange of one call for images of ``size`` = (width, height)."""
-        try:
-            width, height = (_integer(v, "size") for v in size)
-        except TypeError:
-            raise Error(f"size: expected (width, height), got {size!r}") from None
+        sides = [_integer(v, "size") for v in _sequence(size, "size", "(width, height)")]
+        if len(sides) != 2 or not all(1 <= v <= _MAX_SIDE for v in sides):
+            raise Error(f"size: expected (width, height), each in 1..{_MAX_SIDE}, got {_shown(size)}")
+        width, height = sides
         if seed is None:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
@@ -598,7 +750,7 @@ class RandomAffine:
             depth_map=depth_map,
             camera=lambda c: c,  # no camera model: the camera is passed on as it is
             size=(width, height),
-            fill_mask=self.fill_mask)
+            fill_mask=self.fill_mask, fill=self.fill)
 
     def __call__(self, image: typing.Optional[Array] = None, mask: typing.Optional[Array] = None,
                  camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None,
@@ -606,8 +758,8 @@ class RandomAffine:
         """As RandomViewpoint's; ``camera`` is passed on unchanged (the baseline has no
         camera model), depth maps keep their values (sampled as masks)."""
         given = next((x for x in (image, mask, targets.get("depth_map")) if x is not None), None)
-        if given is None and targets.get("images"):
-            given = targets["images"][0]
+        if given is None and targets.get("images") is not None:
+            given = next(iter(_sequence(targets["images"], "images")), None)
         if given is None:
             raise Error("nothing to transform: pass image= and/or mask= (or images=, depth_map=)")
         if not isinstance(given, np.ndarray) or given.ndim < 2:

@@ -87,8 +87,8 @@ std::string camera_state(const Camera& camera) {
   return format_camera(camera.parameters(), CameraFormat::fishcam);
 }
 
-Camera camera_from_state(const std::string& state) {
-  return Camera(parse_camera(state, "pickled camera", CameraFormat::fishcam));
+Camera camera_from_state(const std::string& state, const char* what) {
+  return Camera(parse_camera(state, what, CameraFormat::fishcam));
 }
 
 

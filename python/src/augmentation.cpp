@@ -56,6 +56,23 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
                   " but the camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
     }
   }
+  // A fill the image's type cannot hold would be saturated or wrapped by OpenCV (2^31
+  // became 0 on uint8): refused, as the transforms refuse it.
+  if (image) {
+    const int depth = image_in.depth();
+    const auto [lowest, highest] = depth == CV_8U    ? std::pair{0.0, 255.0}
+                                   : depth == CV_16U ? std::pair{0.0, 65535.0}
+                                   : depth == CV_16S ? std::pair{-32768.0, 32767.0}
+                                                     : std::pair{-double(std::numeric_limits<float>::max()),
+                                                                 double(std::numeric_limits<float>::max())};
+    const bool integral = depth == CV_8U || depth == CV_16U || depth == CV_16S;
+    if (!(fill >= lowest && fill <= highest) || (integral && fill != std::floor(fill))) {
+      throw Error("fill: " + number_for_message(fill) + " is not a value of the image's type (" +
+                  (integral ? "integers in [" + number_for_message(lowest) + ", " + number_for_message(highest) + "]"
+                            : std::string("finite float32")) +
+                  ")");
+    }
+  }
   const std::array<const uchar*, 3> before{image_out.data, labels_out.data, valid_out.data};
   apply(AugmentIO{image ? &image_in : nullptr, &image_out, fill, labels ? &labels_in : nullptr, &labels_out, label_fill,
                   return_valid ? &valid_out : nullptr});

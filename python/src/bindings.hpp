@@ -66,7 +66,9 @@ std::string shape_text(const py::array& a);
 
 // The camera's full state as fishcam JSON (exact: doubles are written round-trip).
 std::string camera_state(const Camera& camera);
-Camera camera_from_state(const std::string& state);
+// A camera from fishcam JSON; `what` names the text in messages ("pickled camera",
+// "from_json text").
+Camera camera_from_state(const std::string& state, const char* what = "pickled camera");
 
 // A pickled state read by `read`: any state of the wrong shape or type (a tampered
 // or truncated pickle, a hand-made __setstate__ call) becomes a one-line Error

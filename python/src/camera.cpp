@@ -14,7 +14,9 @@ namespace {
 std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
   if (!name) return std::nullopt;
   const auto format = parse_camera_format(*name);
-  if (!format) throw Error("format: unknown camera format '" + *name + "' (expected one of: " + camera_format_names() + ")");
+  if (!format) {
+    throw Error("format: unknown camera format " + quoted_for_message(*name) + " (expected one of: " + camera_format_names() + ")");
+  }
   return format;
 }
 
@@ -282,7 +284,8 @@ void bind_camera(py::module_& m) {
       .def("parameters_key", &parameters_key, py::arg("with_pose") = true,
            "bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a "
            "warp depends on); cheap, for caches and hashing")
-      .def_static("from_json", &camera_from_state, py::arg("text"),
+      .def_static("from_json", [](const std::string& text) { return camera_from_state(text, "from_json text"); },
+                  py::arg("text"),
                   "The camera of fishcam JSON text (what to_json gives).")
       .def(py::pickle(&camera_pickle_state, [](const py::object& state) {
         return from_pickle_state("pickled camera", [&] { return camera_from_pickle_state(state); });

@@ -266,3 +266,42 @@ def test_albumentations_masks_are_instances(cam):
     assert np.array_equal(out["mask"] == 255, ~valid)
     masks = np.asarray(out["masks"])
     assert masks.shape == (3, H, W) and not masks[:, ~valid].any() and masks.sum() > 1000
+
+
+@pytest.mark.parametrize("fill", [300, -1, 2**31, 2**32 + 7, 2**64, 1.5, 1e20])
+def test_image_fills_an_integer_image_cannot_hold_are_refused(cam, fill):
+    """An integer image's fill must be a value of its dtype: OpenCV would saturate
+    300 to 255, round 1.5 and wrap 2^31 to 0; fishcam refuses them, in one line, in
+    every adapter (a float32 image takes any of them but 1e39)."""
+    pytest.importorskip("albumentations")
+    import albumentations as A
+    import fishcam.albumentations as fa
+    image = np.full((H, W, 3), 9, np.uint8)
+    calls = [
+        lambda: fishcam.transforms.RandomViewpoint(cam, preset="large", fill=fill)(image=image, seed=0),
+        lambda: fishcam.transforms.RandomAffine(fill=fill)(image=image, seed=0),
+        lambda: fishcam.transforms.RandomViewpoint(cam, fill={"image": fill})(image=image, mask=image[..., 0], seed=0),
+        lambda: ft.RandomViewpoint(cam, fill=fill)(tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1))),
+        lambda: ft.RandomAffine(fill={tv_tensors.Image: fill})(torch.from_numpy(image).permute(2, 0, 1)),
+        lambda: A.Compose([fa.RandomViewpoint(cam, fill=fill)], seed=0)(image=image),
+        lambda: ft.warp_batch(torch.from_numpy(image).permute(2, 0, 1)[None], cam, [fishcam.random_change("large", 0)],
+                              fill=fill),
+    ]
+    for call in calls:
+        with pytest.raises(fishcam.Error, match="no-source fill .* dtype (torch.)?uint8") as error:
+            call()
+        assert "\n" not in str(error.value)
+    if fill != 1e20:
+        out = fishcam.transforms.RandomViewpoint(cam, preset="large", fill=fill)(image=image.astype(np.float32), seed=0)
+        assert (out["image"] == np.float32(fill)).any()
+    with pytest.raises(fishcam.Error, match="past the range of dtype float32"):
+        fishcam.transforms.RandomViewpoint(cam, fill=1e39)(image=image.astype(np.float32), seed=0)
+
+
+@pytest.mark.parametrize("dtype, fill", [(np.uint8, 255), (np.uint8, 0), (np.uint16, 65535), (np.float32, -1.0)])
+def test_image_fills_the_dtype_holds_are_exact(cam, dtype, fill):
+    image = np.full((H, W, 3), 9, dtype)
+    out = fishcam.transforms.RandomViewpoint(cam, preset="large", fill=fill)(image=image, seed=SEEDS[0])["image"]
+    valid = fishcam.ViewpointWarp(cam).warp(image=image, change=fishcam.random_change("large", SEEDS[0]),
+                                            return_valid=True)["valid"]
+    assert (~valid).sum() > 1000 and (out[~valid] == np.array(fill, dtype)).all() and (out[valid] != fill).any()

@@ -188,3 +188,51 @@ def test_bad_targets_are_refused_in_one_line(cam):
         assert "\n" not in str(error.value)
     with pytest.raises(fishcam.Error, match="depth_values"):
         RandomViewpoint(cam, depth_values="disparity")
+
+
+def dense_box(sample_change, box, step=0.25):
+    """The tight box of the outline sampled every ``step`` px (what boxes() did before
+    round 3 of issue 40): the reference for ordinary boxes."""
+    x0, y0, x1, y1 = np.asarray(box, dtype=float) - 0.5
+    xs = np.linspace(x0, x1, max(int(np.ceil((x1 - x0) / step)), 1) + 1)
+    ys = np.linspace(y0, y1, max(int(np.ceil((y1 - y0) / step)), 1) + 1)
+    outline = np.concatenate([np.stack([xs, np.full_like(xs, y0)], 1), np.stack([xs, np.full_like(xs, y1)], 1),
+                              np.stack([np.full_like(ys, x0), ys], 1), np.stack([np.full_like(ys, x1), ys], 1)])
+    mapped = sample_change.points(outline)[0]
+    mapped = mapped[np.isfinite(mapped).all(axis=1)] + 0.5
+    return np.concatenate([mapped.min(0), mapped.max(0)])
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_boxes_sampled_adaptively_match_the_dense_outline(cam, seed):
+    """The adaptive outline (at most BOX_MAX_POINTS points a box) gives the dense
+    outline's box within 0.02 px for ordinary boxes."""
+    rng = np.random.default_rng(seed)
+    corner = rng.uniform((0, 0), (cam.width - 20, cam.height - 20), (12, 2))
+    boxes = np.concatenate([corner, corner + rng.uniform(1, 150, (12, 2))], axis=1)
+    change = RandomViewpoint(cam, preset="large").draw(seed=seed)
+    out, _ = change.boxes(boxes, clip=False)
+    for box, got in zip(boxes, out):
+        np.testing.assert_allclose(got, dense_box(change, box), atol=0.02)
+
+
+@pytest.mark.parametrize("size", [1e4, 1e6, 1e7, 1e300, np.inf])
+def test_huge_boxes_are_clipped_before_their_outline_is_sampled(cam, size):
+    """A box far larger than the image costs a bounded number of mapped points (it
+    took 1.2 GB and 7.7 s at 1e6 px, and exhausted memory at 1e7), and, reaching
+    past the image on every side, keeps the content in view rather than becoming
+    [0, 0, 0, 0] where its outline leaves the field of view."""
+    import time
+    sample_change = RandomViewpoint(cam, preset="large").draw(seed=1)
+    counted = []
+    forward = sample_change._forward
+    sample_change._forward = lambda points: (counted.append(len(points)), forward(points))[1]
+    start = time.perf_counter()
+    out, visibility = sample_change.boxes([[-size, -size, size, size], [-size, 10, 20, 30]])
+    assert time.perf_counter() - start < 2 and sum(counted) <= 2 * fishcam.transforms.BOX_MAX_POINTS
+    valid = fishcam.ViewpointWarp(cam).maps(RandomViewpoint(cam, preset="large").change_for(1))[2] != 0
+    ys, xs = np.nonzero(valid)
+    assert out[0][0] <= xs.min() + 1 and out[0][1] <= ys.min() + 1
+    assert out[0][2] >= xs.max() and out[0][3] >= ys.max() and visibility[0] > 0
+    identity = RandomViewpoint(cam, preset="large", p=0).draw(seed=1)
+    np.testing.assert_array_equal(identity.boxes([[-size, -size, size, size]])[0], [[0, 0, cam.width, cam.height]])

@@ -356,3 +356,28 @@ def test_masks_keep_their_dtype(small_camera):
         transform(mask=np.full((121, 160), 70000, np.int64), seed=1)
     with pytest.raises(fishcam.Error, match="dtype float32"):
         transform(mask=np.zeros((121, 160), np.float32), seed=1)
+
+
+def test_a_sample_with_two_images_is_refused(tmp_path, small_camera):
+    """NAME.png beside NAME.jpg listed one sample twice (reading the .png both times): refused, naming both."""
+    import cv2
+    for sub in ["rgb_images", "semantic_annotations/gtLabels", "calibration"]:
+        (tmp_path / sub).mkdir(parents=True)
+    image = np.zeros((121, 160, 3), np.uint8)
+    for name in ["a.png", "a.jpg", "b.png", "b.txt"]:
+        cv2.imwrite(str(tmp_path / "rgb_images" / name), image) if not name.endswith(".txt") else \
+            (tmp_path / "rgb_images" / name).write_text("notes")
+    with pytest.raises(fishcam.Error, match=r"two images of sample 'a', 'a.jpg' and 'a.png'") as error:
+        ft.WoodScapeDataset(tmp_path)
+    assert "\n" not in str(error.value)
+    (tmp_path / "rgb_images" / "a.jpg").unlink()
+    for name in ["a", "b"]:
+        cv2.imwrite(str(tmp_path / "semantic_annotations/gtLabels" / f"{name}.png"), image[..., 0])
+        small_camera.write(str(tmp_path / "calibration" / f"{name}.json"), format="woodscape")
+    ds = ft.WoodScapeDataset(tmp_path)
+    assert ds.names == ["a", "b"] and ds[1]["name"] == "b", "b.txt is not b's image"
+    for key in ["0", 1.5, (0, "x"), None]:
+        with pytest.raises(fishcam.Error, match="expected an integer"):
+            ds[key]
+    with pytest.raises(IndexError):  # the sequence protocol's: iteration stops there
+        ds[2]
