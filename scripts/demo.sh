@@ -5,4 +5,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/build.sh >/dev/null
-build/tools/fishcam demo --out fishcam-demo
+# fishcam-demo/ is the demo's own folder: a second run replaces its contact sheets.
+build/tools/fishcam demo --out fishcam-demo --force

@@ -166,6 +166,11 @@ TEST_F(CliReliability, SampleDatasetResumesOnlyWithTheSameSettings) {
   EXPECT_NE(r.out.find("(2 already there)"), std::string::npos) << r.out;
   EXPECT_TRUE(test::files_below(out) == first);
   expect_refused(base + " --seed 2", "--seed: this folder was written with '1', this run has '2'", out);
+  // A sample cut by a kill between the renames of its files is written again.
+  fs::remove(out / "calibration" / "00001_FV.json");
+  r = run_fishcam(base + " --seed 1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::files_below(out) == first);
   expect_refused(base + " --seed 1 --depth", "--depth: this folder was written with 'no'", out);
   const auto foreign = dir_ / "f";
   put(foreign / "rgb_images" / "00001_FV.png", "mine");
@@ -284,6 +289,18 @@ TEST_F(CliReliability, EveryInputIsBounded) {
   EXPECT_EQ(WEXITSTATUS(status), 1) << "124: timed out";
   EXPECT_NE(test::read_file(dir_ / "err").find("stdin line 1: longer than 4096 characters"), std::string::npos)
       << test::read_file(dir_ / "err");
+}
+
+// demo writes into a folder too: a file of the user's under one of its names stays
+// (refused before anything is computed); --force replaces it.
+TEST_F(CliReliability, DemoNeverReplacesFilesUnlessForced) {
+  const auto mine = put(dir_ / "out" / "demo-fig5.png", "mine");
+  expect_refused("demo --out " + quoted(dir_ / "out"), "demo-fig5.png: already exists", dir_ / "out");
+  EXPECT_EQ(test::read_file(mine), "mine");
+  const auto r = run_fishcam("demo --out " + quoted(dir_ / "out") + " --force");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(test::read_file(mine), "mine");
+  expect_refused("demo --out ''", "--out: expected a folder", dir_);
 }
 
 // Probe 8: readers refuse magnitudes no camera has (principal point and focal

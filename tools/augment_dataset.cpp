@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <opencv2/imgcodecs.hpp>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -138,12 +139,34 @@ class Manifest {
   bool lists(const std::string& output) const { return listed_.count(output) != 0; }
   // Appends one line in one write (a kill leaves at most a cut last line, which the
   // next run drops).
-  void append(const nlohmann::json& line) { append_text(line.dump() + "\n"); listed_.insert(line.at("output").get<std::string>()); }
+  void append(const nlohmann::json& line) {
+    struct stat info {};
+    if (fstat(fd_, &info) != 0) throw Error(path_for_message(path_) + ": cannot read (" + std::strerror(errno) + ")");
+    last_start_ = info.st_size;
+    last_output_ = line.at("output").get<std::string>();
+    append_text(line.dump() + "\n");
+    listed_.insert(last_output_);
+  }
+  // Takes the last line back (its files did not land: a file that appeared meanwhile,
+  // a full disk), so that no later run takes a file there for this run's.
+  void withdraw_last() {
+    if (last_start_ < 0) return;
+    if (ftruncate(fd_, last_start_) != 0) {
+      throw Error(path_for_message(path_) + ": cannot truncate (" + std::strerror(errno) + ")");
+    }
+    listed_.erase(last_output_);
+    last_start_ = -1;
+  }
 
  private:
   void append_text(const std::string& text) {
+    const off_t before = lseek(fd_, 0, SEEK_END);
     if (write(fd_, text.data(), text.size()) != ssize_t(text.size())) {
-      throw Error(path_for_message(path_) + ": write failed (" + std::strerror(errno) + ")");
+      const int error = errno;
+      // A short write (a full disk) leaves no partial line behind for later runs (if
+      // even that fails, the write's own error is the one to report).
+      [[maybe_unused]] const int undone = before >= 0 ? ftruncate(fd_, before) : 0;
+      throw Error(path_for_message(path_) + ": write failed (" + std::strerror(error) + ")");
     }
   }
 
@@ -186,6 +209,8 @@ class Manifest {
   fs::path path_;
   int fd_ = -1;
   std::set<std::string> listed_;
+  off_t last_start_ = -1;
+  std::string last_output_;
 };
 
 struct DatasetOptions {
@@ -313,8 +338,12 @@ class DatasetAugmentation {
   // Everything the outputs depend on (not --shard or --threads: the N shards of a
   // run equal the unsharded run, and so do runs on any number of threads).
   OutputSettings settings_of(const std::vector<PosePreset>& presets) const {
+    // Sorted: the outputs do not depend on the order the presets are given in.
+    std::vector<std::string> names;
+    for (const PosePreset& preset : presets) names.emplace_back(preset.name);
+    std::sort(names.begin(), names.end());
     std::string preset_names;
-    for (const PosePreset& preset : presets) preset_names += (preset_names.empty() ? "" : ",") + std::string(preset.name);
+    for (const std::string& name : names) preset_names += (preset_names.empty() ? "" : ",") + name;
     return {kCommand,
             {{"ROOT", fs::weakly_canonical(fs::absolute(root_)).string()},
              {"--preset", preset_names},
@@ -452,7 +481,12 @@ class DatasetAugmentation {
       if (!ours) output.manifest->append(manifest_line(image_path, listed, copy, output.preset, seed, pose, affine_change));
       // The files land together (a killed run leaves none of them); they replace only
       // files this run's manifest lists, or any with --force.
-      write_files_atomically(contents, ours || o_.force);
+      try {
+        write_files_atomically(contents, ours || o_.force);
+      } catch (const Error&) {
+        if (!ours) output.manifest->withdraw_last();
+        throw;
+      }
       ++written_;
     }
   }

@@ -44,14 +44,23 @@ void register_demo(CLI::App& app) {
   auto* cmd = app.add_subcommand("demo", "Render the bundled scene with the WoodScape front camera, augment it as in "
                                          "the paper's Fig. 5 and with the small/medium/large presets, write contact "
                                          "sheets");
-  auto out_dir = std::make_shared<std::string>("fishcam-demo");
-  cmd->add_option("--out", *out_dir, "Output folder (created; its demo-*.png files are replaced)")
-      ->capture_default_str();
-  cmd->callback([out_dir] {
-    const std::filesystem::path dir = *out_dir;
+  struct Options {
+    std::string out = "fishcam-demo";
+    bool force = false;
+  };
+  auto o = std::make_shared<Options>();
+  cmd->add_option("--out", o->out, "Output folder (created)")->capture_default_str();
+  cmd->add_flag("--force", o->force, "Replace the demo-*.png files already in --out");
+  cmd->callback([o] {
+    if (o->out.empty()) throw Error("--out: expected a folder, got ''");
+    const std::filesystem::path dir = o->out;
     const std::filesystem::path camera_path = bundled_data("woodscape_front.json");
     check_output_not_input(dir, {camera_path}, true);
+    const auto fig5 = dir / "demo-fig5.png", presets = dir / "demo-presets.png", render = dir / "demo-render.png",
+               render_labels = dir / "demo-render-labels.png";
+    // Before anything is computed: none of them replaces a file unless --force.
     std::filesystem::create_directories(dir);
+    check_outputs({{fig5}, {presets}, {render}, {render_labels, true}}, {camera_path.string()}, o->force);
     const Camera camera = read_camera(camera_path);
     const SceneRender scene = render_street_scene(camera, *camera.parameters().pose);
     const ViewpointWarp warp(camera);
@@ -80,8 +89,7 @@ void register_demo(CLI::App& app) {
         }
       }
     }
-    const auto fig5 = dir / "demo-fig5.png";
-    write_image(fig5, grid(cells, 2, "fishcam viewpoint augmentation (paper Fig. 5), source-sphere prior"), true);
+    write_image(fig5, grid(cells, 2, "fishcam viewpoint augmentation (paper Fig. 5), source-sphere prior"), o->force);
 
     cells.clear();
     for (const char* name : {"small", "medium", "large"}) {
@@ -95,13 +103,10 @@ void register_demo(CLI::App& app) {
         cells.push_back(cell(image, labels, caption));
       }
     }
-    const auto presets = dir / "demo-presets.png";
-    write_image(presets, grid(cells, 3, "random poses: small (10 deg, 0.1), medium (20, 0.3), large (30, 0.5)"), true);
-    write_image(dir / "demo-render.png", scene.image, true);
-    write_image(dir / "demo-render-labels.png", scene.labels, true);
+    write_image(presets, grid(cells, 3, "random poses: small (10 deg, 0.1), medium (20, 0.3), large (30, 0.5)"), o->force);
+    write_images({{render, scene.image}, {render_labels, scene.labels}}, o->force);
     std::printf("camera %s\nwrote %s\nwrote %s\nwrote %s and %s (the rendered scene and its WoodScape labels)\n",
-                camera_path.c_str(), fig5.c_str(), presets.c_str(), (dir / "demo-render.png").c_str(),
-                (dir / "demo-render-labels.png").c_str());
+                camera_path.c_str(), fig5.c_str(), presets.c_str(), render.c_str(), render_labels.c_str());
   });
 }
 

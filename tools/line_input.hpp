@@ -22,7 +22,8 @@ constexpr long kMaxRecords = 100'000'000;
 
 template <size_t N, class OnRecord>
 void for_each_record(std::istream& in, const char* what, const OnRecord& on_record) {
-  std::string buffer(std::size_t(kMaxRecordChars) + 2, '\0');
+  // getline stores at most size - 1 characters: a line of kMaxRecordChars fits, one more fails.
+  std::string buffer(std::size_t(kMaxRecordChars) + 1, '\0');
   for (long number = 1;; ++number) {
     in.getline(buffer.data(), std::streamsize(buffer.size()));
     const std::streamsize got = in.gcount();

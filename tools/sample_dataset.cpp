@@ -56,8 +56,10 @@ class SampleWriter {
     std::size_t existing = 0;
     std::error_code ec;
     for (const fs::path& file : files) existing += fs::exists(fs::symlink_status(file, ec));
+    // In a folder this run's settings claim, a sample's files are this run's: complete
+    // (skipped), or cut by a kill between the renames of its files (written again).
     if (!writing_) {
-      if (existing > 0 && !(resuming_ && existing == files.size()) && foreign_++ == 0) first_foreign_ = files[0];
+      if (existing > 0 && !resuming_ && foreign_++ == 0) first_foreign_ = files[0];
       return;
     }
     if (existing == files.size()) {
@@ -73,7 +75,7 @@ class SampleWriter {
       range.data.assign(r.range.begin<float>(), r.range.end<float>());
       contents.emplace_back(files[3], npy_bytes(range, files[3].string()));
     }
-    write_files_atomically(contents, false);
+    write_files_atomically(contents, resuming_ && existing > 0);
     ++written_;
   }
 
@@ -233,7 +235,10 @@ void surround_view_dataset(const Options& o) {
         return *scene;
       };
       const std::string split = split_of(k);
-      for (const auto& [camera_name, camera] : cameras) {
+      for (const auto& entry : cameras) {
+        // Named, not structured bindings: lambdas below capture them (clang 14 refuses bindings).
+        const std::string& camera_name = entry.first;
+        const Camera& camera = entry.second;
         char name[48];
         std::snprintf(name, sizeof name, "%05d_%s", k, camera_name.c_str());
         const CameraParameters& p = camera.parameters();

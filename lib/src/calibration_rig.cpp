@@ -109,12 +109,16 @@ Pose board_half_turn(const BoardSpec& board) {
           Eigen::Vector3d((board.cols - 1) * board.spacing, (board.rows - 1) * board.spacing, 0)};
 }
 
-// Relative poses of one camera pair that describe the same mounting. A view numbered
-// from the other end gives an estimate a half turn away, far outside this.
-bool same_mounting(const Pose& a, const Pose& b) {
+// Relative poses of one camera pair that describe the same mounting, each estimated
+// from one board at distance `distance`: a per-view pose errs by a fraction of a
+// degree, so its translation by a share of the board's distance (not of the baseline,
+// which may be centimetres). A view numbered from the other end gives an estimate a
+// half turn away, far outside this.
+bool same_mounting(const Pose& a, const Pose& b, double distance) {
   constexpr double kAngle = 10 * std::numbers::pi / 180, kShare = 0.25;
   return a.rotation.angularDistance(b.rotation) < kAngle &&
-         (a.translation - b.translation).norm() <= kShare * std::max(a.translation.norm(), b.translation.norm());
+         (a.translation - b.translation).norm() <=
+             kShare * std::max({a.translation.norm(), b.translation.norm(), distance});
 }
 
 // What the instants camera k shares with camera 0 say about their relative pose.
@@ -132,10 +136,12 @@ InstantConsensus instant_consensus(const std::map<int, Pose>& seen0, const std::
   InstantConsensus out;
   std::vector<int> instants;
   std::vector<Pose> as_given, renumbered;
+  std::vector<double> distance;  // the board's, from camera 0
   for (const auto& [i, pose_k] : seen_k) {
     const auto pose_0 = seen0.find(i);
     if (pose_0 == seen0.end()) continue;
     instants.push_back(i);
+    distance.push_back(pose_0->second.translation.norm());
     as_given.push_back(compose(pose_k, inverse(pose_0->second)));
     renumbered.push_back(compose(compose(pose_k, half_turn), inverse(pose_0->second)));
   }
@@ -144,7 +150,7 @@ InstantConsensus instant_consensus(const std::map<int, Pose>& seen0, const std::
   const auto support = [&](const Pose& candidate) {
     long agreeing = 0;
     for (size_t j = 0; j < instants.size(); ++j) {
-      agreeing += same_mounting(as_given[j], candidate) || same_mounting(renumbered[j], candidate);
+      agreeing += same_mounting(as_given[j], candidate, distance[j]) || same_mounting(renumbered[j], candidate, distance[j]);
     }
     return agreeing;
   };
@@ -156,9 +162,9 @@ InstantConsensus instant_consensus(const std::map<int, Pose>& seen0, const std::
     }
   }
   for (size_t j = 0; j < instants.size(); ++j) {
-    const Pose* agreeing = same_mounting(as_given[j], *best) ? &as_given[j]
-                           : same_mounting(renumbered[j], *best) ? &renumbered[j]
-                                                                 : nullptr;
+    const Pose* agreeing = same_mounting(as_given[j], *best, distance[j])     ? &as_given[j]
+                           : same_mounting(renumbered[j], *best, distance[j]) ? &renumbered[j]
+                                                                              : nullptr;
     if (!agreeing) {
       out.disagreeing.push_back(instants[j]);
       continue;

@@ -3,6 +3,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <cstdio>
+#include <mutex>
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -14,25 +15,43 @@ namespace {
 
 // Standard error closed for a scope: the image codecs under OpenCV (libpng, libjpeg)
 // print their own complaints about a corrupt file there, around our one-line message.
+// File descriptor 2 is the process's: images read in parallel (detect-corners) share
+// one silencing, the first to come closes it and the last to leave opens it again.
 class SilencedStderr {
  public:
-  SilencedStderr() : saved_(dup(STDERR_FILENO)) {
+  SilencedStderr() {
+    const std::lock_guard<std::mutex> lock(mutex());
+    if (depth()++ > 0) return;
     std::fflush(stderr);
-    const int null = open("/dev/null", O_WRONLY);
-    if (saved_ >= 0 && null >= 0) dup2(null, STDERR_FILENO);
+    saved() = dup(STDERR_FILENO);
+    const int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved() >= 0 && null >= 0) dup2(null, STDERR_FILENO);
     if (null >= 0) close(null);
   }
   ~SilencedStderr() {
-    if (saved_ < 0) return;
+    const std::lock_guard<std::mutex> lock(mutex());
+    if (--depth() > 0 || saved() < 0) return;
     std::fflush(stderr);
-    dup2(saved_, STDERR_FILENO);
-    close(saved_);
+    dup2(saved(), STDERR_FILENO);
+    close(saved());
+    saved() = -1;
   }
   SilencedStderr(const SilencedStderr&) = delete;
   SilencedStderr& operator=(const SilencedStderr&) = delete;
 
  private:
-  int saved_;
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static int& depth() {
+    static int d = 0;
+    return d;
+  }
+  static int& saved() {
+    static int fd = -1;
+    return fd;
+  }
 };
 
 }  // namespace
