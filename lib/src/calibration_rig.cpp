@@ -222,7 +222,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     if (consensus.shared >= 3 && 2 * long(consensus.disagreeing.size()) > consensus.shared) {
       throw Error("calibrate rig: " + camera_name(k) + " and camera 0 disagree on their relative pose at " +
                   std::to_string(consensus.disagreeing.size()) + " of their " + std::to_string(consensus.shared) +
-                  " shared instants (more than 10 deg or 25 % of the baseline from the others): are images of the "
+                  " shared instants (more than 10 deg, or 25 % of the board distance, from the others): are images of the "
                   "same name taken at the same time? (unsynchronised or mismatched pairs)");
     }
     if (!consensus.disagreeing.empty()) {
