@@ -241,7 +241,8 @@ TEST_F(CliOutputs, ConcurrentIdenticalRunsNeverDuplicateManifestLines) {
 }
 
 // A temporary of a killed run (its process gone) is removed by the next run; one
-// of a running process (this test) stays.
+// of a running process (this test) stays, and so does a file whose name only looks
+// like a temporary (its random part not the 16 hex digits fishcam writes).
 TEST_F(CliOutputs, OnlyTemporariesOfFinishedProcessesAreRemoved) {
   const auto root = dataset("ds");
   const pid_t child = fork();
@@ -252,10 +253,14 @@ TEST_F(CliOutputs, OnlyTemporariesOfFinishedProcessesAreRemoved) {
   fs::create_directories(images);
   const auto stale = test::write_file(temporary_path(images / "00000_FV_train0.png", child, 1), "half");
   const auto live = test::write_file(temporary_path(images / "00000_FV_train0.png", getpid(), 2), "in flight");
+  std::string notes = temporary_path(images / "b.png", child, 1).string();
+  notes.replace(notes.find("0000000000000001"), 16, "my-notes");
+  test::write_file(notes, "keep me");
   const auto r = run_fishcam("augment-dataset " + quoted(root) + " --preset train --seed 1 --out " + quoted(dir_ / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(fs::exists(stale));
   EXPECT_EQ(test::read_file(live), "in flight");
+  EXPECT_EQ(test::read_file(notes), "keep me");
 }
 
 // A file name the manifest (JSON, UTF-8) cannot hold is refused before anything

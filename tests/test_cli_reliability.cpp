@@ -117,25 +117,6 @@ TEST_F(CliReliability, AugmentDatasetResumesOnlyWithTheSameSettings) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
-// Probe 4: a killed run's temporaries are removed, but only names exactly of the
-// form fishcam writes (a random part of 16 hex digits), whatever else matches the pattern.
-TEST_F(CliReliability, OnlyFishcamsOwnTemporaryNamesAreCleaned) {
-  const auto root = dataset("ds");
-  const pid_t child = fork();
-  if (child == 0) _exit(0);
-  ASSERT_GT(child, 0);
-  waitpid(child, nullptr, 0);
-  const auto images = dir_ / "o" / "rgb_images";
-  const auto stale = put(temporary_path(images / "a.png", child, 1), "half");
-  std::string other = temporary_path(images / "b.png", child, 1).string();
-  other.replace(other.find("0000000000000001"), 16, "my-notes");
-  put(other, "keep me");
-  const auto r = run_fishcam("augment-dataset " + quoted(root) + " --preset small --seed 1 --out " + quoted(dir_ / "o"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_FALSE(fs::exists(stale));
-  EXPECT_EQ(test::read_file(other), "keep me");
-}
-
 // Probe 15 and Deliver 2: empty or repeated names in a list option, and an empty
 // output folder, are refused before anything is written.
 TEST_F(CliReliability, EmptyOrRepeatedNamesAndEmptyOutputsAreRefused) {
