@@ -117,6 +117,20 @@ TEST_F(CliReliability, AugmentDatasetResumesOnlyWithTheSameSettings) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// A dataset under a path that is not UTF-8 (Latin-1 bytes) still augments and
+// resumes: its settings record holds the path's other bytes as \xNN.
+TEST_F(CliReliability, SettingsRecordsHoldPathsThatAreNotUtf8) {
+  const auto root = dir_ / "lat\xe9n";
+  ASSERT_EQ(run_fishcam("sample-dataset " + quoted(root) + " --images 2 --seed 1 --size 64x48").exit_code, 0);
+  const std::string command = "augment-dataset " + quoted(root) + " --preset small --seed 1 --out " + quoted(dir_ / "o");
+  auto r = run_fishcam(command);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(test::read_file(dir_ / "o" / "augment-dataset.json").find("lat\\\\xe9n"), std::string::npos);
+  r = run_fishcam(command);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("0 written, 2 already there"), std::string::npos) << r.out;
+}
+
 // Probe 15 and Deliver 2: empty or repeated names in a list option, and an empty
 // output folder, are refused before anything is written.
 TEST_F(CliReliability, EmptyOrRepeatedNamesAndEmptyOutputsAreRefused) {

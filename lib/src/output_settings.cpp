@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
+
 #include "fishcam/atomic_file.hpp"
 #include "fishcam/error.hpp"
 #include "fishcam/file_input.hpp"
@@ -14,9 +16,27 @@ namespace fs = std::filesystem;
 // A settings record is small; anything larger is not one.
 constexpr std::size_t kMaxRecordBytes = 1 << 16;
 
+// JSON holds UTF-8 only: a value that is not (a path of Latin-1 bytes) is recorded
+// with its other bytes as \xNN, the same way every time, so runs still compare.
+std::string as_utf8(const std::string& value) {
+  if (is_valid_utf8(value)) return value;
+  std::string out;
+  for (const char c : value) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x80) {
+      out.push_back(c);
+    } else {
+      char hex[5];
+      std::snprintf(hex, sizeof hex, "\\x%02x", byte);
+      out += hex;
+    }
+  }
+  return out;
+}
+
 nlohmann::ordered_json record_json(const OutputSettings& settings) {
   nlohmann::ordered_json values = nlohmann::ordered_json::object();
-  for (const auto& [option, value] : settings.values) values[option] = value;
+  for (const auto& [option, value] : settings.values) values[as_utf8(option)] = as_utf8(value);
   return {{"fishcam", settings.command}, {"version", fishcam_version()}, {"settings", values}};
 }
 
@@ -56,7 +76,8 @@ bool claim_output_settings(const fs::path& file, const OutputSettings& settings,
                 fishcam_version() + " (outputs may differ: use another output folder)");
   }
   const nlohmann::json& values = theirs["settings"];
-  for (const auto& [option, value] : settings.values) {
+  for (const auto& [raw_option, raw_value] : settings.values) {
+    const std::string option = as_utf8(raw_option), value = as_utf8(raw_value);
     const auto found = values.find(option);
     const std::string their_value =
         found == values.end() ? "(not given)" : found->is_string() ? found->get<std::string>() : found->dump();
@@ -67,7 +88,7 @@ bool claim_output_settings(const fs::path& file, const OutputSettings& settings,
   }
   for (const auto& [option, value] : values.items()) {
     bool known = false;
-    for (const auto& mine_value : settings.values) known = known || mine_value.first == option;
+    for (const auto& mine_value : settings.values) known = known || as_utf8(mine_value.first) == option;
     if (!known) {
       throw Error(where + ": this folder was written with " + text_for_message(option) +
                   ", which this run does not have (use another output folder, or the same settings)");
