@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <map>
+#include <numbers>
 #include <tuple>
 
 #include "fishcam/atomic_file.hpp"
@@ -345,6 +346,35 @@ TEST_F(CliReliability, ReadersRefuseMagnitudesNoCameraHas) {
     const auto file = put(dir_ / "lens.cameramodel", text);
     expect_refused("info " + quoted(file), expected.substr(0, 40), dir_);
   }
+}
+
+// Probe 13: a CAHVORE lens whose own iteration fails at the fold of its distortion
+// (libmrcal prints "too many iterations" for each such point: ~94k lines in info and
+// ~380k per map before). Its domain ends where libmrcal evaluates, just inside the
+// fold; no command that evaluates the camera lets libmrcal reach the terminal.
+TEST_F(CliReliability, LibmrcalSaysNothingAtRunTime) {
+  const auto file = put(dir_ / "cahvore.cameramodel",
+                        "{ 'lensmodel': 'LENSMODEL_CAHVORE_linearity=0.25', 'intrinsics': [ 160, 160, 159.5, 120.5, "
+                        "0.0263, 0.1000, 0.0172, -0.1905, -0.0110, 0.1722, 0.9753, 0.0697 ], 'imagersize': [320, 242] }");
+  const Camera camera = read_camera(file.string());
+  const double fold_deg = 40.2825;  // where the fold scan ends the domain (measured)
+  EXPECT_LT(camera.domain().theta_max * 180 / std::numbers::pi, fold_deg);
+  EXPECT_GT(camera.domain().theta_max * 180 / std::numbers::pi, fold_deg * 0.99);
+  const std::string front = quoted(test::data_path("woodscape_front.json"));
+  int ran = 0;
+  for (const std::string& args :
+       {"info " + quoted(file), "map " + quoted(file) + " --rotate 30,-20,10 --out " + quoted(dir_ / "a.npy"),
+        "map " + front + " --target " + quoted(file) + " --rotate 10,0,0 --out " + quoted(dir_ / "b.npy")}) {
+    const auto r = run_fishcam(args);
+    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.err.substr(0, 400);
+    EXPECT_EQ(r.err.find("too many iterations"), std::string::npos) << args << ": " << r.err.substr(0, 200);
+    EXPECT_EQ(r.err, "") << args;
+    ++ran;
+  }
+  const auto r = run_fishcam("unproject " + quoted(file), "0 0\n-5000 -5000\n159.5 120.5\n319 241\n");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_EQ(ran, 3);
 }
 
 // Probe 9: diff refuses cameras of different sizes unless told to resize; a map is

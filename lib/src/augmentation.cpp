@@ -146,15 +146,24 @@ struct KernelSource {
 
 // Where a lens table must hold: the source image and this margin around it.
 constexpr double kLensTableMarginPx = 16;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The lens's offset at u, or none past reach (the plane radius of the camera's valid
+// domain): libmrcal is not asked where no ray of the camera can be, since its own
+// iteration fails there and says so on standard error (CAHVORE: "too many iterations").
+Eigen::Vector2d lens_offset_within(const MrcalLens& lens, const Eigen::Vector2d& u, double reach) {
+  if (!(u.norm() <= reach)) return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  return lens.offset(u);
+}
 
 // The bicubic on the cell (cx, cy) of the layout that interpolates f delta_u at 4 x 4
 // points (t, s in -1/2, -1/6, 1/6, 1/2 about the cell's centre; g = u * cells_per_u +
 // origin): 32 floats as SourceParams::lens_cells keeps them, NaN where a point has no
-// projection. On mrcal's spline cells (MrcalLens::polynomial_cells) it is the spline
-// itself, which is that polynomial there. Returns whether a point's pixel lies in the
-// image or its margin (always true without an image).
+// projection or past reach. On mrcal's spline cells (MrcalLens::polynomial_cells) it is
+// the spline itself, which is that polynomial there. Returns whether a point's pixel
+// lies in the image or its margin (always true without an image).
 bool lens_kernel_cell(const MrcalLens& lens, const MrcalLens::PolynomialCells& layout, double f, const Camera* image,
-                      int cx, int cy, float* cell) {
+                      double reach, int cx, int cy, float* cell) {
   static const Eigen::Matrix4d inverse = [] {
     Eigen::Matrix4d vandermonde;  // rows: the nodes; columns: powers of t
     for (int a = 0; a < 4; ++a) {
@@ -168,7 +177,7 @@ bool lens_kernel_cell(const MrcalLens& lens, const MrcalLens::PolynomialCells& l
     for (int b = 0; b < 4; ++b) {  // t = a / 3 - 1/2 along x, s = b / 3 - 1/2 along y
       const Eigen::Vector2d g(cx + a / 3.0, cy + b / 3.0);
       const Eigen::Vector2d u = (g - layout.origin) / layout.cells_per_u;
-      const Eigen::Vector2d delta = f * lens.offset(u);
+      const Eigen::Vector2d delta = f * lens_offset_within(lens, u, reach);
       samples[0](a, b) = delta.x(), samples[1](a, b) = delta.y();
       if (!seen) {  // the point's pixel, c + a (.) (S f (u + delta))
         const Eigen::Vector2d pixel = image->principal_point() +
@@ -195,14 +204,15 @@ bool lens_kernel_cell(const MrcalLens& lens, const MrcalLens::PolynomialCells& l
 // Every cell of the layout (lens_kernel_cell), row by row; seen (given an image) says
 // which cells have a point in it or its margin.
 std::vector<float> lens_kernel_cells(const MrcalLens& lens, const MrcalLens::PolynomialCells& layout, double f,
-                                     const Camera* image = nullptr, std::vector<unsigned char>* seen = nullptr) {
+                                     const Camera* image = nullptr, double reach = kInf,
+                                     std::vector<unsigned char>* seen = nullptr) {
   std::vector<float> out(size_t(layout.nx) * size_t(layout.ny) * 32);
   if (seen) seen->assign(size_t(layout.nx) * size_t(layout.ny), 0);
   cv::parallel_for_(cv::Range(0, layout.ny), [&](const cv::Range& rows) {
     for (int cy = rows.start; cy < rows.end; ++cy) {
       for (int cx = 0; cx < layout.nx; ++cx) {
         const size_t i = size_t(cy) * size_t(layout.nx) + size_t(cx);
-        const bool in_image = lens_kernel_cell(lens, layout, f, image, cx, cy, out.data() + 32 * i);
+        const bool in_image = lens_kernel_cell(lens, layout, f, image, reach, cx, cy, out.data() + 32 * i);
         if (seen) (*seen)[i] = in_image;
       }
     }
@@ -249,6 +259,10 @@ std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens,
   box.min() -= widen, box.max() += widen;
   const double longer = box.sizes().maxCoeff();
   if (!(longer > 0) || !std::isfinite(longer)) return std::nullopt;
+  // The plane radius of the domain's end (m = sin theta / (xi + cos theta) on the plane).
+  const double theta_max = camera.domain().theta_max;
+  const double reach = xi + std::cos(theta_max) > 0 ? plane_per_m * std::sin(theta_max) / (xi + std::cos(theta_max))
+                                                     : kInf;
   const double pixels_per_f = camera.pixel_scale().cwiseAbs().maxCoeff();
   const auto max_nan_first = [](double a, double b) { return std::isnan(a) || a >= b ? a : b; };
   for (int across = 32; across <= kLensTableMaxCells; across *= 2) {
@@ -260,7 +274,7 @@ std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens,
     layout.nx = std::max(1, int(std::ceil(box.sizes().x() / h)));
     layout.ny = std::max(1, int(std::ceil(box.sizes().y() / h)));
     std::vector<unsigned char> seen;
-    table.cells = lens_kernel_cells(lens, layout, focal, &camera, &seen);
+    table.cells = lens_kernel_cells(lens, layout, focal, &camera, reach, &seen);
     std::vector<double> row_worst(size_t(layout.ny), 0);
     cv::parallel_for_(cv::Range(0, layout.ny), [&](const cv::Range& rows) {
       for (int cy = rows.start; cy < rows.end; ++cy) {
@@ -273,7 +287,8 @@ std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens,
           for (double t : {-1.0 / 3, 0.0, 1.0 / 3}) {
             for (double s : {-1.0 / 3, 0.0, 1.0 / 3}) {
               const Eigen::Vector2d g(cx + 0.5 + t, cy + 0.5 + s);
-              const Eigen::Vector2d exact = focal * lens.offset((g - layout.origin) / layout.cells_per_u);
+              const Eigen::Vector2d exact =
+                  focal * lens_offset_within(lens, (g - layout.origin) / layout.cells_per_u, reach);
               Eigen::Vector2d interpolated = Eigen::Vector2d::Zero();
               for (int k = 0; k < 2; ++k) {
                 for (int j = 3; j >= 0; --j) {

@@ -195,6 +195,9 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
         domain.contains_rho(rho) ? theta_of(model, domain, table, rho, InversePath::table) : domain.theta_max;
     if (!std::isfinite(theta0)) return false;
     // Newton with backtracking (a step that does not lower |D(m) - goal| is halved) from m.
+    // A step past the domain's plane radius is halved as well: no ray of the camera lies
+    // there, and a lens evaluated there may fail and say so (libmrcal's CAHVORE).
+    const double m_reach = model.plane_radius(domain.theta_max, &derivative) * (1 + 1e-9);
     Eigen::Vector2d residual;
     const auto newton = [&](Eigen::Vector2d* m, const Eigen::Vector2d& goal, int iterations) {
       Eigen::Matrix2d jacobian;
@@ -206,10 +209,11 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
         if (!(std::abs(det) > 0) || !std::isfinite(det)) return;
         const Eigen::Vector2d step = jacobian.inverse() * residual;
         double lambda = 1, next_error = kNaN;
-        Eigen::Vector2d next, next_residual;
-        Eigen::Matrix2d next_jacobian;
+        Eigen::Vector2d next, next_residual = Eigen::Vector2d::Constant(kNaN);
+        Eigen::Matrix2d next_jacobian = Eigen::Matrix2d::Constant(kNaN);
         for (int halving = 0; halving < 40; ++halving, lambda *= 0.5) {
           next = *m - lambda * step;
+          if (!(next.norm() <= m_reach)) continue;
           next_residual = distorted(model, terms, next, &next_jacobian) - goal;
           next_error = next_residual.norm();
           if (next_error < error) break;
@@ -537,6 +541,40 @@ void check_lens_evaluates(const CameraParameters& p, double theta_max) {
   }
 }
 
+// Where the domain of a lens that libmrcal could not evaluate everywhere during the
+// scans ends: the largest theta at most theta_max (by steps up to 1 % inside) on whose
+// ring, and on a ring just past it (Newton's steps and CAHVORE's central differences
+// reach there), libmrcal evaluates at 1440 azimuths without a word. CAHVORE's own
+// iteration fails at and past its fold, which the fold scan finds to a few ulps.
+// None: libmrcal fails even 1 % inside (the camera is refused).
+std::optional<double> lens_evaluation_end(const CameraParameters& p, double theta_max) {
+  std::optional<double> end;
+  std::visit(
+      [&](const auto& m) {
+        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
+          for (double inside : {0.0, 1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2}) {
+            double derivative;
+            const double theta = theta_max * (1 - inside);
+            const double u = m.plane_radius(theta, &derivative);
+            bool evaluates = true;
+            detail::StderrCapture libmrcal;
+            for (double radius : {u, u * (1 + 1e-9) + 2e-5 * (1 + u)}) {
+              for (int k = 0; k < 1440 && evaluates; ++k) {
+                const double phi = 2 * std::numbers::pi * k / 1440;
+                evaluates = p.mrcal_lens->offset(radius * Eigen::Vector2d(std::cos(phi), std::sin(phi))).allFinite();
+              }
+            }
+            if (evaluates && libmrcal.summary().empty()) {
+              end = theta;
+              return;
+            }
+          }
+        }
+      },
+      p.model);
+  return end;
+}
+
 }  // namespace
 
 Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_(std::move(parameters)) {
@@ -576,8 +614,25 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
     std::string libmrcal_said;
     {
       detail::StderrCapture libmrcal;
-      limit_to_plane_fold(), bound_plane_reach();
+      limit_to_plane_fold();
       libmrcal_said = libmrcal.summary();
+    }
+    if (!libmrcal_said.empty() && params_.mrcal_lens) {
+      const std::optional<double> end = lens_evaluation_end(params_, domain_.theta_max);
+      if (!end) {
+        fail("mrcal_lens: libmrcal cannot evaluate ", params_.mrcal_lens->lensmodel().substr(0, 80),
+             " next to the end of its domain (it said: ", quoted_for_message(libmrcal_said, 200), ")");
+      }
+      if (*end < domain_.theta_max) {
+        domain_.theta_max = *end;
+        domain_.closed = true;
+        domain_.rho_max = rho(*end);
+      }
+    }
+    {
+      detail::StderrCapture libmrcal;
+      bound_plane_reach();
+      if (libmrcal_said.empty()) libmrcal_said = libmrcal.summary();
     }
     if (!libmrcal_said.empty() && params_.mrcal_lens) check_lens_evaluates(params_, domain_.theta_max);
   }
