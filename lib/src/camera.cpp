@@ -195,9 +195,11 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
         domain.contains_rho(rho) ? theta_of(model, domain, table, rho, InversePath::table) : domain.theta_max;
     if (!std::isfinite(theta0)) return false;
     // Newton with backtracking (a step that does not lower |D(m) - goal| is halved) from m.
-    // A step past the domain's plane radius is halved as well: no ray of the camera lies
-    // there, and a lens evaluated there may fail and say so (libmrcal's CAHVORE).
-    const double m_reach = model.plane_radius(domain.theta_max, &derivative) * (1 + 1e-9);
+    // A step far past the domain's plane radius is halved as well: no ray of the camera
+    // lies there, and a lens evaluated there may fail and say so (libmrcal's CAHVORE;
+    // the constructor checked libmrcal up to this far past, lens_evaluation_end).
+    const double u_end = model.plane_radius(domain.theta_max, &derivative);
+    const double m_reach = u_end * (1 + 1e-9) + 1e-5 * (1 + u_end);
     Eigen::Vector2d residual;
     const auto newton = [&](Eigen::Vector2d* m, const Eigen::Vector2d& goal, int iterations) {
       Eigen::Matrix2d jacobian;
