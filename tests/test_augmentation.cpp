@@ -640,11 +640,11 @@ TEST(Augmentation, AgreesWithABruteForceForwardSplat) {
 }
 
 TEST(Augmentation, RealWoodScapeImageStaysInsideTheImageCircle) {
-  const auto image_path = std::filesystem::path(FISHCAM_SHARED_DIR) / "data/woodscape/front.jpg";
+  const auto image_path = test::shared_path("data/woodscape/front.jpg");
   if (!std::filesystem::exists(image_path)) GTEST_SKIP() << "no ../shared checkout";
   const cv::Mat image = cv::imread(image_path.string(), cv::IMREAD_COLOR);
   ASSERT_FALSE(image.empty());
-  const Camera camera = read_camera(std::filesystem::path(FISHCAM_SHARED_DIR) / "data/woodscape/front.json");
+  const Camera camera = read_camera(test::shared_path("data/woodscape/front.json"));
   ASSERT_EQ(image.cols, camera.width());
   ASSERT_EQ(image.rows, camera.height());
   const ViewpointWarp warp(camera);
@@ -775,7 +775,7 @@ INSTANTIATE_TEST_SUITE_P(Augmentation, EveryModelSource, ::testing::ValuesIn(tes
 // into itself, the per-pixel maps agree with the exact ones to 1e-3 px and the grid's
 // to cv::remap's fixed-point step.
 TEST(Augmentation, MrcalSplinedSourceTakesTheKernelAndTheGrid) {
-  const auto path = std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external/mrcal_cam0.splined.cameramodel";
+  const auto path = test::shared_path("data/external/mrcal_cam0.splined.cameramodel");
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "no ../shared checkout";
   const Camera full = read_camera(path);
   ASSERT_TRUE(full.parameters().mrcal_lens);

@@ -290,7 +290,7 @@ TEST(Calibration, DuplicateViewsAreRefused) {
 
 // The real photos (../shared): the detected corners, given transposed, are refused too.
 TEST(Calibration, ARealTransposedBoardIsRefused) {
-  const std::filesystem::path photos = std::filesystem::path(FISHCAM_SHARED_DIR) / "data" / "calibration";
+  const std::filesystem::path photos = test::shared_path("data/calibration");
   if (!std::filesystem::exists(photos / "right1.jpg")) GTEST_SKIP() << "no ../shared/data/calibration";
   const auto dir = test::scratch_dir("transposed_real");
   std::string images;
@@ -354,7 +354,7 @@ TEST(Calibration, OpenCVDetectionFindsTheCornersOfARenderedBoard) {
   const auto dir = test::scratch_dir("detect");
   cv::imwrite((dir / "board.png").string(), image);
   cv::imwrite((dir / "blank.png").string(), cv::Mat(600, 700, CV_8UC1, cv::Scalar(128)));
-  const std::string command = std::string("'") + FISHCAM_BINARY + "' detect-corners '" + (dir / "board.png").string() +
+  const std::string command = "'" + test::fishcam_binary() + "' detect-corners '" + (dir / "board.png").string() +
                               "' '" + (dir / "blank.png").string() + "' --board 10x10 --out '" +
                               (dir / "c.vnl").string() + "' > /dev/null";
   ASSERT_EQ(std::system(command.c_str()), 0);

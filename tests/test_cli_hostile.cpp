@@ -276,7 +276,7 @@ TEST_F(CliHostile, UnknownSubcommandsAreNamed) {
 }
 
 TEST_F(CliHostile, FailedWritesToStandardOutputFail) {
-  const std::string command = std::string("'") + FISHCAM_BINARY + "' info " + q("camera.json") + " > /dev/full 2> " +
+  const std::string command = "'" + test::fishcam_binary() + "' info " + q("camera.json") + " > /dev/full 2> " +
                               q("err.txt");
   const int status = std::system(command.c_str());
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0);

@@ -186,7 +186,7 @@ TEST_F(CliOutputs, ParallelShardsIntoOneOutEqualOneRun) {
     const auto out = dir_ / ("sharded" + std::to_string(repetition));
     std::string command;
     for (int shard = 0; shard < 4; ++shard) {
-      command += "'" + std::string(FISHCAM_BINARY) + "' " + augment_dataset(root, out) + " -j 1 --shard " +
+      command += "'" + test::fishcam_binary() + "' " + augment_dataset(root, out) + " -j 1 --shard " +
                  std::to_string(shard) + "/4 > /dev/null 2> " + quoted(dir_ / ("err" + std::to_string(shard))) + " & ";
     }
     const int status = std::system(("bash -c \"" + command + "wait\"").c_str());
@@ -217,7 +217,7 @@ TEST_F(CliOutputs, ConcurrentIdenticalRunsNeverDuplicateManifestLines) {
   const auto out = dir_ / "out";
   std::string command;
   for (int run = 0; run < 2; ++run) {
-    command += "'" + std::string(FISHCAM_BINARY) + "' " + augment_dataset(root, out) + " -j 1 > /dev/null 2> " +
+    command += "'" + test::fishcam_binary() + "' " + augment_dataset(root, out) + " -j 1 > /dev/null 2> " +
                quoted(dir_ / ("err" + std::to_string(run))) + "; echo $? > " +
                quoted(dir_ / ("rc" + std::to_string(run))) + " & ";
   }

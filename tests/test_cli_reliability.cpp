@@ -278,7 +278,7 @@ TEST_F(CliReliability, EveryInputIsBounded) {
   }
   EXPECT_EQ(checked, 9);
   // Standard input: a record longer than any is refused (it read /dev/zero until memory ran out).
-  const std::string command = std::string("timeout 20 '") + FISHCAM_BINARY + "' project " + camera +
+  const std::string command = "timeout 20 '" + test::fishcam_binary() + "' project " + camera +
                               " < /dev/zero > /dev/null 2> " + quoted(dir_ / "err");
   const int status = std::system(command.c_str());
   ASSERT_TRUE(WIFEXITED(status));

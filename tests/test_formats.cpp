@@ -19,7 +19,7 @@ namespace {
 using test::Intrinsics;
 
 std::filesystem::path external(const std::string& name) {
-  return std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external" / name;
+  return test::shared_path("data/external") / name;
 }
 
 using Reference = std::function<Eigen::Vector2d(const Eigen::Vector3d&)>;
@@ -542,7 +542,7 @@ INSTANTIATE_TEST_SUITE_P(Formats, EveryFormat, ::testing::ValuesIn(camera_format
 
 // docs/formats.md's table lists, per format, exactly the models of its list.
 TEST(Formats, TheDocsTableListsEachFormatsModels) {
-  const std::string docs = test::read_file(std::filesystem::path(FISHCAM_DATA_DIR) / ".." / "docs" / "formats.md");
+  const std::string docs = test::read_file(test::data_path("..") / "docs" / "formats.md");
   int rows = 0;
   for (const CameraFormat format : camera_formats()) {
     const std::string key = "| `" + std::string(to_string(format)) + "` |";

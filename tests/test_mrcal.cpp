@@ -125,7 +125,7 @@ TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
   check_against_mrcal({"spline (synthetic)", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC, 60 * M_PI / 180, synthetic,
                        spline.values(), spline.lensmodel()});
   const std::filesystem::path file =
-      std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external/mrcal_cam0.splined.cameramodel";
+      test::shared_path("data/external/mrcal_cam0.splined.cameramodel");
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "no ../shared checkout";
   const Camera camera = read_camera(file.string());
   mrcal_cameramodel_t* model = mrcal_read_cameramodel_file(file.c_str());
@@ -294,7 +294,7 @@ TEST(Mrcal, ConvertingASplinedCameraReportsWhatLibmrcalAndThePolynomialFind) {
 // The real OPENCV8 calibrations of ../shared (tangential terms and all), read by our
 // reader and by libmrcal's own, against mrcal_project / mrcal_unproject.
 TEST(Mrcal, RealOpenCV8FilesAgreeWithLibmrcal) {
-  const std::filesystem::path external = std::filesystem::path(FISHCAM_SHARED_DIR) / "data/external";
+  const std::filesystem::path external = test::shared_path("data/external");
   if (!std::filesystem::exists(external / "README.md")) GTEST_SKIP() << "no ../shared checkout";
   struct File {
     const char* name;

@@ -27,9 +27,9 @@ void compare_with_mrcal(const char* source_file, const char* target_file, std::u
   write_camera(with_change(target.parameters(), change), dir / "target.cameramodel", CameraFormat::mrcal);
   for (const char* distance : {"none", "1"}) {
     const std::string out = (dir / (std::string(distance) + ".npy")).string();
-    const std::string command = "/usr/bin/python3 '" FISHCAM_MRCAL_MAP_SCRIPT "' '" + (dir / "source.cameramodel").string() +
-                                "' '" + (dir / "target.cameramodel").string() + "' " + distance + " '" + out + "' > '" +
-                                (dir / "log").string() + "' 2>&1";
+    const std::string command = "/usr/bin/python3 '" + test::test_path("mrcal_map_script").string() + "' '" +
+                                (dir / "source.cameramodel").string() + "' '" + (dir / "target.cameramodel").string() +
+                                "' " + distance + " '" + out + "' > '" + (dir / "log").string() + "' 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "log");
   }
 

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <unistd.h>
 
@@ -16,11 +17,35 @@
 
 namespace fishcam::test {
 
-inline std::filesystem::path data_path(const std::string& name) { return std::filesystem::path(FISHCAM_DATA_DIR) / name; }
+// The paths the tests use (data, shared, tmp, binary, mrcal_map_script), from
+// fishcam_test_paths.txt that CMake writes beside the test programs (KEY=PATH per
+// line). Read at run time, not compiled in, so that the tests' objects do not depend
+// on where the tree lies (a clone elsewhere hits the compiler cache).
+inline std::filesystem::path test_path(const std::string& key) {
+  static const std::map<std::string, std::string> paths = [] {
+    std::map<std::string, std::string> found;
+    std::error_code ec;
+    const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    std::ifstream in(exe.parent_path() / "fishcam_test_paths.txt");
+    for (std::string line; std::getline(in, line);) {
+      if (const size_t eq = line.find('='); eq != std::string::npos) found[line.substr(0, eq)] = line.substr(eq + 1);
+    }
+    return found;
+  }();
+  const auto it = paths.find(key);
+  if (it == paths.end() || it->second.empty()) {
+    throw std::runtime_error("test path '" + key + "' missing from fishcam_test_paths.txt beside the test program");
+  }
+  return it->second;
+}
+
+inline std::filesystem::path data_path(const std::string& name) { return test_path("data") / name; }
+// ../shared beside the source tree (real files; tests skip without it).
+inline std::filesystem::path shared_path(const std::string& name) { return test_path("shared") / name; }
 
 // A fresh scratch folder for one test.
 inline std::filesystem::path scratch_dir(const std::string& name) {
-  const auto dir = std::filesystem::path(FISHCAM_TEST_TMP) / name;
+  const auto dir = test_path("tmp") / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -271,7 +296,10 @@ inline double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) 
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
-#ifdef FISHCAM_BINARY
+#ifdef FISHCAM_HAS_CLI
+// The fishcam program under test.
+inline std::string fishcam_binary() { return test_path("binary").string(); }
+
 struct CommandResult {
   int exit_code;
   std::string out, err;
@@ -281,11 +309,11 @@ struct CommandResult {
 inline CommandResult run_fishcam(const std::string& args, const std::string& stdin_text = "") {
   // One folder per process and call: CTest runs the tests in parallel.
   static int calls = 0;
-  const auto dir = std::filesystem::path(FISHCAM_TEST_TMP) /
+  const auto dir = test_path("tmp") /
                    ("cli-" + std::to_string(::getpid()) + "-" + std::to_string(calls++));
   std::filesystem::create_directories(dir);
   const auto in = write_file(dir / "stdin.txt", stdin_text), out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string command = std::string("'") + FISHCAM_BINARY + "' " + args + " < '" + in.string() + "' > '" +
+  const std::string command = "'" + fishcam_binary() + "' " + args + " < '" + in.string() + "' > '" +
                               out.string() + "' 2> '" + err.string() + "'";
   const int status = std::system(command.c_str());
   CommandResult result{WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};

@@ -70,7 +70,7 @@ TEST(WoodScape, ExtrinsicsAreCameraToVehicle) {
 }
 
 TEST(WoodScape, SharedCalibrationMatchesTheBundledOne) {
-  const std::filesystem::path shared = std::filesystem::path(FISHCAM_SHARED_DIR) / "data/woodscape/front.json";
+  const std::filesystem::path shared = test::shared_path("data/woodscape/front.json");
   if (!std::filesystem::exists(shared)) GTEST_SKIP() << "no ../shared checkout";
   const Camera a = read_camera(shared), b = read_camera(test::data_path("woodscape_front.json"));
   EXPECT_EQ(model_params(a.model()), model_params(b.model()));
