@@ -21,9 +21,10 @@ seed reproduces a run. With ``WoodScapeDataset(seed=S)``, sample ``i`` of epoch
 the epoch travels with the index from ``EpochSampler``, which runs in the main
 process and counts the epochs itself; torch's generator is seeded with that seed
 for the call, so the other random transforms of the pipeline follow it too. A
-seeded dataset indexed by a bare index inside a DataLoader worker raises instead
-of repeating one epoch's changes (a worker's copy of the dataset never sees
-``set_epoch`` from the main process).
+seeded dataset indexed by a bare index raises instead of repeating one epoch's
+changes: always inside a DataLoader worker (a worker's copy of the dataset never
+sees ``set_epoch`` from the main process), and in the main process until
+``set_epoch`` is called.
 """
 
 import contextlib
@@ -687,8 +688,9 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
     ``sample_seed(derive_seed(seed, f"epoch{e}", index))``: the same change whatever
     the workers. The epoch comes with the key: ``dataset[(e, index)]``, as
     ``EpochSampler`` yields them; a bare ``dataset[index]`` uses ``set_epoch``'s
-    epoch, in the main process only (raises in a DataLoader worker, whose copy never
-    sees ``set_epoch``).
+    epoch, in the main process only, and only once ``set_epoch`` has been called
+    (raises otherwise: every epoch would repeat epoch 0's changes; and in a
+    DataLoader worker, whose copy never sees ``set_epoch``).
     """
 
     def __init__(self, root: typing.Union[str, "os.PathLike[str]"],
@@ -698,7 +700,7 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
         self.transform = transform
         self.mask_dtype = mask_dtype
         self.seed = None if seed is None else _check_seed(seed)
-        self.epoch = 0
+        self.epoch: typing.Optional[int] = None  # set_epoch's; None: bare indices of a seeded dataset refused
         images = os.path.join(self.root, "rgb_images")
         if not os.path.isdir(images):
             raise Error(f"{images}: missing (expected the WoodScape layout)")
@@ -733,6 +735,10 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
                     raise Error("WoodScapeDataset(seed=...) in a DataLoader worker needs the epoch with each index "
                                 "(the worker's copy never sees set_epoch): pass "
                                 "sampler=fishcam.torch.EpochSampler(...) to the DataLoader")
+                if self.epoch is None:
+                    raise Error("WoodScapeDataset(seed=...): a bare index has no epoch (every epoch would repeat "
+                                "epoch 0's changes): pass sampler=fishcam.torch.EpochSampler(...) to the DataLoader, "
+                                "index with (epoch, index), or call set_epoch(e) before each epoch")
                 epoch = self.epoch
         if not -len(self.names) <= index < len(self.names):
             raise IndexError(f"WoodScapeDataset: index {index} out of range for {len(self.names)} samples")

@@ -154,7 +154,14 @@ def test_a_seeded_dataset_without_the_epoch_in_workers_is_refused(dataset_root):
                                          collate_fn=ft.collate)
     with pytest.raises(fishcam.Error, match="EpochSampler"):
         next(iter(loader))
-    # In the main process a bare index uses set_epoch's epoch; unseeded datasets take bare indices anywhere.
+    # In the main process too, without EpochSampler: a bare index before set_epoch would
+    # give every epoch epoch 0's changes (num_workers=0 and a plain sampler).
+    plain = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=0, collate_fn=ft.collate)
+    with pytest.raises(fishcam.Error, match="a bare index has no epoch"):
+        next(iter(plain))
+    with pytest.raises(fishcam.Error, match="set_epoch"):
+        ds[0]
+    # After set_epoch a bare index uses its epoch; unseeded datasets take bare indices anywhere.
     ds.set_epoch(2)
     assert seed_of(ds[1]["changes"]) == fishcam.derive_seed(4, "epoch2", 1)
     assert seed_of(ds[(5, 1)]["changes"]) == fishcam.derive_seed(4, "epoch5", 1)
@@ -166,9 +173,31 @@ def test_a_seeded_dataset_without_the_epoch_in_workers_is_refused(dataset_root):
         ft.EpochSampler(range(3), start_epoch=-1)
 
 
+def test_what_reproduces_an_unseeded_run(dataset_root):
+    """docs/python.md, "Seeding and workers": without a dataset seed, DataLoader(generator=)
+    reproduces a run with workers; with num_workers=0 torch.manual_seed does (the
+    DataLoader seeds no worker then); unseeded epochs differ."""
+    ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"))
+
+    def run(workers, generator_seed=None, manual_seed=None):
+        if manual_seed is not None:
+            torch.manual_seed(manual_seed)
+        generator = None if generator_seed is None else torch.Generator().manual_seed(generator_seed)
+        loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=workers, generator=generator,
+                                             collate_fn=ft.collate)
+        return [seed_of(c) for _ in range(2) for batch in loader for c in batch["changes"]]
+
+    with_workers = run(1, generator_seed=5)
+    assert run(1, generator_seed=5) == with_workers
+    assert run(1, generator_seed=6) != with_workers
+    in_main = run(0, manual_seed=5)
+    assert run(0, manual_seed=5) == in_main
+    assert len(set(in_main)) == len(in_main) == 2 * len(ds), "an unseeded change repeated across epochs"
+
+
 def test_dataset_items(dataset_root, small_camera):
     ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"), seed=3)
-    item = ds[0]
+    item = ds[(0, 0)]
     assert isinstance(item["image"], tv_tensors.Image) and item["image"].shape == (3, 121, 160)
     assert item["image"].dtype == torch.uint8
     assert isinstance(item["mask"], tv_tensors.Mask) and item["mask"].dtype == torch.int64
@@ -180,7 +209,7 @@ def test_dataset_items(dataset_root, small_camera):
     untransformed = ft.WoodScapeDataset(dataset_root)[0]
     assert untransformed["camera"] == plain and "changes" not in untransformed
     pickle.loads(pickle.dumps(ds))
-    batch = ft.collate([ds[0], ds[1]])
+    batch = ft.collate([ds[(0, 0)], ds[(0, 1)]])
     assert batch["image"].shape == (2, 3, 121, 160) and len(batch["camera"]) == 2
 
 
