@@ -88,6 +88,14 @@ TEST_F(CliReliability, AForeignManifestIsNeverTruncated) {
   expect_refused("augment-dataset " + quoted(root) + " --preset small --seed 1 --out " + quoted(out),
                  "not a manifest of fishcam augment-dataset", out);
   EXPECT_EQ(test::read_file(manifest), "{\"output\": \"my notes\"}");
+  // An earlier fishcam's manifest (entries from the first line, no settings record) is
+  // named as such, and kept as well.
+  const std::string earlier =
+      "{\"image\":\"a.png\",\"output\":\"a_small0\",\"copy\":0,\"preset\":\"small\",\"seed\":1}\n";
+  put(manifest, earlier);
+  expect_refused("augment-dataset " + quoted(root) + " --preset small --seed 1 --out " + quoted(out),
+                 "written by an earlier fishcam, whose manifests have no settings record", out);
+  EXPECT_EQ(test::read_file(manifest), earlier);
 }
 
 // Probes 3 and 5: every setting the outputs depend on, changed on a resume (with and

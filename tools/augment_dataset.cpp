@@ -79,6 +79,19 @@ constexpr const char* kCommand = "augment-dataset";
 // Manifests hold a line per output; far larger than any dataset fishcam augments.
 constexpr std::size_t kMaxManifestBytes = std::size_t(1) << 30;
 
+// Why a manifest whose first line is not this run's record is not touched: another
+// run's settings, an earlier fishcam's manifest (entries from the first line: no
+// settings record), or not fishcam's at all.
+Error manifest_refusal(const fs::path& path, const std::string& first_line) {
+  const nlohmann::json entry = nlohmann::json::parse(first_line, nullptr, false);
+  const char* why = OutputSettings::is_record(first_line, kCommand) ? "written with other settings than this run's"
+                    : entry.is_object() && entry.contains("image") && entry.contains("output") &&
+                            entry.contains("copy") && entry.contains("preset") && entry.contains("seed")
+                        ? "written by an earlier fishcam, whose manifests have no settings record"
+                        : "not a manifest of fishcam augment-dataset";
+  return Error(path_for_message(path) + ": " + why + " (refusing to touch it: use another --out)");
+}
+
 // The outputs a manifest lists, read without locking it (another shard may be
 // appending: a last line without its newline is not counted). A manifest whose first
 // line is not this run's settings record was not written by this run's settings, or
@@ -91,12 +104,7 @@ std::set<std::string> listed_outputs(const fs::path& path, const std::string& re
   if (content.find('\n') == std::string::npos) return listed;
   std::istringstream lines(content);
   std::string line;
-  if (!std::getline(lines, line) || line != record) {
-    throw Error(path_for_message(path) + ": " +
-                (OutputSettings::is_record(line, kCommand) ? "written with other settings than this run's"
-                                                          : "not a manifest of fishcam augment-dataset") +
-                " (refusing to touch it: use another --out)");
-  }
+  if (!std::getline(lines, line) || line != record) throw manifest_refusal(path, line);
   while (std::getline(lines, line)) {
     if (lines.eof()) break;  // cut: being written, or an interrupted run's
     const nlohmann::json entry = nlohmann::json::parse(line, nullptr, false);
@@ -417,11 +425,7 @@ class DatasetAugmentation {
     }
     const std::string content = read_bounded_file(path, kMaxManifestBytes, "a manifest");
     if (!content.empty() && !content.starts_with(record + "\n")) {
-      throw Error(path_for_message(path) + ": " +
-                  (OutputSettings::is_record(content.substr(0, content.find('\n')), kCommand)
-                       ? "written with other settings than this run's"
-                       : "not a manifest of fishcam augment-dataset") +
-                  " (refusing to touch it: use another --out)");
+      throw manifest_refusal(path, content.substr(0, content.find('\n')));
     }
   }
 
