@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <numbers>
 #include <filesystem>
@@ -22,6 +23,43 @@ using detail::Solve;
 using detail::undetermined_text;
 
 namespace {
+
+// The joint solve is said to hide inconsistent data when a camera's joint RMS is more
+// than this factor of its own calibration's, or its joint intrinsics lie more than
+// kIntrinsicsMoveSigmas of their own sigma from its own calibration's (docs/fitting.md).
+constexpr double kJointRmsFactor = 1.5;
+constexpr double kIntrinsicsMoveSigmas = 3;
+
+// A number for a warning, to 3 significant digits.
+std::string three_digits(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
+// The warnings of camera `name` whose joint solution is `joint` and own calibration `own`.
+std::vector<std::string> joint_solve_warnings(const std::string& name, const CalibrationResult& own,
+                                              const CalibrationResult& joint) {
+  std::vector<std::string> warnings;
+  if (joint.rms_px > kJointRmsFactor * own.rms_px) {
+    warnings.push_back(name + ": the joint solve's rms " + three_digits(joint.rms_px) + " px is " +
+                       three_digits(joint.rms_px / own.rms_px) + " times its own calibration's (" +
+                       three_digits(own.rms_px) +
+                       " px): its boards do not agree with the other cameras' at the same instants (pairs not "
+                       "taken together, a camera that moved, a board that bent?)");
+  }
+  double worst = 0;
+  std::string worst_name;
+  for (size_t i = 0; i < own.parameters.size() && i < joint.parameters.size(); ++i) {
+    const double moved = std::abs(joint.parameters[i] - own.parameters[i]) / own.sigmas[i];
+    if (std::isfinite(moved) && moved > worst) worst = moved, worst_name = own.parameter_names[i];
+  }
+  if (worst > kIntrinsicsMoveSigmas) {
+    warnings.push_back(name + ": the joint solve moves " + worst_name + " by " + three_digits(worst) +
+                       " sigma from the camera's own calibration: the other cameras' boards pull its intrinsics");
+  }
+  return warnings;
+}
 
 // One corner of a rig camera at one instant: p[0..2] the camera's intrinsics, then
 // (cameras other than 0) camera 0 -> this camera, then the board -> camera 0.
@@ -410,6 +448,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     out.rotation_sigma_rad.push_back(rotation);
     out.translation_sigma.push_back(translation);
     for (const auto& w : r.warnings) out.warnings.push_back(camera_name(k) + ": " + w);
+    for (std::string& w : joint_solve_warnings(camera_name(k), singles[k], r)) out.warnings.push_back(std::move(w));
     out.cameras.push_back(std::move(r));
   }
   for (const Eigen::VectorXd& direction : full.undetermined) {
