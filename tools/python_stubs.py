@@ -43,7 +43,25 @@ def generate(extension_dir):
     text = re.sub(r": list([,)])", r": list[typing.Any]\1", text)
     text = re.sub(r": dict([,)])", r": dict[str, typing.Any]\1", text)
     text = re.sub(r": tuple([,)])", r": tuple[typing.Any, ...]\1", text)
+    # pybind11 converts any array-like to a float64 (Eigen or py::array_t) argument:
+    # tuples, lists and ints are what the docs pass (ViewpointChange(rotation_deg=(10,
+    # 0, -5)), theta_from_rho(10.0)). Results stay ndarrays.
+    text = "\n".join(array_like_arguments(line) for line in text.split("\n"))
+    if "numpy.typing.ArrayLike" in text:
+        text = text.replace("import numpy\n", "import numpy\nimport numpy.typing\n", 1)
     return text
+
+
+FLOAT64_ARRAY = re.compile(r"numpy\.ndarray\[(?:[^\[\]]|\[(?:[^\[\]]|\[[^\[\]]*\])*\])*?numpy\.dtype\[numpy\.float64\]\]")
+
+
+def array_like_arguments(line):
+    """A def line with its float64 ndarray parameters typed numpy.typing.ArrayLike."""
+    stripped = line.strip()
+    if not stripped.startswith("def ") or ") ->" not in stripped:
+        return line
+    cut = line.rfind(") ->")
+    return FLOAT64_ARRAY.sub("numpy.typing.ArrayLike", line[:cut]) + line[cut:]
 
 
 def main():

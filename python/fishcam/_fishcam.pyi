@@ -3,6 +3,7 @@ fishcam's C++ library (use the fishcam package, not this module)
 """
 from __future__ import annotations
 import numpy
+import numpy.typing
 import typing
 __all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'dataset_fidelity', 'depth_priors', 'depth_priors_and_map', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'reprojection_error_map', 'sampling_names', 'set_num_threads', 'woodscape_classes']
 class Error(ValueError):
@@ -114,7 +115,7 @@ class Camera:
         """
         The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.
         """
-    def theta_from_rho(self, rho: numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]:
+    def theta_from_rho(self, rho: numpy.typing.ArrayLike) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]:
         """
         theta (radians) of radii rho (pixels, any shape, float64; same shape out) under the radial model; NaN outside the valid domain. For a camera with tangential terms (radial is False) that is its radial part only: unproject pixels instead.
         """
@@ -323,7 +324,7 @@ class ViewpointChange:
     """
     def __getstate__(self) -> tuple[typing.Any, ...]:
         ...
-    def __init__(self, rotation_deg: numpy.ndarray[tuple[typing.Literal[3], typing.Literal[1]], numpy.dtype[numpy.float64]] = ..., translation: numpy.ndarray[tuple[typing.Literal[3], typing.Literal[1]], numpy.dtype[numpy.float64]] = ...) -> None:
+    def __init__(self, rotation_deg: numpy.typing.ArrayLike = ..., translation: numpy.typing.ArrayLike = ...) -> None:
         """
         rotation_deg: (3,) degrees about x, y, z; translation: (3,).
         """
@@ -410,7 +411,7 @@ class ViewpointWarp:
 class AffineChange:
     def __getstate__(self) -> tuple[typing.Any, ...]:
         ...
-    def __init__(self, rotation_deg: float = 0.0, translation: numpy.ndarray[tuple[typing.Literal[2], typing.Literal[1]], numpy.dtype[numpy.float64]] = ..., scale: float = 1.0) -> None:
+    def __init__(self, rotation_deg: float = 0.0, translation: numpy.typing.ArrayLike = ..., scale: float = 1.0) -> None:
         ...
     def __repr__(self) -> str:
         ...

@@ -1,0 +1,101 @@
+"""The Python blocks of docs/python.md and README.md pass mypy --strict against the
+package under test (the blocks are extracted from the docs, not copied here): what
+the docs pass (tuples for vectors, ints for floats, dicts of fills) is what the stubs
+accept. The names a block takes as given (an image, a camera, a model) are declared
+once below with the types the docs describe."""
+
+import os
+import re
+import subprocess
+import sys
+
+import pytest
+
+import fishcam
+
+REPO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+DOCS = ["docs/python.md", "README.md"]
+
+GIVEN = '''\
+import typing
+import numpy as np
+import numpy.typing as npt
+import torch
+import fishcam
+import fishcam.torch
+import fishcam.torch as ft
+from torchvision import tv_tensors
+
+# What the docs' blocks take as given.
+root: str
+path: str
+epochs: int
+seed: int
+n: int
+model: torch.nn.Module
+test_loader: torch.utils.data.DataLoader[dict[str, typing.Any]]
+cam: fishcam.Camera
+camera: fishcam.Camera
+cameras: list[fishcam.Camera]
+changes: list[fishcam.ViewpointChange]
+image: npt.NDArray[np.uint8]
+img: npt.NDArray[np.uint8]
+images: torch.Tensor
+labels: npt.NDArray[np.uint8]
+lab: npt.NDArray[np.uint8]
+part_labels: npt.NDArray[np.uint8]
+instance_masks: npt.NDArray[np.bool_]
+masks: torch.Tensor
+boxes: npt.NDArray[np.float64]
+xyxy: npt.NDArray[np.float64]
+classes: list[int]
+points: npt.NDArray[np.float64]
+xy: npt.NDArray[np.float64]
+pixels: npt.NDArray[np.float64]
+rays: npt.NDArray[np.float64]
+rho: npt.NDArray[np.float64]
+depth: npt.NDArray[np.float32]
+depth_map: npt.NDArray[np.float32]
+p: npt.NDArray[np.float64]
+outlines: list[npt.NDArray[np.float64]]
+left: list[tuple[str, npt.NDArray[np.float64]]]
+right: typing.Any  # an image in one block, a camera's corners in another
+'''
+
+
+def python_blocks():
+    """(file, first line, code) of every ```python block of the docs."""
+    blocks = []
+    for doc in DOCS:
+        with open(os.path.join(REPO, doc), encoding="utf-8") as f:
+            text = f.read()
+        for match in re.finditer(r"```python\n(.*?)```", text, re.S):
+            blocks.append((doc, text.count("\n", 0, match.start()) + 2, match.group(1)))
+    return blocks
+
+
+def test_every_python_block_of_the_docs_passes_mypy_strict(tmp_path):
+    pytest.importorskip("mypy")
+    blocks = python_blocks()
+    assert len(blocks) >= 8, f"expected the 8 blocks of docs/python.md at least, found {len(blocks)}"
+    names = {}
+    for k, (doc, line, code) in enumerate(blocks):
+        name = f"block{k}.py"
+        (tmp_path / name).write_text(GIVEN + code)
+        names[name] = (doc, line - GIVEN.count("\n") - 1)
+    # The fishcam under test, with its stubs: an installed one mypy finds through the
+    # interpreter's site-packages (which MYPYPATH may not hold), a built one through MYPYPATH.
+    package_parent = os.path.dirname(os.path.dirname(os.path.abspath(fishcam.__file__)))
+    env = dict(os.environ)
+    if os.path.basename(package_parent) not in ("site-packages", "dist-packages"):
+        env["MYPYPATH"] = package_parent
+    result = subprocess.run([sys.executable, "-m", "mypy", "--config-file", os.path.join(REPO, "pyproject.toml"),
+                             "--cache-dir", str(tmp_path / "cache"), *sorted(names)],
+                            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=900)
+
+    def where(match):  # blockK.py:N -> docs/python.md:M
+        doc, offset = names[match.group(1)]
+        return f"{doc}:{int(match.group(2)) + offset}"
+
+    report = re.sub(r"(block\d+\.py):(\d+)", where, result.stdout + result.stderr)
+    assert result.returncode == 0, report
