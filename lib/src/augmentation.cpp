@@ -146,7 +146,6 @@ struct KernelSource {
 
 // Where a lens table must hold: the source image and this margin around it.
 constexpr double kLensTableMarginPx = 16;
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // The lens's offset at u, or none past reach (the plane radius of the camera's valid
 // domain): libmrcal is not asked where no ray of the camera can be, since its own
@@ -204,7 +203,8 @@ bool lens_kernel_cell(const MrcalLens& lens, const MrcalLens::PolynomialCells& l
 // Every cell of the layout (lens_kernel_cell), row by row; seen (given an image) says
 // which cells have a point in it or its margin.
 std::vector<float> lens_kernel_cells(const MrcalLens& lens, const MrcalLens::PolynomialCells& layout, double f,
-                                     const Camera* image = nullptr, double reach = kInf,
+                                     const Camera* image = nullptr,
+                                     double reach = std::numeric_limits<double>::infinity(),
                                      std::vector<unsigned char>* seen = nullptr) {
   std::vector<float> out(size_t(layout.nx) * size_t(layout.ny) * 32);
   if (seen) seen->assign(size_t(layout.nx) * size_t(layout.ny), 0);
@@ -262,7 +262,7 @@ std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens,
   // The plane radius of the domain's end (m = sin theta / (xi + cos theta) on the plane).
   const double theta_max = camera.domain().theta_max;
   const double reach = xi + std::cos(theta_max) > 0 ? plane_per_m * std::sin(theta_max) / (xi + std::cos(theta_max))
-                                                     : kInf;
+                                                     : std::numeric_limits<double>::infinity();
   const double pixels_per_f = camera.pixel_scale().cwiseAbs().maxCoeff();
   const auto max_nan_first = [](double a, double b) { return std::isnan(a) || a >= b ? a : b; };
   for (int across = 32; across <= kLensTableMaxCells; across *= 2) {

@@ -2,59 +2,11 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include <cstdio>
-#include <mutex>
-#include <fcntl.h>
-#include <unistd.h>
-
 #include "fishcam/error.hpp"
 #include "fishcam/file_input.hpp"
+#include "stderr_capture.hpp"
 
 namespace fishcam {
-namespace {
-
-// Standard error closed for a scope: the image codecs under OpenCV (libpng, libjpeg)
-// print their own complaints about a corrupt file there, around our one-line message.
-// File descriptor 2 is the process's: images read in parallel (detect-corners) share
-// one silencing, the first to come closes it and the last to leave opens it again.
-class SilencedStderr {
- public:
-  SilencedStderr() {
-    const std::lock_guard<std::mutex> lock(mutex());
-    if (depth()++ > 0) return;
-    std::fflush(stderr);
-    saved() = dup(STDERR_FILENO);
-    const int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
-    if (saved() >= 0 && null >= 0) dup2(null, STDERR_FILENO);
-    if (null >= 0) close(null);
-  }
-  ~SilencedStderr() {
-    const std::lock_guard<std::mutex> lock(mutex());
-    if (--depth() > 0 || saved() < 0) return;
-    std::fflush(stderr);
-    dup2(saved(), STDERR_FILENO);
-    close(saved());
-    saved() = -1;
-  }
-  SilencedStderr(const SilencedStderr&) = delete;
-  SilencedStderr& operator=(const SilencedStderr&) = delete;
-
- private:
-  static std::mutex& mutex() {
-    static std::mutex m;
-    return m;
-  }
-  static int& depth() {
-    static int d = 0;
-    return d;
-  }
-  static int& saved() {
-    static int fd = -1;
-    return fd;
-  }
-};
-
-}  // namespace
 
 cv::Mat read_image(const std::filesystem::path& path, int flags) {
   std::error_code ec;
@@ -67,7 +19,9 @@ cv::Mat read_image(const std::filesystem::path& path, int flags) {
   check_bounded_file(path, std::size_t(2) << 30, "an image file");
   cv::Mat image;
   {
-    const SilencedStderr quiet;
+    // The codecs under OpenCV (libpng, libjpeg) print their own complaints about a
+    // corrupt file: our one-line message says it instead.
+    const detail::SilencedStderr quiet;
     image = cv::imread(path.string(), flags);
   }
   if (image.empty()) throw Error(path_for_message(path) + ": cannot read image (unsupported or corrupt file)");

@@ -1,12 +1,12 @@
-// Standard error taken from third-party code for a scope: a library that prints its
-// own diagnostics (libmrcal) writes into a temporary file instead of the terminal,
-// and the caller summarises what it said in its own one-line message. File
-// descriptor 2 is process-wide: captures are serialised (one at a time), and meant
-// for scopes that call such a library, not for long runs.
+// Standard error taken from third-party code for a scope: libraries that print their
+// own diagnostics (libmrcal; OpenCV's image decoders) write into one temporary file
+// instead of the terminal. File descriptor 2 is the process's, so there is one
+// redirection, counted: the first scope to enter points fd 2 at the file, the last to
+// leave points it back, whatever the order in which scopes on different threads end
+// (two independent redirections could leave fd 2 on the other's file).
 #pragma once
 
-#include <fcntl.h>
-#include <unistd.h>
+#include <sys/types.h>
 
 #include <cstdio>
 #include <mutex>
@@ -14,56 +14,69 @@
 
 namespace fishcam::detail {
 
+// The shared redirection (stderr_capture.cpp): enter returns the file's size at entry
+// (-1 if standard error could not be redirected), leave undoes one enter.
+off_t enter_stderr_redirect();
+void leave_stderr_redirect();
+// What was written to the redirection from `from` on (at most max_bytes of it).
+std::string stderr_written_since(off_t from, std::size_t max_bytes);
+
+// Standard error discarded for the scope (a decoder's complaints about a corrupt file,
+// reported in our own one-line message instead).
+class SilencedStderr {
+ public:
+  SilencedStderr() { enter_stderr_redirect(); }
+  ~SilencedStderr() { leave_stderr_redirect(); }
+  SilencedStderr(const SilencedStderr&) = delete;
+  SilencedStderr& operator=(const SilencedStderr&) = delete;
+};
+
+// Standard error captured for the scope, and what was said summarised in one line for
+// the caller's message. Captures are serialised among themselves (one library's
+// complaint is never taken for another capture's); other threads' output during the
+// scope is captured too.
 class StderrCapture {
  public:
-  StderrCapture() : lock_(mutex()), file_(std::tmpfile()) {
-    std::fflush(stderr);
-    if (file_) saved_ = dup(STDERR_FILENO);
-    if (saved_ >= 0) dup2(fileno(file_), STDERR_FILENO);
-  }
-  ~StderrCapture() {
-    restore();
-    if (file_) std::fclose(file_);
-  }
+  StderrCapture() : lock_(mutex()), start_(enter_stderr_redirect()) {}
+  ~StderrCapture() { release(); }
   StderrCapture(const StderrCapture&) = delete;
   StderrCapture& operator=(const StderrCapture&) = delete;
 
   // "FIRST LINE (N lines)" of what was written, at most kShown characters of its
   // first line; "" when nothing was. Standard error is back from here on.
   std::string summary() {
-    restore();
-    if (!file_) return "";
-    const long size = std::ftell(file_);
-    if (size <= 0) return "";
-    std::rewind(file_);
+    const std::string said = start_ >= 0 ? stderr_written_since(start_, kRead) : std::string();
+    release();
+    if (said.empty()) return "";
     std::string first;
     long lines = 0;
-    for (int c; (c = std::fgetc(file_)) != EOF;) {
+    for (char c : said) {
       if (c == '\n') {
         ++lines;
       } else if (lines == 0 && first.size() < kShown) {
-        first.push_back(char(c));
+        first.push_back(c);
       }
     }
-    return first + " (" + std::to_string(lines) + " line" + (lines == 1 ? "" : "s") + ")";
+    // Past kRead bytes the count is a lower bound.
+    return first + " (" + std::to_string(lines) + (said.size() == kRead ? "+" : "") + " line" +
+           (lines == 1 ? "" : "s") + ")";
   }
 
  private:
   static constexpr std::size_t kShown = 160;
+  static constexpr std::size_t kRead = std::size_t(1) << 20;
   static std::mutex& mutex() {
     static std::mutex m;
     return m;
   }
-  void restore() {
-    if (saved_ < 0) return;
-    std::fflush(stderr);
-    dup2(saved_, STDERR_FILENO);
-    close(saved_);
-    saved_ = -1;
+  void release() {
+    if (released_) return;
+    released_ = true;
+    leave_stderr_redirect();
   }
   std::lock_guard<std::mutex> lock_;
-  std::FILE* file_ = nullptr;
-  int saved_ = -1;
+  off_t start_;
+  bool released_ = false;
 };
 
 }  // namespace fishcam::detail
