@@ -27,6 +27,7 @@ seed of the change is drawn from the transform's generator, which ``A.Compose(se
 seeds; ``A.ReplayCompose`` replays it.
 """
 
+import json
 import typing
 
 import numpy as np
@@ -134,13 +135,22 @@ class RandomViewpoint(_FishcamDualTransform):
     module). The camera comes from the constructor or from ``camera=`` in the call;
     ``p`` is albumentations' (its generator decides). ``fill``: a number (the
     images') or ``{"image": ..., "mask": ...}``; ``fill_mask``: the semantic masks'
-    (``mask``) label; ``masks`` and bool masks get 0 / False."""
+    (``mask``) label; ``masks`` and bool masks get 0 / False. ``A.to_dict`` writes a
+    constructor camera as its fishcam JSON object (``Camera.to_json``), which the
+    constructor (and so ``A.from_dict``) takes back as ``camera``."""
 
-    def __init__(self, camera: typing.Optional[Camera] = None, preset: str = "train",
+    def __init__(self, camera: typing.Union[Camera, typing.Dict[str, typing.Any], None] = None, preset: str = "train",
                  max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
                  depth: str = "source-sphere", fill: _transforms.Fill = 0, fill_mask: int = 0, sampling: str = "grid",
                  depth_values: str = "range", p: float = 1.0) -> None:
         super().__init__(p)
+        if isinstance(camera, dict):  # what get_transform_init_args (A.to_dict) writes
+            try:
+                camera = Camera.from_json(json.dumps(camera))
+            except (TypeError, ValueError) as error:
+                raise Error(f"camera: not a fishcam JSON camera ({error})") from None
+        elif camera is not None and not isinstance(camera, Camera):
+            raise Error(f"camera: expected a fishcam.Camera or its fishcam JSON object, got {type(camera).__name__}")
         self._viewpoint = _transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
                                                       max_translation=max_translation, depth=depth, fill=fill,
                                                       fill_mask=fill_mask, sampling=sampling,
@@ -153,6 +163,13 @@ class RandomViewpoint(_FishcamDualTransform):
     def get_transform_init_args_names(self) -> typing.Tuple[str, ...]:
         return ("camera", "preset", "max_rotation_deg", "max_translation", "depth", "fill", "fill_mask", "sampling",
                 "depth_values")
+
+    def get_transform_init_args(self) -> typing.Dict[str, typing.Any]:
+        """The constructor's arguments for A.to_dict: the camera as its fishcam JSON object."""
+        args = typing.cast(typing.Dict[str, typing.Any], super().get_transform_init_args())
+        if isinstance(args.get("camera"), Camera):
+            args["camera"] = json.loads(args["camera"].to_json())
+        return args
 
     def _change(self, params: Params) -> _transforms.SampleChange:
         camera = params.get("source_camera") or self.camera

@@ -437,7 +437,23 @@ class RandomViewpoint(_FishcamTransform):
     N >= 2, and the masks under the key "masks" of a dict (a detection target
     ``{"boxes", "labels", "masks"}``; ``is_instance_mask``).
 
-    Arguments as fishcam.transforms.RandomViewpoint, plus min_visibility (boxes).
+    Args:
+        camera: the fishcam.Camera of the images, or None: then the sample must hold one.
+        preset: "small", "medium", "large" or "train" (the paper's ranges); None, or
+            max_rotation_deg and max_translation given, draws uniformly per axis in
+            [-max, max] instead.
+        max_rotation_deg, max_translation: the ranges without a preset (degrees; units
+            of the depth prior: the unit sphere's, or the depth map's).
+        depth: where a pixel's scene point is assumed to be when the camera moves:
+            "source-sphere" (default), "target-sphere", "infinity" (rotation only
+            matters), or "map" (the sample's fishcam.torch.DepthMap; exact).
+        p: probability of applying a change (else the identity, still recorded).
+        fill, fill_mask: the no-source values per target type (above).
+        sampling: "grid" (maps interpolated from grid nodes, within 1/32 px of the
+            per-pixel map) or "exact".
+        depth_values: what a DepthMap holds, "range" (along the ray) or "z".
+        min_visibility: boxes seen less than this share of their area collapse to
+            zero size.
     """
 
     def __init__(self, camera: typing.Optional[Camera] = None, preset: typing.Optional[str] = "train",

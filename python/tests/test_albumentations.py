@@ -2,6 +2,7 @@
 keypoints and additional targets under one change, the numpy transform's result for
 the same seed, Compose(seed=) reproducibility, ReplayCompose replay."""
 
+import json
 import os
 
 import numpy as np
@@ -78,6 +79,24 @@ def test_seeds_reproduce_and_replay(cam, data):
     first = replay(image=data["image"], mask=data["mask"])
     again = A.ReplayCompose.replay(first["replay"], image=data["image"], mask=data["mask"])
     assert np.array_equal(first["image"], again["image"]) and np.array_equal(first["mask"], again["mask"])
+
+
+def test_to_dict_round_trips_a_constructor_camera(cam, data):
+    """A.to_dict writes the constructor's camera as its fishcam JSON object (JSON all
+    through) and A.from_dict rebuilds the same pipeline: the same camera, the same
+    image for the same seed."""
+    pipeline = A.Compose([fa.RandomViewpoint(cam, preset="medium", fill_mask=255), A.HorizontalFlip(p=0.5)], seed=4)
+    described = json.loads(json.dumps(A.to_dict(pipeline)))
+    assert described["transform"]["transforms"][0]["camera"]["fishcam_camera"] == 1
+    again = A.from_dict(described)
+    assert again.transforms[0].camera == cam
+    again.set_random_seed(4)
+    pipeline.set_random_seed(4)
+    assert np.array_equal(pipeline(image=data["image"])["image"], again(image=data["image"])["image"])
+    with pytest.raises(fishcam.Error, match="camera: expected a fishcam.Camera or its fishcam JSON object"):
+        fa.RandomViewpoint("front.json")
+    with pytest.raises(fishcam.Error):
+        fa.RandomViewpoint({"fishcam_camera": 1, "model": "nonsense"})
 
 
 def test_min_visibility_drops_boxes_that_leave(cam, data):
