@@ -228,7 +228,8 @@ std::vector<float> lens_kernel_cells(const MrcalLens& lens, const MrcalLens::Pol
 // doubled until the bicubics meet kLensTableTolerancePx at 3 x 3 points between their
 // nodes in every cell that sees the image; a cell that does not see it and misses
 // the tolerance (next to LONLAT's pole, where the chart is singular) becomes NaN (no
-// source). nullopt when kLensTableMaxCells per side do not do, or no pixel has a ray.
+// source). No offset past reach, the plane radius of the domain's end (lens_offset_within).
+// nullopt when kLensTableMaxCells per side do not do, or no pixel has a ray.
 constexpr double kLensTableTolerancePx = 1e-4;
 constexpr int kLensTableMaxCells = 256;
 
@@ -238,7 +239,7 @@ struct LensTable {
 };
 
 std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens, double focal, double xi,
-                                    double plane_per_m) {
+                                    double plane_per_m, double reach) {
   constexpr int kSteps = 128;
   const double x0 = -0.5 - kLensTableMarginPx, y0 = -0.5 - kLensTableMarginPx;
   const double dx = (camera.width() + 2 * kLensTableMarginPx) / kSteps;
@@ -259,10 +260,6 @@ std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens,
   box.min() -= widen, box.max() += widen;
   const double longer = box.sizes().maxCoeff();
   if (!(longer > 0) || !std::isfinite(longer)) return std::nullopt;
-  // The plane radius of the domain's end (m = sin theta / (xi + cos theta) on the plane).
-  const double theta_max = camera.domain().theta_max;
-  const double reach = xi + std::cos(theta_max) > 0 ? plane_per_m * std::sin(theta_max) / (xi + std::cos(theta_max))
-                                                     : std::numeric_limits<double>::infinity();
   const double pixels_per_f = camera.pixel_scale().cwiseAbs().maxCoeff();
   const auto max_nan_first = [](double a, double b) { return std::isnan(a) || a >= b ? a : b; };
   for (int across = 32; across <= kLensTableMaxCells; across *= 2) {
@@ -331,6 +328,7 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
     // On the stereographic or pinhole plane (unified, alpha = 0): u = m * plane_per_m.
     if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return nullptr;
     std::optional<double> focal, plane_per_m;
+    double reach = std::numeric_limits<double>::infinity();  // the plane radius of the domain's end
     std::visit(
         [&](const auto& m) {
           if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
@@ -339,6 +337,8 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
               return m.plane_radius(theta, &derivative) * (p->xi + std::cos(theta)) / std::sin(theta);
             };
             focal = m.focal(), plane_per_m = ratio(0.5);
+            double derivative;
+            reach = m.plane_radius(camera.domain().theta_max, &derivative);
             if (!(std::abs(ratio(1.0) - *plane_per_m) <= 1e-12 * *plane_per_m)) plane_per_m.reset();
           }
         },
@@ -351,7 +351,7 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
         if (!std::isfinite(x)) return nullptr;
       }
     } else {
-      std::optional<LensTable> table = lens_table(camera, *lens, *focal, p->xi, *plane_per_m);
+      std::optional<LensTable> table = lens_table(camera, *lens, *focal, p->xi, *plane_per_m, reach);
       if (!table) return nullptr;
       for (float& x : table->cells) {  // overflow: no projection the kernel can trust
         if (std::isinf(x)) x = std::numeric_limits<float>::quiet_NaN();

@@ -518,6 +518,17 @@ bool CalibrationRecord::observed(const Eigen::Vector3d& ray) const {
 
 namespace {
 
+// Evaluates the lens at `azimuths` points of the ring of plane radius u (under the
+// caller's capture of what libmrcal says); false when one of them has no offset.
+bool lens_finite_on_ring(const MrcalLens& lens, double u, int azimuths) {
+  bool finite = true;
+  for (int k = 0; k < azimuths; ++k) {
+    const double phi = 2 * std::numbers::pi * k / azimuths;
+    finite = lens.offset(u * Eigen::Vector2d(std::cos(phi), std::sin(phi))).allFinite() && finite;
+  }
+  return finite;
+}
+
 // The domain's rays, 64 rings by 360 azimuths up to theta_max: libmrcal must evaluate
 // each without a complaint on standard error, or the lens is refused in one line (a
 // projection whose own iteration failed cannot be right).
@@ -528,11 +539,8 @@ void check_lens_evaluates(const CameraParameters& p, double theta_max) {
         if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
           double derivative;
           for (int ring = 1; ring <= 64; ++ring) {
-            const double u = m.plane_radius(theta_max * (1 - 1e-9) * ring / 64, &derivative);
-            for (int k = 0; k < 360; ++k) {
-              const double phi = 2 * std::numbers::pi * k / 360;
-              (void)distorted(m, *p.mrcal_lens, u * Eigen::Vector2d(std::cos(phi), std::sin(phi)));
-            }
+            (void)lens_finite_on_ring(*p.mrcal_lens, m.plane_radius(theta_max * (1 - 1e-9) * ring / 64, &derivative),
+                                      360);
           }
         }
       },
@@ -558,14 +566,9 @@ std::optional<double> lens_evaluation_end(const CameraParameters& p, double thet
             double derivative;
             const double theta = theta_max * (1 - inside);
             const double u = m.plane_radius(theta, &derivative);
-            bool evaluates = true;
             detail::StderrCapture libmrcal;
-            for (double radius : {u, u * (1 + 1e-9) + 2e-5 * (1 + u)}) {
-              for (int k = 0; k < 1440 && evaluates; ++k) {
-                const double phi = 2 * std::numbers::pi * k / 1440;
-                evaluates = p.mrcal_lens->offset(radius * Eigen::Vector2d(std::cos(phi), std::sin(phi))).allFinite();
-              }
-            }
+            const bool evaluates = lens_finite_on_ring(*p.mrcal_lens, u, 1440) &&
+                                   lens_finite_on_ring(*p.mrcal_lens, u * (1 + 1e-9) + 2e-5 * (1 + u), 1440);
             if (evaluates && libmrcal.summary().empty()) {
               end = theta;
               return;
