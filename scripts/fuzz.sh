@@ -11,7 +11,7 @@
 # to build-fuzz/findings/HARNESS/: turn each into a regression reproducer under
 # tests/fuzz/regressions/. The last lines give each harness's coverage.
 #   scripts/fuzz.sh [SECONDS] [HARNESS ...]   harnesses: camera, camera_FORMAT for every
-#   format of lib/include/fishcam/camera_format_list.hpp, corners npy stdin_records
+#   format of lib/io/include/fishcam/io/camera_format_list.hpp, corners npy stdin_records
 #   correspondence_csv
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -22,7 +22,7 @@ harnesses=("$@")
 failed=()
 coverage=()
 # The formats, from the library's one list of them.
-mapfile -t formats < <(grep -o 'X([a-z0-9_]*)' lib/include/fishcam/camera_format_list.hpp | sed 's/X(\(.*\))/\1/')
+mapfile -t formats < <(grep -o 'X([a-z0-9_]*)' lib/io/include/fishcam/io/camera_format_list.hpp | sed 's/X(\(.*\))/\1/')
 [ ${#harnesses[@]} -eq 0 ] && harnesses=(camera "${formats[@]/#/camera_}" corners npy stdin_records correspondence_csv)
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
 /usr/bin/cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \

@@ -2,7 +2,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "test_support.hpp"
+#include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
 namespace {

@@ -9,9 +9,9 @@
 #include <set>
 #include <sstream>
 
-#include "fishcam/npy.hpp"
-#include "fishcam/scene.hpp"
-#include "test_support.hpp"
+#include "fishcam/io/npy.hpp"
+#include "fishcam/augment/scene.hpp"
+#include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
 namespace {

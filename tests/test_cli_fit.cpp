@@ -1,7 +1,7 @@
 // fishcam convert and fishcam fit end to end.
 #include <nlohmann/json.hpp>
 
-#include "test_support.hpp"
+#include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
 namespace {

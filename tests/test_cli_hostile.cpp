@@ -8,7 +8,7 @@
 #include <functional>
 #include <sys/stat.h>
 
-#include "test_support.hpp"
+#include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
 namespace {
@@ -16,10 +16,10 @@ namespace {
 using test::quoted;
 using test::run_fishcam;
 
-class CliHostile : public ::testing::Test {
+class CliHostile : public test::CliTest {
  protected:
   void SetUp() override {
-    dir_ = test::scratch_dir(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    CliTest::SetUp();
     camera_ = dir_ / "camera.json";
     std::filesystem::copy_file(test::data_path("woodscape_front.json"), camera_);
     image_ = dir_ / "image.png";
@@ -29,23 +29,10 @@ class CliHostile : public ::testing::Test {
   }
   // Fails with one line containing `expected`, and leaves the folder as it was.
   void expect_refused(const std::string& args, const std::string& expected) {
-    std::vector<std::pair<std::string, std::string>> before;
-    for (const auto& e : std::filesystem::directory_iterator(dir_)) {
-      before.emplace_back(e.path().filename().string(), test::read_file(e.path()));
-    }
-    const auto r = run_fishcam(args);
-    EXPECT_NE(r.exit_code, 0) << args;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-    std::vector<std::pair<std::string, std::string>> after;
-    for (const auto& e : std::filesystem::directory_iterator(dir_)) {
-      after.emplace_back(e.path().filename().string(), test::read_file(e.path()));
-    }
-    std::sort(before.begin(), before.end()), std::sort(after.begin(), after.end());
-    EXPECT_TRUE(before == after) << args << ": the folder changed";
+    CliTest::expect_refused(args, expected, dir_);
   }
   std::string q(const std::string& name) { return quoted(dir_ / name); }
-  std::filesystem::path dir_, camera_, image_, labels_;
+  std::filesystem::path camera_, image_, labels_;
 };
 
 TEST_F(CliHostile, NonFiniteNumbersAreRefusedNamingTheOption) {

@@ -9,8 +9,8 @@
 #include <set>
 #include <sstream>
 
-#include "fishcam/atomic_file.hpp"
-#include "test_support.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
 namespace {
@@ -26,32 +26,11 @@ std::vector<std::string> lines_of(const std::string& text) {
   return lines;
 }
 
-class CliOutputs : public ::testing::Test {
+class CliOutputs : public test::CliTest {
  protected:
-  void SetUp() override {
-    dir_ = test::scratch_dir(::testing::UnitTest::GetInstance()->current_test_info()->name());
-  }
-  // A small WoodScape-layout dataset at dir_/NAME.
-  fs::path dataset(const std::string& name, int images = 2) {
-    const auto root = dir_ / name;
-    const auto r = run_fishcam("sample-dataset " + quoted(root) + " --images " + std::to_string(images) +
-                               " --seed 1 --size 64x48");
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    return root;
-  }
   std::string augment_dataset(const fs::path& root, const fs::path& out, const std::string& presets = "train,small") {
     return "augment-dataset " + quoted(root) + " --preset " + presets + " --seed 1 --out " + quoted(out);
   }
-  // Refused in one line containing `expected`; `watched` unchanged.
-  void expect_refused(const std::string& args, const std::string& expected, const fs::path& watched) {
-    const auto before = test::files_below(watched);
-    const auto r = run_fishcam(args);
-    EXPECT_NE(r.exit_code, 0) << args;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-    EXPECT_TRUE(test::files_below(watched) == before) << args << ": " << watched << " changed";
-  }
-  fs::path dir_;
 };
 
 TEST_F(CliOutputs, TheDatasetIsNeverWrittenWhereverOutLies) {

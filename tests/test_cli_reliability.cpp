@@ -13,9 +13,9 @@
 #include <numbers>
 #include <tuple>
 
-#include "fishcam/atomic_file.hpp"
-#include "fishcam/camera_io.hpp"
-#include "test_support.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
 namespace {
@@ -30,33 +30,9 @@ fs::path put(const fs::path& path, const std::string& content) {
   return test::write_file(path, content);
 }
 
-class CliReliability : public ::testing::Test {
+class CliReliability : public test::CliTest {
  protected:
-  void SetUp() override {
-    dir_ = test::scratch_dir(std::string("reliability_") +
-                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  }
-  fs::path dataset(const std::string& name, int images = 2) {
-    const auto root = dir_ / name;
-    const auto r = run_fishcam("sample-dataset " + quoted(root) + " --images " + std::to_string(images) +
-                               " --seed 1 --size 64x48");
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    return root;
-  }
-  // Refused in one line containing `expected`; `watched` (a folder or file) unchanged.
-  void expect_refused(const std::string& args, const std::string& expected, const fs::path& watched) {
-    const auto before = fs::is_directory(watched) ? test::files_below(watched) : std::map<std::string, std::string>{};
-    const bool existed = fs::exists(watched);
-    const auto r = run_fishcam(args);
-    EXPECT_NE(r.exit_code, 0) << args;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-    EXPECT_EQ(fs::exists(watched), existed) << watched;
-    if (fs::is_directory(watched)) {
-      EXPECT_TRUE(test::files_below(watched) == before) << args << ": " << watched << " changed";
-    }
-  }
-  fs::path dir_;
+  CliReliability() : CliTest("reliability_") {}
 };
 
 // Probe 1: files already in --out that augment-dataset did not write stay as they

@@ -5,7 +5,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/npy.hpp"
+#include "fishcam/io/npy.hpp"
 
 namespace fishcam::cli {
 

@@ -18,10 +18,10 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/atomic_file.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/file_input.hpp"
-#include "fishcam/output_settings.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/io/file_input.hpp"
+#include "fishcam/io/output_settings.hpp"
 
 namespace fishcam::cli {
 namespace {

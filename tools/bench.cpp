@@ -12,15 +12,15 @@
 #include <random>
 #include <vector>
 
-#include "fishcam/testing.hpp"
+#include "fishcam/testing/testing.hpp"
 #include "commands.hpp"
 #include "cli_common.hpp"
-#include "fishcam/augmentation.hpp"
-#include "fishcam/calibration.hpp"
-#include "fishcam/chessboard.hpp"
-#include "fishcam/fit.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/scene.hpp"
+#include "fishcam/augment/augmentation.hpp"
+#include "fishcam/fit/calibration.hpp"
+#include "fishcam/augment/chessboard.hpp"
+#include "fishcam/fit/fit.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 namespace {

@@ -9,10 +9,10 @@
 #include <sstream>
 #include <thread>
 
-#include "fishcam/corners.hpp"
+#include "fishcam/io/corners.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/calibration.hpp"
+#include "fishcam/fit/calibration.hpp"
 
 namespace fishcam::cli {
 namespace {

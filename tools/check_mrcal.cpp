@@ -6,8 +6,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/npy.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/io/npy.hpp"
 
 namespace fishcam::cli {
 

@@ -9,10 +9,10 @@
 #include <cstdlib>
 #include <numbers>
 
-#include "fishcam/atomic_file.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/error.hpp"
-#include "fishcam/scene.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/core/error.hpp"
+#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 

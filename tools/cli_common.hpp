@@ -10,15 +10,15 @@
 #include <string>
 #include <vector>
 
-#include "fishcam/affine.hpp"
-#include "fishcam/atomic_file.hpp"
-#include "fishcam/augmentation.hpp"
-#include "fishcam/camera.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/calibration.hpp"
-#include "fishcam/fit.hpp"
-#include "fishcam/image_io.hpp"
-#include "fishcam/viewpoint.hpp"
+#include "fishcam/augment/affine.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/augment/augmentation.hpp"
+#include "fishcam/core/camera.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/fit/calibration.hpp"
+#include "fishcam/fit/fit.hpp"
+#include "fishcam/io/image_io.hpp"
+#include "fishcam/augment/viewpoint.hpp"
 
 namespace fishcam::cli {
 
@@ -67,7 +67,7 @@ struct OutputFile {
 void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std::string>& inputs, bool overwrite);
 // The file content of an image in the format of path's extension; throws Error naming the file.
 std::string encode_image(const std::filesystem::path& path, const cv::Mat& image);
-// Encodes all images first, then commits them together (fishcam/atomic_file.hpp).
+// Encodes all images first, then commits them together (fishcam/io/atomic_file.hpp).
 void write_images(const std::vector<std::pair<std::filesystem::path, cv::Mat>>& images, bool overwrite);
 void write_image(const std::filesystem::path& path, const cv::Mat& image, bool overwrite);
 // Commits files (path, bytes) together; a refusal to overwrite suggests --force.

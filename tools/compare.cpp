@@ -9,9 +9,9 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/atomic_file.hpp"
-#include "fishcam/comparison.hpp"
-#include "fishcam/scene.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/eval/comparison.hpp"
+#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 namespace {

@@ -5,9 +5,9 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/fit.hpp"
-#include "fishcam/npy.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/fit/fit.hpp"
+#include "fishcam/io/npy.hpp"
 
 namespace fishcam::cli {
 namespace {

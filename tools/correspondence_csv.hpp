@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "fishcam/error.hpp"
-#include "fishcam/file_input.hpp"
+#include "fishcam/core/error.hpp"
+#include "fishcam/io/file_input.hpp"
 
 namespace fishcam::cli {
 

@@ -6,8 +6,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/scene.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 namespace {

@@ -1,4 +1,4 @@
-// fishcam detect-corners IMAGES...: chessboard corners found by OpenCV (fishcam/chessboard.hpp), in
+// fishcam detect-corners IMAGES...: chessboard corners found by OpenCV (fishcam/augment/chessboard.hpp), in
 // mrcal's corners format.
 #include <opencv2/imgcodecs.hpp>
 #include <unistd.h>
@@ -9,11 +9,11 @@
 #include <mutex>
 #include <thread>
 
-#include "fishcam/corners.hpp"
+#include "fishcam/io/corners.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/chessboard.hpp"
-#include "fishcam/parallel.hpp"
+#include "fishcam/augment/chessboard.hpp"
+#include "fishcam/core/parallel.hpp"
 
 namespace fishcam::cli {
 

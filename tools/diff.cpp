@@ -8,7 +8,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/corners.hpp"
+#include "fishcam/io/corners.hpp"
 
 namespace fishcam::cli {
 

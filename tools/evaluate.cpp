@@ -7,8 +7,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/metrics.hpp"
-#include "fishcam/scene.hpp"
+#include "fishcam/eval/metrics.hpp"
+#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 namespace {

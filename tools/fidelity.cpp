@@ -6,7 +6,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/fidelity.hpp"
+#include "fishcam/eval/fidelity.hpp"
 
 namespace fishcam::cli {
 namespace {

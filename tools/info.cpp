@@ -6,7 +6,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/camera_io.hpp"
+#include "fishcam/io/camera_io.hpp"
 
 namespace fishcam::cli {
 namespace {

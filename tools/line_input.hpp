@@ -8,7 +8,7 @@
 #include <iostream>
 #include <string>
 
-#include "fishcam/error.hpp"
+#include "fishcam/core/error.hpp"
 
 namespace fishcam::cli {
 

@@ -12,7 +12,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/error.hpp"
+#include "fishcam/core/error.hpp"
 
 namespace {
 

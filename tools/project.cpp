@@ -5,7 +5,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/camera_io.hpp"
+#include "fishcam/io/camera_io.hpp"
 #include "line_input.hpp"
 
 namespace fishcam::cli {

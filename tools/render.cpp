@@ -3,13 +3,13 @@
 // truth for augmentations): RGB, labels and, on request, the range of every pixel.
 #include <cstdio>
 
-#include "fishcam/atomic_file.hpp"
-#include "fishcam/npy.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/io/npy.hpp"
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/scene.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 

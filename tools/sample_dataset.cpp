@@ -13,10 +13,10 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/atomic_file.hpp"
-#include "fishcam/npy.hpp"
-#include "fishcam/output_settings.hpp"
-#include "fishcam/scene.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/io/npy.hpp"
+#include "fishcam/io/output_settings.hpp"
+#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 namespace {

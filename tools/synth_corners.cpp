@@ -1,12 +1,12 @@
 // fishcam synth-corners CAMERA: chessboard observations from a known camera, in mrcal's corners format.
 #include <cstdio>
 
-#include "fishcam/corners.hpp"
-#include "fishcam/testing.hpp"
+#include "fishcam/io/corners.hpp"
+#include "fishcam/testing/testing.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/atomic_file.hpp"
-#include "fishcam/calibration.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/fit/calibration.hpp"
 
 namespace fishcam::cli {
 

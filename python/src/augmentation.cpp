@@ -8,8 +8,8 @@
 #include <limits>
 
 #include "bindings.hpp"
-#include "fishcam/affine.hpp"
-#include "fishcam/augmentation.hpp"
+#include "fishcam/augment/affine.hpp"
+#include "fishcam/augment/augmentation.hpp"
 
 namespace fishcam::python {
 namespace {

@@ -15,10 +15,10 @@
 #include <span>
 #include <string>
 
-#include "fishcam/camera.hpp"
-#include "fishcam/camera_io.hpp"
-#include "fishcam/metrics.hpp"
-#include "fishcam/viewpoint.hpp"
+#include "fishcam/core/camera.hpp"
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/eval/metrics.hpp"
+#include "fishcam/augment/viewpoint.hpp"
 
 namespace fishcam::python {
 

@@ -1,8 +1,8 @@
 // Chessboard calibration (fishcam.calibrate, fishcam.read_corners) and what a
 // calibrated camera knows about its data (Camera.projection_uncertainty, ...).
 #include "bindings.hpp"
-#include "fishcam/calibration.hpp"
-#include "fishcam/corners.hpp"
+#include "fishcam/fit/calibration.hpp"
+#include "fishcam/io/corners.hpp"
 
 #include <numbers>
 

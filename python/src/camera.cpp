@@ -6,7 +6,7 @@
 #include <numbers>
 
 #include "bindings.hpp"
-#include "fishcam/fit.hpp"
+#include "fishcam/fit/fit.hpp"
 
 namespace fishcam::python {
 namespace {

@@ -3,9 +3,9 @@
 #include <filesystem>
 
 #include "bindings.hpp"
-#include "fishcam/comparison.hpp"
-#include "fishcam/fit.hpp"
-#include "fishcam/metrics.hpp"
+#include "fishcam/eval/comparison.hpp"
+#include "fishcam/fit/fit.hpp"
+#include "fishcam/eval/metrics.hpp"
 
 namespace fishcam::python {
 namespace {

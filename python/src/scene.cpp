@@ -1,8 +1,8 @@
 // Python bindings: the street scenes (fishcam.render, woodscape_classes) and the
 // augmentation's fidelity against their re-renders (dataset_fidelity).
 #include "bindings.hpp"
-#include "fishcam/fidelity.hpp"
-#include "fishcam/scene.hpp"
+#include "fishcam/eval/fidelity.hpp"
+#include "fishcam/augment/scene.hpp"
 
 #include <opencv2/imgproc.hpp>
 

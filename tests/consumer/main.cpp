@@ -1,7 +1,7 @@
 // Built against an installed fishcam: one round trip through the public API.
 #include <cmath>
 #include <cstdio>
-#include <fishcam/camera.hpp>
+#include <fishcam/core/camera.hpp>
 
 int main() {
   fishcam::CameraParameters p;

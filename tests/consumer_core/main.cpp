@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <vector>
 
-#include <fishcam/camera.hpp>
+#include <fishcam/core/camera.hpp>
 
 int main() {
   fishcam::CameraParameters p;

@@ -1,6 +1,6 @@
 // Camera files: detection and every format's reader (FISHCAM_FUZZ_FORMAT forces
 // one format; unset, the format is detected from the content as read_camera does).
-#include "fishcam/camera_io.hpp"
+#include "fishcam/io/camera_io.hpp"
 #include "fuzz_harness.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

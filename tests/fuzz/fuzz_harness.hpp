@@ -13,7 +13,7 @@
 #include <string>
 #include <string_view>
 
-#include "fishcam/error.hpp"
+#include "fishcam/core/error.hpp"
 
 namespace fishcam::fuzz {
 

@@ -1,5 +1,5 @@
 // numpy .npy files (maps).
-#include "fishcam/npy.hpp"
+#include "fishcam/io/npy.hpp"
 #include "fuzz_harness.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

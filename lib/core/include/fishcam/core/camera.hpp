@@ -1,0 +1,216 @@
+// A fisheye camera: imager size, principal point, per-axis pixel scale (the
+// paper's eq. 5), a radial model rho(theta) and an optional pose.
+// Conventions (docs/conventions.md): pixel centres at integer coordinates, (0, 0)
+// the centre of the top-left pixel; camera frame x right, y down, z forward;
+//   theta = atan2(sqrt(X^2 + Y^2), Z),  u = cx + a_x rho(theta) X / chi,  v = cy + a_y rho(theta) Y / chi.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "fishcam/core/error.hpp"
+#include "fishcam/core/radial_inverse.hpp"
+#include "fishcam/core/model_registry.hpp"
+#include "fishcam/core/mrcal_lens.hpp"
+#include "fishcam/core/radial_models.hpp"
+#include "fishcam/core/tangential.hpp"
+
+namespace fishcam {
+
+// Projection of one point through a model, generic in the scalar type (usable by
+// ceres::AutoDiffCostFunction). pixel_mapping = (cx, cy, a_x, a_y). Returns theta;
+// the caller decides validity from it. On the optical axis rho/chi is replaced by
+// its limit rho'(0)/Z, so Jets get the right first-order derivatives there.
+template <class Model, typename T>
+T project_radial(const Model& model, const T* pixel_mapping, const T* point, T* pixel) {
+  using std::atan2;
+  using std::sqrt;
+  const T chi2 = point[0] * point[0] + point[1] * point[1];
+  T theta, scale;  // scale = rho(theta) / chi
+  if (chi2 == T(0)) {
+    theta = point[2] > T(0) ? T(0) : T(std::numbers::pi);
+    scale = model.drho(T(0)) / point[2];
+  } else {
+    const T chi = sqrt(chi2);
+    theta = atan2(chi, point[2]);
+    scale = model.rho(theta) / chi;
+  }
+  pixel[0] = pixel_mapping[0] + pixel_mapping[2] * scale * point[0];
+  pixel[1] = pixel_mapping[1] + pixel_mapping[3] * scale * point[1];
+  return theta;
+}
+
+
+// Rigid transform camera -> reference: p_ref = rotation * p_cam + translation.
+struct Pose {
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+};
+// a after b: p -> a(b(p)).
+Pose compose(const Pose& a, const Pose& b);
+Pose inverse(const Pose& pose);
+
+// What a calibration learnt from its data, kept with the camera it produced:
+// fishcam JSON holds it, other formats cannot (writing to them drops it, and the
+// tools say so). fishcam/fit/calibration.hpp computes it and the projection
+// uncertainty from it.
+struct CalibrationRecord {
+  static constexpr int kAzimuthSectors = 24;  // 15 degrees each
+  // Incidence angle theta (radians) of the corners the solve used: the largest, and
+  // the largest per azimuth sector -- azimuth atan2(y, x) in the camera frame,
+  // sector k covering [-180 + 15 k, -165 + 15 k) degrees; NaN where no corner fell.
+  double theta_max = 0;
+  std::array<double, kAzimuthSectors> theta_max_by_azimuth{};
+  // Covariance of (model parameters, cx, cy, a_y, then the mean motion of the board
+  // frames relative to the camera: rotation vector (3, radians) and translation (3,
+  // board units)), scaled by the solve's residual variance; empty when not known.
+  Eigen::MatrixXd covariance;
+
+  // No corner yet (every sector NaN); observe() each corner's camera-frame point.
+  static CalibrationRecord nothing_observed();
+  void observe(const Eigen::Vector3d& point);
+  static int sector_of(double azimuth);
+  // Whether a camera-frame direction is inside the observed range: theta at most
+  // the largest observed in its azimuth sector.
+  bool observed(const Eigen::Vector3d& ray) const;
+};
+
+// A pixel grid whose axes are not perpendicular (OCamCalib's affine c, d, e; the skew of
+// BoofCV and of Bouguet's toolbox, alpha_c = xy): with q the model's image offset
+// (rho(theta) along the ray's azimuth, plus any tangential terms or mrcal lens),
+//   pixel = c + a (.) (S q),   S = [1 xy; yx 1],   det S = 1 - xy yx > 0.
+// Both zero: the usual grid, pixel = c + a (.) q.
+struct PixelSkew {
+  double xy = 0, yx = 0;
+  bool any() const { return xy != 0 || yx != 0; }
+  Eigen::Matrix2d matrix() const { return (Eigen::Matrix2d() << 1, xy, yx, 1).finished(); }
+  bool operator==(const PixelSkew&) const = default;
+};
+
+struct CameraParameters {
+  int width = 0;
+  int height = 0;
+  Eigen::Vector2d principal_point = Eigen::Vector2d::Zero();  // (cx, cy), pixels
+  Eigen::Vector2d pixel_scale = Eigen::Vector2d::Ones();      // (a_x, a_y)
+  RadialModel model;
+  // Non-radial terms on the model's undistorted plane (fishcam/core/tangential.hpp); all
+  // zero for a radial camera. Only models with a plane (pinhole, opencv, mei) take them.
+  TangentialTerms tangential;
+  // Or one of mrcal's lens models on the plane of its base model (splined, CAHVOR(E),
+  // LONLAT, LATLON; fishcam/core/mrcal_lens.hpp), evaluated by libmrcal; null for none.
+  std::shared_ptr<const MrcalLens> mrcal_lens;
+  // A skewed pixel grid (any model, with or without the above); zero for none.
+  PixelSkew skew;
+  std::optional<double> theta_limit;  // radians; a user cap on the valid domain
+  std::optional<Pose> pose;
+  std::optional<CalibrationRecord> calibration;
+
+  // No tangential terms, no mrcal lens, no skew: rho(theta) is the whole projection.
+  bool radially_symmetric() const { return !tangential.any() && !mrcal_lens && !skew.any(); }
+  // Tangential terms or an mrcal lens: a displacement on the model's undistorted plane.
+  bool distorted_plane() const { return tangential.any() || mrcal_lens; }
+};
+
+// The same lens for the image resized to width x height: with pixel centres at
+// integer coordinates, c' = (c + 0.5) s - 0.5 and a' = a s per axis (s = new / old
+// size), exactly; model, user limit and pose unchanged, the calibration record's
+// covariance re-expressed for the new cx, cy, a_y. Throws Error for sizes < 1.
+CameraParameters resized(const CameraParameters& camera, int width, int height);
+
+// The camera with its valid domain capped (theta_limit) at the largest incidence
+// angle its calibration observed plus margin (radians, >= 0), so unprojection and
+// augmentation stop where the calibration stops knowing. Throws Error when the
+// camera carries no calibration record.
+CameraParameters limited_to_observed(CameraParameters camera, double margin);
+
+// Which theta(rho) a batch unprojection uses.
+enum class InversePath {
+  robust,  // bracketed Newton per point: |rho(theta) - rho| <= 1e-10 px
+  table,   // the camera's inverse table (robust solver in cells next to a fold)
+};
+
+class Camera {
+ public:
+  // Validates the parameters and computes the valid domain and the inverse table.
+  // Throws Error naming the offending parameter.
+  explicit Camera(CameraParameters parameters, double table_tolerance_px = InverseTable::kDefaultTolerancePx);
+
+  const CameraParameters& parameters() const { return params_; }
+  // The same camera with another pose (the pose is not part of the projection:
+  // the domain and the inverse table are kept, not recomputed).
+  Camera with_pose(std::optional<Pose> pose) const {
+    Camera moved = *this;
+    moved.params_.pose = std::move(pose);
+    return moved;
+  }
+  int width() const { return params_.width; }
+  int height() const { return params_.height; }
+  const Eigen::Vector2d& principal_point() const { return params_.principal_point; }
+  const Eigen::Vector2d& pixel_scale() const { return params_.pixel_scale; }
+  const RadialModel& model() const { return params_.model; }
+  const TangentialTerms& tangential() const { return params_.tangential; }
+  const PixelSkew& skew() const { return params_.skew; }
+  // Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do
+  // rho, theta_from_rho and rho_of_pixel describe its whole projection.
+  bool radial() const { return params_.radially_symmetric(); }
+  const ValidDomain& domain() const { return domain_; }
+  const InverseTable& inverse_table() const { return table_; }
+
+  // The radial model (for a camera with tangential terms, its radial part).
+  double rho(double theta) const;
+  double drho(double theta) const;
+  // The unique theta in the valid domain with rho(theta) = rho (robust solver or
+  // closed form); NaN when rho is outside [0, rho_max] or NaN.
+  double theta_from_rho(double rho) const;
+  // Same through the bulk path (inverse table); error <= inverse_table().worst_error_px().
+  double theta_from_rho_table(double rho) const;
+  // rho of a pixel: the radius of ((u - cx) / a_x, (v - cy) / a_y).
+  double rho_of_pixel(const Eigen::Vector2d& pixel) const;
+
+  // Projects a camera-frame point. False (and NaN pixel) when the point is the
+  // origin, non-finite, outside the valid domain, or on the -z axis (the pixel
+  // direction is undefined there). The Jacobian d pixel / d point on request.
+  bool project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+               Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const;
+  // Unit ray of a pixel. False (and NaN ray) when rho is outside the valid domain.
+  bool unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const;
+
+  // Batches: model dispatch once per batch, multithreaded. valid may be empty;
+  // otherwise it must have the size of the input (1 = valid).
+  void project(std::span<const Eigen::Vector3d> points, std::span<Eigen::Vector2d> pixels,
+               std::span<std::uint8_t> valid = {}) const;
+  void unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen::Vector3d> rays,
+                 std::span<std::uint8_t> valid = {}, InversePath path = InversePath::robust) const;
+  // Unit rays of every pixel centre, row-major, W*H*3 floats (x, y, z); NaN where invalid.
+  void unproject_image(std::span<float> rays_xyz, InversePath path = InversePath::table) const;
+  // The same as three planes (x, y and z of every pixel centre, row-major), each of
+  // at least W*H floats; what lies past W*H is left as it is.
+  void unproject_image(std::span<float> x, std::span<float> y, std::span<float> z,
+                       InversePath path = InversePath::table) const;
+
+  // Angular coverage of the image (degrees) through the principal point: theta of
+  // the two opposite image borders added (borders at -0.5 and W - 0.5 / H - 0.5),
+  // each capped at theta_max when the border is outside the valid domain.
+  struct FieldOfView {
+    double horizontal, vertical, diagonal;
+  };
+  FieldOfView field_of_view_deg() const;
+
+ private:
+  void limit_to_plane_fold();  // validates the non-radial part, lowers domain_ to where it stays one-to-one
+  void bound_plane_reach();    // domain_.plane_reach
+  CameraParameters params_;
+  ValidDomain domain_;
+  InverseTable table_;
+};
+
+}  // namespace fishcam

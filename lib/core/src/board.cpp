@@ -1,0 +1,30 @@
+#include "fishcam/core/board.hpp"
+
+#include <cmath>
+
+#include "fishcam/core/error.hpp"
+
+namespace fishcam {
+
+void check_board(const BoardSpec& board) {
+  if (board.cols < 2 || board.rows < 2 || board.cols > 1000 || board.rows > 1000) {
+    throw Error("board: needs 2 to 1000 corners per side, got " + std::to_string(board.cols) + "x" +
+                std::to_string(board.rows));
+  }
+  // In any unit (metres, millimetres): a spacing outside [1e-6, 1e4] is a typo, and
+  // its solve under- or overflows (Ceres then logs pages of warnings).
+  if (!(board.spacing >= 1e-6 && board.spacing <= 1e4)) {
+    throw Error("board: the corner spacing must lie within [1e-06, 10000] (any unit), got " +
+                number_for_message(board.spacing));
+  }
+}
+
+std::vector<Eigen::Vector3d> board_points(const BoardSpec& board) {
+  std::vector<Eigen::Vector3d> points;
+  for (int j = 0; j < board.rows; ++j) {
+    for (int i = 0; i < board.cols; ++i) points.emplace_back(i * board.spacing, j * board.spacing, 0.0);
+  }
+  return points;
+}
+
+}  // namespace fishcam

@@ -1,0 +1,185 @@
+#include "fishcam/eval/fidelity.hpp"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <limits>
+#include <map>
+
+#include "fishcam/io/camera_io.hpp"
+#include "fishcam/io/file_input.hpp"
+#include "fishcam/io/image_io.hpp"
+#include "fishcam/io/npy.hpp"
+
+namespace fishcam {
+
+Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange& change,
+                               std::optional<DepthPrior> prior, const cv::Mat& source_image,
+                               const cv::Mat& source_labels, const cv::Mat& source_depth,
+                               const cv::Mat& truth_image, const cv::Mat& truth_labels) {
+  const cv::Size out(warp.target().width(), warp.target().height());
+  if (source_image.type() != CV_8UC3 || truth_image.type() != CV_8UC3 || source_labels.type() != CV_8UC1 ||
+      truth_labels.type() != CV_8UC1) {
+    throw Error("fidelity: expected 8-bit 3-channel images and 8-bit labels");
+  }
+  if (truth_image.size() != out || truth_labels.size() != out) {
+    throw Error("fidelity: the truth is not the output camera's size");
+  }
+  WarpMaps maps;
+  if (prior) {
+    warp.compute(change, *prior, &maps);
+  } else {
+    if (source_depth.empty()) throw Error("fidelity: the depth-map prior needs the source's depth map");
+    warp.compute_from_depth(change, source_depth, DepthValues::range, &maps);
+  }
+  cv::Mat image, labels;
+  warp_image(source_image, maps, &image);
+  warp_labels(source_labels, maps, 255, &labels);
+  // Away from boundaries: one label in the truth's 5 x 5 neighbourhood, and a source
+  // all around.
+  const cv::Mat kernel = cv::Mat::ones(5, 5, CV_8U);
+  cv::Mat low, high, valid_inner;
+  cv::erode(truth_labels, low, kernel);
+  cv::dilate(truth_labels, high, kernel);
+  const cv::Mat valid = maps.validity();
+  cv::erode(valid, valid_inner, kernel);
+  const cv::Mat where = (low == high) & (valid_inner != 0);
+  Fidelity f;
+  f.valid_share = cv::countNonZero(valid) / double(valid.total());
+  f.compared = cv::countNonZero(where);
+  if (f.compared == 0) {
+    f.label_agreement = f.psnr_db = std::numeric_limits<double>::quiet_NaN();
+    return f;
+  }
+  f.label_agreement = cv::countNonZero((labels == truth_labels) & where) / double(f.compared);
+  cv::Mat difference;
+  cv::absdiff(image, truth_image, difference);
+  difference.convertTo(difference, CV_64FC3);
+  cv::Mat squared = difference.mul(difference);
+  squared.setTo(cv::Scalar::all(0), where == 0);
+  const cv::Scalar sum = cv::sum(squared);
+  const double mse = (sum[0] + sum[1] + sum[2]) / (3.0 * double(f.compared));
+  f.psnr_db = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
+  return f;
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// One sample of a WoodScape-layout folder: image, labels and (when asked) the range.
+struct SampleFiles {
+  cv::Mat image, labels, depth;
+};
+
+SampleFiles read_sample(const fs::path& root, const std::string& name, bool depth) {
+  const fs::path label_path = root / "semantic_annotations" / "gtLabels" / (name + ".png");
+  SampleFiles f{read_image(root / "rgb_images" / (name + ".png"), cv::IMREAD_COLOR),
+                read_image(label_path, cv::IMREAD_UNCHANGED), {}};
+  if (f.labels.type() != CV_8UC1) throw Error(path_for_message(label_path) + ": expected 8-bit single-channel labels");
+  if (depth) {
+    const fs::path depth_path = root / "depth" / (name + ".npy");
+    const NpyArray range = read_npy(depth_path);
+    if (range.shape != std::vector<size_t>{size_t(f.image.rows), size_t(f.image.cols)}) {
+      throw Error(path_for_message(depth_path) + ": not the image's size");
+    }
+    f.depth = cv::Mat(f.image.rows, f.image.cols, CV_32FC1, const_cast<float*>(range.data.data())).clone();
+  }
+  return f;
+}
+
+ViewpointChange change_of(const nlohmann::json& entry, const fs::path& file, std::string* name) {
+  try {
+    *name = entry.at("name").get<std::string>();
+    const auto r = entry.at("rotation_deg").get<std::vector<double>>();
+    const auto t = entry.at("translation").get<std::vector<double>>();
+    if (r.size() != 3 || t.size() != 3) throw Error(path_for_message(file) + ": " + *name + ": expected 3 values");
+    // sample-dataset's presets turn by tens of degrees and move by metres at most.
+    for (double v : r) {
+      if (!(std::abs(v) <= 360)) {
+        throw Error(path_for_message(file) + ": " + text_for_message(*name) + ": rotation_deg: expected angles within "
+                    "[-360, 360], got " + number_for_message(v));
+      }
+    }
+    for (double v : t) {
+      if (!(std::abs(v) <= 1000)) {
+        throw Error(path_for_message(file) + ": " + text_for_message(*name) + ": translation: expected metres within "
+                    "[-1000, 1000], got " + number_for_message(v));
+      }
+    }
+    return ViewpointChange::from_euler_deg({r[0], r[1], r[2]}, {t[0], t[1], t[2]});
+  } catch (const nlohmann::json::exception&) {
+    throw Error(path_for_message(file) + ": a line lacks name, rotation_deg or translation");
+  }
+}
+
+}  // namespace
+
+std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
+  if (!fs::is_directory(root / "test")) {
+    throw Error(path_for_message(root) + ": no test/ folder (expected a dataset of fishcam sample-dataset --scenes N)");
+  }
+  const bool depth = fs::is_directory(root / "test" / "depth");
+  std::vector<fs::path> sets;
+  for (const auto& entry : fs::directory_iterator(root)) {
+    if (entry.is_directory() && entry.path().filename().string().starts_with("test-")) {
+      // A test set without its changes cannot be scored: an interrupted sample-dataset
+      // or a folder of something else, never skipped in silence.
+      if (!fs::exists(entry.path() / "changes.jsonl")) {
+        throw Error(path_for_message(entry.path()) + ": a test set without changes.jsonl (incomplete: make the "
+                    "dataset again with fishcam sample-dataset, or move the folder out)");
+      }
+      sets.push_back(entry.path());
+    }
+  }
+  std::sort(sets.begin(), sets.end());
+  if (sets.empty()) throw Error(path_for_message(root) + ": no true viewpoint test sets (test-PRESET/changes.jsonl)");
+  std::vector<std::pair<std::string, std::optional<DepthPrior>>> priors;
+  for (DepthPrior p : {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity}) {
+    priors.emplace_back(std::string(to_string(p)), p);
+  }
+  if (depth) priors.emplace_back(std::string(kDepthMapName), std::nullopt);
+  std::map<std::string, ViewpointWarp> warps;  // per calibration file
+  std::vector<DatasetFidelity> rows;
+  for (const fs::path& set : sets) {
+    std::vector<DatasetFidelity> set_rows;
+    for (const auto& [prior_name, prior] : priors) set_rows.push_back({set.filename().string(), prior_name, 0, 0, 0, 0});
+    const fs::path changes = set / "changes.jsonl";
+    std::istringstream lines(read_bounded_file(changes, std::size_t(64) << 20, "a changes.jsonl file"));
+    for (std::string line; std::getline(lines, line);) {
+      if (line.empty()) continue;
+      nlohmann::json entry;
+      try {
+        entry = nlohmann::json::parse(line);
+      } catch (const nlohmann::json::exception&) {
+        throw Error(path_for_message(changes) + ": a line is not JSON");
+      }
+      std::string name;
+      const ViewpointChange change = change_of(entry, changes, &name);
+      const fs::path calibration = root / "test" / "calibration" / (name + ".json");
+      auto warp = warps.find(calibration.string());
+      if (warp == warps.end()) warp = warps.emplace(calibration.string(), ViewpointWarp(read_camera(calibration))).first;
+      const SampleFiles source = read_sample(root / "test", name, depth);
+      const SampleFiles truth = read_sample(set, name, false);
+      for (size_t k = 0; k < priors.size(); ++k) {
+        const Fidelity f = augmentation_fidelity(warp->second, change, priors[k].second, source.image, source.labels,
+                                                 source.depth, truth.image, truth.labels);
+        DatasetFidelity& row = set_rows[k];
+        row.valid_share += f.valid_share, row.label_agreement += f.label_agreement, row.psnr_db += f.psnr_db;
+        ++row.samples;
+      }
+    }
+    for (DatasetFidelity& row : set_rows) {
+      if (row.samples == 0) continue;
+      row.valid_share /= row.samples, row.label_agreement /= row.samples, row.psnr_db /= row.samples;
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
+}  // namespace fishcam

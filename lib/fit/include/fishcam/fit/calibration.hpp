@@ -1,0 +1,98 @@
+// Chessboard calibration: a joint Ceres solve of the intrinsics (any model) and one
+// board pose per image, from corners (fishcam/io/corners.hpp reads them).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fishcam/core/board.hpp"
+#include "fishcam/core/camera.hpp"
+#include "fishcam/fit/fit.hpp"
+
+namespace fishcam {
+
+struct CalibrationResult {
+  CameraParameters camera;
+  std::vector<BoardPose> poses;            // per observation with a board, in file order
+  std::vector<std::string> used_images;    // their filenames
+  std::vector<double> per_image_rms_px;
+  double rms_px = 0;
+  long observations = 0;                   // corners used
+  struct Outlier {
+    std::string filename;
+    int corner;
+    double error_px;
+  };
+  std::vector<Outlier> outliers;           // corners the robust loss discounted (> 5 sigma)
+  std::vector<std::string> parameter_names;  // model parameters, then cx, cy, a_y
+  // Values and 1-sigma uncertainties (the solve's covariance); sigma NaN for a
+  // parameter the data do not determine (see undetermined).
+  std::vector<double> parameters, sigmas;
+  // One text per combination of parameters the data do not determine (a direction
+  // of the solve's covariance with no curvature), naming the parameters.
+  std::vector<std::string> undetermined;
+  double noise_px = 0;                       // residual standard deviation per coordinate
+  std::vector<std::string> warnings;         // e.g. boards that leave most of the image uncovered
+};
+
+struct CalibrationOptions {
+  // Threads for the independent solves (the model's starts, the initial focal-length
+  // scan). Each solve runs on one thread and results are combined in a fixed order,
+  // so the result is the same, bit for bit, for every count.
+  int threads = 1;
+};
+
+// Joint solve. Initialisation works for lenses past 180 deg: an equidistant model
+// scanned over focal lengths, each board placed from its corners' rays, the best
+// start refined. Throws Error on too little or degenerate data.
+// The result's camera carries a CalibrationRecord: the observed incidence angles
+// and the covariance projection uncertainty is computed from.
+CalibrationResult calibrate(const std::vector<BoardObservation>& observations, const BoardSpec& board, int width,
+                            int height, const ModelSpec& model, const CalibrationOptions& options = {});
+
+// A camera rig (a stereo pair, a car's surround-view cameras): every camera's
+// intrinsics, each camera's pose relative to camera 0 and the boards' poses, solved
+// jointly from images taken at the same instants. Images of one instant have the
+// same file name (the last path component: left/0001.png and right/0001.png).
+struct RigCamera {
+  std::vector<BoardObservation> observations;
+  int width = 0, height = 0;
+  ModelSpec model;
+};
+struct RigCalibrationResult {
+  // Per camera: its report (intrinsics and sigmas from the joint solve; the record's
+  // observed angles from the joint solve, its covariance from the camera's own
+  // boards), camera.pose = camera -> camera 0 (camera 0: identity).
+  std::vector<CalibrationResult> cameras;
+  // Per camera, 1-sigma of its pose relative to camera 0 from the joint covariance:
+  // rotation (rad, the angle-axis components' largest) and translation (board units,
+  // the largest component); 0 for camera 0.
+  std::vector<double> rotation_sigma_rad, translation_sigma;
+  double rms_px = 0;      // over every camera's corners (2-D)
+  long instants = 0;      // distinct instants with a board
+  std::vector<std::string> warnings;
+};
+// Each camera must calibrate on its own (>= 3 boards, fishcam::calibrate's checks),
+// and every camera must share instants with camera 0, directly or through others.
+// Throws Error naming the camera otherwise.
+RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
+                                   const CalibrationOptions& options = {});
+
+// Projection uncertainty as mrcal defines it: the spread of the projection of a
+// point fixed relative to the calibration boards, seen at `pixel`, through
+// calibrations perturbed by the corner noise -- propagated (to first order) from
+// the covariance of the intrinsics and the boards' mean motion in the camera's
+// CalibrationRecord. The point lies at `distance` (board units) along the pixel's
+// ray, or at infinity (nullopt: only rotations move it). Returns the 2x2 covariance
+// (px^2); NaN where the pixel does not unproject. Throws Error when the camera
+// carries no covariance (only fishcam calibrate writes one).
+Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2d& pixel,
+                                      std::optional<double> distance);
+// Its worst-direction 1-sigma (px): the square root of the larger eigenvalue, as
+// mrcal's projection_uncertainty(what = "worstdirection-stdev").
+double projection_uncertainty(const Camera& camera, const Eigen::Vector2d& pixel, std::optional<double> distance);
+
+}  // namespace fishcam

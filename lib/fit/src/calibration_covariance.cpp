@@ -1,0 +1,213 @@
+#include "fishcam/fit/calibration.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "calibration_internal.hpp"
+
+namespace fishcam {
+namespace detail {
+
+ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<double*>& kept,
+                                  const std::vector<double*>& eliminated) {
+  std::vector<double*> blocks = kept;
+  blocks.insert(blocks.end(), eliminated.begin(), eliminated.end());
+  ceres::Problem::EvaluateOptions options;
+  options.parameter_blocks = blocks;
+  options.apply_loss_function = false;
+  options.num_threads = 1;
+  double cost = 0;
+  ceres::CRSMatrix crs;
+  problem->Evaluate(options, &cost, nullptr, nullptr, &crs);
+  Eigen::Index a = 0;  // kept columns [0, a), then the eliminated blocks'
+  for (double* b : kept) a += problem->ParameterBlockSize(b);
+  std::vector<Eigen::Index> starts;
+  for (Eigen::Index at = a; double* b : eliminated) starts.push_back(at), at += problem->ParameterBlockSize(b);
+  const Eigen::Index m = crs.num_cols;
+  // J^T J from the sparse rows (each corner touches the kept blocks and one board).
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    const int begin = crs.rows[size_t(r)], end = crs.rows[size_t(r) + 1];
+    Eigen::Index lo = m, hi = -1;  // the eliminated columns this row touches
+    for (int i = begin; i < end; ++i) {
+      const Eigen::Index c = crs.cols[size_t(i)];
+      if (c >= a) lo = std::min(lo, c), hi = std::max(hi, c);
+      for (int j = begin; j < end; ++j) normal(c, crs.cols[size_t(j)]) += crs.values[size_t(i)] * crs.values[size_t(j)];
+    }
+    if (hi >= 0 && std::upper_bound(starts.begin(), starts.end(), lo) != std::upper_bound(starts.begin(), starts.end(), hi)) {
+      throw Error("calibrate: internal error: a residual depends on two eliminated parameter blocks");
+    }
+  }
+  Eigen::VectorXd scale(m);  // to unit curvature: the threshold then has no units
+  for (Eigen::Index i = 0; i < m; ++i) scale[i] = normal(i, i) > 0 ? 1 / std::sqrt(normal(i, i)) : 0.0;
+  normal = scale.asDiagonal() * normal * scale.asDiagonal();
+  // Each eliminated block inverted on its own (pseudo-inverse: a direction without
+  // curvature is reported, not inverted).
+  const Eigen::Index e = m - a;
+  Eigen::MatrixXd d_inverse = Eigen::MatrixXd::Zero(e, e);
+  std::vector<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>> blocks_eigen;
+  double largest = 0;
+  for (size_t k = 0; k < starts.size(); ++k) {
+    const Eigen::Index size = problem->ParameterBlockSize(eliminated[k]);
+    blocks_eigen.emplace_back(normal.block(starts[k], starts[k], size, size));
+    largest = std::max(largest, blocks_eigen.back().eigenvalues().maxCoeff());
+  }
+  // The Schur complement onto the kept parameters, S = A - B D^+ B^T.
+  int rank = 0;
+  ParameterCovariance out;
+  const auto inverse_of = [&](const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& eigen, double reference,
+                              Eigen::Index at, Eigen::Index size, Eigen::MatrixXd* inverse,
+                              std::vector<Eigen::VectorXd>* undetermined) {
+    inverse->setZero(size, size);
+    for (Eigen::Index k = 0; k < size; ++k) {
+      const double lambda = eigen.eigenvalues()[k];
+      const Eigen::VectorXd v = eigen.eigenvectors().col(k);
+      if (lambda > kUndetermined * reference) {
+        *inverse += v * v.transpose() / lambda;
+        ++rank;
+      } else {
+        Eigen::VectorXd full = Eigen::VectorXd::Zero(m);
+        full.segment(at, size) = v;
+        undetermined->push_back(full);
+      }
+    }
+  };
+  for (size_t k = 0; k < starts.size(); ++k) {
+    const Eigen::Index size = problem->ParameterBlockSize(eliminated[k]), at = starts[k] - a;
+    Eigen::MatrixXd inverse;
+    inverse_of(blocks_eigen[k], largest, starts[k], size, &inverse, &out.undetermined);
+    d_inverse.block(at, at, size, size) = inverse;
+  }
+  const Eigen::MatrixXd g = normal.topRightCorner(a, e) * d_inverse;  // B D^+
+  const Eigen::MatrixXd schur = normal.topLeftCorner(a, a) - g * normal.topRightCorner(a, e).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(schur);
+  largest = std::max(largest, eigen.eigenvalues().maxCoeff());
+  Eigen::MatrixXd s_inverse;
+  std::vector<Eigen::VectorXd> kept_undetermined;
+  inverse_of(eigen, largest, 0, a, &s_inverse, &kept_undetermined);
+  for (Eigen::VectorXd& direction : kept_undetermined) {  // the eliminated blocks follow: (u, -D^+ B^T u)
+    direction.tail(e) = -g.transpose() * direction.head(a);
+    out.undetermined.push_back(direction.normalized());
+  }
+  // The inverse of [A B; B^T D] from S^+ and D^+.
+  Eigen::MatrixXd inverse(m, m);
+  inverse.topLeftCorner(a, a) = s_inverse;
+  inverse.topRightCorner(a, e) = -s_inverse * g;
+  inverse.bottomLeftCorner(e, a) = inverse.topRightCorner(a, e).transpose();
+  inverse.bottomRightCorner(e, e) = d_inverse + g.transpose() * s_inverse * g;
+  const double dof = double(crs.num_rows - rank);
+  out.variance = dof > 0 ? 2 * cost / dof : std::numeric_limits<double>::quiet_NaN();
+  out.covariance = out.variance * scale.asDiagonal() * inverse * scale.asDiagonal();
+  return out;
+}
+
+Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d k;
+  k << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return k;
+}
+
+Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& r) {
+  const double angle = r.norm();
+  const Eigen::Matrix3d k = cross_matrix(r);
+  if (angle < 1e-8) return Eigen::Matrix3d::Identity() + 0.5 * k;
+  return Eigen::Matrix3d::Identity() + (1 - std::cos(angle)) / (angle * angle) * k +
+         (angle - std::sin(angle)) / (angle * angle * angle) * k * k;
+}
+
+// What projection uncertainty needs of the full covariance (mrcal's definition):
+// a point fixed relative to the boards moves, in the camera frame, by the mean of
+// the boards' motions. Board b's pose perturbed by (dr, dt) moves a camera-frame
+// point p to p + w x p + t' with w = J_l(r_b) dr and t' = dt + t_b x w; the record
+// keeps the intrinsics and the mean (w, t') over the boards.
+Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s) {
+  const Eigen::Index intrinsics = Eigen::Index(s.model.size()) + 3;
+  const Eigen::Index boards = Eigen::Index(s.poses.size());
+  Eigen::MatrixXd map = Eigen::MatrixXd::Zero(intrinsics + 6, intrinsics + 6 * boards);
+  map.topLeftCorner(intrinsics, intrinsics).setIdentity();
+  for (Eigen::Index b = 0; b < boards; ++b) {
+    const auto& pose = s.poses[size_t(b)];
+    const Eigen::Matrix3d jl = left_jacobian({pose[0], pose[1], pose[2]});
+    const Eigen::Index col = intrinsics + 6 * b;
+    map.block<3, 3>(intrinsics, col) = jl / double(boards);
+    map.block<3, 3>(intrinsics + 3, col) = cross_matrix({pose[3], pose[4], pose[5]}) * jl / double(boards);
+    map.block<3, 3>(intrinsics + 3, col + 3) = Eigen::Matrix3d::Identity() / double(boards);
+  }
+  Eigen::MatrixXd c = map * full.covariance * map.transpose();
+  return (c + c.transpose()) / 2;
+}
+
+}  // namespace detail
+
+namespace {
+
+// A camera-frame point's pixel, for the Jacobians of projection uncertainty.
+template <template <typename> class Model>
+struct PointProjection {
+  int params;
+  double ax;
+
+  template <typename T>
+  bool operator()(T const* const* p, T* pixel) const {
+    const Model<T> model = detail::model_from_block<Model>(p[0], params);
+    const T mapping[4] = {p[1][0], p[1][1], T(ax), p[2][0]};
+    project_radial(model, mapping, p[3], pixel);
+    return true;
+  }
+};
+
+}  // namespace
+
+Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2d& pixel,
+                                      std::optional<double> distance) {
+  const auto& record = camera.parameters().calibration;
+  if (!record || record->covariance.size() == 0) {
+    throw Error("projection uncertainty: the camera carries no calibration covariance (fishcam calibrate writes one "
+                "into fishcam JSON)");
+  }
+  if (distance && !(*distance > 0 && std::isfinite(*distance))) {
+    throw Error("projection uncertainty: the distance must be finite and > 0");
+  }
+  Eigen::Vector3d ray;
+  if (!camera.unproject(pixel, &ray)) return Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d point = distance ? Eigen::Vector3d(*distance * ray) : ray;
+  std::vector<double> model = model_params(camera.model());
+  Eigen::Vector2d center = camera.principal_point();
+  double ay = camera.pixel_scale().y();
+  const int n = int(model.size());
+  Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> d_model(2, n);
+  Eigen::Matrix<double, 2, 2, Eigen::RowMajor> d_center;
+  Eigen::Matrix<double, 2, 1> d_ay;
+  Eigen::Matrix<double, 2, 3, Eigen::RowMajor> d_point;
+  const std::string name(model_name(camera.model()));
+  with_model_class(name, [&]<template <typename> class Model>() {
+    ceres::DynamicAutoDiffCostFunction<PointProjection<Model>, 8> f(
+        new PointProjection<Model>{n, camera.pixel_scale().x()});
+    f.AddParameterBlock(n);
+    f.AddParameterBlock(2);
+    f.AddParameterBlock(1);
+    f.AddParameterBlock(3);
+    f.SetNumResiduals(2);
+    const double* blocks[4] = {model.data(), center.data(), &ay, point.data()};
+    double* jacobians[4] = {d_model.data(), d_center.data(), d_ay.data(), d_point.data()};
+    double q[2];
+    f.Evaluate(blocks, q, jacobians);
+  });
+  // d pixel / d (model, cx, cy, a_y, w, t): a board-fixed point moves to p + w x p + t.
+  Eigen::MatrixXd jacobian(2, n + 9);
+  jacobian << d_model, d_center, d_ay, -d_point * detail::cross_matrix(point), (distance ? d_point : Eigen::Matrix<double, 2, 3, Eigen::RowMajor>::Zero());
+  return jacobian * record->covariance * jacobian.transpose();
+}
+
+double projection_uncertainty(const Camera& camera, const Eigen::Vector2d& pixel, std::optional<double> distance) {
+  const Eigen::Matrix2d c = projection_covariance(camera, pixel, distance);
+  if (!c.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+  // The larger eigenvalue of a symmetric 2x2.
+  const double mean = (c(0, 0) + c(1, 1)) / 2, half = (c(0, 0) - c(1, 1)) / 2;
+  return std::sqrt(std::max(0.0, mean + std::sqrt(half * half + c(0, 1) * c(0, 1))));
+}
+
+}  // namespace fishcam
+

@@ -1,0 +1,170 @@
+// What the chessboard calibration's files share (calibration.cpp: one camera;
+// calibration_rig.cpp: rigs; calibration_covariance.cpp: covariance and projection
+// uncertainty): the solve's parameter blocks, the corner residual, the covariance.
+#pragma once
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "ceres_support.hpp"
+#include "fishcam/fit/calibration.hpp"
+#include "fishcam/core/camera.hpp"
+#include "fishcam/fit/fit.hpp"
+
+namespace fishcam::detail {
+
+// The parameters of one camera's solve: the model's, the principal point, a_y, and
+// each board's pose as a block (angle-axis, translation; board -> camera).
+struct Solve {
+  std::vector<double> model;
+  Eigen::Vector2d center;
+  double ay = 1;
+  std::vector<std::array<double, 6>> poses;
+};
+
+std::array<double, 6> pose_block(const BoardPose& pose);
+BoardPose pose_of(const std::array<double, 6>& block);
+
+// [v]x, and the left Jacobian of SO(3) at angle-axis r: R(r + dr) = exp([J dr]x) R(r)
+// to first order.
+Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v);
+Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& r);
+
+// One corner's reprojection residual as a functor of every parameter, for Ceres'
+// automatic derivatives: the reference CornerCost is tested against, and what it
+// falls back to on the optical axis.
+template <template <typename> class Model>
+struct CornerResidual {
+  Eigen::Vector3d point;
+  Eigen::Vector2d corner;
+  int params;
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    const Model<T> model = detail::model_from_block<Model>(p[0], params);
+    const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
+    const T* pose = p[3];  // angle-axis, translation
+    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
+    T camera[3];
+    ceres::AngleAxisRotatePoint(pose, board, camera);
+    for (int k = 0; k < 3; ++k) camera[k] += pose[3 + k];
+    T pixel[2];
+    project_radial(model, mapping, camera, pixel);
+    residuals[0] = pixel[0] - corner.x();
+    residuals[1] = pixel[1] - corner.y();
+    return true;
+  }
+};
+
+// The same residual with its Jacobians written out; parameter blocks (model,
+// (cx, cy), a_y, board pose). A radial model enters only through rho(theta): one
+// forward-mode evaluation of rho with Jets over (model parameters, theta) gives
+// d rho / d params and rho'(theta); the rest is the chain rule through the
+// projection and the pose. Automatic derivatives of the whole residual carry every
+// derivative through the rotation and atan2 and cost several times more; they
+// remain the fallback where the closed form divides by ~0 (a corner on the axis).
+template <template <typename> class Model>
+class CornerCost final : public ceres::CostFunction {
+  // Model parameters (a polynomial's count varies: up to the fitted maximum), then theta.
+  static constexpr int kJetSize =
+      (Model<double>::kParamNames.empty() ? kMaxFittedPolynomialOrder : int(Model<double>::kParamNames.size())) + 1;
+  using Jet = ceres::Jet<double, kJetSize>;
+
+ public:
+  CornerCost(const Eigen::Vector3d& point, const Eigen::Vector2d& corner, int params)
+      : point_(point), corner_(corner), params_(params), reference_(new CornerResidual<Model>{point, corner, params}) {
+    for (const int size : {params, 2, 1, 6}) reference_.AddParameterBlock(size);
+    reference_.SetNumResiduals(2);
+    set_num_residuals(2);
+    *mutable_parameter_block_sizes() = {params, 2, 1, 6};
+  }
+
+  bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+    Eigen::Vector3d rotated;
+    ceres::AngleAxisRotatePoint(p[3], point_.data(), rotated.data());
+    const Eigen::Vector3d q = rotated + Eigen::Vector3d(p[3][3], p[3][4], p[3][5]);
+    const double chi2 = q.x() * q.x() + q.y() * q.y();
+    // Near the axis the closed form loses digits (its terms grow as 1/chi^2 and cancel).
+    if (!(chi2 > 1e-10 * q.z() * q.z()) || params_ + 1 > kJetSize) return reference_.Evaluate(p, residuals, jacobians);
+    const double chi = std::sqrt(chi2), theta = std::atan2(chi, q.z()), ay = p[2][0];
+    std::array<Jet, kJetSize> jets;
+    for (int i = 0; i < params_; ++i) jets[size_t(i)] = Jet(p[0][i], i);
+    const Jet rho = Model<Jet>(jets.data(), params_).rho(Jet(theta, kJetSize - 1));
+    const double s = rho.a / chi;  // pixel = c + diag(1, a_y) s (x, y)
+    residuals[0] = p[1][0] + s * q.x() - corner_.x();
+    residuals[1] = p[1][1] + ay * s * q.y() - corner_.y();
+    if (!jacobians) return true;
+    if (jacobians[0]) {
+      for (int i = 0; i < params_; ++i) {
+        jacobians[0][i] = q.x() / chi * rho.v[i];
+        jacobians[0][params_ + i] = ay * q.y() / chi * rho.v[i];
+      }
+    }
+    if (jacobians[1]) jacobians[1][0] = 1, jacobians[1][1] = 0, jacobians[1][2] = 0, jacobians[1][3] = 1;
+    if (jacobians[2]) jacobians[2][0] = 0, jacobians[2][1] = s * q.y();
+    if (jacobians[3]) {
+      // d s / d q from d theta / d q = (z x / chi, z y / chi, -chi) / |q|^2 and d chi / d q = (x, y, 0) / chi.
+      const double r2 = chi2 + q.z() * q.z(), drho = rho.v[kJetSize - 1];
+      const Eigen::Vector3d dtheta(q.z() * q.x() / (chi * r2), q.z() * q.y() / (chi * r2), -chi / r2);
+      const Eigen::Vector3d ds = (drho * dtheta - s * Eigen::Vector3d(q.x() / chi, q.y() / chi, 0)) / chi;
+      Eigen::Matrix<double, 2, 3> dpixel;
+      dpixel.row(0) = q.x() * ds.transpose(), dpixel(0, 0) += s;
+      dpixel.row(1) = ay * q.y() * ds.transpose(), dpixel(1, 1) += ay * s;
+      Eigen::Map<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> d_pose(jacobians[3]);
+      d_pose.leftCols<3>() = -dpixel * cross_matrix(rotated) * left_jacobian({p[3][0], p[3][1], p[3][2]});
+      d_pose.rightCols<3>() = dpixel;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector3d point_;
+  Eigen::Vector2d corner_;
+  int params_;
+  ceres::DynamicAutoDiffCostFunction<CornerResidual<Model>, 8> reference_;
+};
+
+// The covariance of a solve's parameters as sigma^2 (J^T J)^+ with sigma^2 the
+// residual variance per coordinate. Directions the data do not determine (scaled
+// eigenvalues below kUndetermined of the largest) are left out of the inverse and
+// returned, so that no sigma pretends to know them.
+struct ParameterCovariance {
+  Eigen::MatrixXd covariance;
+  std::vector<Eigen::VectorXd> undetermined;  // unit directions in parameters scaled to unit curvature
+  double variance = 0;                        // residual variance per coordinate, px^2
+};
+
+constexpr double kUndetermined = 1e-12;
+
+// The covariance of a problem's parameter blocks at their current values (no loss
+// function), in the order `kept` then `eliminated`. No residual may depend on two
+// eliminated blocks (they are board poses): those are then solved block by block
+// and the kept ones through the Schur complement, as Ceres' Schur solvers do.
+ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<double*>& kept,
+                                  const std::vector<double*>& eliminated);
+
+// What projection uncertainty needs of a single camera's full covariance (the
+// record's (n + 9)^2 matrix; calibration_covariance.cpp says how).
+Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s);
+
+// "f, xi and alpha trade against each other", with a hint where a model is degenerate.
+std::string undetermined_text(const std::vector<std::string>& names, bool poses, const std::string& model,
+                              const std::vector<double>& parameters);
+
+// A solve whose result cannot be right is an error, not a camera.
+// How far the principal point lies from the image centre, as the larger share of the
+// image's width or height. Lenses are centred within a few per cent; past
+// kPrincipalPointWarned a calibration says so, past kPrincipalPointRefused
+// (check_solution) the image size is not the one the corners came from.
+constexpr double kPrincipalPointWarned = 0.1, kPrincipalPointRefused = 0.2;
+double principal_point_offset(const Eigen::Vector2d& principal_point, int width, int height);
+// Corners may lie this far outside the image (sub-pixel refinement at the border).
+constexpr double kCornerMarginPx = 2;
+void check_solution(const CalibrationResult& r, int width, int height, const std::string& model);
+
+}  // namespace fishcam::detail

@@ -1,0 +1,464 @@
+#include "fishcam/fit/calibration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <numbers>
+#include <filesystem>
+#include <map>
+#include <numeric>
+#include <optional>
+#include <set>
+
+#include "calibration_internal.hpp"
+
+namespace fishcam {
+
+using detail::check_solution;
+using detail::ParameterCovariance;
+using detail::pose_block;
+using detail::pose_of;
+using detail::Solve;
+using detail::undetermined_text;
+
+namespace {
+
+// The joint solve is said to hide inconsistent data when a camera's joint RMS is more
+// than this factor of its own calibration's, or its joint intrinsics lie more than
+// kIntrinsicsMoveSigmas of their own sigma from its own calibration's (docs/fitting.md).
+constexpr double kJointRmsFactor = 1.5;
+constexpr double kIntrinsicsMoveSigmas = 3;
+
+// A number for a warning, to 3 significant digits.
+std::string three_digits(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
+// The warnings of camera `name` whose joint solution is `joint` and own calibration `own`.
+std::vector<std::string> joint_solve_warnings(const std::string& name, const CalibrationResult& own,
+                                              const CalibrationResult& joint) {
+  std::vector<std::string> warnings;
+  if (joint.rms_px > kJointRmsFactor * own.rms_px) {
+    warnings.push_back(name + ": the joint solve's rms " + three_digits(joint.rms_px) + " px is " +
+                       three_digits(joint.rms_px / own.rms_px) + " times its own calibration's (" +
+                       three_digits(own.rms_px) +
+                       " px): its boards do not agree with the other cameras' at the same instants (pairs not "
+                       "taken together, a camera that moved, a board that bent?)");
+  }
+  double worst = 0;
+  std::string worst_name;
+  for (size_t i = 0; i < own.parameters.size() && i < joint.parameters.size(); ++i) {
+    const double moved = std::abs(joint.parameters[i] - own.parameters[i]) / own.sigmas[i];
+    if (std::isfinite(moved) && moved > worst) worst = moved, worst_name = own.parameter_names[i];
+  }
+  if (worst > kIntrinsicsMoveSigmas) {
+    warnings.push_back(name + ": the joint solve moves " + worst_name + " by " + three_digits(worst) +
+                       " sigma from the camera's own calibration: the other cameras' boards pull its intrinsics");
+  }
+  return warnings;
+}
+
+// One corner of a rig camera at one instant: p[0..2] the camera's intrinsics, then
+// (cameras other than 0) camera 0 -> this camera, then the board -> camera 0.
+template <template <typename> class Model>
+struct RigCornerResidual {
+  Eigen::Vector3d point;
+  Eigen::Vector2d corner;
+  int params;
+  bool moved;  // false for camera 0, whose frame is the rig's
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    const Model<T> model = detail::model_from_block<Model>(p[0], params);
+    const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
+    const T* board_pose = moved ? p[4] : p[3];
+    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
+    T in_rig[3], camera[3];
+    ceres::AngleAxisRotatePoint(board_pose, board, in_rig);
+    for (int k = 0; k < 3; ++k) in_rig[k] += board_pose[3 + k];
+    if (moved) {
+      ceres::AngleAxisRotatePoint(p[3], in_rig, camera);
+      for (int k = 0; k < 3; ++k) camera[k] += p[3][3 + k];
+    } else {
+      for (int k = 0; k < 3; ++k) camera[k] = in_rig[k];
+    }
+    T pixel[2];
+    project_radial(model, mapping, camera, pixel);
+    residuals[0] = pixel[0] - corner.x();
+    residuals[1] = pixel[1] - corner.y();
+    return true;
+  }
+};
+
+
+// The mean of rigid transforms: quaternions aligned in sign and averaged, translations averaged.
+Pose mean_pose(const std::vector<Pose>& poses) {
+  Eigen::Vector4d q = Eigen::Vector4d::Zero();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  for (const Pose& p : poses) {
+    Eigen::Vector4d c = p.rotation.coeffs();
+    if (c.dot(poses.front().rotation.coeffs()) < 0) c = -c;
+    q += c, t += p.translation;
+  }
+  q.normalize();
+  return {Eigen::Quaterniond(q[3], q[0], q[1], q[2]), t / double(poses.size())};
+}
+
+std::string instant_of(const std::string& filename) { return std::filesystem::path(filename).filename().string(); }
+
+// Two views of one board with the same corners (within 0.5 px everywhere).
+bool same_corners(const BoardObservation& a, const BoardObservation& b) {
+  if (a.corners.size() != b.corners.size()) return false;
+  for (size_t c = 0; c < a.corners.size(); ++c) {
+    if (!((a.corners[c] - b.corners[c]).cwiseAbs().maxCoeff() < 0.5)) return false;
+  }
+  return true;
+}
+
+// Two cameras of a rig see one board from different places: the same corners at
+// most of their shared instants are one camera's corners given twice.
+void check_distinct_cameras(const std::vector<std::map<int, const BoardObservation*>>& observed) {
+  for (size_t b = 1; b < observed.size(); ++b) {
+    for (size_t a = 0; a < b; ++a) {
+      long shared = 0, same = 0;
+      for (const auto& [i, view] : observed[b]) {
+        const auto other = observed[a].find(i);
+        if (other == observed[a].end()) continue;
+        ++shared;
+        same += same_corners(*view, *other->second);
+      }
+      if (shared > 0 && 2 * same >= shared) {
+        throw Error("calibrate rig: camera " + std::to_string(b) + " has the same corners as camera " +
+                    std::to_string(a) + " at " + std::to_string(same) + " of their " + std::to_string(shared) +
+                    " shared instants: the same corners given for both cameras? (each camera needs its own)");
+      }
+    }
+  }
+}
+
+// A chessboard looks the same turned by 180 deg about its normal, so a detector may
+// number its corners from either end: corner m is then the board's point N-1-m, the
+// board's points moved by this half turn about the board's centre.
+Pose board_half_turn(const BoardSpec& board) {
+  return {Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitZ())),
+          Eigen::Vector3d((board.cols - 1) * board.spacing, (board.rows - 1) * board.spacing, 0)};
+}
+
+// Relative poses of one camera pair that describe the same mounting, each estimated
+// from one board at distance `distance`: a per-view pose errs by a fraction of a
+// degree, so its translation by a share of the board's distance (not of the baseline,
+// which may be centimetres). A view numbered from the other end gives an estimate a
+// half turn away, far outside this.
+bool same_mounting(const Pose& a, const Pose& b, double distance) {
+  constexpr double kAngle = 10 * std::numbers::pi / 180, kShare = 0.25;
+  return a.rotation.angularDistance(b.rotation) < kAngle &&
+         (a.translation - b.translation).norm() <=
+             kShare * std::max({a.translation.norm(), b.translation.norm(), distance});
+}
+
+// What the instants camera k shares with camera 0 say about their relative pose.
+struct InstantConsensus {
+  std::vector<int> renumbered;  // instants whose board camera k numbers from the other end
+  std::vector<int> disagreeing;  // instants that agree with the consensus in neither numbering
+  long shared = 0;
+};
+
+// The per-instant relative poses (camera 0 -> k) agree with each other only when
+// both cameras number each board alike and saw it at the same time; the estimate
+// with the most agreeing instants (as given or renumbered) is the consensus.
+InstantConsensus instant_consensus(const std::map<int, Pose>& seen0, const std::map<int, Pose>& seen_k,
+                                   const Pose& half_turn) {
+  InstantConsensus out;
+  std::vector<int> instants;
+  std::vector<Pose> as_given, renumbered;
+  std::vector<double> distance;  // the board's, from camera 0
+  for (const auto& [i, pose_k] : seen_k) {
+    const auto pose_0 = seen0.find(i);
+    if (pose_0 == seen0.end()) continue;
+    instants.push_back(i);
+    distance.push_back(pose_0->second.translation.norm());
+    as_given.push_back(compose(pose_k, inverse(pose_0->second)));
+    renumbered.push_back(compose(compose(pose_k, half_turn), inverse(pose_0->second)));
+  }
+  out.shared = long(instants.size());
+  if (instants.size() < 2) return out;
+  const auto support = [&](const Pose& candidate) {
+    long agreeing = 0;
+    for (size_t j = 0; j < instants.size(); ++j) {
+      agreeing += same_mounting(as_given[j], candidate, distance[j]) || same_mounting(renumbered[j], candidate, distance[j]);
+    }
+    return agreeing;
+  };
+  const Pose* best = &as_given[0];
+  long best_support = -1;
+  for (const auto* list : {&as_given, &renumbered}) {
+    for (const Pose& candidate : *list) {
+      if (const long s = support(candidate); s > best_support) best = &candidate, best_support = s;
+    }
+  }
+  for (size_t j = 0; j < instants.size(); ++j) {
+    const Pose* agreeing = same_mounting(as_given[j], *best, distance[j])     ? &as_given[j]
+                           : same_mounting(renumbered[j], *best, distance[j]) ? &renumbered[j]
+                                                                              : nullptr;
+    if (!agreeing) {
+      out.disagreeing.push_back(instants[j]);
+      continue;
+    }
+    if (agreeing == &renumbered[j]) out.renumbered.push_back(instants[j]);
+  }
+  return out;
+}
+
+}  // namespace
+
+RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
+                                   const CalibrationOptions& options) {
+  const size_t n = cameras.size();
+  if (n < 2) throw Error("calibrate rig: needs at least 2 cameras, got " + std::to_string(n));
+  const auto camera_name = [](size_t k) { return "camera " + std::to_string(k); };
+  // 1. Each camera alone: intrinsics, its boards' poses, its outliers.
+  std::vector<CalibrationResult> singles;
+  for (size_t k = 0; k < n; ++k) {
+    try {
+      singles.push_back(calibrate(cameras[k].observations, board, cameras[k].width, cameras[k].height,
+                                  cameras[k].model, options));
+    } catch (const Error& e) {
+      throw Error(camera_name(k) + ": " + e.what());
+    }
+  }
+  // The instants, and which camera saw which board (in that camera's frame).
+  std::map<std::string, int> instant_index;
+  std::vector<std::map<int, Pose>> seen(n);
+  std::vector<std::map<int, const BoardObservation*>> observed(n);
+  for (size_t k = 0; k < n; ++k) {
+    std::map<std::string, const BoardObservation*> by_name;
+    for (const auto& o : cameras[k].observations) by_name[o.filename] = &o;
+    for (size_t b = 0; b < singles[k].used_images.size(); ++b) {
+      const std::string instant = instant_of(singles[k].used_images[b]);
+      const int i = instant_index.emplace(instant, int(instant_index.size())).first->second;
+      if (seen[k].count(i)) throw Error(camera_name(k) + ": two images of the instant " + instant);
+      seen[k][i] = singles[k].poses[b];
+      observed[k][i] = by_name.at(singles[k].used_images[b]);
+    }
+  }
+  check_distinct_cameras(observed);
+  // Views a camera numbers from the other end than camera 0: renumbered (corners
+  // reversed, pose turned, outliers' corner numbers mirrored), and said.
+  std::vector<std::string> warnings;
+  std::deque<BoardObservation> renumbered_views;
+  std::vector<std::set<std::string>> renumbered_images(n);
+  const Pose half_turn = board_half_turn(board);
+  std::map<int, std::string> instant_names;
+  for (const auto& [name, i] : instant_index) instant_names[i] = name;
+  for (size_t k = 1; k < n; ++k) {
+    const InstantConsensus consensus = instant_consensus(seen[0], seen[k], half_turn);
+    // Most instants disagreeing with each other: the images of one instant were not
+    // taken at the same time (or are not of one instant at all).
+    if (consensus.shared >= 3 && 2 * long(consensus.disagreeing.size()) > consensus.shared) {
+      throw Error("calibrate rig: " + camera_name(k) + " and camera 0 disagree on their relative pose at " +
+                  std::to_string(consensus.disagreeing.size()) + " of their " + std::to_string(consensus.shared) +
+                  " shared instants (more than 10 deg, or 25 % of the board distance, from the others): are images of the "
+                  "same name taken at the same time? (unsynchronised or mismatched pairs)");
+    }
+    if (!consensus.disagreeing.empty()) {
+      std::string names;
+      for (size_t j = 0; j < consensus.disagreeing.size() && j < 5; ++j) {
+        names += (j ? ", " : "") + instant_names[consensus.disagreeing[j]];
+      }
+      warnings.push_back(camera_name(k) + ": " + std::to_string(consensus.disagreeing.size()) + " instant(s) disagree " +
+                         "with the others on the pose relative to camera 0 (" + names +
+                         (consensus.disagreeing.size() > 5 ? ", ..." : "") + "): not synchronised?");
+    }
+    for (const int i : consensus.renumbered) {
+      BoardObservation view = *observed[k][i];
+      std::reverse(view.corners.begin(), view.corners.end());
+      renumbered_views.push_back(std::move(view));
+      observed[k][i] = &renumbered_views.back();
+      seen[k][i] = compose(seen[k][i], half_turn);
+      renumbered_images[k].insert(renumbered_views.back().filename);
+      warnings.push_back(camera_name(k) + ": image " + renumbered_views.back().filename +
+                         ": the board's corners are numbered from the other end than in camera 0 (a chessboard "
+                         "looks the same turned by 180 degrees): renumbered");
+    }
+  }
+  // 2. Camera poses relative to camera 0 (cam0 -> cam k), through shared instants,
+  // breadth first from camera 0.
+  std::vector<std::optional<Pose>> from_rig(n);
+  from_rig[0] = Pose{};
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (size_t b = 0; b < n; ++b) {
+      if (from_rig[b]) continue;
+      for (size_t a = 0; a < n && !from_rig[b]; ++a) {
+        if (!from_rig[a]) continue;
+        std::vector<Pose> estimates;
+        for (const auto& [i, pose_b] : seen[b]) {
+          if (const auto it = seen[a].find(i); it != seen[a].end()) {
+            estimates.push_back(compose(compose(pose_b, inverse(it->second)), *from_rig[a]));
+          }
+        }
+        if (!estimates.empty()) from_rig[b] = mean_pose(estimates), grew = true;
+      }
+    }
+  }
+  for (size_t k = 0; k < n; ++k) {
+    if (!from_rig[k]) {
+      throw Error(camera_name(k) + " shares no board instant with camera 0 or the cameras linked to it (images of "
+                                   "the same instant must have the same file name)");
+    }
+  }
+  // 3. The joint solve: every camera's intrinsics, cameras 1.. relative to camera 0,
+  // each instant's board relative to camera 0 (placed from the first camera that saw it).
+  const int instants = int(instant_index.size());
+  std::vector<Solve> intrinsics(n);
+  for (size_t k = 0; k < n; ++k) {
+    const auto& p = singles[k].camera;
+    intrinsics[k] = Solve{model_params(p.model), p.principal_point, p.pixel_scale.y(), {}};
+  }
+  std::vector<std::array<double, 6>> camera_blocks(n);
+  std::vector<std::array<double, 6>> board_blocks(static_cast<size_t>(instants));
+  for (size_t k = 0; k < n; ++k) camera_blocks[k] = pose_block(*from_rig[k]);
+  std::vector<bool> placed(size_t(instants), false);
+  for (size_t k = 0; k < n; ++k) {
+    for (const auto& [i, pose] : seen[k]) {
+      if (placed[size_t(i)]) continue;
+      board_blocks[size_t(i)] = pose_block(compose(inverse(*from_rig[k]), pose));
+      placed[size_t(i)] = true;
+    }
+  }
+  const auto points = board_points(board);
+  std::vector<std::set<std::pair<std::string, int>>> outliers(n);  // (image, corner) per camera, from step 1
+  for (size_t k = 0; k < n; ++k) {
+    const int last = board.corners() - 1;
+    for (const auto& o : singles[k].outliers) {
+      outliers[k].insert({o.filename, renumbered_images[k].count(o.filename) ? last - o.corner : o.corner});
+    }
+  }
+  ceres::Problem problem;
+  std::vector<long> corners_of(n, 0);
+  for (size_t k = 0; k < n; ++k) {
+    const int params = int(intrinsics[k].model.size());
+    with_model_class(cameras[k].model.name, [&]<template <typename> class Model>() {
+      for (const auto& [i, o] : observed[k]) {
+        for (size_t c = 0; c < o->corners.size(); ++c) {
+          if (outliers[k].count({o->filename, int(c)})) continue;
+          auto* cost = new ceres::DynamicAutoDiffCostFunction<RigCornerResidual<Model>, 8>(
+              new RigCornerResidual<Model>{points[c], o->corners[c], params, k > 0});
+          cost->AddParameterBlock(params);
+          cost->AddParameterBlock(2);
+          cost->AddParameterBlock(1);
+          std::vector<double*> blocks = {intrinsics[k].model.data(), intrinsics[k].center.data(), &intrinsics[k].ay};
+          if (k > 0) cost->AddParameterBlock(6), blocks.push_back(camera_blocks[k].data());
+          cost->AddParameterBlock(6);
+          blocks.push_back(board_blocks[size_t(i)].data());
+          cost->SetNumResiduals(2);
+          problem.AddResidualBlock(cost, nullptr, blocks);
+          ++corners_of[k];
+        }
+      }
+      detail::bound_model_block<Model>(&problem, intrinsics[k].model.data(), params);
+    });
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(detail::solver_options(ceres::DENSE_SCHUR), &problem, &summary);
+  if (!summary.IsSolutionUsable()) throw Error("calibrate rig: the joint solve failed: " + summary.message);
+  // 4. Covariance of everything; the report per camera.
+  std::vector<double*> blocks;
+  std::vector<Eigen::Index> intrinsic_start(n), pose_start(n, -1);
+  Eigen::Index column = 0;
+  for (size_t k = 0; k < n; ++k) {
+    intrinsic_start[k] = column;
+    blocks.insert(blocks.end(), {intrinsics[k].model.data(), intrinsics[k].center.data(), &intrinsics[k].ay});
+    column += Eigen::Index(intrinsics[k].model.size()) + 3;
+  }
+  for (size_t k = 1; k < n; ++k) pose_start[k] = column, blocks.push_back(camera_blocks[k].data()), column += 6;
+  std::vector<double*> boards;
+  for (auto& b : board_blocks) boards.push_back(b.data());
+  const ParameterCovariance full = detail::covariance_of(&problem, blocks, boards);
+
+  RigCalibrationResult out;
+  out.warnings = warnings;
+  out.instants = instants;
+  out.rms_px = std::sqrt(2 * summary.final_cost / double(std::max(1L, std::accumulate(corners_of.begin(), corners_of.end(), 0L))));
+  for (size_t k = 0; k < n; ++k) {
+    CalibrationResult r = singles[k];
+    const Pose rig_to_camera = pose_of(camera_blocks[k]);
+    CameraParameters p = r.camera;
+    p.model = make_model(cameras[k].model.name, intrinsics[k].model);
+    p.principal_point = intrinsics[k].center;
+    p.pixel_scale = {1.0, intrinsics[k].ay};
+    p.pose = inverse(rig_to_camera);  // camera -> camera 0
+    const Camera camera(p);
+    // Reprojection, board poses (in this camera's frame) and observed angles from the joint solution.
+    r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();
+    double sum2 = 0;
+    CalibrationRecord& record = *p.calibration;
+    const Eigen::MatrixXd own_covariance = record.covariance;
+    record = CalibrationRecord::nothing_observed();
+    record.covariance = own_covariance;
+    for (const auto& [i, o] : observed[k]) {
+      const Pose board_pose = compose(rig_to_camera, pose_of(board_blocks[size_t(i)]));
+      double board_sum2 = 0;
+      long used = 0;
+      for (size_t c = 0; c < o->corners.size(); ++c) {
+        if (outliers[k].count({o->filename, int(c)})) continue;
+        const Eigen::Vector3d point = board_pose.rotation * points[c] + board_pose.translation;
+        Eigen::Vector2d q;
+        camera.project(point, &q);
+        board_sum2 += (q - o->corners[c]).squaredNorm(), ++used;
+        record.observe(point);
+      }
+      sum2 += board_sum2;
+      r.poses.push_back(board_pose);
+      r.used_images.push_back(o->filename);
+      r.per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max(1L, used))));
+    }
+    r.rms_px = std::sqrt(sum2 / double(std::max(1L, corners_of[k])));
+    r.observations = corners_of[k];
+    r.parameters = intrinsics[k].model;
+    r.parameters.insert(r.parameters.end(), {intrinsics[k].center.x(), intrinsics[k].center.y(), intrinsics[k].ay});
+    r.undetermined.clear();
+    for (size_t i = 0; i < r.parameters.size(); ++i) {
+      const Eigen::Index at = intrinsic_start[k] + Eigen::Index(i);
+      r.sigmas[i] = std::sqrt(full.covariance(at, at));
+    }
+    for (const Eigen::VectorXd& direction : full.undetermined) {
+      std::vector<std::string> names;
+      for (size_t i = 0; i < r.parameters.size(); ++i) {
+        if (std::abs(direction[intrinsic_start[k] + Eigen::Index(i)]) >= 0.1) {
+          names.push_back(r.parameter_names[i]);
+          r.sigmas[i] = std::numeric_limits<double>::quiet_NaN();
+        }
+      }
+      if (!names.empty()) r.undetermined.push_back(undetermined_text(names, false, cameras[k].model.name, r.parameters));
+    }
+    r.noise_px = std::sqrt(full.variance);
+    r.camera = p;
+    check_solution(r, cameras[k].width, cameras[k].height, camera_name(k) + " " + cameras[k].model.name);
+    double rotation = 0, translation = 0;
+    if (k > 0) {
+      for (int j = 0; j < 3; ++j) {
+        rotation = std::max(rotation, std::sqrt(full.covariance(pose_start[k] + j, pose_start[k] + j)));
+        translation = std::max(translation, std::sqrt(full.covariance(pose_start[k] + 3 + j, pose_start[k] + 3 + j)));
+      }
+    }
+    out.rotation_sigma_rad.push_back(rotation);
+    out.translation_sigma.push_back(translation);
+    for (const auto& w : r.warnings) out.warnings.push_back(camera_name(k) + ": " + w);
+    for (std::string& w : joint_solve_warnings(camera_name(k), singles[k], r)) out.warnings.push_back(std::move(w));
+    out.cameras.push_back(std::move(r));
+  }
+  for (const Eigen::VectorXd& direction : full.undetermined) {
+    bool intrinsic = false;
+    for (size_t k = 0; k < n; ++k) {
+      intrinsic = intrinsic || direction.segment(intrinsic_start[k], Eigen::Index(out.cameras[k].parameters.size())).norm() >= 0.1;
+    }
+    if (!intrinsic) out.warnings.push_back("the data do not determine the cameras' relative poses fully (a direction of the joint solve has no curvature)");
+  }
+  return out;
+}
+
+}  // namespace fishcam

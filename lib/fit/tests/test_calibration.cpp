@@ -1,0 +1,413 @@
+// Chessboard calibration: exact recovery without noise, honest uncertainties with
+// noise, mrcal's corners format, detection, and bad input.
+#include <opencv2/imgcodecs.hpp>
+#include <algorithm>
+#include <opencv2/imgproc.hpp>
+
+#include "fishcam/io/corners.hpp"
+#include "fishcam/testing/testing.hpp"
+#include "fishcam/fit/calibration.hpp"
+#include "fishcam/augment/chessboard.hpp"
+#include "fishcam/testing/test_support.hpp"
+
+namespace fishcam {
+namespace {
+
+const BoardSpec kBoard{10, 10, 0.1};
+
+ModelSpec spec_of(const RadialModel& m) {
+  ModelSpec s{std::string(model_name(m))};
+  if (const auto* p = std::get_if<Polynomial<double>>(&m)) s.order = p->order();
+  return s;
+}
+
+std::vector<double> truth_vector(const CameraParameters& p) {
+  auto v = model_params(p.model);
+  v.insert(v.end(), {p.principal_point.x(), p.principal_point.y(), p.pixel_scale.y()});
+  return v;
+}
+
+// Noise-free boards recover every model's parameters, one test per model.
+class EveryModel : public ::testing::TestWithParam<test::ModelCase> {};
+
+TEST_P(EveryModel, NoiseFreeBoardsRecoverTheParameters) {
+  const CameraParameters& truth = GetParam().second;
+  if (model_name(truth.model) == "pinhole") {  // mrcal's narrower pinhole: its focal length
+    const CameraParameters pinhole = read_camera(test::data_path("pinhole.cameramodel")).parameters();
+    const auto boards = testing::synthesize_boards(Camera(pinhole), kBoard, 25, 0.0, 12);
+    const auto result = calibrate(boards.observations, kBoard, pinhole.width, pinhole.height, spec_of(pinhole.model));
+    EXPECT_NEAR(result.parameters[0], model_params(pinhole.model)[0], 1e-6 * 640);
+    return;
+  }
+  const Camera camera(truth);
+  const auto boards = testing::synthesize_boards(camera, kBoard, 25, 0.0, 11);
+  const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, spec_of(truth.model));
+  const auto expected = truth_vector(truth);
+  ASSERT_EQ(result.parameters.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_NEAR(result.parameters[i], expected[i], 1e-6 * std::abs(expected[i]) + 1e-9) << result.parameter_names[i];
+  }
+  EXPECT_LT(result.rms_px, 1e-6);
+  EXPECT_EQ(result.observations, 25L * kBoard.corners());
+  EXPECT_TRUE(result.outliers.empty());
+  EXPECT_TRUE(result.warnings.empty()) << ::testing::PrintToString(result.warnings);
+}
+
+INSTANTIATE_TEST_SUITE_P(Calibration, EveryModel, ::testing::ValuesIn(test::every_model()), test::model_case_name);
+
+TEST(Calibration, WithNoiseTheErrorsSitWithinThreeSigma) {
+  const CameraParameters truth = read_camera(test::data_path("woodscape_front.json")).parameters();
+  const auto expected = truth_vector(truth);
+  for (std::uint64_t seed : {2, 3}) {
+    const auto boards = testing::synthesize_boards(Camera(truth), kBoard, 50, 0.3, seed);
+    const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, {"polynomial", 4});
+    EXPECT_NEAR(result.rms_px, 0.3 * std::sqrt(2.0), 0.03);  // two noisy coordinates per corner
+    for (size_t i = 0; i < expected.size(); ++i) {
+      ASSERT_TRUE(std::isfinite(result.sigmas[i]) && result.sigmas[i] > 0) << result.parameter_names[i];
+      EXPECT_LE(std::abs(result.parameters[i] - expected[i]), 3 * result.sigmas[i])
+          << "seed " << seed << " " << result.parameter_names[i] << " sigma " << result.sigmas[i];
+    }
+  }
+}
+
+TEST(Calibration, OutliersAreFoundAndDoNotBiasTheResult) {
+  const CameraParameters truth = read_camera(test::data_path("stereographic.cameramodel")).parameters();
+  auto boards = testing::synthesize_boards(Camera(truth), kBoard, 30, 0.1, 4);
+  boards.observations[3].corners[17] += Eigen::Vector2d(25, -30);  // a wrong detection
+  boards.observations[9].corners[50] += Eigen::Vector2d(-12, 8);
+  const auto result = calibrate(boards.observations, kBoard, truth.width, truth.height, {"stereographic"});
+  ASSERT_EQ(result.outliers.size(), 2u);
+  EXPECT_EQ(result.outliers[0].filename, boards.observations[3].filename);
+  EXPECT_EQ(result.outliers[0].corner, 17);
+  EXPECT_NEAR(result.parameters[0], model_params(truth.model)[0], 3 * result.sigmas[0]);
+  EXPECT_LT(result.rms_px, 0.2);
+}
+
+TEST(Calibration, CornersFileRoundTripAndErrors) {
+  const auto dir = test::scratch_dir("corners");
+  auto boards = testing::synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 3, 0.2, 5).observations;
+  boards.push_back({"empty.png", {}});
+  write_corners(dir / "c.vnl", boards);
+  const auto back = read_corners(dir / "c.vnl", kBoard);
+  ASSERT_EQ(back.size(), boards.size());
+  for (size_t b = 0; b < boards.size(); ++b) {
+    EXPECT_EQ(back[b].filename, boards[b].filename);
+    EXPECT_EQ(back[b].corners, boards[b].corners);  // %.17g: exact
+  }
+  EXPECT_THROW(write_corners(dir / "c.vnl", boards), Error);  // no overwrite
+  const std::string good = test::read_file(dir / "c.vnl");
+  const struct {
+    std::string content, expected;
+  } bad[] = {
+      {good.substr(0, good.rfind("synth-002.png")), "image synth-002.png: expected 100 corners (10x10), got 99"},
+      {"# filename x y level\na.png 1 2\n", "expected 'filename x y level'"},
+      {"b.png - - -\nb.png 1 2 0\n", "only row"},
+      {"a.png x 2 0\n", "finite numbers"},
+      {"# nothing\n", "no corners"},
+  };
+  for (const auto& c : bad) {
+    test::write_file(dir / "bad.vnl", c.content);
+    try {
+      read_corners(dir / "bad.vnl", kBoard);
+      ADD_FAILURE() << "accepted: " << c.expected;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Calibration, DegenerateDataIsReported) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  const auto one = testing::synthesize_boards(camera, kBoard, 1, 0.0, 6);
+  EXPECT_THROW(calibrate(one.observations, kBoard, 1280, 966, {"polynomial", 4}), Error);
+  // Boards only near the centre: it solves, and says the rim is extrapolated.
+  CameraParameters narrow = camera.parameters();
+  narrow.width = 400, narrow.height = 300;
+  narrow.principal_point = {199.5, 149.5};
+  auto centre = testing::synthesize_boards(Camera(narrow), kBoard, 10, 0.0, 7).observations;
+  for (auto& o : centre) {
+    for (auto& c : o.corners) c += Eigen::Vector2d(640 - 199.5 + 3.942, 480 - 149.5 - 3.093);
+  }
+  const auto result = calibrate(centre, kBoard, 1280, 966, {"polynomial", 4});
+  ASSERT_FALSE(result.warnings.empty());
+  EXPECT_NE(result.warnings[0].find("cover only"), std::string::npos);
+}
+
+// A 9x6 board given as --board 6x9 has the same corner count, so the corners file
+// reads; before this check the solve wrote a camera with cx = -1932 and exit 0.
+TEST(Calibration, ATransposedBoardIsRefusedNamingTheFix) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  const BoardSpec board{9, 6, 0.1}, transposed{6, 9, 0.1};
+  const auto boards = testing::synthesize_boards(camera, board, 20, 0.3, 8).observations;
+  for (const char* model : {"polynomial", "equidistant", "kannala-brandt", "double-sphere"}) {
+    try {
+      calibrate(boards, transposed, 1280, 966, parse_model_spec(model));
+      ADD_FAILURE() << model << ": a transposed board was calibrated";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("ordered as a 9x6 board, not 6x9 (rows of 9): pass --board 9x6"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // Corners in no grid order at all.
+  auto scrambled = boards;
+  std::mt19937 random(1);
+  for (auto& o : scrambled) std::shuffle(o.corners.begin(), o.corners.end(), random);
+  try {
+    calibrate(scrambled, board, 1280, 966, {"polynomial", 4});
+    ADD_FAILURE() << "scrambled corners were calibrated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not in the board order of a 9x6 board"), std::string::npos) << e.what();
+  }
+  // The right board still calibrates.
+  EXPECT_LT(calibrate(boards, board, 1280, 966, {"polynomial", 4}).rms_px, 0.6);
+}
+
+// Through the program: refused in one line, exit non-zero, nothing written.
+TEST(Calibration, TheProgramWritesNothingForATransposedBoard) {
+  const auto dir = test::scratch_dir("transposed_cli");
+  auto r = test::run_fishcam("synth-corners " + test::quoted(test::data_path("woodscape_front.json")) +
+                             " --boards 20 --noise 0.2 --seed 3 --board 9x6 --out " + test::quoted(dir / "c.vnl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* model : {"polynomial", "equidistant"}) {
+    for (const char* json : {"", " --json"}) {
+      r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                            " --board 6x9 --spacing 0.1 --imagersize 1280x966 --model " + model + json + " --out " +
+                            test::quoted(dir / "cal.json"));
+      EXPECT_NE(r.exit_code, 0) << model;
+      EXPECT_NE(r.err.find("pass --board 9x6"), std::string::npos) << r.err;
+      EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+      EXPECT_TRUE(r.out.empty()) << r.out;
+      EXPECT_FALSE(std::filesystem::exists(dir / "cal.json"));
+    }
+  }
+  r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                        " --board 9x6 --spacing 0.1 --imagersize 1280x966 --model polynomial --out " +
+                        test::quoted(dir / "cal.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// One board pose seen several times determines no camera: refused for every model,
+// nothing written (every model once wrote a camera with a coverage warning).
+TEST(Calibration, BoardsInOnePoseAreRefused) {
+  const auto one = testing::synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 1, 0.2, 5);
+  std::vector<BoardObservation> same;
+  for (int i = 0; i < 5; ++i) {
+    // The same pose, each photo with noise of its own (the same corners twice are
+    // refused as the same photo: DuplicateViewsAreRefused).
+    std::vector<Eigen::Vector2d> corners = one.observations[0].corners;
+    for (size_t c = 0; c < corners.size(); ++c) corners[c] += Eigen::Vector2d(0.05 * std::sin(double(c + 7 * i)), 0.05 * std::cos(double(3 * c + i)));
+    same.push_back({"img" + std::to_string(i) + ".png", corners});
+  }
+  for (const char* model : {"polynomial", "equidistant", "kannala-brandt", "double-sphere"}) {
+    try {
+      calibrate(same, kBoard, 1280, 966, parse_model_spec(model));
+      ADD_FAILURE() << model << ": one pose was calibrated";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("the 5 boards show 1 distinct pose(s)"), std::string::npos) << e.what();
+    }
+  }
+  const auto dir = test::scratch_dir("one_pose_cli");
+  write_corners(dir / "c.vnl", same);
+  const auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                                   " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model polynomial --out " +
+                                   test::quoted(dir / "cal.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("distinct pose"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "cal.json"));
+}
+
+// A board size with the right corner count but another row length (2x27 for a 9x6
+// board) keeps most of a row's corners in a row, so the median bend passes; the
+// wraps between rows do not. Refused naming the board that fits.
+TEST(Calibration, ABoardSizeThatDoesNotExplainTheCornersIsRefused) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  const BoardSpec board{9, 6, 0.1};
+  const auto boards = testing::synthesize_boards(camera, board, 20, 0.3, 8).observations;
+  int refused = 0;
+  for (const BoardSpec wrong : {BoardSpec{2, 27, 0.1}, BoardSpec{27, 2, 0.1}, BoardSpec{3, 18, 0.1}, BoardSpec{18, 3, 0.1}}) {
+    try {
+      calibrate(boards, wrong, 1280, 966, {"polynomial", 4});
+      ADD_FAILURE() << wrong.cols << "x" << wrong.rows << " was calibrated";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("ordered as a 9x6 board, not " + std::to_string(wrong.cols) + "x" +
+                                           std::to_string(wrong.rows) + " (rows of 9): pass --board 9x6"),
+                std::string::npos)
+          << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_EQ(refused, 4);
+}
+
+// Corners outside the image size given cannot have been detected in that image;
+// a principal point far from the centre of a larger size is warned about, then
+// refused. The 1280x966 boards given as other sizes.
+TEST(Calibration, AnImageSizeTheCornersDoNotFitIsRefused) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  const auto boards = testing::synthesize_boards(camera, kBoard, 20, 0.2, 9).observations;
+  try {
+    calibrate(boards, kBoard, 640, 483, {"polynomial", 4});
+    ADD_FAILURE() << "corners outside a 640x483 image were calibrated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("corners lie outside the 640x483 image (first: image"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("check --imagersize"), std::string::npos) << e.what();
+  }
+  // 16-17 % of the size from the centre: solved, with a warning.
+  const CalibrationResult wide = calibrate(boards, kBoard, 1920, 1450, {"polynomial", 4});
+  int warned = 0;
+  for (const std::string& w : wide.warnings) warned += w.find("principal point lies 1") != std::string::npos;
+  EXPECT_EQ(warned, 1);
+  // 25 %: refused.
+  try {
+    calibrate(boards, kBoard, 2560, 1932, {"polynomial", 4});
+    ADD_FAILURE() << "a principal point 25 % off the centre was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("check --imagersize"), std::string::npos) << e.what();
+  }
+  // The right size: no such warning.
+  for (const std::string& w : calibrate(boards, kBoard, 1280, 966, {"polynomial", 4}).warnings) {
+    EXPECT_EQ(w.find("principal point"), std::string::npos) << w;
+  }
+}
+
+// One photo under two names would count its corners twice (sigmas shrink, the
+// solution moves): refused naming both.
+TEST(Calibration, DuplicateViewsAreRefused) {
+  const Camera camera = read_camera(test::data_path("woodscape_front.json"));
+  auto boards = testing::synthesize_boards(camera, kBoard, 12, 0.2, 10).observations;
+  boards.push_back({"copy-of-4.png", boards[4].corners});
+  try {
+    calibrate(boards, kBoard, 1280, 966, {"polynomial", 4});
+    ADD_FAILURE() << "a duplicated view was calibrated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("images " + boards[4].filename + " and copy-of-4.png have the same corners"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// The real photos (../shared): the detected corners, given transposed, are refused too.
+TEST(Calibration, ARealTransposedBoardIsRefused) {
+  const std::filesystem::path photos = test::shared_path("data/calibration");
+  if (!std::filesystem::exists(photos / "right1.jpg")) GTEST_SKIP() << "no ../shared/data/calibration";
+  const auto dir = test::scratch_dir("transposed_real");
+  std::string images;
+  for (int i = 1; i <= 8; ++i) images += " " + test::quoted(photos / ("right" + std::to_string(i) + ".jpg"));
+  auto r = test::run_fishcam("detect-corners" + images + " --board 9x6 --out " + test::quoted(dir / "c.vnl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
+                        " --board 6x9 --spacing 0.1 --imagersize 960x600 --model kannala-brandt --out " +
+                        test::quoted(dir / "cal.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("pass --board 9x6"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "cal.json"));
+}
+
+// The same corners through mrcal-calibrate-cameras (LENSMODEL_STEREOGRAPHIC, no board
+// warp): the two calibrations project within 0.05 px across the image, compared as
+// mrcal.projection_diff does (after fitting the rotation between the frames).
+TEST(Calibration, AgreesWithMrcalCalibrateCameras) {
+  const auto dir = test::scratch_dir("mrcal_calibrate");
+  const Camera truth = read_camera(test::data_path("stereographic.cameramodel"));
+  const auto boards = testing::synthesize_boards(truth, kBoard, 30, 0.3, 9);
+  write_corners(dir / "corners.vnl", boards.observations);
+  const std::string command = "cd '" + dir.string() + "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl "
+                              "--lensmodel LENSMODEL_STEREOGRAPHIC --focal 300 --object-spacing 0.1 --object-width-n 10 "
+                              "--object-height-n 10 --imagersize 1280 966 --outdir . --skip-calobject-warp-solve "
+                              "'synth-*.png' > log.txt 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "log.txt");
+  const Camera theirs = read_camera(dir / "camera-0.cameramodel");  // mrcal's own file, optimization_inputs and all
+  const CalibrationResult ours = calibrate(boards.observations, kBoard, 1280, 966, {"stereographic"});
+  const ProjectionDiff diff = projection_diff(theirs, Camera(ours.camera), 4);
+  EXPECT_GT(diff.pixels, 70000);
+  EXPECT_LE(diff.max_px, 0.05);
+  std::printf("  fishcam vs mrcal-calibrate-cameras: rms %.2g px, max %.2g px over %ld pixels\n", diff.rms_px,
+              diff.max_px, diff.pixels);
+  // And both against the truth: the noise shows, at the size the uncertainty predicts.
+  EXPECT_LT(projection_diff(truth, Camera(ours.camera), 8).rms_px, 1.0);
+}
+
+TEST(Calibration, ProjectionDiffFitsTheRotationBetweenFrames) {
+  const Camera a = read_camera(test::data_path("woodscape_front.json"));
+  EXPECT_LT(projection_diff(a, a).max_px, 1e-9);
+  // The same lens with its principal point moved: without a rotation, pixels
+  // differ by the shift; with one, much of the shift is absorbed near the centre.
+  CameraParameters moved = a.parameters();
+  moved.principal_point += Eigen::Vector2d(1.0, 0);
+  const Camera b(moved);
+  const ProjectionDiff plain = projection_diff(a, b, 8, false), rotated = projection_diff(a, b, 8, true);
+  EXPECT_NEAR(plain.rms_px, 1.0, 1e-9);
+  EXPECT_LT(rotated.rms_px, plain.rms_px);
+}
+
+TEST(Calibration, OpenCVDetectionFindsTheCornersOfARenderedBoard) {
+  // A fronto-parallel board drawn directly: squares of 40 px, inner corners at 100 + 40 k.
+  cv::Mat image(600, 700, CV_8UC1, cv::Scalar(255));
+  for (int j = 0; j < 11; ++j) {
+    for (int i = 0; i < 11; ++i) {
+      if ((i + j) % 2 == 0) cv::rectangle(image, cv::Rect(60 + 40 * i, 60 + 40 * j, 40, 40), cv::Scalar(0), cv::FILLED);
+    }
+  }
+  cv::GaussianBlur(image, image, {3, 3}, 0.8);
+  const auto dir = test::scratch_dir("detect");
+  cv::imwrite((dir / "board.png").string(), image);
+  cv::imwrite((dir / "blank.png").string(), cv::Mat(600, 700, CV_8UC1, cv::Scalar(128)));
+  const std::string command = "'" + test::fishcam_binary() + "' detect-corners '" + (dir / "board.png").string() +
+                              "' '" + (dir / "blank.png").string() + "' --board 10x10 --out '" +
+                              (dir / "c.vnl").string() + "' > /dev/null";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const auto observations = read_corners(dir / "c.vnl", kBoard);
+  ASSERT_EQ(observations.size(), 2u);
+  ASSERT_EQ(observations[0].corners.size(), 100u);
+  EXPECT_TRUE(observations[1].corners.empty());
+  // The same grid (OpenCV may start from any corner: compare as sets).
+  double worst = 0;
+  for (const auto& c : observations[0].corners) {
+    const double u = 100 + 40 * std::round((c.x() - 99.5) / 40), v = 100 + 40 * std::round((c.y() - 99.5) / 40);
+    worst = std::max(worst, std::hypot(c.x() - (u - 0.5), c.y() - (v - 0.5)));
+  }
+  EXPECT_LT(worst, 0.2);
+}
+
+}  // namespace
+}  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// A board photographed through a fisheye (rendered with known corners): detection
+// finds every corner within 0.3 px of the truth, in board order from either end,
+// and an image without a board gives none.
+TEST(Calibration, DetectionFindsTheCornersOfABoardSeenThroughAFisheye) {
+  const CameraParameters full = read_camera(test::data_path("kannala_brandt.yaml")).parameters();
+  const Camera camera(resized(full, 640, 483));
+  const BoardSpec board{9, 6, 0.1};
+  const auto poses = testing::synthesize_boards(camera, board, 3, 0.0, 2).poses;
+  int found = 0;
+  for (size_t b = 0; b < poses.size(); ++b) {
+    auto pixels = testing::render_board_image(camera, board, poses[b], 3, 0.8, 2.0, b);
+    const cv::Mat image(camera.height(), camera.width(), CV_8UC1, pixels.data());
+    const auto corners = detect_chessboard(image, board);
+    if (!corners) continue;
+    ++found;
+    ASSERT_EQ(corners->size(), 54u);
+    const auto points = board_points(board);
+    double direct = 0, reversed = 0;
+    for (size_t i = 0; i < 54; ++i) {
+      Eigen::Vector2d truth;
+      ASSERT_TRUE(camera.project(poses[b].rotation * points[i] + poses[b].translation, &truth));
+      direct = std::max(direct, ((*corners)[i] - truth).norm());
+      reversed = std::max(reversed, ((*corners)[53 - i] - truth).norm());
+    }
+    EXPECT_LT(std::min(direct, reversed), 0.3) << "board " << b;
+  }
+  EXPECT_GE(found, 2);
+  EXPECT_FALSE(detect_chessboard(cv::Mat(200, 300, CV_8UC1, cv::Scalar(128)), board));
+  EXPECT_THROW(detect_chessboard(cv::Mat(200, 300, CV_8UC3), board), Error);
+  EXPECT_THROW(detect_chessboard(cv::Mat(200, 300, CV_8UC1), BoardSpec{2, 6, 0.1}), Error);
+}
+
+}  // namespace
+}  // namespace fishcam
