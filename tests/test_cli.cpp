@@ -109,8 +109,8 @@ TEST(Cli, ProjectThenUnprojectRoundTrips) {
   EXPECT_EQ(rows[2], "nan nan");
   EXPECT_EQ(rows[3], "nan nan");
   EXPECT_EQ(rows[4], "nan nan");
-  const auto unprojected = run_fishcam("unproject " + data("woodscape_front.json"), rows[0] + "\n" + rows[1] +
-                                                                                        "\n99999 0\n");
+  const auto unprojected =
+      run_fishcam("unproject " + data("woodscape_front.json"), rows[0] + "\n" + rows[1] + "\n99999 0\n");
   ASSERT_EQ(unprojected.exit_code, 0) << unprojected.err;
   std::istringstream rays(unprojected.out);
   Eigen::Vector3d a, b;
@@ -144,8 +144,10 @@ TEST(Cli, BadInputExitsNonZeroWithOneLine) {
 }
 
 TEST(Cli, EverySubcommandHasHelp) {
-  for (const char* sub : {"", "info", "project", "unproject", "bench", "bench roots", "bench augment", "bench fit", "render", "map",
-                          "augment", "augment-dataset", "check-mrcal", "demo", "convert", "fit", "diff", "detect-corners", "synth-corners", "calibrate"}) {
+  for (const char* sub :
+       {"",          "info",   "project", "unproject",      "bench",           "bench roots", "bench augment",
+        "bench fit", "render", "map",     "augment",        "augment-dataset", "check-mrcal", "demo",
+        "convert",   "fit",    "diff",    "detect-corners", "synth-corners",   "calibrate"}) {
     const auto r = run_fishcam(std::string(sub) + " --help");
     EXPECT_EQ(r.exit_code, 0) << sub;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << sub << r.out;

@@ -9,8 +9,8 @@
 #include <set>
 #include <sstream>
 
-#include "fishcam/io/npy.hpp"
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/io/npy.hpp"
 #include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
@@ -56,8 +56,9 @@ TEST(CliAugmentation, RenderSeededStreetWithDepth) {
 // on it: exact for rotations under every prior, and the depth map exact with translations.
 TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
   const auto dir = test::scratch_dir("cli_surround_view");
-  const std::string args = " --scenes 3 --size 200x151 --seed 9 --depth --splits 0.34,0,0.66 --test-sets small "
-                           "--supersampling 1";
+  const std::string args =
+      " --scenes 3 --size 200x151 --seed 9 --depth --splits 0.34,0,0.66 --test-sets small "
+      "--supersampling 1";
   auto r = run_fishcam("sample-dataset " + quoted(dir / "a") + args);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = run_fishcam("sample-dataset " + quoted(dir / "b") + args);
@@ -71,8 +72,8 @@ TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
   EXPECT_EQ(count(dir / "a" / "test" / "depth"), 8);
   EXPECT_EQ(count(dir / "a" / "test-small" / "rgb_images"), 8);
   EXPECT_EQ(count(dir / "a" / "test-small-rotation" / "calibration"), 8);
-  for (const char* file : {"scenes.jsonl", "test-small/changes.jsonl", "test/rgb_images/00002_MVR.png",
-                           "test-small/depth/00001_RV.npy"}) {
+  for (const char* file :
+       {"scenes.jsonl", "test-small/changes.jsonl", "test/rgb_images/00002_MVR.png", "test-small/depth/00001_RV.npy"}) {
     EXPECT_EQ(test::read_file(dir / "a" / file), test::read_file(dir / "b" / file)) << file;
   }
   std::istringstream changes(test::read_file(dir / "a" / "test-small-rotation" / "changes.jsonl"));
@@ -141,8 +142,9 @@ TEST(CliAugmentation, RenderAugmentAndMap) {
   const NpyArray map = read_npy(dir / "map.npy");
   EXPECT_EQ(map.shape, (std::vector<size_t>{966, 1280, 2}));
   // numpy reads it too.
-  const std::string check = "/usr/bin/python3 -c \"import numpy as np; m = np.load('" + (dir / "map.npy").string() +
-                            "'); assert m.dtype == np.float32 and m.shape == (966, 1280, 2); print(np.isnan(m).sum())\"";
+  const std::string check =
+      "/usr/bin/python3 -c \"import numpy as np; m = np.load('" + (dir / "map.npy").string() +
+      "'); assert m.dtype == np.float32 and m.shape == (966, 1280, 2); print(np.isnan(m).sum())\"";
   EXPECT_EQ(std::system(check.c_str()), 0);
 }
 
@@ -158,10 +160,10 @@ TEST(CliAugmentation, BadArguments) {
        "cannot read image"},
       {"augment " + data("woodscape_front.json") + " --image x.png --out-image o.png --preset huge --seed 1",
        "--preset"},
-      {"augment " + data("woodscape_front.json") + " --image x.png --out-image o.png --preset small",
-       "--seed"},
-      {"augment " + data("woodscape_front.json") + " --image x.png --out-image o.png --preset small --seed 1 --rotate "
-       "1,2,3",
+      {"augment " + data("woodscape_front.json") + " --image x.png --out-image o.png --preset small", "--seed"},
+      {"augment " + data("woodscape_front.json") +
+           " --image x.png --out-image o.png --preset small --seed 1 --rotate "
+           "1,2,3",
        "excludes"},
       {"map " + data("woodscape_front.json") + " --rotate 1,2 --out " + quoted(dir / "m.npy"), "--rotate"},
       {"map " + data("woodscape_front.json") + " --depth sideways --out " + quoted(dir / "m.npy"), "--depth"},
@@ -207,8 +209,10 @@ TEST(CliAugmentation, DatasetIsMirroredResumableAndReportsBadFiles) {
   std::filesystem::copy_file(root / "rgb_images/frame0.png", root / "rgb_images/unlabelled.png");
   std::filesystem::copy_file(test::data_path("woodscape_front.json"), root / "calibration/unlabelled.json");
 
-  const std::string command = "augment-dataset " + quoted(root) + " --preset small,medium,large --seed 5 --copies 2 "
-                              "-j 2 --out " + quoted(out);
+  const std::string command = "augment-dataset " + quoted(root) +
+                              " --preset small,medium,large --seed 5 --copies 2 "
+                              "-j 2 --out " +
+                              quoted(out);
   auto r = run_fishcam(command);
   EXPECT_NE(r.exit_code, 0) << "failures make the exit code non-zero";
   EXPECT_NE(r.err.find("broken"), std::string::npos) << r.err;
@@ -356,8 +360,10 @@ TEST(CliAugmentation, AffineDatasetAndOptions) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(test::read_file(dir / "exact/manifest.jsonl").find("\"sampling\":\"exact\""), std::string::npos);
 
-  const std::string image = quoted(dir / "root/rgb_images/" / test::files_below(dir / "root/rgb_images").begin()->first);
-  const std::string camera = quoted(dir / "root/calibration/" / test::files_below(dir / "root/calibration").begin()->first);
+  const std::string image =
+      quoted(dir / "root/rgb_images/" / test::files_below(dir / "root/rgb_images").begin()->first);
+  const std::string camera =
+      quoted(dir / "root/calibration/" / test::files_below(dir / "root/calibration").begin()->first);
   const std::string augment = "augment " + camera + " --image " + image + " --out-image " + quoted(dir / "a.png");
   for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
            {" --affine 1,0,0,1", "--affine needs --method affine"},
@@ -381,8 +387,8 @@ TEST(CliAugmentation, AffineDatasetAndOptions) {
 TEST(CliAugmentation, ResumeAfterACutManifestLine) {
   const auto dir = test::scratch_dir("cut_manifest");
   ASSERT_EQ(run_fishcam("sample-dataset " + quoted(dir / "root") + " --images 2 --seed 1 --size 160x121").exit_code, 0);
-  const std::string command = "augment-dataset " + quoted(dir / "root") + " --preset small --seed 2 --out " +
-                              quoted(dir / "out");
+  const std::string command =
+      "augment-dataset " + quoted(dir / "root") + " --preset small --seed 2 --out " + quoted(dir / "out");
   ASSERT_EQ(run_fishcam(command).exit_code, 0);
   const auto manifest_path = dir / "out" / "manifest.jsonl";
   const std::string full = test::read_file(manifest_path);

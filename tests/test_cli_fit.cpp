@@ -16,7 +16,8 @@ TEST(CliFit, ConvertReportsAndWritesEveryFormat) {
   auto r = run_fishcam("convert " + source + " --to kannala-brandt --out " + quoted(dir / "kb.yaml") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  for (const char* key : {"rms_px", "p99_px", "max_px", "by_angle", "below_90_deg"}) EXPECT_TRUE(j.contains(key)) << key;
+  for (const char* key : {"rms_px", "p99_px", "max_px", "by_angle", "below_90_deg"})
+    EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_LT(j["rms_px"].get<double>(), 0.2);
   EXPECT_NE(r.err.find("warning: OpenCV's fisheye functions"), std::string::npos) << r.err;
   EXPECT_EQ(read_camera(dir / "kb.yaml").parameters().model.index(), RadialModel(KannalaBrandt<double>()).index());
@@ -29,7 +30,8 @@ TEST(CliFit, ConvertReportsAndWritesEveryFormat) {
   r = run_fishcam("convert " + source + " --to polynomial:5 --out " + quoted(dir / "ws.json") + " --format woodscape");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // Radial -> OpenCV's rational model (mrcal's OPENCV8 with p1 = p2 = 0) where it can hold the field of view.
-  r = run_fishcam("convert " + source + " --to opencv --max-angle 75 --out " + quoted(dir / "cv8.cameramodel") + " --json");
+  r = run_fishcam("convert " + source + " --to opencv --max-angle 75 --out " + quoted(dir / "cv8.cameramodel") +
+                  " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_LT(nlohmann::json::parse(r.out)["max_px"].get<double>(), 1.0);
   EXPECT_EQ(read_camera(dir / "cv8.cameramodel").parameters().model.index(), RadialModel(OpenCV<double>()).index());
@@ -38,7 +40,8 @@ TEST(CliFit, ConvertReportsAndWritesEveryFormat) {
   const struct {
     std::string args, expected;
   } bad[] = {
-      {"--to polynomial --out " + quoted(dir / "p.cameramodel"), "the mrcal format holds pinhole, stereographic and opencv"},
+      {"--to polynomial --out " + quoted(dir / "p.cameramodel"),
+       "the mrcal format holds pinhole, stereographic and opencv"},
       {"--to fisheye --out " + quoted(dir / "x.json"), "unknown model 'fisheye'"},
       {"--to pinhole --out " + quoted(dir / "x.json"), "--max-angle"},
       {"--to kannala-brandt --method paper --out " + quoted(dir / "x.json"), "eqs. 13-14"},
@@ -62,8 +65,10 @@ TEST(CliFit, FitFromCsv) {
     theta_rho += std::to_string(t) + ", " + std::to_string(truth.rho(t)) + "\n";
   }
   test::write_file(dir / "tr.csv", theta_rho);
-  auto r = run_fishcam("fit " + quoted(dir / "tr.csv") + " --to polynomial --imagersize 1280,966 --center 643.442,479.407 "
-                       "--out " + quoted(dir / "fit.json") + " --json");
+  auto r = run_fishcam("fit " + quoted(dir / "tr.csv") +
+                       " --to polynomial --imagersize 1280,966 --center 643.442,479.407 "
+                       "--out " +
+                       quoted(dir / "fit.json") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto params = model_params(read_camera(dir / "fit.json").model());
   EXPECT_NEAR(params[0], 339.749, 1e-3);  // the CSV holds 6 decimals
@@ -80,8 +85,10 @@ TEST(CliFit, FitFromCsv) {
     rays += line;
   }
   test::write_file(dir / "rays.csv", rays);
-  r = run_fishcam("fit " + quoted(dir / "rays.csv") + " --to stereographic --imagersize 1280,966 --center 640,480 "
-                  "--fit-center --fit-aspect --out " + quoted(dir / "st.cameramodel"));
+  r = run_fishcam("fit " + quoted(dir / "rays.csv") +
+                  " --to stereographic --imagersize 1280,966 --center 640,480 "
+                  "--fit-center --fit-aspect --out " +
+                  quoted(dir / "st.cameramodel"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Camera fitted = read_camera(dir / "st.cameramodel");
   EXPECT_LT((fitted.principal_point() - camera.principal_point()).norm(), 1e-6);
@@ -100,8 +107,8 @@ TEST(CliFit, FitFromCsv) {
   };
   for (const auto& c : bad) {
     test::write_file(dir / "bad.csv", c.content);
-    r = run_fishcam("fit " + quoted(dir / "bad.csv") + " --to equidistant --imagersize 1280,966 --center 640,480 --out " +
-                    quoted(dir / "bad.json"));
+    r = run_fishcam("fit " + quoted(dir / "bad.csv") +
+                    " --to equidistant --imagersize 1280,966 --center 640,480 --out " + quoted(dir / "bad.json"));
     EXPECT_NE(r.exit_code, 0) << c.content;
     EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.content << " -> " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -114,12 +121,14 @@ TEST(CliFit, SynthCornersCalibrateDiff) {
                        " --boards 20 --noise 0.2 --seed 3 --board 8x6 --spacing 0.05 --out " + quoted(dir / "c.vnl") +
                        " --truth " + quoted(dir / "truth.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = run_fishcam("calibrate --corners " + quoted(dir / "c.vnl") + " --board 8x6 --spacing 0.05 --imagersize 1280x966 "
-                  "--model polynomial --out " + quoted(dir / "calibrated.json") + " --json");
+  r = run_fishcam("calibrate --corners " + quoted(dir / "c.vnl") +
+                  " --board 8x6 --spacing 0.05 --imagersize 1280x966 "
+                  "--model polynomial --out " +
+                  quoted(dir / "calibrated.json") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_NEAR(j["rms_px"].get<double>(), 0.2 * std::sqrt(2.0), 0.05);  // the 2-D norm of noise 0.2 per coordinate
-  EXPECT_NEAR(j["rms_per_coordinate_px"].get<double>(), 0.2, 0.035);    // what mrcal and OpenCV print
+  EXPECT_NEAR(j["rms_per_coordinate_px"].get<double>(), 0.2, 0.035);   // what mrcal and OpenCV print
   EXPECT_DOUBLE_EQ(j["rms_per_coordinate_px"].get<double>(), j["rms_px"].get<double>() / std::sqrt(2.0));
   for (const char* p : {"k1", "k2", "k3", "k4", "cx", "cy", "a_y"}) {
     EXPECT_TRUE(j["parameters"].contains(p)) << p;
@@ -137,14 +146,24 @@ TEST(CliFit, SynthCornersCalibrateDiff) {
   const struct {
     std::string args, expected;
   } bad[] = {
-      {"calibrate --corners " + quoted(dir / "c.vnl") + " --board 10x10 --spacing 0.05 --imagersize 1280x966 --model "
-       "polynomial --out " + quoted(dir / "x.json"), "expected 100 corners (10x10), got 48"},
-      {"calibrate --corners " + quoted(dir / "c.vnl") + " --board 8 --spacing 0.05 --imagersize 1280x966 --model "
-       "polynomial --out " + quoted(dir / "x.json"), "--board: expected WxH"},
-      {"calibrate --corners " + quoted(dir / "c.vnl") + " --board 8x6 --spacing 0.05 --imagersize 1280x966 --model "
-       "fisheye --out " + quoted(dir / "x.json"), "unknown model 'fisheye'"},
+      {"calibrate --corners " + quoted(dir / "c.vnl") +
+           " --board 10x10 --spacing 0.05 --imagersize 1280x966 --model "
+           "polynomial --out " +
+           quoted(dir / "x.json"),
+       "expected 100 corners (10x10), got 48"},
+      {"calibrate --corners " + quoted(dir / "c.vnl") +
+           " --board 8 --spacing 0.05 --imagersize 1280x966 --model "
+           "polynomial --out " +
+           quoted(dir / "x.json"),
+       "--board: expected WxH"},
+      {"calibrate --corners " + quoted(dir / "c.vnl") +
+           " --board 8x6 --spacing 0.05 --imagersize 1280x966 --model "
+           "fisheye --out " +
+           quoted(dir / "x.json"),
+       "unknown model 'fisheye'"},
       {"synth-corners " + quoted(test::data_path("woodscape_front.json")) + " --boards 0 --noise 0 --seed 1 --out " +
-       quoted(dir / "y.vnl"), "--boards"},
+           quoted(dir / "y.vnl"),
+       "--boards"},
       {"detect-corners /no/such.png --board 8x6 --out " + quoted(dir / "d.vnl"), "/no/such.png: no such file"},
   };
   for (const auto& c : bad) {

@@ -2,11 +2,11 @@
 // lossy label files, outputs that are inputs or each other, failures part-way.
 // Every case: a one-line error naming the option or file, non-zero exit, and no
 // file written or changed.
-#include <opencv2/imgcodecs.hpp>
 #include <sys/resource.h>
+#include <opencv2/imgcodecs.hpp>
 
-#include <functional>
 #include <sys/stat.h>
+#include <functional>
 
 #include "fishcam/testing/test_support.hpp"
 
@@ -36,7 +36,8 @@ class CliHostile : public test::CliTest {
 };
 
 TEST_F(CliHostile, NonFiniteNumbersAreRefusedNamingTheOption) {
-  const std::string augment = "augment " + q("camera.json") + " --image " + q("image.png") + " --out-image " + q("o.png");
+  const std::string augment =
+      "augment " + q("camera.json") + " --image " + q("image.png") + " --out-image " + q("o.png");
   for (const char* value : {"nan,0,0", "0,inf,0", "0,0,-inf", "1e400,0,0"}) {
     expect_refused(augment + " --rotate " + value, "--rotate: must be a finite number");
     expect_refused(augment + " --translate " + value, "--translate: must be a finite number");
@@ -46,9 +47,9 @@ TEST_F(CliHostile, NonFiniteNumbersAreRefusedNamingTheOption) {
                  "--max-angle: must be a finite number");
   expect_refused("fit " + q("x.csv") + " --to equidistant --imagersize 10,10 --center nan,nan --out " + q("f.json"),
                  "--center: must be a finite number");
-  expect_refused("fit " + q("x.csv") + " --to equidistant --imagersize 10,10 --center 5,5 --aspect nan --out " +
-                     q("f.json"),
-                 "--aspect: must be a finite number");
+  expect_refused(
+      "fit " + q("x.csv") + " --to equidistant --imagersize 10,10 --center 5,5 --aspect nan --out " + q("f.json"),
+      "--aspect: must be a finite number");
   expect_refused("check-mrcal " + test::quoted(test::data_path("stereographic.cameramodel")) + " --rotate nan,0,0",
                  "--rotate: must be a finite number");
 }
@@ -71,9 +72,9 @@ TEST_F(CliHostile, OutputsThatAreInputsAreRefusedEvenWithForce) {
   expect_refused("map " + q("camera.json") + " --out " + q("camera.json") + " --force", "is also an input");
   expect_refused("convert " + q("camera.json") + " --to equidistant --out " + q("camera.json") + " --force",
                  "is also an input");
-  expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --out-image " + q("image.png") +
-                     " --force",
-                 "is also an input");
+  expect_refused(
+      "augment " + q("camera.json") + " --image " + q("image.png") + " --out-image " + q("image.png") + " --force",
+      "is also an input");
   expect_refused("augment " + q("camera.json") + " --image " + q("image.png") + " --label " + q("labels.png") +
                      " --out-image " + q("o.png") + " --out-label " + q("o.png"),
                  "given as more than one output");
@@ -149,7 +150,9 @@ TEST_F(CliHostile, HostileCameraFilesAreRefusedWithinBoundedResources) {
       {"array.json", [&] { return "[" + repeated("1,", size - 10) + "1]"; }},
       {"object.json", [&] { return "{\"intrinsic\": [" + repeated("1,", size - 20) + "1]}"; }},
       {"elements.xml",
-       [&] { return "<?xml version=\"1.0\"?><opencv_storage>" + repeated("<_>1</_>", size - 80) + "</opencv_storage>"; }},
+       [&] {
+         return "<?xml version=\"1.0\"?><opencv_storage>" + repeated("<_>1</_>", size - 80) + "</opencv_storage>";
+       }},
       {"literal.cameramodel",
        [&] { return "{'lensmodel': 'LENSMODEL_STEREOGRAPHIC', 'intrinsics': [" + repeated("1,", size - 80) + "1]}"; }},
       // Just under the node budget, each value as long as the size allows.
@@ -223,11 +226,14 @@ TEST_F(CliHostile, LabelFoldersWithLinksToNothingOrDevices) {
 TEST_F(CliHostile, FileTextInMessagesIsEscaped) {
   test::write_file(dir_ / "escape.txt", "1\x1b[2J OPENCV_FISHEYE 640 480 300 300 320 240 0.1 0.01 0 nan\n");
   expect_refused("info " + q("escape.txt"), "camera '1\\x1b[2J': value 'nan'");
-  test::write_file(dir_ / "bom.txt", "\xEF\xBB\xBF" "1 OPENCV_FISHEYE 640 480 300 300 320 240 0.1 0.01 0 0\n");
+  test::write_file(dir_ / "bom.txt",
+                   "\xEF\xBB\xBF"
+                   "1 OPENCV_FISHEYE 640 480 300 300 320 240 0.1 0.01 0 0\n");
   const auto bom = run_fishcam("info " + q("bom.txt"));
   EXPECT_EQ(bom.exit_code, 0) << bom.err;
-  const std::string camera = "  camera_model: pinhole\n  intrinsics: [300, 300, 320, 240]\n  resolution: [640, 480]\n"
-                             "  distortion_model: none\n  distortion_coeffs: []\n";
+  const std::string camera =
+      "  camera_model: pinhole\n  intrinsics: [300, 300, 320, 240]\n  resolution: [640, 480]\n"
+      "  distortion_model: none\n  distortion_coeffs: []\n";
   test::write_file(dir_ / "keys.yaml", "\"ca\\rm0\":\n" + camera + "\"cam\\xe9\":\n" + camera +
                                            "  T_cn_cnm1: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n"
                                            "  T_cam_imu: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n");
@@ -248,8 +254,8 @@ TEST_F(CliHostile, AmbiguousCameraFilesAreRefusedNamingTheField) {
   test::write_file(dir_ / "none.yaml",
                    "cam0:\n" + camera + "  distortion_model: none\n  distortion_coeffs: [0.1, 0.05, 0.01, 0.002]\n");
   expect_refused("info " + q("none.yaml"), "non-zero coefficients with distortion_model none");
-  test::write_file(dir_ / "twice.yaml", "cam0:\n" + camera +
-                                            "  distortion_model: none\n  intrinsics: [600, 600, 320, 240]\n");
+  test::write_file(dir_ / "twice.yaml",
+                   "cam0:\n" + camera + "  distortion_model: none\n  intrinsics: [600, 600, 320, 240]\n");
   expect_refused("info " + q("twice.yaml"), "the key 'intrinsics' appears twice");
   std::string json = test::read_file(test::data_path("equidistant.json"));
   json.insert(json.find('{') + 1, "\"model\": \"pinhole\",");
@@ -263,8 +269,8 @@ TEST_F(CliHostile, UnknownSubcommandsAreNamed) {
 }
 
 TEST_F(CliHostile, FailedWritesToStandardOutputFail) {
-  const std::string command = "'" + test::fishcam_binary() + "' info " + q("camera.json") + " > /dev/full 2> " +
-                              q("err.txt");
+  const std::string command =
+      "'" + test::fishcam_binary() + "' info " + q("camera.json") + " > /dev/full 2> " + q("err.txt");
   const int status = std::system(command.c_str());
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0);
   EXPECT_NE(test::read_file(dir_ / "err.txt").find("cannot write to standard output"), std::string::npos);

@@ -91,10 +91,13 @@ TEST_F(CliOutputs, EverySubcommandRefusesLinksToItsInputsAsOutputs) {
       {"detect-corners IMG --board 10x10 --out OUT", "image.png"},
   };
   const auto substitute = [&](std::string command, const fs::path& out) {
-    for (const auto& [token, path] : std::vector<std::pair<std::string, fs::path>>{
-             {"CAM", input / "camera.json"}, {"IMG", input / "image.png"}, {"CSV", input / "data.csv"},
-             {"VNL", input / "corners.vnl"}, {"OUT", out}}) {
-      if (const size_t at = command.find(token); at != std::string::npos) command.replace(at, token.size(), quoted(path));
+    for (const auto& [token, path] : std::vector<std::pair<std::string, fs::path>>{{"CAM", input / "camera.json"},
+                                                                                   {"IMG", input / "image.png"},
+                                                                                   {"CSV", input / "data.csv"},
+                                                                                   {"VNL", input / "corners.vnl"},
+                                                                                   {"OUT", out}}) {
+      if (const size_t at = command.find(token); at != std::string::npos)
+        command.replace(at, token.size(), quoted(path));
     }
     return command;
   };
@@ -121,8 +124,8 @@ TEST_F(CliOutputs, SymlinksAtOutputsAreReplacedNotFollowed) {
   const auto victim = test::write_file(dir_ / "victim.json", "keep me");
   fs::create_symlink(victim, dir_ / "out.json");
   fs::create_symlink(victim, dir_ / "out.json.fishcam-tmp");
-  const auto r = run_fishcam("convert " + quoted(test::data_path("woodscape_front.json")) +
-                             " --to equidistant --out " + quoted(dir_ / "out.json") + " --force");
+  const auto r = run_fishcam("convert " + quoted(test::data_path("woodscape_front.json")) + " --to equidistant --out " +
+                             quoted(dir_ / "out.json") + " --force");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(test::read_file(victim), "keep me");
   EXPECT_FALSE(fs::is_symlink(dir_ / "out.json"));
@@ -138,8 +141,8 @@ TEST_F(CliOutputs, SymlinksAtOutputsAreReplacedNotFollowed) {
 
 TEST_F(CliOutputs, AFailedRenameNamesItsRealCause) {
   fs::create_directories(dir_ / "existing.json" / "inside");
-  const auto r = run_fishcam("convert " + quoted(test::data_path("woodscape_front.json")) +
-                             " --to equidistant --out " + quoted(dir_ / "existing.json") + " --force");
+  const auto r = run_fishcam("convert " + quoted(test::data_path("woodscape_front.json")) + " --to equidistant --out " +
+                             quoted(dir_ / "existing.json") + " --force");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(r.err.find("Success"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("existing.json"), std::string::npos) << r.err;
@@ -235,7 +238,8 @@ TEST_F(CliOutputs, OnlyTemporariesOfFinishedProcessesAreRemoved) {
   std::string notes = temporary_path(images / "b.png", child, 1).string();
   notes.replace(notes.find("0000000000000001"), 16, "my-notes");
   test::write_file(notes, "keep me");
-  const auto r = run_fishcam("augment-dataset " + quoted(root) + " --preset train --seed 1 --out " + quoted(dir_ / "out"));
+  const auto r =
+      run_fishcam("augment-dataset " + quoted(root) + " --preset train --seed 1 --out " + quoted(dir_ / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(fs::exists(stale));
   EXPECT_EQ(test::read_file(live), "in flight");
@@ -252,11 +256,13 @@ TEST_F(CliOutputs, NamesThatAreNotUtf8AreRefusedBeforeWriting) {
                 root / "semantic_annotations" / "gtLabels" / (bad + ".png"));
   fs::copy_file(root / "calibration" / "00000_FV.json", root / "calibration" / (bad + ".json"));
   for (int run = 0; run < 2; ++run) {
-    const auto r = run_fishcam("augment-dataset " + quoted(root) + " --preset train --seed 1 --out " + quoted(dir_ / "out"));
+    const auto r =
+        run_fishcam("augment-dataset " + quoted(root) + " --preset train --seed 1 --out " + quoted(dir_ / "out"));
     EXPECT_NE(r.exit_code, 0);
     EXPECT_NE(r.err.find("not valid UTF-8"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("lat\\xe9n"), std::string::npos) << r.err;  // escaped in the message
-    for (const auto& [name, bytes] : test::files_below(dir_ / "out")) EXPECT_EQ(name.find(bad), std::string::npos) << name;
+    for (const auto& [name, bytes] : test::files_below(dir_ / "out"))
+      EXPECT_EQ(name.find(bad), std::string::npos) << name;
     EXPECT_EQ(lines_of(test::read_file(dir_ / "out" / "manifest.jsonl")).size(), 3u);  // the record, 2 outputs
   }
 }
@@ -274,8 +280,10 @@ TEST_F(CliOutputs, DatasetsAreTheSameOnEveryInstructionSet) {
     for (int baseline = 0; baseline < 2; ++baseline) {
       const auto out = dir_ / (std::string(sampling) + std::to_string(baseline));
       if (baseline) setenv("FISHCAM_NO_AVX2", "1", 1);
-      const auto r = run_fishcam("augment-dataset " + quoted(root) + " --preset train,large --copies 4 --seed 9 "
-                                 "--depth target-sphere --sampling " + sampling + " --out " + quoted(out));
+      const auto r = run_fishcam("augment-dataset " + quoted(root) +
+                                 " --preset train,large --copies 4 --seed 9 "
+                                 "--depth target-sphere --sampling " +
+                                 sampling + " --out " + quoted(out));
       unsetenv("FISHCAM_NO_AVX2");
       ASSERT_EQ(r.exit_code, 0) << r.err;
       runs[baseline] = test::files_below(out);

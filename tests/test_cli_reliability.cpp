@@ -107,7 +107,8 @@ TEST_F(CliReliability, AugmentDatasetResumesOnlyWithTheSameSettings) {
 TEST_F(CliReliability, SettingsRecordsHoldPathsThatAreNotUtf8) {
   const auto root = dir_ / "lat\xe9n";
   ASSERT_EQ(run_fishcam("sample-dataset " + quoted(root) + " --images 2 --seed 1 --size 64x48").exit_code, 0);
-  const std::string command = "augment-dataset " + quoted(root) + " --preset small --seed 1 --out " + quoted(dir_ / "o");
+  const std::string command =
+      "augment-dataset " + quoted(root) + " --preset small --seed 1 --out " + quoted(dir_ / "o");
   auto r = run_fishcam(command);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(test::read_file(dir_ / "o" / "augment-dataset.json").find("lat\\\\xe9n"), std::string::npos);
@@ -157,7 +158,8 @@ TEST_F(CliReliability, SampleDatasetResumesOnlyWithTheSameSettings) {
   expect_refused("sample-dataset " + quoted(foreign) + " --images 2 --seed 1 --size 64x48",
                  "exists and is not a sample of a run with these settings", foreign);
   // A surround-view set the same way (its manifests included).
-  const std::string sv = "sample-dataset " + quoted(dir_ / "sv") + " --scenes 2 --cameras FV --size 64x48 --test-sets small";
+  const std::string sv =
+      "sample-dataset " + quoted(dir_ / "sv") + " --scenes 2 --cameras FV --size 64x48 --test-sets small";
   ASSERT_EQ(run_fishcam(sv + " --seed 3").exit_code, 0);
   const auto whole = test::files_below(dir_ / "sv");
   r = run_fishcam(sv + " --seed 3");
@@ -170,14 +172,15 @@ TEST_F(CliReliability, SampleDatasetResumesOnlyWithTheSameSettings) {
 TEST_F(CliReliability, SeedsOutsideUint64AreRefused) {
   const std::string camera = quoted(test::data_path("woodscape_front.json"));
   for (const char* seed : {"18446744073709551616", "1.5", "99999999999999999999999", "0x10"}) {
-    expect_refused("synth-corners " + camera + " --boards 3 --noise 0 --seed " + seed + " --out " +
-                       quoted(dir_ / "c.vnl"),
-                   "--seed: must be an integer in [0, 2^64)", dir_);
+    expect_refused(
+        "synth-corners " + camera + " --boards 3 --noise 0 --seed " + seed + " --out " + quoted(dir_ / "c.vnl"),
+        "--seed: must be an integer in [0, 2^64)", dir_);
   }
   expect_refused("synth-corners " + camera + " --boards 3 --noise 0 --seed -1 --out " + quoted(dir_ / "c.vnl"),
                  "--seed: must not be negative", dir_);
   EXPECT_EQ(run_fishcam("synth-corners " + camera + " --boards 3 --noise 0 --seed 18446744073709551615 --out " +
-                        quoted(dir_ / "c.vnl")).exit_code,
+                        quoted(dir_ / "c.vnl"))
+                .exit_code,
             0);
 }
 
@@ -191,7 +194,8 @@ TEST_F(CliReliability, ABoardSizeThatDoesNotExplainTheCornersWritesNothing) {
                      quoted(dir_ / "cal.json"),
                  "pass --board 9x6", dir_ / "cal.json");
   expect_refused("calibrate --corners " + quoted(dir_ / "c.vnl") +
-                     " --board 9x6 --spacing 0.1 --imagersize 640x483 --model polynomial --out " + quoted(dir_ / "cal.json"),
+                     " --board 9x6 --spacing 0.1 --imagersize 640x483 --model polynomial --out " +
+                     quoted(dir_ / "cal.json"),
                  "corners lie outside the 640x483 image", dir_ / "cal.json");
 }
 
@@ -208,8 +212,10 @@ TEST_F(CliReliability, DetectCornersRefusesOnePhotoTwice) {
 // changes no preset makes (a 1e308-degree rotation).
 TEST_F(CliReliability, FidelityRefusesIncompleteOrAbsurdTestSets) {
   const auto root = dir_ / "sv";
-  ASSERT_EQ(run_fishcam("sample-dataset " + quoted(root) + " --scenes 2 --cameras FV --size 64x48 --test-sets small "
-                        "--splits 0,0,1 --seed 1").exit_code,
+  ASSERT_EQ(run_fishcam("sample-dataset " + quoted(root) +
+                        " --scenes 2 --cameras FV --size 64x48 --test-sets small "
+                        "--splits 0,0,1 --seed 1")
+                .exit_code,
             0);
   EXPECT_EQ(run_fishcam("fidelity " + quoted(root)).exit_code, 0);
   const auto changes = root / "test-small" / "changes.jsonl";
@@ -242,7 +248,8 @@ TEST_F(CliReliability, EveryInputIsBounded) {
       {"corners", "calibrate --corners FILE --board 9x6 --spacing 0.1 --imagersize 1280x966 --model polynomial --out " +
                       quoted(dir_ / "cal.json")},
       {"csv", "fit FILE --to polynomial:4 --imagersize 1280,966 --center 640,483 --out " + quoted(dir_ / "fit.json")},
-      {"npy", "augment " + camera + " --image FILE --out-image " + quoted(dir_ / "a.png") + " --depth map --depth-file FILE"},
+      {"npy",
+       "augment " + camera + " --image FILE --out-image " + quoted(dir_ / "a.png") + " --depth map --depth-file FILE"},
   };
   int checked = 0;
   for (const auto& [what, command] : commands) {
@@ -253,7 +260,8 @@ TEST_F(CliReliability, EveryInputIsBounded) {
       const auto r = run_fishcam(args);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       EXPECT_NE(r.exit_code, 0) << what << " " << input;
-      const bool named = r.err.find("not a regular file") != std::string::npos || r.err.find("larger than") != std::string::npos;
+      const bool named =
+          r.err.find("not a regular file") != std::string::npos || r.err.find("larger than") != std::string::npos;
       EXPECT_TRUE(named) << what << " " << input << ": " << r.err;
       EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
       EXPECT_LT(seconds, 10) << what << " " << input;
@@ -316,7 +324,8 @@ TEST_F(CliReliability, ReadersRefuseMagnitudesNoCameraHas) {
   EXPECT_NO_THROW(parse_camera(with("cx_offset", "100"), "front.json"));  // off-centre, but it sees
   // mrcal lenses: a NaN linearity, a value no lens has.
   for (const auto& [lensmodel, values, expected] : std::vector<std::tuple<std::string, std::string, std::string>>{
-           {"LENSMODEL_CAHVORE_linearity=nan", "0.01, 0.02, 0.1, 0.02, 0.0, 0.0, 0.5, 0.0, 0.0", "linearity must be a finite"},
+           {"LENSMODEL_CAHVORE_linearity=nan", "0.01, 0.02, 0.1, 0.02, 0.0, 0.0, 0.5, 0.0, 0.0",
+            "linearity must be a finite"},
            {"LENSMODEL_CAHVOR", "0.01, 0.02, 0.1, 0.02, 1e20", "values must lie within [-1000, 1000], got 1e+20"}}) {
     const std::string text = "{ 'lensmodel': '" + lensmodel + "', 'intrinsics': [ 640, 640, 639.5, 482.5, " + values +
                              " ], 'imagersize': [1280, 966] }";
@@ -337,9 +346,10 @@ TEST_F(CliReliability, ReadersRefuseMagnitudesNoCameraHas) {
 // ~380k per map before). Its domain ends where libmrcal evaluates, just inside the
 // fold; no command that evaluates the camera lets libmrcal reach the terminal.
 TEST_F(CliReliability, LibmrcalSaysNothingAtRunTime) {
-  const auto file = put(dir_ / "cahvore.cameramodel",
-                        "{ 'lensmodel': 'LENSMODEL_CAHVORE_linearity=0.25', 'intrinsics': [ 160, 160, 159.5, 120.5, "
-                        "0.0263, 0.1000, 0.0172, -0.1905, -0.0110, 0.1722, 0.9753, 0.0697 ], 'imagersize': [320, 242] }");
+  const auto file =
+      put(dir_ / "cahvore.cameramodel",
+          "{ 'lensmodel': 'LENSMODEL_CAHVORE_linearity=0.25', 'intrinsics': [ 160, 160, 159.5, 120.5, "
+          "0.0263, 0.1000, 0.0172, -0.1905, -0.0110, 0.1722, 0.9753, 0.0697 ], 'imagersize': [320, 242] }");
   const Camera camera = read_camera(file.string());
   const double fold_deg = 40.2825;  // where the fold scan ends the domain (measured)
   EXPECT_LT(camera.domain().theta_max * 180 / std::numbers::pi, fold_deg);
@@ -377,7 +387,8 @@ TEST_F(CliReliability, OutputsAndComparisonsThatCannotBeRight) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   expect_refused("map " + front + " --rotate 1,0,0 --out " + quoted(dir_ / "m.png"), "a map is written as .npy", dir_);
   ASSERT_EQ(run_fishcam("render " + front + " --out-image " + quoted(dir_ / "s.png") + " --out-label " +
-                        quoted(dir_ / "l.png")).exit_code,
+                        quoted(dir_ / "l.png"))
+                .exit_code,
             0);
   expect_refused("augment " + front + " --image " + quoted(dir_ / "s.png") + " --out-image " + quoted(dir_ / "a.png") +
                      " --out-mask " + quoted(dir_ / "m.jpg") + " --rotate 1,0,0",

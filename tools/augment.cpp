@@ -12,9 +12,8 @@ namespace fishcam::cli {
 namespace {
 
 struct AugmentOptions {
-  std::string source, target, image, label, out_image, out_label, out_mask, preset, method = "viewpoint",
-                                                                               sampling = "grid", depth_file,
-                                                                               depth_values = "range";
+  std::string source, target, image, label, out_image, out_label, out_mask, preset,
+      method = "viewpoint", sampling = "grid", depth_file, depth_values = "range";
   std::vector<double> affine;
   PoseOptions pose;
   std::uint64_t seed = 0;
@@ -58,7 +57,8 @@ void print_change(const AugmentOptions& o, const AugmentChange& c, bool affine) 
     return;
   }
   if (!o.json) {
-    std::printf("pose: %s, depth %s\n", describe(c.pose.rotation_deg, c.pose.translation).c_str(), o.pose.depth.c_str());
+    std::printf("pose: %s, depth %s\n", describe(c.pose.rotation_deg, c.pose.translation).c_str(),
+                o.pose.depth.c_str());
     return;
   }
   const auto& r = c.pose.rotation_deg;
@@ -101,8 +101,8 @@ void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, co
     throw Error(std::string(o.depth_file.empty() ? "--depth-values" : "--depth-file") + " needs --depth map");
   }
   if (depth_map && cmd.count("--sampling")) throw Error("--sampling: not used by --depth map (its maps are exact)");
-  check_outputs({{o.out_image}, {o.out_label, true}, {o.out_mask, true}}, {o.source, o.target, o.image, o.label, o.depth_file},
-                o.force);
+  check_outputs({{o.out_image}, {o.out_label, true}, {o.out_mask, true}},
+                {o.source, o.target, o.image, o.label, o.depth_file}, o.force);
   const ViewpointWarp warp = make_warp(inputs, o.source, o.target);
   const AugmentChange change = change_of(o, affine);
   const cv::Mat image = read_image(o.image, cv::IMREAD_UNCHANGED);
@@ -138,8 +138,9 @@ void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, co
 }  // namespace
 
 void register_augment(CLI::App& app) {
-  auto* cmd = app.add_subcommand("augment", "Augment one image (and its labels) with a viewpoint change (or the "
-                                            "affine baseline)");
+  auto* cmd = app.add_subcommand("augment",
+                                 "Augment one image (and its labels) with a viewpoint change (or the "
+                                 "affine baseline)");
   auto o = std::make_shared<AugmentOptions>();
   cmd->add_option("SOURCE", o->source, "Source camera file")->required();
   cmd->add_option("--image", o->image, "Input image (8/16-bit, 1-4 channels)")->required();
@@ -167,8 +168,9 @@ void register_augment(CLI::App& app) {
                                  "width and height, scale > 0) for --method affine")
                      ->delimiter(',')
                      ->expected(4);
-  auto* preset = cmd->add_option("--preset", o->preset, "Random change preset (the viewpoint or affine ranges of that name)")
-                     ->check(CLI::IsMember(pose_preset_names()));
+  auto* preset =
+      cmd->add_option("--preset", o->preset, "Random change preset (the viewpoint or affine ranges of that name)")
+          ->check(CLI::IsMember(pose_preset_names()));
   auto* seed = cmd->add_option("--seed", o->seed, "Seed of the random pose");
   preset->needs(seed);
   seed->needs(preset);

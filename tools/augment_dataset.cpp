@@ -1,18 +1,18 @@
 // fishcam augment-dataset ROOT: every image of a WoodScape-layout dataset, K copies
 // each, with seeded random poses; resumable, never writes inside ROOT.
 #include <fcntl.h>
-#include <opencv2/imgcodecs.hpp>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <cerrno>
 #include <cstring>
 
 #include <cstdio>
-#include <nlohmann/json.hpp>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
@@ -192,7 +192,8 @@ class Manifest {
     }
     if (content.empty()) return append_text(record + "\n");
     if (!content.starts_with(record + "\n")) {
-      throw Error(path_for_message(path_) + ": not this run's manifest (its first line is not this run's settings "
+      throw Error(path_for_message(path_) +
+                  ": not this run's manifest (its first line is not this run's settings "
                   "record; refusing to touch it: use another --out)");
     }
     size_t start = record.size() + 1;
@@ -252,7 +253,8 @@ Shard parse_shard(const std::string& text) {
 // The dataset's images (rgb_images/), in name order, this shard's only.
 std::vector<fs::path> list_images(const fs::path& root, const Shard& shard) {
   const fs::path images_dir = root / "rgb_images";
-  if (!fs::is_directory(images_dir)) throw Error(path_for_message(images_dir) + ": missing (expected WoodScape layout)");
+  if (!fs::is_directory(images_dir))
+    throw Error(path_for_message(images_dir) + ": missing (expected WoodScape layout)");
   std::vector<fs::path> images;
   for (const auto& entry : fs::directory_iterator(images_dir)) {
     if (entry.is_regular_file() && is_image(entry.path())) images.push_back(entry.path());
@@ -293,19 +295,25 @@ struct DatasetImage {
 class DatasetAugmentation {
  public:
   explicit DatasetAugmentation(const DatasetOptions& o)
-      : o_(o), root_(o.root), out_(o.out), prior_(depth_prior(o.depth, "--depth")),
-        sampling_(*parse_sampling(o.sampling)), affine_(o.method == "affine") {}
+      : o_(o),
+        root_(o.root),
+        out_(o.out),
+        prior_(depth_prior(o.depth, "--depth")),
+        sampling_(*parse_sampling(o.sampling)),
+        affine_(o.method == "affine") {}
 
   void run() {
     const Shard shard = parse_shard(o_.shard);
     if (o_.out.empty()) throw Error("--out: expected a folder, got ''");
     check_output_not_input(out_, {root_}, true);
     std::vector<PosePreset> presets;
-    for (const std::string& name : distinct_names(o_.presets, "--preset")) presets.push_back(pose_preset(name, "--preset"));
+    for (const std::string& name : distinct_names(o_.presets, "--preset"))
+      presets.push_back(pose_preset(name, "--preset"));
     if (o_.threads > 0) cv::setNumThreads(o_.threads);
     const std::vector<fs::path> images = list_images(root_, shard);
     if (images.empty()) {
-      std::printf("shard %d/%d: no images (the dataset has fewer than %d)\n", shard.index, shard.count, shard.index + 1);
+      std::printf("shard %d/%d: no images (the dataset has fewer than %d)\n", shard.index, shard.count,
+                  shard.index + 1);
       return;
     }
     // Before anything is written: the folder's settings are this run's, and no file
@@ -388,7 +396,8 @@ class DatasetAugmentation {
       std::set<std::string> listed;
       for (const auto& entry : fs::directory_iterator(dir)) {
         const std::string name = entry.path().filename().string();
-        if (name.starts_with("manifest") && name.ends_with(".jsonl")) listed.merge(listed_outputs(entry.path(), record));
+        if (name.starts_with("manifest") && name.ends_with(".jsonl"))
+          listed.merge(listed_outputs(entry.path(), record));
       }
       listed_before_[dir] = listed;
       for (const fs::path& image_path : images) {
@@ -403,7 +412,8 @@ class DatasetAugmentation {
       }
     }
     if (foreign > 0 && !o_.force) {
-      throw Error(path_for_message(first) + ": exists and no manifest of this run lists it (" + std::to_string(foreign) +
+      throw Error(path_for_message(first) + ": exists and no manifest of this run lists it (" +
+                  std::to_string(foreign) +
                   " such file(s) where this run would write: not written by augment-dataset with these settings); "
                   "nothing written (--force replaces them)");
     }
@@ -433,7 +443,8 @@ class DatasetAugmentation {
   // created or anything read or written there.
   void check_output_folders(const std::vector<PosePreset>& presets) const {
     for (const PosePreset& preset : presets) {
-      for (const char* sub : {"", "rgb_images", "semantic_annotations", "semantic_annotations/gtLabels", "calibration"}) {
+      for (const char* sub :
+           {"", "rgb_images", "semantic_annotations", "semantic_annotations/gtLabels", "calibration"}) {
         check_output_not_input(preset_dir(preset, presets.size()) / sub, {root_}, true);
       }
     }
@@ -462,11 +473,17 @@ class DatasetAugmentation {
       throw Error(path_for_message(image_path) + ": the file name is not valid UTF-8 (rename it)");
     }
     const std::string stem = image_path.stem().string();
-    DatasetImage source{image_path, root_ / "semantic_annotations" / "gtLabels" / (stem + ".png"),
-                        root_ / "calibration" / (stem + ".json"), std::nullopt, nullptr, {}, {}};
+    DatasetImage source{image_path,
+                        root_ / "semantic_annotations" / "gtLabels" / (stem + ".png"),
+                        root_ / "calibration" / (stem + ".json"),
+                        std::nullopt,
+                        nullptr,
+                        {},
+                        {}};
     const std::string preset_name(output.preset.name);
     for (int copy = 0; copy < o_.copies; ++copy) {
-      const std::vector<fs::path> files = copy_files(output.dir, copy_name(image_path, output.preset, copy), image_path);
+      const std::vector<fs::path> files =
+          copy_files(output.dir, copy_name(image_path, output.preset, copy), image_path);
       const std::uint64_t seed = derive_seed(o_.seed, stem + "/" + preset_name, copy);
       const RandomPose pose = random_pose(output.preset, seed);
       const AffineChange affine_change = affine_ ? random_affine(affine_preset(preset_name), seed) : AffineChange{};
@@ -482,7 +499,8 @@ class DatasetAugmentation {
       std::vector<std::pair<fs::path, std::string>> contents = render_copy(source, pose, affine_change, files);
       // Listed before its files land: a kill in between leaves a listed output whose
       // files the next run writes, never a file of ours that no manifest lists.
-      if (!ours) output.manifest->append(manifest_line(image_path, listed, copy, output.preset, seed, pose, affine_change));
+      if (!ours)
+        output.manifest->append(manifest_line(image_path, listed, copy, output.preset, seed, pose, affine_change));
       // The files land together (a killed run leaves none of them); they replace only
       // files this run's manifest lists, or any with --force.
       try {
@@ -506,7 +524,7 @@ class DatasetAugmentation {
       source.warp->augment(pose.change(), prior_, io, sampling_);
     }
     std::vector<std::pair<fs::path, std::string>> contents{{files[0], encode_image(files[0], out_pixels)},
-                                                            {files[1], encode_image(files[1], out_labels)}};
+                                                           {files[1], encode_image(files[1], out_labels)}};
     if (!affine_) {
       // The output camera: same intrinsics, the moved pose (translation in
       // unit-sphere units, written as metres).
@@ -564,11 +582,13 @@ void register_augment_dataset(CLI::App& app) {
       ->required();
   cmd->add_option("--seed", o->seed, "Seed; each image and copy gets its own seed derived from it")->required();
   cmd->add_option("--out", o->out, "Output folder (must not be inside ROOT)")->required();
-  cmd->add_option("--copies", o->copies, "Augmented copies per image")->check(CLI::Range(1, 1000))->capture_default_str();
-  cmd->add_option("-j,--threads", o->threads, "Threads (0: all cores)")->check(CLI::Range(0, 256))->capture_default_str();
-  cmd->add_option("--depth", o->depth, "Depth prior")
-      ->check(CLI::IsMember(depth_prior_names()))
+  cmd->add_option("--copies", o->copies, "Augmented copies per image")
+      ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  cmd->add_option("-j,--threads", o->threads, "Threads (0: all cores)")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
+  cmd->add_option("--depth", o->depth, "Depth prior")->check(CLI::IsMember(depth_prior_names()))->capture_default_str();
   cmd->add_option("--method", o->method,
                   "viewpoint, or affine: the paper's baseline (no camera model; no calibration files are written, "
                   "since no camera model describes the result)")

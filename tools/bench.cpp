@@ -1,26 +1,26 @@
 // fishcam bench roots CAMERA [--json]: the cost of theta(rho), every method in one
 // run on one camera (this machine is shared and noisy: compare within a run).
-#include <opencv2/core.hpp>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
-#include <functional>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <vector>
 
-#include "fishcam/testing/testing.hpp"
-#include "commands.hpp"
 #include "cli_common.hpp"
+#include "commands.hpp"
 #include "fishcam/augment/augmentation.hpp"
-#include "fishcam/fit/calibration.hpp"
 #include "fishcam/augment/chessboard.hpp"
+#include "fishcam/augment/scene.hpp"
+#include "fishcam/fit/calibration.hpp"
 #include "fishcam/fit/fit.hpp"
 #include "fishcam/io/camera_io.hpp"
-#include "fishcam/augment/scene.hpp"
+#include "fishcam/testing/testing.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -80,15 +80,13 @@ nlohmann::json measure_roots(const Camera& camera, const std::string& path, int 
       camera.model());
   out["table_ns"] = per_call_ns(kSamples, [&](double r) { return camera.theta_from_rho_table(r); });
   out["newton10_ns"] = std::visit(
-      [&](const auto& m) { return per_call_ns(kSamples, [&](double r) { return newton10(m, r); }); },
-      camera.model());
+      [&](const auto& m) { return per_call_ns(kSamples, [&](double r) { return newton10(m, r); }); }, camera.model());
   std::visit(
       [&](const auto& m) {
         if constexpr (PolynomialInTheta<std::decay_t<decltype(m)>>) {
           const auto c = m.power_coefficients();
-          out["companion_ns"] = per_call_ns(kSamples / 64, [&](double r) {
-            return testing::algebraic_theta(c, r, camera.domain());
-          });
+          out["companion_ns"] =
+              per_call_ns(kSamples / 64, [&](double r) { return testing::algebraic_theta(c, r, camera.domain()); });
         }
       },
       camera.model());
@@ -133,8 +131,8 @@ void print_roots(const nlohmann::json& out, const Camera& camera, const std::str
               out["newton10_ns"].get<double>(), out["newton10_worst_residual_px"].get<double>());
   std::printf("full-image unprojection %dx%d (ms):\n", camera.width(), camera.height());
   for (const char* name : {"robust", "table"}) {
-    std::printf("  %-7s 1 thread %7.2f   2 threads %7.2f\n", name,
-                out["unproject_image_ms"][name]["1"].get<double>(), out["unproject_image_ms"][name]["2"].get<double>());
+    std::printf("  %-7s 1 thread %7.2f   2 threads %7.2f\n", name, out["unproject_image_ms"][name]["1"].get<double>(),
+                out["unproject_image_ms"][name]["2"].get<double>());
   }
 }
 
@@ -233,10 +231,11 @@ void run_augment(const std::string& path, bool json, int samples, Sampling sampl
     std::printf("%s\n", out.dump(2).c_str());
     return;
   }
-  std::printf("augmentation of a %dx%d sample (RGB bilinear + labels nearest), new train pose each, median of %d, "
-              "sampling %s (grid spacing %d px, measured error %.4f px)\n",
-              camera.width(), camera.height(), samples, std::string(to_string(sampling)).c_str(), warp.grid_spacing(),
-              warp.grid_error_px());
+  std::printf(
+      "augmentation of a %dx%d sample (RGB bilinear + labels nearest), new train pose each, median of %d, "
+      "sampling %s (grid spacing %d px, measured error %.4f px)\n",
+      camera.width(), camera.height(), samples, std::string(to_string(sampling)).c_str(), warp.grid_spacing(),
+      warp.grid_error_px());
   std::printf("threads  map ms  total ms  floor: fixed ms  float ms  total / fastest floor\n");
   for (const auto& r : results) {
     std::printf("%7d %7.2f %9.2f %16.2f %9.2f %22.3f\n", r["threads"].get<int>(), r["map_ms"].get<double>(),
@@ -276,7 +275,8 @@ void run_grid_accuracy(const std::string& path, bool json, std::optional<cv::Siz
     }
     cv::Mat grid_labels, exact_labels, exact_valid;
     warp.augment(change, prior, {nullptr, nullptr, 0, &scene.labels, &grid_labels, 255, nullptr}, Sampling::grid);
-    warp.augment(change, prior, {nullptr, nullptr, 0, &scene.labels, &exact_labels, 255, &exact_valid}, Sampling::exact);
+    warp.augment(change, prior, {nullptr, nullptr, 0, &scene.labels, &exact_labels, 255, &exact_valid},
+                 Sampling::exact);
     labels_differ += cv::countNonZero((grid_labels != exact_labels) & (exact_valid != 0));
   }
   const nlohmann::json out{{"camera", path},
@@ -292,11 +292,12 @@ void run_grid_accuracy(const std::string& path, bool json, std::optional<cv::Siz
     std::printf("%s\n", out.dump(2).c_str());
     return;
   }
-  std::printf("grid sampling of a %dx%d camera (spacing %d px), 20 large changes against compute_exact:\n"
-              "  worst map error %.4f px (1/32 = 0.03125), inside/outside decisions differing %.2g, labels differing "
-              "%.2g of the valid pixels\n",
-              camera.width(), camera.height(), warp.grid_spacing(), worst, out["decisions_differ_share"].get<double>(),
-              out["labels_differ_share"].get<double>());
+  std::printf(
+      "grid sampling of a %dx%d camera (spacing %d px), 20 large changes against compute_exact:\n"
+      "  worst map error %.4f px (1/32 = 0.03125), inside/outside decisions differing %.2g, labels differing "
+      "%.2g of the valid pixels\n",
+      camera.width(), camera.height(), warp.grid_spacing(), worst, out["decisions_differ_share"].get<double>(),
+      out["labels_differ_share"].get<double>());
 }
 
 // Conversion of the WoodScape front camera and calibration from 50 boards of 10x10
@@ -306,18 +307,22 @@ void run_fit(bool json, int repeats) {
   nlohmann::json out = {{"repeats", repeats}};
   for (const char* model : {"kannala-brandt", "polynomial:4", "equidistant"}) {
     const ModelSpec spec = parse_model_spec(model);
-    out["convert_ms"][model] = 1e3 * median_seconds(repeats, [&] {
-      g_sink = model_params(fit_camera(sample_image(source, 4, 1), spec, source.parameters()).model)[0];
-    });
-    out["convert_fit_center_ms"][model] = 1e3 * median_seconds(repeats, [&] {
-      g_sink = model_params(fit_camera(sample_image(source, 4, 1), spec, source.parameters(), {true, true}).model)[0];
-    });
+    out["convert_ms"][model] =
+        1e3 * median_seconds(repeats, [&] {
+          g_sink = model_params(fit_camera(sample_image(source, 4, 1), spec, source.parameters()).model)[0];
+        });
+    out["convert_fit_center_ms"][model] =
+        1e3 * median_seconds(repeats, [&] {
+          g_sink =
+              model_params(fit_camera(sample_image(source, 4, 1), spec, source.parameters(), {true, true}).model)[0];
+        });
   }
   const BoardSpec board{10, 10, 0.1};
   const auto boards = testing::synthesize_boards(source, board, 50, 0.3, 1);
-  out["calibrate_50_boards_ms"] = 1e3 * median_seconds(std::max(1, repeats / 2), [&] {
-    g_sink = calibrate(boards.observations, board, source.width(), source.height(), {"polynomial", 4}).rms_px;
-  });
+  out["calibrate_50_boards_ms"] =
+      1e3 * median_seconds(std::max(1, repeats / 2), [&] {
+        g_sink = calibrate(boards.observations, board, source.width(), source.height(), {"polynomial", 4}).rms_px;
+      });
   if (json) {
     std::printf("%s\n", out.dump(2).c_str());
     return;
@@ -351,7 +356,8 @@ void run_corners(bool json, int boards_count, int repeats) {
   };
   const cv::TermCriteria until(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.01);
   std::vector<Method> methods = {
-      {"findChessboardCorners + cornerSubPix", [&](const cv::Mat& gray) -> std::optional<std::vector<Eigen::Vector2d>> {
+      {"findChessboardCorners + cornerSubPix",
+       [&](const cv::Mat& gray) -> std::optional<std::vector<Eigen::Vector2d>> {
          std::vector<cv::Point2f> c;
          if (!cv::findChessboardCorners(gray, {board.cols, board.rows}, c,
                                         cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
@@ -379,7 +385,8 @@ void run_corners(bool json, int boards_count, int repeats) {
   std::vector<std::vector<Eigen::Vector2d>> truths;
   for (size_t b = 0; b < poses.size(); ++b) {
     const auto pixels = testing::render_board_image(camera, board, poses[b], 3, 0.8, 2.0, b);
-    images.push_back(cv::Mat(camera.height(), camera.width(), CV_8UC1, const_cast<std::uint8_t*>(pixels.data())).clone());
+    images.push_back(
+        cv::Mat(camera.height(), camera.width(), CV_8UC1, const_cast<std::uint8_t*>(pixels.data())).clone());
     std::vector<Eigen::Vector2d> truth;
     for (const auto& p : points) {
       Eigen::Vector2d q;
@@ -430,8 +437,10 @@ void run_corners(bool json, int boards_count, int repeats) {
     std::printf("%s\n", out.dump(2).c_str());
     return;
   }
-  std::printf("chessboard detection, %zu rendered %dx%d images (9x6 boards, blur 0.8 px, noise 2), %d repeats, one "
-              "thread:\n", images.size(), camera.width(), camera.height(), repeats);
+  std::printf(
+      "chessboard detection, %zu rendered %dx%d images (9x6 boards, blur 0.8 px, noise 2), %d repeats, one "
+      "thread:\n",
+      images.size(), camera.width(), camera.height(), repeats);
   for (const auto& m : out["methods"]) {
     std::printf("  %-48s %7.1f ms/image (%.2fx)  found %ld, corner error rms %.3f px, max %.3f px\n",
                 m["name"].get<std::string>().c_str(), m["ms_per_image"].get<double>(),
@@ -445,26 +454,28 @@ void run_corners(bool json, int boards_count, int repeats) {
 void register_bench(CLI::App& app) {
   auto* bench = app.add_subcommand("bench", "Benchmarks (numbers for docs/performance.md)");
   bench->require_subcommand(1);
-  auto* roots = bench->add_subcommand("roots", "ns per theta(rho) for every inversion method, and full-image "
-                                               "unprojection on 1 and 2 threads");
+  auto* roots = bench->add_subcommand("roots",
+                                      "ns per theta(rho) for every inversion method, and full-image "
+                                      "unprojection on 1 and 2 threads");
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   auto repeats = std::make_shared<int>(7);
   roots->add_option("CAMERA", *path, "Camera file (e.g. data/woodscape_front.json)")->required();
   roots->add_flag("--json", *json, "Print one JSON object");
-  roots->add_option("--repeats", *repeats, "Runs per measurement (the median is reported)")
-      ->check(CLI::Range(1, 1000));
+  roots->add_option("--repeats", *repeats, "Runs per measurement (the median is reported)")->check(CLI::Range(1, 1000));
   roots->callback([=] { run_roots(*path, *json, *repeats); });
 
-  auto* augment = bench->add_subcommand("augment", "Augmentation per training sample on 1 and 2 threads, against "
-                                                   "the fastest cv::remap of the same sample with maps computed "
-                                                   "beforehand");
+  auto* augment = bench->add_subcommand("augment",
+                                        "Augmentation per training sample on 1 and 2 threads, against "
+                                        "the fastest cv::remap of the same sample with maps computed "
+                                        "beforehand");
   auto augment_camera = std::make_shared<std::string>();
   auto augment_json = std::make_shared<bool>(false);
   auto samples = std::make_shared<int>(41);
   auto sampling = std::make_shared<std::string>("grid");
   auto bench_size = std::make_shared<std::string>();
-  augment->add_option("CAMERA", *augment_camera, "Camera file with a pose (default: the bundled WoodScape front camera)");
+  augment->add_option("CAMERA", *augment_camera,
+                      "Camera file with a pose (default: the bundled WoodScape front camera)");
   augment->add_flag("--json", *augment_json, "Print one JSON object");
   augment->add_option("--samples", *samples, "Samples (poses) per thread count (the median is reported)")
       ->check(CLI::Range(1, 10000))
@@ -485,14 +496,19 @@ void register_bench(CLI::App& app) {
       ->capture_default_str();
   fit->callback([=] { run_fit(*fit_json, *fit_repeats); });
 
-  auto* corners = bench->add_subcommand("corners", "Chessboard detection time and corner accuracy on rendered "
-                                                   "photographs with known corners");
+  auto* corners = bench->add_subcommand("corners",
+                                        "Chessboard detection time and corner accuracy on rendered "
+                                        "photographs with known corners");
   auto corners_json = std::make_shared<bool>(false);
   auto corners_boards = std::make_shared<int>(24);
   auto corners_repeats = std::make_shared<int>(3);
   corners->add_flag("--json", *corners_json, "Print one JSON object");
-  corners->add_option("--boards", *corners_boards, "Rendered images")->check(CLI::Range(1, 1000))->capture_default_str();
-  corners->add_option("--repeats", *corners_repeats, "Passes over the images")->check(CLI::Range(1, 100))->capture_default_str();
+  corners->add_option("--boards", *corners_boards, "Rendered images")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  corners->add_option("--repeats", *corners_repeats, "Passes over the images")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
   corners->callback([=] { run_corners(*corners_json, *corners_boards, *corners_repeats); });
   register_bench_render(bench);
 

@@ -9,8 +9,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/io/camera_io.hpp"
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/io/camera_io.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -50,8 +50,8 @@ void run_render(const std::string& size_text, int scenes, int supersampling, boo
                             .c_str());
     return;
   }
-  std::printf("%dx%d, %dx%d supersampling, %d scene seeds, 1 thread (medians):\n", w, h, supersampling,
-              supersampling, scenes);
+  std::printf("%dx%d, %dx%d supersampling, %d scene seeds, 1 thread (medians):\n", w, h, supersampling, supersampling,
+              scenes);
   std::printf("  generate %.2f ms  render %.2f ms  -> %.1f images/s\n", median(generate_ms), median(render_ms),
               1000 / per_image);
 }
@@ -67,8 +67,12 @@ void register_bench_render(CLI::App* bench) {
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--size", o->size, "Image size (the bundled front camera resized)")->capture_default_str();
-  cmd->add_option("--scenes", o->scenes, "Scene seeds 1..N, one image each")->check(CLI::Range(1, 10000))->capture_default_str();
-  cmd->add_option("--supersampling", o->supersampling, "RGB rays per pixel side")->check(CLI::Range(1, 4))->capture_default_str();
+  cmd->add_option("--scenes", o->scenes, "Scene seeds 1..N, one image each")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  cmd->add_option("--supersampling", o->supersampling, "RGB rays per pixel side")
+      ->check(CLI::Range(1, 4))
+      ->capture_default_str();
   cmd->add_flag("--json", o->json, "Print one JSON object");
   cmd->callback([o] { run_render(o->size, o->scenes, o->supersampling, o->json); });
 }

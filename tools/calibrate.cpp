@@ -2,17 +2,17 @@
 #include <fnmatch.h>
 
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
+#include <filesystem>
 #include <numbers>
 #include <set>
 #include <sstream>
 #include <thread>
 
-#include "fishcam/io/corners.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/fit/calibration.hpp"
+#include "fishcam/io/corners.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -97,21 +97,30 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
   std::vector<CameraParameters> written;
   for (const auto& r : rig.cameras) written.push_back(apply_theta_limit(r.camera, o.theta_limit));
   std::vector<std::pair<std::filesystem::path, std::string>> files = {{o.output.out, format_rig(written, format)}};
-  nlohmann::json report = {{"rms_px", rig.rms_px}, {"rms_per_coordinate_px", rig.rms_px / std::sqrt(2.0)},
-                           {"instants", rig.instants}, {"warnings", rig.warnings}, {"out", o.output.out},
-                           {"pose_convention", "camera -> camera 0: p_camera0 = R(quaternion) p_camera + translation; "
-                                               "board poses as for one camera, in each camera's frame"}};
+  nlohmann::json report = {{"rms_px", rig.rms_px},
+                           {"rms_per_coordinate_px", rig.rms_px / std::sqrt(2.0)},
+                           {"instants", rig.instants},
+                           {"warnings", rig.warnings},
+                           {"out", o.output.out},
+                           {"pose_convention",
+                            "camera -> camera 0: p_camera0 = R(quaternion) p_camera + translation; "
+                            "board poses as for one camera, in each camera's frame"}};
   nlohmann::json all_poses = nlohmann::json::array();
   for (size_t k = 0; k < n; ++k) {
     const CalibrationResult& r = rig.cameras[k];
     const Pose& pose = *r.camera.pose;
     nlohmann::json camera = {
-        {"corners_file", o.corners[k]}, {"model", model_name(r.camera.model)}, {"rms_px", r.rms_px},
-        {"corners", r.observations}, {"images", r.used_images.size()}, {"undetermined", r.undetermined},
-        {"pose", {{"quaternion_xyzw", {pose.rotation.x(), pose.rotation.y(), pose.rotation.z(), pose.rotation.w()}},
-                  {"translation", {pose.translation.x(), pose.translation.y(), pose.translation.z()}},
-                  {"rotation_sigma_deg", rig.rotation_sigma_rad[k] * 180 / std::numbers::pi},
-                  {"translation_sigma", rig.translation_sigma[k]}}}};
+        {"corners_file", o.corners[k]},
+        {"model", model_name(r.camera.model)},
+        {"rms_px", r.rms_px},
+        {"corners", r.observations},
+        {"images", r.used_images.size()},
+        {"undetermined", r.undetermined},
+        {"pose",
+         {{"quaternion_xyzw", {pose.rotation.x(), pose.rotation.y(), pose.rotation.z(), pose.rotation.w()}},
+          {"translation", {pose.translation.x(), pose.translation.y(), pose.translation.z()}},
+          {"rotation_sigma_deg", rig.rotation_sigma_rad[k] * 180 / std::numbers::pi},
+          {"translation_sigma", rig.translation_sigma[k]}}}};
     for (size_t i = 0; i < r.parameters.size(); ++i) {
       camera["parameters"][r.parameter_names[i]] = {
           {"value", r.parameters[i]},
@@ -121,7 +130,8 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
     all_poses.push_back({{"camera", k}, {"poses", poses_json(r)}});
   }
   if (!o.poses.empty()) {
-    files.emplace_back(o.poses, nlohmann::json({{"convention", kPoseConvention}, {"cameras", all_poses}}).dump(2) + "\n");
+    files.emplace_back(o.poses,
+                       nlohmann::json({{"convention", kPoseConvention}, {"cameras", all_poses}}).dump(2) + "\n");
   }
   write_files_atomically(files, o.output.force);
   for (const auto& warning : rig.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
@@ -158,8 +168,9 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
 }  // namespace
 
 void register_calibrate(CLI::App& app) {
-  auto* cmd = app.add_subcommand("calibrate", "Calibrate a camera model from chessboard corners: joint Ceres solve "
-                                              "of intrinsics and board poses, robust, with uncertainties");
+  auto* cmd = app.add_subcommand("calibrate",
+                                 "Calibrate a camera model from chessboard corners: joint Ceres solve "
+                                 "of intrinsics and board poses, robust, with uncertainties");
   auto o = std::make_shared<CalibrateOptions>();
   cmd->add_option("--corners", o->corners,
                   "corners.vnl (mrcal's format); once per camera for a rig (images of one instant share their file "
@@ -230,19 +241,22 @@ void register_calibrate(CLI::App& app) {
                         {"out", o->output.out}};
     for (size_t i = 0; i < result.parameters.size(); ++i) {
       const double sigma = result.sigmas[i];
-      j["parameters"][result.parameter_names[i]] = {{"value", result.parameters[i]},
-                                                    {"sigma", std::isnan(sigma) ? nlohmann::json(nullptr) : nlohmann::json(sigma)},
-                                                    {"determined", !std::isnan(sigma)}};
+      j["parameters"][result.parameter_names[i]] = {
+          {"value", result.parameters[i]},
+          {"sigma", std::isnan(sigma) ? nlohmann::json(nullptr) : nlohmann::json(sigma)},
+          {"determined", !std::isnan(sigma)}};
     }
-    for (size_t i = 0; i < result.used_images.size(); ++i) j["per_image_rms_px"][result.used_images[i]] = result.per_image_rms_px[i];
+    for (size_t i = 0; i < result.used_images.size(); ++i)
+      j["per_image_rms_px"][result.used_images[i]] = result.per_image_rms_px[i];
     if (o->output.json) {
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
-    std::printf("calibrated %s from %zu images, %ld corners: rms %.4f px (2-D; %.4f per coordinate), %zu outliers; "
-                "wrote %s\n",
-                std::string(model_name(result.camera.model)).c_str(), result.used_images.size(), result.observations,
-                result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(), o->output.out.c_str());
+    std::printf(
+        "calibrated %s from %zu images, %ld corners: rms %.4f px (2-D; %.4f per coordinate), %zu outliers; "
+        "wrote %s\n",
+        std::string(model_name(result.camera.model)).c_str(), result.used_images.size(), result.observations,
+        result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(), o->output.out.c_str());
     for (size_t i = 0; i < result.parameters.size(); ++i) {
       if (std::isnan(result.sigmas[i])) {
         std::printf("  %-4s %16.10g    not determined by the data\n", result.parameter_names[i].c_str(),

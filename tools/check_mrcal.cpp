@@ -12,8 +12,9 @@
 namespace fishcam::cli {
 
 void register_check_mrcal(CLI::App& app) {
-  auto* cmd = app.add_subcommand("check-mrcal", "Compare our map with mrcal.image_transformation_map (needs "
-                                                "/usr/bin/python3 with mrcal, and mrcal-representable cameras)");
+  auto* cmd = app.add_subcommand("check-mrcal",
+                                 "Compare our map with mrcal.image_transformation_map (needs "
+                                 "/usr/bin/python3 with mrcal, and mrcal-representable cameras)");
   struct Options {
     std::string source, target;
     PoseOptions pose;

@@ -1,18 +1,18 @@
-#include <charconv>
 #include "cli_common.hpp"
+#include <charconv>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 #include <cstdlib>
 #include <numbers>
+#include <sstream>
 
+#include "fishcam/augment/scene.hpp"
+#include "fishcam/core/error.hpp"
 #include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/camera_io.hpp"
-#include "fishcam/core/error.hpp"
-#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 
@@ -23,8 +23,9 @@ ViewpointChange PoseOptions::change() const {
 DepthPrior PoseOptions::prior() const { return depth_prior(depth, "--depth"); }
 
 void add_pose_options(CLI::App* cmd, PoseOptions* options, bool with_depth, bool with_depth_map) {
-  cmd->add_option("--rotate", options->rotate, "Rotation rx,ry,rz in degrees about the camera x, y, z axes "
-                                               "(R = Rz Ry Rx, acting on the points)")
+  cmd->add_option("--rotate", options->rotate,
+                  "Rotation rx,ry,rz in degrees about the camera x, y, z axes "
+                  "(R = Rz Ry Rx, acting on the points)")
       ->delimiter(',')
       ->expected(3);
   cmd->add_option("--translate", options->translate, "Translation tx,ty,tz in unit-sphere units (metres for render)")

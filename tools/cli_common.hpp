@@ -11,14 +11,14 @@
 #include <vector>
 
 #include "fishcam/augment/affine.hpp"
-#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/augment/augmentation.hpp"
+#include "fishcam/augment/viewpoint.hpp"
 #include "fishcam/core/camera.hpp"
-#include "fishcam/io/camera_io.hpp"
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/fit/fit.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/io/camera_io.hpp"
 #include "fishcam/io/image_io.hpp"
-#include "fishcam/augment/viewpoint.hpp"
 
 namespace fishcam::cli {
 

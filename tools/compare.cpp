@@ -9,9 +9,9 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/io/atomic_file.hpp"
-#include "fishcam/eval/comparison.hpp"
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/eval/comparison.hpp"
+#include "fishcam/io/atomic_file.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -232,8 +232,9 @@ void print_comparison(const CompareOptions& o, const Camera& camera, const Compa
     if (label_sets > 1) std::printf(" %13.3f%%", r.labels_differ_pct[1]);
     std::printf("\n");
   }
-  std::printf("angle bands: mean displacement by the angle of incidence (deg) under the camera; identity: the "
-              "unchanged view through both (a check: 0 up to the float maps' 1e-3 px)\n");
+  std::printf(
+      "angle bands: mean displacement by the angle of incidence (deg) under the camera; identity: the "
+      "unchanged view through both (a check: 0 up to the float maps' 1e-3 px)\n");
   if (!o.out.empty()) std::printf("pictures and the alternatives' cameras in %s\n", o.out.c_str());
 }
 
@@ -286,17 +287,19 @@ void register_compare(CLI::App& app) {
   cmd->add_option("--preset", o->preset, "Viewpoint-change preset")
       ->check(CLI::IsMember(pose_preset_names()))
       ->capture_default_str();
-  cmd->add_option("--samples", o->samples, "Seeded viewpoint changes")->check(CLI::Range(1, 1000))->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Seed of the changes")->capture_default_str();
-  cmd->add_option("--depth", o->depth, "Depth prior")
-      ->check(CLI::IsMember(depth_prior_names()))
+  cmd->add_option("--samples", o->samples, "Seeded viewpoint changes")
+      ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  auto* image = cmd->add_option("--image", o->image, "An image of CAMERA for the pictures (default: the rendered scene)");
+  cmd->add_option("--seed", o->seed, "Seed of the changes")->capture_default_str();
+  cmd->add_option("--depth", o->depth, "Depth prior")->check(CLI::IsMember(depth_prior_names()))->capture_default_str();
+  auto* image =
+      cmd->add_option("--image", o->image, "An image of CAMERA for the pictures (default: the rendered scene)");
   auto* label = cmd->add_option("--label", o->label, "Its label image: label differences are reported for it too");
   label->needs(image);
-  cmd->add_option("--out", o->out,
-                  "Folder (created) for the pictures (sphere.png: Fig. 8; displacement-MODEL.png; augmented.png) and the "
-                  "alternatives as fishcam JSON (MODEL.json)");
+  cmd->add_option(
+      "--out", o->out,
+      "Folder (created) for the pictures (sphere.png: Fig. 8; displacement-MODEL.png; augmented.png) and the "
+      "alternatives as fishcam JSON (MODEL.json)");
   cmd->add_flag("--json", o->json, "Print the results as JSON");
   cmd->add_flag("--force", o->force, "Replace existing files in --out");
   const auto inputs = add_camera_input_options(cmd);

@@ -5,8 +5,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/io/camera_io.hpp"
 #include "fishcam/fit/fit.hpp"
+#include "fishcam/io/camera_io.hpp"
 #include "fishcam/io/npy.hpp"
 
 namespace fishcam::cli {
@@ -17,8 +17,9 @@ constexpr double kDeg = 180 / std::numbers::pi;
 }  // namespace
 
 void register_convert(CLI::App& app) {
-  auto* cmd = app.add_subcommand("convert", "Fit another projection model to a camera and report the pixel error "
-                                            "it costs");
+  auto* cmd = app.add_subcommand("convert",
+                                 "Fit another projection model to a camera and report the pixel error "
+                                 "it costs");
   struct Options {
     std::string source, to, method = "lsq", theta_limit, error_map;
     double max_angle = 0;
@@ -27,8 +28,7 @@ void register_convert(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("SOURCE", o->source, "Camera file")->required();
-  cmd->add_option("--to", o->to, "Target model: " + fishcam::model_names_text())
-      ->required();
+  cmd->add_option("--to", o->to, "Target model: " + fishcam::model_names_text())->required();
   cmd->add_option("--method", o->method, "lsq: least squares over the image's pixels; paper: eqs. 13-14")
       ->check(CLI::IsMember(conversion_method_names()))
       ->capture_default_str();
@@ -92,13 +92,14 @@ void register_convert(CLI::App& app) {
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
-    std::printf("%s -> %s (%s), wrote %s (%s)\n", o->source.c_str(), o->to.c_str(), o->method.c_str(), o->output.out.c_str(),
-                std::string(to_string(format)).c_str());
+    std::printf("%s -> %s (%s), wrote %s (%s)\n", o->source.c_str(), o->to.c_str(), o->method.c_str(),
+                o->output.out.c_str(), std::string(to_string(format)).c_str());
     print_fit_report(fitted, report, "pixels of the source's valid image");
     if (!source.radial()) {
-      std::printf("the source is not radially symmetric (principal point and a_y were fitted): about them no radial "
-                  "model gets below rms %.4f px (max %.4f px), the error of the best free-form rho(theta)\n",
-                  non_radial.rms_px, non_radial.max_px);
+      std::printf(
+          "the source is not radially symmetric (principal point and a_y were fitted): about them no radial "
+          "model gets below rms %.4f px (max %.4f px), the error of the best free-form rho(theta)\n",
+          non_radial.rms_px, non_radial.max_px);
     }
     if (!o->error_map.empty()) std::printf("wrote %s (pixel error per pixel)\n", o->error_map.c_str());
   });

@@ -38,8 +38,10 @@ inline CorrespondenceFile read_csv(const std::string& path) {
       } else if (compact == "x,y,z,u,v") {
         file.kind = CorrespondenceFile::Kind::ray_pixel, columns = 5;
       } else {
-        throw Error(path + ":" + std::to_string(number) + ": expected a header 'theta,rho', 'theta_deg,rho' or "
-                    "'x,y,z,u,v', got " + quoted_for_message(line));
+        throw Error(path + ":" + std::to_string(number) +
+                    ": expected a header 'theta,rho', 'theta_deg,rho' or "
+                    "'x,y,z,u,v', got " +
+                    quoted_for_message(line));
       }
       continue;
     }

@@ -6,8 +6,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/io/camera_io.hpp"
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/io/camera_io.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -41,9 +41,10 @@ cv::Mat grid(const std::vector<cv::Mat>& cells, int columns, const std::string& 
 }  // namespace
 
 void register_demo(CLI::App& app) {
-  auto* cmd = app.add_subcommand("demo", "Render the bundled scene with the WoodScape front camera, augment it as in "
-                                         "the paper's Fig. 5 and with the small/medium/large presets, write contact "
-                                         "sheets");
+  auto* cmd = app.add_subcommand("demo",
+                                 "Render the bundled scene with the WoodScape front camera, augment it as in "
+                                 "the paper's Fig. 5 and with the small/medium/large presets, write contact "
+                                 "sheets");
   struct Options {
     std::string out = "fishcam-demo";
     bool force = false;
@@ -103,7 +104,8 @@ void register_demo(CLI::App& app) {
         cells.push_back(cell(image, labels, caption));
       }
     }
-    write_image(presets, grid(cells, 3, "random poses: small (10 deg, 0.1), medium (20, 0.3), large (30, 0.5)"), o->force);
+    write_image(presets, grid(cells, 3, "random poses: small (10 deg, 0.1), medium (20, 0.3), large (30, 0.5)"),
+                o->force);
     write_images({{render, scene.image}, {render_labels, scene.labels}}, o->force);
     std::printf("camera %s\nwrote %s\nwrote %s\nwrote %s and %s (the rendered scene and its WoodScape labels)\n",
                 camera_path.c_str(), fig5.c_str(), presets.c_str(), render.c_str(), render_labels.c_str());

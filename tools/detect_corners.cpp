@@ -1,7 +1,7 @@
 // fishcam detect-corners IMAGES...: chessboard corners found by OpenCV (fishcam/augment/chessboard.hpp), in
 // mrcal's corners format.
-#include <opencv2/imgcodecs.hpp>
 #include <unistd.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <atomic>
 #include <cstdio>
@@ -9,17 +9,18 @@
 #include <mutex>
 #include <thread>
 
-#include "fishcam/io/corners.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/augment/chessboard.hpp"
 #include "fishcam/core/parallel.hpp"
+#include "fishcam/io/corners.hpp"
 
 namespace fishcam::cli {
 
 void register_detect_corners(CLI::App& app) {
-  auto* cmd = app.add_subcommand("detect-corners", "Find chessboard corners (OpenCV) and write them in mrcal's "
-                                                   "corners format");
+  auto* cmd = app.add_subcommand("detect-corners",
+                                 "Find chessboard corners (OpenCV) and write them in mrcal's "
+                                 "corners format");
   struct Options {
     std::vector<std::string> images;
     std::string board, out;
@@ -30,7 +31,9 @@ void register_detect_corners(CLI::App& app) {
   cmd->add_option("IMAGES", o->images, "Images")->required();
   cmd->add_option("--board", o->board, "Inner corners WxH, e.g. 10x10")->required();
   cmd->add_option("--out", o->out, "Output corners.vnl")->required();
-  cmd->add_option("--threads", o->threads, "Images detected in parallel")->check(CLI::Range(1, 256))->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Images detected in parallel")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
   cmd->add_flag("--force", o->force, "Replace an existing output file");
   cmd->callback([o] {
     {

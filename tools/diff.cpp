@@ -13,8 +13,9 @@
 namespace fishcam::cli {
 
 void register_diff(CLI::App& app) {
-  auto* cmd = app.add_subcommand("diff", "Projection difference of two calibrations of one camera, after fitting the "
-                                         "rotation between their frames (as mrcal.projection_diff)");
+  auto* cmd = app.add_subcommand("diff",
+                                 "Projection difference of two calibrations of one camera, after fitting the "
+                                 "rotation between their frames (as mrcal.projection_diff)");
   struct Options {
     std::string a, b, region = "auto", weights = "auto", corners, board;
     int step = 8;
@@ -29,7 +30,8 @@ void register_diff(CLI::App& app) {
                   "angles); all: every pixel valid in both; auto: data where known, else all")
       ->check(CLI::IsMember({"auto", "data", "all"}))
       ->capture_default_str();
-  cmd->add_option("--corners", o->corners, "Corners file (mrcal's vnlog) whose corners' convex hull is the data region");
+  cmd->add_option("--corners", o->corners,
+                  "Corners file (mrcal's vnlog) whose corners' convex hull is the data region");
   cmd->add_option("--board", o->board, "Inner corners WxH of the --corners board");
   cmd->add_option("--weights", o->weights,
                   "uncertainty: weigh the rotation fit by 1 / (sigma_A^2 + sigma_B^2) (both cameras need a "
@@ -44,7 +46,8 @@ void register_diff(CLI::App& app) {
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([o, inputs] {
     if (o->corners.empty() != o->board.empty()) throw Error("--corners and --board go together");
-    if (!o->corners.empty() && o->region == "all") throw Error("--corners defines a data region: not with --region all");
+    if (!o->corners.empty() && o->region == "all")
+      throw Error("--corners defines a data region: not with --region all");
     const Camera a = inputs->read(o->a);
     Camera b = inputs->read(o->b);
     // Pixels of two sizes are not the same pixels: comparing them measures the resize.
@@ -81,22 +84,24 @@ void register_diff(CLI::App& app) {
         region = std::string("the angles the calibration of ") + (record_a ? "CAMERA_A" : "CAMERA_B") +
                  " observed (its calibration record)";
       } else if (o->region == "data") {
-        throw Error("--region data: neither camera carries a calibration record (fishcam calibrate writes one); pass "
-                    "--corners FILE --board WxH");
+        throw Error(
+            "--region data: neither camera carries a calibration record (fishcam calibrate writes one); pass "
+            "--corners FILE --board WxH");
       }
     }
     const bool both_uncertain = record_a && record_b && record_a->covariance.size() && record_b->covariance.size();
     if (o->weights == "uncertainty" && !both_uncertain) {
-      throw Error("--weights uncertainty: both cameras need a calibration covariance (fishcam JSON written by "
-                  "fishcam calibrate)");
+      throw Error(
+          "--weights uncertainty: both cameras need a calibration covariance (fishcam JSON written by "
+          "fishcam calibrate)");
     }
     options.weigh_by_uncertainty = o->weights == "uncertainty" || (o->weights == "auto" && both_uncertain);
     const ProjectionDiff diff = projection_diff(a, b, options);
     const double angle_deg = Eigen::AngleAxisd(diff.rotation).angle() * 180 / std::numbers::pi;
     const std::string weights = options.weigh_by_uncertainty ? "1 / (sigma_A^2 + sigma_B^2)" : "none";
     if (o->json) {
-      const nlohmann::json j = {{"pixels", diff.pixels}, {"rms_px", diff.rms_px},   {"max_px", diff.max_px},
-                                {"rotation_deg", angle_deg}, {"region", region}, {"weights", weights}};
+      const nlohmann::json j = {{"pixels", diff.pixels},     {"rms_px", diff.rms_px}, {"max_px", diff.max_px},
+                                {"rotation_deg", angle_deg}, {"region", region},      {"weights", weights}};
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }

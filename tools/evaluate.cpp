@@ -7,8 +7,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/eval/metrics.hpp"
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/eval/metrics.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -39,10 +39,12 @@ std::map<std::string, fs::path> label_files(const fs::path& dir, const std::stri
     // an error, not a file silently left out of the score.
     const bool regular = entry.is_regular_file(ec);
     if (ec || !regular) {
-      throw Error(path_for_message(entry.path()) + ": not a regular file" + (ec ? " (" + ec.message() + ")" : std::string()));
+      throw Error(path_for_message(entry.path()) + ": not a regular file" +
+                  (ec ? " (" + ec.message() + ")" : std::string()));
     }
     const auto [at, inserted] = files.emplace(entry.path().stem().string(), entry.path());
-    if (!inserted) throw Error(path_for_message(entry.path()) + ": two label files named " + path_for_message(at->second.stem()));
+    if (!inserted)
+      throw Error(path_for_message(entry.path()) + ": two label files named " + path_for_message(at->second.stem()));
   }
   if (ec) throw Error(path_for_message(dir) + ": cannot list (" + ec.message() + ")");
   if (files.empty()) throw Error(path_for_message(dir) + ": no label images (PNG, TIFF or PGM) (" + what + ")");
@@ -61,19 +63,24 @@ ConfusionMatrix evaluate_set(const TestSet& set, int classes, std::optional<std:
   std::map<std::string, fs::path> masks;
   if (!set.valid.empty()) masks = label_files(set.valid, "validity masks of " + set.name);
   for (const auto& [stem, path] : predictions) {
-    if (!truths.count(stem)) throw Error(path_for_message(path) + ": no ground truth named " + text_for_message(stem) + " in " + path_for_message(set.gt));
+    if (!truths.count(stem))
+      throw Error(path_for_message(path) + ": no ground truth named " + text_for_message(stem) + " in " +
+                  path_for_message(set.gt));
   }
   ConfusionMatrix matrix(classes, ignore);
   for (const auto& [stem, gt_path] : truths) {
     const auto pred = predictions.find(stem);
     if (pred == predictions.end()) {
-      throw Error(path_for_message(gt_path) + ": no prediction named " + text_for_message(stem) + " in " + path_for_message(set.pred));
+      throw Error(path_for_message(gt_path) + ": no prediction named " + text_for_message(stem) + " in " +
+                  path_for_message(set.pred));
     }
     const cv::Mat truth = read_labels(gt_path), prediction = read_labels(pred->second);
     cv::Mat valid;
     if (!set.valid.empty()) {
       const auto mask = masks.find(stem);
-      if (mask == masks.end()) throw Error(path_for_message(gt_path) + ": no validity mask named " + text_for_message(stem) + " in " + path_for_message(set.valid));
+      if (mask == masks.end())
+        throw Error(path_for_message(gt_path) + ": no validity mask named " + text_for_message(stem) + " in " +
+                    path_for_message(set.valid));
       valid = read_labels(mask->second);
       if (valid.type() != CV_8UC1 || valid.size() != truth.size()) {
         throw Error(path_for_message(mask->second) + ": expected an 8-bit mask of the ground truth's size");

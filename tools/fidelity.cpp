@@ -16,8 +16,12 @@ void run(const std::string& dataset, bool json) {
   if (json) {
     nlohmann::json out = nlohmann::json::array();
     for (const DatasetFidelity& r : rows) {
-      out.push_back({{"test_set", r.test_set}, {"prior", r.prior}, {"samples", r.samples},
-                     {"valid_share", r.valid_share}, {"label_agreement", r.label_agreement}, {"psnr_db", r.psnr_db}});
+      out.push_back({{"test_set", r.test_set},
+                     {"prior", r.prior},
+                     {"samples", r.samples},
+                     {"valid_share", r.valid_share},
+                     {"label_agreement", r.label_agreement},
+                     {"psnr_db", r.psnr_db}});
     }
     std::printf("%s\n", nlohmann::json{{"dataset", dataset}, {"rows", out}}.dump(2).c_str());
     return;
@@ -32,9 +36,10 @@ void run(const std::string& dataset, bool json) {
 }  // namespace
 
 void register_fidelity(CLI::App& app) {
-  auto* cmd = app.add_subcommand("fidelity", "Augmentation against the truth: each test sample augmented by each true "
-                                             "viewpoint test set's change, under every depth prior (and the depth map "
-                                             "when the dataset has one), against the re-render from the moved camera");
+  auto* cmd = app.add_subcommand("fidelity",
+                                 "Augmentation against the truth: each test sample augmented by each true "
+                                 "viewpoint test set's change, under every depth prior (and the depth map "
+                                 "when the dataset has one), against the re-render from the moved camera");
   auto dataset = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("DATASET", *dataset, "Folder of fishcam sample-dataset --scenes N [--depth]")->required();

@@ -1,9 +1,9 @@
 // fishcam fit DATA.csv --to MODEL: a camera model from measured correspondences.
 #include <charconv>
-#include <tuple>
 #include <cstdio>
 #include <fstream>
 #include <numbers>
+#include <tuple>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -12,8 +12,9 @@
 namespace fishcam::cli {
 
 void register_fit(CLI::App& app) {
-  auto* cmd = app.add_subcommand("fit", "Fit a camera model to measured correspondences (CSV: theta,rho or "
-                                        "x,y,z,u,v) and report the pixel error");
+  auto* cmd = app.add_subcommand("fit",
+                                 "Fit a camera model to measured correspondences (CSV: theta,rho or "
+                                 "x,y,z,u,v) and report the pixel error");
   struct Options {
     std::string data, to;
     std::string imagersize;
@@ -24,8 +25,7 @@ void register_fit(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("DATA", o->data, "CSV with a header: theta,rho | theta_deg,rho | x,y,z,u,v")->required();
-  cmd->add_option("--to", o->to, "Model: " + fishcam::model_names_text())
-      ->required();
+  cmd->add_option("--to", o->to, "Model: " + fishcam::model_names_text())->required();
   cmd->add_option("--imagersize", o->imagersize, "Image size W,H (or WxH)")->required();
   cmd->add_option("--center", o->center, "Principal point cx,cy (px; the start when --fit-center)")
       ->delimiter(',')

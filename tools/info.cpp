@@ -45,15 +45,14 @@ void print_text(const nlohmann::json& j) {
     std::printf("rho_max           %.6f px%s\n", j["rho_max_px"].get<double>(), radial_part);
   }
   const auto& fov = j["fov_deg"];
-  std::printf("field of view     %.3f deg horizontal, %.3f vertical, %.3f diagonal\n",
-              fov["horizontal"].get<double>(), fov["vertical"].get<double>(), fov["diagonal"].get<double>());
+  std::printf("field of view     %.3f deg horizontal, %.3f vertical, %.3f diagonal\n", fov["horizontal"].get<double>(),
+              fov["vertical"].get<double>(), fov["diagonal"].get<double>());
   const auto& table = j["inverse_table"];
   if (!j["tangential"].is_null() || !j["mrcal_lens"].is_null()) {
     std::printf("unprojection      2-D Newton on the distortion map, checked to reproject within 1e-7 px\n");
   } else if (table["cells"].get<int>() > 0) {
     std::printf("inverse table     %d cells, worst error %.3g px, %d cells use the robust solver\n",
-                table["cells"].get<int>(), table["worst_error_px"].get<double>(),
-                table["fallback_cells"].get<int>());
+                table["cells"].get<int>(), table["worst_error_px"].get<double>(), table["fallback_cells"].get<int>());
   } else if (table["closed_form"].get<bool>()) {
     std::printf("inverse table     none (closed-form inverse)\n");
   } else {
@@ -62,7 +61,9 @@ void print_text(const nlohmann::json& j) {
   if (const auto& observed = j["observed"]; observed.is_null()) {
     std::printf("observed angles   unknown (no calibration record: only fishcam calibrate writes one)\n");
   } else {
-    const auto axis = [](const nlohmann::json& v) { return v.is_null() ? std::string("-") : std::to_string(int(std::lround(v.get<double>()))); };
+    const auto axis = [](const nlohmann::json& v) {
+      return v.is_null() ? std::string("-") : std::to_string(int(std::lround(v.get<double>())));
+    };
     std::printf("observed angles   theta up to %.3f deg; the corners span %s deg horizontally, %s deg vertically%s\n",
                 observed["theta_max_deg"].get<double>(), axis(observed["fov_deg"]["horizontal"]).c_str(),
                 axis(observed["fov_deg"]["vertical"]).c_str(),
@@ -74,9 +75,9 @@ void print_text(const nlohmann::json& j) {
   if (j.contains("pose")) {
     const auto& q = j["pose"]["quaternion_xyzw"];
     const auto& t = j["pose"]["translation"];
-    std::printf("pose (cam->ref)   q_xyzw [%.10g, %.10g, %.10g, %.10g], t [%.10g, %.10g, %.10g]\n",
-                q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>(), t[0].get<double>(),
-                t[1].get<double>(), t[2].get<double>());
+    std::printf("pose (cam->ref)   q_xyzw [%.10g, %.10g, %.10g, %.10g], t [%.10g, %.10g, %.10g]\n", q[0].get<double>(),
+                q[1].get<double>(), q[2].get<double>(), q[3].get<double>(), t[0].get<double>(), t[1].get<double>(),
+                t[2].get<double>());
   }
 }
 
@@ -86,8 +87,7 @@ void register_info(CLI::App& app) {
   auto* cmd = app.add_subcommand("info", "Print a camera's model, parameters, valid domain and field of view");
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  cmd->add_option("CAMERA", *path, "Camera file (" + camera_format_names() + ")")
-      ->required();
+  cmd->add_option("CAMERA", *path, "Camera file (" + camera_format_names() + ")")->required();
   cmd->add_flag("--json", *json, "Print one JSON object");
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([path, json, inputs] {

@@ -33,7 +33,8 @@ void for_each_record(std::istream& in, const char* what, const OnRecord& on_reco
                   " characters (not " + what + ")");
     }
     if (in.eof() && got == 0) break;
-    if (number > kMaxRecords) throw Error("stdin: more than " + std::to_string(kMaxRecords) + " records (split the input)");
+    if (number > kMaxRecords)
+      throw Error("stdin: more than " + std::to_string(kMaxRecords) + " records (split the input)");
     const std::string line(buffer.data(), std::size_t(in.eof() ? got : got - 1));
     const char* p = line.data();
     const char* end = p + line.size();
@@ -47,7 +48,8 @@ void for_each_record(std::istream& in, const char* what, const OnRecord& on_reco
       skip_space();
       const auto [next, ec] = std::from_chars(p, end, values[i]);
       if (ec != std::errc() || (next < end && *next != ' ' && *next != '\t' && *next != '\r')) {
-        throw Error("stdin line " + std::to_string(number) + ": expected " + what + ", got " + quoted_for_message(line));
+        throw Error("stdin line " + std::to_string(number) + ": expected " + what + ", got " +
+                    quoted_for_message(line));
       }
       p = next;
     }

@@ -1,14 +1,14 @@
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <string>
-#include <utility>
 #include <exception>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utils/logger.hpp>
+#include <string>
+#include <utility>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -30,7 +30,8 @@ void guard_number_options(CLI::App* app) {
       "", "finite");
   static const CLI::Validator non_negative(
       [](std::string& text) -> std::string {
-        if (text.find('-') != std::string::npos) return "must not be negative, got " + fishcam::quoted_for_message(text);
+        if (text.find('-') != std::string::npos)
+          return "must not be negative, got " + fishcam::quoted_for_message(text);
         std::uint64_t value = 0;
         const char* end = text.data() + text.size();
         const auto [next, error] = std::from_chars(text.data(), end, value);
@@ -51,8 +52,11 @@ void guard_number_options(CLI::App* app) {
 // set them.
 std::string in_cli_terms(std::string message) {
   static const std::pair<const char*, const char*> kOptions[] = {
-      {"max_angle", "--max-angle"}, {"fit_center", "--fit-center"}, {"fit_aspect", "--fit-aspect"},
-      {"image_size", "--imagersize"}, {"say which (distortion_model", "say which (--distortion-model"},
+      {"max_angle", "--max-angle"},
+      {"fit_center", "--fit-center"},
+      {"fit_aspect", "--fit-aspect"},
+      {"image_size", "--imagersize"},
+      {"say which (distortion_model", "say which (--distortion-model"},
       {"samples: ", "--samples: "}};
   for (const auto& [concept_name, option] : kOptions) {
     for (size_t at = message.find(concept_name); at != std::string::npos;

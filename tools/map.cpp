@@ -8,8 +8,9 @@
 namespace fishcam::cli {
 
 void register_map(CLI::App& app) {
-  auto* cmd = app.add_subcommand("map", "Write the viewpoint-augmentation map: float32 HxWx2 .npy of source (x, y) per "
-                                        "output pixel, NaN where there is no valid source");
+  auto* cmd = app.add_subcommand("map",
+                                 "Write the viewpoint-augmentation map: float32 HxWx2 .npy of source (x, y) per "
+                                 "output pixel, NaN where there is no valid source");
   struct Options {
     std::string source, target, out;
     PoseOptions pose;
@@ -26,7 +27,8 @@ void register_map(CLI::App& app) {
   cmd->callback([o, inputs] {
     check_outputs({{o->out}}, {o->source, o->target}, o->force);
     if (std::filesystem::path(o->out).extension() != ".npy") {
-      throw Error("--out: " + path_for_message(o->out) + ": a map is written as .npy (float32 H x W x 2); name it .npy");
+      throw Error("--out: " + path_for_message(o->out) +
+                  ": a map is written as .npy (float32 H x W x 2); name it .npy");
     }
     const ViewpointWarp warp = make_warp(*inputs, o->source, o->target);
     WarpMaps maps;
@@ -49,8 +51,7 @@ void register_map(CLI::App& app) {
     write_npy(o->out, array, o->force);
     std::printf("wrote %s: %dx%dx2 float32, %ld pixels with a source (%ld inside the source image), %s, depth %s\n",
                 o->out.c_str(), h, w, finite, long(h) * w - maps.invalid_count,
-                describe(o->pose.change().euler_deg(), o->pose.change().translation).c_str(),
-                o->pose.depth.c_str());
+                describe(o->pose.change().euler_deg(), o->pose.change().translation).c_str(), o->pose.depth.c_str());
   });
 }
 

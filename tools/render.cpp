@@ -8,8 +8,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/io/camera_io.hpp"
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/io/camera_io.hpp"
 
 namespace fishcam::cli {
 
@@ -32,8 +32,9 @@ void register_render(CLI::App& app) {
                   "Output range of every pixel (.npy float32 H x W, metres along the ray; inf: sky, NaN: outside "
                   "the camera's domain)");
   cmd->add_option("--scene-seed", o->scene_seed, "Draw a random street from this seed (default: the bundled street)");
-  cmd->add_option("--supersampling", o->supersampling, "RGB rays per pixel side (labels and range: one ray at the "
-                                                       "pixel centre)")
+  cmd->add_option("--supersampling", o->supersampling,
+                  "RGB rays per pixel side (labels and range: one ray at the "
+                  "pixel centre)")
       ->check(CLI::Range(1, 4))
       ->capture_default_str();
   cmd->add_flag("--force", o->force, "Replace existing output files");
@@ -44,16 +45,19 @@ void register_render(CLI::App& app) {
     }
     check_outputs({{o->out_image}, {o->out_label, true}, {o->out_depth}}, {o->camera, o->mount}, o->force);
     const Camera camera = inputs->read(o->camera);
-    const std::optional<Pose> mount_pose = o->mount.empty() ? camera.parameters().pose : inputs->read(o->mount).parameters().pose;
+    const std::optional<Pose> mount_pose =
+        o->mount.empty() ? camera.parameters().pose : inputs->read(o->mount).parameters().pose;
     if (!mount_pose) {
-      throw Error(o->camera + ": has no pose to place it in the scene (give one with --mount, e.g. "
-                              "data/woodscape_front.json)");
+      throw Error(o->camera +
+                  ": has no pose to place it in the scene (give one with --mount, e.g. "
+                  "data/woodscape_front.json)");
     }
     const Pose pose = moved_camera(*mount_pose, o->pose.change());
     const StreetScene scene = o->scene_seed ? StreetScene::generate(*o->scene_seed) : StreetScene::bundled();
     const SceneRender render = scene.render(camera, pose, o->supersampling);
     std::vector<std::pair<std::filesystem::path, std::string>> files = {
-        {o->out_image, encode_image(o->out_image, render.image)}, {o->out_label, encode_image(o->out_label, render.labels)}};
+        {o->out_image, encode_image(o->out_image, render.image)},
+        {o->out_label, encode_image(o->out_label, render.labels)}};
     if (!o->out_depth.empty()) {
       NpyArray depth{{size_t(camera.height()), size_t(camera.width())}, {}};
       depth.data.assign(render.range.begin<float>(), render.range.end<float>());

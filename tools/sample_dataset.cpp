@@ -13,10 +13,10 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fishcam/augment/scene.hpp"
 #include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/npy.hpp"
 #include "fishcam/io/output_settings.hpp"
-#include "fishcam/augment/scene.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -25,7 +25,8 @@ namespace fs = std::filesystem;
 
 // The folders of one WoodScape-layout root.
 void make_layout(const fs::path& root, bool depth) {
-  for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) fs::create_directories(root / sub);
+  for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"})
+    fs::create_directories(root / sub);
   if (depth) fs::create_directories(root / "depth");
 }
 
@@ -67,9 +68,10 @@ class SampleWriter {
       return;
     }
     const SceneRender r = render();
-    std::vector<std::pair<fs::path, std::string>> contents = {{files[0], encode_image(files[0], r.image)},
-                                                              {files[1], encode_image(files[1], r.labels)},
-                                                              {files[2], format_camera(camera, CameraFormat::woodscape)}};
+    std::vector<std::pair<fs::path, std::string>> contents = {
+        {files[0], encode_image(files[0], r.image)},
+        {files[1], encode_image(files[1], r.labels)},
+        {files[2], format_camera(camera, CameraFormat::woodscape)}};
     if (depth_) {
       NpyArray range{{size_t(r.range.rows), size_t(r.range.cols)}, {}};
       range.data.assign(r.range.begin<float>(), r.range.end<float>());
@@ -98,7 +100,8 @@ class SampleWriter {
 Camera sized(Camera camera, const std::string& size) {
   if (size.empty()) return camera;
   const auto [width, height] = parse_image_size(size, "--size");
-  if (width < 16 || height < 16 || width > 8192 || height > 8192) throw Error("--size: expected 16 to 8192 pixels per side");
+  if (width < 16 || height < 16 || width > 8192 || height > 8192)
+    throw Error("--size: expected 16 to 8192 pixels per side");
   return Camera(resized(camera.parameters(), width, height));
 }
 
@@ -122,8 +125,9 @@ OutputSettings settings_of(const Options& o, const fs::path& camera_path) {
                                                    {"--splits", o.splits},
                                                    {"--test-sets", o.test_sets}});
   } else {
-    settings.values.insert(settings.values.end(), {{"--images", std::to_string(o.images)},
-                                                   {"--camera", fs::weakly_canonical(fs::absolute(camera_path)).string()}});
+    settings.values.insert(settings.values.end(),
+                           {{"--images", std::to_string(o.images)},
+                            {"--camera", fs::weakly_canonical(fs::absolute(camera_path)).string()}});
   }
   return settings;
 }
@@ -142,7 +146,8 @@ long write_samples(const fs::path& out, const OutputSettings& settings, bool dep
   std::error_code ec;
   for (const fs::path& manifest : manifests) {
     if (!resuming && fs::exists(fs::symlink_status(manifest, ec))) {
-      throw Error(path_for_message(manifest) + ": exists and is not a run's with these settings; nothing written (use "
+      throw Error(path_for_message(manifest) +
+                  ": exists and is not a run's with these settings; nothing written (use "
                   "another OUT)");
     }
   }
@@ -243,8 +248,10 @@ void surround_view_dataset(const Options& o) {
         std::snprintf(name, sizeof name, "%05d_%s", k, camera_name.c_str());
         const CameraParameters& p = camera.parameters();
         writer.sample(out / split, name, p, [&] { return scene_of().render(camera, *p.pose, o.supersampling); });
-        scenes_manifest += nlohmann::json{{"name", name}, {"split", split}, {"scene_seed", scene_seed},
-                                          {"camera", camera_name}}.dump() + "\n";
+        scenes_manifest +=
+            nlohmann::json{{"name", name}, {"split", split}, {"scene_seed", scene_seed}, {"camera", camera_name}}
+                .dump() +
+            "\n";
         ++samples;
         if (split != std::string("test")) continue;
         // The true viewpoint test sets: the camera really moved (t read as metres), and
@@ -262,9 +269,13 @@ void surround_view_dataset(const Options& o) {
                           [&] { return scene_of().render(camera, *moved.pose, o.supersampling); });
             const auto& r = change.rotation_deg;
             const auto& t = change.translation;
-            changes[folder] += nlohmann::json{{"name", name}, {"preset", preset.name}, {"seed", seed},
+            changes[folder] += nlohmann::json{{"name", name},
+                                              {"preset", preset.name},
+                                              {"seed", seed},
                                               {"rotation_deg", {r.x(), r.y(), r.z()}},
-                                              {"translation", {t.x(), t.y(), t.z()}}}.dump() + "\n";
+                                              {"translation", {t.x(), t.y(), t.z()}}}
+                                   .dump() +
+                               "\n";
           }
         }
       }
@@ -275,26 +286,30 @@ void surround_view_dataset(const Options& o) {
   std::vector<std::pair<fs::path, std::string>> manifests = {{out / "scenes.jsonl", scenes_manifest}};
   for (const auto& [folder, text] : changes) manifests.emplace_back(out / folder / "changes.jsonl", text);
   write_outputs(manifests, resuming);
-  std::printf("wrote %d scenes x %zu cameras (%d train, %d val, %d test scenes; %zu true viewpoint test sets) to %s%s\n",
-              o.scenes, cameras.size(), train, val, o.scenes - train - val, test_sets.size(), out.c_str(),
-              skipped > 0 ? (" (" + std::to_string(skipped) + " samples already there)").c_str() : "");
+  std::printf(
+      "wrote %d scenes x %zu cameras (%d train, %d val, %d test scenes; %zu true viewpoint test sets) to %s%s\n",
+      o.scenes, cameras.size(), train, val, o.scenes - train - val, test_sets.size(), out.c_str(),
+      skipped > 0 ? (" (" + std::to_string(skipped) + " samples already there)").c_str() : "");
 }
 
 }  // namespace
 
 void register_sample_dataset(CLI::App& app) {
-  auto* cmd = app.add_subcommand("sample-dataset", "Write a WoodScape-layout dataset rendered from street scenes "
-                                                   "(images, labels, calibrations)");
+  auto* cmd = app.add_subcommand("sample-dataset",
+                                 "Write a WoodScape-layout dataset rendered from street scenes "
+                                 "(images, labels, calibrations)");
   auto o = std::make_shared<Options>();
   cmd->add_option("OUT", o->out, "Output folder (created; existing samples are never replaced)")->required();
   auto* images = cmd->add_option("--images", o->images, "Samples of the bundled street (one camera, mount perturbed)")
                      ->check(CLI::Range(1, 100000));
-  auto* scenes = cmd->add_option("--scenes", o->scenes, "Seeded streets seen by --cameras: a surround-view dataset "
-                                                        "with train/val/test splits and true viewpoint test sets")
+  auto* scenes = cmd->add_option("--scenes", o->scenes,
+                                 "Seeded streets seen by --cameras: a surround-view dataset "
+                                 "with train/val/test splits and true viewpoint test sets")
                      ->check(CLI::Range(1, 100000));
   images->excludes(scenes);
   cmd->add_option("--seed", o->seed, "Seed of everything drawn (mount perturbations, scenes, changes)")->required();
-  cmd->add_option("--camera", o->camera, "--images: camera file with a pose (default: the bundled WoodScape front camera)")
+  cmd->add_option("--camera", o->camera,
+                  "--images: camera file with a pose (default: the bundled WoodScape front camera)")
       ->excludes(scenes);
   cmd->add_option("--cameras", o->cameras, "--scenes: the SynWoodScape cameras (data/synwoodscape_NAME.json)")
       ->capture_default_str()
@@ -306,7 +321,9 @@ void register_sample_dataset(CLI::App& app) {
       ->capture_default_str()
       ->excludes(images);
   cmd->add_option("--size", o->size, "Render at WxH or W,H (the same lens, resized; default: the camera's size)");
-  cmd->add_option("--supersampling", o->supersampling, "RGB rays per pixel side")->check(CLI::Range(1, 4))->capture_default_str();
+  cmd->add_option("--supersampling", o->supersampling, "RGB rays per pixel side")
+      ->check(CLI::Range(1, 4))
+      ->capture_default_str();
   cmd->add_flag("--depth", o->depth, "Also write each sample's range (depth/NAME.npy, float32, metres along the ray)");
   cmd->callback([o] {
     if (o->out.empty()) throw Error("OUT: expected a folder, got ''");

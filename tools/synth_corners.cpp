@@ -1,18 +1,19 @@
 // fishcam synth-corners CAMERA: chessboard observations from a known camera, in mrcal's corners format.
 #include <cstdio>
 
-#include "fishcam/io/corners.hpp"
-#include "fishcam/testing/testing.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/fit/calibration.hpp"
+#include "fishcam/io/atomic_file.hpp"
+#include "fishcam/io/corners.hpp"
+#include "fishcam/testing/testing.hpp"
 
 namespace fishcam::cli {
 
 void register_synth_corners(CLI::App& app) {
-  auto* cmd = app.add_subcommand("synth-corners", "Synthetic chessboard observations from a known camera (poses over "
-                                                  "the whole field of view), in mrcal's corners format");
+  auto* cmd = app.add_subcommand("synth-corners",
+                                 "Synthetic chessboard observations from a known camera (poses over "
+                                 "the whole field of view), in mrcal's corners format");
   struct Options {
     std::string camera, board = "10x10", out, truth;
     int boards = 0;

@@ -36,8 +36,9 @@ nlohmann::json summary_json(const Summary& s) {
 
 void register_uncertainty(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "uncertainty", "Projection uncertainty of a calibration (as mrcal defines it): the 1-sigma spread, in the worst "
-                     "direction, of where a point seen at a pixel projects, given the calibration's corner noise");
+      "uncertainty",
+      "Projection uncertainty of a calibration (as mrcal defines it): the 1-sigma spread, in the worst "
+      "direction, of where a point seen at a pixel projects, given the calibration's corner noise");
   struct Options {
     std::string camera, out;
     double distance = 0, max_px = 0;
@@ -52,8 +53,9 @@ void register_uncertainty(CLI::App& app) {
   distance->excludes(infinity);
   cmd->add_option("--step", o->step, "Evaluate every STEP-th pixel")->check(CLI::Range(1, 256))->capture_default_str();
   cmd->add_option("--out", o->out, "Heatmap image (PNG): black = no ray, dimmed = outside the observed angles");
-  cmd->add_option("--max-px", o->max_px, "The heatmap's top colour (px; default: the largest value over the "
-                                         "observed angles)")
+  cmd->add_option("--max-px", o->max_px,
+                  "The heatmap's top colour (px; default: the largest value over the "
+                  "observed angles)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--json", o->json, "Print one JSON object");
   cmd->add_flag("--force", o->force, "Replace an existing output file");
@@ -93,8 +95,10 @@ void register_uncertainty(CLI::App& app) {
       for (int r = 0; r < rows; ++r) {
         for (int c = 0; c < cols; ++c) {
           auto& px = colour.at<cv::Vec3b>(r, c);
-          if (std::isnan(sigma.at<double>(r, c))) px = {0, 0, 0};
-          else if (!observed.at<std::uint8_t>(r, c)) px /= 2;
+          if (std::isnan(sigma.at<double>(r, c)))
+            px = {0, 0, 0};
+          else if (!observed.at<std::uint8_t>(r, c))
+            px /= 2;
         }
       }
       cv::Mat full;

@@ -35,7 +35,8 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels) {
     throw Error(std::string(what) + (labels ? ": expected an HxW array" : ": expected an HxW or HxWxC array"));
   }
   const int channels = ndim == 3 ? static_cast<int>(array.shape(2)) : 1;
-  if (channels < 1 || channels > 4) throw Error(std::string(what) + ": expected 1 to 4 channels, got " + std::to_string(channels));
+  if (channels < 1 || channels > 4)
+    throw Error(std::string(what) + ": expected 1 to 4 channels, got " + std::to_string(channels));
   int depth = -1;
   if (py::isinstance<py::array_t<std::uint8_t>>(array)) depth = CV_8U;
   if (py::isinstance<py::array_t<std::uint16_t>>(array)) depth = CV_16U;
@@ -49,7 +50,6 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels) {
   return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_MAKETYPE(depth, channels),
                  const_cast<void*>(array.data()));
 }
-
 
 // A new numpy array of height x width (x the channels of `like`), dtype of `like`,
 // and a cv::Mat header on its memory.
@@ -72,9 +72,9 @@ LabelSpan labels_of(const py::handle& input, const char* what, py::array* keep) 
   if (py::isinstance<py::array_t<std::uint16_t>>(a)) return std::span(static_cast<const std::uint16_t*>(a.data()), n);
   if (py::isinstance<py::array_t<std::int32_t>>(a)) return std::span(static_cast<const std::int32_t*>(a.data()), n);
   if (py::isinstance<py::array_t<std::int64_t>>(a)) return std::span(static_cast<const std::int64_t*>(a.data()), n);
-  throw Error(std::string(what) + ": expected dtype uint8, uint16, int32 or int64, got " + std::string(py::str(a.dtype())));
+  throw Error(std::string(what) + ": expected dtype uint8, uint16, int32 or int64, got " +
+              std::string(py::str(a.dtype())));
 }
-
 
 std::string shape_text(const py::array& a) {
   std::string out = "(";
@@ -82,14 +82,10 @@ std::string shape_text(const py::array& a) {
   return out + (a.ndim() == 1 ? ",)" : ")");
 }
 
-
-std::string camera_state(const Camera& camera) {
-  return format_camera(camera.parameters(), CameraFormat::fishcam);
-}
+std::string camera_state(const Camera& camera) { return format_camera(camera.parameters(), CameraFormat::fishcam); }
 
 Camera camera_from_state(const std::string& state, const char* what) {
   return Camera(parse_camera(state, what, CameraFormat::fishcam));
 }
-
 
 }  // namespace fishcam::python

@@ -16,7 +16,8 @@ namespace {
 
 MapKind map_kind(const std::string& name) {
   const auto kind = parse_map_kind(name);
-  if (!kind) throw Error("kind: expected " + choices_for_message(map_kind_names()) + ", got " + quoted_for_message(name));
+  if (!kind)
+    throw Error("kind: expected " + choices_for_message(map_kind_names()) + ", got " + quoted_for_message(name));
   return *kind;
 }
 
@@ -25,7 +26,6 @@ RandomPose change_from(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3
   if (!translation.allFinite()) throw Error("translation: must be finite");
   return RandomPose{rotation_deg, translation};
 }
-
 
 // What `fishcam augment` writes, into new numpy arrays: the image and labels (and
 // optionally the validity) resampled by `apply` (an AugmentIO -> outputs written in
@@ -49,8 +49,8 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
     out["valid"] = valid;
   }
   py::gil_scoped_release release;
-  for (const auto& [mat, what, given] : {std::tuple(&image_in, "image", bool(image)),
-                                         std::tuple(&labels_in, "labels", bool(labels))}) {
+  for (const auto& [mat, what, given] :
+       {std::tuple(&image_in, "image", bool(image)), std::tuple(&labels_in, "labels", bool(labels))}) {
     if (given && mat->size() != source) {
       throw Error(std::string(what) + ": is " + std::to_string(mat->cols) + "x" + std::to_string(mat->rows) +
                   " but the camera is " + std::to_string(source.width) + "x" + std::to_string(source.height));
@@ -82,7 +82,6 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
   }
   return out;
 }
-
 
 Sampling sampling_of(const std::string& name) {
   const auto sampling = parse_sampling(name);
@@ -140,33 +139,35 @@ py::dict augment_sample(const ViewpointWarp& warp, std::optional<py::array> imag
   });
 }
 
-
 }  // namespace
 
 void bind_augmentation(py::module_& m) {
-  py::class_<RandomPose>(m, "ViewpointChange",
-                         "A viewpoint change (the paper's eq. 7): a point P of the camera frame is at R P + t in the "
-                         "moved camera's frame; R = Rz Ry Rx of rotation_deg (x applied first), t in unit-sphere units.")
+  py::class_<RandomPose>(
+      m, "ViewpointChange",
+      "A viewpoint change (the paper's eq. 7): a point P of the camera frame is at R P + t in the "
+      "moved camera's frame; R = Rz Ry Rx of rotation_deg (x applied first), t in unit-sphere units.")
       .def(py::init(&change_from), py::arg("rotation_deg") = Eigen::Vector3d::Zero(),
-           py::arg("translation") = Eigen::Vector3d::Zero(), "rotation_deg: (3,) degrees about x, y, z; translation: (3,).")
+           py::arg("translation") = Eigen::Vector3d::Zero(),
+           "rotation_deg: (3,) degrees about x, y, z; translation: (3,).")
       .def_readonly("rotation_deg", &RandomPose::rotation_deg, "Degrees about x, y, z: float64 array (3,).")
       .def_readonly("translation", &RandomPose::translation, "t of eq. 7: float64 array (3,).")
       .def_property_readonly(
           "rotation", [](const RandomPose& p) { return Eigen::Matrix3d(p.change().rotation); },
           "R of eq. 7: float64 array (3, 3).")
-      .def(py::pickle(
-          [](const RandomPose& p) { return py::make_tuple(p.rotation_deg, p.translation); },
-          [](const py::tuple& t) {
-            return from_pickle_state("pickled ViewpointChange", [&] {
-              if (t.size() != 2) throw Error("pickled ViewpointChange: expected 2 fields, got " + std::to_string(t.size()));
-              return change_from(t[0].cast<Eigen::Vector3d>(), t[1].cast<Eigen::Vector3d>());
-            });
-          }))
+      .def(py::pickle([](const RandomPose& p) { return py::make_tuple(p.rotation_deg, p.translation); },
+                      [](const py::tuple& t) {
+                        return from_pickle_state("pickled ViewpointChange", [&] {
+                          if (t.size() != 2)
+                            throw Error("pickled ViewpointChange: expected 2 fields, got " + std::to_string(t.size()));
+                          return change_from(t[0].cast<Eigen::Vector3d>(), t[1].cast<Eigen::Vector3d>());
+                        });
+                      }))
       .def("__repr__", [](const RandomPose& p) {
         char buffer[256];
-        std::snprintf(buffer, sizeof buffer, "ViewpointChange(rotation_deg=(%.17g, %.17g, %.17g), translation=(%.17g, %.17g, %.17g))",
-                      p.rotation_deg.x(), p.rotation_deg.y(), p.rotation_deg.z(), p.translation.x(),
-                      p.translation.y(), p.translation.z());
+        std::snprintf(buffer, sizeof buffer,
+                      "ViewpointChange(rotation_deg=(%.17g, %.17g, %.17g), translation=(%.17g, %.17g, %.17g))",
+                      p.rotation_deg.x(), p.rotation_deg.y(), p.rotation_deg.z(), p.translation.x(), p.translation.y(),
+                      p.translation.z());
         return std::string(buffer);
       });
 
@@ -174,17 +175,14 @@ void bind_augmentation(py::module_& m) {
   // its signature (and the stubs) name it.
   py::reinterpret_borrow<py::class_<Camera>>(m.attr("Camera"))
       .def(
-          "augmented",
-          [](const Camera& c, const RandomPose& change) { return augmented_camera(c, change.change()); },
+          "augmented", [](const Camera& c, const RandomPose& change) { return augmented_camera(c, change.change()); },
           py::arg("change"),
           "The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera "
           "without a pose gets one relative to its own frame)");
 
   m.def(
       "random_change",
-      [](const std::string& preset, std::uint64_t seed) {
-        return random_pose(pose_preset(preset), seed);
-      },
+      [](const std::string& preset, std::uint64_t seed) { return random_pose(pose_preset(preset), seed); },
       py::arg("preset"), py::arg("seed"));
   m.def(
       "random_change_in",
@@ -203,15 +201,21 @@ void bind_augmentation(py::module_& m) {
     }
     return out;
   });
-  m.def("depth_priors", [] { return depth_prior_names(); }, "The depth priors' names.");
-  m.def("depth_priors_and_map", [] { return depth_prior_and_map_names(); },
-        "The depth priors' names and \"map\" (the source image's depth map in place of a prior).");
-  m.def("sampling_names", [] { return sampling_names(); }, "The sampling modes' names.");
-  m.def("depth_values_names", [] { return depth_values_names(); }, "What depth maps' values can be.");
-  m.def("check_depth_prior", [](const std::string& name) { depth_prior(name); },
-        "Raises fishcam.Error naming the choices unless name is a depth prior.");
-  m.def("check_preset", [](const std::string& name) { pose_preset(name); },
-        "Raises fishcam.Error naming the choices unless name is a pose preset.");
+  m.def(
+      "depth_priors", [] { return depth_prior_names(); }, "The depth priors' names.");
+  m.def(
+      "depth_priors_and_map", [] { return depth_prior_and_map_names(); },
+      "The depth priors' names and \"map\" (the source image's depth map in place of a prior).");
+  m.def(
+      "sampling_names", [] { return sampling_names(); }, "The sampling modes' names.");
+  m.def(
+      "depth_values_names", [] { return depth_values_names(); }, "What depth maps' values can be.");
+  m.def(
+      "check_depth_prior", [](const std::string& name) { depth_prior(name); },
+      "Raises fishcam.Error naming the choices unless name is a depth prior.");
+  m.def(
+      "check_preset", [](const std::string& name) { pose_preset(name); },
+      "Raises fishcam.Error naming the choices unless name is a pose preset.");
   m.def("derive_seed", &derive_seed, py::arg("seed"), py::arg("key"), py::arg("index"),
         "A 64-bit seed per (key, index) from one user seed (SplitMix64 over FNV-1a of the key): "
         "the seeds of augment-dataset, compare and WoodScapeDataset(seed=).");
@@ -225,10 +229,13 @@ void bind_augmentation(py::module_& m) {
            }),
            py::arg("camera"), py::arg("target") = py::none(),
            "camera: the images' camera; target: the output camera (default: the same).")
-      .def_property_readonly("source", [](const ViewpointWarp& self) -> decltype(auto) { return self.source(); }, "The images' camera.")
-      .def_property_readonly("target", [](const ViewpointWarp& self) -> decltype(auto) { return self.target(); }, "The output camera.")
-      .def_property_readonly("float_kernel", [](const ViewpointWarp& self) -> decltype(auto) { return self.float_kernel(); },
-                             "Whether maps come from the float kernel (within 1e-3 px), else the exact path.")
+      .def_property_readonly(
+          "source", [](const ViewpointWarp& self) -> decltype(auto) { return self.source(); }, "The images' camera.")
+      .def_property_readonly(
+          "target", [](const ViewpointWarp& self) -> decltype(auto) { return self.target(); }, "The output camera.")
+      .def_property_readonly(
+          "float_kernel", [](const ViewpointWarp& self) -> decltype(auto) { return self.float_kernel(); },
+          "Whether maps come from the float kernel (within 1e-3 px), else the exact path.")
       .def(
           "maps",
           [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth, const std::string& kind,
@@ -270,17 +277,14 @@ void bind_augmentation(py::module_& m) {
           "The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source "
           "coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision "
           "reference; grid=True: the grid path's (within 1/32 px), geometric.")
-      .def(
-          "warp",
-          &augment_sample,
-          py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
-          py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
-          py::arg("return_valid") = false, py::arg("sampling") = "grid", py::arg("depth_map") = py::none(),
-          py::arg("depth_values") = "range",
-          "One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; "
-          "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
-          "asked. depth: a prior, or \"map\" with depth_map (the source's HxW float32 range or z, "
-          "depth_values; exact, no source where the source never saw the scene).")
+      .def("warp", &augment_sample, py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(),
+           py::arg("change"), py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
+           py::arg("return_valid") = false, py::arg("sampling") = "grid", py::arg("depth_map") = py::none(),
+           py::arg("depth_values") = "range",
+           "One augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; "
+           "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
+           "asked. depth: a prior, or \"map\" with depth_map (the source's HxW float32 range or z, "
+           "depth_values; exact, no source where the source never saw the scene).")
       .def(
           "sampling_grid",
           [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth) {
@@ -367,26 +371,28 @@ void bind_augmentation(py::module_& m) {
           "A depth map (HxW float32, range or z) seen from the moved camera: nearest-neighbour sampled, values "
           "re-expressed in the moved camera (exact for rotations; with depth=\"map\", the map is the prior: exact); "
           "fill where there is no source")
-      .def(
-          "__call__",
-          &augment_sample,
-          py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
-          py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
-          py::arg("return_valid") = false, py::arg("sampling") = "grid", py::arg("depth_map") = py::none(),
-          py::arg("depth_values") = "range",
-          "warp(...): one augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, float32; "
-          "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
-          "asked.")
-      .def_property_readonly("grid_spacing", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_spacing(); },
-                             "The grid path's node spacing in pixels (0: no grid, per-pixel maps).")
-      .def_property_readonly("grid_error_px", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_error_px(); },
-                             "The grid's measured worst interpolation error against the per-pixel map (px).")
+      .def("__call__", &augment_sample, py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(),
+           py::arg("change"), py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
+           py::arg("return_valid") = false, py::arg("sampling") = "grid", py::arg("depth_map") = py::none(),
+           py::arg("depth_values") = "range",
+           "warp(...): one augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, "
+           "float32; "
+           "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
+           "asked.")
+      .def_property_readonly(
+          "grid_spacing", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_spacing(); },
+          "The grid path's node spacing in pixels (0: no grid, per-pixel maps).")
+      .def_property_readonly(
+          "grid_error_px", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_error_px(); },
+          "The grid's measured worst interpolation error against the per-pixel map (px).")
       .def(py::pickle(
           [](const ViewpointWarp& w) { return py::make_tuple(camera_state(w.source()), camera_state(w.target())); },
           [](const py::tuple& t) {
             return from_pickle_state("pickled ViewpointWarp", [&] {
-              if (t.size() != 2) throw Error("pickled ViewpointWarp: expected 2 fields, got " + std::to_string(t.size()));
-              return ViewpointWarp(camera_from_state(t[0].cast<std::string>()), camera_from_state(t[1].cast<std::string>()));
+              if (t.size() != 2)
+                throw Error("pickled ViewpointWarp: expected 2 fields, got " + std::to_string(t.size()));
+              return ViewpointWarp(camera_from_state(t[0].cast<std::string>()),
+                                   camera_from_state(t[1].cast<std::string>()));
             });
           }));
 
@@ -403,7 +409,8 @@ void bind_augmentation(py::module_& m) {
       .def(py::pickle([](const AffineChange& c) { return py::make_tuple(c.rotation_deg, c.translation, c.scale); },
                       [](const py::tuple& t) {
                         return from_pickle_state("pickled AffineChange", [&] {
-                          if (t.size() != 3) throw Error("pickled AffineChange: expected 3 fields, got " + std::to_string(t.size()));
+                          if (t.size() != 3)
+                            throw Error("pickled AffineChange: expected 3 fields, got " + std::to_string(t.size()));
                           AffineChange c{t[0].cast<double>(), t[1].cast<Eigen::Vector2d>(), t[2].cast<double>()};
                           check_affine(c);
                           return c;
@@ -411,15 +418,14 @@ void bind_augmentation(py::module_& m) {
                       }))
       .def("__repr__", [](const AffineChange& c) {
         char buffer[200];
-        std::snprintf(buffer, sizeof buffer, "AffineChange(rotation_deg=%.17g, translation=(%.17g, %.17g), scale=%.17g)",
-                      c.rotation_deg, c.translation.x(), c.translation.y(), c.scale);
+        std::snprintf(buffer, sizeof buffer,
+                      "AffineChange(rotation_deg=%.17g, translation=(%.17g, %.17g), scale=%.17g)", c.rotation_deg,
+                      c.translation.x(), c.translation.y(), c.scale);
         return std::string(buffer);
       });
   m.def(
       "random_affine",
-      [](const std::string& preset, std::uint64_t seed) {
-        return random_affine(affine_preset(preset), seed);
-      },
+      [](const std::string& preset, std::uint64_t seed) { return random_affine(affine_preset(preset), seed); },
       py::arg("preset"), py::arg("seed"));
   m.def(
       "random_affine_in",
@@ -427,8 +433,9 @@ void bind_augmentation(py::module_& m) {
         if (!(max_rotation_deg >= 0 && max_rotation_deg <= 180) || !(max_translation >= 0) ||
             !std::isfinite(max_translation) || !(min_scale > 0) || !(max_scale >= min_scale) ||
             !std::isfinite(max_scale)) {
-          throw Error("max_rotation_deg must be in [0, 180], max_translation finite and >= 0, and "
-                      "0 < min_scale <= max_scale finite");
+          throw Error(
+              "max_rotation_deg must be in [0, 180], max_translation finite and >= 0, and "
+              "0 < min_scale <= max_scale finite");
         }
         return random_affine(AffinePreset{"custom", max_rotation_deg, max_translation, min_scale, max_scale}, seed);
       },
@@ -470,7 +477,8 @@ void bind_augmentation(py::module_& m) {
   m.def("affine_presets", [] {
     py::dict out;
     for (const AffinePreset& p : affine_presets()) {
-      out[py::str(std::string(p.name))] = py::make_tuple(p.max_rotation_deg, p.max_translation, p.min_scale, p.max_scale);
+      out[py::str(std::string(p.name))] =
+          py::make_tuple(p.max_rotation_deg, p.max_translation, p.min_scale, p.max_scale);
     }
     return out;
   });
@@ -486,14 +494,14 @@ void bind_augmentation(py::module_& m) {
                         [&](const AugmentIO& io) { affine_augment(change, size, io); });
       },
       py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
-      py::arg("fill") = 0.0,
-      py::arg("label_fill") = 0, py::arg("return_valid") = false);
+      py::arg("fill") = 0.0, py::arg("label_fill") = 0, py::arg("return_valid") = false);
 
   m.def("set_num_threads", [](int n) {
     if (n < 1 || n > 1024) throw Error("set_num_threads: expected 1 to 1024, got " + std::to_string(n));
     cv::setNumThreads(n);
   });
-  m.def("get_num_threads", [] { return cv::getNumThreads(); }, "The threads fishcam's compute uses (int).");
+  m.def(
+      "get_num_threads", [] { return cv::getNumThreads(); }, "The threads fishcam's compute uses (int).");
 
   // For the zero-copy tests: the address of the memory the bindings compute on
   // for an input (points with k columns, or an image / labels).

@@ -15,10 +15,10 @@
 #include <span>
 #include <string>
 
-#include "fishcam/core/camera.hpp"
-#include "fishcam/io/camera_io.hpp"
-#include "fishcam/eval/metrics.hpp"
 #include "fishcam/augment/viewpoint.hpp"
+#include "fishcam/core/camera.hpp"
+#include "fishcam/eval/metrics.hpp"
+#include "fishcam/io/camera_io.hpp"
 
 namespace fishcam::python {
 
@@ -80,7 +80,8 @@ auto from_pickle_state(const char* what, const Read& read) -> decltype(read()) {
   } catch (const py::cast_error&) {
     throw Error(std::string(what) + ": a field of the wrong type (not a state fishcam pickled)");
   } catch (const py::error_already_set& e) {
-    throw Error(std::string(what) + ": not a state fishcam pickled (" + std::string(e.type().attr("__name__").cast<std::string>()) + ")");
+    throw Error(std::string(what) + ": not a state fishcam pickled (" +
+                std::string(e.type().attr("__name__").cast<std::string>()) + ")");
   }
 }
 

@@ -1,7 +1,7 @@
 // Chessboard calibration (fishcam.calibrate, fishcam.read_corners) and what a
 // calibrated camera knows about its data (Camera.projection_uncertainty, ...).
-#include "bindings.hpp"
 #include "fishcam/fit/calibration.hpp"
+#include "bindings.hpp"
 #include "fishcam/io/corners.hpp"
 
 #include <numbers>
@@ -63,7 +63,8 @@ void bind_calibration(py::module_& m) {
           [](const CalibrationResult& r) {
             py::dict d;
             for (size_t i = 0; i < r.sigmas.size(); ++i) {
-              d[py::str(r.parameter_names[i])] = std::isnan(r.sigmas[i]) ? py::object(py::none()) : py::float_(r.sigmas[i]);
+              d[py::str(r.parameter_names[i])] =
+                  std::isnan(r.sigmas[i]) ? py::object(py::none()) : py::float_(r.sigmas[i]);
             }
             return d;
           },
@@ -199,7 +200,9 @@ void bind_calibration_record(py::class_<Camera>& camera) {
           "sector): (N,) bool.")
       .def(
           "limited_to_observed",
-          [](const Camera& c, double margin_deg) { return Camera(limited_to_observed(c.parameters(), margin_deg / kDeg)); },
+          [](const Camera& c, double margin_deg) {
+            return Camera(limited_to_observed(c.parameters(), margin_deg / kDeg));
+          },
           py::arg("margin_deg") = 0.0,
           "The camera with its valid domain capped at the observed angles plus margin_deg (`--theta-limit "
           "data+DEG`).")

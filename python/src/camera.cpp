@@ -1,8 +1,8 @@
 // fishcam.Camera and fishcam.convert.
 #include <array>
 #include <cmath>
-#include <map>
 #include <cstdio>
+#include <map>
 #include <numbers>
 
 #include "bindings.hpp"
@@ -15,11 +15,11 @@ std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
   if (!name) return std::nullopt;
   const auto format = parse_camera_format(*name);
   if (!format) {
-    throw Error("format: unknown camera format " + quoted_for_message(*name) + " (expected one of: " + camera_format_names() + ")");
+    throw Error("format: unknown camera format " + quoted_for_message(*name) +
+                " (expected one of: " + camera_format_names() + ")");
   }
   return format;
 }
-
 
 // The camera's numbers as bytes: equal exactly when the cameras are (model, its
 // parameters, size, principal point, pixel scale, tangential terms, skew, theta limit
@@ -74,7 +74,8 @@ py::object camera_pickle_state(const Camera& c) {
 Camera camera_from_pickle_state(const py::object& state) {
   if (py::isinstance<py::str>(state)) return camera_from_state(state.cast<std::string>());  // earlier pickles
   const py::tuple t = state.cast<py::tuple>();
-  if (t.size() != 10 && t.size() != 11) throw Error("pickled camera: expected 11 fields, got " + std::to_string(t.size()));
+  if (t.size() != 10 && t.size() != 11)
+    throw Error("pickled camera: expected 11 fields, got " + std::to_string(t.size()));
   CameraParameters p;
   p.model = make_model(t[0].cast<std::string>(), t[1].cast<std::vector<double>>());
   p.width = t[2].cast<int>(), p.height = t[3].cast<int>();
@@ -112,7 +113,8 @@ void bind_camera(py::module_& m) {
           "limited_by", [](const ValidDomain& d) { return std::string(to_string(d.limited_by)); },
           "What sets theta_max: 'model', 'fold' (rho stops increasing) or 'user' (a theta limit).")
       .def_property_readonly(
-          "rho_max_px", [](const ValidDomain& d) -> std::optional<double> {
+          "rho_max_px",
+          [](const ValidDomain& d) -> std::optional<double> {
             return d.closed ? std::optional(d.rho_max) : std::nullopt;
           },
           "rho(theta_max) in pixel-scale units, or None where the model diverges there.")
@@ -129,16 +131,17 @@ void bind_camera(py::module_& m) {
       .def_readonly("diagonal", &Camera::FieldOfView::diagonal, "Degrees across its diagonal.")
       .def("__repr__", [](const Camera::FieldOfView& f) {
         char buffer[128];
-        std::snprintf(buffer, sizeof buffer, "FieldOfView(horizontal=%.6g, vertical=%.6g, diagonal=%.6g)",
-                      f.horizontal, f.vertical, f.diagonal);
+        std::snprintf(buffer, sizeof buffer, "FieldOfView(horizontal=%.6g, vertical=%.6g, diagonal=%.6g)", f.horizontal,
+                      f.vertical, f.diagonal);
         return std::string(buffer);
       });
 
-  py::class_<Camera>(m, "Camera",
-                     "A calibrated camera: a radial model rho(theta) (with tangential terms for some models), principal "
-                     "point, pixel scale, image size and "
-                     "an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z "
-                     "forward. Immutable; equal cameras compare equal and hash alike.")
+  py::class_<Camera>(
+      m, "Camera",
+      "A calibrated camera: a radial model rho(theta) (with tangential terms for some models), principal "
+      "point, pixel scale, image size and "
+      "an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z "
+      "forward. Immutable; equal cameras compare equal and hash alike.")
       .def_static(
           "read",
           [](const std::string& path, std::optional<py::object> camera, std::optional<std::pair<int, int>> image_size,
@@ -172,15 +175,18 @@ void bind_camera(py::module_& m) {
               py::module_::import("warnings")
                   .attr("warn")("the " + std::string(to_string(resolved)) +
                                 " format cannot hold the calibration record (observed angles, projection "
-                                "uncertainty); " + path + " was written without it (fishcam JSON keeps it)");
+                                "uncertainty); " +
+                                path + " was written without it (fishcam JSON keeps it)");
             }
           },
           py::arg("path"), py::arg("format") = py::none(), py::arg("overwrite") = false,
           "Writes the camera in `format` (default: from the extension); refuses an existing file unless "
           "overwrite=True, and a format that cannot hold the model. Only fishcam JSON keeps a calibration record "
           "(a UserWarning says when it is left out).")
-      .def_property_readonly("width", [](const Camera& self) -> decltype(auto) { return self.width(); }, "Image width in pixels (int).")
-      .def_property_readonly("height", [](const Camera& self) -> decltype(auto) { return self.height(); }, "Image height in pixels (int).")
+      .def_property_readonly(
+          "width", [](const Camera& self) -> decltype(auto) { return self.width(); }, "Image width in pixels (int).")
+      .def_property_readonly(
+          "height", [](const Camera& self) -> decltype(auto) { return self.height(); }, "Image height in pixels (int).")
       .def_property_readonly(
           "model", [](const Camera& c) { return std::string(model_name(c.model())); },
           "The model's name (docs/models.md), e.g. 'polynomial', 'kannala-brandt'.")
@@ -205,15 +211,17 @@ void bind_camera(py::module_& m) {
             return std::pair(c.parameters().mrcal_lens->lensmodel(), c.parameters().mrcal_lens->values());
           },
           "mrcal's lens model on the plane of the camera's model, evaluated by libmrcal (splined stereographic, "
-          "CAHVOR on pinhole, CAHVORE, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, cy), "
+          "CAHVOR on pinhole, CAHVORE, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, "
+          "cy), "
           "or None.")
       .def_property_readonly(
           "skew", [](const Camera& c) { return std::pair(c.skew().xy, c.skew().yx); },
           "The pixel grid's skew (xy, yx): pixel = c + a * ([[1, xy], [yx, 1]] q) with q the model's image offset "
           "(docs/conventions.md); (0, 0) for the usual grid.")
-      .def_property_readonly("radial", [](const Camera& self) -> decltype(auto) { return self.radial(); },
-                             "Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do rho and "
-                             "theta_from_rho describe its whole projection.")
+      .def_property_readonly(
+          "radial", [](const Camera& self) -> decltype(auto) { return self.radial(); },
+          "Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do rho and "
+          "theta_from_rho describe its whole projection.")
       .def_property_readonly(
           "principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); },
           "(cx, cy) in pixels, float64 array (2,).")
@@ -260,16 +268,21 @@ void bind_camera(py::module_& m) {
           "theta (radians) of radii rho (pixels, any shape, float64; same shape out) under the radial model; NaN "
           "outside the valid domain. For a camera with tangential terms (radial is False) that is its radial part "
           "only: unproject pixels instead.")
-      .def("info_json", [](const Camera& c) { return camera_info_json(c); },
-           "What `fishcam info --json` prints (str); the same values typed: model, parameters, principal_point, "
-           "pixel_scale, domain, field_of_view_deg, pose.")
       .def(
-          "resized", [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
+          "info_json", [](const Camera& c) { return camera_info_json(c); },
+          "What `fishcam info --json` prints (str); the same values typed: model, parameters, principal_point, "
+          "pixel_scale, domain, field_of_view_deg, pose.")
+      .def(
+          "resized",
+          [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
           py::arg("width"), py::arg("height"),
           "The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.")
-      .def_property_readonly("domain", [](const Camera& self) -> decltype(auto) { return self.domain(); }, "The model's valid domain (ValidDomain).")
-      .def_property_readonly("field_of_view_deg", [](const Camera& self) -> decltype(auto) { return self.field_of_view_deg(); },
-                             "The image's angular coverage (FieldOfView, degrees).")
+      .def_property_readonly(
+          "domain", [](const Camera& self) -> decltype(auto) { return self.domain(); },
+          "The model's valid domain (ValidDomain).")
+      .def_property_readonly(
+          "field_of_view_deg", [](const Camera& self) -> decltype(auto) { return self.field_of_view_deg(); },
+          "The image's angular coverage (FieldOfView, degrees).")
       .def(
           "__eq__",
           [](const Camera& a, const py::object& b) {
@@ -284,12 +297,13 @@ void bind_camera(py::module_& m) {
       .def("parameters_key", &parameters_key, py::arg("with_pose") = true,
            "bytes equal exactly when two cameras are (with_pose=False: the intrinsics and size only, what a "
            "warp depends on); cheap, for caches and hashing")
-      .def_static("from_json", [](const std::string& text) { return camera_from_state(text, "from_json text"); },
-                  py::arg("text"),
-                  "The camera of fishcam JSON text (what to_json gives).")
-      .def(py::pickle(&camera_pickle_state, [](const py::object& state) {
-        return from_pickle_state("pickled camera", [&] { return camera_from_pickle_state(state); });
-      }))
+      .def_static(
+          "from_json", [](const std::string& text) { return camera_from_state(text, "from_json text"); },
+          py::arg("text"), "The camera of fishcam JSON text (what to_json gives).")
+      .def(py::pickle(&camera_pickle_state,
+                      [](const py::object& state) {
+                        return from_pickle_state("pickled camera", [&] { return camera_from_pickle_state(state); });
+                      }))
       .def("__repr__", [](const Camera& c) {
         return "<fishcam.Camera " + std::string(model_name(c.model())) + " " + std::to_string(c.width()) + "x" +
                std::to_string(c.height()) + ">";
@@ -326,7 +340,8 @@ void bind_camera(py::module_& m) {
   py::class_<Conversion>(m, "Conversion",
                          "fishcam.convert's result: the fitted camera and its FitReport; unpacks as "
                          "(camera, report).")
-      .def_property_readonly("camera", [](const Conversion& c) { return Camera(c.camera); }, "The fitted camera.")
+      .def_property_readonly(
+          "camera", [](const Conversion& c) { return Camera(c.camera); }, "The fitted camera.")
       .def_readonly("report", &Conversion::report, "Its FitReport against the source camera.")
       .def_property_readonly(
           "widest_theta_deg", [](const Conversion& c) { return c.widest_theta * 180 / std::numbers::pi; },
@@ -346,9 +361,7 @@ void bind_camera(py::module_& m) {
           "What `fishcam convert --json` prints (str).")
       .def(
           "__iter__",
-          [](const Conversion& c) {
-            return py::iter(py::make_tuple(Camera(c.camera), py::cast(c.report)));
-          },
+          [](const Conversion& c) { return py::iter(py::make_tuple(Camera(c.camera), py::cast(c.report))); },
           "camera, report = fishcam.convert(...)");
 
   m.def(

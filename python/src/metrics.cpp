@@ -4,8 +4,8 @@
 
 #include "bindings.hpp"
 #include "fishcam/eval/comparison.hpp"
-#include "fishcam/fit/fit.hpp"
 #include "fishcam/eval/metrics.hpp"
+#include "fishcam/fit/fit.hpp"
 
 namespace fishcam::python {
 namespace {
@@ -26,8 +26,10 @@ void bind_comparison(py::module_& m) {
           if (py::isinstance<Camera>(item)) {
             const Camera& given = item.cast<const Camera&>();
             alternatives.push_back({std::string(model_name(given.model())), "given", given, std::nullopt});
-          } else if (py::isinstance<py::tuple>(item) && py::len(item) == 2 && py::isinstance<Camera>(item[py::int_(1)])) {
-            alternatives.push_back({py::str(item[py::int_(0)]), "given", item[py::int_(1)].cast<Camera>(), std::nullopt});
+          } else if (py::isinstance<py::tuple>(item) && py::len(item) == 2 &&
+                     py::isinstance<Camera>(item[py::int_(1)])) {
+            alternatives.push_back(
+                {py::str(item[py::int_(0)]), "given", item[py::int_(1)].cast<Camera>(), std::nullopt});
           } else if (py::isinstance<py::str>(item)) {
             alternatives.push_back({item.cast<std::string>(), "", camera, std::nullopt});  // resolved below
           } else {
@@ -70,14 +72,17 @@ void bind_comparison_results(py::module_& m) {
         return std::string(buffer);
       });
   py::class_<ModelComparison>(m, "ModelComparison", "One alternative model against the reference camera.")
-      .def_property_readonly("name", [](const ModelComparison& c) { return c.alternative.name; },
-                             "The model as named: a model name or a file.")
-      .def_property_readonly("how", [](const ModelComparison& c) { return c.alternative.how; },
-                             "Where it came from: 'least-squares fit', \"the paper's eqs. 13-14\", 'read from FILE', ...")
-      .def_property_readonly("camera", [](const ModelComparison& c) { return c.alternative.camera; },
-                             "The alternative camera.")
-      .def_property_readonly("fit_rms_px", [](const ModelComparison& c) { return c.alternative.fit_rms_px; },
-                             "The fit's RMS error over the camera's image when fitted, else None.")
+      .def_property_readonly(
+          "name", [](const ModelComparison& c) { return c.alternative.name; },
+          "The model as named: a model name or a file.")
+      .def_property_readonly(
+          "how", [](const ModelComparison& c) { return c.alternative.how; },
+          "Where it came from: 'least-squares fit', \"the paper's eqs. 13-14\", 'read from FILE', ...")
+      .def_property_readonly(
+          "camera", [](const ModelComparison& c) { return c.alternative.camera; }, "The alternative camera.")
+      .def_property_readonly(
+          "fit_rms_px", [](const ModelComparison& c) { return c.alternative.fit_rms_px; },
+          "The fit's RMS error over the camera's image when fitted, else None.")
       .def_readonly("identity_max_px", &ModelComparison::identity_max_px,
                     "Largest displacement of the identity change (the models' own disagreement).")
       .def_readonly("displacement", &ModelComparison::all, "Over every compared pixel (DisplacementStats).")
@@ -99,12 +104,15 @@ void bind_comparison_results(py::module_& m) {
           },
           "Mean displacement per output pixel over the changes, (H, W) float32, NaN where none.");
   py::class_<Comparison>(m, "Comparison", "What `fishcam compare` measures (docs/comparison.md).")
-      .def_property_readonly("preset", [](const Comparison& c) { return std::string(c.options.preset.name); },
-                             "The pose preset of the changes.")
-      .def_property_readonly("samples", [](const Comparison& c) { return c.options.samples; }, "Changes compared.")
-      .def_property_readonly("seed", [](const Comparison& c) { return c.options.seed; }, "The changes' seed.")
-      .def_property_readonly("depth", [](const Comparison& c) { return std::string(to_string(c.options.prior)); },
-                             "The depth prior.")
+      .def_property_readonly(
+          "preset", [](const Comparison& c) { return std::string(c.options.preset.name); },
+          "The pose preset of the changes.")
+      .def_property_readonly(
+          "samples", [](const Comparison& c) { return c.options.samples; }, "Changes compared.")
+      .def_property_readonly(
+          "seed", [](const Comparison& c) { return c.options.seed; }, "The changes' seed.")
+      .def_property_readonly(
+          "depth", [](const Comparison& c) { return std::string(to_string(c.options.prior)); }, "The depth prior.")
       .def_property_readonly(
           "angle_bands_deg",
           [](const Comparison&) {
@@ -118,7 +126,6 @@ void bind_comparison_results(py::module_& m) {
           "to_json", [](const Comparison& c) { return comparison_json(c); },
           "What `fishcam compare --json` prints (str).");
 }
-
 
 }  // namespace
 
@@ -185,6 +192,5 @@ void bind_metrics(py::module_& m) {
       .def("_iou", &ConfusionMatrix::iou)
       .def("_miou", &ConfusionMatrix::miou);
 }
-
 
 }  // namespace fishcam::python

@@ -21,8 +21,9 @@ PYBIND11_MODULE(_fishcam, m) {
     } catch (const py::reference_cast_error&) {
       // pybind11's only way to meet an instance whose C++ object was never made
       // (cls.__new__(cls) without __init__ or __setstate__).
-      PyErr_SetString(error.ptr(), "an object made without __init__ (cls.__new__ alone): make it with its constructor, "
-                                   "a reader or pickle");
+      PyErr_SetString(error.ptr(),
+                      "an object made without __init__ (cls.__new__ alone): make it with its constructor, "
+                      "a reader or pickle");
     }
   });
   m.attr("__version__") = FISHCAM_VERSION;
@@ -45,4 +46,3 @@ PYBIND11_MODULE(_fishcam, m) {
   fishcam::python::bind_calibration(m);
   fishcam::python::bind_scene(m);
 }
-

@@ -1,8 +1,8 @@
 // Python bindings: the street scenes (fishcam.render, woodscape_classes) and the
 // augmentation's fidelity against their re-renders (dataset_fidelity).
+#include "fishcam/augment/scene.hpp"
 #include "bindings.hpp"
 #include "fishcam/eval/fidelity.hpp"
-#include "fishcam/augment/scene.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -15,8 +15,9 @@ void bind_scene(py::module_& m) {
          int supersampling) {
         const auto& mount = camera.parameters().pose;
         if (!mount) {
-          throw Error("render: the camera has no pose to place it in the scene (give the camera file an extrinsic "
-                      "pose, as data/woodscape_front.json has)");
+          throw Error(
+              "render: the camera has no pose to place it in the scene (give the camera file an extrinsic "
+              "pose, as data/woodscape_front.json has)");
         }
         const Pose pose = change ? moved_camera(*mount, change->change()) : *mount;
         const int h = camera.height(), w = camera.width();

@@ -7,7 +7,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   fishcam::fuzz::expect_only_errors([&] {
 #ifdef FISHCAM_FUZZ_FORMAT
-    const fishcam::Camera camera(fishcam::parse_camera(text, "fuzz", *fishcam::parse_camera_format(FISHCAM_FUZZ_FORMAT)));
+    const fishcam::Camera camera(
+        fishcam::parse_camera(text, "fuzz", *fishcam::parse_camera_format(FISHCAM_FUZZ_FORMAT)));
 #else
     const fishcam::Camera camera(fishcam::parse_camera(text, "fuzz"));
 #endif

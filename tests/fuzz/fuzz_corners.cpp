@@ -1,6 +1,6 @@
 // mrcal corners files (calibration input).
-#include "fishcam/io/corners.hpp"
 #include "fishcam/fit/calibration.hpp"
+#include "fishcam/io/corners.hpp"
 #include "fuzz_harness.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

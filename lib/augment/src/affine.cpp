@@ -5,8 +5,8 @@
 #include <cmath>
 #include <numbers>
 
-#include "fishcam/core/error.hpp"
 #include "fishcam/augment/viewpoint.hpp"
+#include "fishcam/core/error.hpp"
 
 namespace fishcam {
 

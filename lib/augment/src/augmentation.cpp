@@ -6,11 +6,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <numbers>
-#include <cstdlib>
-#include <cmath>
 
 #include "grid_warp.hpp"
 #include "warp_kernel.hpp"
@@ -31,8 +31,8 @@ PoseParams pose_params(const ViewpointChange& change) {
 // The kernel for this CPU: AVX2 + FMA where available, else the build's baseline.
 // FISHCAM_NO_AVX2 (set to anything) forces the baseline: how the tests cover it.
 bool use_avx2() {
-  static const bool avx2 = !std::getenv("FISHCAM_NO_AVX2") && cv::checkHardwareSupport(CV_CPU_AVX2) &&
-                           cv::checkHardwareSupport(CV_CPU_FMA3);
+  static const bool avx2 =
+      !std::getenv("FISHCAM_NO_AVX2") && cv::checkHardwareSupport(CV_CPU_AVX2) && cv::checkHardwareSupport(CV_CPU_FMA3);
   return avx2;
 }
 
@@ -52,8 +52,8 @@ bool shares_memory(const cv::Mat& a, const cv::Mat& b) {
 }
 
 using detail::pose_params;
-using detail::select_kernel_for_cpu;
 using detail::PoseParams;
+using detail::select_kernel_for_cpu;
 using detail::SourceParams;
 static_assert(detail::kOutside == kOutsideSource);
 
@@ -63,7 +63,6 @@ constexpr double kFloatTolerancePx = 1e-3;
 constexpr double kFloatCoordinateLimit = 8192;
 // cv::remap's own limit on image sizes (it asserts otherwise).
 constexpr int kRemapSizeLimit = 32767;
-
 
 // A double that survives the conversion to float: finite, and not flushed into
 // the subnormal range (where float keeps too few digits).
@@ -115,7 +114,8 @@ bool ray_polynomial_start(const Camera& camera, SourceParams* p) {
   double reach = 0;
   for (double u : {-0.5, camera.width() - 0.5}) {
     for (double v : {-0.5, camera.height() - 0.5}) {
-      const Eigen::Vector2d offset = (Eigen::Vector2d(u, v) - camera.principal_point()).cwiseQuotient(camera.pixel_scale());
+      const Eigen::Vector2d offset =
+          (Eigen::Vector2d(u, v) - camera.principal_point()).cwiseQuotient(camera.pixel_scale());
       reach = std::max(reach, (unskew * offset).norm());
     }
   }
@@ -179,8 +179,8 @@ bool lens_kernel_cell(const MrcalLens& lens, const MrcalLens::PolynomialCells& l
       const Eigen::Vector2d delta = f * lens_offset_within(lens, u, reach);
       samples[0](a, b) = delta.x(), samples[1](a, b) = delta.y();
       if (!seen) {  // the point's pixel, c + a (.) (S f (u + delta))
-        const Eigen::Vector2d pixel = image->principal_point() +
-                                      image->pixel_scale().cwiseProduct(image->skew().matrix() * (f * u + delta));
+        const Eigen::Vector2d pixel =
+            image->principal_point() + image->pixel_scale().cwiseProduct(image->skew().matrix() * (f * u + delta));
         seen = pixel.x() >= -0.5 - kLensTableMarginPx && pixel.y() >= -0.5 - kLensTableMarginPx &&
                pixel.x() < image->width() - 0.5 + kLensTableMarginPx &&
                pixel.y() < image->height() - 0.5 + kLensTableMarginPx;
@@ -398,8 +398,7 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
   p->ax = float(camera.pixel_scale().x()), p->ay = float(camera.pixel_scale().y());
   // A domain up to pi needs no angle test (the kernel excludes the -z axis itself):
   // float rays next to -z have z = -1 exactly, which a cos test would reject.
-  p->cos_theta_max = camera.domain().theta_max >= std::numbers::pi ? -2.0f
-                                                                   : float(std::cos(camera.domain().theta_max));
+  p->cos_theta_max = camera.domain().theta_max >= std::numbers::pi ? -2.0f : float(std::cos(camera.domain().theta_max));
   p->closed = camera.domain().closed;
   p->width = float(camera.width()), p->height = float(camera.height());
   source->params = *p;
@@ -418,11 +417,9 @@ void allocate(const Camera& source, const Camera& target, MapKind kind, WarpMaps
   }
 }
 
-
 }  // namespace
 
-std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const ViewpointChange& change,
-                                            DepthPrior prior) {
+std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const ViewpointChange& change, DepthPrior prior) {
   const Eigen::Vector3d& t = change.translation;
   Eigen::Vector3d q = d;
   if (prior == DepthPrior::target_sphere) {
@@ -547,7 +544,7 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
     }
   }
   const std::shared_ptr<KernelSource> src = float_source_params(source_);
-  if (!src || !float_kernel_agrees(source_, src->params)) return;  // the exact path needs no cached rays
+  if (!src || !float_kernel_agrees(source_, src->params)) return;           // the exact path needs no cached rays
   kernel_source_ = std::shared_ptr<const SourceParams>(src, &src->params);  // which keeps its arrays
   const size_t n = size_t(target_.width()) * size_t(target_.height());
   const size_t padded = (n + 63) / 64 * 64 + 64;  // whole vectors, and one more for kernels started mid-row
@@ -601,8 +598,8 @@ void ViewpointWarp::forward(const ViewpointChange& change, DepthPrior prior,
     if (!target_.project(d, &pixel)) continue;
     pixels[i] = pixel;
     const auto back = source_point(d, change, prior);
-    visible[i] = pixel.x() >= -0.5 && pixel.x() < w && pixel.y() >= -0.5 && pixel.y() < h && back &&
-                 (*back - ray).norm() < 1e-9;
+    visible[i] =
+        pixel.x() >= -0.5 && pixel.x() < w && pixel.y() >= -0.5 && pixel.y() < h && back && (*back - ray).norm() < 1e-9;
   }
 }
 
@@ -642,8 +639,8 @@ void ViewpointWarp::warp_depth(const ViewpointChange& change, DepthPrior prior, 
           row[u] = std::numeric_limits<float>::quiet_NaN();  // no ray to re-express along
           continue;
         }
-        const Eigen::Vector3d point = change.rotation * (*s * (values == DepthValues::z ? value / s->z() : value)) +
-                                      change.translation;
+        const Eigen::Vector3d point =
+            change.rotation * (*s * (values == DepthValues::z ? value / s->z() : value)) + change.translation;
         row[u] = float(values == DepthValues::z ? point.z() : point.norm());
       }
     }
@@ -722,7 +719,8 @@ void ViewpointWarp::compute(const ViewpointChange& change, DepthPrior prior, War
   const SourceParams& src = *kernel_source_;
   const PoseParams pose = pose_params(change);
   const bool sampling = kind == MapKind::sampling;
-  const detail::RangeKernel kernel = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, sampling);
+  const detail::RangeKernel kernel =
+      select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, sampling);
   const detail::KernelOutput out{maps->map_x.ptr<float>(), maps->map_y.ptr<float>(),
                                  sampling ? nullptr : maps->valid.ptr<uchar>()};
   const size_t n = size_t(target_.width()) * size_t(target_.height());
@@ -773,7 +771,6 @@ void ViewpointWarp::compute_double(const ViewpointChange& change, DepthPrior pri
   });
   maps->invalid_count = invalid;
 }
-
 
 cv::Mat WarpMaps::validity() const {
   if (kind == MapKind::geometric) return valid;

@@ -76,7 +76,7 @@ void ViewpointWarp::compute_from_depth(const ViewpointChange& change, const cv::
   cv::Mat nearest(th, tw, CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
   cv::Mat written(th, tw, CV_8UC1, cv::Scalar(0));
   constexpr float kMaxExtent = 64;  // px: a one-pixel triangle stretched further spans a fold or wrap
-  const auto draw = [&](int a, int b, int c, const int (&su)[3], const int (&sv)[3]) {
+  const auto draw = [&](int a, int b, int c, const int(&su)[3], const int(&sv)[3]) {
     const Landing* l[3] = {&landing[size_t(a)], &landing[size_t(b)], &landing[size_t(c)]};
     if (!l[0]->ok || !l[1]->ok || !l[2]->ok) return;
     const float near = std::min({l[0]->range, l[1]->range, l[2]->range});
@@ -85,13 +85,16 @@ void ViewpointWarp::compute_from_depth(const ViewpointChange& change, const cv::
     const float x0 = std::min({l[0]->x, l[1]->x, l[2]->x}), x1 = std::max({l[0]->x, l[1]->x, l[2]->x});
     const float y0 = std::min({l[0]->y, l[1]->y, l[2]->y}), y1 = std::max({l[0]->y, l[1]->y, l[2]->y});
     if (x1 - x0 > kMaxExtent || y1 - y0 > kMaxExtent) return;
-    const double area = double(l[1]->x - l[0]->x) * (l[2]->y - l[0]->y) - double(l[2]->x - l[0]->x) * (l[1]->y - l[0]->y);
+    const double area =
+        double(l[1]->x - l[0]->x) * (l[2]->y - l[0]->y) - double(l[2]->x - l[0]->x) * (l[1]->y - l[0]->y);
     if (area == 0) return;
     for (int y = std::max(0, int(std::ceil(y0))); y <= std::min(th - 1, int(std::floor(y1))); ++y) {
       for (int x = std::max(0, int(std::ceil(x0))); x <= std::min(tw - 1, int(std::floor(x1))); ++x) {
         // Barycentric weights of the output pixel centre (x, y).
-        const double w1 = ((x - l[0]->x) * double(l[2]->y - l[0]->y) - double(l[2]->x - l[0]->x) * (y - l[0]->y)) / area;
-        const double w2 = (double(l[1]->x - l[0]->x) * (y - l[0]->y) - (x - l[0]->x) * double(l[1]->y - l[0]->y)) / area;
+        const double w1 =
+            ((x - l[0]->x) * double(l[2]->y - l[0]->y) - double(l[2]->x - l[0]->x) * (y - l[0]->y)) / area;
+        const double w2 =
+            (double(l[1]->x - l[0]->x) * (y - l[0]->y) - (x - l[0]->x) * double(l[1]->y - l[0]->y)) / area;
         const double w0 = 1 - w1 - w2;
         constexpr double kEdge = -1e-6;  // pixel centres on a shared edge belong to both triangles
         if (w0 < kEdge || w1 < kEdge || w2 < kEdge) continue;
@@ -123,7 +126,6 @@ void ViewpointWarp::compute_from_depth(const ViewpointChange& change, const cv::
   map_y.setTo(kOutsideSource, written == 0);
   maps->map_x = map_x, maps->map_y = map_y;
 }
-
 
 void ViewpointWarp::augment_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
                                        const AugmentIO& io) const {
@@ -177,7 +179,8 @@ void ViewpointWarp::forward_from_depth(const ViewpointChange& change, const cv::
     if (!target_.project(moved, &q)) continue;
     pixels[i] = q;
     const long x = std::lround(q.x()), y = std::lround(q.y());
-    if (x < 0 || y < 0 || x >= maps.map_x.cols || y >= maps.map_x.rows || !maps.valid.at<uchar>(int(y), int(x))) continue;
+    if (x < 0 || y < 0 || x >= maps.map_x.cols || y >= maps.map_x.rows || !maps.valid.at<uchar>(int(y), int(x)))
+      continue;
     const Eigen::Vector2d sampled(maps.map_x.at<float>(int(y), int(x)), maps.map_y.at<float>(int(y), int(x)));
     visible[i] = (sampled - p).norm() <= 1.5;
   }

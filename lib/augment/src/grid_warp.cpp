@@ -59,7 +59,10 @@ void node_maps(const GridPlan& plan, const SourceParams& src, const PoseParams& 
 struct FoldGuard {
   float cx, cy, kx, ky, radius2;
   FoldGuard(const GridPlan& plan, const SourceParams& src)
-      : cx(src.cx), cy(src.cy), kx(std::max(src.ax, src.ay) / src.ax), ky(std::max(src.ax, src.ay) / src.ay),
+      : cx(src.cx),
+        cy(src.cy),
+        kx(std::max(src.ax, src.ay) / src.ax),
+        ky(std::max(src.ax, src.ay) / src.ay),
         radius2(plan.fold_guard_radius * plan.fold_guard_radius) {}
   bool operator()(float x, float y) const {
     const float dx = (x - cx) * kx, dy = (y - cy) * ky;
@@ -116,8 +119,8 @@ struct GridChange {
 
 // The source coordinates of output row v: interpolated in interpolated cells, by
 // the kernel per pixel elsewhere.
-void grid_row(const GridPlan& plan, const GridChange& change, const SourceParams& src, const cv::Mat& pixel_rays,
-              int v, int w, float* x, float* y, unsigned char* in, RowScratch* scratch) {
+void grid_row(const GridPlan& plan, const GridChange& change, const SourceParams& src, const cv::Mat& pixel_rays, int v,
+              int w, float* x, float* y, unsigned char* in, RowScratch* scratch) {
   interpolate_row(plan, change.nodes, v, w, x, y, scratch);
   const int s = plan.spacing, cells = (w + s - 1) / s;
   const unsigned char* ok_row = change.ok.data() + std::size_t(v / s) * std::size_t(plan.nodes_u - 1);
@@ -228,9 +231,7 @@ cv::Mat node_rays_for(const Camera& target, int s, int* nodes_u, int* nodes_v) {
   return planes;
 }
 
-double rotation_angle(const Eigen::Matrix3d& r) {
-  return std::acos(std::clamp((r.trace() - 1) / 2, -1.0, 1.0));
-}
+double rotation_angle(const Eigen::Matrix3d& r) { return std::acos(std::clamp((r.trace() - 1) / 2, -1.0, 1.0)); }
 
 // Whether the plan's measurement covers the change (else: the per-pixel path).
 bool measured(const GridPlan& plan, const ViewpointChange& change) {
@@ -280,7 +281,8 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
   double max_angle = 0, max_translation = 0;
   for (int k = 0; k < 8; ++k) {
     const double sx = k & 1 ? 1 : -1, sy = k & 2 ? 1 : -1, sz = k & 4 ? 1 : -1;
-    const ViewpointChange change = ViewpointChange::from_euler_deg({30 * sx, 30 * sy, 30 * sz}, {0.5 * sy, 0.5 * sz, 0.5 * sx});
+    const ViewpointChange change =
+        ViewpointChange::from_euler_deg({30 * sx, 30 * sy, 30 * sz}, {0.5 * sy, 0.5 * sz, 0.5 * sx});
     changes.emplace_back(change, k % 2 ? DepthPrior::source_sphere : DepthPrior::target_sphere);
     max_angle = std::max(max_angle, rotation_angle(change.rotation));
     max_translation = std::max(max_translation, change.translation.norm());
@@ -384,8 +386,8 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
       io.image->dataend - io.image->data < kMaxFusedImageBytes) {
     const cv::Mat& image = *io.image;
     const unsigned char fill = cv::saturate_cast<unsigned char>(io.fill);
-    fused = BilinearSource{image.data, image.dataend, image.step[0], image.cols, image.rows, image.channels(),
-                           {fill, fill, fill, fill}};
+    fused = BilinearSource{image.data, image.dataend,    image.step[0],           image.cols,
+                           image.rows, image.channels(), {fill, fill, fill, fill}};
   }
   const int tiles = (h + kTileRows - 1) / kTileRows;
   // One stripe per tile: threads take the next tile as they finish one (tiles through
@@ -405,8 +407,8 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
       for (int v = r0; v < r1; ++v) {
         grid_row(plan, prepared, src, pixel_rays, v, w, x.data(), y.data(), in.data(), &scratch);
         loops.to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
-                       fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
-                       io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
+                             fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
+                             io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
         if (fused) {
           loops.bilinear_8u(*fused, fixed.ptr<short>(v - r0), fractions.ptr<unsigned short>(v - r0), w,
                             io.out_image->ptr<unsigned char>(v));

@@ -18,9 +18,9 @@ GridRowLoops grid_row_loops_for_cpu();
 PoseParams pose_params(const ViewpointChange& change);
 
 struct GridPlan {
-  int spacing = 0;          // S (px)
+  int spacing = 0;               // S (px)
   int nodes_u = 0, nodes_v = 0;  // nodes per row and column: at u = i S, v = j S (the last may lie past the image)
-  cv::Mat node_rays;        // 3 x padded(nodes_u * nodes_v) CV_32F planes; NaN where the target has no ray
+  cv::Mat node_rays;             // 3 x padded(nodes_u * nodes_v) CV_32F planes; NaN where the target has no ray
   double measured_error_px = 0;  // worst interpolation error against the per-pixel float map at construction
   // The changes the measurement covered: larger ones take the per-pixel path.
   double max_rotation_rad = 0, max_translation = 0;

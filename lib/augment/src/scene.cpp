@@ -128,13 +128,21 @@ StreetScene::Content bundled_content() {
   // Poles (background) with signs.
   for (const auto& [x, y] : {std::pair{8.5, -6.2}, std::pair{18.0, 6.0}}) {
     cylinders.push_back({x, y, 0.06, 0, 3.2, wc::background, Material::pole, {140, 140, 140}});
-    boxes.push_back({{x - 0.05, y - 0.4, 2.4}, {x + 0.05, y + 0.4, 3.1}, wc::traffic_sign, Material::sign,
-                     {30, 30, 220}, Eigen::Vector2d::Zero(), 0, 0.2});
+    boxes.push_back({{x - 0.05, y - 0.4, 2.4},
+                     {x + 0.05, y + 0.4, 3.1},
+                     wc::traffic_sign,
+                     Material::sign,
+                     {30, 30, 220},
+                     Eigen::Vector2d::Zero(),
+                     0,
+                     0.2});
   }
   // Buildings on both sides and across the end of the street.
   boxes.push_back({{-40, 12, 0}, {90, 20, 12}, wc::background, Material::facade, {120, 150, 190}, {0, 0}, 0, 3.0, 4.0});
-  boxes.push_back({{-40, -20, 0}, {90, -12, 14}, wc::background, Material::facade, {170, 170, 150}, {0, 0}, 0, 3.0, 4.0});
-  boxes.push_back({{90, -20, 0}, {100, 20, 16}, wc::background, Material::facade, {140, 120, 110}, {0, 0}, 0, 3.0, 4.0});
+  boxes.push_back(
+      {{-40, -20, 0}, {90, -12, 14}, wc::background, Material::facade, {170, 170, 150}, {0, 0}, 0, 3.0, 4.0});
+  boxes.push_back(
+      {{90, -20, 0}, {100, 20, 16}, wc::background, Material::facade, {140, 120, 110}, {0, 0}, 0, 3.0, 4.0});
   return s;
 }
 
@@ -146,9 +154,7 @@ class Draw {
   double uniform(double lo, double hi) { return lo + (hi - lo) * double(engine_() >> 11) * 0x1.0p-53; }
   int integer(int lo, int hi) { return std::min(hi, lo + int(uniform(0, hi - lo + 1))); }  // [lo, hi]
   bool chance(double p) { return uniform(0, 1) < p; }
-  cv::Vec3b colour(int lo, int hi) {
-    return {uchar(integer(lo, hi)), uchar(integer(lo, hi)), uchar(integer(lo, hi))};
-  }
+  cv::Vec3b colour(int lo, int hi) { return {uchar(integer(lo, hi)), uchar(integer(lo, hi)), uchar(integer(lo, hi))}; }
 
  private:
   std::mt19937_64 engine_;
@@ -182,8 +188,15 @@ struct Layout {
     const Eigen::Vector2d p = at(x, d);
     const double yaw = heading(x) + yaw_jitter;
     if (z0 == 0 && !claim(p, yaw, length / 2, width / 2)) return false;
-    scene->boxes.push_back({{-length / 2, -width / 2, z0}, {length / 2, width / 2, z0 + height}, label, material,
-                            colour, p, yaw, detail_a, detail_b});
+    scene->boxes.push_back({{-length / 2, -width / 2, z0},
+                            {length / 2, width / 2, z0 + height},
+                            label,
+                            material,
+                            colour,
+                            p,
+                            yaw,
+                            detail_a,
+                            detail_b});
     return true;
   }
 };
@@ -220,8 +233,8 @@ StreetScene::Content generated_content(std::uint64_t seed) {
   const double lanes = road.lanes_per_side * road.lane_width, half = road.half_width();
   const double kerb = half + road.curb_width;  // where the sidewalk begins
   const double sidewalk = draw.uniform(2.0, 5.0);
-  const cv::Vec3b palette[] = {{40, 40, 170}, {160, 110, 30}, {60, 140, 60}, {200, 200, 210}, {30, 30, 30},
-                               {230, 230, 230}, {20, 90, 200}, {120, 120, 120}, {60, 30, 110}, {0, 150, 220}};
+  const cv::Vec3b palette[] = {{40, 40, 170},   {160, 110, 30}, {60, 140, 60},   {200, 200, 210}, {30, 30, 30},
+                               {230, 230, 230}, {20, 90, 200},  {120, 120, 120}, {60, 30, 110},   {0, 150, 220}};
   const auto vehicle_colour = [&] {
     cv::Vec3b c = palette[draw.integer(0, 9)];
     for (int k = 0; k < 3; ++k) c[k] = cv::saturate_cast<uchar>(c[k] + draw.integer(-20, 20));
@@ -281,8 +294,8 @@ StreetScene::Content generated_content(std::uint64_t seed) {
     const Eigen::Vector2d p = layout.at(x, d);
     const double radius = draw.uniform(0.22, 0.3), height = draw.uniform(1.5, 1.9);
     if (!layout.claim(p, 0, radius, radius, 0.2)) continue;
-    s.cylinders.push_back({p.x(), p.y(), radius, 0, height, wc::person, Material::person, draw.colour(20, 220),
-                           0.52 * height});
+    s.cylinders.push_back(
+        {p.x(), p.y(), radius, 0, height, wc::person, Material::person, draw.colour(20, 220), 0.52 * height});
     ++i;
   }
   // Traffic signs on poles near the curbs.
@@ -293,12 +306,18 @@ StreetScene::Content generated_content(std::uint64_t seed) {
     const Eigen::Vector2d p = layout.at(x, d);
     if (!layout.claim(p, 0, 0.4, 0.4, 0.2)) continue;
     const double top = draw.uniform(2.6, 3.4), size = draw.uniform(0.55, 0.85);
-    s.cylinders.push_back({p.x(), p.y(), draw.uniform(0.05, 0.07), 0, top, wc::background, Material::pole,
-                           {140, 140, 140}});
+    s.cylinders.push_back(
+        {p.x(), p.y(), draw.uniform(0.05, 0.07), 0, top, wc::background, Material::pole, {140, 140, 140}});
     const cv::Vec3b sign_colours[] = {{30, 30, 220}, {200, 90, 20}, {20, 200, 230}, {40, 140, 40}};
     // The plate faces along the road (thin along it), just in front of the pole.
-    s.boxes.push_back({{-0.04, -size / 2, top - size}, {0.04, size / 2, top}, wc::traffic_sign, Material::sign,
-                       sign_colours[draw.integer(0, 3)], layout.at(x - 0.1, d), layout.heading(x), 0.15});
+    s.boxes.push_back({{-0.04, -size / 2, top - size},
+                       {0.04, size / 2, top},
+                       wc::traffic_sign,
+                       Material::sign,
+                       sign_colours[draw.integer(0, 3)],
+                       layout.at(x - 0.1, d),
+                       layout.heading(x),
+                       0.15});
     ++i;
   }
   // Buildings beyond the sidewalks, and far away across the street's ends.
@@ -306,9 +325,15 @@ StreetScene::Content generated_content(std::uint64_t seed) {
     for (double x = -60 + draw.uniform(0, 5); x < 110;) {
       const double length = draw.uniform(6, 20), depth = draw.uniform(6, 12), height = draw.uniform(5, 22);
       const cv::Vec3b colour = draw.colour(90, 210);
-      s.boxes.push_back({{-length / 2, -depth / 2, 0}, {length / 2, depth / 2, height}, wc::background,
-                         Material::facade, colour, layout.at(x + length / 2, side * (kerb + sidewalk + depth / 2)),
-                         layout.heading(x + length / 2), draw.uniform(2.8, 3.6), draw.uniform(2.5, 4.5)});
+      s.boxes.push_back({{-length / 2, -depth / 2, 0},
+                         {length / 2, depth / 2, height},
+                         wc::background,
+                         Material::facade,
+                         colour,
+                         layout.at(x + length / 2, side * (kerb + sidewalk + depth / 2)),
+                         layout.heading(x + length / 2),
+                         draw.uniform(2.8, 3.6),
+                         draw.uniform(2.5, 4.5)});
       x += length + (draw.chance(0.3) ? draw.uniform(1, 4) : 0.0);
     }
   }
@@ -337,7 +362,8 @@ void intersect_box(const Box& b, const Eigen::Vector3d& o, const Eigen::Vector3d
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   normal[axis] = lw[axis] > 0 ? -1 : 1;
   normal = Eigen::Vector3d(c * normal.x() - sn * normal.y(), sn * normal.x() + c * normal.y(), normal.z());
-  *hit = {t0, o + t0 * w, lo + t0 * lw, normal, b.label, b.material, b.colour, false, b.detail_a, b.detail_b, b.lo, b.hi};
+  *hit = {t0,       o + t0 * w, lo + t0 * lw, normal,     b.label, b.material,
+          b.colour, false,      b.detail_a,   b.detail_b, b.lo,    b.hi};
 }
 
 void intersect_cylinder(const Cylinder& c, const Eigen::Vector3d& o, const Eigen::Vector3d& w, Hit* hit) {
@@ -368,15 +394,20 @@ cv::Vec3b albedo(const Hit& hit, const Road& road) {
       const uchar g = uchar(road.road_grey + road.road_grain * n);
       return {g, g, cv::saturate_cast<uchar>(g + 4)};
     }
-    case Material::paint: return {235, 235, 235};
+    case Material::paint:
+      return {235, 235, 235};
     case Material::sidewalk: {
       const bool tile = (long(std::floor(p.x())) + long(std::floor(p.y()))) % 2 == 0;
       return tile ? road.tile_a : road.tile_b;
     }
-    case Material::curb: return long(std::floor(p.x() * 2)) % 2 == 0 ? cv::Vec3b(185, 185, 180) : scaled({185, 185, 180}, 0.8);
-    case Material::body: return p.z() > hit.detail_a ? scaled(hit.colour, 0.45) : hit.colour;  // windows
-    case Material::person: return p.z() > hit.detail_a ? hit.colour : scaled(hit.colour, 0.5);
-    case Material::pole: return hit.colour;
+    case Material::curb:
+      return long(std::floor(p.x() * 2)) % 2 == 0 ? cv::Vec3b(185, 185, 180) : scaled({185, 185, 180}, 0.8);
+    case Material::body:
+      return p.z() > hit.detail_a ? scaled(hit.colour, 0.45) : hit.colour;  // windows
+    case Material::person:
+      return p.z() > hit.detail_a ? hit.colour : scaled(hit.colour, 0.5);
+    case Material::pole:
+      return hit.colour;
     case Material::sign: {  // a white border around the coloured plate
       const double cy = (hit.lo.y() + hit.hi.y()) / 2, hy = (hit.hi.y() - hit.lo.y()) / 2;
       const double cz = (hit.lo.z() + hit.hi.z()) / 2, hz = (hit.hi.z() - hit.lo.z()) / 2;
@@ -427,8 +458,16 @@ Hit trace(const StreetScene::Content& scene, const std::vector<int>& candidates,
       };
       bool paint = on_line(0, road.centre) || (road.edges && on_line(lanes - road.edge_inset, Road::Line::solid));
       for (int k = 1; k < road.lanes_per_side; ++k) paint = paint || on_line(k * road.lane_width, road.lanes);
-      hit = {t, p, p, Eigen::Vector3d::UnitZ(), paint ? wc::lane_marking : wc::road,
-             paint ? Material::paint : Material::road, {}, false, 0, 0};
+      hit = {t,
+             p,
+             p,
+             Eigen::Vector3d::UnitZ(),
+             paint ? wc::lane_marking : wc::road,
+             paint ? Material::paint : Material::road,
+             {},
+             false,
+             0,
+             0};
     } else if (y <= road.half_width() + road.curb_width) {
       hit = {t, p, p, Eigen::Vector3d::UnitZ(), wc::curb, Material::curb, {}, false, 0, 0};
     } else {
@@ -608,8 +647,8 @@ std::string_view woodscape_class_name(int label) {
 }
 
 cv::Vec3b woodscape_class_colour(int label) {
-  static const cv::Vec3b colours[] = {{0, 0, 0},     {128, 64, 128}, {255, 255, 255}, {0, 200, 255}, {60, 20, 220},
-                                      {0, 0, 255},   {142, 0, 0},    {32, 11, 119},   {230, 0, 0},   {0, 220, 220}};
+  static const cv::Vec3b colours[] = {{0, 0, 0},   {128, 64, 128}, {255, 255, 255}, {0, 200, 255}, {60, 20, 220},
+                                      {0, 0, 255}, {142, 0, 0},    {32, 11, 119},   {230, 0, 0},   {0, 220, 220}};
   return label >= 0 && label < wc::kCount ? colours[label] : cv::Vec3b(255, 0, 255);
 }
 

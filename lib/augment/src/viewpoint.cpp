@@ -22,9 +22,12 @@ std::uint64_t splitmix64(std::uint64_t x) {
 
 std::string_view to_string(DepthPrior prior) {
   switch (prior) {
-    case DepthPrior::source_sphere: return "source-sphere";
-    case DepthPrior::target_sphere: return "target-sphere";
-    case DepthPrior::infinity: return "infinity";
+    case DepthPrior::source_sphere:
+      return "source-sphere";
+    case DepthPrior::target_sphere:
+      return "target-sphere";
+    case DepthPrior::infinity:
+      return "infinity";
   }
   return "?";
 }
@@ -61,7 +64,8 @@ const std::vector<std::string>& depth_prior_and_map_names() {
 
 DepthPrior depth_prior(std::string_view name, std::string_view what) {
   if (const auto prior = parse_depth_prior(name)) return *prior;
-  throw Error(std::string(what) + ": expected " + choices_for_message(depth_prior_names()) + ", got " + quoted_for_message(name));
+  throw Error(std::string(what) + ": expected " + choices_for_message(depth_prior_names()) + ", got " +
+              quoted_for_message(name));
 }
 
 const std::vector<std::string>& pose_preset_names() {

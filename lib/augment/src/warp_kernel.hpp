@@ -92,7 +92,7 @@ struct BilinearSource {
   const unsigned char* end;   // one past the last byte of the last row (reads stay before it)
   std::size_t step;           // bytes per row
   int width, height, channels;
-  unsigned char fill[4];      // the border value per channel
+  unsigned char fill[4];  // the border value per channel
 };
 struct GridRowLoops {
   // Spacing 4: pixels 4i .. 4i+3 from the node columns interpolated to the row,
@@ -101,8 +101,8 @@ struct GridRowLoops {
   void (*interpolate4)(const float* column_x, const float* column_y, int cells, float* x, float* y);
   // A row of source coordinates in cv::remap's fixed-point form (see grid_warp.cpp);
   // valid may be null.
-  void (*to_fixed_point)(const float* x, const float* y, int w, float limit_x, float limit_y, float max_x,
-                         float max_y, short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid);
+  void (*to_fixed_point)(const float* x, const float* y, int w, float limit_x, float limit_y, float max_x, float max_y,
+                         short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid);
   // cv::remap's INTER_LINEAR + BORDER_CONSTANT of an 8-bit image with 1, 3 or 4
   // channels from one row of those maps, byte for byte; null where the instruction
   // set has no fast form (the caller then calls cv::remap). The image is smaller

@@ -120,15 +120,16 @@ void bilinear_8u_row(const BilinearSource& src, const short* fixed, const unsign
       const __m128i rows = _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(tops[j])),
                                               _mm_loadl_epi64(reinterpret_cast<const __m128i*>(bottoms[j])));
       const __m128i across_sum = _mm_maddubs_epi16(_mm_shuffle_epi8(rows, pairs), _mm_set1_epi32(int(across[j])));
-      const __m128i columns = _mm_unpacklo_epi16(across_sum, _mm_srli_si128(across_sum, 8));  // (c0 top, c0 bottom, ...)
+      const __m128i columns =
+          _mm_unpacklo_epi16(across_sum, _mm_srli_si128(across_sum, 8));  // (c0 top, c0 bottom, ...)
       const __m128i sum = _mm_madd_epi16(columns, _mm_set1_epi32(int(down[j])));
       return _mm_srli_epi32(_mm_add_epi32(sum, half), 10);
     };
     unsigned char* row_out = out + u0 * kChannels;
     int j = 0;
     for (; j + 4 <= n; j += 4) {
-      const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(pixel(j), pixel(j + 1)),
-                                             _mm_packs_epi32(pixel(j + 2), pixel(j + 3)));
+      const __m128i bytes =
+          _mm_packus_epi16(_mm_packs_epi32(pixel(j), pixel(j + 1)), _mm_packs_epi32(pixel(j + 2), pixel(j + 3)));
       alignas(16) unsigned char packed[16];
       _mm_store_si128(reinterpret_cast<__m128i*>(packed), _mm_shuffle_epi8(bytes, keep));
       std::memcpy(row_out + j * kChannels, packed, 4 * kChannels);
@@ -145,9 +146,12 @@ void bilinear_8u_row(const BilinearSource& src, const short* fixed, const unsign
 void bilinear_8u(const BilinearSource& src, const short* fixed, const unsigned short* fractions, int w,
                  unsigned char* out) {
   switch (src.channels) {
-    case 1: return bilinear_8u_row<1>(src, fixed, fractions, w, out);
-    case 3: return bilinear_8u_row<3>(src, fixed, fractions, w, out);
-    case 4: return bilinear_8u_row<4>(src, fixed, fractions, w, out);
+    case 1:
+      return bilinear_8u_row<1>(src, fixed, fractions, w, out);
+    case 3:
+      return bilinear_8u_row<3>(src, fixed, fractions, w, out);
+    case 4:
+      return bilinear_8u_row<4>(src, fixed, fractions, w, out);
   }
 }
 #else

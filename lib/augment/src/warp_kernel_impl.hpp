@@ -64,9 +64,12 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     qx = mul_add(s, dx, zero - tx), qy = mul_add(s, dy, zero - ty), qz = mul_add(s, dz, zero - tz);
   }
   const float* r = pose.rt;
-  const v_float32 px = mul_add(cv::vx_setall_f32(r[0]), qx, mul_add(cv::vx_setall_f32(r[1]), qy, cv::vx_setall_f32(r[2]) * qz));
-  const v_float32 py = mul_add(cv::vx_setall_f32(r[3]), qx, mul_add(cv::vx_setall_f32(r[4]), qy, cv::vx_setall_f32(r[5]) * qz));
-  const v_float32 pz = mul_add(cv::vx_setall_f32(r[6]), qx, mul_add(cv::vx_setall_f32(r[7]), qy, cv::vx_setall_f32(r[8]) * qz));
+  const v_float32 px =
+      mul_add(cv::vx_setall_f32(r[0]), qx, mul_add(cv::vx_setall_f32(r[1]), qy, cv::vx_setall_f32(r[2]) * qz));
+  const v_float32 py =
+      mul_add(cv::vx_setall_f32(r[3]), qx, mul_add(cv::vx_setall_f32(r[4]), qy, cv::vx_setall_f32(r[5]) * qz));
+  const v_float32 pz =
+      mul_add(cv::vx_setall_f32(r[6]), qx, mul_add(cv::vx_setall_f32(r[7]), qy, cv::vx_setall_f32(r[8]) * qz));
 
   // Projection by the source camera (the direction of P is all that matters).
   const v_float32 chi2 = mul_add(px, px, py * py);
@@ -89,9 +92,9 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     const v_float32 xi = cv::vx_setall_f32(src.xi);
     v_float32 w = mul_add(xi, norm, pz);
     if (src.xi > 0) {
-      const v_float32 numerator =
-          src.xi == 1 ? chi2
-                      : mul_add(cv::vx_setall_f32(src.xi * src.xi), chi2, cv::vx_setall_f32(src.xi * src.xi - 1) * pz * pz);
+      const v_float32 numerator = src.xi == 1 ? chi2
+                                              : mul_add(cv::vx_setall_f32(src.xi * src.xi), chi2,
+                                                        cv::vx_setall_f32(src.xi * src.xi - 1) * pz * pz);
       w = cv::v_select(pz >= zero, w, numerator / mul_add(xi, norm, zero - pz));
     }
     v_float32 d = w;
@@ -141,11 +144,14 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
       }
       // The cell: g clamped into the grid before the floor (so any g, huge or NaN, gives
       // an index in it; max and min return their second operand for NaN).
-      const v_float32 fx = cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(src.lens_nx - 1)))));
-      const v_float32 fy = cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(src.lens_ny - 1)))));
+      const v_float32 fx =
+          cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(src.lens_nx - 1)))));
+      const v_float32 fy =
+          cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(src.lens_ny - 1)))));
       const v_float32 half = cv::vx_setall_f32(0.5f), t = gx - fx - half, s = gy - fy - half;
       // 32 (ny nx) < 2^24: the cell's first coefficient's index is exact in float.
-      const cv::v_int32 first = cv::v_round(mul_add(fy, cv::vx_setall_f32(float(src.lens_nx)), fx) * cv::vx_setall_f32(32.0f));
+      const cv::v_int32 first =
+          cv::v_round(mul_add(fy, cv::vx_setall_f32(float(src.lens_nx)), fx) * cv::vx_setall_f32(32.0f));
       // Neighbouring pixels mostly share a cell: then its coefficients are broadcast,
       // else gathered per lane (the same values either way).
       alignas(64) int firsts[cv::v_int32::nlanes];
@@ -170,7 +176,8 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     const v_float32 chi = cv::v_sqrt(chi2);
     const v_float32 ray_theta = atan2_nonnegative_y(chi, pz);
     v_float32 theta = ray_theta;
-    if constexpr (kKind == SourceParams::Kind::ray_polynomial) theta = cv::v_min(theta, cv::vx_setall_f32(src.theta_fit));
+    if constexpr (kKind == SourceParams::Kind::ray_polynomial)
+      theta = cv::v_min(theta, cv::vx_setall_f32(src.theta_fit));
     v_float32 rho = cv::vx_setall_f32(src.c[src.n]);
     for (int i = src.n - 1; i >= 1; --i) rho = mul_add(rho, theta, cv::vx_setall_f32(src.c[i]));
     rho = rho * theta;
@@ -183,8 +190,8 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
         rho = rho - mul_add(chi, p, rho * pz) / mul_add(chi, dp, pz);
       }
       // Past theta_fit the start is not trusted; the root lies beyond rho_fit, outside the image.
-      rho = cv::v_select(ray_theta > cv::vx_setall_f32(src.theta_fit),
-                         cv::v_max(rho, cv::vx_setall_f32(src.rho_fit)), rho);
+      rho = cv::v_select(ray_theta > cv::vx_setall_f32(src.theta_fit), cv::v_max(rho, cv::vx_setall_f32(src.rho_fit)),
+                         rho);
       slope0 = cv::vx_setall_f32(-src.a[0]);
     }
     // On the axis rho / chi -> rho'(0) / Pz.
@@ -199,7 +206,8 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     u = mul_add(cv::vx_setall_f32(src.ax), mul_add(cv::vx_setall_f32(src.xy), qy, qx), cv::vx_setall_f32(src.cx));
     v = mul_add(cv::vx_setall_f32(src.ay), mul_add(cv::vx_setall_f32(src.yx), qx, qy), cv::vx_setall_f32(src.cy));
   } else {
-    if (kKind == SourceParams::Kind::unified && plane_offset) {  // the offset before c: one rounding at the image's scale
+    if (kKind == SourceParams::Kind::unified &&
+        plane_offset) {  // the offset before c: one rounding at the image's scale
       u = mul_add(cv::vx_setall_f32(src.ax), mul_add(scale, px, offset_x), cv::vx_setall_f32(src.cx));
       v = mul_add(cv::vx_setall_f32(src.ay), mul_add(scale, py, offset_y), cv::vx_setall_f32(src.cy));
     } else {
@@ -278,8 +286,10 @@ RangeKernel kernel_for_kind(SourceParams::Kind kind) {
 template <bool kSampling>
 RangeKernel kernel_for(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind) {
   switch (prior) {
-    case DepthPrior::infinity: return kernel_for_kind<DepthPrior::infinity, true, kSampling>(kind);
-    case DepthPrior::target_sphere: return kernel_for_kind<DepthPrior::target_sphere, true, kSampling>(kind);
+    case DepthPrior::infinity:
+      return kernel_for_kind<DepthPrior::infinity, true, kSampling>(kind);
+    case DepthPrior::target_sphere:
+      return kernel_for_kind<DepthPrior::target_sphere, true, kSampling>(kind);
     case DepthPrior::source_sphere:
       return inside_sphere ? kernel_for_kind<DepthPrior::source_sphere, true, kSampling>(kind)
                            : kernel_for_kind<DepthPrior::source_sphere, false, kSampling>(kind);

@@ -69,8 +69,8 @@ TEST(Affine, MapsInvertOpenCVsRotationMatrix) {
   warp_image(image, maps, &ours, 0);
   cv::warpAffine(image, theirs, forward, size, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
   // Away from the source's outer half pixel (clamped by fishcam, blended with the border by OpenCV).
-  const cv::Mat interior = (maps.map_x >= 1) & (maps.map_x <= size.width - 2) & (maps.map_y >= 1) &
-                           (maps.map_y <= size.height - 2);
+  const cv::Mat interior =
+      (maps.map_x >= 1) & (maps.map_x <= size.width - 2) & (maps.map_y >= 1) & (maps.map_y <= size.height - 2);
   cv::Mat difference;
   cv::absdiff(ours, theirs, difference);
   double worst = 0;

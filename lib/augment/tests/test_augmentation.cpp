@@ -9,8 +9,8 @@
 #include <random>
 
 #include "fishcam/augment/augmentation.hpp"
-#include "fishcam/io/npy.hpp"
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/io/npy.hpp"
 #include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
@@ -46,8 +46,8 @@ TEST(Augmentation, SourcePointSatisfiesItsDefiningEquation) {
   int checked = 0, missed = 0;
   for (int i = 0; i < 20000; ++i) {
     const double scale = i % 2 ? 0.99 : 1.6;  // inside the unit sphere and outside
-    const Eigen::Vector3d t = scale * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized() *
-                              std::abs(uniform(rng));
+    const Eigen::Vector3d t =
+        scale * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized() * std::abs(uniform(rng));
     const ViewpointChange change =
         ViewpointChange::from_euler_deg({30 * uniform(rng), 30 * uniform(rng), 30 * uniform(rng)}, t);
     const Eigen::Vector3d d = Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized();
@@ -104,8 +104,7 @@ TEST(Augmentation, EveryValidMapEntrySatisfiesItsDefiningEquation) {
         // square root: float maps lose digits there, and only there.
         const double b = d.dot(change.translation), disc = b * b - (change.translation.squaredNorm() - 1);
         const double tolerance = disc > 1e-2 ? 1e-3 : 2e-2;
-        ASSERT_LT(std::hypot(pixel.x() - maps.map_x.at<float>(v, u), pixel.y() - maps.map_y.at<float>(v, u)),
-                  tolerance)
+        ASSERT_LT(std::hypot(pixel.x() - maps.map_x.at<float>(v, u), pixel.y() - maps.map_y.at<float>(v, u)), tolerance)
             << "disc " << disc;
         ++checked;
       }
@@ -149,7 +148,8 @@ TEST(Augmentation, RandomPosesAreReproducibleAndInRange) {
   EXPECT_NE(a.rotation_deg, c.rotation_deg);
   // Fixed by std::mt19937_64's specified output and our own mapping to [0, 1):
   // these digits must be the same on every platform.
-  EXPECT_NEAR(random_pose(*find_pose_preset("small"), 1).rotation_deg.x(), 10 * (2 * double(std::mt19937_64(1)() >> 11) * 0x1.0p-53 - 1), 0);
+  EXPECT_NEAR(random_pose(*find_pose_preset("small"), 1).rotation_deg.x(),
+              10 * (2 * double(std::mt19937_64(1)() >> 11) * 0x1.0p-53 - 1), 0);
   double max_rotation = 0, max_translation = 0;
   for (std::uint64_t seed = 0; seed < 2000; ++seed) {
     const RandomPose p = random_pose(*find_pose_preset("medium"), derive_seed(7, "frame", seed));
@@ -314,8 +314,7 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
     const ViewpointWarp warp{Camera(p)};
     EXPECT_FALSE(warp.float_kernel()) << name;
     long differs = 0;
-    EXPECT_LE(worst_fast_vs_exact(warp, random_pose(*find_pose_preset("large"), 1).change(), &differs), 1e-3)
-        << name;
+    EXPECT_LE(worst_fast_vs_exact(warp, random_pose(*find_pose_preset("large"), 1).change(), &differs), 1e-3) << name;
     EXPECT_LE(differs, 2) << name;
     WarpMaps identity;
     warp.compute(ViewpointChange{}, DepthPrior::source_sphere, &identity);
@@ -338,7 +337,6 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
   }
   EXPECT_GE(kernels, 21);  // 16 models, 3 tangential, the spline, the skewed ocam (not CAHVOR, LONLAT, LATLON)
 }
-
 
 // The forward direction inverts the maps under every prior: a visible point's
 // output pixel has, in the exact maps, a source within the map's pixel grid of it,
@@ -434,9 +432,9 @@ TEST(Augmentation, ImagesPastTheResamplingLimitAreRefused) {
 TEST(Augmentation, IdentityReproducesTheInputExactly) {
   const Camera camera = woodscape();
   const ViewpointWarp warp(camera);
-  for (const auto& [prior, kind] : {std::pair{DepthPrior::source_sphere, MapKind::sampling},
-                                    std::pair{DepthPrior::target_sphere, MapKind::geometric},
-                                    std::pair{DepthPrior::infinity, MapKind::sampling}}) {
+  for (const auto& [prior, kind] :
+       {std::pair{DepthPrior::source_sphere, MapKind::sampling},
+        std::pair{DepthPrior::target_sphere, MapKind::geometric}, std::pair{DepthPrior::infinity, MapKind::sampling}}) {
     WarpMaps maps;
     warp.compute(ViewpointChange{}, prior, &maps, kind);
     EXPECT_EQ(maps.invalid_count, 0);
@@ -700,8 +698,8 @@ TEST(Npy, RoundTripAndLyingHeaders) {
     return test::write_file(dir / "bad.npy", text);
   };
   ASSERT_EQ(read_npy(with_shape("(3, 2)")).shape, (std::vector<std::size_t>{3, 2}));
-  for (const char* shape : {"(4000000000, 4)", "(99999999999999999999, 1)", "(2, 4)", "(1, 3)",
-                            "(4294967296, 4294967296, 4294967296)"}) {
+  for (const char* shape :
+       {"(4000000000, 4)", "(99999999999999999999, 1)", "(2, 4)", "(1, 3)", "(4294967296, 4294967296, 4294967296)"}) {
     try {
       read_npy(with_shape(shape));
       ADD_FAILURE() << shape << " accepted";
@@ -851,7 +849,8 @@ TEST(Augmentation, ExtremeMrcalLensesTakeTheKernelOnlyWhereItAgrees) {
   small.width = 160, small.height = 121;
   small.principal_point = {79.5, 60.5};
   const auto lens = [&](double f, bool pinhole, const char* lensmodel, std::vector<double> values) {
-    CameraParameters p = pinhole ? test::with_model(small, Pinhole<double>(f)) : test::with_model(small, Stereographic<double>(f));
+    CameraParameters p =
+        pinhole ? test::with_model(small, Pinhole<double>(f)) : test::with_model(small, Stereographic<double>(f));
     p.mrcal_lens = std::make_shared<const MrcalLens>(lensmodel, std::move(values));
     return p;
   };
@@ -862,8 +861,8 @@ TEST(Augmentation, ExtremeMrcalLensesTakeTheKernelOnlyWhereItAgrees) {
   };
   const Case cases[] = {
       {"strong CAHVOR", lens(100, true, "LENSMODEL_CAHVOR", {0.3, -0.2, 0.05, -0.5, 0.3}), true},
-      {"CAHVORE folding in its image", lens(60, false, "LENSMODEL_CAHVORE_linearity=1.00", {0, 0, 0, 0, 0, 2.0, 1.0, -0.5}),
-       false},
+      {"CAHVORE folding in its image",
+       lens(60, false, "LENSMODEL_CAHVORE_linearity=1.00", {0, 0, 0, 0, 0, 2.0, 1.0, -0.5}), false},
       {"LONLAT past its poles", lens(30, false, "LENSMODEL_LONLAT", {}), false},
       {"LATLON 2 degrees wide", lens(4500, false, "LENSMODEL_LATLON", {}), true},
   };
@@ -893,7 +892,7 @@ TEST(Augmentation, FullCircleAndAnisotropicCamerasKeepTheirAccuracy) {
       {"full circle", full_circle},
       {"full circle, a_y = 0.2", test::with_model(full_circle, Equidistant<double>(100), {1, 0.2})},
       {"woodscape, a_y = 0.2", test::with_model(resized(test::woodscape_front(), 640, 483),
-                                                 resized(test::woodscape_front(), 640, 483).model, {1, 0.2})},
+                                                resized(test::woodscape_front(), 640, 483).model, {1, 0.2})},
   };
   int checked = 0;
   for (const auto& [name, p] : cases) {
@@ -953,7 +952,8 @@ TEST(Augmentation, GridSamplingMatchesTheExactPath) {
     cv::Mat g, e;
     const ViewpointChange small = ViewpointChange::from_euler_deg({5, 0, 0});
     no_grid.augment(small, DepthPrior::infinity, {&pinhole_image, &g, 0, nullptr, nullptr, 0, nullptr}, Sampling::grid);
-    no_grid.augment(small, DepthPrior::infinity, {&pinhole_image, &e, 0, nullptr, nullptr, 0, nullptr}, Sampling::exact);
+    no_grid.augment(small, DepthPrior::infinity, {&pinhole_image, &e, 0, nullptr, nullptr, 0, nullptr},
+                    Sampling::exact);
     EXPECT_EQ(cv::norm(g, e, cv::NORM_INF), 0);
   }
   // Past the measured changes: the exact path, exactly.
@@ -968,8 +968,9 @@ TEST(Augmentation, GridSamplingMatchesTheExactPath) {
   EXPECT_LT(cv::norm(same, scene.image, cv::NORM_L1) / double(scene.image.total() * 3), 0.05);
   // Bad inputs as warp_image / warp_labels.
   cv::Mat small(10, 10, CV_8UC3), out;
-  EXPECT_THROW(warp.augment(ViewpointChange{}, DepthPrior::source_sphere, {&small, &out, 0, nullptr, nullptr, 0, nullptr}),
-               Error);
+  EXPECT_THROW(
+      warp.augment(ViewpointChange{}, DepthPrior::source_sphere, {&small, &out, 0, nullptr, nullptr, 0, nullptr}),
+      Error);
   EXPECT_THROW(warp.augment(ViewpointChange{}, DepthPrior::source_sphere,
                             {nullptr, nullptr, 0, &scene.labels, &out, 300, nullptr}),
                Error);
@@ -994,13 +995,14 @@ TEST(Augmentation, GridImagesAreCvRemapOfTheGridMapByteForByte) {
   cv::Mat wide_buffer = noise(CV_8UC3);
   cv::copyMakeBorder(wide_buffer, wide_buffer, 3, 5, 7, 11, cv::BORDER_REFLECT);
   const cv::Mat view = wide_buffer(cv::Rect(7, 3, camera.width(), camera.height()));
-  const std::vector<cv::Mat> images = {noise(CV_8UC1), noise(CV_8UC3), noise(CV_8UC4), view, noise(CV_16UC3),
-                                       noise(CV_32FC1)};
+  const std::vector<cv::Mat> images = {noise(CV_8UC1), noise(CV_8UC3),  noise(CV_8UC4),
+                                       view,           noise(CV_16UC3), noise(CV_32FC1)};
   const float max_x = float(camera.width() - 1), max_y = float(camera.height() - 1);
   // Three large changes, and the identity: it samples the image's last pixels, whose
   // taps bilinear_8u reads without passing the image's end.
   for (std::uint64_t seed = 0; seed < 4; ++seed) {
-    const ViewpointChange change = seed < 3 ? random_pose(*find_pose_preset("large"), seed).change() : ViewpointChange{};
+    const ViewpointChange change =
+        seed < 3 ? random_pose(*find_pose_preset("large"), seed).change() : ViewpointChange{};
     const DepthPrior prior = seed == 0 ? DepthPrior::infinity : DepthPrior::source_sphere;
     WarpMaps maps;
     warp.compute_grid(change, prior, &maps);

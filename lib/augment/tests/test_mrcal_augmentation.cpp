@@ -18,7 +18,8 @@ CameraParameters with_change(CameraParameters p, const ViewpointChange& change) 
 }
 
 void compare_with_mrcal(const char* source_file, const char* target_file, std::uint64_t seed) {
-  const auto dir = test::scratch_dir(std::string("mrcal_map_") + source_file + "_" + target_file + std::to_string(seed));
+  const auto dir =
+      test::scratch_dir(std::string("mrcal_map_") + source_file + "_" + target_file + std::to_string(seed));
   const Camera source = read_camera(test::data_path(source_file)), target = read_camera(test::data_path(target_file));
   const ViewpointChange change = random_pose(*find_pose_preset("large"), seed).change();
   CameraParameters src = source.parameters();
@@ -65,8 +66,12 @@ void compare_with_mrcal(const char* source_file, const char* target_file, std::u
 TEST(MrcalAugmentation, StereographicToStereographic) {
   for (std::uint64_t seed : {1, 2}) compare_with_mrcal("stereographic.cameramodel", "stereographic.cameramodel", seed);
 }
-TEST(MrcalAugmentation, StereographicToPinhole) { compare_with_mrcal("stereographic.cameramodel", "pinhole.cameramodel", 3); }
-TEST(MrcalAugmentation, PinholeToStereographic) { compare_with_mrcal("pinhole.cameramodel", "stereographic.cameramodel", 4); }
+TEST(MrcalAugmentation, StereographicToPinhole) {
+  compare_with_mrcal("stereographic.cameramodel", "pinhole.cameramodel", 3);
+}
+TEST(MrcalAugmentation, PinholeToStereographic) {
+  compare_with_mrcal("pinhole.cameramodel", "stereographic.cameramodel", 4);
+}
 TEST(MrcalAugmentation, PinholeToPinhole) { compare_with_mrcal("pinhole.cameramodel", "pinhole.cameramodel", 5); }
 
 }  // namespace

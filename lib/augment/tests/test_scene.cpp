@@ -114,7 +114,6 @@ TEST(Scene, TranslationShowsWhatEachDepthPriorCosts) {
   }
 }
 
-
 // --- Seeded streets (StreetScene::generate) ---
 
 Camera small_front() { return Camera(resized(front().parameters(), 320, 242)); }
@@ -140,7 +139,8 @@ TEST(SeededScene, TheSameSeedGivesTheSameBytesAndSeedsDiffer) {
   EXPECT_EQ(cv::norm(a.image, b.image, cv::NORM_INF), 0);
   EXPECT_EQ(cv::norm(a.labels, b.labels, cv::NORM_INF), 0);
   EXPECT_EQ(std::memcmp(a.range.data, b.range.data, a.range.total() * sizeof(float)), 0);
-  EXPECT_GT(cv::countNonZero(a.labels != c.labels), int(a.labels.total() / 20)) << "seeds 11 and 12 draw the same street";
+  EXPECT_GT(cv::countNonZero(a.labels != c.labels), int(a.labels.total() / 20))
+      << "seeds 11 and 12 draw the same street";
   // The bundled street is not a seeded one.
   const SceneRender bundled = StreetScene::bundled().render(camera, mount);
   EXPECT_GT(cv::countNonZero(a.labels != bundled.labels), int(a.labels.total() / 20));
@@ -154,7 +154,8 @@ TEST(SeededScene, EveryWoodScapeClassOccursAcrossSeedsAndViews) {
     const StreetScene scene = StreetScene::generate(seed);
     for (const Pose& mount : surround_mounts()) {
       const SceneRender r = scene.render(camera, mount);
-      for (int label = 0; label < woodscape_class::kCount; ++label) pixels[size_t(label)] += cv::countNonZero(r.labels == label);
+      for (int label = 0; label < woodscape_class::kCount; ++label)
+        pixels[size_t(label)] += cv::countNonZero(r.labels == label);
       ++renders;
     }
   }
@@ -247,9 +248,10 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
         warp.compute(change, prior, &sphere);
         cv::Mat sphere_labels;
         warp_labels(source.labels, sphere, 255, &sphere_labels);
-        if (prior == DepthPrior::infinity) infinity_valid = cv::countNonZero(sphere.validity()) / double(sphere.map_x.total());
-        best_sphere = std::max(best_sphere, agreement(sphere_labels, truth.labels,
-                                                      away_from_boundaries(truth.labels, sphere.validity())));
+        if (prior == DepthPrior::infinity)
+          infinity_valid = cv::countNonZero(sphere.validity()) / double(sphere.map_x.total());
+        best_sphere = std::max(
+            best_sphere, agreement(sphere_labels, truth.labels, away_from_boundaries(truth.labels, sphere.validity())));
       }
       EXPECT_GT(same, best_sphere) << preset << " seed " << seed;
       std::printf("  %-7s %4d  %15.1f%%  %8.2f%% | %.2f%%, %.1f%%\n", preset, int(seed),
@@ -275,7 +277,8 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
   // Bad input: a depth map of the wrong size or type.
   WarpMaps maps;
   EXPECT_THROW(warp.compute_from_depth(ViewpointChange{}, cv::Mat(10, 10, CV_32FC1), DepthValues::range, &maps), Error);
-  EXPECT_THROW(warp.compute_from_depth(ViewpointChange{}, cv::Mat(483, 640, CV_64FC1), DepthValues::range, &maps), Error);
+  EXPECT_THROW(warp.compute_from_depth(ViewpointChange{}, cv::Mat(483, 640, CV_64FC1), DepthValues::range, &maps),
+               Error);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-#include "fishcam/core/error.hpp"
 #include "fishcam/core/camera.hpp"
+#include "fishcam/core/error.hpp"
 
 #include <Eigen/Eigenvalues>
 #include "fishcam/core/parallel.hpp"
@@ -101,7 +101,8 @@ bool ray_of(const Model& model, const ValidDomain& domain, const InverseTable& t
             InversePath path, double* ray) {
   double rho = std::sqrt(x * x + y * y);
   // A point projected at theta_max may come back a few ulps past rho_max: it is valid.
-  if (domain.closed && rho > domain.rho_max && rho <= domain.rho_max * (1 + 8 * std::numeric_limits<double>::epsilon())) {
+  if (domain.closed && rho > domain.rho_max &&
+      rho <= domain.rho_max * (1 + 8 * std::numeric_limits<double>::epsilon())) {
     rho = domain.rho_max;
   }
   double s, c;
@@ -147,9 +148,8 @@ Eigen::Vector2d distorted(const Model& model, const Distortion& terms, const Eig
 }
 
 template <bool kWithJacobian, class Model, class Distortion>
-bool project_distorted(const Model& model, const double* mapping, const ValidDomain& domain,
-                       const Distortion& terms, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
-                       Eigen::Matrix<double, 2, 3>* jacobian) {
+bool project_distorted(const Model& model, const double* mapping, const ValidDomain& domain, const Distortion& terms,
+                       const Eigen::Vector3d& point, Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* jacobian) {
   if constexpr (!HasUndistortedPlane<Model>) {
     throw Error("internal: a non-radial part on a model without an undistorted plane");  // the constructor refuses
   } else {
@@ -178,9 +178,9 @@ bool project_distorted(const Model& model, const double* mapping, const ValidDom
 // on return this pixel's m (NaN without one). The domain holds one solution only: the
 // guess changes the cost, not the ray (but for rounding).
 template <class Model, class Distortion>
-bool distorted_ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table,
-                      const Distortion& terms, const Eigen::Vector2d& pixel_scale, double x, double y,
-                      double* ray, Eigen::Vector2d* start = nullptr) {
+bool distorted_ray_of(const Model& model, const ValidDomain& domain, const InverseTable& table, const Distortion& terms,
+                      const Eigen::Vector2d& pixel_scale, double x, double y, double* ray,
+                      Eigen::Vector2d* start = nullptr) {
   if constexpr (!HasUndistortedPlane<Model>) {
     throw Error("internal: a non-radial part on a model without an undistorted plane");
   } else {
@@ -227,7 +227,8 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
     const double tolerance_px = 1e-7 + 1e-15 * rho * pixel_scale.maxCoeff();  // what doubles resolve 1e8 px out
     // A point projected at theta_max may come back a few ulps past it: it is valid.
     const auto theta_in_domain = [&](double theta) {
-      if (domain.closed && theta > domain.theta_max && theta <= domain.theta_max * (1 + 1e-12)) theta = domain.theta_max;
+      if (domain.closed && theta > domain.theta_max && theta <= domain.theta_max * (1 + 1e-12))
+        theta = domain.theta_max;
       return domain.contains_theta(theta) ? theta : kNaN;
     };
     const auto solved = [&](const Eigen::Vector2d& m) {
@@ -248,7 +249,8 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
       const Eigen::Vector2d centre = distorted(model, terms, Eigen::Vector2d::Zero());
       m = Eigen::Vector2d::Zero();
       constexpr int kSteps = 16;
-      for (int k = 1; k <= kSteps; ++k) newton(&m, centre + (target - centre) * (double(k) / kSteps), k < kSteps ? 20 : 100);
+      for (int k = 1; k <= kSteps; ++k)
+        newton(&m, centre + (target - centre) * (double(k) / kSteps), k < kSteps ? 20 : 100);
     }
     if (!solved(m)) return false;
     if (start) *start = m;
@@ -341,10 +343,10 @@ bool project_unskewed(const Model& model, const CameraParameters& params, const 
 }
 
 template <bool kWithJacobian, class Model>
-bool project_point(const Model& model, const CameraParameters& params, const double* mapping,
-                   const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
-                   Eigen::Matrix<double, 2, 3>* jacobian) {
-  if (!params.skew.any()) return project_unskewed<kWithJacobian>(model, params, mapping, domain, point, pixel, jacobian);
+bool project_point(const Model& model, const CameraParameters& params, const double* mapping, const ValidDomain& domain,
+                   const Eigen::Vector3d& point, Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* jacobian) {
+  if (!params.skew.any())
+    return project_unskewed<kWithJacobian>(model, params, mapping, domain, point, pixel, jacobian);
   // q with c = 0, a = 1, then pixel = c + a (.) (S q).
   const double unit[4] = {0, 0, 1, 1};
   Eigen::Vector2d q;
@@ -464,8 +466,8 @@ void check_calibration_record(const CalibrationRecord& r, size_t model_params) {
   // would give negative variances along some direction, and uncertainties of any size.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(c, Eigen::EigenvaluesOnly);
   if (eigen.info() != Eigen::Success || eigen.eigenvalues().minCoeff() < -1e-9 * scale) {
-    fail("calibration.covariance: must be positive semi-definite (smallest eigenvalue ",
-         eigen.eigenvalues().minCoeff(), ", largest ", eigen.eigenvalues().maxCoeff(), ")");
+    fail("calibration.covariance: must be positive semi-definite (smallest eigenvalue ", eigen.eigenvalues().minCoeff(),
+         ", largest ", eigen.eigenvalues().maxCoeff(), ")");
   }
 }
 
@@ -482,10 +484,12 @@ Pose inverse(const Pose& pose) {
 
 CameraParameters limited_to_observed(CameraParameters camera, double margin) {
   if (!camera.calibration) {
-    fail("theta limit 'data': the camera carries no calibration record (fishcam calibrate writes one into fishcam "
-         "JSON)");
+    fail(
+        "theta limit 'data': the camera carries no calibration record (fishcam calibrate writes one into fishcam "
+        "JSON)");
   }
-  if (!(margin >= 0 && margin < std::numbers::pi)) fail("theta limit 'data+DEG': the margin must be in [0, 180) degrees");
+  if (!(margin >= 0 && margin < std::numbers::pi))
+    fail("theta limit 'data+DEG': the margin must be in [0, 180) degrees");
   const double limit = std::min(camera.calibration->theta_max + margin, std::numbers::pi);
   camera.theta_limit = camera.theta_limit ? std::min(*camera.theta_limit, limit) : limit;
   return camera;
@@ -644,7 +648,6 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
 }
 
-
 void Camera::limit_to_plane_fold() {
   const TangentialTerms& terms = params_.tangential;
   for (size_t i = 0; i < terms.kNames.size(); ++i) {
@@ -659,8 +662,8 @@ void Camera::limit_to_plane_fold() {
     }
     fold = std::visit([&](const auto& m) { return distortion_fold(m, *lens, domain_); }, params_.model);
   } else {
-    const bool takes = std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; },
-                                  params_.model);
+    const bool takes =
+        std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; }, params_.model);
     if (!takes) {
       fail("tangential: the ", model_name(params_.model),
            " model takes no tangential terms (pinhole, opencv and mei do, on their undistorted plane)");
@@ -678,7 +681,6 @@ void Camera::limit_to_plane_fold() {
     domain_.rho_max = rho(*fold);
   }
 }
-
 
 void Camera::bound_plane_reach() {
   if (!domain_.closed) return;
@@ -730,8 +732,8 @@ double Camera::rho_of_pixel(const Eigen::Vector2d& pixel) const {
 
 bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                      Eigen::Matrix<double, 2, 3>* jacobian) const {
-  const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(),
-                                      params_.pixel_scale.x(), params_.pixel_scale.y()};
+  const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(), params_.pixel_scale.x(),
+                                      params_.pixel_scale.y()};
   return std::visit(
       [&](const auto& m) {
         return jacobian ? project_point<true>(m, params_, mapping.data(), domain_, point, pixel, jacobian)
@@ -743,9 +745,9 @@ bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
 bool Camera::unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const {
   const double x = (pixel.x() - params_.principal_point.x()) / params_.pixel_scale.x();
   const double y = (pixel.y() - params_.principal_point.y()) / params_.pixel_scale.y();
-  const bool ok =
-      std::visit([&](const auto& m) { return ray_of_point(m, params_, domain_, table_, x, y, InversePath::robust, ray->data()); },
-                 params_.model);
+  const bool ok = std::visit(
+      [&](const auto& m) { return ray_of_point(m, params_, domain_, table_, x, y, InversePath::robust, ray->data()); },
+      params_.model);
   if (!ok) ray->setConstant(kNaN);
   return ok;
 }
@@ -755,8 +757,8 @@ void Camera::project(std::span<const Eigen::Vector3d> points, std::span<Eigen::V
   if (pixels.size() != points.size() || (!valid.empty() && valid.size() != points.size())) {
     throw Error("project: output sizes must match the number of points");
   }
-  const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(),
-                                      params_.pixel_scale.x(), params_.pixel_scale.y()};
+  const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(), params_.pixel_scale.x(),
+                                      params_.pixel_scale.y()};
   std::visit(
       [&](const auto& m) {
         parallel_chunks(points.size(), [&](size_t begin, size_t end) {
@@ -831,7 +833,8 @@ Camera::FieldOfView Camera::field_of_view_deg() const {
       last = ray;
       const double theta = std::acos(std::clamp(ray.z(), -1.0, 1.0));
       // Which side of the principal point the sample lies on.
-      ((q - centre).dot(b - a) < 0 ? theta_a : theta_b) = std::max((q - centre).dot(b - a) < 0 ? theta_a : theta_b, theta);
+      ((q - centre).dot(b - a) < 0 ? theta_a : theta_b) =
+          std::max((q - centre).dot(b - a) < 0 ? theta_a : theta_b, theta);
     }
     if (centred) return theta_a + theta_b;
     return first ? std::acos(std::clamp(first->dot(*last), -1.0, 1.0)) : 0.0;

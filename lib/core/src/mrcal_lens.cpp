@@ -14,7 +14,7 @@ namespace fishcam {
 
 struct MrcalLens::Lensmodel {
   mrcal_lensmodel_t model;
-  bool projects_behind = false;  // mrcal's metadata: whether rays with z <= 0 have a projection
+  bool projects_behind = false;      // mrcal's metadata: whether rays with z <= 0 have a projection
   bool stereographic_plane = false;  // the base model (kinds()): stereographic, else pinhole
 };
 
@@ -31,12 +31,18 @@ constexpr std::array<MrcalLens::KindInfo, 5> kKinds = {{
 
 std::optional<MrcalLens::Kind> kind_of(mrcal_lensmodel_type_t type) {
   switch (type) {
-    case MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC: return MrcalLens::Kind::splined_stereographic;
-    case MRCAL_LENSMODEL_CAHVOR: return MrcalLens::Kind::cahvor;
-    case MRCAL_LENSMODEL_CAHVORE: return MrcalLens::Kind::cahvore;
-    case MRCAL_LENSMODEL_LONLAT: return MrcalLens::Kind::lonlat;
-    case MRCAL_LENSMODEL_LATLON: return MrcalLens::Kind::latlon;
-    default: return std::nullopt;
+    case MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC:
+      return MrcalLens::Kind::splined_stereographic;
+    case MRCAL_LENSMODEL_CAHVOR:
+      return MrcalLens::Kind::cahvor;
+    case MRCAL_LENSMODEL_CAHVORE:
+      return MrcalLens::Kind::cahvore;
+    case MRCAL_LENSMODEL_LONLAT:
+      return MrcalLens::Kind::lonlat;
+    case MRCAL_LENSMODEL_LATLON:
+      return MrcalLens::Kind::latlon;
+    default:
+      return std::nullopt;
   }
 }
 

@@ -2,8 +2,8 @@
 // independent algebraic cross-check, the inverse table, and adversarial models.
 #include <random>
 
-#include "fishcam/testing/testing.hpp"
 #include "fishcam/testing/test_support.hpp"
+#include "fishcam/testing/testing.hpp"
 
 namespace fishcam {
 namespace {
@@ -216,9 +216,10 @@ TEST(Inverse, FoldRadiiSolveToTheBracket) {
 }
 
 TEST(Inverse, TableErrorIsMeasuredAndWithinTolerance) {
-  for (const auto& params : {test::woodscape_front(), polynomial_camera({300, 0, 0, -40}),
-                             test::with_model(test::woodscape_front(),
-                                              KannalaBrandt<double>(331.5526, 0.0346514, 0.0241055, -0.0074981, 0.0007767))}) {
+  for (const auto& params :
+       {test::woodscape_front(), polynomial_camera({300, 0, 0, -40}),
+        test::with_model(test::woodscape_front(),
+                         KannalaBrandt<double>(331.5526, 0.0346514, 0.0241055, -0.0074981, 0.0007767))}) {
     const Camera camera(params);
     const InverseTable& table = camera.inverse_table();
     ASSERT_FALSE(table.empty());

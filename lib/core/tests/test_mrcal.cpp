@@ -14,7 +14,7 @@ namespace {
 struct Case {
   const char* file;  // a camera of data/, or a label
   mrcal_lensmodel_type_t type;
-  double theta_max;  // where to draw test rays
+  double theta_max;                             // where to draw test rays
   std::optional<Camera> camera = std::nullopt;  // instead of the file
   std::vector<double> distortion = {};          // mrcal's intrinsics after fx, fy, cx, cy
   std::string configured = {};                  // an mrcal lens's name (then it decides the type)
@@ -49,7 +49,8 @@ void check_against_mrcal(const Case& c) {
   int mrcal_failed = 0;
   std::vector<mrcal_point3_t> mrcal_rays(points.size(), mrcal_point3_t{{NAN, NAN, NAN}});
   if (c.mrcal_unprojects) {
-    ASSERT_TRUE(mrcal_unproject(mrcal_rays.data(), expected.data(), int(expected.size()), &lensmodel, intrinsics.data()));
+    ASSERT_TRUE(
+        mrcal_unproject(mrcal_rays.data(), expected.data(), int(expected.size()), &lensmodel, intrinsics.data()));
   }
   for (size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d p(points[i].x, points[i].y, points[i].z);
@@ -83,10 +84,10 @@ void check_against_mrcal(const Case& c) {
   EXPECT_LE(worst_project, c.project_px) << c.file;
   EXPECT_LE(worst_unproject, c.project_px) << c.file;
   EXPECT_LE(worst_mrcal_unproject, c.distortion.empty() ? 1e-9 : c.mrcal_unproject_px) << c.file;
-  std::printf("  %s: %zu points up to %.1f deg, worst project %.2e px, unproject %.2e px (mrcal's own: %.2e px, "
-              "no ray for %d)\n",
-              c.file, points.size(), widest * 180 / M_PI, worst_project, worst_unproject, worst_mrcal_unproject,
-              mrcal_failed);
+  std::printf(
+      "  %s: %zu points up to %.1f deg, worst project %.2e px, unproject %.2e px (mrcal's own: %.2e px, "
+      "no ray for %d)\n",
+      c.file, points.size(), widest * 180 / M_PI, worst_project, worst_unproject, worst_mrcal_unproject, mrcal_failed);
 }
 
 TEST(Mrcal, StereographicAgreesWithLibmrcalBehindTheCameraToo) {
@@ -110,8 +111,11 @@ CameraParameters opencv8_camera() {
 TEST(Mrcal, OpenCV8WithoutTangentialTermsAgreesWithLibmrcal) {
   const Camera camera(opencv8_camera());
   const auto k = model_params(camera.model());
-  check_against_mrcal({"opencv8", MRCAL_LENSMODEL_OPENCV8, std::min(camera.domain().theta_max * 0.999, 80 * M_PI / 180),
-                       camera, {k[1], k[2], 0, 0, k[3], k[4], k[5], k[6]}});
+  check_against_mrcal({"opencv8",
+                       MRCAL_LENSMODEL_OPENCV8,
+                       std::min(camera.domain().theta_max * 0.999, 80 * M_PI / 180),
+                       camera,
+                       {k[1], k[2], 0, 0, k[3], k[4], k[5], k[6]}});
 }
 
 // A stereographic camera with mrcal's spline (fishcam/core/mrcal_lens.hpp), projected and
@@ -124,8 +128,7 @@ TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
   ASSERT_GT(synthetic.domain().theta_max, 60 * M_PI / 180);
   check_against_mrcal({"spline (synthetic)", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC, 60 * M_PI / 180, synthetic,
                        spline.values(), spline.lensmodel()});
-  const std::filesystem::path file =
-      test::shared_path("data/external/mrcal_cam0.splined.cameramodel");
+  const std::filesystem::path file = test::shared_path("data/external/mrcal_cam0.splined.cameramodel");
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "no ../shared checkout";
   const Camera camera = read_camera(file.string());
   mrcal_cameramodel_t* model = mrcal_read_cameramodel_file(file.c_str());
@@ -161,8 +164,12 @@ TEST_P(EveryMrcalLens, AgreesWithLibmrcal) {
   if (!mrcal_lensmodel_metadata(&model).can_project_behind_camera) {  // CAHVOR(E): none behind the camera
     EXPECT_LE(theta_max, M_PI / 2);
   }
-  Case c{GetParam().first.c_str(), MRCAL_LENSMODEL_PINHOLE, std::min(theta_max * 0.999, 85 * M_PI / 180), camera,
-         lens.values(), lens.lensmodel()};
+  Case c{GetParam().first.c_str(),
+         MRCAL_LENSMODEL_PINHOLE,
+         std::min(theta_max * 0.999, 85 * M_PI / 180),
+         camera,
+         lens.values(),
+         lens.lensmodel()};
   if (lens.kind() == MrcalLens::Kind::cahvor || lens.kind() == MrcalLens::Kind::cahvore) {
     // libmrcal's CAHVOR is not scale-invariant to rounding: the same ray at 0.5 and 6.5
     // times its length projects 1.3e-8 px apart at 80 deg (f = 640). Its iterative
@@ -287,8 +294,9 @@ TEST(Mrcal, ConvertingASplinedCameraReportsWhatLibmrcalAndThePolynomialFind) {
   EXPECT_NEAR(worst, conversion.report.max_px, 1e-6);
   EXPECT_GT(conversion.non_radial.rms_px, 0.1);
   EXPECT_LE(conversion.non_radial.rms_px, conversion.report.rms_px);
-  std::printf("  spline -> polynomial:4: rms %.4f px, max %.4f px (libmrcal and the formula: the same); floor %.4f px\n",
-              conversion.report.rms_px, conversion.report.max_px, conversion.non_radial.rms_px);
+  std::printf(
+      "  spline -> polynomial:4: rms %.4f px, max %.4f px (libmrcal and the formula: the same); floor %.4f px\n",
+      conversion.report.rms_px, conversion.report.max_px, conversion.non_radial.rms_px);
 }
 
 // The real OPENCV8 calibrations of ../shared (tangential terms and all), read by our
@@ -322,7 +330,8 @@ TEST(Mrcal, RealOpenCV8FilesAgreeWithLibmrcal) {
 
 TEST(Mrcal, LibmrcalReadsOurCameramodelFiles) {
   for (const char* name : {"stereographic.cameramodel", "pinhole.cameramodel", "opencv8"}) {
-    CameraParameters p = name == std::string("opencv8") ? opencv8_camera() : read_camera(test::data_path(name)).parameters();
+    CameraParameters p =
+        name == std::string("opencv8") ? opencv8_camera() : read_camera(test::data_path(name)).parameters();
     p.pose = Pose{Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())),
                   Eigen::Vector3d(0.1, -0.2, 1.5)};
     const std::string text = format_camera(p, CameraFormat::mrcal);

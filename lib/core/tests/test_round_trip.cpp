@@ -72,8 +72,8 @@ TEST_P(EveryModel, UnprojectProjectRandomRays) {
   // Stay off the open limits (where rho diverges) and off a fold (where theta(rho)
   // is ill-conditioned: there the pixel round trip above is the meaningful test).
   const double theta_max = d.limited_by == ValidDomain::Limit::fold ? d.theta_max - 0.02
-                           : d.closed                                ? d.theta_max
-                                                                     : d.theta_max - 1e-3;
+                           : d.closed                               ? d.theta_max
+                                                                    : d.theta_max - 1e-3;
   double worst = 0;
   for (const Eigen::Vector3d& ray : test::random_rays(100000, theta_max, 99)) {
     Eigen::Vector2d pixel;

@@ -24,7 +24,8 @@ std::vector<Eigen::Vector2d> opencv_projection(const CameraParameters& p, const 
   const TangentialTerms& t = p.tangential;
   const std::string_view name = model_name(p.model);
   if (name == "mei") {
-    cv::omnidir::projectPoints(in, out, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, q[1], cv::Vec4d(q[2], q[3], t.p1, t.p2));
+    cv::omnidir::projectPoints(in, out, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, q[1],
+                               cv::Vec4d(q[2], q[3], t.p1, t.p2));
   } else {
     std::vector<double> d = {0, 0, t.p1, t.p2, 0, 0, 0, 0, t.s[0], t.s[1], t.s[2], t.s[3]};
     if (name == "opencv") d[0] = q[1], d[1] = q[2], d[4] = q[3], d[5] = q[4], d[6] = q[5], d[7] = q[6];
@@ -43,7 +44,8 @@ TEST_P(EveryTangentialCamera, ProjectionIsOpenCVsAndTheJacobianItsDerivative) {
   ASSERT_FALSE(camera.radial());
   const ValidDomain& d = camera.domain();
   // Up to just inside the domain, and below 89 deg for the pinhole models (OpenCV divides by z).
-  const double limit = std::min(d.closed ? d.theta_max : d.theta_max - 1e-3, name.find("mei") == 0 ? M_PI : 89 * M_PI / 180);
+  const double limit =
+      std::min(d.closed ? d.theta_max : d.theta_max - 1e-3, name.find("mei") == 0 ? M_PI : 89 * M_PI / 180);
   std::vector<Eigen::Vector3d> points;
   for (const auto& ray : test::random_rays(5000, limit, 7)) points.push_back((0.5 + double(points.size() % 9)) * ray);
   const std::vector<Eigen::Vector2d> expected = opencv_projection(params, points);
@@ -63,7 +65,8 @@ TEST_P(EveryTangentialCamera, ProjectionIsOpenCVsAndTheJacobianItsDerivative) {
       ASSERT_TRUE(camera.project(points[i] - h * Eigen::Vector3d::Unit(k), &minus));
       numeric.col(k) = (plus - minus) / (2 * h);
     }
-    worst_jacobian = std::max(worst_jacobian, (numeric - jacobian).cwiseAbs().maxCoeff() / (1 + jacobian.cwiseAbs().maxCoeff()));
+    worst_jacobian =
+        std::max(worst_jacobian, (numeric - jacobian).cwiseAbs().maxCoeff() / (1 + jacobian.cwiseAbs().maxCoeff()));
   }
   EXPECT_LE(worst, 1e-9) << name;
   EXPECT_LE(worst_jacobian, 1e-6) << name;
@@ -220,7 +223,8 @@ TEST(Tangential, SkewedGridsProjectThroughTheSkewAndUnprojectBack) {
         ASSERT_TRUE(camera.project(p - h * Eigen::Vector3d::Unit(k), &minus));
         numeric.col(k) = (plus - minus) / (2 * h);
       }
-      worst_jacobian = std::max(worst_jacobian, (numeric - jacobian).cwiseAbs().maxCoeff() / (1 + jacobian.cwiseAbs().maxCoeff()));
+      worst_jacobian =
+          std::max(worst_jacobian, (numeric - jacobian).cwiseAbs().maxCoeff() / (1 + jacobian.cwiseAbs().maxCoeff()));
     }
     EXPECT_LE(worst, 1e-12) << name;
     EXPECT_LE(worst_back, 1e-9) << name;
@@ -250,7 +254,8 @@ TEST(Tangential, SkewsThatCannotBeAGridAreRefused) {
     format_camera(p, CameraFormat::woodscape);
     ADD_FAILURE() << "woodscape wrote a skew";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "skew: the woodscape format cannot hold a skewed pixel grid (fishcam, boofcv, ocamcalib can)");
+    EXPECT_EQ(std::string(e.what()),
+              "skew: the woodscape format cannot hold a skewed pixel grid (fishcam, boofcv, ocamcalib can)");
   }
 }
 
@@ -265,7 +270,9 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
   };
   CameraParameters p = test::woodscape_front();
   p.tangential = {0.001, 0, {}};
-  refused(p, "tangential: the polynomial model takes no tangential terms (pinhole, opencv and mei do, on their undistorted plane)");
+  refused(p,
+          "tangential: the polynomial model takes no tangential terms (pinhole, opencv and mei do, on their "
+          "undistorted plane)");
   p.model = Mei<double>(640.0, 0.9, 0, 0);
   p.tangential.p2 = std::numeric_limits<double>::quiet_NaN();
   refused(p, "tangential.p2: must be finite");
@@ -278,12 +285,14 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
   refused(s, "tangential: a camera has tangential terms or an mrcal lens, not both");
   s.tangential = {};
   s.model = Equidistant<double>(330.0);
-  refused(s, "mrcal_lens: LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150 displaces the stereographic "
-             "plane: the model must be stereographic, got equidistant");
+  refused(s,
+          "mrcal_lens: LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150 displaces the stereographic "
+          "plane: the model must be stereographic, got equidistant");
   s.mrcal_lens = std::make_shared<const MrcalLens>("LENSMODEL_CAHVOR", std::vector<double>(5, 0.0));
   s.model = Stereographic<double>(330.0);
   refused(s, "mrcal_lens: LENSMODEL_CAHVOR displaces the pinhole plane: the model must be pinhole, got stereographic");
-  const auto spline_refused = [](const std::string& lensmodel, std::vector<double> values, const std::string& expected) {
+  const auto spline_refused = [](const std::string& lensmodel, std::vector<double> values,
+                                 const std::string& expected) {
     try {
       MrcalLens spline(lensmodel, std::move(values));
       ADD_FAILURE() << "accepted: " << expected;
@@ -293,20 +302,27 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
   };
   spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", std::vector<double>(95, 0.0),
                  "has 96 values after fx, fy, cx, cy, got 95");
-  spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8", std::vector<double>(96, 0.0), "is not one of the mrcal lens");
-  spline_refused("LENSMODEL_OPENCV8", std::vector<double>(8, 0.0), "is not one of the mrcal lens models fishcam evaluates");
-  spline_refused("LENSMODEL_CAHVORE_linearity=0.00", std::vector<double>(7, 0.0), "has 8 values after fx, fy, cx, cy, got 7");
+  spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8", std::vector<double>(96, 0.0),
+                 "is not one of the mrcal lens");
+  spline_refused("LENSMODEL_OPENCV8", std::vector<double>(8, 0.0),
+                 "is not one of the mrcal lens models fishcam evaluates");
+  spline_refused("LENSMODEL_CAHVORE_linearity=0.00", std::vector<double>(7, 0.0),
+                 "has 8 values after fx, fy, cx, cy, got 7");
   spline_refused("LENSMODEL_CAHVORE_linearity=0.5", std::vector<double>(8, 0.0), "is not written as mrcal");
   spline_refused("LENSMODEL_CAHVOR", std::vector<double>(4, 0.0), "has 5 values after fx, fy, cx, cy, got 4");
   spline_refused("LENSMODEL_LONLAT", {1.0}, "has 0 values after fx, fy, cx, cy, got 1");
   // Configurations libmrcal would abort on, or parse wrapped (uint16), never reach it.
   const std::string prefix = "LENSMODEL_SPLINED_STEREOGRAPHIC_";
   spline_refused(prefix + "order=7_Nx=4_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "order must be 2 or 3");
-  spline_refused(prefix + "order=3_Nx=1_Ny=1_fov_x_deg=120", std::vector<double>(2, 0.0), "Nx and Ny must be in [4, 200]");
+  spline_refused(prefix + "order=3_Nx=1_Ny=1_fov_x_deg=120", std::vector<double>(2, 0.0),
+                 "Nx and Ny must be in [4, 200]");
   spline_refused(prefix + "order=3_Nx=-4_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "is not written as mrcal");
-  spline_refused(prefix + "order=3_Nx=99999999_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0), "is not written as mrcal");
-  spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=0", std::vector<double>(32, 0.0), "fov_x_deg must be in [1, 359]");
-  spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=120_extra", std::vector<double>(32, 0.0), "is not one of the mrcal lens");
+  spline_refused(prefix + "order=3_Nx=99999999_Ny=4_fov_x_deg=120", std::vector<double>(32, 0.0),
+                 "is not written as mrcal");
+  spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=0", std::vector<double>(32, 0.0),
+                 "fov_x_deg must be in [1, 359]");
+  spline_refused(prefix + "order=3_Nx=4_Ny=4_fov_x_deg=120_extra", std::vector<double>(32, 0.0),
+                 "is not one of the mrcal lens");
   std::vector<double> values(96, 0.0);
   values[5] = std::numeric_limits<double>::quiet_NaN();
   spline_refused("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", values, "must be finite");
@@ -323,7 +339,8 @@ TEST(Tangential, FormatsHoldTheTermsTheyCanAndRefuseTheRestInOneLine) {
     format_camera(p, CameraFormat::ros);
     ADD_FAILURE() << "ros took thin-prism terms";
   } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "tangential: the ros format cannot hold thin-prism terms s1..s4 (mrcal, opencv, fishcam can)");
+    EXPECT_STREQ(e.what(),
+                 "tangential: the ros format cannot hold thin-prism terms s1..s4 (mrcal, opencv, fishcam can)");
   }
   p.tangential.s = {};
   EXPECT_NE(format_camera(p, CameraFormat::ros).find("rational_polynomial"), std::string::npos);
@@ -356,8 +373,7 @@ TEST(Tangential, ConversionToARadialModelReportsWhatAnIndependentComparisonFinds
   EXPECT_NE(conversion.camera.principal_point, p.principal_point);
   const auto k = model_params(conversion.camera.model);
   const test::Intrinsics fitted{k[0] * conversion.camera.pixel_scale.x(), k[0] * conversion.camera.pixel_scale.y(),
-                                conversion.camera.principal_point.x(),
-                                conversion.camera.principal_point.y()};
+                                conversion.camera.principal_point.x(), conversion.camera.principal_point.y()};
   const auto samples = sample_image(source, 2, 0);  // the report's evaluation grid
   std::vector<Eigen::Vector3d> rays;
   for (const auto& s : samples) rays.push_back(s.ray);

@@ -31,9 +31,11 @@ std::vector<Case> cases() {
       {"eucm fold", ExtendedUnified<double>(400, 0.6, 1.1), [](auto& k, auto& p) { return eucm(k, 0.6, 1.1, p); }},
       {"eucm pole", ExtendedUnified<double>(340, 0.45, 0.9), [](auto& k, auto& p) { return eucm(k, 0.45, 0.9, p); }},
       {"eucm alpha 1", ExtendedUnified<double>(340, 1.0, 0.7), [](auto& k, auto& p) { return eucm(k, 1.0, 0.7, p); }},
-      {"ds fold", DoubleSphere<double>(370, -0.18, 0.6), [](auto& k, auto& p) { return double_sphere(k, -0.18, 0.6, p); }},
+      {"ds fold", DoubleSphere<double>(370, -0.18, 0.6),
+       [](auto& k, auto& p) { return double_sphere(k, -0.18, 0.6, p); }},
       {"ds pole", DoubleSphere<double>(370, 0.1, 0.4), [](auto& k, auto& p) { return double_sphere(k, 0.1, 0.4, p); }},
-      {"ds pole xi<0", DoubleSphere<double>(300, -0.3, 0.2), [](auto& k, auto& p) { return double_sphere(k, -0.3, 0.2, p); }},
+      {"ds pole xi<0", DoubleSphere<double>(300, -0.3, 0.2),
+       [](auto& k, auto& p) { return double_sphere(k, -0.3, 0.2, p); }},
       {"mei", Mei<double>(640, 0.9, -0.05, 0.01), [](auto& k, auto& p) { return mei(k, 0.9, -0.05, 0.01, p); }},
       {"mei fold", Mei<double>(900, 1.2, -0.3, 0.0), [](auto& k, auto& p) { return mei(k, 1.2, -0.3, 0.0, p); }},
   };
@@ -131,7 +133,8 @@ TEST(UnifiedFamily, SpecialCasesAreTheClassicalModels) {
   for (double theta : {0.1, 0.8, 1.4, 2.0, 3.0}) {
     // xi = 1: stereographic with f = 2 f_s; EUCM beta = 1: unified in alpha form;
     // DS xi = 0: EUCM with beta = 1; xi = 0, alpha = 0: pinhole.
-    EXPECT_NEAR(Unified<double>(660, 1).rho(theta), Stereographic<double>(330).rho(theta), 1e-12 * Stereographic<double>(330).rho(theta));
+    EXPECT_NEAR(Unified<double>(660, 1).rho(theta), Stereographic<double>(330).rho(theta),
+                1e-12 * Stereographic<double>(330).rho(theta));
     const double alpha = 0.3, xi = alpha / (1 - alpha);
     EXPECT_NEAR(ExtendedUnified<double>(400, alpha, 1).rho(theta), Unified<double>(400 / (1 - alpha), xi).rho(theta),
                 1e-12 * std::abs(Unified<double>(400 / (1 - alpha), xi).rho(theta)));
@@ -167,7 +170,8 @@ TEST(UnifiedFamily, OutOfRangeParametersAreRefusedNamingTheParameter) {
 // Every registry name resolves to its class and back; the help text lists them all.
 TEST(ModelRegistry, NamesRoundTripAndUnknownNamesThrow) {
   for (std::string_view name : model_names()) {
-    const std::string_view back = with_model_class(name, []<template <typename> class M>() { return M<double>::kName; });
+    const std::string_view back =
+        with_model_class(name, []<template <typename> class M>() { return M<double>::kName; });
     EXPECT_EQ(back, name);
     EXPECT_NE(model_names_text().find(name), std::string::npos);
   }

@@ -9,8 +9,8 @@
 
 #include "fishcam/augment/augmentation.hpp"
 #include "fishcam/core/error.hpp"
-#include "fishcam/fit/fit.hpp"
 #include "fishcam/core/model_registry.hpp"
+#include "fishcam/fit/fit.hpp"
 
 namespace fishcam {
 namespace {
@@ -263,7 +263,8 @@ std::string comparison_json(const Comparison& comparison) {
                {"labels_differ_pct", json::object()}};
     for (std::size_t b = 0; b < r.by_angle.size(); ++b) {
       json band{{"from_deg", Comparison::kAngleBandsDeg[b]}};
-      band["to_deg"] = b + 2 < Comparison::kAngleBandsDeg.size() ? json(Comparison::kAngleBandsDeg[b + 1]) : json(nullptr);
+      band["to_deg"] =
+          b + 2 < Comparison::kAngleBandsDeg.size() ? json(Comparison::kAngleBandsDeg[b + 1]) : json(nullptr);
       band.update(stats_json(r.by_angle[b]));
       model["by_angle"].push_back(band);
     }

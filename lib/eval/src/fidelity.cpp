@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <limits>
 #include <map>
+#include <sstream>
 
 #include "fishcam/io/camera_io.hpp"
 #include "fishcam/io/file_input.hpp"
@@ -19,8 +19,8 @@ namespace fishcam {
 
 Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange& change,
                                std::optional<DepthPrior> prior, const cv::Mat& source_image,
-                               const cv::Mat& source_labels, const cv::Mat& source_depth,
-                               const cv::Mat& truth_image, const cv::Mat& truth_labels) {
+                               const cv::Mat& source_labels, const cv::Mat& source_depth, const cv::Mat& truth_image,
+                               const cv::Mat& truth_labels) {
   const cv::Size out(warp.target().width(), warp.target().height());
   if (source_image.type() != CV_8UC3 || truth_image.type() != CV_8UC3 || source_labels.type() != CV_8UC1 ||
       truth_labels.type() != CV_8UC1) {
@@ -79,7 +79,8 @@ struct SampleFiles {
 SampleFiles read_sample(const fs::path& root, const std::string& name, bool depth) {
   const fs::path label_path = root / "semantic_annotations" / "gtLabels" / (name + ".png");
   SampleFiles f{read_image(root / "rgb_images" / (name + ".png"), cv::IMREAD_COLOR),
-                read_image(label_path, cv::IMREAD_UNCHANGED), {}};
+                read_image(label_path, cv::IMREAD_UNCHANGED),
+                {}};
   if (f.labels.type() != CV_8UC1) throw Error(path_for_message(label_path) + ": expected 8-bit single-channel labels");
   if (depth) {
     const fs::path depth_path = root / "depth" / (name + ".npy");
@@ -101,14 +102,18 @@ ViewpointChange change_of(const nlohmann::json& entry, const fs::path& file, std
     // sample-dataset's presets turn by tens of degrees and move by metres at most.
     for (double v : r) {
       if (!(std::abs(v) <= 360)) {
-        throw Error(path_for_message(file) + ": " + text_for_message(*name) + ": rotation_deg: expected angles within "
-                    "[-360, 360], got " + number_for_message(v));
+        throw Error(path_for_message(file) + ": " + text_for_message(*name) +
+                    ": rotation_deg: expected angles within "
+                    "[-360, 360], got " +
+                    number_for_message(v));
       }
     }
     for (double v : t) {
       if (!(std::abs(v) <= 1000)) {
-        throw Error(path_for_message(file) + ": " + text_for_message(*name) + ": translation: expected metres within "
-                    "[-1000, 1000], got " + number_for_message(v));
+        throw Error(path_for_message(file) + ": " + text_for_message(*name) +
+                    ": translation: expected metres within "
+                    "[-1000, 1000], got " +
+                    number_for_message(v));
       }
     }
     return ViewpointChange::from_euler_deg({r[0], r[1], r[2]}, {t[0], t[1], t[2]});
@@ -130,7 +135,8 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
       // A test set without its changes cannot be scored: an interrupted sample-dataset
       // or a folder of something else, never skipped in silence.
       if (!fs::exists(entry.path() / "changes.jsonl")) {
-        throw Error(path_for_message(entry.path()) + ": a test set without changes.jsonl (incomplete: make the "
+        throw Error(path_for_message(entry.path()) +
+                    ": a test set without changes.jsonl (incomplete: make the "
                     "dataset again with fishcam sample-dataset, or move the folder out)");
       }
       sets.push_back(entry.path());
@@ -147,7 +153,8 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
   std::vector<DatasetFidelity> rows;
   for (const fs::path& set : sets) {
     std::vector<DatasetFidelity> set_rows;
-    for (const auto& [prior_name, prior] : priors) set_rows.push_back({set.filename().string(), prior_name, 0, 0, 0, 0});
+    for (const auto& [prior_name, prior] : priors)
+      set_rows.push_back({set.filename().string(), prior_name, 0, 0, 0, 0});
     const fs::path changes = set / "changes.jsonl";
     std::istringstream lines(read_bounded_file(changes, std::size_t(64) << 20, "a changes.jsonl file"));
     for (std::string line; std::getline(lines, line);) {
@@ -162,7 +169,8 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
       const ViewpointChange change = change_of(entry, changes, &name);
       const fs::path calibration = root / "test" / "calibration" / (name + ".json");
       auto warp = warps.find(calibration.string());
-      if (warp == warps.end()) warp = warps.emplace(calibration.string(), ViewpointWarp(read_camera(calibration))).first;
+      if (warp == warps.end())
+        warp = warps.emplace(calibration.string(), ViewpointWarp(read_camera(calibration))).first;
       const SampleFiles source = read_sample(root / "test", name, depth);
       const SampleFiles truth = read_sample(set, name, false);
       for (size_t k = 0; k < priors.size(); ++k) {

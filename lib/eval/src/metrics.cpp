@@ -26,10 +26,14 @@ LabelSpan span_of(const cv::Mat& image, const char* what) {
   if (!m.isContinuous()) throw Error(std::string(what) + ": expected a continuous image");
   const std::size_t n = m.total();
   switch (m.depth()) {
-    case CV_8U: return std::span<const std::uint8_t>(m.ptr<std::uint8_t>(), n);
-    case CV_16U: return std::span<const std::uint16_t>(m.ptr<std::uint16_t>(), n);
-    case CV_32S: return std::span<const std::int32_t>(m.ptr<std::int32_t>(), n);
-    default: throw Error(std::string(what) + ": expected 8- or 16-bit unsigned or 32-bit signed labels");
+    case CV_8U:
+      return std::span<const std::uint8_t>(m.ptr<std::uint8_t>(), n);
+    case CV_16U:
+      return std::span<const std::uint16_t>(m.ptr<std::uint16_t>(), n);
+    case CV_32S:
+      return std::span<const std::int32_t>(m.ptr<std::int32_t>(), n);
+    default:
+      throw Error(std::string(what) + ": expected 8- or 16-bit unsigned or 32-bit signed labels");
   }
 }
 
@@ -68,8 +72,7 @@ void ConfusionMatrix::update(const LabelSpan& prediction, const LabelSpan& groun
           const std::int64_t t = std::int64_t(gt[i]), p = std::int64_t(pred[i]);
           if (t < 0 || t >= classes) {
             throw Error("ground truth value " + std::to_string(t) + " " + where(i, width) + " is not a class (0 to " +
-                        std::to_string(classes - 1) + (has_ignore ? ", ignored: " + std::to_string(ignore) : "") +
-                        ")");
+                        std::to_string(classes - 1) + (has_ignore ? ", ignored: " + std::to_string(ignore) : "") + ")");
           }
           if (p < 0 || p >= classes) {
             throw Error("prediction value " + std::to_string(p) + " " + where(i, width) + " is not a class (0 to " +

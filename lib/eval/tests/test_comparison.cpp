@@ -1,8 +1,8 @@
 // compare_models: what the projection model used for augmentation changes.
 #include <nlohmann/json.hpp>
 
-#include "fishcam/eval/comparison.hpp"
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/eval/comparison.hpp"
 #include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
@@ -15,8 +15,8 @@ TEST(Comparison, TheCameraAgainstItselfIsZeroAndTheIdentityIsACheck) {
   const SceneRender scene = render_street_scene(camera, *camera.parameters().pose);
   ComparisonOptions options;
   options.samples = 2;
-  const Comparison c = compare_models(camera, {{"itself", "given", camera, std::nullopt}}, options,
-                                      {{"scene", scene.labels}});
+  const Comparison c =
+      compare_models(camera, {{"itself", "given", camera, std::nullopt}}, options, {{"scene", scene.labels}});
   ASSERT_EQ(c.models.size(), 1u);
   const ModelComparison& m = c.models[0];
   EXPECT_EQ(m.all.max_px, 0);

@@ -19,8 +19,8 @@ TEST(Metrics, HandWorkedConfusionMatrix) {
   ConfusionMatrix m(3, 255);
   m.update(span(pred), span(gt));
   // rows: truth; columns: prediction
-  const std::vector<std::int64_t> expected{1, 1, 0,   //
-                                           0, 2, 1,   //
+  const std::vector<std::int64_t> expected{1, 1, 0,  //
+                                           0, 2, 1,  //
                                            1, 0, 1};
   EXPECT_EQ(m.counts(), expected);
   EXPECT_EQ(m.scored_pixels(), 7);

@@ -36,8 +36,9 @@ void check_solution(const CalibrationResult& r, int width, int height, const std
   const auto& p = r.camera.principal_point;
   if (!std::isfinite(r.rms_px) ||
       !std::all_of(r.parameters.begin(), r.parameters.end(), [](double v) { return std::isfinite(v); })) {
-    throw Error(what + "the solve ended without a finite cost or parameters (check --board, --imagersize and the "
-                       "corners)");
+    throw Error(what +
+                "the solve ended without a finite cost or parameters (check --board, --imagersize and the "
+                "corners)");
   }
   char text[200];
   if (!(p.x() >= 0 && p.x() <= width - 1 && p.y() >= 0 && p.y() <= height - 1)) {
@@ -71,12 +72,13 @@ std::string undetermined_text(const std::vector<std::string>& names, bool poses,
   }
   if (poses) text += names.empty() ? "the board poses" : " and the board poses";
   text += names.size() + (poses ? 1 : 0) > 1 ? " trade against each other: the data determine "
-                                                "only a combination of them"
-                                              : " has no effect on the data";
+                                               "only a combination of them"
+                                             : " has no effect on the data";
   const auto names_all = model_param_names(model, int(parameters.size()) - 3);
   const auto xi = std::find(names_all.begin(), names_all.end(), "xi");
   if (xi != names_all.end() && std::abs(parameters[size_t(xi - names_all.begin())]) < 0.05) {
-    text += " (xi ~ 0, where the " + model + " model's xi acts as a combination of its other parameters; a model "
+    text += " (xi ~ 0, where the " + model +
+            " model's xi acts as a combination of its other parameters; a model "
             "without xi, such as kannala-brandt, determines this lens)";
   }
   return text;
@@ -95,7 +97,9 @@ using detail::projection_covariance_of;
 using detail::Solve;
 using detail::undetermined_text;
 
-Eigen::Vector3d to_camera(const BoardPose& pose, const Eigen::Vector3d& p) { return pose.rotation * p + pose.translation; }
+Eigen::Vector3d to_camera(const BoardPose& pose, const Eigen::Vector3d& p) {
+  return pose.rotation * p + pose.translation;
+}
 
 // Kabsch: the rigid transform taking `from` onto `to` (least squares).
 BoardPose rigid_fit(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to) {
@@ -117,8 +121,8 @@ BoardPose rigid_fit(const std::vector<Eigen::Vector3d>& from, const std::vector<
 // A board pose from its corners' rays: all corners first put at one distance
 // (from the angle between neighbouring rays), then a few rounds of "fit the board,
 // intersect the rays with its plane, fit again".
-std::optional<BoardPose> pose_from_rays(const std::vector<Eigen::Vector3d>& rays, const std::vector<Eigen::Vector3d>& points,
-                                        const BoardSpec& board) {
+std::optional<BoardPose> pose_from_rays(const std::vector<Eigen::Vector3d>& rays,
+                                        const std::vector<Eigen::Vector3d>& points, const BoardSpec& board) {
   double angle = 0;
   int pairs = 0;
   for (int j = 0; j < board.rows; ++j) {
@@ -264,7 +268,8 @@ void check_board_order(const std::vector<const BoardObservation*>& boards, const
   const int n = board.cols * board.rows;
   for (int cols = 2; cols <= n / 2; ++cols) {  // the row length that explains the corners
     if (n % cols != 0 || cols == board.cols || n / cols < 2) continue;
-    if (median_grid_disorder(boards, cols, n / cols) <= kOrdered && median_disordered_share(boards, cols, n / cols) <= kClean) {
+    if (median_grid_disorder(boards, cols, n / cols) <= kOrdered &&
+        median_disordered_share(boards, cols, n / cols) <= kClean) {
       const std::string fits = std::to_string(cols) + "x" + std::to_string(n / cols);
       throw Error("calibrate: the corners are ordered as a " + fits + " board, not " + as_given + " (rows of " +
                   std::to_string(cols) + "): pass --board " + fits);
@@ -289,8 +294,8 @@ void check_corners_in_image(const std::vector<BoardObservation>& observations, i
   for (const auto& o : observations) {
     for (const auto& c : o.corners) {
       ++total;
-      if (c.x() >= -detail::kCornerMarginPx && c.x() <= width - 1 + detail::kCornerMarginPx && c.y() >= -detail::kCornerMarginPx &&
-          c.y() <= height - 1 + detail::kCornerMarginPx) {
+      if (c.x() >= -detail::kCornerMarginPx && c.x() <= width - 1 + detail::kCornerMarginPx &&
+          c.y() >= -detail::kCornerMarginPx && c.y() <= height - 1 + detail::kCornerMarginPx) {
         continue;
       }
       if (outside++ == 0) first_image = &o, first = c;
@@ -310,7 +315,8 @@ void check_corners_in_image(const std::vector<BoardObservation>& observations, i
 void check_no_duplicate_views(const std::vector<const BoardObservation*>& boards) {
   // Sorted by the first corner, so only neighbours in that order are compared.
   std::vector<const BoardObservation*> order(boards);
-  std::sort(order.begin(), order.end(), [](const auto* a, const auto* b) { return a->corners[0].x() < b->corners[0].x(); });
+  std::sort(order.begin(), order.end(),
+            [](const auto* a, const auto* b) { return a->corners[0].x() < b->corners[0].x(); });
   for (size_t a = 0; a < order.size(); ++a) {
     for (size_t b = a + 1; b < order.size() && order[b]->corners[0].x() - order[a]->corners[0].x() <= 0.01; ++b) {
       bool same = order[a]->corners.size() == order[b]->corners.size();
@@ -442,7 +448,8 @@ Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
   for_each_index(int(starts.size()), o.threads, [&](int k) {
     candidates[size_t(k)].model = starts[size_t(k)];
     ceres::CauchyLoss loss(1.0);
-    costs[size_t(k)] = solve<Model>(&candidates[size_t(k)], o.all_points, o.corners, false, &loss, kScreening).final_cost;
+    costs[size_t(k)] =
+        solve<Model>(&candidates[size_t(k)], o.all_points, o.corners, false, &loss, kScreening).final_cost;
   });
   // Finished to 1e-9: the robust solution only decides the outliers; the final
   // plain solve (step 4) polishes.
@@ -463,7 +470,7 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
     for (size_t i = 0; i < o.points.size(); ++i) {
       Eigen::Vector2d q;
       const double e = camera.project(to_camera(pose, o.points[i]), &q) ? (q - o.corners[b][i]).norm()
-                                                                         : std::numeric_limits<double>::infinity();
+                                                                        : std::numeric_limits<double>::infinity();
       per_board[b].push_back(e);
       errors.push_back(e);
     }
@@ -473,7 +480,8 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
   std::vector<CalibrationResult::Outlier> outliers;
   for (size_t b = 0; b < o.boards.size(); ++b) {
     for (size_t i = 0; i < o.points.size(); ++i) {
-      if (per_board[b][i] > std::max(5 * sigma, 0.1)) outliers.push_back({o.boards[b]->filename, int(i), per_board[b][i]});
+      if (per_board[b][i] > std::max(5 * sigma, 0.1))
+        outliers.push_back({o.boards[b]->filename, int(i), per_board[b][i]});
     }
   }
   return outliers;
@@ -501,7 +509,8 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
       corners.push_back(o.corners[b][i]);
     }
     if (points.size() < 3) {
-      result->warnings.push_back("image " + o.boards[b]->filename + ": " + std::to_string(o.points.size() - points.size()) +
+      result->warnings.push_back("image " + o.boards[b]->filename + ": " +
+                                 std::to_string(o.points.size() - points.size()) +
                                  " of its corners are outliers; the image is left out");
       continue;
     }
@@ -540,7 +549,8 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
   const size_t intrinsics = result->parameters.size();
   result->noise_px = std::sqrt(full.variance);
   result->sigmas.assign(intrinsics, 0);
-  for (size_t i = 0; i < intrinsics; ++i) result->sigmas[i] = std::sqrt(full.covariance(Eigen::Index(i), Eigen::Index(i)));
+  for (size_t i = 0; i < intrinsics; ++i)
+    result->sigmas[i] = std::sqrt(full.covariance(Eigen::Index(i), Eigen::Index(i)));
   for (const Eigen::VectorXd& direction : full.undetermined) {
     std::vector<std::string> names;
     for (size_t i = 0; i < intrinsics; ++i) {
@@ -629,11 +639,11 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
   int covered = 0;
   for (const auto& row : cell) covered += int(std::count(std::begin(row), std::end(row), true));
   if (covered < 24) {
-    result.warnings.push_back("the boards cover only " + std::to_string(100 * covered / 48) +
-                              "% of the image (8x6 grid): the model is extrapolated elsewhere; add boards near the rim");
+    result.warnings.push_back(
+        "the boards cover only " + std::to_string(100 * covered / 48) +
+        "% of the image (8x6 grid): the model is extrapolated elsewhere; add boards near the rim");
   }
   return result;
 }
-
 
 }  // namespace fishcam

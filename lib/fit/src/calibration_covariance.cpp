@@ -36,7 +36,8 @@ ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<dou
       if (c >= a) lo = std::min(lo, c), hi = std::max(hi, c);
       for (int j = begin; j < end; ++j) normal(c, crs.cols[size_t(j)]) += crs.values[size_t(i)] * crs.values[size_t(j)];
     }
-    if (hi >= 0 && std::upper_bound(starts.begin(), starts.end(), lo) != std::upper_bound(starts.begin(), starts.end(), hi)) {
+    if (hi >= 0 &&
+        std::upper_bound(starts.begin(), starts.end(), lo) != std::upper_bound(starts.begin(), starts.end(), hi)) {
       throw Error("calibrate: internal error: a residual depends on two eliminated parameter blocks");
     }
   }
@@ -164,8 +165,9 @@ Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2
                                       std::optional<double> distance) {
   const auto& record = camera.parameters().calibration;
   if (!record || record->covariance.size() == 0) {
-    throw Error("projection uncertainty: the camera carries no calibration covariance (fishcam calibrate writes one "
-                "into fishcam JSON)");
+    throw Error(
+        "projection uncertainty: the camera carries no calibration covariance (fishcam calibrate writes one "
+        "into fishcam JSON)");
   }
   if (distance && !(*distance > 0 && std::isfinite(*distance))) {
     throw Error("projection uncertainty: the distance must be finite and > 0");
@@ -197,7 +199,8 @@ Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2
   });
   // d pixel / d (model, cx, cy, a_y, w, t): a board-fixed point moves to p + w x p + t.
   Eigen::MatrixXd jacobian(2, n + 9);
-  jacobian << d_model, d_center, d_ay, -d_point * detail::cross_matrix(point), (distance ? d_point : Eigen::Matrix<double, 2, 3, Eigen::RowMajor>::Zero());
+  jacobian << d_model, d_center, d_ay, -d_point * detail::cross_matrix(point),
+      (distance ? d_point : Eigen::Matrix<double, 2, 3, Eigen::RowMajor>::Zero());
   return jacobian * record->covariance * jacobian.transpose();
 }
 
@@ -210,4 +213,3 @@ double projection_uncertainty(const Camera& camera, const Eigen::Vector2d& pixel
 }
 
 }  // namespace fishcam
-

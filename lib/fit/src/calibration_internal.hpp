@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "ceres_support.hpp"
-#include "fishcam/fit/calibration.hpp"
 #include "fishcam/core/camera.hpp"
+#include "fishcam/fit/calibration.hpp"
 #include "fishcam/fit/fit.hpp"
 
 namespace fishcam::detail {

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
-#include <numbers>
 #include <filesystem>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <optional>
 #include <set>
@@ -93,7 +93,6 @@ struct RigCornerResidual {
   }
 };
 
-
 // The mean of rigid transforms: quaternions aligned in sign and averaged, translations averaged.
 Pose mean_pose(const std::vector<Pose>& poses) {
   Eigen::Vector4d q = Eigen::Vector4d::Zero();
@@ -161,7 +160,7 @@ bool same_mounting(const Pose& a, const Pose& b, double distance) {
 
 // What the instants camera k shares with camera 0 say about their relative pose.
 struct InstantConsensus {
-  std::vector<int> renumbered;  // instants whose board camera k numbers from the other end
+  std::vector<int> renumbered;   // instants whose board camera k numbers from the other end
   std::vector<int> disagreeing;  // instants that agree with the consensus in neither numbering
   long shared = 0;
 };
@@ -188,7 +187,8 @@ InstantConsensus instant_consensus(const std::map<int, Pose>& seen0, const std::
   const auto support = [&](const Pose& candidate) {
     long agreeing = 0;
     for (size_t j = 0; j < instants.size(); ++j) {
-      agreeing += same_mounting(as_given[j], candidate, distance[j]) || same_mounting(renumbered[j], candidate, distance[j]);
+      agreeing +=
+          same_mounting(as_given[j], candidate, distance[j]) || same_mounting(renumbered[j], candidate, distance[j]);
     }
     return agreeing;
   };
@@ -223,8 +223,8 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   std::vector<CalibrationResult> singles;
   for (size_t k = 0; k < n; ++k) {
     try {
-      singles.push_back(calibrate(cameras[k].observations, board, cameras[k].width, cameras[k].height,
-                                  cameras[k].model, options));
+      singles.push_back(
+          calibrate(cameras[k].observations, board, cameras[k].width, cameras[k].height, cameras[k].model, options));
     } catch (const Error& e) {
       throw Error(camera_name(k) + ": " + e.what());
     }
@@ -258,18 +258,19 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     // Most instants disagreeing with each other: the images of one instant were not
     // taken at the same time (or are not of one instant at all).
     if (consensus.shared >= 3 && 2 * long(consensus.disagreeing.size()) > consensus.shared) {
-      throw Error("calibrate rig: " + camera_name(k) + " and camera 0 disagree on their relative pose at " +
-                  std::to_string(consensus.disagreeing.size()) + " of their " + std::to_string(consensus.shared) +
-                  " shared instants (more than 10 deg, or 25 % of the board distance, from the others): are images of the "
-                  "same name taken at the same time? (unsynchronised or mismatched pairs)");
+      throw Error(
+          "calibrate rig: " + camera_name(k) + " and camera 0 disagree on their relative pose at " +
+          std::to_string(consensus.disagreeing.size()) + " of their " + std::to_string(consensus.shared) +
+          " shared instants (more than 10 deg, or 25 % of the board distance, from the others): are images of the "
+          "same name taken at the same time? (unsynchronised or mismatched pairs)");
     }
     if (!consensus.disagreeing.empty()) {
       std::string names;
       for (size_t j = 0; j < consensus.disagreeing.size() && j < 5; ++j) {
         names += (j ? ", " : "") + instant_names[consensus.disagreeing[j]];
       }
-      warnings.push_back(camera_name(k) + ": " + std::to_string(consensus.disagreeing.size()) + " instant(s) disagree " +
-                         "with the others on the pose relative to camera 0 (" + names +
+      warnings.push_back(camera_name(k) + ": " + std::to_string(consensus.disagreeing.size()) +
+                         " instant(s) disagree " + "with the others on the pose relative to camera 0 (" + names +
                          (consensus.disagreeing.size() > 5 ? ", ..." : "") + "): not synchronised?");
     }
     for (const int i : consensus.renumbered) {
@@ -306,8 +307,9 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   }
   for (size_t k = 0; k < n; ++k) {
     if (!from_rig[k]) {
-      throw Error(camera_name(k) + " shares no board instant with camera 0 or the cameras linked to it (images of "
-                                   "the same instant must have the same file name)");
+      throw Error(camera_name(k) +
+                  " shares no board instant with camera 0 or the cameras linked to it (images of "
+                  "the same instant must have the same file name)");
     }
   }
   // 3. The joint solve: every camera's intrinsics, cameras 1.. relative to camera 0,
@@ -382,7 +384,8 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   RigCalibrationResult out;
   out.warnings = warnings;
   out.instants = instants;
-  out.rms_px = std::sqrt(2 * summary.final_cost / double(std::max(1L, std::accumulate(corners_of.begin(), corners_of.end(), 0L))));
+  out.rms_px = std::sqrt(2 * summary.final_cost /
+                         double(std::max(1L, std::accumulate(corners_of.begin(), corners_of.end(), 0L))));
   for (size_t k = 0; k < n; ++k) {
     CalibrationResult r = singles[k];
     const Pose rig_to_camera = pose_of(camera_blocks[k]);
@@ -433,7 +436,8 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
           r.sigmas[i] = std::numeric_limits<double>::quiet_NaN();
         }
       }
-      if (!names.empty()) r.undetermined.push_back(undetermined_text(names, false, cameras[k].model.name, r.parameters));
+      if (!names.empty())
+        r.undetermined.push_back(undetermined_text(names, false, cameras[k].model.name, r.parameters));
     }
     r.noise_px = std::sqrt(full.variance);
     r.camera = p;
@@ -454,9 +458,13 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   for (const Eigen::VectorXd& direction : full.undetermined) {
     bool intrinsic = false;
     for (size_t k = 0; k < n; ++k) {
-      intrinsic = intrinsic || direction.segment(intrinsic_start[k], Eigen::Index(out.cameras[k].parameters.size())).norm() >= 0.1;
+      intrinsic = intrinsic ||
+                  direction.segment(intrinsic_start[k], Eigen::Index(out.cameras[k].parameters.size())).norm() >= 0.1;
     }
-    if (!intrinsic) out.warnings.push_back("the data do not determine the cameras' relative poses fully (a direction of the joint solve has no curvature)");
+    if (!intrinsic)
+      out.warnings.push_back(
+          "the data do not determine the cameras' relative poses fully (a direction of the joint solve has no "
+          "curvature)");
   }
   return out;
 }

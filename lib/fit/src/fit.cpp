@@ -1,7 +1,7 @@
-#include "fishcam/core/error.hpp"
 #include "fishcam/fit/fit.hpp"
-#include "fishcam/fit/calibration.hpp"
+#include "fishcam/core/error.hpp"
 #include "fishcam/core/parallel.hpp"
+#include "fishcam/fit/calibration.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -9,9 +9,9 @@
 
 #include <Eigen/QR>
 #include <algorithm>
-#include <map>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numbers>
 
 namespace fishcam {
@@ -66,8 +66,8 @@ double refine(std::span<const Correspondence> samples, int params, double ax, st
   constexpr size_t kChunk = 512;
   for (size_t begin = 0; begin < samples.size(); begin += kChunk) {
     const auto chunk = samples.subspan(begin, std::min(kChunk, samples.size() - begin));
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<ChunkResidual<Model>, 8>(
-        new ChunkResidual<Model>{chunk, params, ax});
+    auto* cost =
+        new ceres::DynamicAutoDiffCostFunction<ChunkResidual<Model>, 8>(new ChunkResidual<Model>{chunk, params, ax});
     cost->AddParameterBlock(params);
     cost->AddParameterBlock(2);
     cost->AddParameterBlock(1);
@@ -109,7 +109,8 @@ std::vector<double> linear_fit(std::span<const Correspondence> samples, int k, c
     target[i] = sw * (samples[i].pixel - c).dot(ae) / w;
   }
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
-  if (qr.rank() < k) throw Error("fit: the samples do not determine the " + std::string(name) + " model (degenerate data)");
+  if (qr.rank() < k)
+    throw Error("fit: the samples do not determine the " + std::string(name) + " model (degenerate data)");
   const Eigen::VectorXd p = qr.solve(target);
   return Model<double>::from_basis(p.data(), k);
 }
@@ -152,7 +153,8 @@ ModelSpec parse_model_spec(std::string_view text) {
   const auto colon = text.find(':');
   spec.name = std::string(text.substr(0, colon));
   if (colon != std::string_view::npos) {
-    const bool ordered = with_model_class(spec.name, []<template <typename> class Model>() { return takes_order<Model>; });
+    const bool ordered =
+        with_model_class(spec.name, []<template <typename> class Model>() { return takes_order<Model>; });
     if (!ordered) throw Error("model " + quoted_for_message(std::string(text)) + ": only polynomial takes an order");
     const std::string order(text.substr(colon + 1));
     size_t used = 0;
@@ -355,7 +357,9 @@ ProjectionDiff projection_diff(const Camera& a, const Camera& b, const Projectio
     Eigen::VectorXd rhs(long(2 * e.size()));
     for (size_t i = 0; i < e.size(); ++i) rhs.segment<2>(long(2 * i)) = std::sqrt(w[i]) * e[i];
     const Eigen::Vector3d step = -(jacobian.transpose() * jacobian).ldlt().solve(jacobian.transpose() * rhs);
-    r = Eigen::AngleAxisd(step.norm(), step.norm() > 0 ? Eigen::Vector3d(step.normalized()) : Eigen::Vector3d::UnitX()) * r;
+    r = Eigen::AngleAxisd(step.norm(),
+                          step.norm() > 0 ? Eigen::Vector3d(step.normalized()) : Eigen::Vector3d::UnitX()) *
+        r;
     if (step.norm() < 1e-15) break;
   }
   const auto e = residuals(r, nullptr, nullptr);
@@ -479,8 +483,11 @@ std::vector<float> reprojection_error_map(const Camera& source, const Camera& fi
 std::string fit_report_json(const CameraParameters& fitted, const ErrorReport& r) {
   nlohmann::json bins = nlohmann::json::array();
   for (const auto& b : r.by_angle) {
-    bins.push_back({{"theta_from_deg", b.theta_from_deg}, {"theta_to_deg", b.theta_to_deg}, {"samples", b.samples},
-                    {"rms_px", b.rms_px}, {"max_px", b.max_px}});
+    bins.push_back({{"theta_from_deg", b.theta_from_deg},
+                    {"theta_to_deg", b.theta_to_deg},
+                    {"samples", b.samples},
+                    {"rms_px", b.rms_px},
+                    {"max_px", b.max_px}});
   }
   return nlohmann::json{
       {"samples", r.samples},

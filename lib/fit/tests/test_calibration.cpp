@@ -1,14 +1,14 @@
 // Chessboard calibration: exact recovery without noise, honest uncertainties with
 // noise, mrcal's corners format, detection, and bad input.
-#include <opencv2/imgcodecs.hpp>
 #include <algorithm>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "fishcam/io/corners.hpp"
-#include "fishcam/testing/testing.hpp"
-#include "fishcam/fit/calibration.hpp"
 #include "fishcam/augment/chessboard.hpp"
+#include "fishcam/fit/calibration.hpp"
+#include "fishcam/io/corners.hpp"
 #include "fishcam/testing/test_support.hpp"
+#include "fishcam/testing/testing.hpp"
 
 namespace fishcam {
 namespace {
@@ -41,7 +41,8 @@ TEST_P(EveryModel, NoiseFreeBoardsRecoverTheParameters) {
   }
   const Camera camera(truth);
   const auto boards = testing::synthesize_boards(camera, kBoard, 25, 0.0, 11);
-  const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, spec_of(truth.model));
+  const CalibrationResult result =
+      calibrate(boards.observations, kBoard, truth.width, truth.height, spec_of(truth.model));
   const auto expected = truth_vector(truth);
   ASSERT_EQ(result.parameters.size(), expected.size());
   for (size_t i = 0; i < expected.size(); ++i) {
@@ -60,7 +61,8 @@ TEST(Calibration, WithNoiseTheErrorsSitWithinThreeSigma) {
   const auto expected = truth_vector(truth);
   for (std::uint64_t seed : {2, 3}) {
     const auto boards = testing::synthesize_boards(Camera(truth), kBoard, 50, 0.3, seed);
-    const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, {"polynomial", 4});
+    const CalibrationResult result =
+        calibrate(boards.observations, kBoard, truth.width, truth.height, {"polynomial", 4});
     EXPECT_NEAR(result.rms_px, 0.3 * std::sqrt(2.0), 0.03);  // two noisy coordinates per corner
     for (size_t i = 0; i < expected.size(); ++i) {
       ASSERT_TRUE(std::isfinite(result.sigmas[i]) && result.sigmas[i] > 0) << result.parameter_names[i];
@@ -85,7 +87,8 @@ TEST(Calibration, OutliersAreFoundAndDoNotBiasTheResult) {
 
 TEST(Calibration, CornersFileRoundTripAndErrors) {
   const auto dir = test::scratch_dir("corners");
-  auto boards = testing::synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 3, 0.2, 5).observations;
+  auto boards =
+      testing::synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 3, 0.2, 5).observations;
   boards.push_back({"empty.png", {}});
   write_corners(dir / "c.vnl", boards);
   const auto back = read_corners(dir / "c.vnl", kBoard);
@@ -196,7 +199,8 @@ TEST(Calibration, BoardsInOnePoseAreRefused) {
     // The same pose, each photo with noise of its own (the same corners twice are
     // refused as the same photo: DuplicateViewsAreRefused).
     std::vector<Eigen::Vector2d> corners = one.observations[0].corners;
-    for (size_t c = 0; c < corners.size(); ++c) corners[c] += Eigen::Vector2d(0.05 * std::sin(double(c + 7 * i)), 0.05 * std::cos(double(3 * c + i)));
+    for (size_t c = 0; c < corners.size(); ++c)
+      corners[c] += Eigen::Vector2d(0.05 * std::sin(double(c + 7 * i)), 0.05 * std::cos(double(3 * c + i)));
     same.push_back({"img" + std::to_string(i) + ".png", corners});
   }
   for (const char* model : {"polynomial", "equidistant", "kannala-brandt", "double-sphere"}) {
@@ -225,7 +229,8 @@ TEST(Calibration, ABoardSizeThatDoesNotExplainTheCornersIsRefused) {
   const BoardSpec board{9, 6, 0.1};
   const auto boards = testing::synthesize_boards(camera, board, 20, 0.3, 8).observations;
   int refused = 0;
-  for (const BoardSpec wrong : {BoardSpec{2, 27, 0.1}, BoardSpec{27, 2, 0.1}, BoardSpec{3, 18, 0.1}, BoardSpec{18, 3, 0.1}}) {
+  for (const BoardSpec wrong :
+       {BoardSpec{2, 27, 0.1}, BoardSpec{27, 2, 0.1}, BoardSpec{3, 18, 0.1}, BoardSpec{18, 3, 0.1}}) {
     try {
       calibrate(boards, wrong, 1280, 966, {"polynomial", 4});
       ADD_FAILURE() << wrong.cols << "x" << wrong.rows << " was calibrated";
@@ -313,10 +318,12 @@ TEST(Calibration, AgreesWithMrcalCalibrateCameras) {
   const Camera truth = read_camera(test::data_path("stereographic.cameramodel"));
   const auto boards = testing::synthesize_boards(truth, kBoard, 30, 0.3, 9);
   write_corners(dir / "corners.vnl", boards.observations);
-  const std::string command = "cd '" + dir.string() + "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl "
-                              "--lensmodel LENSMODEL_STEREOGRAPHIC --focal 300 --object-spacing 0.1 --object-width-n 10 "
-                              "--object-height-n 10 --imagersize 1280 966 --outdir . --skip-calobject-warp-solve "
-                              "'synth-*.png' > log.txt 2>&1";
+  const std::string command =
+      "cd '" + dir.string() +
+      "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl "
+      "--lensmodel LENSMODEL_STEREOGRAPHIC --focal 300 --object-spacing 0.1 --object-width-n 10 "
+      "--object-height-n 10 --imagersize 1280 966 --outdir . --skip-calobject-warp-solve "
+      "'synth-*.png' > log.txt 2>&1";
   ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "log.txt");
   const Camera theirs = read_camera(dir / "camera-0.cameramodel");  // mrcal's own file, optimization_inputs and all
   const CalibrationResult ours = calibrate(boards.observations, kBoard, 1280, 966, {"stereographic"});

@@ -6,11 +6,11 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "fishcam/core/parallel.hpp"
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/io/corners.hpp"
-#include "fishcam/core/parallel.hpp"
-#include "fishcam/testing/testing.hpp"
 #include "fishcam/testing/test_support.hpp"
+#include "fishcam/testing/testing.hpp"
 
 namespace fishcam {
 namespace {
@@ -64,8 +64,8 @@ TEST(ProjectionUncertainty, PredictsTheSpreadOfReNoisedCalibrations) {
   const auto clean = testing::synthesize_boards(truth, kBoard, 20, 0.0, 21);
   constexpr double kNoise = 0.3;
   constexpr int kRuns = 50;
-  const CalibrationResult baseline = calibrate(renoised(clean.observations, kNoise, 1000), kBoard, truth.width(),
-                                               truth.height(), {"kannala-brandt"});
+  const CalibrationResult baseline =
+      calibrate(renoised(clean.observations, kNoise, 1000), kBoard, truth.width(), truth.height(), {"kannala-brandt"});
   const Camera predicted(baseline.camera);
   std::vector<CalibrationResult> runs(kRuns);
   for_each_index(kRuns, 2, [&](int k) {
@@ -96,9 +96,9 @@ TEST(ProjectionUncertainty, PredictsTheSpreadOfReNoisedCalibrations) {
         }
         const double measured = worst_direction_sigma(projected);
         const double expected = projection_uncertainty(predicted, pixel, distance);
-        EXPECT_NEAR(measured / expected, 1.0, 0.25) << "pixel " << u << "," << v << " distance "
-                                                    << distance.value_or(-1) << ": measured " << measured
-                                                    << " px, predicted " << expected << " px";
+        EXPECT_NEAR(measured / expected, 1.0, 0.25)
+            << "pixel " << u << "," << v << " distance " << distance.value_or(-1) << ": measured " << measured
+            << " px, predicted " << expected << " px";
         ++compared;
       }
     }
@@ -258,7 +258,8 @@ TEST(Calibration, ThreadCountDoesNotChangeTheResult) {
   for (const char* threads : {"1", "2"}) {
     const auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
                                      " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model double-sphere "
-                                     "--threads " + threads + " --out " + test::quoted(dir / ("t" + std::string(threads) + ".json")) +
+                                     "--threads " +
+                                     threads + " --out " + test::quoted(dir / ("t" + std::string(threads) + ".json")) +
                                      " --poses " + test::quoted(dir / ("p" + std::string(threads) + ".json")));
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
@@ -288,8 +289,7 @@ TEST(Calibration, TheProgramSelectsImagesAndCapsAtTheData) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("the opencv format cannot hold the calibration record"), std::string::npos) << r.err;
 
-  for (const std::string bad : {"--images 'nothing*.png'", "--theta-limit 70", "--theta-limit data+x",
-                                "--threads 0"}) {
+  for (const std::string bad : {"--images 'nothing*.png'", "--theta-limit 70", "--theta-limit data+x", "--threads 0"}) {
     r = test::run_fishcam(base + bad + " --out " + test::quoted(dir / "c.json"));
     EXPECT_NE(r.exit_code, 0) << bad;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << bad << ": " << r.err;
@@ -360,8 +360,8 @@ TEST(Calibration, DiffComparesWhereTheBoardsWere) {
   write_corners(dir / "c.vnl", inner);
   for (const char* model : {"kannala-brandt", "polynomial"}) {
     const auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
-                                     " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model " + model +
-                                     " --out " + test::quoted(dir / (std::string(model) + ".json")));
+                                     " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model " + model + " --out " +
+                                     test::quoted(dir / (std::string(model) + ".json")));
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   const std::string pair = test::quoted(dir / "kannala-brandt.json") + " " + test::quoted(dir / "polynomial.json");
@@ -375,7 +375,8 @@ TEST(Calibration, DiffComparesWhereTheBoardsWere) {
   const auto all = nlohmann::json::parse(r.out);
   EXPECT_GT(all["pixels"].get<long>(), data["pixels"].get<long>());
   EXPECT_GT(all["rms_px"].get<double>(), 5 * data["rms_px"].get<double>());  // extrapolation dominates
-  r = test::run_fishcam("diff --json --weights none --corners " + test::quoted(dir / "c.vnl") + " --board 10x10 " + pair);
+  r = test::run_fishcam("diff --json --weights none --corners " + test::quoted(dir / "c.vnl") + " --board 10x10 " +
+                        pair);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto hull = nlohmann::json::parse(r.out);
   EXPECT_NE(hull["region"].get<std::string>().find("convex hull"), std::string::npos);
@@ -383,7 +384,7 @@ TEST(Calibration, DiffComparesWhereTheBoardsWere) {
   // Refused in one line: weights without covariances, a data region nobody knows.
   const std::string plain = test::quoted(test::data_path("kannala_brandt.yaml"));
   for (const std::string& bad : {"--weights uncertainty " + plain + " " + plain, "--region data " + plain + " " + plain,
-                                "--corners " + test::quoted(dir / "c.vnl") + " " + pair}) {
+                                 "--corners " + test::quoted(dir / "c.vnl") + " " + pair}) {
     r = test::run_fishcam("diff " + bad);
     EXPECT_NE(r.exit_code, 0) << bad;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;

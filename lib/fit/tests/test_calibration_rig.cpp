@@ -6,8 +6,8 @@
 
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/io/corners.hpp"
-#include "fishcam/testing/testing.hpp"
 #include "fishcam/testing/test_support.hpp"
+#include "fishcam/testing/testing.hpp"
 
 namespace fishcam {
 namespace {
@@ -44,7 +44,8 @@ SyntheticRig surround_rig(double noise_px, std::uint64_t seed) {
   int instant = 0;
   for (size_t k = 0; k < 4; ++k) {
     for (const BoardPose& in_k : testing::synthesize_boards(lens, kBoard, 16, 0.0, seed * 10 + k).poses) {
-      const Pose in_car = {rig.truth[k].rotation * in_k.rotation, rig.truth[k].rotation * in_k.translation + rig.truth[k].translation};
+      const Pose in_car = {rig.truth[k].rotation * in_k.rotation,
+                           rig.truth[k].rotation * in_k.translation + rig.truth[k].translation};
       const std::string name = "instant-" + std::to_string(instant++) + ".png";
       for (size_t j = 0; j < 4; ++j) {
         const Eigen::Quaterniond to_j = rig.truth[j].rotation.conjugate();
@@ -52,10 +53,13 @@ SyntheticRig surround_rig(double noise_px, std::uint64_t seed) {
         for (const auto& p : points) {
           Eigen::Vector2d q;
           const Eigen::Vector3d in_j = to_j * (in_car.rotation * p + in_car.translation - rig.truth[j].translation);
-          if (!lens.project(in_j, &q) || q.x() < 0 || q.y() < 0 || q.x() > lens.width() - 1 || q.y() > lens.height() - 1) break;
+          if (!lens.project(in_j, &q) || q.x() < 0 || q.y() < 0 || q.x() > lens.width() - 1 ||
+              q.y() > lens.height() - 1)
+            break;
           corners.push_back(q + Eigen::Vector2d(noise(random), noise(random)));
         }
-        if (corners.size() == points.size()) rig.cameras[j].observations.push_back({"cam" + std::to_string(j) + "/" + name, corners});
+        if (corners.size() == points.size())
+          rig.cameras[j].observations.push_back({"cam" + std::to_string(j) + "/" + name, corners});
       }
     }
   }
@@ -153,14 +157,16 @@ SyntheticRig stereo_rig(double noise_px, std::uint64_t seed, double baseline = 0
     for (size_t j = 0; j < 2; ++j) {
       for (const auto& p : points) {
         Eigen::Vector2d q;
-        const Eigen::Vector3d in_j = inverse(now[j]).rotation * (in_rig.rotation * p + in_rig.translation) +
-                                     inverse(now[j]).translation;
-        if (!lens.project(in_j, &q) || q.x() < 0 || q.y() < 0 || q.x() > lens.width() - 1 || q.y() > lens.height() - 1) break;
+        const Eigen::Vector3d in_j =
+            inverse(now[j]).rotation * (in_rig.rotation * p + in_rig.translation) + inverse(now[j]).translation;
+        if (!lens.project(in_j, &q) || q.x() < 0 || q.y() < 0 || q.x() > lens.width() - 1 || q.y() > lens.height() - 1)
+          break;
         seen[j].push_back(q + Eigen::Vector2d(noise(random), noise(random)));
       }
     }
     if (seen[0].size() != points.size() || seen[1].size() != points.size()) continue;
-    for (size_t j = 0; j < 2; ++j) rig.cameras[j].observations.push_back({"cam" + std::to_string(j) + "/" + name, seen[j]});
+    for (size_t j = 0; j < 2; ++j)
+      rig.cameras[j].observations.push_back({"cam" + std::to_string(j) + "/" + name, seen[j]});
   }
   return rig;
 }
@@ -227,7 +233,8 @@ TEST(Rig, AJointSolveThatHidesInconsistentDataSaysSo) {
   const RigCalibrationResult r = calibrate_rig(rig.cameras, kBoard);
   int rms_said = 0;
   for (const std::string& w : r.warnings) {
-    rms_said += w.starts_with("camera 1: the joint solve's rms ") && w.find("times its own calibration's") != std::string::npos;
+    rms_said +=
+        w.starts_with("camera 1: the joint solve's rms ") && w.find("times its own calibration's") != std::string::npos;
   }
   EXPECT_GE(rms_said, 1) << ::testing::PrintToString(r.warnings);
   EXPECT_GT(r.cameras[1].rms_px, 1.5 * 0.1);
@@ -264,7 +271,8 @@ TEST(Rig, TheProgramWritesTheRigInEveryFormatThatHoldsOne) {
     write_corners(path, rig.cameras[k].observations);
     corners += " --corners " + test::quoted(path);
   }
-  const std::string base = "calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model kannala-brandt ";
+  const std::string base =
+      "calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model kannala-brandt ";
   int formats = 0;
   std::vector<Pose> first;
   for (const CameraFormat f : camera_formats()) {  // every format of the table that holds a rig, fishcam first
@@ -295,8 +303,10 @@ TEST(Rig, TheProgramWritesTheRigInEveryFormatThatHoldsOne) {
   EXPECT_NE(r.err.find("holds one camera, not a rig"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "rig_opencv.yaml"));
-  r = test::run_fishcam("calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model "
-                        "kannala-brandt,equidistant --out " + test::quoted(dir / "bad.json"));
+  r = test::run_fishcam("calibrate" + corners +
+                        " --board 9x6 --spacing 0.1 --imagersize 640x483 --model "
+                        "kannala-brandt,equidistant --out " +
+                        test::quoted(dir / "bad.json"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("one per camera (4)"), std::string::npos) << r.err;
 }

@@ -23,7 +23,8 @@ TEST_P(EveryModelCornerCost, JacobiansMatchAutomaticDifferentiation) {
   // Camera-frame points: random rays up to 100 deg (or the model's limit), and rays
   // near and on the axis (where the closed form hands over to automatic derivatives).
   std::vector<Eigen::Vector3d> rays = test::random_rays(300, std::min(100 * M_PI / 180, camera.domain().theta_max), 11);
-  for (const double off_axis : {0.0, 1e-6, 1e-5, 1e-4, 1e-2}) rays.push_back(Eigen::Vector3d(off_axis, -off_axis / 3, 1).normalized());
+  for (const double off_axis : {0.0, 1e-6, 1e-5, 1e-4, 1e-2})
+    rays.push_back(Eigen::Vector3d(off_axis, -off_axis / 3, 1).normalized());
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   int compared = 0;
@@ -32,7 +33,8 @@ TEST_P(EveryModelCornerCost, JacobiansMatchAutomaticDifferentiation) {
       Eigen::Vector2d pixel;
       if (!camera.project(ray, &pixel)) continue;
       // A board pose (rotation up to ~100 deg) and the board point it takes onto the ray.
-      std::array<double, 6> pose{2 * uniform(rng), 2 * uniform(rng), 2 * uniform(rng), uniform(rng), uniform(rng), 1 + uniform(rng)};
+      std::array<double, 6> pose{2 * uniform(rng), 2 * uniform(rng), 2 * uniform(rng),
+                                 uniform(rng),     uniform(rng),     1 + uniform(rng)};
       const BoardPose board = detail::pose_of(pose);
       const Eigen::Vector3d point = board.rotation.inverse() * ((1.5 + uniform(rng)) * ray - board.translation);
       const Eigen::Vector2d corner = pixel + Eigen::Vector2d(uniform(rng), uniform(rng));
@@ -53,7 +55,8 @@ TEST_P(EveryModelCornerCost, JacobiansMatchAutomaticDifferentiation) {
       EXPECT_NEAR(residual[1], expected[1], 1e-9);
       const auto same = [&](const std::vector<double>& a, const std::vector<double>& b, const char* what) {
         for (size_t i = 0; i < a.size(); ++i) {
-          EXPECT_NEAR(a[i], b[i], 1e-8 * std::max(1.0, std::abs(b[i]))) << what << "[" << i << "] at ray " << ray.transpose();
+          EXPECT_NEAR(a[i], b[i], 1e-8 * std::max(1.0, std::abs(b[i])))
+              << what << "[" << i << "] at ray " << ray.transpose();
         }
       };
       same(j_model, k_model, "d/d model"), same(j_center, k_center, "d/d center");

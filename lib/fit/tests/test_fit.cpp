@@ -65,8 +65,11 @@ TEST(Fit, WoodScapeConversionsReportWhatTheyCostOnFreshPixels) {
   const struct {
     const char* model;
     double rms_below, rms_above;  // the expected error range, px
-  } cases[] = {{"kannala-brandt", 0.10, 0.20}, {"equidistant", 15, 25}, {"stereographic", 15, 25},
-               {"polynomial:4", 0, 1e-9}, {"polynomial:3", 0.1, 5}};
+  } cases[] = {{"kannala-brandt", 0.10, 0.20},
+               {"equidistant", 15, 25},
+               {"stereographic", 15, 25},
+               {"polynomial:4", 0, 1e-9},
+               {"polynomial:3", 0.1, 5}};
   for (const auto& c : cases) {
     const Camera fitted(fit_camera(fit_samples, parse_model_spec(c.model), source.parameters()));
     const ErrorReport reported = reprojection_errors(fitted, sample_image(source, 2, 0));
@@ -85,8 +88,8 @@ TEST(Fit, WoodScapeConversionsReportWhatTheyCostOnFreshPixels) {
 
 TEST(Fit, KannalaBrandtAsOpenCVYamlWorksWithCvFisheye) {
   const Camera source = woodscape();
-  const CameraParameters kb = fit_camera(sample_image(source, 4, 1), parse_model_spec("kannala-brandt"),
-                                         source.parameters());
+  const CameraParameters kb =
+      fit_camera(sample_image(source, 4, 1), parse_model_spec("kannala-brandt"), source.parameters());
   const auto dir = test::scratch_dir("fit_opencv");
   write_camera(kb, dir / "kb.yaml", CameraFormat::opencv);
   // Read back with cv::FileStorage itself, as an OpenCV user would.
@@ -132,8 +135,8 @@ TEST(Fit, PaperFormulas) {
   const double half_fov = source.field_of_view_deg().horizontal / 2 * M_PI / 180;
   const auto eq = paper_camera(source, parse_model_spec("equidistant"));
   const auto st = paper_camera(source, parse_model_spec("stereographic"));
-  EXPECT_DOUBLE_EQ(model_params(eq.model)[0], 640 / half_fov);                          // eq. 13
-  EXPECT_DOUBLE_EQ(model_params(st.model)[0], 640 / (2 * std::tan(half_fov / 2)));     // eq. 14
+  EXPECT_DOUBLE_EQ(model_params(eq.model)[0], 640 / half_fov);                      // eq. 13
+  EXPECT_DOUBLE_EQ(model_params(st.model)[0], 640 / (2 * std::tan(half_fov / 2)));  // eq. 14
   EXPECT_THROW(paper_camera(source, parse_model_spec("kannala-brandt")), Error);
 }
 
@@ -150,7 +153,8 @@ TEST(Fit, BadInput) {
   std::vector<Correspondence> ring;
   for (int i = 0; i < 100; ++i) {
     const double phi = 0.0628 * i;
-    ring.push_back({{std::cos(phi), std::sin(phi), 1.0}, source.principal_point() + 200 * Eigen::Vector2d(std::cos(phi), std::sin(phi))});
+    ring.push_back({{std::cos(phi), std::sin(phi), 1.0},
+                    source.principal_point() + 200 * Eigen::Vector2d(std::cos(phi), std::sin(phi))});
   }
   EXPECT_THROW(fit_camera(ring, parse_model_spec("polynomial"), source.parameters()), Error);
 }

@@ -12,8 +12,8 @@
 #include <random>
 #include <set>
 
-#include "fishcam/core/error.hpp"
 #include "file_descriptor.hpp"
+#include "fishcam/core/error.hpp"
 
 namespace fishcam {
 namespace {
@@ -171,9 +171,10 @@ std::size_t remove_stale_temporaries(const fs::path& folder) {
     // NAME.HOST.PID.RANDOM.fishcam-tmp, read from the right.
     const std::string fields = name.substr(0, name.size() - kTemporaryExtension.size());
     const size_t random_at = fields.rfind('.');
-    const size_t pid_at = random_at == std::string::npos || random_at == 0 ? std::string::npos
-                                                                          : fields.rfind('.', random_at - 1);
-    const size_t host_at = pid_at == std::string::npos || pid_at == 0 ? std::string::npos : fields.rfind('.', pid_at - 1);
+    const size_t pid_at =
+        random_at == std::string::npos || random_at == 0 ? std::string::npos : fields.rfind('.', random_at - 1);
+    const size_t host_at =
+        pid_at == std::string::npos || pid_at == 0 ? std::string::npos : fields.rfind('.', pid_at - 1);
     if (host_at == std::string::npos || fields.substr(host_at + 1, pid_at - host_at - 1) != host) continue;
     const std::string pid_text = fields.substr(pid_at + 1, random_at - pid_at - 1);
     if (pid_text.empty() || pid_text.size() > 9 ||
@@ -182,8 +183,9 @@ std::size_t remove_stale_temporaries(const fs::path& folder) {
     }
     // The random part exactly as temporary_path writes it: 16 lowercase hex digits.
     const std::string random_text = fields.substr(random_at + 1);
-    if (random_text.size() != 16 ||
-        !std::all_of(random_text.begin(), random_text.end(), [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); })) {
+    if (random_text.size() != 16 || !std::all_of(random_text.begin(), random_text.end(), [](char c) {
+          return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+        })) {
       continue;
     }
     const pid_t pid = pid_t(std::stol(pid_text));

@@ -12,8 +12,8 @@
 #include <numbers>
 #include <sstream>
 
-#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/core/error.hpp"
+#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/file_input.hpp"
 #include "formats/format.hpp"
 
@@ -37,7 +37,7 @@ std::string read_camera_file(const std::filesystem::path& path) {
 
 // Magnitudes no camera has: a file holding them is corrupt (or a fuzzer's), and its
 // numbers would overflow every computation downstream (round trips missed by 1e291 px).
-constexpr double kMaxPixels = 1e6;       // principal point, focal length (px)
+constexpr double kMaxPixels = 1e6;        // principal point, focal length (px)
 constexpr double kPixelScaleRange = 1e6;  // a_x, a_y within [1e-6, 1e6]
 
 std::string magnitude_problem(const Camera& camera) {
@@ -116,7 +116,8 @@ std::string camera_format_names() { return joined(&detail::FormatSpec::name); }
 std::optional<CameraFormat> camera_format_for_extension(const std::filesystem::path& path) {
   const std::string ext = path.extension().string();
   // Extensions several formats share go to the first of: fishcam (.json), opencv (.yaml).
-  for (CameraFormat preferred : {CameraFormat::mrcal, CameraFormat::fishcam, CameraFormat::opencv, CameraFormat::colmap}) {
+  for (CameraFormat preferred :
+       {CameraFormat::mrcal, CameraFormat::fishcam, CameraFormat::opencv, CameraFormat::colmap}) {
     for (std::string_view e : format_spec(preferred).extensions) {
       if (ext == e) return preferred;
     }
@@ -149,8 +150,8 @@ CameraFormat detect_camera_format(std::string_view content, std::string_view sou
   const bool binary = content.find('\0') != std::string_view::npos;
   if (!binary && !c.yaml()) c.yaml_or_throw();
   if (!binary && (start.starts_with("<") || start.starts_with("%YAML"))) return CameraFormat::opencv;
-  throw Error(std::string(source_name) + ": unrecognised camera file (expected one of: " +
-              joined(&detail::FormatSpec::description) + ")");
+  throw Error(std::string(source_name) +
+              ": unrecognised camera file (expected one of: " + joined(&detail::FormatSpec::description) + ")");
 }
 
 namespace {
@@ -170,8 +171,8 @@ std::vector<detail::NamedCamera> read_all(const detail::Content& c, CameraFormat
 
 }  // namespace
 
-CameraParameters parse_camera(std::string_view content, std::string_view source_name,
-                              const CameraReadOptions& options, CameraFileInfo* info) {
+CameraParameters parse_camera(std::string_view content, std::string_view source_name, const CameraReadOptions& options,
+                              CameraFileInfo* info) {
   content = without_byte_order_mark(content);
   const std::string source(source_name);
   const detail::Content c(content, source, &options);
@@ -205,7 +206,8 @@ CameraParameters parse_camera(std::string_view content, std::string_view source_
     p.width = options.image_size->first, p.height = options.image_size->second;
   } else if (options.image_size && (options.image_size->first != p.width || options.image_size->second != p.height)) {
     throw Error(source + ": image_size: the file says " + std::to_string(p.width) + "x" + std::to_string(p.height) +
-                ", got " + std::to_string(options.image_size->first) + "x" + std::to_string(options.image_size->second));
+                ", got " + std::to_string(options.image_size->first) + "x" +
+                std::to_string(options.image_size->second));
   }
   p = validated(std::move(p), source_name);
   if (info) {
@@ -251,7 +253,8 @@ namespace {
 double observed_next_to(const CalibrationRecord& r, double azimuth) {
   const double step = 2 * std::numbers::pi / CalibrationRecord::kAzimuthSectors;
   const double a = r.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(azimuth - step / 2))];
-  const double b = r.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(azimuth + step / 2 - 2 * std::numbers::pi * (azimuth + step / 2 >= std::numbers::pi)))];
+  const double b = r.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(
+      azimuth + step / 2 - 2 * std::numbers::pi * (azimuth + step / 2 >= std::numbers::pi)))];
   return std::isnan(a) ? b : std::isnan(b) ? a : std::max(a, b);
 }
 
@@ -272,8 +275,8 @@ json observed_json(const Camera& camera) {
   const auto fov = camera.field_of_view_deg();
   char text[240];
   const double observed_deg = r.theta_max * kToDeg;
-  for (const auto& [name, model_fov, data_fov] : {std::tuple{"horizontal", fov.horizontal, horizontal},
-                                                  std::tuple{"vertical", fov.vertical, vertical}}) {
+  for (const auto& [name, model_fov, data_fov] :
+       {std::tuple{"horizontal", fov.horizontal, horizontal}, std::tuple{"vertical", fov.vertical, vertical}}) {
     if (std::isnan(data_fov) || model_fov > data_fov + 1.0) {
       std::snprintf(text, sizeof text,
                     "the %s field of view (%.1f deg) reaches beyond the %s deg the calibration's corners span", name,
@@ -325,17 +328,18 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
       {"theta_max_limited_by", to_string(d.limited_by)},
       {"rho_max_px", d.closed ? json(d.rho_max) : json(nullptr)},
       {"fov_deg", {{"horizontal", fov.horizontal}, {"vertical", fov.vertical}, {"diagonal", fov.diagonal}}},
-      {"inverse_table", {{"cells", camera.inverse_table().cells()},
-                         {"fallback_cells", camera.inverse_table().fallback_cells()},
-                         {"worst_error_px", camera.inverse_table().worst_error_px()},
-                         // Without a table (an open domain): a closed form, or the robust solver per point.
-                         {"closed_form", std::visit([](const auto& m) { return ClosedFormInverse<std::decay_t<decltype(m)>>; },
-                                                    p.model)}}},
+      {"inverse_table",
+       {{"cells", camera.inverse_table().cells()},
+        {"fallback_cells", camera.inverse_table().fallback_cells()},
+        {"worst_error_px", camera.inverse_table().worst_error_px()},
+        // Without a table (an open domain): a closed form, or the robust solver per point.
+        {"closed_form",
+         std::visit([](const auto& m) { return ClosedFormInverse<std::decay_t<decltype(m)>>; }, p.model)}}},
   };
   j["mrcal_lens"] = p.mrcal_lens ? json{{"lensmodel", p.mrcal_lens->lensmodel()},
                                         {"base_model", p.mrcal_lens->base_model()},
                                         {"values", p.mrcal_lens->values().size()}}
-                                  : json(nullptr);
+                                 : json(nullptr);
   j["tangential"] = nullptr;  // radially symmetric
   if (p.tangential.any()) {
     for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
@@ -431,7 +435,8 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
     if (!near(back.skew.xy, camera.skew.xy) || !near(back.skew.yx, camera.skew.yx)) {
       throw Error(": its skew does not read back");
     }
-    if (bool(back.mrcal_lens) != bool(camera.mrcal_lens) || (back.mrcal_lens && !(*back.mrcal_lens == *camera.mrcal_lens))) {
+    if (bool(back.mrcal_lens) != bool(camera.mrcal_lens) ||
+        (back.mrcal_lens && !(*back.mrcal_lens == *camera.mrcal_lens))) {
       throw Error(": its mrcal lens does not read back");
     }
   } catch (const Error& e) {

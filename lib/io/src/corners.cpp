@@ -7,8 +7,8 @@
 #include <map>
 #include <sstream>
 
-#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/core/error.hpp"
+#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/file_input.hpp"
 
 namespace fishcam {

@@ -1,8 +1,8 @@
 #include "document.hpp"
 
-#include <pugixml.hpp>
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
+#include <pugixml.hpp>
 
 #include <algorithm>
 #include <sstream>
@@ -31,7 +31,8 @@ void check_yaml_shape(std::string_view content, const std::string& source) {
   const auto lines = std::count(content.begin(), content.end(), '\n');
   const auto separators = std::count(content.begin(), content.end(), ',');
   if (size_t(std::max(lines, separators)) > kMaxDocumentNodes) {
-    fail(source, "YAML", "more than " + std::to_string(kMaxDocumentNodes) + (lines > separators ? " lines" : " commas"));
+    fail(source, "YAML",
+         "more than " + std::to_string(kMaxDocumentNodes) + (lines > separators ? " lines" : " commas"));
   }
   int depth = 0;
   size_t line_start = 0;
@@ -168,7 +169,8 @@ DocNode from_xml(const pugi::xml_node& node, int depth, Budget& budget, const st
   for (const pugi::xml_node& child : node.children()) {
     if (child.type() == pugi::node_element) {
       has_elements = true;
-      if (std::string_view(child.name()) != "_") reject_duplicate_key(seen, child.name(), source, "XML");  // "_": OpenCV's sequence items
+      if (std::string_view(child.name()) != "_")
+        reject_duplicate_key(seen, child.name(), source, "XML");  // "_": OpenCV's sequence items
       out.keys.push_back(child.name());
       out.items.push_back(from_xml(child, depth + 1, budget, source));
     }

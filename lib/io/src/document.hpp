@@ -13,9 +13,9 @@ namespace fishcam::detail {
 struct DocNode {
   enum class Kind { null, scalar, sequence, map };
   Kind kind = Kind::null;
-  std::string tag;     // YAML tag or XML type_id, without "!!" / "tag:yaml.org,2002:" ("opencv-matrix")
-  std::string scalar;  // the text of a scalar (XML: the element's text)
-  std::vector<DocNode> items;  // a sequence, or a map's values (in file order)
+  std::string tag;                // YAML tag or XML type_id, without "!!" / "tag:yaml.org,2002:" ("opencv-matrix")
+  std::string scalar;             // the text of a scalar (XML: the element's text)
+  std::vector<DocNode> items;     // a sequence, or a map's values (in file order)
   std::vector<std::string> keys;  // a map's keys, one per item (vector<pair<string, DocNode>>
                                   // would need DocNode complete here)
 

@@ -8,8 +8,8 @@
 #include <cerrno>
 #include <cstring>
 
-#include "fishcam/core/error.hpp"
 #include "file_descriptor.hpp"
+#include "fishcam/core/error.hpp"
 
 namespace fishcam {
 namespace {
@@ -37,7 +37,8 @@ FileDescriptor open_bounded(const std::filesystem::path& path, std::size_t max_b
 }  // namespace
 
 std::string byte_size_for_message(std::size_t bytes) {
-  if (bytes >= (std::size_t(1) << 20) && bytes % (std::size_t(1) << 20) == 0) return std::to_string(bytes >> 20) + " MiB";
+  if (bytes >= (std::size_t(1) << 20) && bytes % (std::size_t(1) << 20) == 0)
+    return std::to_string(bytes >> 20) + " MiB";
   if (bytes >= 1024 && bytes % 1024 == 0) return std::to_string(bytes >> 10) + " kB";
   return std::to_string(bytes) + " bytes";
 }

@@ -3,8 +3,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "fishcam/core/error.hpp"
-#include "fishcam/io/file_input.hpp"
 #include "fishcam/core/stderr_capture.hpp"
+#include "fishcam/io/file_input.hpp"
 
 namespace fishcam {
 

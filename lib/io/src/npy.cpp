@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
-#include <sstream>
 #include <regex>
+#include <sstream>
 #include <string>
 
-#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/core/error.hpp"
+#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/file_input.hpp"
 
 namespace fishcam {
@@ -31,7 +31,15 @@ std::string npy_bytes(const NpyArray& array, const std::string& name) {
   const size_t total = (10 + header.size() + 1 + 63) / 64 * 64;
   header.append(total - 10 - header.size() - 1, ' ');
   header += '\n';
-  const unsigned char preamble[10] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0, static_cast<unsigned char>(header.size() & 0xff),
+  const unsigned char preamble[10] = {0x93,
+                                      'N',
+                                      'U',
+                                      'M',
+                                      'P',
+                                      'Y',
+                                      1,
+                                      0,
+                                      static_cast<unsigned char>(header.size() & 0xff),
                                       static_cast<unsigned char>(header.size() >> 8)};
   std::string bytes(reinterpret_cast<const char*>(preamble), sizeof preamble);
   bytes += header;
@@ -52,11 +60,15 @@ NpyArray read_npy(const std::filesystem::path& path) {
   }
   if (preamble[6] != 1) throw Error(path.string() + ": only .npy format version 1.0 is read");
   std::string header(size_t(preamble[8]) | (size_t(preamble[9]) << 8), '\0');
-  if (!in.read(header.data(), static_cast<std::streamsize>(header.size()))) throw Error(path.string() + ": truncated header");
-  if (header.find("'descr': '<f4'") == std::string::npos) throw Error(path.string() + ": descr: expected '<f4' (float32)");
-  if (header.find("'fortran_order': False") == std::string::npos) throw Error(path.string() + ": fortran_order: expected False");
+  if (!in.read(header.data(), static_cast<std::streamsize>(header.size())))
+    throw Error(path.string() + ": truncated header");
+  if (header.find("'descr': '<f4'") == std::string::npos)
+    throw Error(path.string() + ": descr: expected '<f4' (float32)");
+  if (header.find("'fortran_order': False") == std::string::npos)
+    throw Error(path.string() + ": fortran_order: expected False");
   std::smatch match;
-  if (!std::regex_search(header, match, std::regex(R"('shape': \(([0-9, ]*)\))"))) throw Error(path.string() + ": shape: missing");
+  if (!std::regex_search(header, match, std::regex(R"('shape': \(([0-9, ]*)\))")))
+    throw Error(path.string() + ": shape: missing");
   NpyArray array;
   // The element count is checked against the file's size before anything is
   // allocated (a 128-byte header must not make us zero-fill gigabytes).

@@ -4,8 +4,8 @@
 
 #include <cstdio>
 
-#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/core/error.hpp"
+#include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/file_input.hpp"
 
 namespace fishcam {
@@ -79,8 +79,9 @@ bool claim_output_settings(const fs::path& file, const OutputSettings& settings,
   for (const auto& [raw_option, raw_value] : settings.values) {
     const std::string option = as_utf8(raw_option), value = as_utf8(raw_value);
     const auto found = values.find(option);
-    const std::string their_value =
-        found == values.end() ? "(not given)" : found->is_string() ? found->get<std::string>() : found->dump();
+    const std::string their_value = found == values.end() ? "(not given)"
+                                    : found->is_string()  ? found->get<std::string>()
+                                                          : found->dump();
     if (their_value != value) {
       throw Error(option + ": this folder was written with " + quoted_for_message(their_value) + ", this run has " +
                   quoted_for_message(value) + " (" + where + "; use another output folder, or the same settings)");

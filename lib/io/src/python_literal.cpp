@@ -76,14 +76,14 @@ class Parser {
     while (peek() != '}') {
       if (peek() != '\'' && peek() != '"') fail("expected a quoted key");
       const std::string key = parse_strings();
-      if (peek() != ':') fail("expected ':' after key " + quoted_for_message(key) );
+      if (peek() != ':') fail("expected ':' after key " + quoted_for_message(key));
       ++pos_;
-      if (object.contains(key)) fail("duplicate key " + quoted_for_message(key) );
+      if (object.contains(key)) fail("duplicate key " + quoted_for_message(key));
       object[key] = parse_value();
       if (peek() == ',') {
         ++pos_;
       } else if (peek() != '}') {
-        fail("expected ',' or '}' after the value of " + quoted_for_message(key) );
+        fail("expected ',' or '}' after the value of " + quoted_for_message(key));
       }
     }
     ++pos_;
@@ -138,14 +138,16 @@ class Parser {
     if (word == "nan") return std::numeric_limits<double>::quiet_NaN();
     if (word == "inf") return std::numeric_limits<double>::infinity();
     pos_ = start;
-    fail("unexpected word " + quoted_for_message(std::string(word)) + " (only numbers, strings, True, False, None are allowed)");
+    fail("unexpected word " + quoted_for_message(std::string(word)) +
+         " (only numbers, strings, True, False, None are allowed)");
   }
 
   nlohmann::json parse_number() {
     const size_t start = pos_;
     if (s_[pos_] == '+' || s_[pos_] == '-') ++pos_;
-    while (pos_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.' ||
-                                ((s_[pos_] == '+' || s_[pos_] == '-') && (s_[pos_ - 1] == 'e' || s_[pos_ - 1] == 'E')))) {
+    while (pos_ < s_.size() &&
+           (std::isalnum(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.' ||
+            ((s_[pos_] == '+' || s_[pos_] == '-') && (s_[pos_ - 1] == 'e' || s_[pos_ - 1] == 'E')))) {
       ++pos_;
     }
     std::string token(s_.substr(start, pos_ - start));
@@ -154,7 +156,7 @@ class Parser {
     const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
     if (token.empty() || ec != std::errc() || end != token.data() + token.size()) {
       pos_ = start;
-      fail("expected a value, got " + quoted_for_message(token.substr(0, 20)) );
+      fail("expected a value, got " + quoted_for_message(token.substr(0, 20)));
     }
     return value;
   }

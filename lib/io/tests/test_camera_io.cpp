@@ -124,13 +124,16 @@ TEST(CameraIo, MrcalPythonReadsWhatWeWriteAndWeReadWhatItWrites) {
   // mrcal loads our file, projects a point, and writes the model back in its own style.
   const std::string script =
       "import mrcal, numpy as np\n"
-      "m = mrcal.cameramodel('" + (dir / "ours.cameramodel").string() + "')\n"
+      "m = mrcal.cameramodel('" +
+      (dir / "ours.cameramodel").string() +
+      "')\n"
       "print(m.intrinsics()[0], *['%.17g' % x for x in m.intrinsics()[1]])\n"
       "print(*['%.17g' % x for x in mrcal.project(np.array([0.3, -0.2, -0.4]), *m.intrinsics())])\n"
-      "m.write('" + (dir / "theirs.cameramodel").string() + "')\n";
+      "m.write('" +
+      (dir / "theirs.cameramodel").string() + "')\n";
   test::write_file(dir / "check.py", script);
-  const std::string command = "/usr/bin/python3 '" + (dir / "check.py").string() + "' > '" +
-                              (dir / "out.txt").string() + "' 2>&1";
+  const std::string command =
+      "/usr/bin/python3 '" + (dir / "check.py").string() + "' > '" + (dir / "out.txt").string() + "' 2>&1";
   ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "out.txt");
   std::istringstream out(test::read_file(dir / "out.txt"));
   std::string lensmodel;
@@ -182,7 +185,7 @@ const Malformed kMalformed[] = {
     {"ws_aspect", replaced(kWoodScape, "\"aspect_ratio\": 1.0", "\"aspect_ratio\": 0"), "intrinsic.aspect_ratio"},
     {"ws_quaternion", replaced(kWoodScape, "0.5941767906169857", "0.9"), "extrinsic.quaternion: must have unit norm"},
     {"ws_quaternion_short", replaced(kWoodScape, "0.5941767906169857, ", ""), "extrinsic.quaternion: expected 4"},
-    {"ws_intrinsic_list", replaced(kWoodScape, "\"intrinsic\": {", "\"intrinsic\": [{") , "not valid JSON"},
+    {"ws_intrinsic_list", replaced(kWoodScape, "\"intrinsic\": {", "\"intrinsic\": [{"), "not valid JSON"},
     {"ws_huge", replaced(kWoodScape, "-7.201", "1e308"), "coefficients too large"},
     {"ws_rho_overflow", replaced(kWoodScape, "-7.201", "1e308"), "coefficients too large"},
     {"ws_top_array", "[\"intrinsic\"]", "expected a JSON object"},
@@ -191,7 +194,8 @@ const Malformed kMalformed[] = {
     {"fc_params", replaced(kFishcam, "[340.0]", "[340.0, 1]"), "equidistant: expected 1 parameter(s) (f), got 2"},
     {"fc_version", replaced(kFishcam, "\"fishcam_camera\": 1", "\"fishcam_camera\": 9"), "fishcam_camera: unsupported"},
     {"fc_scale", replaced(kFishcam, "[1.0, 1.0]", "[1.0, -1.0]"), "pixel_scale"},
-    {"fc_limit", replaced(kFishcam, "\"parameters\"", "\"theta_limit_deg\": 200, \"parameters\""), "theta_limit: must be in (0, 180]"},
+    {"fc_limit", replaced(kFishcam, "\"parameters\"", "\"theta_limit_deg\": 200, \"parameters\""),
+     "theta_limit: must be in (0, 180]"},
     {"fc_pp_type", replaced(kFishcam, "[643.442, 479.407]", "\"centre\""), "principal_point: expected a list"},
     // mrcal
     {"mr_lensmodel", replaced(kMrcal, "'LENSMODEL_STEREOGRAPHIC'", "'LENSMODEL_CAHVOR7'"),
@@ -203,7 +207,8 @@ const Malformed kMalformed[] = {
     {"mr_intrinsics_short", replaced(kMrcal, "330, ", ""), "intrinsics: expected 4 numbers, got 3"},
     {"mr_nan", replaced(kMrcal, "330", "nan"), "intrinsics[0]: must be finite"},
     {"mr_truncated", kMrcal.substr(0, kMrcal.size() - 40), "not a valid mrcal .cameramodel"},
-    {"mr_imagersize", replaced(kMrcal, "[ 1280, 966,]", "[ 1280, -966,]"), "imagersize: expected two positive integers"},
+    {"mr_imagersize", replaced(kMrcal, "[ 1280, 966,]", "[ 1280, -966,]"),
+     "imagersize: expected two positive integers"},
     {"mr_missing_imagersize", replaced(kMrcal, "'imagersize'", "'imagesize'"), "imagersize: missing"},
     {"mr_garbage", replaced(kMrcal, "'extrinsics':", "'extrinsics': @"), "not a valid mrcal .cameramodel (line"},
     {"mr_fx_negative", replaced(kMrcal, "330", "-330"), "intrinsics: fx and fy must be > 0"},
@@ -250,8 +255,9 @@ TEST(CameraIo, TruncatedAndCorruptedFilesNeverCrash) {
   for (const auto& [name, format] : kBundled) {
     const std::string content = test::read_file(data_path(name));
     for (size_t cut = 0; cut < content.size(); cut += 3) {
-      for (const std::string& variant : {content.substr(0, cut), content.substr(0, cut) + "\x01" + content.substr(cut + 1),
-                                         content.substr(0, cut) + "}" + content.substr(cut + 1)}) {
+      for (const std::string& variant :
+           {content.substr(0, cut), content.substr(0, cut) + "\x01" + content.substr(cut + 1),
+            content.substr(0, cut) + "}" + content.substr(cut + 1)}) {
         try {
           Camera camera(parse_camera(variant, name));
           ++parsed;
@@ -274,8 +280,12 @@ TEST(CameraIo, OpenCvXmlReadsAndItsPrefixesNeverCrash) {
   cv::FileStorage fs(".xml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
   const auto p = yaml.parameters();
   const auto kb = model_params(p.model);
-  fs << "distortion_model" << "fisheye" << "image_width" << p.width << "image_height" << p.height;
-  fs << "K" << cv::Mat(cv::Matx33d(kb[0], 0, p.principal_point.x(), 0, kb[0] * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1));
+  fs << "distortion_model"
+     << "fisheye"
+     << "image_width" << p.width << "image_height" << p.height;
+  fs << "K"
+     << cv::Mat(
+            cv::Matx33d(kb[0], 0, p.principal_point.x(), 0, kb[0] * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1));
   fs << "D" << cv::Mat(cv::Matx41d(kb[1], kb[2], kb[3], kb[4]));
   const std::string xml = fs.releaseAndGetString();
   ASSERT_EQ(xml.rfind("<?xml", 0), 0u);

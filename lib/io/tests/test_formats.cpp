@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "fishcam/testing/reference_models.hpp"
 #include "fishcam/fit/fit.hpp"
+#include "fishcam/testing/reference_models.hpp"
 #include "fishcam/testing/test_support.hpp"
 
 namespace fishcam {
@@ -18,16 +18,15 @@ namespace {
 
 using test::Intrinsics;
 
-std::filesystem::path external(const std::string& name) {
-  return test::shared_path("data/external") / name;
-}
+std::filesystem::path external(const std::string& name) { return test::shared_path("data/external") / name; }
 
 using Reference = std::function<Eigen::Vector2d(const Eigen::Vector3d&)>;
 
 // The camera against the reference over random rays up to max_theta (and the
 // camera's domain), at distances 0.3 to 50: the worst pixel difference.
 double worst_difference(const Camera& camera, const Reference& reference, double max_theta) {
-  const double limit = std::min(max_theta, camera.domain().closed ? camera.domain().theta_max : camera.domain().theta_max - 1e-3);
+  const double limit =
+      std::min(max_theta, camera.domain().closed ? camera.domain().theta_max : camera.domain().theta_max - 1e-3);
   double worst = 0;
   int n = 0;
   for (const Eigen::Vector3d& ray : test::random_rays(5000, limit, 17)) {
@@ -46,7 +45,8 @@ double worst_against_opencv(const Camera& camera, const Intrinsics& k, const std
   for (const Eigen::Vector3d& ray : test::random_rays(3000, limit, 23)) points.emplace_back(ray.x(), ray.y(), ray.z());
   std::vector<cv::Point2d> pixels;
   const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
-  cv::fisheye::projectPoints(points, pixels, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, cv::Vec4d(d[0], d[1], d[2], d[3]));
+  cv::fisheye::projectPoints(points, pixels, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K,
+                             cv::Vec4d(d[0], d[1], d[2], d[3]));
   double worst = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     Eigen::Vector2d pixel;
@@ -64,7 +64,11 @@ const test::OCamCalib kOCamCalibFile{
     {-7.463674e+02, 0.000000e+00, 8.872435e-04, -1.024379e-06, 9.406640e-10},
     {976.011496, 423.799439, -71.005688, 109.822387, 14.864652, -10.577479, -103.634310, -135.380427, 365.628459,
      832.263016, 646.459114, 228.199663, 31.134605},
-    630.102940, 958.314910, 0.996974, -0.014257, 0.013102};
+    630.102940,
+    958.314910,
+    0.996974,
+    -0.014257,
+    0.013102};
 
 struct Readable {
   std::string file;
@@ -82,8 +86,8 @@ Reference opencv_radtan(const Intrinsics& k, const std::vector<double>& d) {
   return [=](const Eigen::Vector3d& p) {
     const std::vector<cv::Point3d> points{{p.x(), p.y(), p.z()}};
     std::vector<cv::Point2d> pixels;
-    cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1),
-                      d, pixels);
+    cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0),
+                      cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1), d, pixels);
     return Eigen::Vector2d(pixels[0].x, pixels[0].y);
   };
 }
@@ -94,96 +98,245 @@ Reference opencv_omnidir(const Intrinsics& k, double xi, const std::array<double
     const std::vector<cv::Point3d> points{{p.x(), p.y(), p.z()}};
     std::vector<cv::Point2d> pixels;
     cv::omnidir::projectPoints(points, pixels, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0),
-                               cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1), xi, cv::Vec4d(d[0], d[1], d[2], d[3]));
+                               cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1), xi,
+                               cv::Vec4d(d[0], d[1], d[2], d[3]));
     return Eigen::Vector2d(pixels[0].x, pixels[0].y);
   };
 }
 
 std::vector<Readable> readable_files() {
   const double kFull = M_PI;
-  auto kb = [](Intrinsics k, std::array<double, 4> d) { return [=](const Eigen::Vector3d& p) { return test::kannala_brandt(k, d, p); }; };
+  auto kb = [](Intrinsics k, std::array<double, 4> d) {
+    return [=](const Eigen::Vector3d& p) { return test::kannala_brandt(k, d, p); };
+  };
   const Intrinsics tumvi{190.97847715128717, 190.9733070521226, 254.93170605935475, 256.8974428996504};
-  const std::array<double, 4> tumvi_d{0.0034823894022493434, 0.0007150348452162257, -0.0020532361418706202, 0.00020293673591811182};
+  const std::array<double, 4> tumvi_d{0.0034823894022493434, 0.0007150348452162257, -0.0020532361418706202,
+                                      0.00020293673591811182};
   const Intrinsics t265_cam1{281.49219856329046, 280.3289056204996, 414.09933409091184, 406.02198481912353};
-  const std::array<double, 4> t265_cam1_d{-0.0028480208540388407, 0.05429895807264252, -0.0516469474707301, 0.010954064142332987};
+  const std::array<double, 4> t265_cam1_d{-0.0028480208540388407, 0.05429895807264252, -0.0516469474707301,
+                                          0.010954064142332987};
   const Intrinsics basalt_kb{286.60144163375528, 286.4617087423328, 422.2765876951761, 395.2246466040553};
-  const std::array<double, 4> basalt_kb_d{-0.006762412326815424, 0.045170283325720008, -0.043515167278210638, 0.008374959821591333};
+  const std::array<double, 4> basalt_kb_d{-0.006762412326815424, 0.045170283325720008, -0.043515167278210638,
+                                          0.008374959821591333};
   const Intrinsics camodocal{286.2373962402344, 286.4901123046875, 421.489990234375, 400.760986328125};
-  const std::array<double, 4> camodocal_d{-0.00703547615557909, 0.042284730821847916, -0.03999178111553192, 0.006651225965470076};
+  const std::array<double, 4> camodocal_d{-0.00703547615557909, 0.042284730821847916, -0.03999178111553192,
+                                          0.006651225965470076};
   const Intrinsics orb2{285.284, 285.469, 423.582, 412.376};
-  const std::array<double, 4> orb2_d{-0.0011336730094626546, 0.02848909981548786, -0.02476550079882145, 0.0018412149511277676};
+  const std::array<double, 4> orb2_d{-0.0011336730094626546, 0.02848909981548786, -0.02476550079882145,
+                                     0.0018412149511277676};
   const Intrinsics panyu{991, 991, 1612, 1617};
   const Intrinsics panyu_colmap{991, 991, 1612 - 0.5, 1617 - 0.5};  // COLMAP's pixel centres at +0.5
-  const std::array<double, 4> panyu_d{0.024943212941115993, 0.0049984956352712093, -0.017541641442409061, 0.0045520708951808514};
-  const Intrinsics modalai{4.6089521210754816e+02, 4.6131778898262439e+02, 6.7449558584818692e+02, 3.9842248409866886e+02};
-  const std::array<double, 4> modalai_d{5.1711564126224734e-02, 2.6006282671421282e-02, -1.3105287746560544e-02, 1.3645308211349091e-03};
+  const std::array<double, 4> panyu_d{0.024943212941115993, 0.0049984956352712093, -0.017541641442409061,
+                                      0.0045520708951808514};
+  const Intrinsics modalai{4.6089521210754816e+02, 4.6131778898262439e+02, 6.7449558584818692e+02,
+                           3.9842248409866886e+02};
+  const std::array<double, 4> modalai_d{5.1711564126224734e-02, 2.6006282671421282e-02, -1.3105287746560544e-02,
+                                        1.3645308211349091e-03};
   const Intrinsics ds{158.28600034966977, 158.2743455478755, 254.96116578191653, 256.8894394501779};
   const Intrinsics eucm{460.76484651566468, 459.4051018049483, 365.8937161309615, 249.33499869752445};
   return {
-      {"openvins_tum_vi_kalibr_imucam_chain.yaml", "", "kalibr", "kannala-brandt", 512, 512, kb(tumvi, tumvi_d), kFull, {{tumvi, tumvi_d}}},
-      {"openvins_rs_t265_kalibr_imucam_chain.yaml", "cam1", "kalibr", "kannala-brandt", 848, 800, kb(t265_cam1, t265_cam1_d), kFull, {{t265_cam1, t265_cam1_d}}},
-      {"basalt_t265_kb4_calib.json", "", "basalt", "kannala-brandt", 848, 800, kb(basalt_kb, basalt_kb_d), kFull, {{basalt_kb, basalt_kb_d}}},
-      {"vinsfusion_t265_left_KANNALA_BRANDT.yaml", "", "camodocal", "kannala-brandt", 848, 800, kb(camodocal, camodocal_d), kFull, {{camodocal, camodocal_d}}},
-      {"orbslam3_fisheye_KannalaBrandt8.yaml", "Camera2", "orbslam3", "kannala-brandt", 848, 800, kb(orb2, orb2_d), kFull, {{orb2, orb2_d}}},
-      {"panyu_ros_style_fisheye_camera_intrinsics.yaml", "", "ros", "kannala-brandt", 3264, 3264, kb(panyu, panyu_d), kFull, {{panyu, panyu_d}}},
-      {"colmap_opencv_fisheye_cameras.txt", "2", "colmap", "kannala-brandt", 3264, 3264, kb(panyu_colmap, panyu_d), kFull, {{panyu_colmap, panyu_d}}},
-      {"modalai_opencv_tracking_down_intrinsics.yml", "", "opencv", "kannala-brandt", 1280, 800, kb(modalai, modalai_d), kFull, {{modalai, modalai_d}}},
-      {"basalt_tumvi_512_ds_calib.json", "", "basalt", "double-sphere", 512, 512,
-       [=](const Eigen::Vector3d& p) { return test::double_sphere(ds, -0.17213086034353243, 0.5931177593944744, p); }, kFull, {}},
-      {"basalt_euroc_eucm_calib.json", "0", "basalt", "extended-unified", 752, 480,
-       [=](const Eigen::Vector3d& p) { return test::eucm(eucm, 0.5903365915227143, 1.127468196965374, p); }, kFull, {}},
+      {"openvins_tum_vi_kalibr_imucam_chain.yaml",
+       "",
+       "kalibr",
+       "kannala-brandt",
+       512,
+       512,
+       kb(tumvi, tumvi_d),
+       kFull,
+       {{tumvi, tumvi_d}}},
+      {"openvins_rs_t265_kalibr_imucam_chain.yaml",
+       "cam1",
+       "kalibr",
+       "kannala-brandt",
+       848,
+       800,
+       kb(t265_cam1, t265_cam1_d),
+       kFull,
+       {{t265_cam1, t265_cam1_d}}},
+      {"basalt_t265_kb4_calib.json",
+       "",
+       "basalt",
+       "kannala-brandt",
+       848,
+       800,
+       kb(basalt_kb, basalt_kb_d),
+       kFull,
+       {{basalt_kb, basalt_kb_d}}},
+      {"vinsfusion_t265_left_KANNALA_BRANDT.yaml",
+       "",
+       "camodocal",
+       "kannala-brandt",
+       848,
+       800,
+       kb(camodocal, camodocal_d),
+       kFull,
+       {{camodocal, camodocal_d}}},
+      {"orbslam3_fisheye_KannalaBrandt8.yaml",
+       "Camera2",
+       "orbslam3",
+       "kannala-brandt",
+       848,
+       800,
+       kb(orb2, orb2_d),
+       kFull,
+       {{orb2, orb2_d}}},
+      {"panyu_ros_style_fisheye_camera_intrinsics.yaml",
+       "",
+       "ros",
+       "kannala-brandt",
+       3264,
+       3264,
+       kb(panyu, panyu_d),
+       kFull,
+       {{panyu, panyu_d}}},
+      {"colmap_opencv_fisheye_cameras.txt",
+       "2",
+       "colmap",
+       "kannala-brandt",
+       3264,
+       3264,
+       kb(panyu_colmap, panyu_d),
+       kFull,
+       {{panyu_colmap, panyu_d}}},
+      {"modalai_opencv_tracking_down_intrinsics.yml",
+       "",
+       "opencv",
+       "kannala-brandt",
+       1280,
+       800,
+       kb(modalai, modalai_d),
+       kFull,
+       {{modalai, modalai_d}}},
+      {"basalt_tumvi_512_ds_calib.json",
+       "",
+       "basalt",
+       "double-sphere",
+       512,
+       512,
+       [=](const Eigen::Vector3d& p) { return test::double_sphere(ds, -0.17213086034353243, 0.5931177593944744, p); },
+       kFull,
+       {}},
+      {"basalt_euroc_eucm_calib.json",
+       "0",
+       "basalt",
+       "extended-unified",
+       752,
+       480,
+       [=](const Eigen::Vector3d& p) { return test::eucm(eucm, 0.5903365915227143, 1.127468196965374, p); },
+       kFull,
+       {}},
       // Not radially symmetric: OpenCV's and Mei's tangential terms, against OpenCV's own code.
-      {"mrcal_cam0.opencv8.cameramodel", "", "mrcal", "opencv", 4000, 2200,
+      {"mrcal_cam0.opencv8.cameramodel",
+       "",
+       "mrcal",
+       "opencv",
+       4000,
+       2200,
        opencv_radtan({1761.181055, 1761.250444, 1965.706996, 1087.518797},
                      {-0.01266096516, 0.03590794372, -0.0002547045941, 0.0005275929652, 0.01968883397, 0.01482863541,
                       -0.0562239888, 0.0500223357}),
-       kFull, {}},
-      {"mrcal_figueroa_opencv8-0.cameramodel", "", "mrcal", "opencv", 6016, 4016,
+       kFull,
+       {}},
+      {"mrcal_figueroa_opencv8-0.cameramodel",
+       "",
+       "mrcal",
+       "opencv",
+       6016,
+       4016,
        opencv_radtan({2073.872915, 2077.452267, 3004.686823, 1997.377253},
                      {0.4791613797, 0.0266824914, 4.398264387e-05, -1.180073913e-05, 8.959722542e-05, 0.7666912469,
                       0.09633561231, 0.001407513313}),
-       kFull, {}},
-      {"photonvision_camera-0.cameramodel", "", "mrcal", "opencv", 1600, 896,
+       kFull,
+       {}},
+      {"photonvision_camera-0.cameramodel",
+       "",
+       "mrcal",
+       "opencv",
+       1600,
+       896,
        opencv_radtan({1190.608979, 1190.068998, 804.2783086, 455.1773601},
                      {0.02722490305, -0.1509815462, -0.0005247860649, 0.000941291852, 0.1112874619, -0.009490756014,
                       0.01096065265, -0.0004255420927}),
-       65 * M_PI / 180, {}},  // valid to 79 deg, where pixels are 5e8 from the centre and 1e-9 px is not a double's precision
-      {"openvins_euroc_mav_kalibr_imucam_chain.yaml", "cam0", "kalibr", "opencv", 752, 480,
+       65 * M_PI / 180,
+       {}},  // valid to 79 deg, where pixels are 5e8 from the centre and 1e-9 px is not a double's precision
+      {"openvins_euroc_mav_kalibr_imucam_chain.yaml",
+       "cam0",
+       "kalibr",
+       "opencv",
+       752,
+       480,
        opencv_radtan({458.654, 457.296, 367.215, 248.375}, {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05}),
-       80 * M_PI / 180, {}},  // valid to 90 deg (no fold), pixels at 1e20 there
-      {"vinsfusion_t265_omni_radtan_camchain.yaml", "cam0", "kalibr", "mei", 848, 800,
+       80 * M_PI / 180,
+       {}},  // valid to 90 deg (no fold), pixels at 1e20 there
+      {"vinsfusion_t265_omni_radtan_camchain.yaml",
+       "cam0",
+       "kalibr",
+       "mei",
+       848,
+       800,
        opencv_omnidir({840.3541786270555, 841.7395501100224, 426.05865129442844, 400.00487827975144}, 2.001096742981025,
                       {0.26251514138713067, -0.8542295909903589, 0.005012383463787277, 0.0003963320511238702}),
-       kFull, {}},
-      {"vinsfusion_t265_fisheye1_MEI.yaml", "", "camodocal", "mei", 848, 800,
+       kFull,
+       {}},
+      {"vinsfusion_t265_fisheye1_MEI.yaml",
+       "",
+       "camodocal",
+       "mei",
+       848,
+       800,
        [](const Eigen::Vector3d& p) {
          return test::mei_radtan({840.35417863, 841.73955011, 426.05865129, 400.00487828}, 2.00109674298,
                                  {0.26251514, -0.85422959, 0.00501238, 0.00039633}, p);
        },
-       kFull, {}},
-      {"vinsfisheye_dsta_cam0_mei.yaml", "", "camodocal", "mei", 1280, 960,
+       kFull,
+       {}},
+      {"vinsfisheye_dsta_cam0_mei.yaml",
+       "",
+       "camodocal",
+       "mei",
+       1280,
+       960,
        opencv_omnidir({840.7517267665538, 753.2509367205932, 640.3867187257891, 483.95547527295696}, 1.7668989774186101,
                       {-0.0982253999263517, 0.11694029405469884, -0.00011437603929821573, -0.00489509708490966}),
-       kFull, {}},
+       kFull,
+       {}},
       // BoofCV's omnidirectional_universal with t1 = t2 = 0: Mei's model (BoofCV's UniOmniStoP).
-      {"mei_omnidir_universal_fisheye.yaml", "", "boofcv", "mei", 3840, 2160,
+      {"mei_omnidir_universal_fisheye.yaml",
+       "",
+       "boofcv",
+       "mei",
+       3840,
+       2160,
        [](const Eigen::Vector3d& p) {
          return test::mei({2151.6168117931597, 2161.652781357435, 1894.179700702442, 968.7551405752832},
                           2.2268230796296904, 0.3207260522384846, 1.311770851988966, p);
        },
-       kFull, {}},
+       kFull,
+       {}},
       // OCamCalib: pol's exact inverse in OCamCalib's frame (x rows, y columns, looking along -z).
-      {"ocamcalib_calib_results.txt", "", "ocamcalib", "ocam", 1920, 1208,
+      {"ocamcalib_calib_results.txt",
+       "",
+       "ocamcalib",
+       "ocam",
+       1920,
+       1208,
        [](const Eigen::Vector3d& p) {
          const Eigen::Vector2d row_column = test::ocam_world2cam_exact(kOCamCalibFile, {p.y(), p.x(), -p.z()}, 5000);
          return Eigen::Vector2d(row_column.y(), row_column.x());
        },
-       120 * M_PI / 180, {}},  // the image's corners see 115 deg
-      {"synwoodscape_FV.json", "", "woodscape", "polynomial", 1280, 966,
+       120 * M_PI / 180,
+       {}},  // the image's corners see 115 deg
+      {"synwoodscape_FV.json",
+       "",
+       "woodscape",
+       "polynomial",
+       1280,
+       966,
        [](const Eigen::Vector3d& p) {
          return test::woodscape({341.725, -26.4448, 32.7864, 0.50499}, 1280, 966, 0.329055, -3.5506, 1.00021, p);
        },
-       kFull, {}},
+       kFull,
+       {}},
   };
 }
 
@@ -231,7 +384,8 @@ TEST(Formats, EveryExternalFileIsReadAgainstAReferenceOrRefused) {
     checked.insert(file);
   }
   // mrcal's pinhole files: the pinhole formula (mrcal.project itself: test_mrcal).
-  for (const char* file : {"mrcal_pinhole-narrow-yawed-left.cameramodel", "mrcal_pinhole-narrow-yawed-right.cameramodel"}) {
+  for (const char* file :
+       {"mrcal_pinhole-narrow-yawed-left.cameramodel", "mrcal_pinhole-narrow-yawed-right.cameramodel"}) {
     const Camera camera = read_camera(external(file));
     const Reference pinhole = [](const Eigen::Vector3d& p) {
       return Eigen::Vector2d(2405.678127 * p.x() / p.z() + 1508.569804, 2453.362582 * p.y() / p.z() + 978.395964);
@@ -266,8 +420,10 @@ TEST(Formats, PosesAreReadInFishcamsConvention) {
   const Camera basalt = read_camera(external("basalt_tumvi_512_ds_calib.json"));
   const Eigen::Quaterniond q(0.007639340823570553, -0.013392900690257393, -0.6945866755293793, 0.7192437840259219);
   EXPECT_LT(basalt.parameters().pose->rotation.angularDistance(q.normalized()), 1e-12);
-  EXPECT_LT((basalt.parameters().pose->translation - Eigen::Vector3d(0.04548094812071685, -0.07145370002838907,
-                                                                     -0.046315428444919249)).norm(), 1e-15);
+  EXPECT_LT((basalt.parameters().pose->translation -
+             Eigen::Vector3d(0.04548094812071685, -0.07145370002838907, -0.046315428444919249))
+                .norm(),
+            1e-15);
 }
 
 // OCamCalib's own functions on the real file: our unprojection is cam2world (pol)
@@ -297,7 +453,7 @@ TEST(Formats, OCamCalibFileIsCam2worldAndWorld2cam) {
   EXPECT_EQ(pixels, 120 * 76);
   EXPECT_LE(worst_angle, 1e-13);
   EXPECT_LE(worst_round_trip, 1e-9);
-  EXPECT_LE(worst_invpol, 0.1);  // the file's invpol against its pol: measured 0.02 px
+  EXPECT_LE(worst_invpol, 0.1);   // the file's invpol against its pol: measured 0.02 px
   EXPECT_GT(worst_invpol, 1e-4);  // (so this is not comparing pol with itself)
   EXPECT_EQ(camera.skew().xy, 0.013102);
   EXPECT_NEAR(camera.skew().yx, -0.014257 / 0.996974, 1e-15);
@@ -346,10 +502,12 @@ TEST(Formats, OCamCalibFilesThatCannotBeRightAreRefused) {
     EXPECT_NE(at, std::string::npos) << from;
     return at == std::string::npos ? text : text.replace(at, from.size(), to);
   };
-  const std::string pol_line = good.substr(good.find("\n\n") + 2, good.find('\n', good.find("\n\n") + 2) - good.find("\n\n") - 2);
+  const std::string pol_line =
+      good.substr(good.find("\n\n") + 2, good.find('\n', good.find("\n\n") + 2) - good.find("\n\n") - 2);
   const size_t invpol_at = good.find("\n\n", good.find("inverse mapping")) + 2;
   const std::string invpol_line = good.substr(invpol_at, good.find('\n', invpol_at) - invpol_at);
-  const std::string invpol_first = invpol_line.substr(invpol_line.find(' ') + 1, invpol_line.find(' ', invpol_line.find(' ') + 1) - invpol_line.find(' ') - 1);
+  const std::string invpol_first = invpol_line.substr(
+      invpol_line.find(' ') + 1, invpol_line.find(' ', invpol_line.find(' ') + 1) - invpol_line.find(' ') - 1);
   const std::vector<std::pair<std::string, std::string>> cases = {
       {replaced(", starting from 0 (C convention)", ""), "does not say where its rows and columns start"},
       {replaced(pol_line, "6 -340 0 0.001 0 0 1e-12"), "degree up to 4"},
@@ -381,7 +539,8 @@ TEST(Formats, OCamCalibFilesThatCannotBeRightAreRefused) {
 TEST(Formats, FilesFishcamCannotHoldAreRefusedNamingWhy) {
   if (!std::filesystem::exists(external("README.md"))) GTEST_SKIP() << "no ../shared checkout";
   const std::vector<std::pair<std::string, std::string>> refused = {
-      {"opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml", "distortion_model: missing: 4 distortion coefficients could be"},
+      {"opencv_filestorage_cameraMatrix_distCoeffs_fisheye.yml",
+       "distortion_model: missing: 4 distortion coefficients could be"},
   };
   for (const auto& [file, expected] : refused) {
     try {
@@ -404,7 +563,8 @@ TEST(Formats, FilesFishcamCannotHoldAreRefusedNamingWhy) {
   EXPECT_EQ(model_name(p.model), "kannala-brandt");
   EXPECT_EQ(model_params(p.model)[0], 3.5858622506170752e+02);
   options.distortion_model.reset();
-  EXPECT_EQ(model_params(parse_camera(text + "distortion_model: fisheye\n", "f.yml", options).model)[1], -6.0217213307700412e-02);
+  EXPECT_EQ(model_params(parse_camera(text + "distortion_model: fisheye\n", "f.yml", options).model)[1],
+            -6.0217213307700412e-02);
   options.distortion_model = "plumb_bob";  // the caller contradicts the file
   EXPECT_THROW(parse_camera(text + "distortion_model: fisheye\n", "f.yml", options), Error);
   options.distortion_model = "fisheye";
@@ -514,7 +674,8 @@ TEST_P(EveryFormat, HoldsASkewedGridOrSaysItCannot) {
     try {
       text = format_camera(p, format);
     } catch (const Error& e) {
-      EXPECT_EQ(std::string(e.what()).rfind("skew: the " + std::string(to_string(format)) + " format cannot hold", 0), 0u)
+      EXPECT_EQ(std::string(e.what()).rfind("skew: the " + std::string(to_string(format)) + " format cannot hold", 0),
+                0u)
           << e.what();
       break;
     }
@@ -585,7 +746,8 @@ TEST(Formats, CamerasAreChosenByNameOrIndexAndSizesChecked) {
     parse_camera(both, "chain.yaml", options);
     ADD_FAILURE();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("no camera 'cam7' (the file has 0 = 'cam0', 1 = 'cam1')"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no camera 'cam7' (the file has 0 = 'cam0', 1 = 'cam1')"), std::string::npos)
+        << e.what();
   }
   options.camera.reset();
   options.image_size = std::pair{640, 480};
@@ -597,7 +759,8 @@ TEST(Formats, CamerasAreChosenByNameOrIndexAndSizesChecked) {
     parse_camera(orb, "orb.yaml");
     ADD_FAILURE();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("image_size: the ORB-SLAM3 settings YAML file has no image size"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("image_size: the ORB-SLAM3 settings YAML file has no image size"),
+              std::string::npos)
         << e.what();
   }
   options.image_size = std::pair{1280, 966};
@@ -616,12 +779,16 @@ TEST(Formats, ConversionReportsAgreeWithTheTargetsOwnFormula) {
     std::function<Eigen::Vector2d(const Intrinsics&, const std::vector<double>&, const Eigen::Vector3d&)> formula;
   };
   const std::vector<Target> targets = {
-      {"double-sphere", CameraFormat::basalt, [](auto& k, auto& q, auto& p) { return test::double_sphere(k, q[1], q[2], p); }},
-      {"extended-unified", CameraFormat::kalibr, [](auto& k, auto& q, auto& p) { return test::eucm(k, q[1], q[2], p); }},
+      {"double-sphere", CameraFormat::basalt,
+       [](auto& k, auto& q, auto& p) { return test::double_sphere(k, q[1], q[2], p); }},
+      {"extended-unified", CameraFormat::kalibr,
+       [](auto& k, auto& q, auto& p) { return test::eucm(k, q[1], q[2], p); }},
       {"unified", CameraFormat::basalt, [](auto& k, auto& q, auto& p) { return test::ucm_xi(k, q[1], p); }},
       {"mei", CameraFormat::camodocal, [](auto& k, auto& q, auto& p) { return test::mei(k, q[1], q[2], q[3], p); }},
       {"kannala-brandt", CameraFormat::ros,
-       [](auto& k, auto& q, auto& p) { return test::kannala_brandt(k, {q[1], q[2], q[3], q[4]}, p); }},
+       [](auto& k, auto& q, auto& p) {
+         return test::kannala_brandt(k, {q[1], q[2], q[3], q[4]}, p);
+       }},
   };
   for (const auto& t : targets) {
     const Conversion conversion = convert_camera(source, parse_model_spec(t.model));
@@ -648,8 +815,8 @@ TEST(Formats, ConversionReportsAgreeWithTheTargetsOwnFormula) {
 // OPENCV's p1, p2 as cv::projectPoints has them.
 TEST(Formats, ColmapRadialModelsAreOpenCVs) {
   const Camera radial(parse_camera("1 RADIAL 640 480 500 320 240 -0.2 0.05\n", "cameras.txt"));
-  const Camera full(parse_camera("1 FULL_OPENCV 640 480 500 505 320 240 -0.2 0.05 0 0 0.01 0.02 -0.01 0.003\n",
-                                   "cameras.txt"));
+  const Camera full(
+      parse_camera("1 FULL_OPENCV 640 480 500 505 320 240 -0.2 0.05 0 0 0.01 0.02 -0.01 0.003\n", "cameras.txt"));
   int checked = 0;
   for (const auto& ray : test::random_rays(2000, 40 * M_PI / 180, 3)) {
     const double x = ray.x() / ray.z(), y = ray.y() / ray.z(), r2 = x * x + y * y;

@@ -11,7 +11,8 @@ namespace {
 // sum_i c[i] x^i, or with absolute_terms sum_i |c[i] x^i| (the scale of a residual).
 double horner(std::span<const double> c, double x, bool absolute_terms) {
   double sum = 0;
-  for (size_t i = c.size(); i-- > 0;) sum = sum * (absolute_terms ? std::abs(x) : x) + (absolute_terms ? std::abs(c[i]) : c[i]);
+  for (size_t i = c.size(); i-- > 0;)
+    sum = sum * (absolute_terms ? std::abs(x) : x) + (absolute_terms ? std::abs(c[i]) : c[i]);
   return sum;
 }
 
@@ -29,7 +30,8 @@ double algebraic_theta(std::span<const double> power_coefficients, double rho, c
     if (std::abs(z.imag()) > 1e-6 * std::max(1.0, std::abs(z))) continue;
     if (z.real() < -slack || z.real() > domain.theta_max + slack) continue;
     const double theta = std::clamp(z.real(), 0.0, domain.theta_max);
-    const double residual = std::abs(horner(shifted, theta, false)) / std::max(1.0, horner(power_coefficients, theta, true));
+    const double residual =
+        std::abs(horner(shifted, theta, false)) / std::max(1.0, horner(power_coefficients, theta, true));
     if (residual < best_residual) best = theta, best_residual = residual;
   }
   return best;

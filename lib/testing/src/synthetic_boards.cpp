@@ -117,7 +117,8 @@ std::vector<std::uint8_t> render_board_image(const Camera& camera, const BoardSp
     const int radius = int(std::ceil(3 * blur_px));
     std::vector<double> kernel(size_t(2 * radius + 1));
     double sum = 0;
-    for (int i = -radius; i <= radius; ++i) sum += kernel[size_t(i + radius)] = std::exp(-0.5 * i * i / (blur_px * blur_px));
+    for (int i = -radius; i <= radius; ++i)
+      sum += kernel[size_t(i + radius)] = std::exp(-0.5 * i * i / (blur_px * blur_px));
     for (double& k : kernel) k /= sum;
     std::vector<double> tmp(grey.size());
     for (int pass = 0; pass < 2; ++pass) {
@@ -125,7 +126,8 @@ std::vector<std::uint8_t> render_board_image(const Camera& camera, const BoardSp
         for (int u = 0; u < w; ++u) {
           double acc = 0;
           for (int i = -radius; i <= radius; ++i) {
-            const int uu = pass == 0 ? std::clamp(u + i, 0, w - 1) : u, vv = pass == 1 ? std::clamp(v + i, 0, h - 1) : v;
+            const int uu = pass == 0 ? std::clamp(u + i, 0, w - 1) : u,
+                      vv = pass == 1 ? std::clamp(v + i, 0, h - 1) : v;
             acc += kernel[size_t(i + radius)] * grey[size_t(vv) * size_t(w) + size_t(uu)];
           }
           tmp[size_t(v) * size_t(w) + size_t(u)] = acc;

@@ -96,7 +96,8 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const auto& q = pose.rotation;
   const auto& t = pose.translation;
   nlohmann::json v = {
-      {"T_imu_cam", {{{"px", t.x()}, {"py", t.y()}, {"pz", t.z()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()}, {"qw", q.w()}}}},
+      {"T_imu_cam",
+       {{{"px", t.x()}, {"py", t.y()}, {"pz", t.z()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()}, {"qw", q.w()}}}},
       {"intrinsics", {{{"camera_type", type}, {"intrinsics", k}}}},
       {"resolution", {{p.width, p.height}}},
   };
@@ -122,9 +123,18 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 
 }  // namespace
 
-extern const FormatSpec basalt_format{CameraFormat::basalt, "basalt", "basalt calibration JSON", {".json"},
-                                      {"kannala-brandt", "equidistant", "double-sphere", "extended-unified", "unified",
-                                       "pinhole"},
-                                      score, read, write, false, false, false, write_rig};
+extern const FormatSpec basalt_format{
+    CameraFormat::basalt,
+    "basalt",
+    "basalt calibration JSON",
+    {".json"},
+    {"kannala-brandt", "equidistant", "double-sphere", "extended-unified", "unified", "pinhole"},
+    score,
+    read,
+    write,
+    false,
+    false,
+    false,
+    write_rig};
 
 }  // namespace fishcam::detail

@@ -43,8 +43,9 @@ std::vector<NamedCamera> read(const Content& c) {
     // BoofCV adds t1, t2 to the radially distorted point (UniOmniStoP), not to the
     // undistorted one as OpenCV, Mei and fishcam do: a different model.
     if ((d.has("t1") && d.number("t1") != 0) || (d.has("t2") && d.number("t2") != 0)) {
-      d.fail("t1", "BoofCV's tangential terms act on the radially distorted point, unlike OpenCV's and Mei's; fishcam "
-                   "reads BoofCV files with t1 = t2 = 0");
+      d.fail("t1",
+             "BoofCV's tangential terms act on the radially distorted point, unlike OpenCV's and Mei's; fishcam "
+             "reads BoofCV files with t1 = t2 = 0");
     }
     radial.resize(max_radial, 0.0);
     return radial;
@@ -79,15 +80,29 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   out += "  width: " + std::to_string(p.width) + "\n  height: " + std::to_string(p.height) + "\n";
   if (omni) {
     out += "mirror_offset: " + yaml_number(q[1]) + "\nradial_tangential:\n";
-    out += "  radial: " + yaml_list({q.size() > 2 ? q[2] : 0.0, q.size() > 2 ? q[3] : 0.0}) + "\n  t1: 0.0\n  t2: 0.0\n";
+    out +=
+        "  radial: " + yaml_list({q.size() > 2 ? q[2] : 0.0, q.size() > 2 ? q[3] : 0.0}) + "\n  t1: 0.0\n  t2: 0.0\n";
   }
   return out;
 }
 
 }  // namespace
 
-extern const FormatSpec boofcv_format{CameraFormat::boofcv, "boofcv", "BoofCV calibration YAML", {".yaml", ".yml"},
-                                      {"mei", "unified", "pinhole"}, score, read, write, false, false, false,
-                                      nullptr, false, false, false, true};
+extern const FormatSpec boofcv_format{CameraFormat::boofcv,
+                                      "boofcv",
+                                      "BoofCV calibration YAML",
+                                      {".yaml", ".yml"},
+                                      {"mei", "unified", "pinhole"},
+                                      score,
+                                      read,
+                                      write,
+                                      false,
+                                      false,
+                                      false,
+                                      nullptr,
+                                      false,
+                                      false,
+                                      false,
+                                      true};
 
 }  // namespace fishcam::detail

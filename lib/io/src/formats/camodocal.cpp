@@ -38,11 +38,12 @@ std::vector<NamedCamera> read(const Content& c) {
     set_focal(&p, fx, k.number("fy"), [&](std::string_view problem) { k.fail("fx", problem); });
     p.principal_point = {k.number("cx"), k.number("cy")};
     set_radial_tangential(&p, {d.number("k1"), d.number("k2"), d.number("p1"), d.number("p2")}, fx,
-                                             [&](std::string_view problem) { d.fail("k1", problem); });
+                          [&](std::string_view problem) { d.fail("k1", problem); });
   } else if (type == "SCARAMUZZA") {
-    f.fail("model_type", "SCARAMUZZA: camodocal's projection and unprojection disagree for an affine c, d, e other "
-                         "than the identity, and its forks differ in inv_poly's length; give fishcam OCamCalib's "
-                         "calib_results.txt (format ocamcalib)");
+    f.fail("model_type",
+           "SCARAMUZZA: camodocal's projection and unprojection disagree for an affine c, d, e other "
+           "than the identity, and its forks differ in inv_poly's length; give fishcam OCamCalib's "
+           "calib_results.txt (format ocamcalib)");
   } else {
     f.fail("model_type", "unsupported " + quoted_for_message(type) + " (expected KANNALA_BRANDT, MEI or PINHOLE)");
   }
@@ -89,8 +90,18 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec camodocal_format{CameraFormat::camodocal, "camodocal", "camodocal YAML", {".yaml", ".yml"},
-                                         {"kannala-brandt", "equidistant", "mei", "unified", "pinhole"}, score, read,
-                                         write, false, false, false, nullptr, true};
+extern const FormatSpec camodocal_format{CameraFormat::camodocal,
+                                         "camodocal",
+                                         "camodocal YAML",
+                                         {".yaml", ".yml"},
+                                         {"kannala-brandt", "equidistant", "mei", "unified", "pinhole"},
+                                         score,
+                                         read,
+                                         write,
+                                         false,
+                                         false,
+                                         false,
+                                         nullptr,
+                                         true};
 
 }  // namespace fishcam::detail

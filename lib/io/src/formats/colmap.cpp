@@ -14,10 +14,18 @@ struct ColmapModel {
   int params;
 };
 // Every COLMAP model, so that the ones fishcam cannot hold are named in the refusal.
-constexpr ColmapModel kModels[] = {
-    {"SIMPLE_PINHOLE", 3}, {"PINHOLE", 4}, {"SIMPLE_RADIAL", 4}, {"RADIAL", 5}, {"OPENCV", 8},
-    {"OPENCV_FISHEYE", 8}, {"FULL_OPENCV", 12}, {"FOV", 5}, {"SIMPLE_RADIAL_FISHEYE", 4},
-    {"RADIAL_FISHEYE", 5}, {"THIN_PRISM_FISHEYE", 12}, {"RAD_TAN_THIN_PRISM_FISHEYE", 16}};
+constexpr ColmapModel kModels[] = {{"SIMPLE_PINHOLE", 3},
+                                   {"PINHOLE", 4},
+                                   {"SIMPLE_RADIAL", 4},
+                                   {"RADIAL", 5},
+                                   {"OPENCV", 8},
+                                   {"OPENCV_FISHEYE", 8},
+                                   {"FULL_OPENCV", 12},
+                                   {"FOV", 5},
+                                   {"SIMPLE_RADIAL_FISHEYE", 4},
+                                   {"RADIAL_FISHEYE", 5},
+                                   {"THIN_PRISM_FISHEYE", 12},
+                                   {"RAD_TAN_THIN_PRISM_FISHEYE", 16}};
 
 const ColmapModel* find_model(const std::string& name) {
   for (const auto& m : kModels) {
@@ -57,16 +65,20 @@ std::vector<NamedCamera> read(const Content& c) {
     const ColmapModel* model = find_model(t[1]);
     if (!model) fail("unknown COLMAP model " + quoted_for_message(t[1]));
     if (int(t.size()) != 4 + model->params) {
-      fail(text_for_message(t[1]) + " has " + std::to_string(model->params) + " parameters, got " + std::to_string(t.size() - 4));
+      fail(text_for_message(t[1]) + " has " + std::to_string(model->params) + " parameters, got " +
+           std::to_string(t.size() - 4));
     }
     std::vector<double> v;
     for (size_t i = 2; i < t.size(); ++i) {
-      v.push_back(DocFields::parse_number(t[i], [&](std::string_view problem) { fail("value " + quoted_for_message(t[i]) + ": " + std::string(problem)); }));
+      v.push_back(DocFields::parse_number(t[i], [&](std::string_view problem) {
+        fail("value " + quoted_for_message(t[i]) + ": " + std::string(problem));
+      }));
     }
     NamedCamera named{t[0], {}, {}};
     CameraParameters& p = named.camera;
     for (int i = 0; i < 2; ++i) {
-      if (!(v[i] >= 1 && v[i] <= (1 << 16)) || v[i] != std::floor(v[i])) fail("WIDTH and HEIGHT must be positive integers");
+      if (!(v[i] >= 1 && v[i] <= (1 << 16)) || v[i] != std::floor(v[i]))
+        fail("WIDTH and HEIGHT must be positive integers");
     }
     p.width = int(v[0]), p.height = int(v[1]);
     const std::vector<double> q(v.begin() + 2, v.end());
@@ -95,7 +107,8 @@ std::vector<NamedCamera> read(const Content& c) {
       }
       std::vector<double> d(q.begin() + (one_focal ? 3 : 4), q.end());
       d.resize(d.size() <= 4 ? 4 : 8, 0.0);
-      set_radial_tangential(&p, d, q[0], [&](std::string_view problem) { fail(text_for_message(name) + ": " + std::string(problem)); });
+      set_radial_tangential(
+          &p, d, q[0], [&](std::string_view problem) { fail(text_for_message(name) + ": " + std::string(problem)); });
     } else if (name == "FOV") {
       fail(text_for_message(name) + " is radially symmetric but fishcam has no such model");
     } else {
@@ -136,8 +149,18 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec colmap_format{CameraFormat::colmap, "colmap", "COLMAP cameras.txt", {".txt"},
-                                      {"kannala-brandt", "equidistant", "pinhole", "opencv"}, score, read, write,
-                                      false, false, false, nullptr, true};
+extern const FormatSpec colmap_format{CameraFormat::colmap,
+                                      "colmap",
+                                      "COLMAP cameras.txt",
+                                      {".txt"},
+                                      {"kannala-brandt", "equidistant", "pinhole", "opencv"},
+                                      score,
+                                      read,
+                                      write,
+                                      false,
+                                      false,
+                                      false,
+                                      nullptr,
+                                      true};
 
 }  // namespace fishcam::detail

@@ -160,7 +160,8 @@ double DocFields::parse_number(const std::string& text, const std::function<void
   }
   char* end = nullptr;
   const double v = std::strtod(t.c_str(), &end);
-  if (t.empty() || end == t.c_str() || !trimmed(end).empty()) fail("expected a number, got " + quoted_for_message(text));
+  if (t.empty() || end == t.c_str() || !trimmed(end).empty())
+    fail("expected a number, got " + quoted_for_message(text));
   if (!std::isfinite(v)) fail("must be finite");
   return v;
 }
@@ -177,7 +178,8 @@ int DocFields::positive_integer(std::string_view key) const {
   if (n.kind != DocNode::Kind::scalar) fail(key, "expected an integer");
   if (n.tag == "str" || n.tag == "bool") fail(key, "expected an integer, got " + json_type(n));
   const double v = parse_number(n.scalar, [&](std::string_view problem) {
-    fail(key, problem.starts_with("expected a number") ? "expected an integer" + std::string(problem.substr(17)) : problem);
+    fail(key,
+         problem.starts_with("expected a number") ? "expected an integer" + std::string(problem.substr(17)) : problem);
   });
   if (!(v >= 1 && v <= (1 << 16)) || v != std::floor(v)) fail(key, "expected a positive integer <= 65536");
   return static_cast<int>(v);
@@ -209,7 +211,8 @@ std::vector<double> DocFields::numbers_of(const DocNode& n, std::string_view key
   std::vector<std::string> texts;
   const DocNode* data = &n;
   std::string item_prefix(key);
-  if (n.kind == DocNode::Kind::map && n.find("data")) data = n.find("data"), item_prefix += ".data";  // an opencv-matrix
+  if (n.kind == DocNode::Kind::map && n.find("data"))
+    data = n.find("data"), item_prefix += ".data";  // an opencv-matrix
   if (data->kind == DocNode::Kind::sequence) {
     for (const auto& item : data->items) {
       if (item.kind != DocNode::Kind::scalar) fail(key, "expected a list of numbers");
@@ -226,13 +229,15 @@ std::vector<double> DocFields::numbers_of(const DocNode& n, std::string_view key
   if (texts.size() < min_size || texts.size() > max_size) {
     // Past max_size the count stopped early: "more".
     const std::string got = texts.size() > max_size ? "more" : std::to_string(texts.size());
-    fail(key, (min_size == max_size ? "expected " + std::to_string(min_size) + " numbers"
-                                    : "expected " + std::to_string(min_size) + " to " + std::to_string(max_size) +
-                                          " numbers") + ", got " + got);
+    fail(key, (min_size == max_size
+                   ? "expected " + std::to_string(min_size) + " numbers"
+                   : "expected " + std::to_string(min_size) + " to " + std::to_string(max_size) + " numbers") +
+                  ", got " + got);
   }
   std::vector<double> out;
   for (size_t i = 0; i < texts.size(); ++i) {
-    out.push_back(parse_number(texts[i], [&](std::string_view p) { fail(item_prefix + "[" + std::to_string(i) + "]", p); }));
+    out.push_back(
+        parse_number(texts[i], [&](std::string_view p) { fail(item_prefix + "[" + std::to_string(i) + "]", p); }));
   }
   return out;
 }
@@ -244,7 +249,8 @@ std::vector<double> DocFields::matrix(std::string_view key, int count) const {
   }
   const DocFields m(n, source_, prefix_ + std::string(key) + ".");
   const double rows = m.number("rows"), cols = m.number("cols");
-  if (rows < 1 || cols < 1 || rows * cols != count) fail(key, "expected " + std::to_string(count) + " elements (rows x cols)");
+  if (rows < 1 || cols < 1 || rows * cols != count)
+    fail(key, "expected " + std::to_string(count) + " elements (rows x cols)");
   return m.numbers("data", size_t(count), size_t(count));
 }
 
@@ -343,13 +349,15 @@ void set_radial_tangential(CameraParameters* p, const std::vector<double>& d, do
                            const std::function<void(std::string_view)>& fail) {
   const size_t n = d.size();
   if (n != 0 && n != 4 && n != 5 && n != 8 && n != 12 && n != 14) {
-    fail("expected 4, 5, 8, 12 or 14 radial-tangential coefficients (OpenCV's order k1, k2, p1, p2, k3, k4, k5, k6, "
-         "s1, s2, s3, s4, tau_x, tau_y), got " + std::to_string(n));
+    fail(
+        "expected 4, 5, 8, 12 or 14 radial-tangential coefficients (OpenCV's order k1, k2, p1, p2, k3, k4, k5, k6, "
+        "s1, s2, s3, s4, tau_x, tau_y), got " +
+        std::to_string(n));
   }
   const auto coefficient = [&](size_t i) { return i < n ? d[i] : 0.0; };
   if (coefficient(12) != 0 || coefficient(13) != 0) fail("a tilted sensor (tau_x, tau_y != 0) is not supported");
-  const std::array<double, 6> k{coefficient(0), coefficient(1), coefficient(4), coefficient(5), coefficient(6),
-                                coefficient(7)};
+  const std::array<double, 6> k{coefficient(0), coefficient(1), coefficient(4),
+                                coefficient(5), coefficient(6), coefficient(7)};
   if (std::all_of(k.begin(), k.end(), [](double x) { return x == 0; })) {
     p->model = Pinhole<double>(f);
   } else {
@@ -379,7 +387,8 @@ std::array<double, 6> rt_cam_ref_from_pose(const Pose& pose) {
 
 std::optional<Pose> pose_from_matrix(const std::vector<double>& m, std::string* problem) {
   if (m.size() != 16) return *problem = "expected a 4x4 matrix", std::nullopt;
-  if (m[12] != 0 || m[13] != 0 || m[14] != 0 || m[15] != 1) return *problem = "the last row must be 0 0 0 1", std::nullopt;
+  if (m[12] != 0 || m[13] != 0 || m[14] != 0 || m[15] != 1)
+    return *problem = "the last row must be 0 0 0 1", std::nullopt;
   Eigen::Matrix3d r;
   r << m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10];
   if (!((r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= 1e-6) || !(r.determinant() > 0)) {
@@ -394,7 +403,8 @@ std::optional<Pose> pose_from_matrix(const std::vector<double>& m, std::string* 
 std::array<double, 16> matrix_from_pose(const Pose& pose) {
   const Eigen::Matrix3d r = pose.rotation.toRotationMatrix();
   const Eigen::Vector3d& t = pose.translation;
-  return {r(0, 0), r(0, 1), r(0, 2), t.x(), r(1, 0), r(1, 1), r(1, 2), t.y(), r(2, 0), r(2, 1), r(2, 2), t.z(), 0, 0, 0, 1};
+  return {r(0, 0), r(0, 1), r(0, 2), t.x(), r(1, 0), r(1, 1), r(1, 2), t.y(),
+          r(2, 0), r(2, 1), r(2, 2), t.z(), 0,       0,       0,       1};
 }
 
 Pose pose_from_json(const DocFields& f, const char* quaternion_key) {

@@ -48,7 +48,8 @@ CalibrationRecord read_calibration(const DocFields& f) {
 
 nlohmann::json calibration_json(const CalibrationRecord& r) {
   nlohmann::json sectors = nlohmann::json::array();
-  for (double a : r.theta_max_by_azimuth) sectors.push_back(std::isnan(a) ? nlohmann::json(nullptr) : nlohmann::json(a * kDeg));
+  for (double a : r.theta_max_by_azimuth)
+    sectors.push_back(std::isnan(a) ? nlohmann::json(nullptr) : nlohmann::json(a * kDeg));
   nlohmann::json j = {{"theta_max_deg", r.theta_max * kDeg}, {"theta_max_by_azimuth_deg", sectors}};
   if (r.covariance.size() > 0) {
     nlohmann::json rows = nlohmann::json::array();
@@ -64,7 +65,8 @@ nlohmann::json calibration_json(const CalibrationRecord& r) {
 TangentialTerms read_tangential(const DocFields& f) {
   if (f.node().kind != DocNode::Kind::map) f.fail("", "expected an object of p1, p2, s1..s4");
   for (const std::string& key : f.node().keys) {
-    if (std::find(TangentialTerms::kNames.begin(), TangentialTerms::kNames.end(), key) == TangentialTerms::kNames.end()) {
+    if (std::find(TangentialTerms::kNames.begin(), TangentialTerms::kNames.end(), key) ==
+        TangentialTerms::kNames.end()) {
       f.fail(key, "unknown tangential term (expected p1, p2, s1, s2, s3, s4)");
     }
   }
@@ -98,7 +100,8 @@ CameraParameters read_camera_fields(const DocFields& f) {
     if (!f.has(key)) continue;
     const DocFields s = f.object(key);
     try {
-      p.mrcal_lens = std::make_shared<const MrcalLens>(s.string("lensmodel"), s.numbers("values", 0, kMaxDocumentNodes));
+      p.mrcal_lens =
+          std::make_shared<const MrcalLens>(s.string("lensmodel"), s.numbers("values", 0, kMaxDocumentNodes));
     } catch (const Error& e) {
       f.fail(key, e.what());
     }
@@ -176,7 +179,21 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 
 }  // namespace
 
-extern const FormatSpec fishcam_format{CameraFormat::fishcam, "fishcam", "fishcam camera JSON", {".json"},
-                                       {}, score, read, write, true, true, true, write_rig, true, true, true, true};
+extern const FormatSpec fishcam_format{CameraFormat::fishcam,
+                                       "fishcam",
+                                       "fishcam camera JSON",
+                                       {".json"},
+                                       {},
+                                       score,
+                                       read,
+                                       write,
+                                       true,
+                                       true,
+                                       true,
+                                       write_rig,
+                                       true,
+                                       true,
+                                       true,
+                                       true};
 
 }  // namespace fishcam::detail

@@ -54,8 +54,8 @@ class Content {
 };
 
 struct NamedCamera {
-  std::string name;        // as the file names it ("cam0"), or its index
-  CameraParameters camera;  // width = height = 0 when the file has no image size
+  std::string name;                // as the file names it ("cam0"), or its index
+  CameraParameters camera;         // width = height = 0 when the file has no image size
   std::vector<std::string> notes;  // what the reader did not take (said on stderr by the CLI)
 };
 
@@ -89,7 +89,7 @@ struct FormatSpec {
   bool holds_tangential = false;
   bool holds_thin_prism = false;
   bool holds_mrcal_lens = false;  // an mrcal lens (CameraParameters::mrcal_lens)
-  bool holds_skew = false;    // a skewed pixel grid (CameraParameters::skew)
+  bool holds_skew = false;        // a skewed pixel grid (CameraParameters::skew)
 
   bool holds(std::string_view model) const;
 };

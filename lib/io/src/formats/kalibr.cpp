@@ -9,7 +9,9 @@
 namespace fishcam::detail {
 namespace {
 
-bool is_camera(const DocNode& n) { return n.kind == DocNode::Kind::map && n.find("camera_model") && n.find("intrinsics"); }
+bool is_camera(const DocNode& n) {
+  return n.kind == DocNode::Kind::map && n.find("camera_model") && n.find("intrinsics");
+}
 
 int score(const Content& c) {
   const DocNode* root = c.yaml();
@@ -64,7 +66,8 @@ std::vector<NamedCamera> read(const Content& c) {
     // Kalibr itself requires distortion_model: a missing one is never taken as none
     // (coefficients would be dropped silently).
     const std::string distortion = f.string("distortion_model");
-    const std::vector<double> d = f.has("distortion_coeffs") ? f.numbers("distortion_coeffs", 0, 8) : std::vector<double>{};
+    const std::vector<double> d =
+        f.has("distortion_coeffs") ? f.numbers("distortion_coeffs", 0, 8) : std::vector<double>{};
     auto fail_d = [&](std::string_view problem) { f.fail("distortion_coeffs", problem); };
     if (distortion == "none" && std::any_of(d.begin(), d.end(), [](double x) { return x != 0; })) {
       fail_d("non-zero coefficients with distortion_model none (which model are they for?)");
@@ -75,7 +78,9 @@ std::vector<NamedCamera> read(const Content& c) {
       return k[at];
     };
     auto no_distortion = [&] {
-      if (distortion != "none") f.fail("distortion_model", "expected none for camera_model " + model + ", got " + quoted_for_message(distortion));
+      if (distortion != "none")
+        f.fail("distortion_model",
+               "expected none for camera_model " + model + ", got " + quoted_for_message(distortion));
     };
     if (model == "pinhole") {
       const auto k = f.numbers("intrinsics", 4, 4);
@@ -88,7 +93,8 @@ std::vector<NamedCamera> read(const Content& c) {
       } else if (distortion == "radtan") {
         set_radial_tangential(&p, d, fx, fail_d);
       } else {
-        f.fail("distortion_model", "unsupported " + quoted_for_message(distortion) + " (expected equidistant, radtan or none)");
+        f.fail("distortion_model",
+               "unsupported " + quoted_for_message(distortion) + " (expected equidistant, radtan or none)");
       }
     } else if (model == "omni") {
       const auto k = f.numbers("intrinsics", 5, 5);  // xi, fu, fv, pu, pv
@@ -100,8 +106,9 @@ std::vector<NamedCamera> read(const Content& c) {
         p.model = Mei<double>(fx, k[0], d[0], d[1]);
         p.tangential = {d[2], d[3], {}};
       } else {
-        f.fail("distortion_model", "omni with " + quoted_for_message(distortion) +
-                                   " is radially symmetric but fishcam has no such model (it reads omni-none and omni-radtan)");
+        f.fail("distortion_model",
+               "omni with " + quoted_for_message(distortion) +
+                   " is radially symmetric but fishcam has no such model (it reads omni-none and omni-radtan)");
       }
     } else if (model == "ds") {
       no_distortion();
@@ -196,7 +203,8 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
     if (n > 0) {
       const auto m = matrix_from_pose(compose(inverse(*cameras[n].pose), *cameras[n - 1].pose));
       out += "  T_cn_cnm1:\n";
-      for (int r = 0; r < 4; ++r) out += "  - " + yaml_list({m[4 * r], m[4 * r + 1], m[4 * r + 2], m[4 * r + 3]}) + "\n";
+      for (int r = 0; r < 4; ++r)
+        out += "  - " + yaml_list({m[4 * r], m[4 * r + 1], m[4 * r + 2], m[4 * r + 3]}) + "\n";
     }
   }
   return out;
@@ -204,9 +212,19 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 
 }  // namespace
 
-extern const FormatSpec kalibr_format{CameraFormat::kalibr, "kalibr", "Kalibr camchain YAML", {".yaml", ".yml"},
-                                      {"kannala-brandt", "equidistant", "pinhole", "unified", "mei", "double-sphere",
-                                       "extended-unified"},
-                                      score, read, write, false, false, false, write_rig, true};
+extern const FormatSpec kalibr_format{
+    CameraFormat::kalibr,
+    "kalibr",
+    "Kalibr camchain YAML",
+    {".yaml", ".yml"},
+    {"kannala-brandt", "equidistant", "pinhole", "unified", "mei", "double-sphere", "extended-unified"},
+    score,
+    read,
+    write,
+    false,
+    false,
+    false,
+    write_rig,
+    true};
 
 }  // namespace fishcam::detail

@@ -96,7 +96,8 @@ std::string write(const CameraParameters& p) {
   if (p.mrcal_lens) lensmodel = p.mrcal_lens->lensmodel(), distortion = p.mrcal_lens->values();  // on its base model
   const std::array<double, 6> rt = p.pose ? rt_cam_ref_from_pose(*p.pose) : std::array<double, 6>{};
   std::string out = "{\n    'lensmodel':  '" + lensmodel + "',\n\n";
-  out += std::string("    # intrinsics are fx,fy,cx,cy") + (distortion.empty() ? "" : ",distortion0,distortion1,....") + "\n";
+  out += std::string("    # intrinsics are fx,fy,cx,cy") + (distortion.empty() ? "" : ",distortion0,distortion1,....") +
+         "\n";
   out += "    'intrinsics': [";
   for (double x : {f * p.pixel_scale.x(), f * p.pixel_scale.y(), p.principal_point.x(), p.principal_point.y()}) {
     out += ' ', out += number(x), out += ',';
@@ -110,8 +111,20 @@ std::string write(const CameraParameters& p) {
 
 }  // namespace
 
-extern const FormatSpec mrcal_format{CameraFormat::mrcal, "mrcal", "mrcal .cameramodel", {".cameramodel"},
-                                     {"pinhole", "stereographic", "opencv"}, score, read, write, false, false, false,
-                                     nullptr, true, true, true};
+extern const FormatSpec mrcal_format{CameraFormat::mrcal,
+                                     "mrcal",
+                                     "mrcal .cameramodel",
+                                     {".cameramodel"},
+                                     {"pinhole", "stereographic", "opencv"},
+                                     score,
+                                     read,
+                                     write,
+                                     false,
+                                     false,
+                                     false,
+                                     nullptr,
+                                     true,
+                                     true,
+                                     true};
 
 }  // namespace fishcam::detail

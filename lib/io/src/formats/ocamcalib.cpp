@@ -72,7 +72,8 @@ std::vector<NamedCamera> read(const Content& c) {
     std::vector<double> numbers;
     for (std::string w; words >> w;) {
       numbers.push_back(DocFields::parse_number(w, [&](std::string_view problem) {
-        fail("data line " + std::to_string(lines.size() + 1) + ": " + quoted_for_message(w) + ": " + std::string(problem));
+        fail("data line " + std::to_string(lines.size() + 1) + ": " + quoted_for_message(w) + ": " +
+             std::string(problem));
       }));
     }
     lines.push_back(std::move(numbers));
@@ -94,11 +95,13 @@ std::vector<NamedCamera> read(const Content& c) {
   };
   exactly(2, 2, "centre (row column)"), exactly(3, 3, "affine (c d e)"), exactly(4, 2, "image size (height width)");
   if (!centre_convention_stated) {
-    fail("centre: the file does not say where its rows and columns start (OCamCalib writes \"starting from 0 (C "
-         "convention)\" above it); fishcam does not guess");
+    fail(
+        "centre: the file does not say where its rows and columns start (OCamCalib writes \"starting from 0 (C "
+        "convention)\" above it); fishcam does not guess");
   }
   if (pol.size() > 5) {
-    fail("pol: " + std::to_string(pol.size()) + " coefficients; fishcam's ocam model holds a polynomial of degree up "
+    fail("pol: " + std::to_string(pol.size()) +
+         " coefficients; fishcam's ocam model holds a polynomial of degree up "
          "to 4 (a0..a4)");
   }
   const double xc = lines[2][0], yc = lines[2][1], ac = lines[3][0], ad = lines[3][1], ae = lines[3][2];
@@ -106,7 +109,8 @@ std::vector<NamedCamera> read(const Content& c) {
   CameraParameters& p = named.camera;
   for (int i = 0; i < 2; ++i) {
     const double v = lines[4][size_t(i)];
-    if (!(v >= 1 && v <= (1 << 16)) || v != std::floor(v)) fail("image size: height and width must be positive integers");
+    if (!(v >= 1 && v <= (1 << 16)) || v != std::floor(v))
+      fail("image size: height and width must be positive integers");
   }
   p.height = int(lines[4][0]), p.width = int(lines[4][1]);
   std::array<double, 5> a{};
@@ -177,8 +181,9 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera), the 
   const double c = p.pixel_scale.y(), e = p.skew.xy, d = p.skew.yx * c;
   std::string out = std::string(kDirectComment) + " (ocam_model.ss in MATLAB). These are used by cam2world\n\n";
   out += numbers_line(model_params(p.model), true);
-  out += "#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by "
-         "world2cam\n\n";
+  out +=
+      "#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by "
+      "world2cam\n\n";
   double worst = 0;
   const std::vector<double> invpol = fit_invpol(camera, &worst);
   if (!(worst <= kInvpolTolerancePx)) {
@@ -199,8 +204,21 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera), the 
 
 }  // namespace
 
-extern const FormatSpec ocamcalib_format{CameraFormat::ocamcalib, "ocamcalib", "OCamCalib calib_results.txt", {".txt"},
-                                         {"ocam"}, score, read, write, false, false, false, nullptr, false, false, false,
+extern const FormatSpec ocamcalib_format{CameraFormat::ocamcalib,
+                                         "ocamcalib",
+                                         "OCamCalib calib_results.txt",
+                                         {".txt"},
+                                         {"ocam"},
+                                         score,
+                                         read,
+                                         write,
+                                         false,
+                                         false,
+                                         false,
+                                         nullptr,
+                                         false,
+                                         false,
+                                         false,
                                          true};
 
 }  // namespace fishcam::detail

@@ -35,7 +35,8 @@ std::vector<NamedCamera> read(const Content& c) {
   const DocFields f(root, c.source());
   const Keys* keys = keys_of(root);
   if (!keys) {
-    f.fail(root.find("K") ? "D" : "K", "missing (an OpenCV camera has K and D, or cameraMatrix and distCoeffs, or M and D)");
+    f.fail(root.find("K") ? "D" : "K",
+           "missing (an OpenCV camera has K and D, or cameraMatrix and distCoeffs, or M and D)");
   }
   const auto k = f.matrix(keys->matrix, 9);
   const std::vector<double> d = f.numbers(keys->distortion, 4, 14);
@@ -52,7 +53,9 @@ std::vector<NamedCamera> read(const Content& c) {
                                    "say which (distortion_model fisheye or plumb_bob)");
   }
   const std::string model = f.has("distortion_model") ? f.string("distortion_model") : *said;
-  if (said && *said != model) f.fail("distortion_model", "the file says " + quoted_for_message(model) + ", the caller " + quoted_for_message(*said));
+  if (said && *said != model)
+    f.fail("distortion_model",
+           "the file says " + quoted_for_message(model) + ", the caller " + quoted_for_message(*said));
   if (model == "fisheye" || model == "equidistant") {
     if (d.size() != 4) f.fail(keys->distortion, "a fisheye model has 4 coefficients, got " + std::to_string(d.size()));
     p.model = KannalaBrandt<double>(k[0], d[0], d[1], d[2], d[3]);
@@ -84,11 +87,14 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   if (const std::optional<RadialTangential> r = radial_tangential_of(p)) {
     fs << "distortion_model" << (r->d.size() == 5 ? "plumb_bob" : "rational_polynomial");
     fs << "image_width" << p.width << "image_height" << p.height;
-    fs << "K" << cv::Mat(cv::Matx33d(r->f, 0, p.principal_point.x(), 0, r->f * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1));
+    fs << "K"
+       << cv::Mat(
+              cv::Matx33d(r->f, 0, p.principal_point.x(), 0, r->f * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1));
     fs << "D" << cv::Mat(r->d, true);
   } else {
     const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::opencv);
-    fs << "distortion_model" << "fisheye";
+    fs << "distortion_model"
+       << "fisheye";
     fs << "image_width" << p.width << "image_height" << p.height;
     fs << "K" << cv::Mat(cv::Matx33d(kb.fx, 0, kb.cx, 0, kb.fy, kb.cy, 0, 0, 1));
     fs << "D" << cv::Mat(cv::Matx41d(kb.k[0], kb.k[1], kb.k[2], kb.k[3]));
@@ -103,8 +109,19 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec opencv_format{CameraFormat::opencv, "opencv", "OpenCV FileStorage YAML/XML",
-                                      {".yaml", ".yml", ".xml"}, {"kannala-brandt", "equidistant", "pinhole", "opencv"},
-                                      score, read, write, false, false, false, nullptr, true, true};
+extern const FormatSpec opencv_format{CameraFormat::opencv,
+                                      "opencv",
+                                      "OpenCV FileStorage YAML/XML",
+                                      {".yaml", ".yml", ".xml"},
+                                      {"kannala-brandt", "equidistant", "pinhole", "opencv"},
+                                      score,
+                                      read,
+                                      write,
+                                      false,
+                                      false,
+                                      false,
+                                      nullptr,
+                                      true,
+                                      true};
 
 }  // namespace fishcam::detail

@@ -17,8 +17,9 @@ std::vector<NamedCamera> read(const Content& c) {
   const DocFields f(root, c.source());
   std::string type = f.has("Camera.type") ? f.string("Camera.type") : "";
   if (type != "KannalaBrandt8" && type != "PinHole") {
-    f.fail("Camera.type", type.empty() ? "missing (expected KannalaBrandt8 or PinHole)"
-                                       : "unsupported " + quoted_for_message(type) + " (expected KannalaBrandt8 or PinHole)");
+    f.fail("Camera.type", type.empty()
+                              ? "missing (expected KannalaBrandt8 or PinHole)"
+                              : "unsupported " + quoted_for_message(type) + " (expected KannalaBrandt8 or PinHole)");
   }
   std::vector<NamedCamera> out;
   for (const char* prefix : {"Camera", "Camera1", "Camera2"}) {
@@ -30,7 +31,8 @@ std::vector<NamedCamera> read(const Content& c) {
     set_focal(&p, fx, f.number(pre + "fy"), [&](std::string_view problem) { f.fail(pre + "fx", problem); });
     p.principal_point = {f.number(pre + "cx"), f.number(pre + "cy")};
     if (type == "KannalaBrandt8") {
-      p.model = KannalaBrandt<double>(fx, f.number(pre + "k1"), f.number(pre + "k2"), f.number(pre + "k3"), f.number(pre + "k4"));
+      p.model = KannalaBrandt<double>(fx, f.number(pre + "k1"), f.number(pre + "k2"), f.number(pre + "k3"),
+                                      f.number(pre + "k4"));
     } else {
       std::vector<double> d = {f.number(pre + "k1"), f.number(pre + "k2"), f.number(pre + "p1"), f.number(pre + "p2")};
       if (f.has(pre + "k3")) d.push_back(f.number(pre + "k3"));
@@ -64,8 +66,18 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec orbslam3_format{CameraFormat::orbslam3, "orbslam3", "ORB-SLAM3 settings YAML", {".yaml", ".yml"},
-                                        {"kannala-brandt", "equidistant", "pinhole"}, score, read, write, false,
-                                        false, false, nullptr, true};
+extern const FormatSpec orbslam3_format{CameraFormat::orbslam3,
+                                        "orbslam3",
+                                        "ORB-SLAM3 settings YAML",
+                                        {".yaml", ".yml"},
+                                        {"kannala-brandt", "equidistant", "pinhole"},
+                                        score,
+                                        read,
+                                        write,
+                                        false,
+                                        false,
+                                        false,
+                                        nullptr,
+                                        true};
 
 }  // namespace fishcam::detail

@@ -17,7 +17,8 @@ std::vector<NamedCamera> read(const Content& c) {
   NamedCamera named{f.has("camera_name") ? f.string("camera_name") : "0", {}, {}};
   CameraParameters& p = named.camera;
   const auto k = f.matrix("camera_matrix", 9);
-  if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1) f.fail("camera_matrix", "expected [fx 0 cx; 0 fy cy; 0 0 1]");
+  if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1)
+    f.fail("camera_matrix", "expected [fx 0 cx; 0 fy cy; 0 0 1]");
   set_focal(&p, k[0], k[4], [&](std::string_view problem) { f.fail("camera_matrix", problem); });
   p.principal_point = {k[2], k[5]};
   const std::vector<double> d = f.numbers("distortion_coefficients", 0, 14);
@@ -41,16 +42,20 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const double fx = radtan ? radtan->f : kb.fx, fy = radtan ? radtan->f * p.pixel_scale.y() : kb.fy;
   const double cx = p.principal_point.x(), cy = p.principal_point.y();
   auto matrix = [](int rows, int cols, const std::vector<double>& data) {
-    return "\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: " + yaml_list(data) + "\n";
+    return "\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: " + yaml_list(data) +
+           "\n";
   };
   std::string out;
   out += "image_width: " + std::to_string(p.width) + "\nimage_height: " + std::to_string(p.height) + "\n";
   out += "camera_name: camera\n";
   out += "camera_matrix:" + matrix(3, 3, {fx, 0, cx, 0, fy, cy, 0, 0, 1});
   out += std::string("distortion_model: ") +
-         (!radtan ? "equidistant" : radtan->rational ? "rational_polynomial" : "plumb_bob") + "\n";
-  out += "distortion_coefficients:" + (radtan ? matrix(1, int(radtan->d.size()), radtan->d)
-                                              : matrix(1, 4, {kb.k[0], kb.k[1], kb.k[2], kb.k[3]}));
+         (!radtan            ? "equidistant"
+          : radtan->rational ? "rational_polynomial"
+                             : "plumb_bob") +
+         "\n";
+  out += "distortion_coefficients:" +
+         (radtan ? matrix(1, int(radtan->d.size()), radtan->d) : matrix(1, 4, {kb.k[0], kb.k[1], kb.k[2], kb.k[3]}));
   out += "rectification_matrix:" + matrix(3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
   out += "projection_matrix:" + matrix(3, 4, {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0});
   return out;
@@ -58,8 +63,18 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec ros_format{CameraFormat::ros, "ros", "ROS camera_info YAML", {".yaml", ".yml"},
-                                   {"kannala-brandt", "equidistant", "pinhole", "opencv"}, score, read, write,
-                                   false, false, false, nullptr, true};
+extern const FormatSpec ros_format{CameraFormat::ros,
+                                   "ros",
+                                   "ROS camera_info YAML",
+                                   {".yaml", ".yml"},
+                                   {"kannala-brandt", "equidistant", "pinhole", "opencv"},
+                                   score,
+                                   read,
+                                   write,
+                                   false,
+                                   false,
+                                   false,
+                                   nullptr,
+                                   true};
 
 }  // namespace fishcam::detail

@@ -29,7 +29,8 @@ std::vector<NamedCamera> read(const Content& c) {
   const DocFields top(root, c.source());
   const DocFields in = top.object("intrinsic");
   const std::string model = in.string("model");
-  if (model != "radial_poly") in.fail("model", "unsupported WoodScape model " + quoted_for_message(model) + " (expected radial_poly)");
+  if (model != "radial_poly")
+    in.fail("model", "unsupported WoodScape model " + quoted_for_message(model) + " (expected radial_poly)");
   const double poly_order = in.number("poly_order");
   if (!(poly_order >= 1 && poly_order <= kMaxWoodScapeOrder) || poly_order != std::floor(poly_order)) {
     in.fail("poly_order", "expected an integer in [1, " + std::to_string(kMaxWoodScapeOrder) + "]");
@@ -90,7 +91,13 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec woodscape_format{CameraFormat::woodscape, "woodscape", "WoodScape / SynWoodScape calibration JSON",
-                                         {".json"}, {"polynomial", "equidistant"}, score, read, write};
+extern const FormatSpec woodscape_format{CameraFormat::woodscape,
+                                         "woodscape",
+                                         "WoodScape / SynWoodScape calibration JSON",
+                                         {".json"},
+                                         {"polynomial", "equidistant"},
+                                         score,
+                                         read,
+                                         write};
 
 }  // namespace fishcam::detail

@@ -14,8 +14,8 @@
 #include <string_view>
 #include <vector>
 
-#include "fishcam/core/camera.hpp"
 #include "fishcam/augment/viewpoint.hpp"
+#include "fishcam/core/camera.hpp"
 
 namespace fishcam {
 namespace detail {
@@ -38,7 +38,7 @@ enum class MapKind {
 };
 
 std::optional<MapKind> parse_map_kind(std::string_view name);  // "sampling" | "geometric"
-const std::vector<std::string>& map_kind_names();  // Python's choices, messages
+const std::vector<std::string>& map_kind_names();              // Python's choices, messages
 std::string_view to_string(MapKind kind);
 
 // The sampling maps' coordinate for pixels without a source inside the source image.
@@ -47,9 +47,9 @@ constexpr float kOutsideSource = -100000.0f;
 // Where each output pixel samples the source image.
 struct WarpMaps {
   MapKind kind = MapKind::sampling;
-  cv::Mat map_x, map_y;  // CV_32FC1, output size (see MapKind)
-  cv::Mat valid;         // geometric maps: CV_8UC1, 1 where the source pixel lies inside the
-                         // source image ([-0.5, W - 0.5) x [-0.5, H - 0.5)); empty for sampling maps
+  cv::Mat map_x, map_y;    // CV_32FC1, output size (see MapKind)
+  cv::Mat valid;           // geometric maps: CV_8UC1, 1 where the source pixel lies inside the
+                           // source image ([-0.5, W - 0.5) x [-0.5, H - 0.5)); empty for sampling maps
   long invalid_count = 0;  // output pixels without a source inside the source image
   cv::Size source_size;    // the source image size the maps sample
 
@@ -70,14 +70,14 @@ enum class Sampling {
   exact,
 };
 std::optional<Sampling> parse_sampling(std::string_view name);  // "grid" | "exact"
-const std::vector<std::string>& sampling_names();  // the CLI's choices, Python, messages
+const std::vector<std::string>& sampling_names();               // the CLI's choices, Python, messages
 std::string_view to_string(Sampling sampling);
 
 // What a depth map's values are: the range (distance from the camera centre along
 // the pixel's ray) or z (distance along the optical axis).
 enum class DepthValues { range, z };
 std::optional<DepthValues> parse_depth_values(std::string_view name);  // "range" | "z"
-const std::vector<std::string>& depth_values_names();  // the choices, Python, messages
+const std::vector<std::string>& depth_values_names();                  // the choices, Python, messages
 std::string_view to_string(DepthValues values);
 
 // One sample to augment: any of the image and the labels (with their outputs),
@@ -85,18 +85,17 @@ std::string_view to_string(DepthValues values);
 struct AugmentIO {
   const cv::Mat* image = nullptr;  // source size; 8/16-bit or float32, 1-4 channels; bilinear
   cv::Mat* out_image = nullptr;
-  double fill = 0;                 // where there is no source (saturated to the image's type)
-  const cv::Mat* labels = nullptr; // source size; CV_8UC1 or CV_16UC1; nearest neighbour
+  double fill = 0;                  // where there is no source (saturated to the image's type)
+  const cv::Mat* labels = nullptr;  // source size; CV_8UC1 or CV_16UC1; nearest neighbour
   cv::Mat* out_labels = nullptr;
   int label_fill = 0;
-  cv::Mat* valid = nullptr;        // CV_8UC1, 1 where the output pixel has a source inside the source image
+  cv::Mat* valid = nullptr;  // CV_8UC1, 1 where the output pixel has a source inside the source image
 };
 
 // The source point on the unit sphere (source camera frame) seen along the output
 // ray d (unit) after the viewpoint change, under the depth prior; nullopt where
 // there is none (|t| >= 1 and the ray misses or only grazes the sphere).
-std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const ViewpointChange& change,
-                                            DepthPrior prior);
+std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const ViewpointChange& change, DepthPrior prior);
 
 class ViewpointWarp {
  public:
@@ -116,8 +115,7 @@ class ViewpointWarp {
   // float's range, or a failed check of the kernel against Camera::project over
   // the source's valid domain at construction), the maps come from the exact path.
   // Throws Error for a non-finite or non-rotation change.
-  void compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps,
-               MapKind kind = MapKind::sampling) const;
+  void compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind = MapKind::sampling) const;
   // Geometric maps in double through Camera::project, pixel by pixel: the reference.
   void compute_exact(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
   // Whether compute() uses the float kernel (decided once, at construction).

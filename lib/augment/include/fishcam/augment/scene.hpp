@@ -9,8 +9,8 @@
 #include <memory>
 #include <string_view>
 
-#include "fishcam/core/camera.hpp"
 #include "fishcam/augment/viewpoint.hpp"
+#include "fishcam/core/camera.hpp"
 
 namespace fishcam {
 

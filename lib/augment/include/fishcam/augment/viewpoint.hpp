@@ -11,8 +11,8 @@
 #include <string_view>
 #include <vector>
 
-#include "fishcam/core/camera.hpp"
 #include "fishcam/augment/depth_prior.hpp"
+#include "fishcam/core/camera.hpp"
 
 namespace fishcam {
 

@@ -6,8 +6,8 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <array>
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -18,9 +18,9 @@
 #include <vector>
 
 #include "fishcam/core/error.hpp"
-#include "fishcam/core/radial_inverse.hpp"
 #include "fishcam/core/model_registry.hpp"
 #include "fishcam/core/mrcal_lens.hpp"
+#include "fishcam/core/radial_inverse.hpp"
 #include "fishcam/core/radial_models.hpp"
 #include "fishcam/core/tangential.hpp"
 
@@ -48,7 +48,6 @@ T project_radial(const Model& model, const T* pixel_mapping, const T* point, T* 
   pixel[1] = pixel_mapping[1] + pixel_mapping[3] * scale * point[1];
   return theta;
 }
-
 
 // Rigid transform camera -> reference: p_ref = rotation * p_cam + translation.
 struct Pose {

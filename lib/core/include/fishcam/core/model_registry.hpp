@@ -70,7 +70,7 @@ decltype(auto) dispatch_model(std::string_view name, F&& f) {
   if constexpr (sizeof...(Rest) > 0) {
     return dispatch_model<Rest...>(name, std::forward<F>(f));
   } else {
-    check_model_name(name);  // throws: not a model
+    check_model_name(name);                 // throws: not a model
     return f.template operator()<First>();  // unreachable
   }
 }
@@ -89,9 +89,13 @@ decltype(auto) with_model_class(std::string_view name, F&& f) {
 
 // Model traits generic code asks instead of testing names (radial_models.hpp).
 template <template <typename> class Model>
-constexpr bool has_paper_form = requires { Model<double>::from_paper(1.0, 1.0); };
+constexpr bool has_paper_form = requires {
+  Model<double>::from_paper(1.0, 1.0);
+};
 template <template <typename> class Model>
-constexpr bool takes_order = requires { Model<double>::kTakesOrder; };
+constexpr bool takes_order = requires {
+  Model<double>::kTakesOrder;
+};
 // Whether the model called `name` has the paper's closed form (eqs. 13-14);
 // throws Error for an unknown name.
 bool model_has_paper_form(std::string_view name);

@@ -39,9 +39,9 @@ class MrcalLens {
   enum class Kind { splined_stereographic, cahvor, cahvore, lonlat, latlon };
   struct KindInfo {
     Kind kind;
-    const char* lensmodel;       // mrcal's name, or its prefix for a configured one
-    const char* configuration;   // what follows the prefix ("" for none), for messages
-    const char* base_model;      // the fishcam model whose plane it displaces (model_name)
+    const char* lensmodel;      // mrcal's name, or its prefix for a configured one
+    const char* configuration;  // what follows the prefix ("" for none), for messages
+    const char* base_model;     // the fishcam model whose plane it displaces (model_name)
   };
   // Every lens model this class evaluates: the one list readers, messages and tests use.
   static const std::array<KindInfo, 5>& kinds();
@@ -61,9 +61,7 @@ class MrcalLens {
   const std::vector<double>& values() const { return values_; }
   Kind kind() const { return kind_; }
   const char* base_model() const;
-  bool operator==(const MrcalLens& other) const {
-    return lensmodel_ == other.lensmodel_ && values_ == other.values_;
-  }
+  bool operator==(const MrcalLens& other) const { return lensmodel_ == other.lensmodel_ && values_ == other.values_; }
 
   // delta(m) on the base model's plane, with d delta / dm on request; NaN where libmrcal
   // gives no projection (and behind the camera for a model mrcal cannot project there:

@@ -12,9 +12,9 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <string>
-#include <span>
 #include <vector>
 
 #include "fishcam/core/error.hpp"
@@ -26,18 +26,16 @@ struct ValidDomain {
   // model: the model's own limit; fold: rho' = 0; user: theta_limit; distortion_fold:
   // where the non-radial part (tangential terms, an mrcal lens) stops being one-to-one (Camera).
   enum class Limit { model, fold, user, distortion_fold };
-  double theta_max = 0;   // radians
-  double rho_max = 0;     // rho(theta_max); +inf when the model diverges there
-  bool closed = true;     // theta_max itself is valid (false: theta < theta_max only)
+  double theta_max = 0;  // radians
+  double rho_max = 0;    // rho(theta_max); +inf when the model diverges there
+  bool closed = true;    // theta_max itself is valid (false: theta < theta_max only)
   Limit limited_by = Limit::model;
   // Cameras with a non-radial part (Camera): an upper bound on |D(m)| over the domain
   // (normalized plane units; +inf when open), so unprojection refuses what lies beyond
   // without solving.
   double plane_reach = std::numeric_limits<double>::infinity();
 
-  bool contains_theta(double theta) const {
-    return theta >= 0 && (closed ? theta <= theta_max : theta < theta_max);
-  }
+  bool contains_theta(double theta) const { return theta >= 0 && (closed ? theta <= theta_max : theta < theta_max); }
   bool contains_rho(double rho) const { return rho >= 0 && (closed ? rho <= rho_max : rho < rho_max); }
 };
 
@@ -79,7 +77,7 @@ double solve_theta(const Model& model, double rho, const ValidDomain& domain,
   if (!domain.contains_rho(rho)) return std::numeric_limits<double>::quiet_NaN();
   if constexpr (ClosedFormInverse<Model>) {
     if (domain.closed && rho == domain.rho_max) return domain.theta_max;  // a fold: the formula's sqrt(0 - ulps)
-    return std::min(model.theta_from_rho(rho), domain.theta_max);  // min: rounding at rho_max
+    return std::min(model.theta_from_rho(rho), domain.theta_max);         // min: rounding at rho_max
   } else {
     if (rho == 0) return 0;
     if (rho == domain.rho_max) return domain.theta_max;
@@ -240,7 +238,8 @@ ValidDomain compute_domain(const Model& model, std::optional<double> user_limit)
     if (!(limit > 0) || !in_range) {
       std::ostringstream msg;
       msg.precision(15);  // 180.0000001 must not print as 180
-      msg << "theta_limit: must be in (0, " << model_limit * kDeg << (model_open ? ")" : "]") << " degrees for " << Model::kName << ", got " << limit * kDeg;
+      msg << "theta_limit: must be in (0, " << model_limit * kDeg << (model_open ? ")" : "]") << " degrees for "
+          << Model::kName << ", got " << limit * kDeg;
       throw Error(msg.str());
     }
     if (limit < domain.theta_max || (limit == domain.theta_max && !domain.closed)) {
@@ -314,7 +313,8 @@ InverseTable::InverseTable(const Model& model, const ValidDomain& domain, double
       // The ray's angle error, from its components against the exact angle, in px.
       const double exact = solve_theta(model, rho, domain);
       const double ray_error = std::max(std::abs(detail::cubic(cr, t) * rho - std::sin(exact)),
-                                        std::abs(detail::cubic(cr + 4, t) - std::cos(exact))) * model.drho(exact);
+                                        std::abs(detail::cubic(cr + 4, t) - std::cos(exact))) *
+                               model.drho(exact);
       worst = std::isfinite(theta_error) ? std::max(worst, theta_error) : INFINITY;
       worst_ray = std::isfinite(ray_error) ? std::max(worst_ray, ray_error) : INFINITY;
     }

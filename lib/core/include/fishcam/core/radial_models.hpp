@@ -299,8 +299,7 @@ class OpenCV {
 
   OpenCV() = default;
   explicit OpenCV(const Scalar* p, int = 7) : p_{p[0], p[1], p[2], p[3], p[4], p[5], p[6]} {}
-  OpenCV(Scalar f, Scalar k1, Scalar k2, Scalar k3, Scalar k4 = Scalar(0), Scalar k5 = Scalar(0),
-         Scalar k6 = Scalar(0))
+  OpenCV(Scalar f, Scalar k1, Scalar k2, Scalar k3, Scalar k4 = Scalar(0), Scalar k5 = Scalar(0), Scalar k6 = Scalar(0))
       : p_{f, k1, k2, k3, k4, k5, k6} {}
 
   std::string invalid() const { return ""; }
@@ -350,10 +349,13 @@ class OpenCV {
   // The undistorted plane m = (X, Y) / Z (fishcam/core/tangential.hpp): R = N / D.
   static constexpr bool kTakesTangentialTerms = true;
   double focal() const { return double(p_[0]); }
-  static double plane_radius(double theta, double* derivative) { return Pinhole<double>::plane_radius(theta, derivative); }
+  static double plane_radius(double theta, double* derivative) {
+    return Pinhole<double>::plane_radius(theta, derivative);
+  }
   static double theta_of_plane_radius(double r) { return std::atan(r); }
   double radial_factor(double s, double* derivative) const {
-    const double k[7] = {double(p_[0]), double(p_[1]), double(p_[2]), double(p_[3]), double(p_[4]), double(p_[5]), double(p_[6])};
+    const double k[7] = {double(p_[0]), double(p_[1]), double(p_[2]), double(p_[3]),
+                         double(p_[4]), double(p_[5]), double(p_[6])};
     const double n = 1 + s * (k[1] + s * (k[2] + s * k[3])), d = 1 + s * (k[4] + s * (k[5] + s * k[6]));
     const double dn = k[1] + s * (2 * k[2] + s * 3 * k[3]), dd = k[4] + s * (2 * k[5] + s * 3 * k[6]);
     *derivative = (dn * d - n * dd) / (d * d);
@@ -519,10 +521,10 @@ class Unified {
 
   // rho'(0) = f / (1 + xi).
   static std::vector<double> initial_params(double f, int) { return {2 * f, 1}; }
-  static std::vector<std::vector<double>> fit_starts(double f) {
-    return {{1.5 * f, 0.5}, {2 * f, 1}, {3 * f, 2}};
+  static std::vector<std::vector<double>> fit_starts(double f) { return {{1.5 * f, 0.5}, {2 * f, 1}, {3 * f, 2}}; }
+  static std::pair<double, double> param_bounds(int i) {
+    return i == 1 ? std::pair{0.0, 1e3} : std::pair{0.0, detail::kInf};
   }
-  static std::pair<double, double> param_bounds(int i) { return i == 1 ? std::pair{0.0, 1e3} : std::pair{0.0, detail::kInf}; }
 
  private:
   Scalar f_{1}, xi_{0};
@@ -571,7 +573,8 @@ class ExtendedUnified {
     using std::sqrt;
     const Scalar r = rho / f_, r2 = r * r;
     const Scalar mz = (Scalar(1) - beta_ * alpha_ * alpha_ * r2) /
-                      (alpha_ * detail::sqrt_nonnegative(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * beta_ * r2) + (Scalar(1) - alpha_));
+                      (alpha_ * detail::sqrt_nonnegative(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * beta_ * r2) +
+                       (Scalar(1) - alpha_));
     return detail::newton_polish(*this, atan2(r, mz), rho);
   }
   double theta_limit() const {
@@ -586,9 +589,7 @@ class ExtendedUnified {
   UnifiedForm unified_form() const { return {double(f_), 0, double(alpha_), double(beta_), 0, 0}; }
 
   static std::vector<double> initial_params(double f, int) { return {f, 0.5, 1}; }
-  static std::vector<std::vector<double>> fit_starts(double f) {
-    return {{f, 0.5, 1}, {f, 0.6, 1.2}, {f, 0.4, 0.8}};
-  }
+  static std::vector<std::vector<double>> fit_starts(double f) { return {{f, 0.5, 1}, {f, 0.6, 1.2}, {f, 0.4, 0.8}}; }
   static std::pair<double, double> param_bounds(int i) {
     if (i == 1) return {0.0, 1.0};
     if (i == 2) return {1e-6, 1e3};
@@ -642,8 +643,9 @@ class DoubleSphere {
     using std::atan2;
     using std::sqrt;
     const Scalar r = rho / f_, r2 = r * r;
-    const Scalar mz = (Scalar(1) - alpha_ * alpha_ * r2) /
-                      (alpha_ * detail::sqrt_nonnegative(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * r2) + Scalar(1) - alpha_);
+    const Scalar mz =
+        (Scalar(1) - alpha_ * alpha_ * r2) /
+        (alpha_ * detail::sqrt_nonnegative(Scalar(1) - (Scalar(2) * alpha_ - Scalar(1)) * r2) + Scalar(1) - alpha_);
     const Scalar k = (mz * xi_ + detail::sqrt_nonnegative(mz * mz + (Scalar(1) - xi_ * xi_) * r2)) / (mz * mz + r2);
     return detail::newton_polish(*this, atan2(k * r, k * mz - xi_), rho);
   }
@@ -853,7 +855,10 @@ class OCam {
     int n = 4;
     while (n > 0 && a[n] == 0) --n;
     if (n >= 2) {
-      theta_limit_ = a[n] > 0 ? std::numbers::pi : std::atan2(kMaxRho, -(a[0] + kMaxRho * (a[1] + kMaxRho * (a[2] + kMaxRho * (a[3] + kMaxRho * a[4])))));
+      theta_limit_ =
+          a[n] > 0
+              ? std::numbers::pi
+              : std::atan2(kMaxRho, -(a[0] + kMaxRho * (a[1] + kMaxRho * (a[2] + kMaxRho * (a[3] + kMaxRho * a[4])))));
     } else {
       theta_limit_ = n == 1 ? std::atan2(1.0, -a[1]) : std::numbers::pi / 2;
     }
@@ -862,7 +867,8 @@ class OCam {
   double solve_rho(double theta) const {
     if (theta == 0) return 0;
     if (!(theta > 0)) return std::numeric_limits<double>::quiet_NaN();
-    if (fold_rho_ && theta >= theta_limit_) return theta == theta_limit_ ? *fold_rho_ : std::numeric_limits<double>::quiet_NaN();
+    if (fold_rho_ && theta >= theta_limit_)
+      return theta == theta_limit_ ? *fold_rho_ : std::numeric_limits<double>::quiet_NaN();
     const double c = std::cos(theta), s = std::sin(theta);
     double slope, lo = 0, hi;
     if (fold_rho_) {
@@ -893,10 +899,14 @@ class OCam {
 };
 
 template <class Model>
-concept ClosedFormInverse = requires(const Model& m, double r) { m.theta_from_rho(r); };
+concept ClosedFormInverse = requires(const Model& m, double r) {
+  m.theta_from_rho(r);
+};
 
 template <class Model>
-concept FusedDerivative = requires(const Model& m, double t, double* d) { m.rho(t, d); };
+concept FusedDerivative = requires(const Model& m, double t, double* d) {
+  m.rho(t, d);
+};
 
 // rho and drho/dtheta together, fused where the model offers it.
 template <class Model, typename Scalar>
@@ -910,7 +920,9 @@ Scalar rho_and_drho(const Model& model, const Scalar& theta, Scalar* drho) {
 }
 
 template <class Model>
-concept PolynomialInTheta = requires(const Model& m) { m.power_coefficients(); };
+concept PolynomialInTheta = requires(const Model& m) {
+  m.power_coefficients();
+};
 
 // rho = sum_j p_j g_j(theta): fitted exactly by linear least squares.
 template <class Model>
@@ -920,11 +932,15 @@ concept LinearInParams = requires(double t, double* g, const double* p) {
 };
 
 template <class Model>
-concept HasUnifiedForm = requires(const Model& m) { m.unified_form(); };
+concept HasUnifiedForm = requires(const Model& m) {
+  m.unified_form();
+};
 
 // rho(theta) defined by a ray polynomial (ocam): the float kernel solves for it.
 template <class Model>
-concept HasRayPolynomial = requires(const Model& m) { m.ray_polynomial(); };
+concept HasRayPolynomial = requires(const Model& m) {
+  m.ray_polynomial();
+};
 
 // Models with an undistorted plane on which tangential terms can be added
 // (fishcam/core/tangential.hpp): rho(theta) = f u(theta) R(u(theta)^2) with u the plane
@@ -941,6 +957,8 @@ concept HasUndistortedPlane = requires(const Model& m, double x, double* d) {
 // The models whose plane takes OpenCV's tangential terms (pinhole, opencv, mei; the
 // stereographic plane takes mrcal's spline instead).
 template <class Model>
-concept TakesTangentialTerms = HasUndistortedPlane<Model> && requires { Model::kTakesTangentialTerms; };
+concept TakesTangentialTerms = HasUndistortedPlane<Model> && requires {
+  Model::kTakesTangentialTerms;
+};
 
 }  // namespace fishcam

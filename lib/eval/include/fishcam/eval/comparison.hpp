@@ -15,8 +15,8 @@
 #include <utility>
 #include <vector>
 
-#include "fishcam/core/camera.hpp"
 #include "fishcam/augment/viewpoint.hpp"
+#include "fishcam/core/camera.hpp"
 
 namespace fishcam {
 
@@ -29,7 +29,7 @@ struct ComparisonOptions {
 
 // Distances (px) between where the two augmentations sample the source image.
 struct DisplacementStats {
-  long pixels = 0;  // (output pixel, change) pairs with a source inside the image in both
+  long pixels = 0;                             // (output pixel, change) pairs with a source inside the image in both
   double mean_px = 0, p95_px = 0, max_px = 0;  // p95: linear between order statistics (numpy's default)
 };
 

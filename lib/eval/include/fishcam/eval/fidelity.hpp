@@ -31,8 +31,8 @@ struct Fidelity {
 // (output size). Throws Error for mismatched inputs.
 Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange& change,
                                std::optional<DepthPrior> prior, const cv::Mat& source_image,
-                               const cv::Mat& source_labels, const cv::Mat& source_depth,
-                               const cv::Mat& truth_image, const cv::Mat& truth_labels);
+                               const cv::Mat& source_labels, const cv::Mat& source_depth, const cv::Mat& truth_image,
+                               const cv::Mat& truth_labels);
 
 // One row of a dataset's fidelity: a true viewpoint test set under one prior ("map":
 // the sample's depth map), means over the set's samples.

@@ -16,17 +16,17 @@ namespace fishcam {
 
 struct CalibrationResult {
   CameraParameters camera;
-  std::vector<BoardPose> poses;            // per observation with a board, in file order
-  std::vector<std::string> used_images;    // their filenames
+  std::vector<BoardPose> poses;          // per observation with a board, in file order
+  std::vector<std::string> used_images;  // their filenames
   std::vector<double> per_image_rms_px;
   double rms_px = 0;
-  long observations = 0;                   // corners used
+  long observations = 0;  // corners used
   struct Outlier {
     std::string filename;
     int corner;
     double error_px;
   };
-  std::vector<Outlier> outliers;           // corners the robust loss discounted (> 5 sigma)
+  std::vector<Outlier> outliers;             // corners the robust loss discounted (> 5 sigma)
   std::vector<std::string> parameter_names;  // model parameters, then cx, cy, a_y
   // Values and 1-sigma uncertainties (the solve's covariance); sigma NaN for a
   // parameter the data do not determine (see undetermined).
@@ -34,8 +34,8 @@ struct CalibrationResult {
   // One text per combination of parameters the data do not determine (a direction
   // of the solve's covariance with no curvature), naming the parameters.
   std::vector<std::string> undetermined;
-  double noise_px = 0;                       // residual standard deviation per coordinate
-  std::vector<std::string> warnings;         // e.g. boards that leave most of the image uncovered
+  double noise_px = 0;                // residual standard deviation per coordinate
+  std::vector<std::string> warnings;  // e.g. boards that leave most of the image uncovered
 };
 
 struct CalibrationOptions {
@@ -71,8 +71,8 @@ struct RigCalibrationResult {
   // rotation (rad, the angle-axis components' largest) and translation (board units,
   // the largest component); 0 for camera 0.
   std::vector<double> rotation_sigma_rad, translation_sigma;
-  double rms_px = 0;      // over every camera's corners (2-D)
-  long instants = 0;      // distinct instants with a board
+  double rms_px = 0;  // over every camera's corners (2-D)
+  long instants = 0;  // distinct instants with a board
   std::vector<std::string> warnings;
 };
 // Each camera must calibrate on its own (>= 3 boards, fishcam::calibrate's checks),

@@ -26,8 +26,8 @@ constexpr int kMaxFittedPolynomialOrder = 12;
 ModelSpec parse_model_spec(std::string_view text);  // throws Error on unknown names
 
 struct Correspondence {
-  Eigen::Vector3d ray;     // camera frame, any length
-  Eigen::Vector2d pixel;   // where it is seen
+  Eigen::Vector3d ray;    // camera frame, any length
+  Eigen::Vector2d pixel;  // where it is seen
 };
 
 // Pixels of the camera's image inside its valid domain, every `step` pixels in u and
@@ -116,7 +116,7 @@ std::string fit_report_json(const CameraParameters& fitted, const ErrorReport& r
 // rays of A's pixels (every `step` px), rotated, projected by B.
 struct ProjectionDiff {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // A's camera frame -> B's
-  long pixels = 0;  // compared (valid in both and inside B's image)
+  long pixels = 0;                                         // compared (valid in both and inside B's image)
   double rms_px = 0, max_px = 0;
 };
 struct ProjectionDiffOptions {

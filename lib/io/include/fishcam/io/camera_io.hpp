@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "fishcam/io/camera_format_list.hpp"
 #include "fishcam/core/camera.hpp"
+#include "fishcam/io/camera_format_list.hpp"
 
 namespace fishcam {
 
@@ -59,13 +59,12 @@ struct CameraFileInfo {
 // prefixes every error message.
 CameraParameters parse_camera(std::string_view content, std::string_view source_name,
                               std::optional<CameraFormat> format = std::nullopt);
-CameraParameters parse_camera(std::string_view content, std::string_view source_name,
-                              const CameraReadOptions& options, CameraFileInfo* info = nullptr);
+CameraParameters parse_camera(std::string_view content, std::string_view source_name, const CameraReadOptions& options,
+                              CameraFileInfo* info = nullptr);
 
 // Reads, detects the format (reported in *format when given) and validates.
 Camera read_camera(const std::filesystem::path& path, CameraFormat* format = nullptr);
-Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& options,
-                   CameraFormat* format = nullptr);
+Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& options, CameraFormat* format = nullptr);
 Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& options, CameraFileInfo* info);
 
 // What `fishcam info --json` prints: one JSON object (model, parameters, width,

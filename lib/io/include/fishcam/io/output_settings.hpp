@@ -16,7 +16,7 @@
 namespace fishcam {
 
 struct OutputSettings {
-  std::string command;  // "augment-dataset"
+  std::string command;                                      // "augment-dataset"
   std::vector<std::pair<std::string, std::string>> values;  // ("--seed", "5"), in a fixed order
 
   // The record as one line of JSON (no newline); the library's version included.

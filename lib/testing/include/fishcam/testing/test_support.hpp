@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -12,7 +13,6 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
-#include <unistd.h>
 
 #include "fishcam/core/camera.hpp"
 #include "fishcam/io/camera_io.hpp"
@@ -76,8 +76,8 @@ inline std::string read_file(const std::filesystem::path& path) {
 // followed), so a test sees a link that was written through or replaced.
 inline std::map<std::string, std::string> files_below(const std::filesystem::path& dir) {
   std::map<std::string, std::string> files;
-  for (auto it = std::filesystem::recursive_directory_iterator(dir); it != std::filesystem::recursive_directory_iterator();
-       ++it) {
+  for (auto it = std::filesystem::recursive_directory_iterator(dir);
+       it != std::filesystem::recursive_directory_iterator(); ++it) {
     const std::string name = std::filesystem::relative(it->path(), dir).string();
     if (it->is_symlink()) {
       files[name] = "-> " + std::filesystem::read_symlink(it->path()).string();
@@ -130,12 +130,15 @@ inline std::vector<ModelExample> model_examples() {
       {"mei", Mei<double>(640.0, 0.9, -0.05, 0.01), {1.0, 1.001}},
       // mrcal_cam0.opencv8.cameramodel's k1..k6 (../shared/data/external), f for this image
       // as that camera's (its image reaches 3/4 of the radius of the distortion's fold).
-      {"opencv_rational", OpenCV<double>(700.0, -0.01266096516, 0.03590794372, 0.01968883397, 0.01482863541,
-                                         -0.0562239888, 0.0500223357), {1.0, 1.00004}},
+      {"opencv_rational",
+       OpenCV<double>(700.0, -0.01266096516, 0.03590794372, 0.01968883397, 0.01482863541, -0.0562239888, 0.0500223357),
+       {1.0, 1.00004}},
       // ocamcalib_calib_results.txt's pol (../shared/data/external), scaled to f = 340 px
       // (its domain is open up to 180 degrees), and one whose theta(rho) turns back (a fold
       // at rho = 1208, past the image's corners).
-      {"ocam", OCam<double>({-746.3674, 0, 8.872435e-04, -1.024379e-06, 9.406640e-10}).scaled(340 / 746.3674), {1.0, 1.003}},
+      {"ocam",
+       OCam<double>({-746.3674, 0, 8.872435e-04, -1.024379e-06, 9.406640e-10}).scaled(340 / 746.3674),
+       {1.0, 1.003}},
       {"ocam_fold", OCam<double>({-340.0, 0, 1 / 1020.0, -5.0e-7, 0}), {1.0, 0.999}},
   };
 }
@@ -153,7 +156,9 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_model() {
       out.emplace_back(e.label, with_model(ws, e.model, e.pixel_scale));
       found = true;
     }
-    if (!found) ADD_FAILURE() << "model " << name << " has no example in lib/testing/include/fishcam/testing/test_support.hpp (model_examples)";
+    if (!found)
+      ADD_FAILURE() << "model " << name
+                    << " has no example in lib/testing/include/fishcam/testing/test_support.hpp (model_examples)";
   }
   return out;
 }
@@ -165,7 +170,8 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_model() {
 inline std::vector<std::pair<std::string, CameraParameters>> every_tangential_camera() {
   std::vector<std::pair<std::string, CameraParameters>> out;
   for (const auto& [label, p] : every_model()) {
-    const bool has_plane = std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; }, p.model);
+    const bool has_plane =
+        std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; }, p.model);
     if (!has_plane) continue;
     CameraParameters q = p;
     const std::string_view name = model_name(p.model);
@@ -197,8 +203,8 @@ inline std::pair<std::string, CameraParameters> spline_camera() {
         values.push_back(0.003 * std::sin(0.5 * x - 0.9 * y) - 0.0015 * y);
       }
     }
-    p.mrcal_lens = std::make_shared<const MrcalLens>("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
-                                                   values);
+    p.mrcal_lens =
+        std::make_shared<const MrcalLens>("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", values);
     return {label + "_spline", p};
   }
   ADD_FAILURE() << "no stereographic example for the spline camera";
@@ -311,12 +317,11 @@ struct CommandResult {
 inline CommandResult run_fishcam(const std::string& args, const std::string& stdin_text = "") {
   // One folder per process and call: CTest runs the tests in parallel.
   static int calls = 0;
-  const auto dir = test_path("tmp") /
-                   ("cli-" + std::to_string(::getpid()) + "-" + std::to_string(calls++));
+  const auto dir = test_path("tmp") / ("cli-" + std::to_string(::getpid()) + "-" + std::to_string(calls++));
   std::filesystem::create_directories(dir);
   const auto in = write_file(dir / "stdin.txt", stdin_text), out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string command = "'" + fishcam_binary() + "' " + args + " < '" + in.string() + "' > '" +
-                              out.string() + "' 2> '" + err.string() + "'";
+  const std::string command = "'" + fishcam_binary() + "' " + args + " < '" + in.string() + "' > '" + out.string() +
+                              "' 2> '" + err.string() + "'";
   const int status = std::system(command.c_str());
   CommandResult result{WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};
   std::filesystem::remove_all(dir);
