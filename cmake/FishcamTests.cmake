@@ -15,6 +15,7 @@ set(FISHCAM_TEST_TIMEOUT 300 CACHE STRING "Time limit of each C++ test, seconds"
 #             (minutes under the sanitizers; the CI sanitizer stage leaves them out)
 #   python    the Python package's tests, stubs and types
 #   install   installs and builds a consumer        fuzz     replays a fuzz harness's corpus
+#   style     the tree's style (scripts/style.sh)
 # fishcam_test(NAME [LABEL cli] [SWEEPS GTEST_FILTER]): the tests of NAME.cpp; those
 # matching SWEEPS (a GoogleTest filter, kept here beside the executable they belong
 # to) are labelled sweep, the others LABEL (default unit).

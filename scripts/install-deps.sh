@@ -11,6 +11,7 @@ packages=(
   pybind11-dev python3-pybind11 python3-pytest python3-torch
   libyaml-cpp-dev libpugixml-dev
   clang libclang-rt-14-dev  # the sanitizer and fuzzing builds
+  clang-format-14  # the style check (scripts/style.sh)
 )
 
 missing=()

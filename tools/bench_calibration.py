@@ -18,9 +18,8 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 import fishcam
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 PHOTOS = ROOT.parent / "shared" / "data" / "calibration"
@@ -35,18 +34,23 @@ def main() -> int:
         print(f"no photos at {PHOTOS}", file=sys.stderr)
         return 1
     import cv2  # noqa: PLC0415  (the venv's OpenCV)
+
     images = sorted(PHOTOS.glob("right*.jpg"), key=lambda p: int(re.findall(r"\d+", p.name)[0]))
     with tempfile.TemporaryDirectory() as tmp:
         corners = Path(tmp) / "corners.vnl"
-        subprocess.run([str(BINARY), "detect-corners", *map(str, images), "--board", "9x6", "--out", str(corners)],
-                       check=True, capture_output=True)
+        subprocess.run(
+            [str(BINARY), "detect-corners", *map(str, images), "--board", "9x6", "--out", str(corners)],
+            check=True,
+            capture_output=True,
+        )
         observations = fishcam.read_corners(str(corners), (9, 6))
         board = np.zeros((54, 3))
         board[:, 0] = np.tile(np.arange(9), 6) * 0.03
         board[:, 1] = np.repeat(np.arange(6), 9) * 0.03
         guess = np.array([[240.0, 0, 479.5], [0, 240.0, 299.5], [0, 0, 1]])
-        flags = (cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW |
-                 cv2.fisheye.CALIB_USE_INTRINSIC_GUESS)
+        flags = (
+            cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW | cv2.fisheye.CALIB_USE_INTRINSIC_GUESS
+        )
         criteria = (cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-15)
         ours, theirs = [], []
         for _ in range(args.repeats):
@@ -54,33 +58,90 @@ def main() -> int:
             fishcam.calibrate(observations, (9, 6), 0.03, (960, 600), "kannala-brandt", threads=1)
             ours.append(time.perf_counter() - start)
             start = time.perf_counter()
-            cv2.fisheye.calibrate([board.reshape(-1, 1, 3)] * len(observations),
-                                  [c.reshape(-1, 1, 2) for _, c in observations], (960, 600), guess.copy(),
-                                  np.zeros(4), flags=flags, criteria=criteria)
+            cv2.fisheye.calibrate(
+                [board.reshape(-1, 1, 3)] * len(observations),
+                [c.reshape(-1, 1, 2) for _, c in observations],
+                (960, 600),
+                guess.copy(),
+                np.zeros(4),
+                flags=flags,
+                criteria=criteria,
+            )
             theirs.append(time.perf_counter() - start)
-        print(f"in-call, {len(observations)} images, {sum(len(c) for _, c in observations)} corners, median of "
-              f"{args.repeats} (OpenCV {cv2.__version__}):")
+        print(
+            f"in-call, {len(observations)} images, {sum(len(c) for _, c in observations)} corners, median of "
+            f"{args.repeats} (OpenCV {cv2.__version__}):"
+        )
         print(f"  fishcam.calibrate kannala-brandt, 1 thread  {statistics.median(ours):.3f} s")
-        print(f"  cv2.fisheye.calibrate                       {statistics.median(theirs):.3f} s"
-              f"   ratio {statistics.median(ours) / statistics.median(theirs):.2f}")
+        print(
+            f"  cv2.fisheye.calibrate                       {statistics.median(theirs):.3f} s"
+            f"   ratio {statistics.median(ours) / statistics.median(theirs):.2f}"
+        )
 
         def run(command: list[str]) -> float:
             start = time.perf_counter()
             subprocess.run(command, check=True, capture_output=True, cwd=tmp)
             return time.perf_counter() - start
 
-        mrcal = [run(["/usr/bin/mrcal-calibrate-cameras", "--corners-cache", str(corners), "--lensmodel",
-                      "LENSMODEL_OPENCV8", "--focal", "240", "--object-spacing", "0.03", "--object-width-n", "9",
-                      "--object-height-n", "6", "--imagersize", "960", "600", "--outdir", tmp,
-                      str(PHOTOS / "right*.jpg")]) for _ in range(3)]  # one glob: one camera
-        print(f"whole processes, median of 3: mrcal-calibrate-cameras LENSMODEL_OPENCV8 {statistics.median(mrcal):.2f} s")
+        mrcal = [
+            run(
+                [
+                    "/usr/bin/mrcal-calibrate-cameras",
+                    "--corners-cache",
+                    str(corners),
+                    "--lensmodel",
+                    "LENSMODEL_OPENCV8",
+                    "--focal",
+                    "240",
+                    "--object-spacing",
+                    "0.03",
+                    "--object-width-n",
+                    "9",
+                    "--object-height-n",
+                    "6",
+                    "--imagersize",
+                    "960",
+                    "600",
+                    "--outdir",
+                    tmp,
+                    str(PHOTOS / "right*.jpg"),
+                ]
+            )
+            for _ in range(3)
+        ]  # one glob: one camera
+        print(
+            f"whole processes, median of 3: mrcal-calibrate-cameras LENSMODEL_OPENCV8 {statistics.median(mrcal):.2f} s"
+        )
         for model in ("kannala-brandt", "polynomial", "unified", "extended-unified", "double-sphere", "mei"):
             for threads in (1, 2):
-                times = [run([str(BINARY), "calibrate", "--corners", str(corners), "--board", "9x6", "--spacing",
-                              "0.03", "--imagersize", "960x600", "--model", model, "--threads", str(threads),
-                              "--out", "cal.json", "--force"]) for _ in range(3)]
-                print(f"  fishcam calibrate {model:17s} --threads {threads}  {statistics.median(times):.2f} s"
-                      f"  ({statistics.median(times) / statistics.median(mrcal):.2f} x mrcal)")
+                times = [
+                    run(
+                        [
+                            str(BINARY),
+                            "calibrate",
+                            "--corners",
+                            str(corners),
+                            "--board",
+                            "9x6",
+                            "--spacing",
+                            "0.03",
+                            "--imagersize",
+                            "960x600",
+                            "--model",
+                            model,
+                            "--threads",
+                            str(threads),
+                            "--out",
+                            "cal.json",
+                            "--force",
+                        ]
+                    )
+                    for _ in range(3)
+                ]
+                print(
+                    f"  fishcam calibrate {model:17s} --threads {threads}  {statistics.median(times):.2f} s"
+                    f"  ({statistics.median(times) / statistics.median(mrcal):.2f} x mrcal)"
+                )
     return 0
 
 

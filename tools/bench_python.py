@@ -40,10 +40,14 @@ def median_ms(fn, samples):
 
 def per_sample(fishcam, binary, data, samples, rounds):
     import cv2
+
     with tempfile.TemporaryDirectory() as tmp:
         # The same sample as `fishcam bench augment`: the scene at the camera's pose.
-        subprocess.run([binary, "render", data, "--out-image", f"{tmp}/i.png", "--out-label", f"{tmp}/l.png"],
-                       check=True, capture_output=True)
+        subprocess.run(
+            [binary, "render", data, "--out-image", f"{tmp}/i.png", "--out-label", f"{tmp}/l.png"],
+            check=True,
+            capture_output=True,
+        )
         image = cv2.imread(f"{tmp}/i.png", cv2.IMREAD_UNCHANGED)
         labels = cv2.imread(f"{tmp}/l.png", cv2.IMREAD_UNCHANGED)
     camera = fishcam.Camera.read(data)
@@ -53,11 +57,22 @@ def per_sample(fishcam, binary, data, samples, rounds):
         python_ms, cpp_ms = [], []
         for r in range(rounds):
             fishcam.set_num_threads(threads)
-            python_ms.append(median_ms(lambda i: warp.warp(image=image, labels=labels,
-                                                           change=fishcam.random_change("train", 1000 * r + i)),
-                                       samples))
-            out = json.loads(subprocess.run([binary, "bench", "augment", data, "--json", "--samples", str(samples)],
-                                            check=True, capture_output=True, text=True).stdout)
+            python_ms.append(
+                median_ms(
+                    lambda i, r=r: warp.warp(
+                        image=image, labels=labels, change=fishcam.random_change("train", 1000 * r + i)
+                    ),
+                    samples,
+                )
+            )
+            out = json.loads(
+                subprocess.run(
+                    [binary, "bench", "augment", data, "--json", "--samples", str(samples)],
+                    check=True,
+                    capture_output=True,
+                    text=True,
+                ).stdout
+            )
             cpp_ms.append(next(x["total_ms"] for x in out["results"] if x["threads"] == threads))
         p, c = statistics.median(python_ms), statistics.median(cpp_ms)
         rows.append({"threads": threads, "python_ms": p, "cpp_ms": c, "python_over_cpp": p / c})
@@ -72,16 +87,31 @@ def loader_cost(fishcam, binary, samples, epochs, photo=None):
     sample of `fishcam sample-dataset` has its own calibration) reported apart.
     With `photo`, every RGB image is that photo (resized, as PNG): real content
     decodes slower than the rendered scenes' flat colours."""
-    import torch
     import fishcam.torch as ft
+    import torch
+
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for width, height in ((640, 483), (1280, 966)):
             root = f"{tmp}/ws{width}"
-            subprocess.run([binary, "sample-dataset", root, "--images", str(samples), "--seed", "1",
-                            "--size", f"{width}x{height}"], check=True, capture_output=True)
+            subprocess.run(
+                [
+                    binary,
+                    "sample-dataset",
+                    root,
+                    "--images",
+                    str(samples),
+                    "--seed",
+                    "1",
+                    "--size",
+                    f"{width}x{height}",
+                ],
+                check=True,
+                capture_output=True,
+            )
             if photo:
                 import cv2
+
                 picture = cv2.imread(photo, cv2.IMREAD_COLOR)
                 if picture is None:
                     raise SystemExit(f"{photo}: cannot read image")
@@ -91,12 +121,18 @@ def loader_cost(fishcam, binary, samples, epochs, photo=None):
             for workers in (0, 2):
                 loaders = {}
                 for augment in (False, True):
-                    ds = ft.WoodScapeDataset(root, transform=ft.RandomViewpoint(preset="train") if augment else None,
-                                             seed=1)
+                    ds = ft.WoodScapeDataset(
+                        root, transform=ft.RandomViewpoint(preset="train") if augment else None, seed=1
+                    )
                     loaders[augment] = torch.utils.data.DataLoader(
-                        ds, batch_size=4, num_workers=workers, persistent_workers=workers > 0,
+                        ds,
+                        batch_size=4,
+                        num_workers=workers,
+                        persistent_workers=workers > 0,
                         sampler=ft.EpochSampler(torch.utils.data.SequentialSampler(ds)),
-                        worker_init_fn=ft.worker_init_fn if workers else None, collate_fn=ft.collate)
+                        worker_init_fn=ft.worker_init_fn if workers else None,
+                        collate_fn=ft.collate,
+                    )
                 fishcam.set_num_threads(2 if workers == 0 else 1)
                 per_sample = {False: [], True: []}
                 first = {}
@@ -110,11 +146,18 @@ def loader_cost(fishcam, binary, samples, epochs, photo=None):
                         else:
                             per_sample[augment].append(seconds)
                 plain, augmented = statistics.median(per_sample[False]), statistics.median(per_sample[True])
-                rows.append({"size": f"{width}x{height}", "images": "photo" if photo else "rendered",
-                             "workers": workers, "plain_ms": 1e3 * plain,
-                             "augmented_ms": 1e3 * augmented, "ratio": augmented / plain,
-                             "first_epoch_plain_ms": 1e3 * first[False],
-                             "first_epoch_augmented_ms": 1e3 * first[True]})
+                rows.append(
+                    {
+                        "size": f"{width}x{height}",
+                        "images": "photo" if photo else "rendered",
+                        "workers": workers,
+                        "plain_ms": 1e3 * plain,
+                        "augmented_ms": 1e3 * augmented,
+                        "ratio": augmented / plain,
+                        "first_epoch_plain_ms": 1e3 * first[False],
+                        "first_epoch_augmented_ms": 1e3 * first[True],
+                    }
+                )
                 del loaders
     return rows
 
@@ -129,10 +172,11 @@ def peers(fishcam, data, samples, rounds, batch=8):
     remap (grid_sample) with the same maps precomputed, per sample of a batch."""
     import albumentations
     import cv2
+    import fishcam.torch as ft
     import kornia
     import torch
-    import fishcam.torch as ft
     from fishcam.transforms import RandomViewpoint
+
     camera = fishcam.Camera.read(data)
     rng = np.random.default_rng(0)
     image = rng.integers(0, 256, (camera.height, camera.width, 3), dtype=np.uint8)
@@ -141,8 +185,9 @@ def peers(fishcam, data, samples, rounds, batch=8):
     ours = RandomViewpoint(camera, preset="train")
     optical = albumentations.OpticalDistortion(distort_limit=0.5, mode="fisheye", p=1.0)
     optical.set_random_seed(0)
-    fisheye = kornia.augmentation.RandomFisheye(torch.tensor([-0.3, 0.3]), torch.tensor([-0.3, 0.3]),
-                                                torch.tensor([0.9, 1.0]), p=1.0)
+    fisheye = kornia.augmentation.RandomFisheye(
+        torch.tensor([-0.3, 0.3]), torch.tensor([-0.3, 0.3]), torch.tensor([0.9, 1.0]), p=1.0
+    )
     tensor = torch.from_numpy(image).permute(2, 0, 1)[None].float() / 255
     images = torch.from_numpy(np.stack([image] * batch)).permute(0, 3, 1, 2).contiguous()
     changes = [fishcam.random_change("train", i) for i in range(batch)]
@@ -156,7 +201,8 @@ def peers(fishcam, data, samples, rounds, batch=8):
         "kornia RandomFisheye": lambda i: fisheye(tensor),
         "fishcam warp_batch (per sample of %d)" % batch: lambda i: ft.warp_batch(images, camera, changes),
         "kornia remap, same maps (per sample of %d)" % batch: lambda i: kornia.geometry.transform.remap(
-            float_images, kornia_x, kornia_y, align_corners=True),
+            float_images, kornia_x, kornia_y, align_corners=True
+        ),
     }
     per_batch = {name for name in cases if "per sample of" in name}
     rows = []
@@ -168,7 +214,7 @@ def peers(fishcam, data, samples, rounds, batch=8):
         for r in range(rounds):
             for name, run in cases.items():
                 n = max(samples // batch, 3) if name in per_batch else samples
-                ms = median_ms(lambda i: run(1000 * r + i), n)
+                ms = median_ms(lambda i, run=run, r=r: run(1000 * r + i), n)
                 times[name].append(ms / batch if name in per_batch else ms)
         base = statistics.median(times["fishcam RandomViewpoint"])
         for name in cases:
@@ -179,16 +225,22 @@ def peers(fishcam, data, samples, rounds, batch=8):
 
 def training_share(fishcam, data, steps):
     """A small encoder-decoder (about 0.1 M parameters) on 640x483 batches of 4."""
-    import torch
     import fishcam.transforms
+    import torch
+
     torch.manual_seed(0)
     camera = fishcam.Camera.read(data).resized(640, 483)
     net = torch.nn.Sequential(
-        torch.nn.Conv2d(3, 32, 3, stride=2, padding=1), torch.nn.ReLU(),
-        torch.nn.Conv2d(32, 64, 3, stride=2, padding=1), torch.nn.ReLU(),
-        torch.nn.Conv2d(64, 64, 3, padding=1), torch.nn.ReLU(),
-        torch.nn.ConvTranspose2d(64, 32, 4, stride=2, padding=1), torch.nn.ReLU(),
-        torch.nn.ConvTranspose2d(32, 10, 4, stride=2, padding=1))
+        torch.nn.Conv2d(3, 32, 3, stride=2, padding=1),
+        torch.nn.ReLU(),
+        torch.nn.Conv2d(32, 64, 3, stride=2, padding=1),
+        torch.nn.ReLU(),
+        torch.nn.Conv2d(64, 64, 3, padding=1),
+        torch.nn.ReLU(),
+        torch.nn.ConvTranspose2d(64, 32, 4, stride=2, padding=1),
+        torch.nn.ReLU(),
+        torch.nn.ConvTranspose2d(32, 10, 4, stride=2, padding=1),
+    )
     optimiser = torch.optim.SGD(net.parameters(), lr=1e-3)
     transform = fishcam.transforms.RandomViewpoint(camera, preset="train")
     rng = np.random.default_rng(0)
@@ -198,7 +250,9 @@ def training_share(fishcam, data, steps):
     augment_s, step_s = [], []
     for step in range(steps):
         start = time.perf_counter()
-        batch = [transform(image=image, mask=mask, seed=4 * step + k) for k, (image, mask) in enumerate(zip(images, masks))]
+        batch = [
+            transform(image=image, mask=mask, seed=4 * step + k) for k, (image, mask) in enumerate(zip(images, masks))
+        ]
         middle = time.perf_counter()
         x = torch.stack([torch.from_numpy(b["image"]).permute(2, 0, 1) for b in batch]).float() / 255
         y = torch.stack([torch.from_numpy(b["mask"].astype(np.int64)) for b in batch])
@@ -211,8 +265,14 @@ def training_share(fishcam, data, steps):
         augment_s.append(middle - start)
         step_s.append(end - middle)
     a, s = statistics.median(augment_s), statistics.median(step_s)
-    return {"batch": 4, "size": "640x483", "torch_threads": torch.get_num_threads(), "augment_ms": 1e3 * a,
-            "train_step_ms": 1e3 * s, "augment_share": a / (a + s)}
+    return {
+        "batch": 4,
+        "size": "640x483",
+        "torch_threads": torch.get_num_threads(),
+        "augment_ms": 1e3 * a,
+        "train_step_ms": 1e3 * s,
+        "augment_share": a / (a + s),
+    }
 
 
 def main():
@@ -224,9 +284,12 @@ def main():
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--loader-samples", type=int, default=16)
     shared_photo = os.path.join(here, "..", "..", "shared", "data", "woodscape", "front.jpg")
-    parser.add_argument("--photo", default=shared_photo if os.path.exists(shared_photo) else None,
-                        help="a real photo for the loader's RGB images (default: ../shared's WoodScape image when "
-                             "present; 'none' for the rendered scenes)")
+    parser.add_argument(
+        "--photo",
+        default=shared_photo if os.path.exists(shared_photo) else None,
+        help="a real photo for the loader's RGB images (default: ../shared's WoodScape image when "
+        "present; 'none' for the rendered scenes)",
+    )
     parser.add_argument("--epochs", type=int, default=4, help="steady-state epochs per loader (after the first)")
     parser.add_argument("--only", choices=["per-sample", "dataloader", "training", "peers"], help="run one part")
     parser.add_argument("--json", action="store_true")
@@ -234,6 +297,7 @@ def main():
     if args.photo == "none":
         args.photo = None
     import fishcam
+
     parts = {
         "per_sample": lambda: per_sample(fishcam, args.fishcam, args.camera, args.samples, args.rounds),
         "dataloader": lambda: loader_cost(fishcam, args.fishcam, args.loader_samples, args.epochs, args.photo),
@@ -245,25 +309,42 @@ def main():
         print(json.dumps(result, indent=2))
         return
     if "per_sample" in result:
-        print("per-sample augmentation 1280x966 (median of %d, median over %d interleaved rounds)" %
-              (args.samples, args.rounds))
+        print(
+            "per-sample augmentation 1280x966 (median of %d, median over %d interleaved rounds)"
+            % (args.samples, args.rounds)
+        )
         for r in result["per_sample"]:
-            print("  %d thread(s): python %.2f ms, C++ bench %.2f ms, ratio %.3f" %
-                  (r["threads"], r["python_ms"], r["cpp_ms"], r["python_over_cpp"]))
+            print(
+                "  %d thread(s): python %.2f ms, C++ bench %.2f ms, ratio %.3f"
+                % (r["threads"], r["python_ms"], r["cpp_ms"], r["python_over_cpp"])
+            )
     if "dataloader" in result:
         print("DataLoader, WoodScape-layout PNG samples, batch 4, per sample in steady state (epochs interleaved):")
         for r in result["dataloader"]:
-            print("  %-9s %-8s %d workers: plain %6.2f ms, RandomViewpoint %6.2f ms, ratio %.3f; first epoch %.1f / %.1f ms"
-                  % (r["size"], r["images"], r["workers"], r["plain_ms"], r["augmented_ms"], r["ratio"],
-                     r["first_epoch_plain_ms"], r["first_epoch_augmented_ms"]))
+            print(
+                "  %-9s %-8s %d workers: plain %6.2f ms, RandomViewpoint %6.2f ms, ratio %.3f; first epoch %.1f / %.1f ms"
+                % (
+                    r["size"],
+                    r["images"],
+                    r["workers"],
+                    r["plain_ms"],
+                    r["augmented_ms"],
+                    r["ratio"],
+                    r["first_epoch_plain_ms"],
+                    r["first_epoch_augmented_ms"],
+                )
+            )
     if "peers" in result:
         print("Beside the peers, 1280x966 RGB (median per sample; ratio to fishcam's per-sample transform):")
         for r in result["peers"]:
             print("  %d thread(s) %-44s %8.2f ms  %5.2fx" % (r["threads"], r["case"], r["ms"], r["over_fishcam"]))
     if "training" in result:
         t = result["training"]
-        print("CPU training step, batch 4 at 640x483 (%d torch threads): augmentation %.1f ms, step %.1f ms, "
-              "share %.1f %%" % (t["torch_threads"], t["augment_ms"], t["train_step_ms"], 100 * t["augment_share"]))
+        print(
+            "CPU training step, batch 4 at 640x483 (%d torch threads): augmentation %.1f ms, step %.1f ms, "
+            "share %.1f %%" % (t["torch_threads"], t["augment_ms"], t["train_step_ms"], 100 * t["augment_share"])
+        )
+
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -20,6 +20,7 @@
   of the WoodScape camera, the change as R, a pinhole output) + cv2.remap, per sample.
 Run with Debian's /usr/bin/python3 (python3-mrcal, python3-numpy, python3-opencv).
 """
+
 import argparse
 import json
 import os
@@ -37,8 +38,12 @@ DATA = os.path.join(os.path.dirname(HERE), "data")
 
 
 def fishcam_bench(fishcam, camera, samples):
-    out = subprocess.run([fishcam, "bench", "augment", camera, "--json", "--samples", str(samples)],
-                         check=True, capture_output=True, text=True).stdout
+    out = subprocess.run(
+        [fishcam, "bench", "augment", camera, "--json", "--samples", str(samples)],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
     return {r["threads"]: r for r in json.loads(out)["results"]}
 
 
@@ -55,8 +60,9 @@ def mrcal_path_ms(fishcam, repeats):
     source = os.path.join(DATA, "stereographic.cameramodel")
     with tempfile.TemporaryDirectory() as tmp:
         image, labels = os.path.join(tmp, "image.png"), os.path.join(tmp, "labels.png")
-        subprocess.run([fishcam, "render", source, "--out-image", image, "--out-label", labels],
-                       check=True, capture_output=True)
+        subprocess.run(
+            [fishcam, "render", source, "--out-image", image, "--out-label", labels], check=True, capture_output=True
+        )
         rgb, lab = cv2.imread(image), cv2.imread(labels, cv2.IMREAD_UNCHANGED)
     model = mrcal.cameramodel(source)
     target = mrcal.cameramodel(model)
@@ -95,16 +101,17 @@ def np_roots_ms(subsample):
 def woodscape_scene(fishcam, tmp):
     source = os.path.join(DATA, "woodscape_front.json")
     image, labels = os.path.join(tmp, "ws.png"), os.path.join(tmp, "ws_labels.png")
-    subprocess.run([fishcam, "render", source, "--out-image", image, "--out-label", labels],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [fishcam, "render", source, "--out-image", image, "--out-label", labels], check=True, capture_output=True
+    )
     return cv2.imread(image), cv2.imread(labels, cv2.IMREAD_UNCHANGED)
 
 
 def torch_paths_ms(fishcam, repeats, threads):
     """grid_sample with a precomputed grid, and the per-sample torch grid (kornia style)."""
+    import fishcam as fc
     import torch
     import torch.nn.functional as F
-    import fishcam as fc
 
     torch.set_num_threads(threads)
     cam = fc.Camera.read(os.path.join(DATA, "woodscape_front.json"))
@@ -173,8 +180,11 @@ def opencv_fisheye_ms(fishcam, repeats):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--fishcam", default=os.path.join(os.path.dirname(HERE), "build", "tools", "fishcam"))
-    parser.add_argument("--python-dir", default=os.path.join(os.path.dirname(HERE), "build", "python"),
-                        help="where the fishcam Python package was built (for the torch paths)")
+    parser.add_argument(
+        "--python-dir",
+        default=os.path.join(os.path.dirname(HERE), "build", "python"),
+        help="where the fishcam Python package was built (for the torch paths)",
+    )
     parser.add_argument("--samples", type=int, default=20)
     parser.add_argument("--subsample", type=int, default=20000, help="pixels for the np.roots timing")
     args = parser.parse_args()
@@ -188,8 +198,10 @@ def main():
     cv2.setNumThreads(2)
     fisheye_ms = opencv_fisheye_ms(args.fishcam, args.samples)
     result = {
-        "fishcam_total_ms": {"stereographic": {t: r["total_ms"] for t, r in stereo.items()},
-                             "woodscape": {t: r["total_ms"] for t, r in woodscape.items()}},
+        "fishcam_total_ms": {
+            "stereographic": {t: r["total_ms"] for t, r in stereo.items()},
+            "woodscape": {t: r["total_ms"] for t, r in woodscape.items()},
+        },
         "mrcal_python_ms": mrcal_ms,
         "np_roots_extrapolated_ms": roots_ms,
         "mrcal_over_fishcam_1_thread": mrcal_ms / stereo[1]["total_ms"],

@@ -28,9 +28,24 @@ def generate(extension_dir):
                 shutil.copy(os.path.join(extension_dir, name), tmp)
         env = dict(os.environ, PYTHONPATH=tmp)
         # numpy 1.x has no numpy.bool (pybind11 names bool arrays so): the stubs say numpy.bool_.
-        subprocess.run([sys.executable, "-m", "pybind11_stubgen", "_fishcam", "-o", os.path.join(tmp, "out"),
-                        "--ignore-unresolved-names", "numpy.bool", "--numpy-array-use-type-var", "--exit-code"],
-                       check=True, env=env, capture_output=True, text=True)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "pybind11_stubgen",
+                "_fishcam",
+                "-o",
+                os.path.join(tmp, "out"),
+                "--ignore-unresolved-names",
+                "numpy.bool",
+                "--numpy-array-use-type-var",
+                "--exit-code",
+            ],
+            check=True,
+            env=env,
+            capture_output=True,
+            text=True,
+        )
         with open(os.path.join(tmp, "out", "_fishcam.pyi")) as f:
             text = f.read()
     text = text.replace("numpy.bool]", "numpy.bool_]")
@@ -52,7 +67,9 @@ def generate(extension_dir):
     return text
 
 
-FLOAT64_ARRAY = re.compile(r"numpy\.ndarray\[(?:[^\[\]]|\[(?:[^\[\]]|\[[^\[\]]*\])*\])*?numpy\.dtype\[numpy\.float64\]\]")
+FLOAT64_ARRAY = re.compile(
+    r"numpy\.ndarray\[(?:[^\[\]]|\[(?:[^\[\]]|\[[^\[\]]*\])*\])*?numpy\.dtype\[numpy\.float64\]\]"
+)
 
 
 def array_like_arguments(line):
@@ -80,8 +97,9 @@ def main():
     with open(COMMITTED) as f:
         committed = f.read()
     if committed != text:
-        sys.stdout.writelines(difflib.unified_diff(committed.splitlines(True), text.splitlines(True),
-                                                   "committed", "generated"))
+        sys.stdout.writelines(
+            difflib.unified_diff(committed.splitlines(True), text.splitlines(True), "committed", "generated")
+        )
         print("python/fishcam/_fishcam.pyi is stale: run tools/python_stubs.py build/python/fishcam")
         return 1
     return 0

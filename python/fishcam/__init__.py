@@ -11,6 +11,7 @@ import typing as _typing
 import numpy as _np
 import numpy.typing as _npt
 
+from . import _fishcam
 from ._fishcam import (  # noqa: F401  (re-exported API)
     AngleBin,
     Calibration,
@@ -19,14 +20,14 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
     Conversion,
     DisplacementStats,
     Error,
+    FieldOfView,
     FitReport,
     ModelComparison,
+    RigCalibration,
+    ValidDomain,
     ViewpointChange,
     ViewpointWarp,
-    ValidDomain,
-    FieldOfView,
     __version__,
-    RigCalibration,
     calibrate,
     calibrate_rig,
     dataset_fidelity,
@@ -38,11 +39,38 @@ from ._fishcam import (  # noqa: F401  (re-exported API)
     reprojection_error_map,
     woodscape_classes,
 )
-from . import _fishcam
 
 __all__ = [
-    "AngleBin", "Calibration", "Camera", "RigCalibration", "calibrate", "calibrate_rig", "read_corners", "Comparison", "Conversion", "DisplacementStats", "FitReport", "ModelComparison", "ValidDomain", "FieldOfView", "Error", "ViewpointChange", "ViewpointWarp", "compare", "convert", "reprojection_error_map", "derive_seed", "get_num_threads",
-    "random_change", "render", "woodscape_classes", "dataset_fidelity", "set_num_threads", "presets", "change_to_dict", "__version__",
+    "AngleBin",
+    "Calibration",
+    "Camera",
+    "RigCalibration",
+    "calibrate",
+    "calibrate_rig",
+    "read_corners",
+    "Comparison",
+    "Conversion",
+    "DisplacementStats",
+    "FitReport",
+    "ModelComparison",
+    "ValidDomain",
+    "FieldOfView",
+    "Error",
+    "ViewpointChange",
+    "ViewpointWarp",
+    "compare",
+    "convert",
+    "reprojection_error_map",
+    "derive_seed",
+    "get_num_threads",
+    "random_change",
+    "render",
+    "woodscape_classes",
+    "dataset_fidelity",
+    "set_num_threads",
+    "presets",
+    "change_to_dict",
+    "__version__",
 ]
 
 DEPTH_PRIORS = tuple(_fishcam.depth_priors())  # the library's names
@@ -55,8 +83,10 @@ def _require_initialised(obj: _typing.Any, name: str) -> None:
     """cls.__new__(cls) alone leaves the C++ object unmade: refused before a method or
     property reads it (it read garbage or crashed)."""
     if not _fishcam._initialised(obj):
-        raise Error(f"{name}: an object made without __init__ (cls.__new__ alone): make it with its constructor, "
-                    "a reader or pickle")
+        raise Error(
+            f"{name}: an object made without __init__ (cls.__new__ alone): make it with its constructor, "
+            "a reader or pickle"
+        )
 
 
 # How to make the objects of classes without a constructor (pybind11's TypeError
@@ -67,7 +97,7 @@ _MADE_BY = {"Camera": "fishcam.Camera.read(path) or fishcam.Camera.from_json(tex
 def _shown(value: object, limit: int = 40) -> str:
     """repr(value) on one line, shortened for a message (a 400-digit integer, an array...)."""
     text = " ".join(repr(value).split())
-    return text if len(text) <= limit else f"{text[:limit // 2]}... ({len(text)} characters)"
+    return text if len(text) <= limit else f"{text[: limit // 2]}... ({len(text)} characters)"
 
 
 def _first_line(text: str) -> str:
@@ -96,8 +126,10 @@ def _one_line_argument_errors(function: _F, name: str, bound: bool = False) -> _
             raise Error(str(e).replace("\r", "\\r").replace("\n", "\\n")) from None
         except (TypeError, OverflowError) as e:
             text = str(e)
-            given = ", ".join([type(a).__name__ for a in args[1 if bound else 0:]] +
-                              [f"{k}={type(v).__name__}" for k, v in kwargs.items()])
+            given = ", ".join(
+                [type(a).__name__ for a in args[1 if bound else 0 :]]
+                + [f"{k}={type(v).__name__}" for k, v in kwargs.items()]
+            )
             if "incompatible function arguments" in text or "incompatible constructor arguments" in text:
                 lines = [line.strip() for line in text.splitlines() if line.strip()]
                 expected = next((line.split(". ", 1)[1] for line in lines if line[:1].isdigit() and ". " in line), "")
@@ -106,6 +138,7 @@ def _one_line_argument_errors(function: _F, name: str, bound: bool = False) -> _
                 made_by = _MADE_BY.get(name, "its static methods")
                 raise Error(f"{name}: has no constructor; make one with {made_by}") from None
             raise Error(f"{name}: arguments of the wrong type or range ({given}): {_first_line(text)}") from None
+
     return _typing.cast(_F, call)
 
 
@@ -120,14 +153,16 @@ def _wrap_public_callables(cls: type) -> None:
             def checked(self: _typing.Any, getter: _typing.Any = getter, name: str = name) -> _typing.Any:
                 _require_initialised(self, name)
                 return getter(self)
+
             setattr(cls, attribute, property(checked, value.fset, value.fdel, value.__doc__))
             continue
         static = isinstance(value, staticmethod)
         function = value.__func__ if static else value
         if not callable(function) or isinstance(value, property):
             continue
-        wrapped = _one_line_argument_errors(function, f"{cls.__name__}.{attribute.replace('__init__', '')}".rstrip("."),
-                                            bound=not static)
+        wrapped = _one_line_argument_errors(
+            function, f"{cls.__name__}.{attribute.replace('__init__', '')}".rstrip("."), bound=not static
+        )
         setattr(cls, attribute, staticmethod(wrapped) if static else wrapped)
 
 
@@ -145,7 +180,7 @@ def _restore(cls: type, state: _typing.Any) -> _typing.Any:
     return restored
 
 
-def _reduce(self: _typing.Any) -> _typing.Tuple[_typing.Any, ...]:
+def _reduce(self: _typing.Any) -> tuple[_typing.Any, ...]:
     # One reduction for every protocol: pybind11's own needs protocol 2 (0 and 1
     # abort the interpreter in copyreg with "no registered base types").
     return (_restore, (type(self), self.__getstate__()))
@@ -153,12 +188,19 @@ def _reduce(self: _typing.Any) -> _typing.Tuple[_typing.Any, ...]:
 
 for _pickled in (Camera, ViewpointWarp, ViewpointChange, _fishcam.AffineChange):
     _pickled.__reduce__ = _reduce  # type: ignore[method-assign]
-derive_seed = _fishcam.derive_seed
-random_change_in = _fishcam.random_change_in
+# The names imported above, rebound to the wrapped functions (one-line errors).
+derive_seed = _fishcam.derive_seed  # noqa: F811
+random_change_in = _fishcam.random_change_in  # noqa: F811
 
 
-def convert(camera: Camera, to: str, method: str = "lsq", max_angle: _typing.Optional[float] = None,
-            fit_center: bool = False, fit_aspect: bool = False) -> Conversion:
+def convert(
+    camera: Camera,
+    to: str,
+    method: str = "lsq",
+    max_angle: _typing.Optional[float] = None,
+    fit_center: bool = False,
+    fit_aspect: bool = False,
+) -> Conversion:
     """Fits model ``to`` to ``camera`` as ``fishcam convert`` does (method "lsq" or
     "paper"; max_angle in degrees; fit_center / fit_aspect free the principal point
     and a_y, which a camera with tangential terms always has fitted).
@@ -173,14 +215,23 @@ def convert(camera: Camera, to: str, method: str = "lsq", max_angle: _typing.Opt
     return _fishcam.convert(camera, to, method, max_angle, fit_center, fit_aspect)
 
 
-ModelArgument = _typing.Union[str, Camera, _typing.Tuple[str, Camera]]
+ModelArgument = _typing.Union[str, Camera, tuple[str, Camera]]
 
 
-def compare(camera: Camera,
-            models: _typing.Union[ModelArgument, _typing.Sequence[ModelArgument]] = (
-                "equidistant", "stereographic", "kannala-brandt"),
-            method: str = "lsq", preset: str = "train", samples: int = 8, seed: int = 0, depth: str = "source-sphere",
-            labels: _typing.Optional[_typing.Mapping[str, "_npt.NDArray[_typing.Any]"]] = None) -> Comparison:
+def compare(
+    camera: Camera,
+    models: _typing.Union[ModelArgument, _typing.Sequence[ModelArgument]] = (
+        "equidistant",
+        "stereographic",
+        "kannala-brandt",
+    ),
+    method: str = "lsq",
+    preset: str = "train",
+    samples: int = 8,
+    seed: int = 0,
+    depth: str = "source-sphere",
+    labels: _typing.Optional[_typing.Mapping[str, "_npt.NDArray[_typing.Any]"]] = None,
+) -> Comparison:
     """What ``fishcam compare`` measures: a ``fishcam.Comparison`` (its ``models``, one
     ``ModelComparison`` each: displacement, by_angle, validity and label differences,
     the mean displacement per pixel as an array; ``to_json()``: the CLI's ``--json``).
@@ -191,7 +242,7 @@ def compare(camera: Camera,
     of the camera's size, compared under both augmentations (the CLI adds its
     rendered scene as "scene"). See docs/comparison.md.
     """
-    listed: _typing.List[_typing.Any] = [models] if isinstance(models, (str, Camera)) else list(models)
+    listed: list[_typing.Any] = [models] if isinstance(models, (str, Camera)) else list(models)
     if isinstance(seed, bool) or not isinstance(seed, (int, _np.integer)) or seed < 0:
         raise Error(f"seed: expected a non-negative integer, got {_shown(seed)}")
     if isinstance(samples, bool) or not isinstance(samples, (int, _np.integer)):
@@ -214,7 +265,7 @@ def _check_seed(seed: object) -> int:
     return value
 
 
-def presets() -> _typing.Dict[str, _typing.Tuple[float, float]]:
+def presets() -> dict[str, tuple[float, float]]:
     """The pose presets: name -> (max_rotation_deg, max_translation)."""
     return _fishcam.presets()
 
@@ -232,8 +283,9 @@ def set_num_threads(n: int) -> None:
     _fishcam.set_num_threads(int(n))
 
 
-def change_to_dict(change: ViewpointChange, seed: _typing.Optional[int] = None,
-                   depth: str = "source-sphere") -> _typing.Dict[str, _typing.Any]:
+def change_to_dict(
+    change: ViewpointChange, seed: _typing.Optional[int] = None, depth: str = "source-sphere"
+) -> dict[str, _typing.Any]:
     """A change as the manifest records it: method, seed, rotation_deg, translation, depth (JSON-able)."""
     return {
         "method": "viewpoint",

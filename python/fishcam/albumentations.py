@@ -37,8 +37,9 @@ try:
     import albumentations as _albumentations
     from albumentations.core.transforms_interface import DualTransform as _DualTransform
 except ImportError as error:  # pragma: no cover - the message is the point
-    raise ImportError(f"fishcam.albumentations needs albumentations >= 2.0: pip install albumentations ({error})") \
-        from None
+    raise ImportError(
+        f"fishcam.albumentations needs albumentations >= 2.0: pip install albumentations ({error})"
+    ) from None
 
 from . import Camera, Error
 from . import transforms as _transforms
@@ -50,7 +51,7 @@ if int(_albumentations.__version__.split(".")[0]) < 2:  # pragma: no cover
 
 
 Array = npt.NDArray[typing.Any]
-Params = typing.Dict[str, typing.Any]
+Params = dict[str, typing.Any]
 
 
 class _FishcamDualTransform(_DualTransform):
@@ -61,9 +62,13 @@ class _FishcamDualTransform(_DualTransform):
         super().__init__(p=p)
 
     @property
-    def targets(self) -> typing.Dict[str, typing.Callable[..., typing.Any]]:
-        return {**super().targets, "depth": self.apply_to_depth, "polygons": self.apply_to_polygons,
-                "camera": self.apply_to_camera}
+    def targets(self) -> dict[str, typing.Callable[..., typing.Any]]:
+        return {
+            **super().targets,
+            "depth": self.apply_to_depth,
+            "polygons": self.apply_to_polygons,
+            "camera": self.apply_to_camera,
+        }
 
     def get_params(self) -> Params:
         return {"seed": int(self.random_generator.integers(0, 2**64, dtype=np.uint64))}
@@ -83,8 +88,10 @@ class _FishcamDualTransform(_DualTransform):
 
     def _mask(self, mask: Array, params: Params, instance: bool) -> Array:
         if mask.ndim == 3:  # albumentations' multi-channel mask: each channel a plane
-            return np.stack([self._mask(np.ascontiguousarray(mask[..., c]), params, instance)
-                             for c in range(mask.shape[2])], axis=-1)
+            return np.stack(
+                [self._mask(np.ascontiguousarray(mask[..., c]), params, instance) for c in range(mask.shape[2])],
+                axis=-1,
+            )
         return self._change(params).mask(mask, instance=instance)
 
     def apply_to_mask(self, mask: Array, **params: typing.Any) -> Array:
@@ -112,8 +119,12 @@ class _FishcamDualTransform(_DualTransform):
             return keypoints
         mapped, visible = self._change(params).points(keypoints[:, :2].astype(np.float64))
         height, width = params["shape"][:2]
-        inside = (mapped[:, 0] >= -0.5) & (mapped[:, 0] < width - 0.5) & (mapped[:, 1] >= -0.5) & \
-                 (mapped[:, 1] < height - 0.5)
+        inside = (
+            (mapped[:, 0] >= -0.5)
+            & (mapped[:, 0] < width - 0.5)
+            & (mapped[:, 1] >= -0.5)
+            & (mapped[:, 1] < height - 0.5)
+        )
         mapped[inside & ~visible] = np.nan  # hidden, not merely outside
         out = keypoints.copy()
         out[:, :2] = mapped
@@ -122,7 +133,7 @@ class _FishcamDualTransform(_DualTransform):
     def apply_to_depth(self, depth: Array, **params: typing.Any) -> Array:
         return self._change(params).depth_map(depth, "depth")
 
-    def apply_to_polygons(self, polygons: typing.Sequence[Array], **params: typing.Any) -> typing.List[Array]:
+    def apply_to_polygons(self, polygons: typing.Sequence[Array], **params: typing.Any) -> list[Array]:
         change = self._change(params)
         return [change.polygon(p, f"polygons[{i}]") for i, p in enumerate(polygons)]
 
@@ -139,10 +150,19 @@ class RandomViewpoint(_FishcamDualTransform):
     constructor camera as its fishcam JSON object (``Camera.to_json``), which the
     constructor (and so ``A.from_dict``) takes back as ``camera``."""
 
-    def __init__(self, camera: typing.Union[Camera, typing.Dict[str, typing.Any], None] = None, preset: str = "train",
-                 max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
-                 depth: str = "source-sphere", fill: _transforms.Fill = 0, fill_mask: int = 0, sampling: str = "grid",
-                 depth_values: str = "range", p: float = 1.0) -> None:
+    def __init__(
+        self,
+        camera: typing.Union[Camera, dict[str, typing.Any], None] = None,
+        preset: str = "train",
+        max_rotation_deg: typing.Optional[float] = None,
+        max_translation: typing.Optional[float] = None,
+        depth: str = "source-sphere",
+        fill: _transforms.Fill = 0,
+        fill_mask: int = 0,
+        sampling: str = "grid",
+        depth_values: str = "range",
+        p: float = 1.0,
+    ) -> None:
         super().__init__(p)
         if isinstance(camera, dict):  # what get_transform_init_args (A.to_dict) writes
             try:
@@ -151,22 +171,38 @@ class RandomViewpoint(_FishcamDualTransform):
                 raise Error(f"camera: not a fishcam JSON camera ({error})") from None
         elif camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera or its fishcam JSON object, got {type(camera).__name__}")
-        self._viewpoint = _transforms.RandomViewpoint(camera, preset=preset, max_rotation_deg=max_rotation_deg,
-                                                      max_translation=max_translation, depth=depth, fill=fill,
-                                                      fill_mask=fill_mask, sampling=sampling,
-                                                      depth_values=depth_values)
+        self._viewpoint = _transforms.RandomViewpoint(
+            camera,
+            preset=preset,
+            max_rotation_deg=max_rotation_deg,
+            max_translation=max_translation,
+            depth=depth,
+            fill=fill,
+            fill_mask=fill_mask,
+            sampling=sampling,
+            depth_values=depth_values,
+        )
         self.camera, self.preset = camera, preset
         self.max_rotation_deg, self.max_translation = max_rotation_deg, max_translation
         self.depth, self.fill, self.fill_mask = depth, fill, fill_mask
         self.sampling, self.depth_values = sampling, depth_values
 
-    def get_transform_init_args_names(self) -> typing.Tuple[str, ...]:
-        return ("camera", "preset", "max_rotation_deg", "max_translation", "depth", "fill", "fill_mask", "sampling",
-                "depth_values")
+    def get_transform_init_args_names(self) -> tuple[str, ...]:
+        return (
+            "camera",
+            "preset",
+            "max_rotation_deg",
+            "max_translation",
+            "depth",
+            "fill",
+            "fill_mask",
+            "sampling",
+            "depth_values",
+        )
 
-    def get_transform_init_args(self) -> typing.Dict[str, typing.Any]:
+    def get_transform_init_args(self) -> dict[str, typing.Any]:
         """The constructor's arguments for A.to_dict: the camera as its fishcam JSON object."""
-        args = typing.cast(typing.Dict[str, typing.Any], super().get_transform_init_args())
+        args = typing.cast(dict[str, typing.Any], super().get_transform_init_args())
         if isinstance(args.get("camera"), Camera):
             args["camera"] = json.loads(args["camera"].to_json())
         return args
@@ -186,18 +222,29 @@ class RandomAffine(_FishcamDualTransform):
     albumentations transform; depth maps keep their values, a camera is passed on;
     ``fill`` and ``fill_mask`` as RandomViewpoint's."""
 
-    def __init__(self, preset: str = "train", max_rotation_deg: typing.Optional[float] = None,
-                 max_translation: typing.Optional[float] = None,
-                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, fill: _transforms.Fill = 0,
-                 fill_mask: int = 0, p: float = 1.0) -> None:
+    def __init__(
+        self,
+        preset: str = "train",
+        max_rotation_deg: typing.Optional[float] = None,
+        max_translation: typing.Optional[float] = None,
+        scale_range: typing.Optional[tuple[float, float]] = None,
+        fill: _transforms.Fill = 0,
+        fill_mask: int = 0,
+        p: float = 1.0,
+    ) -> None:
         super().__init__(p)
-        self._affine = _transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
-                                                  max_translation=max_translation, scale_range=scale_range,
-                                                  fill=fill, fill_mask=fill_mask)
+        self._affine = _transforms.RandomAffine(
+            preset=preset,
+            max_rotation_deg=max_rotation_deg,
+            max_translation=max_translation,
+            scale_range=scale_range,
+            fill=fill,
+            fill_mask=fill_mask,
+        )
         self.preset, self.max_rotation_deg, self.max_translation = preset, max_rotation_deg, max_translation
         self.scale_range, self.fill, self.fill_mask = scale_range, fill, fill_mask
 
-    def get_transform_init_args_names(self) -> typing.Tuple[str, ...]:
+    def get_transform_init_args_names(self) -> tuple[str, ...]:
         return ("preset", "max_rotation_deg", "max_translation", "scale_range", "fill", "fill_mask")
 
     def _change(self, params: Params) -> _transforms.SampleChange:

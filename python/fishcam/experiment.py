@@ -54,21 +54,34 @@ MAX_WIDTH = 256
 # What a run's result depends on besides its configuration and seed, in the order a
 # difference is reported (the dataset's identity is compared first); the option that
 # sets each.
-SETTINGS = (("epochs", "--epochs"), ("batch_size", "--batch-size"), ("width", "--width"),
-            ("class_weights", "--class-weights"), ("device", "--device"),
-            ("processes", "--nproc_per_node (torchrun's processes)"))
+SETTINGS = (
+    ("epochs", "--epochs"),
+    ("batch_size", "--batch-size"),
+    ("width", "--width"),
+    ("class_weights", "--class-weights"),
+    ("device", "--device"),
+    ("processes", "--nproc_per_node (torchrun's processes)"),
+)
 
 # Augmentation configurations: Table 3 (none, base, viewpoint, base + viewpoint),
 # Table 4 (affine vs viewpoint), Table 5 (viewpoint computed with a model fitted to
 # the camera instead of its own: equidistant, stereographic, Kannala-Brandt; the
 # paper's fit, which defines the first two only, and least squares).
-CONFIGS = ("none", "base", "viewpoint", "base+viewpoint", "affine",
-           "viewpoint:equidistant:paper", "viewpoint:equidistant:lsq",
-           "viewpoint:stereographic:paper", "viewpoint:stereographic:lsq",
-           "viewpoint:kannala-brandt:lsq")
+CONFIGS = (
+    "none",
+    "base",
+    "viewpoint",
+    "base+viewpoint",
+    "affine",
+    "viewpoint:equidistant:paper",
+    "viewpoint:equidistant:lsq",
+    "viewpoint:stereographic:paper",
+    "viewpoint:stereographic:lsq",
+    "viewpoint:kannala-brandt:lsq",
+)
 # --quick's settings, and the defaults without it (an option given explicitly wins).
-QUICK: typing.Dict[str, typing.Any] = {"configs": "none,viewpoint", "seeds": 2, "epochs": 1, "width": 4}
-DEFAULTS: typing.Dict[str, typing.Any] = {"configs": ",".join(CONFIGS), "seeds": 3, "epochs": 10, "width": 16}
+QUICK: dict[str, typing.Any] = {"configs": "none,viewpoint", "seeds": 2, "epochs": 1, "width": 4}
+DEFAULTS: dict[str, typing.Any] = {"configs": ",".join(CONFIGS), "seeds": 3, "epochs": 10, "width": 16}
 
 
 class UNet(torch.nn.Module):
@@ -78,8 +91,14 @@ class UNet(torch.nn.Module):
         super().__init__()
 
         def block(a: int, b: int) -> torch.nn.Sequential:
-            return torch.nn.Sequential(torch.nn.Conv2d(a, b, 3, padding=1), torch.nn.BatchNorm2d(b), torch.nn.ReLU(),
-                                       torch.nn.Conv2d(b, b, 3, padding=1), torch.nn.BatchNorm2d(b), torch.nn.ReLU())
+            return torch.nn.Sequential(
+                torch.nn.Conv2d(a, b, 3, padding=1),
+                torch.nn.BatchNorm2d(b),
+                torch.nn.ReLU(),
+                torch.nn.Conv2d(b, b, 3, padding=1),
+                torch.nn.BatchNorm2d(b),
+                torch.nn.ReLU(),
+            )
 
         w = width
         self.down1, self.down2, self.down3 = block(3, w), block(w, 2 * w), block(2 * w, 4 * w)
@@ -105,9 +124,9 @@ class ReplaceCamera:
 
     def __init__(self, model: str, method: str) -> None:
         self.model, self.method = model, method
-        self._fits: typing.Dict[fishcam.Camera, fishcam.Camera] = {}
+        self._fits: dict[fishcam.Camera, fishcam.Camera] = {}
 
-    def __call__(self, sample: typing.Dict[str, typing.Any]) -> typing.Dict[str, typing.Any]:
+    def __call__(self, sample: dict[str, typing.Any]) -> dict[str, typing.Any]:
         camera = sample["camera"]
         if camera not in self._fits:
             self._fits[camera] = fishcam.convert(camera, self.model, self.method).camera
@@ -119,9 +138,12 @@ def transform_for(config: str) -> typing.Optional[typing.Callable[[typing.Any], 
     if config not in CONFIGS:
         raise Error(f"config: expected one of {', '.join(CONFIGS)}, got {config!r}")
     to_float = v2.ToDtype({tv_tensors.Image: torch.float32, "others": None}, scale=True)
-    base = [v2.ColorJitter(brightness=0.3, contrast=0.3, saturation=0.3), v2.GaussianBlur(5, sigma=(0.1, 1.5)),
-            v2.RandomHorizontalFlip()]
-    steps: typing.List[typing.Any] = []
+    base = [
+        v2.ColorJitter(brightness=0.3, contrast=0.3, saturation=0.3),
+        v2.GaussianBlur(5, sigma=(0.1, 1.5)),
+        v2.RandomHorizontalFlip(),
+    ]
+    steps: list[typing.Any] = []
     if config.startswith("viewpoint:"):
         _, model, method = config.split(":")
         steps += [ReplaceCamera(model, method), ft.RandomViewpoint(preset="train", fill_mask=NO_SOURCE)]
@@ -136,18 +158,20 @@ def transform_for(config: str) -> typing.Optional[typing.Callable[[typing.Any], 
 
 
 def evaluation_transform() -> typing.Callable[[typing.Any], typing.Any]:
-    to_float: typing.Callable[[typing.Any], typing.Any] = v2.ToDtype({tv_tensors.Image: torch.float32, "others": None},
-                                                                       scale=True)
+    to_float: typing.Callable[[typing.Any], typing.Any] = v2.ToDtype(
+        {tv_tensors.Image: torch.float32, "others": None}, scale=True
+    )
     return to_float
 
 
-def distributed() -> typing.Tuple[int, int]:
+def distributed() -> tuple[int, int]:
     """(rank, world size); initialises the process group under torchrun."""
     if "WORLD_SIZE" not in os.environ or int(os.environ["WORLD_SIZE"]) < 2:
         return 0, 1
     if not dist.is_initialized():
-        dist.init_process_group("nccl" if torch.cuda.is_available() and os.environ.get("FISHCAM_DEVICE") == "cuda"
-                                else "gloo")
+        dist.init_process_group(
+            "nccl" if torch.cuda.is_available() and os.environ.get("FISHCAM_DEVICE") == "cuda" else "gloo"
+        )
     return dist.get_rank(), dist.get_world_size()
 
 
@@ -161,7 +185,7 @@ def class_weights(counts: npt.NDArray[np.int64]) -> torch.Tensor:
     return torch.tensor(weights, dtype=torch.float32)
 
 
-def evaluation_folders(dataset_root: str) -> typing.List[typing.Tuple[str, str]]:
+def evaluation_folders(dataset_root: str) -> list[tuple[str, str]]:
     """(test set, folder) of every split a run is scored on: ``original`` (test/), then
     each true viewpoint test set present (test-PRESET/, test-PRESET-rotation/)."""
     folders = [("original", os.path.join(dataset_root, "test"))]
@@ -169,20 +193,21 @@ def evaluation_folders(dataset_root: str) -> typing.List[typing.Tuple[str, str]]
         for variant in (f"test-{name}", f"test-{name}-rotation"):
             folder = os.path.join(dataset_root, variant)
             if os.path.isdir(folder):
-                folders.append((variant[len("test-"):], folder))
+                folders.append((variant[len("test-") :], folder))
     return folders
 
 
 class DatasetInfo(typing.NamedTuple):
     """What scan_dataset found: the identity of the files the runs read, the training
     images' size and count, and the training labels' pixel count per class."""
+
     sha256: str
     files: int
-    image_size: typing.Tuple[int, int]  # (height, width)
+    image_size: tuple[int, int]  # (height, width)
     train_images: int
     train_counts: npt.NDArray[np.int64]
 
-    def record(self, root: str) -> typing.Dict[str, typing.Any]:
+    def record(self, root: str) -> dict[str, typing.Any]:
         """As stored with each run (the path only informs: a moved dataset is the same)."""
         return {"sha256": self.sha256, "files": self.files, "path": os.path.abspath(root)}
 
@@ -191,14 +216,15 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 def _decode(data: bytes, path: str) -> npt.NDArray[typing.Any]:
-    image: typing.Optional[npt.NDArray[typing.Any]] = ft._cv2().imdecode(np.frombuffer(data, np.uint8),
-                                                                         ft._cv2().IMREAD_UNCHANGED)
+    image: typing.Optional[npt.NDArray[typing.Any]] = ft._cv2().imdecode(
+        np.frombuffer(data, np.uint8), ft._cv2().IMREAD_UNCHANGED
+    )
     if image is None:
         raise Error(f"{path}: cannot read image")
     return image
 
 
-def _image_size(data: bytes, path: str) -> typing.Tuple[int, int]:
+def _image_size(data: bytes, path: str) -> tuple[int, int]:
     """(height, width) of an image file's bytes: a PNG's header, else decoded."""
     if data[:8] == PNG_SIGNATURE and data[12:16] == b"IHDR":
         width, height = struct.unpack(">II", data[16:24])
@@ -221,18 +247,17 @@ def scan_dataset(root: str) -> DatasetInfo:
     reads, are left out."""
     digest = hashlib.sha256()
     files = 0
-    cameras: typing.Set[bytes] = set()
+    cameras: set[bytes] = set()
     train_size, train_images = (0, 0), 0
     train_counts = np.zeros(CLASSES, np.int64)
     for split, folder in [("train", os.path.join(root, "train"))] + evaluation_folders(root):
         images = os.path.join(folder, "rgb_images")
         if not os.path.isdir(images):
             raise Error(f"{images}: missing (expected the WoodScape layout)")
-        found = {os.path.splitext(f)[0]: f for f in os.listdir(images)
-                 if f.lower().endswith((".png", ".jpg", ".jpeg"))}
+        found = {os.path.splitext(f)[0]: f for f in os.listdir(images) if f.lower().endswith((".png", ".jpg", ".jpeg"))}
         if not found:
             raise Error(f"{images}: no images")
-        size: typing.Optional[typing.Tuple[int, int]] = None
+        size: typing.Optional[tuple[int, int]] = None
         first = ""
         for name in sorted(found):
             rgb = os.path.join(images, found[name])
@@ -252,18 +277,23 @@ def scan_dataset(root: str) -> DatasetInfo:
             if size is None:
                 size, first = image_size, rgb
             elif image_size != size:
-                raise Error(f"{rgb}: {image_size[1]}x{image_size[0]}, but {first} is {size[1]}x{size[0]} (a folder's "
-                            "images are batched: one size)")
+                raise Error(
+                    f"{rgb}: {image_size[1]}x{image_size[0]}, but {first} is {size[1]}x{size[0]} (a folder's "
+                    "images are batched: one size)"
+                )
             mask = _decode(contents[label], label)
             if mask.ndim != 2:
                 raise Error(f"{label}: expected a single-channel label image")
             if mask.shape != image_size:
-                raise Error(f"{label}: {mask.shape[1]}x{mask.shape[0]}, but its image is "
-                            f"{image_size[1]}x{image_size[0]}")
+                raise Error(
+                    f"{label}: {mask.shape[1]}x{mask.shape[0]}, but its image is {image_size[1]}x{image_size[0]}"
+                )
             bad = np.unique(mask[(mask >= CLASSES) & (mask != NO_SOURCE)])
             if bad.size:
-                raise Error(f"{label}: label {int(bad[0])} is outside the {CLASSES} classes (0-{CLASSES - 1}; "
-                            f"{NO_SOURCE} marks no label)")
+                raise Error(
+                    f"{label}: label {int(bad[0])} is outside the {CLASSES} classes (0-{CLASSES - 1}; "
+                    f"{NO_SOURCE} marks no label)"
+                )
             if split == "train":
                 train_counts += np.bincount(mask[mask < CLASSES].ravel(), minlength=CLASSES)[:CLASSES]
             if contents[calibration] not in cameras:
@@ -283,7 +313,7 @@ def available_memory(device: torch.device) -> typing.Optional[int]:
     the room left under a cgroup v2 limit (cpu). None when unknown."""
     if device.type == "cuda":
         return int(torch.cuda.mem_get_info(device)[0])
-    free: typing.List[int] = []
+    free: list[int] = []
     try:
         with open("/proc/meminfo") as f:
             free += [int(line.split()[1]) * 1024 for line in f if line.startswith("MemAvailable:")]
@@ -301,7 +331,7 @@ def available_memory(device: torch.device) -> typing.Optional[int]:
     return min(free) if free else None
 
 
-def training_memory(width: int, batch_size: int, image_size: typing.Tuple[int, int]) -> int:
+def training_memory(width: int, batch_size: int, image_size: tuple[int, int]) -> int:
     """Bytes one training process needs, about: the parameters with their gradients and
     AdamW's two moments (16 bytes each; counted on the meta device, nothing
     allocated), and the activations autograd keeps, ~40 floats per pixel and channel
@@ -329,7 +359,7 @@ def parse_device(text: str) -> torch.device:
     return device
 
 
-def parse_list(option: str, text: str, choices: typing.Sequence[str]) -> typing.List[str]:
+def parse_list(option: str, text: str, choices: typing.Sequence[str]) -> list[str]:
     """A comma-separated option: at least one name, none empty, none twice, each one of
     ``choices``."""
     names = text.split(",")
@@ -356,14 +386,21 @@ def check_out(out: str, dataset: str) -> None:
         raise Error(f"{out}: OUT {where}; give an output folder outside it")
 
 
-def run_settings(args: argparse.Namespace, device: torch.device, processes: int) -> typing.Dict[str, typing.Any]:
+def run_settings(args: argparse.Namespace, device: torch.device, processes: int) -> dict[str, typing.Any]:
     """The settings a run's result depends on (SETTINGS), as stored with it."""
-    return {"epochs": args.epochs, "batch_size": args.batch_size, "width": args.width,
-            "class_weights": args.class_weights, "device": device.type, "processes": processes}
+    return {
+        "epochs": args.epochs,
+        "batch_size": args.batch_size,
+        "width": args.width,
+        "class_weights": args.class_weights,
+        "device": device.type,
+        "processes": processes,
+    }
 
 
-def stored_run(path: str, settings: typing.Dict[str, typing.Any], dataset: typing.Dict[str, typing.Any],
-               rerun: bool) -> typing.Optional[typing.Dict[str, typing.Any]]:
+def stored_run(
+    path: str, settings: dict[str, typing.Any], dataset: dict[str, typing.Any], rerun: bool
+) -> typing.Optional[dict[str, typing.Any]]:
     """The result stored at ``path`` when it was made from this dataset with these
     settings; None when there is none, or when it differs and ``rerun`` (it is
     recomputed). Refuses one that differs otherwise, naming the dataset or the first
@@ -386,28 +423,45 @@ def stored_run(path: str, settings: typing.Dict[str, typing.Any], dataset: typin
     if stored_dataset.get("sha256") != dataset["sha256"]:
         if rerun:
             return None
-        raise Error(f"{path}: made from another dataset ({stored_dataset.get('path')}: {stored_dataset.get('files')} "
-                    f"files, sha256 {str(stored_dataset.get('sha256'))[:12]}; now {dataset['path']}: "
-                    f"{dataset['files']} files, sha256 {dataset['sha256'][:12]}); {hint}")
+        raise Error(
+            f"{path}: made from another dataset ({stored_dataset.get('path')}: {stored_dataset.get('files')} "
+            f"files, sha256 {str(stored_dataset.get('sha256'))[:12]}; now {dataset['path']}: "
+            f"{dataset['files']} files, sha256 {dataset['sha256'][:12]}); {hint}"
+        )
     for key, option in SETTINGS:
         if stored_settings.get(key) != settings[key]:
             if rerun:
                 return None
             raise Error(f"{path}: made with {option} {stored_settings.get(key)}, now {settings[key]}; {hint}")
-    return typing.cast(typing.Dict[str, typing.Any], result)
+    return typing.cast(dict[str, typing.Any], result)
 
 
-def train(dataset_root: str, config: str, seed: int, epochs: int, batch_size: int, width: int, workers: int,
-          device: torch.device, weights: typing.Optional[torch.Tensor]) -> torch.nn.Module:
+def train(
+    dataset_root: str,
+    config: str,
+    seed: int,
+    epochs: int,
+    batch_size: int,
+    width: int,
+    workers: int,
+    device: torch.device,
+    weights: typing.Optional[torch.Tensor],
+) -> torch.nn.Module:
     rank, world = distributed()
     dataset = ft.WoodScapeDataset(os.path.join(dataset_root, "train"), transform=transform_for(config), seed=seed)
     if world > 1:
         inner: typing.Any = torch.utils.data.DistributedSampler(dataset, num_replicas=world, rank=rank, seed=seed)
     else:
         inner = torch.utils.data.RandomSampler(dataset, generator=torch.Generator().manual_seed(seed))
-    loader = torch.utils.data.DataLoader(dataset, batch_size=batch_size, sampler=ft.EpochSampler(inner),
-                                         num_workers=workers, persistent_workers=workers > 0,
-                                         worker_init_fn=ft.worker_init_fn, collate_fn=ft.collate)
+    loader = torch.utils.data.DataLoader(
+        dataset,
+        batch_size=batch_size,
+        sampler=ft.EpochSampler(inner),
+        num_workers=workers,
+        persistent_workers=workers > 0,
+        worker_init_fn=ft.worker_init_fn,
+        collate_fn=ft.collate,
+    )
     torch.manual_seed(seed)
     net: torch.nn.Module = UNet(width).to(device)
     if world > 1:
@@ -419,8 +473,9 @@ def train(dataset_root: str, config: str, seed: int, epochs: int, batch_size: in
     for _ in range(epochs):
         for batch in loader:
             image, mask = batch["image"].to(device), batch["mask"].to(device)
-            loss = torch.nn.functional.cross_entropy(net(image), mask, weight=None if weights is None else weights.to(device),
-                                                     ignore_index=NO_SOURCE)
+            loss = torch.nn.functional.cross_entropy(
+                net(image), mask, weight=None if weights is None else weights.to(device), ignore_index=NO_SOURCE
+            )
             if not torch.isfinite(loss):
                 raise Error(f"{config}, seed {seed}: the loss is not finite")
             optimiser.zero_grad()
@@ -431,7 +486,7 @@ def train(dataset_root: str, config: str, seed: int, epochs: int, batch_size: in
 
 
 @torch.no_grad()
-def evaluate(net: torch.nn.Module, root: str, device: torch.device, batch_size: int) -> typing.Dict[str, typing.Any]:
+def evaluate(net: torch.nn.Module, root: str, device: torch.device, batch_size: int) -> dict[str, typing.Any]:
     """mIoU and per-class IoU over a WoodScape-layout folder."""
     dataset = ft.WoodScapeDataset(root, transform=evaluation_transform())
     loader = torch.utils.data.DataLoader(dataset, batch_size=batch_size, collate_fn=ft.collate)
@@ -450,9 +505,15 @@ def run_path(out: str, config: str, seed: int) -> str:
     return os.path.join(out, "runs", f"{config.replace(':', '_')}-seed{seed}")
 
 
-def run_one(args: argparse.Namespace, config: str, seed: int, device: torch.device,
-            weights: typing.Optional[torch.Tensor], record: typing.Dict[str, typing.Any],
-            stored: typing.Optional[typing.Dict[str, typing.Any]]) -> typing.Optional[typing.Dict[str, typing.Any]]:
+def run_one(
+    args: argparse.Namespace,
+    config: str,
+    seed: int,
+    device: torch.device,
+    weights: typing.Optional[torch.Tensor],
+    record: dict[str, typing.Any],
+    stored: typing.Optional[dict[str, typing.Any]],
+) -> typing.Optional[dict[str, typing.Any]]:
     """One training run and its evaluation (stored with ``record``: the settings and the
     dataset's identity), or ``stored``, the result of an earlier run that matches."""
     if stored is not None:
@@ -465,8 +526,13 @@ def run_one(args: argparse.Namespace, config: str, seed: int, device: torch.devi
     net = train(args.dataset, config, seed, args.epochs, args.batch_size, args.width, args.workers, device, weights)
     if rank != 0:
         return None
-    result: typing.Dict[str, typing.Any] = {"config": config, "seed": seed, **record,
-                                            "train_seconds": time.perf_counter() - start, "test": {}}
+    result: dict[str, typing.Any] = {
+        "config": config,
+        "seed": seed,
+        **record,
+        "train_seconds": time.perf_counter() - start,
+        "test": {},
+    }
     for test_set, folder in evaluation_folders(args.dataset):
         result["test"][test_set] = evaluate(net, folder, device, args.batch_size)
     os.makedirs(os.path.dirname(path), exist_ok=True)
@@ -487,51 +553,75 @@ def mean_std(values: typing.Sequence[float]) -> str:
     return f"{mean:.1f} ± {std:.1f}"
 
 
-def class_names() -> typing.List[str]:
+def class_names() -> list[str]:
     return [name for name, _ in fishcam.woodscape_classes()][:CLASSES]
 
 
-def fidelity_table(rows: typing.Sequence[typing.Dict[str, typing.Any]]) -> typing.List[str]:
+def fidelity_table(rows: typing.Sequence[dict[str, typing.Any]]) -> list[str]:
     """fishcam.dataset_fidelity's rows as markdown."""
-    lines = ["### Fidelity - the augmentation against the re-rendered truth", "",
-             "Each test sample augmented by its test set's change under each depth prior (`map`: the sample's own "
-             "depth map) against the re-render from the moved camera; labels compared away from class boundaries; "
-             "means over the samples.", "",
-             "| test set | prior | samples | with a source (%) | labels agree (%) | PSNR (dB) |",
-             "|---|---|---:|---:|---:|---:|"]
-    lines += [f"| {r['test_set'][len('test-'):]} | {r['prior']} | {r['samples']} | {100 * r['valid_share']:.1f} | "
-              f"{100 * r['label_agreement']:.2f} | {r['psnr_db']:.1f} |" for r in rows]
+    lines = [
+        "### Fidelity - the augmentation against the re-rendered truth",
+        "",
+        "Each test sample augmented by its test set's change under each depth prior (`map`: the sample's own "
+        "depth map) against the re-render from the moved camera; labels compared away from class boundaries; "
+        "means over the samples.",
+        "",
+        "| test set | prior | samples | with a source (%) | labels agree (%) | PSNR (dB) |",
+        "|---|---|---:|---:|---:|---:|",
+    ]
+    lines += [
+        f"| {r['test_set'][len('test-') :]} | {r['prior']} | {r['samples']} | {100 * r['valid_share']:.1f} | "
+        f"{100 * r['label_agreement']:.2f} | {r['psnr_db']:.1f} |"
+        for r in rows
+    ]
     return lines + [""]
 
 
-def tables(results: typing.List[typing.Dict[str, typing.Any]], configs: typing.Sequence[str],
-           fidelity: typing.Sequence[typing.Dict[str, typing.Any]] = ()) -> str:
+def tables(
+    results: list[dict[str, typing.Any]],
+    configs: typing.Sequence[str],
+    fidelity: typing.Sequence[dict[str, typing.Any]] = (),
+) -> str:
     """The paper's tables as markdown: mIoU (%) per test set, mean ± std over seeds;
     then the fidelity rows."""
     sets = ["original"] + [s for name in TEST_SETS for s in (name, f"{name}-rotation")]
     present = [s for s in sets if any(s in r["test"] for r in results)]
 
-    def miou(config: str, test_set: str) -> typing.List[float]:
+    def miou(config: str, test_set: str) -> list[float]:
         return [r["test"][test_set]["miou"] for r in results if r["config"] == config and test_set in r["test"]]
 
-    lines = ["mIoU (%) on the original test split and the true viewpoint test sets (`small` = the re-rendered "
-             "test scenes from cameras moved by the preset's changes; `-rotation`: the same changes without "
-             "translation); mean ± std over training seeds.", ""]
-    for title, chosen in (("Table 3 - augmentation", ("none", "base", "viewpoint", "base+viewpoint")),
-                          ("Table 4 - affine baseline vs viewpoint", ("affine", "viewpoint")),
-                          ("Table 5 - the model used for augmenting",
-                           ("viewpoint",) + tuple(c for c in CONFIGS if c.startswith("viewpoint:")))):
+    lines = [
+        "mIoU (%) on the original test split and the true viewpoint test sets (`small` = the re-rendered "
+        "test scenes from cameras moved by the preset's changes; `-rotation`: the same changes without "
+        "translation); mean ± std over training seeds.",
+        "",
+    ]
+    for title, chosen in (
+        ("Table 3 - augmentation", ("none", "base", "viewpoint", "base+viewpoint")),
+        ("Table 4 - affine baseline vs viewpoint", ("affine", "viewpoint")),
+        (
+            "Table 5 - the model used for augmenting",
+            ("viewpoint",) + tuple(c for c in CONFIGS if c.startswith("viewpoint:")),
+        ),
+    ):
         rows = [c for c in chosen if c in configs]
         if not rows:
             continue
-        lines += [f"### {title}", "", "| configuration | " + " | ".join(present) + " |",
-                  "|---|" + "---:|" * len(present)]
+        lines += [
+            f"### {title}",
+            "",
+            "| configuration | " + " | ".join(present) + " |",
+            "|---|" + "---:|" * len(present),
+        ]
         lines += [f"| {c} | " + " | ".join(mean_std(miou(c, s)) for s in present) + " |" for c in rows]
         lines.append("")
     if "none" in configs:
-        lines += ["### Table 2 - no augmentation: per-class IoU (%) and degradation", "",
-                  "| test set | mIoU | degrades (%) | " + " | ".join(class_names()) + " |",
-                  "|---|---:|---:|" + "---:|" * CLASSES]
+        lines += [
+            "### Table 2 - no augmentation: per-class IoU (%) and degradation",
+            "",
+            "| test set | mIoU | degrades (%) | " + " | ".join(class_names()) + " |",
+            "|---|---:|---:|" + "---:|" * CLASSES,
+        ]
         base = [r for r in results if r["config"] == "none"]
         original = np.mean([r["test"]["original"]["miou"] for r in base])
         for s in present:
@@ -557,12 +647,17 @@ def colourise(labels: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
     return coloured
 
 
-def figures(args: argparse.Namespace, results: typing.List[typing.Dict[str, typing.Any]], configs: typing.Sequence[str],
-            device: torch.device) -> typing.List[str]:
+def figures(
+    args: argparse.Namespace,
+    results: list[dict[str, typing.Any]],
+    configs: typing.Sequence[str],
+    device: torch.device,
+) -> list[str]:
     """figures/miou_vs_change.png (mean ± std over seeds against the change size) and
     figures/predictions.png (seed 0 of each configuration on test-large samples);
     returns the files written."""
     import matplotlib  # type: ignore[import-untyped]
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # type: ignore[import-untyped]
 
@@ -573,9 +668,9 @@ def figures(args: argparse.Namespace, results: typing.List[typing.Dict[str, typi
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     for ax, suffix, title in ((axes[0], "", "rotation + translation"), (axes[1], "-rotation", "rotation only")):
         for config in configs:
-            xs: typing.List[int] = []
-            means: typing.List[float] = []
-            stds: typing.List[float] = []
+            xs: list[int] = []
+            means: list[float] = []
+            stds: list[float] = []
             for k, size in enumerate(sizes):
                 key = size if size == "original" else size + suffix
                 values = [r["test"][key]["miou"] * 100 for r in results if r["config"] == config and key in r["test"]]
@@ -596,13 +691,16 @@ def figures(args: argparse.Namespace, results: typing.List[typing.Dict[str, typi
     fig.savefig(written[-1], dpi=110)
     plt.close(fig)
 
-    test_set = next((f"test-{name}" for name in reversed(TEST_SETS)
-                     if os.path.isdir(os.path.join(args.dataset, f"test-{name}"))), "test")
+    test_set = next(
+        (f"test-{name}" for name in reversed(TEST_SETS) if os.path.isdir(os.path.join(args.dataset, f"test-{name}"))),
+        "test",
+    )
     dataset = ft.WoodScapeDataset(os.path.join(args.dataset, test_set), transform=evaluation_transform())
     picks = sorted({0, len(dataset) // 3, 2 * len(dataset) // 3})
     shown = [c for c in configs if os.path.exists(run_path(args.out, c, 0) + ".pt")]
-    fig, axes = plt.subplots(len(picks), 2 + len(shown), figsize=(2.2 * (2 + len(shown)), 1.9 * len(picks)),
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        len(picks), 2 + len(shown), figsize=(2.2 * (2 + len(shown)), 1.9 * len(picks)), squeeze=False
+    )
     nets = {}
     for config in shown:
         net = UNet(args.width)
@@ -612,8 +710,10 @@ def figures(args: argparse.Namespace, results: typing.List[typing.Dict[str, typi
         for row, index in enumerate(picks):
             sample = dataset[index]
             image = sample["image"]
-            panels = [("image", (image.permute(1, 2, 0).numpy() * 255).astype(np.uint8)),
-                      ("truth", colourise(sample["mask"].numpy().astype(np.uint8)))]
+            panels = [
+                ("image", (image.permute(1, 2, 0).numpy() * 255).astype(np.uint8)),
+                ("truth", colourise(sample["mask"].numpy().astype(np.uint8))),
+            ]
             for config, net in nets.items():
                 prediction = net(image[None].to(device)).argmax(1)[0].cpu().numpy().astype(np.uint8)
                 panels.append((config, colourise(prediction)))
@@ -647,34 +747,53 @@ def main(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
 
 def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="fishcam-experiment", description=__doc__.split("\n")[0])
-    parser.add_argument("dataset", help="a dataset of `fishcam sample-dataset --scenes N` (train/, test/, test-PRESET/)")
-    parser.add_argument("out", help="output folder (runs/, results.json, tables.md), outside the dataset; existing "
-                                    "runs are kept")
-    parser.add_argument("--configs", help="comma-separated configurations, each once (default: all of "
-                                          f"{', '.join(CONFIGS)})")
+    parser.add_argument(
+        "dataset", help="a dataset of `fishcam sample-dataset --scenes N` (train/, test/, test-PRESET/)"
+    )
+    parser.add_argument(
+        "out", help="output folder (runs/, results.json, tables.md), outside the dataset; existing runs are kept"
+    )
+    parser.add_argument(
+        "--configs", help=f"comma-separated configurations, each once (default: all of {', '.join(CONFIGS)})"
+    )
     parser.add_argument("--seeds", type=int, help="training seeds per configuration (default: 3)")
     parser.add_argument("--epochs", type=int, help="training epochs per run (default: 10)")
     parser.add_argument("--batch-size", type=int, default=8)
-    parser.add_argument("--width", type=int,
-                        help=f"the U-Net's channels at full resolution, 1-{MAX_WIDTH} (default: 16)")
+    parser.add_argument(
+        "--width", type=int, help=f"the U-Net's channels at full resolution, 1-{MAX_WIDTH} (default: 16)"
+    )
     parser.add_argument("--workers", type=int, default=0, help="DataLoader workers")
     parser.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
-    parser.add_argument("--class-weights", choices=("balanced", "none"), default="balanced",
-                        help="cross-entropy class weights: balanced (ENet's 1/ln(1.02 + share) from train/) or none")
+    parser.add_argument(
+        "--class-weights",
+        choices=("balanced", "none"),
+        default="balanced",
+        help="cross-entropy class weights: balanced (ENet's 1/ln(1.02 + share) from train/) or none",
+    )
     parser.add_argument("--no-figures", action="store_true", help="skip figures/ (they need matplotlib)")
     parser.add_argument("--no-fidelity", action="store_true", help="skip the fidelity table")
-    parser.add_argument("--quick", action="store_true", help="tiny settings: configs none,viewpoint, 2 seeds, 1 epoch, "
-                                                             "width 4 (options given explicitly win)")
-    parser.add_argument("--rerun", action="store_true", help="recompute the stored runs made with other settings or "
-                                                             "from another dataset (refused without it)")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="tiny settings: configs none,viewpoint, 2 seeds, 1 epoch, width 4 (options given explicitly win)",
+    )
+    parser.add_argument(
+        "--rerun",
+        action="store_true",
+        help="recompute the stored runs made with other settings or from another dataset (refused without it)",
+    )
     args = parser.parse_args(argv)
     for key, value in (QUICK if args.quick else DEFAULTS).items():
         if getattr(args, key) is None:
             setattr(args, key, value)
     configs = parse_list("--configs", args.configs, CONFIGS)  # before anything runs or is written
-    for option, value, low in (("--seeds", args.seeds, 1), ("--epochs", args.epochs, 1),
-                               ("--batch-size", args.batch_size, 1), ("--width", args.width, 1),
-                               ("--workers", args.workers, 0)):
+    for option, value, low in (
+        ("--seeds", args.seeds, 1),
+        ("--epochs", args.epochs, 1),
+        ("--batch-size", args.batch_size, 1),
+        ("--width", args.width, 1),
+        ("--workers", args.workers, 0),
+    ):
         if value < low:
             raise Error(f"{option} {value}: must be >= {low}")
     if args.width > MAX_WIDTH:
@@ -695,15 +814,20 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     batch = min(args.batch_size, -(-info.train_images // processes))
     need, free = local * training_memory(args.width, batch, info.image_size), available_memory(device)
     if free is not None and need > free:
-        raise Error(f"--width {args.width} with --batch-size {args.batch_size} at {info.image_size[1]}x"
-                    f"{info.image_size[0]} needs about {need / 2**30:.1f} GiB to train"
-                    f"{f' ({local} processes)' if local > 1 else ''}, more than the {free / 2**30:.1f} GiB free on "
-                    f"{device.type}: lower --width or --batch-size")
+        raise Error(
+            f"--width {args.width} with --batch-size {args.batch_size} at {info.image_size[1]}x"
+            f"{info.image_size[0]} needs about {need / 2**30:.1f} GiB to train"
+            f"{f' ({local} processes)' if local > 1 else ''}, more than the {free / 2**30:.1f} GiB free on "
+            f"{device.type}: lower --width or --batch-size"
+        )
     settings, dataset_record = run_settings(args, device, processes), info.record(args.dataset)
     record = {"settings": settings, "dataset": dataset_record}
     # Every stored run is checked before the first one trains.
-    stored = {(config, seed): stored_run(run_path(args.out, config, seed) + ".json", settings, dataset_record,
-                                         args.rerun) for config in configs for seed in range(args.seeds)}
+    stored = {
+        (config, seed): stored_run(run_path(args.out, config, seed) + ".json", settings, dataset_record, args.rerun)
+        for config in configs
+        for seed in range(args.seeds)
+    }
     os.environ["FISHCAM_DEVICE"] = device.type
     rank, _ = distributed()
     start = time.perf_counter()
@@ -715,28 +839,43 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
             if result is not None:
                 results.append(result)
                 if rank == 0:
-                    print(f"{config} seed {seed}: mIoU original {100 * result['test']['original']['miou']:.1f}%",
-                          flush=True)
+                    print(
+                        f"{config} seed {seed}: mIoU original {100 * result['test']['original']['miou']:.1f}%",
+                        flush=True,
+                    )
     if rank == 0:
         os.makedirs(args.out, exist_ok=True)
-        has_test_sets = any(os.path.exists(os.path.join(args.dataset, f"test-{name}", "changes.jsonl"))
-                            for name in TEST_SETS)
+        has_test_sets = any(
+            os.path.exists(os.path.join(args.dataset, f"test-{name}", "changes.jsonl")) for name in TEST_SETS
+        )
         fidelity = fishcam.dataset_fidelity(args.dataset) if has_test_sets and not args.no_fidelity else []
         written = [] if args.no_figures else figures(args, results, configs, device)
-        summary = {"dataset": os.path.abspath(args.dataset), "dataset_identity": dataset_record, "configs": configs,
-                   "seeds": args.seeds, "epochs": args.epochs, "width": args.width, "batch_size": args.batch_size,
-                   "settings": settings,
-                   "class_weights": None if weights is None else [float(w) for w in weights],
-                   "fishcam": fishcam.__version__, "torch": torch.__version__, "seconds": time.perf_counter() - start,
-                   "train_seconds_total": sum(r["train_seconds"] for r in results),
-                   "runs": results, "fidelity": fidelity}
+        summary = {
+            "dataset": os.path.abspath(args.dataset),
+            "dataset_identity": dataset_record,
+            "configs": configs,
+            "seeds": args.seeds,
+            "epochs": args.epochs,
+            "width": args.width,
+            "batch_size": args.batch_size,
+            "settings": settings,
+            "class_weights": None if weights is None else [float(w) for w in weights],
+            "fishcam": fishcam.__version__,
+            "torch": torch.__version__,
+            "seconds": time.perf_counter() - start,
+            "train_seconds_total": sum(r["train_seconds"] for r in results),
+            "runs": results,
+            "fidelity": fidelity,
+        }
         with open(os.path.join(args.out, "results.json"), "w") as f:
             json.dump(summary, f, indent=1)
         with open(os.path.join(args.out, "tables.md"), "w") as f:
             f.write(tables(results, configs, fidelity))
-        print(f"wrote {os.path.join(args.out, 'results.json')}, tables.md" + "".join(f", {os.path.relpath(w, args.out)}"
-                                                                                    for w in written) +
-              f" ({summary['seconds']:.0f} s)")
+        print(
+            f"wrote {os.path.join(args.out, 'results.json')}, tables.md"
+            + "".join(f", {os.path.relpath(w, args.out)}" for w in written)
+            + f" ({summary['seconds']:.0f} s)"
+        )
     if dist.is_initialized():
         dist.destroy_process_group()
     return 0

@@ -45,8 +45,7 @@ class ConfusionMatrix(_fishcam.ConfusionMatrix):
     counts: the matrix as an int64 (num_classes, num_classes) array.
     """
 
-    def update(self, prediction: typing.Any, ground_truth: typing.Any,
-               valid: typing.Any = None) -> None:
+    def update(self, prediction: typing.Any, ground_truth: typing.Any, valid: typing.Any = None) -> None:
         """Counts the pixels of one batch: prediction and ground_truth integer arrays
         (numpy or torch, CUDA tensors copied to the host) of one shape, valid an
         optional bool mask of that shape. A value that is not a class (nor the
@@ -68,5 +67,6 @@ class ConfusionMatrix(_fishcam.ConfusionMatrix):
         return float("nan") if value is None else value
 
     def __repr__(self) -> str:
-        return (f"ConfusionMatrix(num_classes={self.num_classes}, ignore={self.ignore}, "
-                f"scored_pixels={self.scored_pixels})")
+        return (
+            f"ConfusionMatrix(num_classes={self.num_classes}, ignore={self.ignore}, scored_pixels={self.scored_pixels})"
+        )

@@ -29,10 +29,10 @@ sees ``set_epoch`` from the main process), and in the main process until
 
 import contextlib
 import contextvars
-import typing
 import json
 import operator
 import os
+import typing
 
 import numpy as np
 import PIL.Image
@@ -42,20 +42,36 @@ try:
     from torchvision import tv_tensors
     from torchvision.transforms import v2
 except ImportError as error:  # pragma: no cover - the message is the point
-    raise ImportError("fishcam.torch needs torchvision >= 0.23 (transforms.v2 and tv_tensors.KeyPoints): "
-                      f"pip install torchvision ({error})") from None
+    raise ImportError(
+        "fishcam.torch needs torchvision >= 0.23 (transforms.v2 and tv_tensors.KeyPoints): "
+        f"pip install torchvision ({error})"
+    ) from None
 if not hasattr(tv_tensors, "KeyPoints"):  # pragma: no cover
     raise ImportError("fishcam.torch needs torchvision >= 0.23 (tv_tensors.KeyPoints); pip install -U torchvision")
 
 from . import Camera, Error, ViewpointChange, _check_seed, _shown, derive_seed, set_num_threads
 from . import transforms as _transforms
 
-__all__ = ["RandomViewpoint", "RandomAffine", "DepthMap", "Polygon", "WoodScapeDataset", "EpochSampler", "WarpedBatch",
-           "warp_batch", "collate", "sample_seed", "record_changes", "worker_init_fn", "torch_seed", "is_instance_mask"]
+__all__ = [
+    "RandomViewpoint",
+    "RandomAffine",
+    "DepthMap",
+    "Polygon",
+    "WoodScapeDataset",
+    "EpochSampler",
+    "WarpedBatch",
+    "warp_batch",
+    "collate",
+    "sample_seed",
+    "record_changes",
+    "worker_init_fn",
+    "torch_seed",
+    "is_instance_mask",
+]
 
 
 Sample = typing.Any  # anything torchvision.transforms.v2 takes: a tensor, a tuple, a dict, ...
-Params = typing.Dict[str, typing.Any]
+Params = dict[str, typing.Any]
 
 
 def _cv2() -> typing.Any:
@@ -76,14 +92,21 @@ def worker_init_fn(worker_id: int) -> None:
     set_num_threads(1)
 
 
-def _tensor_of(cls: typing.Type[tv_tensors.TVTensor], data: typing.Any, dtype: typing.Optional[torch.dtype],
-               device: typing.Optional[torch.device], requires_grad: typing.Optional[bool]) -> torch.Tensor:
+def _tensor_of(
+    cls: type[tv_tensors.TVTensor],
+    data: typing.Any,
+    dtype: typing.Optional[torch.dtype],
+    device: typing.Optional[torch.device],
+    requires_grad: typing.Optional[bool],
+) -> torch.Tensor:
     """torch's tensor of ``data`` for a fishcam tv_tensor, or fishcam.Error naming the class."""
     try:
         return typing.cast(torch.Tensor, cls._to_tensor(data, dtype=dtype, device=device, requires_grad=requires_grad))
     except (TypeError, ValueError, RuntimeError, OverflowError) as error:
-        raise Error(f"{cls.__name__}: not a tensor of numbers ({type(data).__name__}): "
-                    f"{str(error).splitlines()[0] if str(error) else type(error).__name__}") from None
+        raise Error(
+            f"{cls.__name__}: not a tensor of numbers ({type(data).__name__}): "
+            f"{str(error).splitlines()[0] if str(error) else type(error).__name__}"
+        ) from None
 
 
 class DepthMap(tv_tensors.TVTensor):
@@ -97,9 +120,14 @@ class DepthMap(tv_tensors.TVTensor):
     def _wrap(cls, tensor: torch.Tensor) -> "DepthMap":
         return tensor.as_subclass(cls)
 
-    def __new__(cls, data: typing.Any, *, dtype: typing.Optional[torch.dtype] = None,
-                device: typing.Optional[torch.device] = None,
-                requires_grad: typing.Optional[bool] = None) -> "DepthMap":
+    def __new__(
+        cls,
+        data: typing.Any,
+        *,
+        dtype: typing.Optional[torch.dtype] = None,
+        device: typing.Optional[torch.device] = None,
+        requires_grad: typing.Optional[bool] = None,
+    ) -> "DepthMap":
         return cls._wrap(_tensor_of(cls, data, dtype, device, requires_grad))
 
 
@@ -113,9 +141,14 @@ class Polygon(tv_tensors.TVTensor):
     def _wrap(cls, tensor: torch.Tensor) -> "Polygon":
         return tensor.as_subclass(cls)
 
-    def __new__(cls, data: typing.Any, *, dtype: typing.Optional[torch.dtype] = None,
-                device: typing.Optional[torch.device] = None,
-                requires_grad: typing.Optional[bool] = None) -> "Polygon":
+    def __new__(
+        cls,
+        data: typing.Any,
+        *,
+        dtype: typing.Optional[torch.dtype] = None,
+        device: typing.Optional[torch.device] = None,
+        requires_grad: typing.Optional[bool] = None,
+    ) -> "Polygon":
         tensor = _tensor_of(cls, data, dtype, device, requires_grad)
         if tensor.ndim != 2 or tensor.shape[-1] != 2:
             raise Error(f"Polygon: expected shape (K, 2), got {tuple(tensor.shape)}")
@@ -124,18 +157,20 @@ class Polygon(tv_tensors.TVTensor):
 
 # The seed a seeded dataset gives the transforms of one sample, and the records of
 # the changes they made (WoodScapeDataset reads them back into the item).
-_sample_seed: "contextvars.ContextVar[typing.Optional[int]]" = contextvars.ContextVar("fishcam_sample_seed",
-                                                                                      default=None)
-_sample_records: "contextvars.ContextVar[typing.Optional[typing.List[_transforms.Record]]]" = contextvars.ContextVar(
-    "fishcam_sample_records", default=None)
+_sample_seed: "contextvars.ContextVar[typing.Optional[int]]" = contextvars.ContextVar(
+    "fishcam_sample_seed", default=None
+)
+_sample_records: "contextvars.ContextVar[typing.Optional[list[_transforms.Record]]]" = contextvars.ContextVar(
+    "fishcam_sample_records", default=None
+)
 
 
 @contextlib.contextmanager
-def record_changes() -> typing.Iterator[typing.List[_transforms.Record]]:
+def record_changes() -> typing.Iterator[list[_transforms.Record]]:
     """Within the block, fishcam's transforms append the record of each change they
     make (the manifest's dict: method, seed, rotation, translation, depth) to the
     list this yields."""
-    records: typing.List[_transforms.Record] = []
+    records: list[_transforms.Record] = []
     token = _sample_records.set(records)
     try:
         yield records
@@ -144,7 +179,7 @@ def record_changes() -> typing.Iterator[typing.List[_transforms.Record]]:
 
 
 @contextlib.contextmanager
-def sample_seed(seed: int) -> typing.Iterator[typing.List[_transforms.Record]]:
+def sample_seed(seed: int) -> typing.Iterator[list[_transforms.Record]]:
     """Within the block, fishcam's transforms use ``seed`` (one 64-bit integer) instead
     of drawing one, and torch's generator is seeded with it (restored afterwards), so
     every random transform of a pipeline is reproducible per sample. Yields the list
@@ -207,17 +242,19 @@ Fill = _transforms.Fill
 # holds its instance masks; and the ids of the masks found under it in the sample
 # being transformed (set by _FishcamTransform.forward for its make_params).
 _INSTANCE_MASKS_KEY = "masks"
-_instance_mask_ids: "contextvars.ContextVar[typing.FrozenSet[int]]" = contextvars.ContextVar(
-    "fishcam_instance_mask_ids", default=frozenset())
+_instance_mask_ids: "contextvars.ContextVar[frozenset[int]]" = contextvars.ContextVar(
+    "fishcam_instance_mask_ids", default=frozenset()
+)
 
 
-def _split_fill(fill: object, fill_mask: object) -> typing.Tuple[typing.Any, int]:
+def _split_fill(fill: object, fill_mask: object) -> tuple[typing.Any, int]:
     """(the images' fill, the semantic masks' fill) of a torch transform's arguments."""
     return _transforms._split_fill(fill, fill_mask, tv_tensors.Image, tv_tensors.Mask)
 
 
-def _masks_under_instance_keys(structure: typing.Any, inside: bool = False,
-                               found: typing.Optional[typing.Set[int]] = None) -> typing.Set[int]:
+def _masks_under_instance_keys(
+    structure: typing.Any, inside: bool = False, found: typing.Optional[set[int]] = None
+) -> set[int]:
     """The ids of the tv_tensors.Mask leaves of ``structure`` held under the key
     "masks" of a dict, at any depth (the sample's own or a target's)."""
     found = set() if found is None else found
@@ -243,12 +280,13 @@ def is_instance_mask(mask: torch.Tensor, under_masks_key: bool = False) -> bool:
     return under_masks_key or mask.dtype == torch.bool or (mask.ndim == 3 and mask.shape[0] >= 2)
 
 
-def _size_of(flat_inputs: typing.List[typing.Any]) -> typing.Tuple[int, int]:
+def _size_of(flat_inputs: list[typing.Any]) -> tuple[int, int]:
     """(width, height) of the sample's images, masks or depth maps (or plain tensors
     of 2 or more dimensions, taken for images), else of its boxes or keypoints."""
     for x in flat_inputs:
         if isinstance(x, (tv_tensors.Image, tv_tensors.Mask, DepthMap)) or (
-                isinstance(x, torch.Tensor) and not isinstance(x, tv_tensors.TVTensor)):
+            isinstance(x, torch.Tensor) and not isinstance(x, tv_tensors.TVTensor)
+        ):
             if x.ndim < 2:
                 if isinstance(x, tv_tensors.TVTensor):
                     raise Error(f"{type(x).__name__}: expected 2 or more dimensions, got shape {tuple(x.shape)}")
@@ -281,17 +319,19 @@ class _FishcamTransform(v2.Transform):
         made = len(records) if records is not None else 0
         return seed if made == 0 else derive_seed(seed, "fishcam-transform", made)
 
-    def check_inputs(self, flat_inputs: typing.List[typing.Any]) -> None:
+    def check_inputs(self, flat_inputs: list[typing.Any]) -> None:
         for x in flat_inputs:
             # Passed through by torchvision, an image or mask in these forms would silently
             # keep its geometry while the rest of the sample moves.
             if isinstance(x, np.ndarray) and x.ndim >= 2:
-                raise Error(f"a numpy array {x.shape} in a torchvision pipeline: convert it (torch.from_numpy, "
-                            "tv_tensors.Image / Mask), or use fishcam.transforms for numpy samples")
+                raise Error(
+                    f"a numpy array {x.shape} in a torchvision pipeline: convert it (torch.from_numpy, "
+                    "tv_tensors.Image / Mask), or use fishcam.transforms for numpy samples"
+                )
             if isinstance(x, PIL.Image.Image):
                 raise Error("PIL images: convert them first (v2.PILToTensor() or v2.ToImage() before this transform)")
 
-    def _draw(self, flat_inputs: typing.List[typing.Any]) -> _transforms.SampleChange:
+    def _draw(self, flat_inputs: list[typing.Any]) -> _transforms.SampleChange:
         raise NotImplementedError
 
     def forward(self, *inputs: typing.Any) -> typing.Any:
@@ -303,7 +343,7 @@ class _FishcamTransform(v2.Transform):
         finally:
             _instance_mask_ids.reset(token)
 
-    def make_params(self, flat_inputs: typing.List[typing.Any]) -> Params:
+    def make_params(self, flat_inputs: list[typing.Any]) -> Params:
         sample_change = self._draw(flat_inputs)
         records = _sample_records.get()
         if records is not None:
@@ -312,24 +352,41 @@ class _FishcamTransform(v2.Transform):
         boxes = [x for x in flat_inputs if isinstance(x, tv_tensors.BoundingBoxes)]
         instance_masks = [x for x in flat_inputs if isinstance(x, tv_tensors.Mask) and x.ndim == 3]
         pairs = [m for m in instance_masks if boxes and m.shape[0] == boxes[0].shape[0] and m.shape[0] > 0]
-        return {"change": sample_change, "instance_masks": pairs[0] if pairs else None,
-                "instance_ids": instance_ids, "done": self._image_and_mask(flat_inputs, sample_change, instance_ids)}
+        return {
+            "change": sample_change,
+            "instance_masks": pairs[0] if pairs else None,
+            "instance_ids": instance_ids,
+            "done": self._image_and_mask(flat_inputs, sample_change, instance_ids),
+        }
 
     @staticmethod
-    def _image_and_mask(flat_inputs: typing.List[typing.Any], change: _transforms.SampleChange,
-                        instance_ids: typing.AbstractSet[int] = frozenset()) -> typing.Dict[int, torch.Tensor]:
+    def _image_and_mask(
+        flat_inputs: list[typing.Any],
+        change: _transforms.SampleChange,
+        instance_ids: typing.AbstractSet[int] = frozenset(),
+    ) -> dict[int, torch.Tensor]:
         """The sample's first image and first HxW mask resampled in one pass (the maps
         computed once for both), keyed by the inputs' ids for transform()."""
-        images = [x for x in flat_inputs if isinstance(x, torch.Tensor) and x.ndim == 3 and (
-            isinstance(x, tv_tensors.Image) or not isinstance(x, tv_tensors.TVTensor))]
+        images = [
+            x
+            for x in flat_inputs
+            if isinstance(x, torch.Tensor)
+            and x.ndim == 3
+            and (isinstance(x, tv_tensors.Image) or not isinstance(x, tv_tensors.TVTensor))
+        ]
         masks = [x for x in flat_inputs if isinstance(x, tv_tensors.Mask) and x.ndim == 2]
         if not images or not masks:
             return {}
         image, mask = images[0], masks[0]
-        out_image, out_mask = change.image_and_mask(_image_to_numpy(image, "image"), _numpy(mask, "mask", _MASK_DTYPES),
-                                                    instance=is_instance_mask(mask, id(mask) in instance_ids))
-        return {id(image): _numpy_to_image(out_image, image),
-                id(mask): tv_tensors.wrap(torch.from_numpy(out_mask), like=mask)}
+        out_image, out_mask = change.image_and_mask(
+            _image_to_numpy(image, "image"),
+            _numpy(mask, "mask", _MASK_DTYPES),
+            instance=is_instance_mask(mask, id(mask) in instance_ids),
+        )
+        return {
+            id(image): _numpy_to_image(out_image, image),
+            id(mask): tv_tensors.wrap(torch.from_numpy(out_mask), like=mask),
+        }
 
     def transform(self, inpt: typing.Any, params: Params) -> typing.Any:
         done = params["done"].get(id(inpt))
@@ -370,8 +427,10 @@ class _FishcamTransform(v2.Transform):
         if tensor.ndim == 2:
             return torch.from_numpy(change.mask(_numpy(tensor, "mask", _MASK_DTYPES), instance=instance))
         if tensor.ndim == 3:  # instance masks (N, H, W), or a 1xHxW label map: each plane on its own
-            planes = [change.mask(_numpy(plane, f"mask[{i}]", _MASK_DTYPES), f"mask[{i}]", instance)
-                      for i, plane in enumerate(tensor)]
+            planes = [
+                change.mask(_numpy(plane, f"mask[{i}]", _MASK_DTYPES), f"mask[{i}]", instance)
+                for i, plane in enumerate(tensor)
+            ]
             return torch.from_numpy(np.stack(planes)) if planes else tensor.clone()
         raise Error(f"mask: expected HxW or NxHxW, got shape {tuple(tensor.shape)}")
 
@@ -382,13 +441,18 @@ class _FishcamTransform(v2.Transform):
         array = _image_to_numpy(image, "image")
         return _numpy_to_image(change.image(array), image)
 
-    def _boxes(self, boxes: tv_tensors.BoundingBoxes, change: _transforms.SampleChange,
-               instance_masks: typing.Optional[torch.Tensor]) -> tv_tensors.BoundingBoxes:
+    def _boxes(
+        self,
+        boxes: tv_tensors.BoundingBoxes,
+        change: _transforms.SampleChange,
+        instance_masks: typing.Optional[torch.Tensor],
+    ) -> tv_tensors.BoundingBoxes:
         fmt = boxes.format
         if "ROTATED" in str(fmt).upper() or "XYXYXYXY" in str(fmt).upper():
             raise Error(f"boxes: rotated boxes ({fmt}) are not supported; use keypoints for their corners")
-        xyxy = v2.functional.convert_bounding_box_format(boxes.as_subclass(torch.Tensor), old_format=fmt,
-                                                         new_format=tv_tensors.BoundingBoxFormat.XYXY)
+        xyxy = v2.functional.convert_bounding_box_format(
+            boxes.as_subclass(torch.Tensor), old_format=fmt, new_format=tv_tensors.BoundingBoxFormat.XYXY
+        )
         if instance_masks is not None:  # the tight box of each transformed instance (no-source pixels: none)
             warped = self._masks(instance_masks, change, instance=True)
             out = torch.zeros((len(warped), 4), dtype=torch.float64)
@@ -402,8 +466,9 @@ class _FishcamTransform(v2.Transform):
             out, visibility = torch.from_numpy(mapped), torch.from_numpy(seen)
         # Boxes seen too little collapse to nothing: v2.SanitizeBoundingBoxes drops them.
         out[visibility < self.min_visibility] = 0
-        out = v2.functional.convert_bounding_box_format(out.to(boxes.dtype), old_format=tv_tensors.BoundingBoxFormat.XYXY,
-                                                        new_format=fmt)
+        out = v2.functional.convert_bounding_box_format(
+            out.to(boxes.dtype), old_format=tv_tensors.BoundingBoxFormat.XYXY, new_format=fmt
+        )
         return tv_tensors.wrap(out, like=boxes)
 
 
@@ -456,18 +521,37 @@ class RandomViewpoint(_FishcamTransform):
             zero size.
     """
 
-    def __init__(self, camera: typing.Optional[Camera] = None, preset: typing.Optional[str] = "train",
-                 max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
-                 depth: str = "source-sphere", p: float = 1.0, fill: Fill = 0, fill_mask: int = 0,
-                 sampling: str = "grid", depth_values: str = "range", min_visibility: float = 0.0) -> None:
+    def __init__(
+        self,
+        camera: typing.Optional[Camera] = None,
+        preset: typing.Optional[str] = "train",
+        max_rotation_deg: typing.Optional[float] = None,
+        max_translation: typing.Optional[float] = None,
+        depth: str = "source-sphere",
+        p: float = 1.0,
+        fill: Fill = 0,
+        fill_mask: int = 0,
+        sampling: str = "grid",
+        depth_values: str = "range",
+        min_visibility: float = 0.0,
+    ) -> None:
         super().__init__(min_visibility)
         if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
             fill, fill_mask = _split_fill(fill, fill_mask)
         self.numpy_transform = _transforms.RandomViewpoint(
-            camera, preset=preset, max_rotation_deg=max_rotation_deg, max_translation=max_translation, depth=depth,
-            p=p, fill=fill, fill_mask=fill_mask, sampling=sampling, depth_values=depth_values)
+            camera,
+            preset=preset,
+            max_rotation_deg=max_rotation_deg,
+            max_translation=max_translation,
+            depth=depth,
+            p=p,
+            fill=fill,
+            fill_mask=fill_mask,
+            sampling=sampling,
+            depth_values=depth_values,
+        )
 
-    def _draw(self, flat_inputs: typing.List[typing.Any]) -> _transforms.SampleChange:
+    def _draw(self, flat_inputs: list[typing.Any]) -> _transforms.SampleChange:
         cameras = [x for x in flat_inputs if isinstance(x, Camera)]
         if len(cameras) > 1 and any(c != cameras[0] for c in cameras[1:]):
             raise Error("camera: the sample holds several different cameras; one change needs one camera")
@@ -485,7 +569,7 @@ class RandomViewpoint(_FishcamTransform):
         return self.numpy_transform.draw(camera, self._seed(), depth_map)
 
     def extra_repr(self) -> str:
-        return repr(self.numpy_transform)[len("RandomViewpoint("):-1] + f", min_visibility={self.min_visibility}"
+        return repr(self.numpy_transform)[len("RandomViewpoint(") : -1] + f", min_visibility={self.min_visibility}"
 
 
 class RandomAffine(_FishcamTransform):
@@ -494,22 +578,35 @@ class RandomAffine(_FishcamTransform):
     a camera in the sample is passed on unchanged: the baseline has no camera model)
     and its ``fill`` and ``fill_mask`` (instance masks get 0 / False)."""
 
-    def __init__(self, preset: typing.Optional[str] = "train", max_rotation_deg: typing.Optional[float] = None,
-                 max_translation: typing.Optional[float] = None,
-                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, p: float = 1.0, fill: Fill = 0,
-                 fill_mask: int = 0, min_visibility: float = 0.0) -> None:
+    def __init__(
+        self,
+        preset: typing.Optional[str] = "train",
+        max_rotation_deg: typing.Optional[float] = None,
+        max_translation: typing.Optional[float] = None,
+        scale_range: typing.Optional[tuple[float, float]] = None,
+        p: float = 1.0,
+        fill: Fill = 0,
+        fill_mask: int = 0,
+        min_visibility: float = 0.0,
+    ) -> None:
         super().__init__(min_visibility)
         if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
             fill, fill_mask = _split_fill(fill, fill_mask)
-        self.numpy_transform = _transforms.RandomAffine(preset=preset, max_rotation_deg=max_rotation_deg,
-                                                        max_translation=max_translation, scale_range=scale_range,
-                                                        p=p, fill=fill, fill_mask=fill_mask)
+        self.numpy_transform = _transforms.RandomAffine(
+            preset=preset,
+            max_rotation_deg=max_rotation_deg,
+            max_translation=max_translation,
+            scale_range=scale_range,
+            p=p,
+            fill=fill,
+            fill_mask=fill_mask,
+        )
 
-    def _draw(self, flat_inputs: typing.List[typing.Any]) -> _transforms.SampleChange:
+    def _draw(self, flat_inputs: list[typing.Any]) -> _transforms.SampleChange:
         return self.numpy_transform.draw(_size_of(flat_inputs), self._seed())
 
     def extra_repr(self) -> str:
-        return repr(self.numpy_transform)[len("RandomAffine("):-1] + f", min_visibility={self.min_visibility}"
+        return repr(self.numpy_transform)[len("RandomAffine(") : -1] + f", min_visibility={self.min_visibility}"
 
 
 class WarpedBatch(typing.NamedTuple):
@@ -523,9 +620,15 @@ class WarpedBatch(typing.NamedTuple):
 _batch_warps = _transforms._WarpCache()
 
 
-def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequence[Camera]],
-               changes: typing.Sequence[ViewpointChange], masks: typing.Optional[torch.Tensor] = None,
-               depth: str = "source-sphere", fill: Fill = 0.0, fill_mask: int = 0) -> WarpedBatch:
+def warp_batch(
+    images: torch.Tensor,
+    cameras: typing.Union[Camera, typing.Sequence[Camera]],
+    changes: typing.Sequence[ViewpointChange],
+    masks: typing.Optional[torch.Tensor] = None,
+    depth: str = "source-sphere",
+    fill: Fill = 0.0,
+    fill_mask: int = 0,
+) -> WarpedBatch:
     """Viewpoint changes for a batch of tensors on any device.
 
     The maps come from fishcam on the CPU (the grid path, geometric: within 1/32 px
@@ -557,8 +660,9 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
         raise Error(f"images: expected an integer or floating point tensor, got {images.dtype}")
     image_fill: typing.Any = fill  # a number (NaN included, for float images)
     if isinstance(fill, typing.Mapping):
-        image_fill, fill_mask = _transforms._split_fill(fill, fill_mask, tv_tensors.Image, tv_tensors.Mask,
-                                                        finite=False, label_range=None)
+        image_fill, fill_mask = _transforms._split_fill(
+            fill, fill_mask, tv_tensors.Image, tv_tensors.Mask, finite=False, label_range=None
+        )
     image_fill = _transforms._number(image_fill, "fill")
     fill_mask = _transforms._integer(fill_mask, "fill_mask")
     if images.is_floating_point():
@@ -567,17 +671,24 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
     else:
         info = torch.iinfo(images.dtype)
         if not (image_fill.is_integer() and info.min <= image_fill <= info.max):
-            raise Error(f"images: the no-source fill {image_fill} is not a value of dtype {images.dtype} "
-                        f"(integers {info.min}..{info.max})")
+            raise Error(
+                f"images: the no-source fill {image_fill} is not a value of dtype {images.dtype} "
+                f"(integers {info.min}..{info.max})"
+            )
     batch, _, height, width = images.shape
-    cameras = [cameras] * batch if isinstance(cameras, Camera) else _transforms._sequence(
-        cameras, "cameras", "a fishcam.Camera or a sequence of them")
+    cameras = (
+        [cameras] * batch
+        if isinstance(cameras, Camera)
+        else _transforms._sequence(cameras, "cameras", "a fishcam.Camera or a sequence of them")
+    )
     changes = _transforms._sequence(changes, "changes", "a sequence of fishcam.ViewpointChange")
     if len(cameras) != batch or len(changes) != batch:
         raise Error(f"cameras, changes: expected one per image ({batch}), got {len(cameras)} and {len(changes)}")
     if masks is not None and (not isinstance(masks, torch.Tensor) or tuple(masks.shape) != (batch, height, width)):
-        raise Error(f"masks: expected a ({batch}, {height}, {width}) tensor, got "
-                    f"{getattr(masks, 'shape', type(masks).__name__)}")
+        raise Error(
+            f"masks: expected a ({batch}, {height}, {width}) tensor, got "
+            f"{getattr(masks, 'shape', type(masks).__name__)}"
+        )
     if masks is not None and masks.device != images.device:
         raise Error(f"masks: on {masks.device} but the images are on {images.device}")
     grids = torch.empty((batch, height, width, 2), dtype=torch.float32)
@@ -595,10 +706,12 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
     device = images.device
     grids, valid = grids.to(device), valid.to(device)
     floating = images if images.is_floating_point() else images.float()
-    sampled = torch.nn.functional.grid_sample(floating, grids.to(floating.dtype), mode="bilinear",
-                                              padding_mode="border", align_corners=True)
-    sampled = torch.where(valid[:, None], sampled,
-                          torch.as_tensor(float(image_fill), dtype=sampled.dtype, device=device))
+    sampled = torch.nn.functional.grid_sample(
+        floating, grids.to(floating.dtype), mode="bilinear", padding_mode="border", align_corners=True
+    )
+    sampled = torch.where(
+        valid[:, None], sampled, torch.as_tensor(float(image_fill), dtype=sampled.dtype, device=device)
+    )
     if not images.is_floating_point():
         info = torch.iinfo(images.dtype)
         sampled = sampled.round_().clamp_(info.min, info.max)
@@ -613,11 +726,12 @@ def warp_batch(images: torch.Tensor, cameras: typing.Union[Camera, typing.Sequen
             fill_mask = 0  # a bool mask is an instance's: no source, not in it
         else:
             info = torch.iinfo(masks.dtype)
-            low, high = max(info.min, -2**24), min(info.max, 2**24)
+            low, high = max(info.min, -(2**24)), min(info.max, 2**24)
             if not low <= fill_mask <= high:
                 raise Error(f"fill_mask: {fill_mask} does not fit the masks' dtype {masks.dtype} ({low}..{high})")
-        picked = torch.nn.functional.grid_sample(masks[:, None].float(), grids, mode="nearest",
-                                                 padding_mode="border", align_corners=True)[:, 0]
+        picked = torch.nn.functional.grid_sample(
+            masks[:, None].float(), grids, mode="nearest", padding_mode="border", align_corners=True
+        )[:, 0]
         out_masks = torch.where(valid, picked, torch.as_tensor(float(fill_mask), device=device)).to(masks.dtype)
     return WarpedBatch(sampled.to(images.dtype), out_masks, valid)
 
@@ -632,7 +746,7 @@ def collate(batch: typing.Sequence[typing.Any]) -> typing.Any:
     return torch.utils.data.default_collate(list(batch))
 
 
-class EpochSampler(torch.utils.data.Sampler[typing.Tuple[int, int]]):
+class EpochSampler(torch.utils.data.Sampler[tuple[int, int]]):
     """Yields ``(epoch, index)`` for every index of ``sampler``, one epoch per pass.
 
     The DataLoader iterates its sampler in the main process, so the epoch reaches
@@ -663,7 +777,7 @@ class EpochSampler(torch.utils.data.Sampler[typing.Tuple[int, int]]):
     def __len__(self) -> int:
         return len(typing.cast(typing.Sized, self.sampler))
 
-    def __iter__(self) -> typing.Iterator[typing.Tuple[int, int]]:
+    def __iter__(self) -> typing.Iterator[tuple[int, int]]:
         epoch = self.next_epoch
         self.next_epoch = epoch + 1
         if hasattr(self.sampler, "set_epoch"):
@@ -709,9 +823,13 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
     DataLoader worker, whose copy never sees ``set_epoch``).
     """
 
-    def __init__(self, root: typing.Union[str, "os.PathLike[str]"],
-                 transform: typing.Optional[typing.Callable[[Sample], Sample]] = None, seed: typing.Optional[int] = None,
-                 mask_dtype: typing.Optional[torch.dtype] = torch.int64) -> None:
+    def __init__(
+        self,
+        root: typing.Union[str, "os.PathLike[str]"],
+        transform: typing.Optional[typing.Callable[[Sample], Sample]] = None,
+        seed: typing.Optional[int] = None,
+        mask_dtype: typing.Optional[torch.dtype] = torch.int64,
+    ) -> None:
         self.root = os.fspath(root)
         self.transform = transform
         self.mask_dtype = mask_dtype
@@ -722,7 +840,7 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
             raise Error(f"{images}: missing (expected the WoodScape layout)")
         # One image a name: NAME.png beside NAME.jpg would be one sample twice (or two
         # images under one calibration and label image).
-        self._files: typing.Dict[str, str] = {}
+        self._files: dict[str, str] = {}
         for f in sorted(os.listdir(images)):
             name, extension = os.path.splitext(f)
             if extension.lower() not in (".png", ".jpg", ".jpeg"):
@@ -733,13 +851,13 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
         self.names = sorted(self._files)
         if not self.names:
             raise Error(f"{images}: no images")
-        self._cameras: typing.Dict[bytes, Camera] = {}
+        self._cameras: dict[bytes, Camera] = {}
 
     def set_epoch(self, epoch: int) -> None:
         """The epoch of bare-index items in this process (DataLoader workers: use EpochSampler)."""
         self.epoch = _index(epoch, "WoodScapeDataset.set_epoch")
 
-    def _epoch_and_index(self, key: typing.Union[int, typing.Tuple[int, int]]) -> typing.Tuple[typing.Optional[int], int]:
+    def _epoch_and_index(self, key: typing.Union[int, tuple[int, int]]) -> tuple[typing.Optional[int], int]:
         if isinstance(key, tuple):
             if len(key) != 2:
                 raise Error(f"WoodScapeDataset: expected an index or (epoch, index), got {_shown(key)}")
@@ -748,13 +866,17 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
             epoch, index = None, _index(key, "WoodScapeDataset: index")
             if self.seed is not None and self.transform is not None:
                 if torch.utils.data.get_worker_info() is not None:
-                    raise Error("WoodScapeDataset(seed=...) in a DataLoader worker needs the epoch with each index "
-                                "(the worker's copy never sees set_epoch): pass "
-                                "sampler=fishcam.torch.EpochSampler(...) to the DataLoader")
+                    raise Error(
+                        "WoodScapeDataset(seed=...) in a DataLoader worker needs the epoch with each index "
+                        "(the worker's copy never sees set_epoch): pass "
+                        "sampler=fishcam.torch.EpochSampler(...) to the DataLoader"
+                    )
                 if self.epoch is None:
-                    raise Error("WoodScapeDataset(seed=...): a bare index has no epoch (every epoch would repeat "
-                                "epoch 0's changes): pass sampler=fishcam.torch.EpochSampler(...) to the DataLoader, "
-                                "index with (epoch, index), or call set_epoch(e) before each epoch")
+                    raise Error(
+                        "WoodScapeDataset(seed=...): a bare index has no epoch (every epoch would repeat "
+                        "epoch 0's changes): pass sampler=fishcam.torch.EpochSampler(...) to the DataLoader, "
+                        "index with (epoch, index), or call set_epoch(e) before each epoch"
+                    )
                 epoch = self.epoch
         if not -len(self.names) <= index < len(self.names):
             raise IndexError(f"WoodScapeDataset: index {index} out of range for {len(self.names)} samples")
@@ -781,19 +903,24 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
             raise Error(f"{path}: cannot read image")
         return image
 
-    def __getitem__(self, key: typing.Union[int, typing.Tuple[int, int]]) -> Sample:
+    def __getitem__(self, key: typing.Union[int, tuple[int, int]]) -> Sample:
         epoch, index = self._epoch_and_index(key)
         name = self.names[index]
         image = self._read(os.path.join(self.root, "rgb_images", self._files[name]), _cv2().IMREAD_COLOR)
         image = _cv2().cvtColor(image, _cv2().COLOR_BGR2RGB)
-        mask = self._read(os.path.join(self.root, "semantic_annotations", "gtLabels", name + ".png"),
-                          _cv2().IMREAD_UNCHANGED)
+        mask = self._read(
+            os.path.join(self.root, "semantic_annotations", "gtLabels", name + ".png"), _cv2().IMREAD_UNCHANGED
+        )
         if mask.ndim != 2:
             raise Error(f"{name}: expected a single-channel label image")
         # The transform gets the mask as decoded (uint8 or uint16: cheaper to resample);
         # the item has it in mask_dtype.
-        item = {"image": tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1)),
-                "mask": tv_tensors.Mask(torch.from_numpy(mask)), "camera": self.camera(name), "name": name}
+        item = {
+            "image": tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1)),
+            "mask": tv_tensors.Mask(torch.from_numpy(mask)),
+            "camera": self.camera(name),
+            "name": name,
+        }
         if self.transform is None:
             return self._with_mask_dtype(item)
         if self.seed is None:
@@ -809,6 +936,9 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
     def _with_mask_dtype(self, item: Sample) -> Sample:
         mask = item.get("mask") if isinstance(item, dict) else None
         if self.mask_dtype is not None and isinstance(mask, torch.Tensor) and mask.dtype != self.mask_dtype:
-            item["mask"] = tv_tensors.wrap(mask.to(self.mask_dtype), like=mask) \
-                if isinstance(mask, tv_tensors.TVTensor) else mask.to(self.mask_dtype)
+            item["mask"] = (
+                tv_tensors.wrap(mask.to(self.mask_dtype), like=mask)
+                if isinstance(mask, tv_tensors.TVTensor)
+                else mask.to(self.mask_dtype)
+            )
         return item

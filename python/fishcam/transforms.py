@@ -47,14 +47,21 @@ import numpy.typing as npt
 
 from . import Camera, Error, ViewpointChange, ViewpointWarp, _check_seed, _fishcam, _shown, change_to_dict
 
-__all__ = ["RandomViewpoint", "RandomAffine", "SampleChange", "POLYGON_TOLERANCE_PX", "BOX_MAX_POINTS",
-           "affine_to_dict", "draw_seed"]
+__all__ = [
+    "RandomViewpoint",
+    "RandomAffine",
+    "SampleChange",
+    "POLYGON_TOLERANCE_PX",
+    "BOX_MAX_POINTS",
+    "affine_to_dict",
+    "draw_seed",
+]
 
 
 Array = npt.NDArray[typing.Any]
-Record = typing.Dict[str, typing.Any]
+Record = dict[str, typing.Any]
 # (N, 2) source pixels -> (pixels (N, 2), visible (N,)): a change's forward direction.
-Forward = typing.Callable[[Array], typing.Tuple[Array, Array]]
+Forward = typing.Callable[[Array], tuple[Array, Array]]
 
 
 def draw_seed(rng: typing.Optional[np.random.Generator] = None) -> int:
@@ -107,10 +114,13 @@ def _check_rng(rng: object) -> None:
         raise Error(f"rng: expected a numpy.random.Generator or None, got {type(rng).__name__}")
 
 
-def _sequence(value: object, what: str, expected: str = "a list of arrays") -> typing.List[typing.Any]:
+def _sequence(value: object, what: str, expected: str = "a list of arrays") -> list[typing.Any]:
     """A list given as any iterable (images=, polygons=, ...) as a list, or fishcam.Error."""
-    if isinstance(value, (str, bytes, typing.Mapping)) or not isinstance(value, typing.Iterable) or \
-            getattr(value, "ndim", 1) == 0:  # a 0-dimensional array or tensor does not iterate
+    if (
+        isinstance(value, (str, bytes, typing.Mapping))
+        or not isinstance(value, typing.Iterable)
+        or getattr(value, "ndim", 1) == 0
+    ):  # a 0-dimensional array or tensor does not iterate
         raise Error(f"{what}: expected {expected}, got {type(value).__name__}")
     return list(value)
 
@@ -124,8 +134,10 @@ def _check_image_fill(fill: float, dtype: "np.dtype[typing.Any]", what: str) -> 
     if dtype.kind in "iu":
         info = np.iinfo(dtype)
         if not (value.is_integer() and info.min <= fill <= info.max):
-            raise Error(f"{what}: the no-source fill {_shown(fill)} is not a value of dtype {dtype} "
-                        f"(integers {info.min}..{info.max})")
+            raise Error(
+                f"{what}: the no-source fill {_shown(fill)} is not a value of dtype {dtype} "
+                f"(integers {info.min}..{info.max})"
+            )
     elif dtype.kind == "f" and np.isfinite(value) and abs(value) > float(np.finfo(dtype).max):
         raise Error(f"{what}: the no-source fill {_shown(fill)} is past the range of dtype {dtype}")
 
@@ -142,9 +154,14 @@ def _key_name(key: object) -> str:
     return repr(key)
 
 
-def _split_fill(fill: object, fill_mask: object, image_key: object = "image", mask_key: object = "mask",
-                finite: bool = True, label_range: typing.Optional[typing.Tuple[int, int]] = (0, _LABEL_MAX),
-                ) -> typing.Tuple[typing.Any, int]:
+def _split_fill(
+    fill: object,
+    fill_mask: object,
+    image_key: object = "image",
+    mask_key: object = "mask",
+    finite: bool = True,
+    label_range: typing.Optional[tuple[int, int]] = (0, _LABEL_MAX),
+) -> tuple[typing.Any, int]:
     """(the images' fill, the semantic masks' fill) from ``fill`` (a number, or a
     dict with ``image_key`` and/or ``mask_key``) and ``fill_mask``; fishcam.Error,
     one line, for anything else: unknown keys (torchvision's "others" too: here a
@@ -178,8 +195,7 @@ def _split_fill(fill: object, fill_mask: object, image_key: object = "image", ma
     return image_fill, mask_fill
 
 
-def _labels_for_warp(mask: Array, fill_mask: int,
-                     what: str = "mask") -> typing.Tuple[Array, typing.Callable[[Array], Array]]:
+def _labels_for_warp(mask: Array, fill_mask: int, what: str = "mask") -> tuple[Array, typing.Callable[[Array], Array]]:
     """The mask as the warp takes it (uint8 or uint16: labels are sampled, never
     blended) and a function giving the warped mask its original dtype back. bool,
     int32 and int64 masks (torch's default for class ids) with values in 0..65535
@@ -210,8 +226,10 @@ def _image_array(image: object, what: str) -> Array:
     if not isinstance(image, np.ndarray):
         raise Error(f"{what}: expected a numpy array, got {type(image).__name__}")
     if image.ndim == 3 and image.shape[0] in (1, 3, 4) and image.shape[2] > 4:
-        raise Error(f"{what}: shape {image.shape} looks channels-first (CHW); numpy images are HxWxC "
-                    "(np.moveaxis(image, 0, -1))")
+        raise Error(
+            f"{what}: shape {image.shape} looks channels-first (CHW); numpy images are HxWxC "
+            "(np.moveaxis(image, 0, -1))"
+        )
     if image.dtype == np.float64:
         raise Error(f"{what}: float64 images are not resampled; pass float32 (image.astype(np.float32))")
     if image.ndim not in (2, 3):
@@ -246,18 +264,25 @@ class SampleChange:
     the module docstring and return new ones.
     """
 
-    def __init__(self, record: Record, forward: Forward,
-                 resample: typing.Callable[..., typing.Dict[str, Array]],
-                 depth_map: typing.Callable[[Array], Array], camera: typing.Callable[[Camera], Camera],
-                 size: typing.Tuple[int, int], fill_mask: int, fill: float = 0) -> None:
+    def __init__(
+        self,
+        record: Record,
+        forward: Forward,
+        resample: typing.Callable[..., dict[str, Array]],
+        depth_map: typing.Callable[[Array], Array],
+        camera: typing.Callable[[Camera], Camera],
+        size: tuple[int, int],
+        fill_mask: int,
+        fill: float = 0,
+    ) -> None:
         self.record = record
-        self._fill = fill            # the images' no-source value
+        self._fill = fill  # the images' no-source value
         self._fill_mask = fill_mask  # the semantic masks' no-source label
-        self._forward = forward      # (N, 2) source pixels -> (pixels, visible)
-        self._resample = resample    # (image, labels, label_fill) -> dict of the warp's outputs
+        self._forward = forward  # (N, 2) source pixels -> (pixels, visible)
+        self._resample = resample  # (image, labels, label_fill) -> dict of the warp's outputs
         self._depth_map = depth_map  # (depth map) -> depth map
-        self._camera = camera        # Camera -> Camera
-        self.size = size             # (width, height) of the output
+        self._camera = camera  # Camera -> Camera
+        self.size = size  # (width, height) of the output
 
     def image(self, image: Array, what: str = "image") -> Array:
         """An image resampled bilinearly (dtype and channels kept); fishcam.Error for
@@ -283,7 +308,7 @@ class SampleChange:
         labels, restore = _labels_for_warp(mask, fill, what)
         return restore(self._resample(image=None, labels=labels, label_fill=fill)["labels"])
 
-    def image_and_mask(self, image: Array, mask: Array, instance: bool = False) -> typing.Tuple[Array, Array]:
+    def image_and_mask(self, image: Array, mask: Array, instance: bool = False) -> tuple[Array, Array]:
         """Both in one pass (the maps are computed once): (image, mask); the mask's fill as ``mask()``'s."""
         image = _image_array(image, "image")
         _check_image_fill(self._fill, image.dtype, "image")
@@ -297,16 +322,20 @@ class SampleChange:
     def depth_map(self, depth_map: Array, what: str = "depth_map") -> Array:
         """A depth map (HxW float32) seen from the moved camera (see RandomViewpoint)."""
         if not isinstance(depth_map, np.ndarray) or depth_map.dtype != np.float32 or depth_map.ndim != 2:
-            got = f"{depth_map.dtype} {depth_map.shape}" if isinstance(depth_map, np.ndarray) else type(depth_map).__name__
+            got = (
+                f"{depth_map.dtype} {depth_map.shape}"
+                if isinstance(depth_map, np.ndarray)
+                else type(depth_map).__name__
+            )
             raise Error(f"{what}: expected an HxW float32 array, got {got}")
         return self._depth_map(depth_map)
 
-    def points(self, points: object, what: str = "keypoints") -> typing.Tuple[Array, Array]:
+    def points(self, points: object, what: str = "keypoints") -> tuple[Array, Array]:
         """(N, 2) pixels -> (new pixels (N, 2) float64, visible (N,) bool). Exact; NaN
         where a point has no image; not visible where it left the view or is hidden."""
         return self._forward(_points_array(points, what))
 
-    def boxes(self, boxes: object, what: str = "boxes", clip: bool = True) -> typing.Tuple[Array, Array]:
+    def boxes(self, boxes: object, what: str = "boxes", clip: bool = True) -> tuple[Array, Array]:
         """(N, 4) x_min, y_min, x_max, y_max (pixel edges) -> (boxes (N, 4), visible
         fraction (N,)): the tight box of the transformed box, clipped to the image
         unless ``clip=False``; the fraction of it inside the image (0, and an empty
@@ -325,15 +354,17 @@ class SampleChange:
         corners = np.clip(boxes.reshape(-1, 2, 2) - 0.5, low, high)
         # The outline leaves the interior lines' first samples of the budget.
         first = (4 + 2 * _BOX_INTERIOR_LINES) * (_BOX_FIRST_STEPS + 1)
-        lo, hi, missed, used = _mapped_extents(self._forward, *_box_lines(corners), len(boxes),
-                                               np.full(len(boxes), BOX_MAX_POINTS - first))
+        lo, hi, missed, used = _mapped_extents(
+            self._forward, *_box_lines(corners), len(boxes), np.full(len(boxes), BOX_MAX_POINTS - first)
+        )
         if missed.any():  # the content that stays in view: lines across the box's part of the image
             inner = np.clip(corners[missed], -0.5, np.array([width, height]) - 0.5)
             seen = (inner[:, 1] >= inner[:, 0]).all(axis=1)
             owners = np.flatnonzero(missed)[seen]
             starts, ends, owner = _box_lines(inner[seen], _BOX_INTERIOR_LINES)
-            more_lo, more_hi, _, _ = _mapped_extents(self._forward, starts, ends, owners[owner], len(boxes),
-                                                     BOX_MAX_POINTS - used)
+            more_lo, more_hi, _, _ = _mapped_extents(
+                self._forward, starts, ends, owners[owner], len(boxes), BOX_MAX_POINTS - used
+            )
             lo, hi = np.fmin(lo, more_lo), np.fmax(hi, more_hi)
         found = np.isfinite(lo).all(axis=1)
         lo, hi = lo + 0.5, hi + 0.5
@@ -344,8 +375,11 @@ class SampleChange:
         point_inside = (clipped_hi >= clipped_lo).all(axis=1).astype(np.float64)
         with np.errstate(invalid="ignore", divide="ignore"):
             visibility = np.where(area > 0, inside / np.where(area > 0, area, 1), point_inside)
-        out = (np.concatenate([np.minimum(clipped_lo, size), np.maximum(clipped_hi, 0)], axis=1) if clip
-               else np.concatenate([lo, hi], axis=1))
+        out = (
+            np.concatenate([np.minimum(clipped_lo, size), np.maximum(clipped_hi, 0)], axis=1)
+            if clip
+            else np.concatenate([lo, hi], axis=1)
+        )
         out[~found] = 0
         visibility[~found] = 0
         return out, visibility
@@ -376,7 +410,7 @@ _BOX_MIN_STEP_PX = 0.25
 _BOX_INTERIOR_LINES = 15  # a direction, across a box whose outline partly has no image
 
 
-def _box_lines(corners: Array, interior: int = 0) -> typing.Tuple[Array, Array, Array]:
+def _box_lines(corners: Array, interior: int = 0) -> tuple[Array, Array, Array]:
     """The sides of boxes ((N, 2, 2): (x0, y0), (x1, y1)), and ``interior`` lines
     across each in both directions: (starts (L, 2), ends (L, 2), box of each (L,))."""
     (x0, y0), (x1, y1) = corners[:, 0].T, corners[:, 1].T
@@ -390,8 +424,9 @@ def _box_lines(corners: Array, interior: int = 0) -> typing.Tuple[Array, Array, 
     return np.concatenate(starts), np.concatenate(ends), owner
 
 
-def _mapped_extents(forward: Forward, starts: Array, ends: Array, owner: Array, count: int,
-                    budget: Array) -> typing.Tuple[Array, Array, Array, Array]:
+def _mapped_extents(
+    forward: Forward, starts: Array, ends: Array, owner: Array, count: int, budget: Array
+) -> tuple[Array, Array, Array, Array]:
     """The bounding boxes (lo (count, 2), hi (count, 2); NaN where nothing maps) of
     the images of the straight lines starts[k] -> ends[k], line k belonging to box
     owner[k]; whether a sample of a box's lines had no image (count,); the points
@@ -488,7 +523,7 @@ class _WarpCache:
     Camera.parameters_key (microseconds; to_json() cost more than a warp)."""
 
     def __init__(self, limit: int = 64) -> None:
-        self._warps: typing.Dict[bytes, ViewpointWarp] = {}
+        self._warps: dict[bytes, ViewpointWarp] = {}
         self._warps = {}
         self._limit = limit
 
@@ -502,10 +537,10 @@ class _WarpCache:
             self._warps[key] = warp
         return warp
 
-    def __getstate__(self) -> typing.Dict[str, int]:
+    def __getstate__(self) -> dict[str, int]:
         return {"limit": self._limit}  # warps are rebuilt on demand after unpickling
 
-    def __setstate__(self, state: typing.Dict[str, int]) -> None:
+    def __setstate__(self, state: dict[str, int]) -> None:
         self._warps = {}
         self._limit = state["limit"]
 
@@ -532,11 +567,20 @@ class RandomViewpoint:
     depth_values: what depth maps hold, "range" (along the ray; default) or "z".
     """
 
-    def __init__(self, camera: typing.Optional[Camera] = None, preset: typing.Optional[str] = "train",
-                 max_rotation_deg: typing.Optional[float] = None, max_translation: typing.Optional[float] = None,
-                 depth: str = "source-sphere", p: float = 1.0, fill: Fill = 0, fill_mask: int = 0,
-                 rng: typing.Optional[np.random.Generator] = None, sampling: str = "grid",
-                 depth_values: str = "range") -> None:
+    def __init__(
+        self,
+        camera: typing.Optional[Camera] = None,
+        preset: typing.Optional[str] = "train",
+        max_rotation_deg: typing.Optional[float] = None,
+        max_translation: typing.Optional[float] = None,
+        depth: str = "source-sphere",
+        p: float = 1.0,
+        fill: Fill = 0,
+        fill_mask: int = 0,
+        rng: typing.Optional[np.random.Generator] = None,
+        sampling: str = "grid",
+        depth_values: str = "range",
+    ) -> None:
         _choice(sampling, _fishcam.sampling_names(), "sampling")
         _choice(depth_values, _fishcam.depth_values_names(), "depth_values")
         if camera is not None and not isinstance(camera, Camera):
@@ -576,8 +620,12 @@ class RandomViewpoint:
         assert self.max_rotation_deg is not None and self.max_translation is not None
         return _fishcam.random_change_in(self.max_rotation_deg, self.max_translation, seed)
 
-    def draw(self, camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None,
-             depth_map: typing.Optional[Array] = None) -> SampleChange:
+    def draw(
+        self,
+        camera: typing.Optional[Camera] = None,
+        seed: typing.Optional[int] = None,
+        depth_map: typing.Optional[Array] = None,
+    ) -> SampleChange:
         """The SampleChange of one call: the change of ``seed`` (drawn when None) for
         images of ``camera`` (default: the constructor's); with depth="map", the
         sample's depth map (HxW float32) places every pixel's scene point."""
@@ -595,46 +643,77 @@ class RandomViewpoint:
             if depth_map is None:
                 raise Error("depth='map' needs the sample's depth map (depth_map=, HxW float32)")
             if not isinstance(depth_map, np.ndarray) or depth_map.dtype != np.float32 or depth_map.ndim != 2:
-                got = f"{depth_map.dtype} {depth_map.shape}" if isinstance(depth_map, np.ndarray) else type(depth_map).__name__
+                got = (
+                    f"{depth_map.dtype} {depth_map.shape}"
+                    if isinstance(depth_map, np.ndarray)
+                    else type(depth_map).__name__
+                )
                 raise Error(f"depth_map: expected an HxW float32 array, got {got}")
         maps_depth = depth_map if self.depth == "map" else None
 
-        def resample(image: typing.Optional[Array], labels: typing.Optional[Array],
-                     label_fill: int) -> typing.Dict[str, Array]:
-            return warp.warp(image=image, labels=labels, change=change, depth=self.depth, fill=self.fill,
-                             label_fill=label_fill, sampling=self.sampling, depth_map=maps_depth,
-                             depth_values=self.depth_values)
+        def resample(
+            image: typing.Optional[Array], labels: typing.Optional[Array], label_fill: int
+        ) -> dict[str, Array]:
+            return warp.warp(
+                image=image,
+                labels=labels,
+                change=change,
+                depth=self.depth,
+                fill=self.fill,
+                label_fill=label_fill,
+                sampling=self.sampling,
+                depth_map=maps_depth,
+                depth_values=self.depth_values,
+            )
 
         return SampleChange(
             record=change_to_dict(change, seed, self.depth),
-            forward=lambda points: warp.forward(points, change, self.depth, depth_map=maps_depth,
-                                                depth_values=self.depth_values),
+            forward=lambda points: warp.forward(
+                points, change, self.depth, depth_map=maps_depth, depth_values=self.depth_values
+            ),
             resample=resample,
             depth_map=lambda depth_map: warp.warp_depth(depth_map, change, self.depth, self.depth_values),
             camera=lambda c: c.augmented(change),
             size=(camera.width, camera.height),
-            fill_mask=self.fill_mask, fill=self.fill)
+            fill_mask=self.fill_mask,
+            fill=self.fill,
+        )
 
-    def __call__(self, image: typing.Optional[Array] = None, mask: typing.Optional[Array] = None,
-                 camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None,
-                 **targets: typing.Any) -> typing.Dict[str, typing.Any]:
+    def __call__(
+        self,
+        image: typing.Optional[Array] = None,
+        mask: typing.Optional[Array] = None,
+        camera: typing.Optional[Camera] = None,
+        seed: typing.Optional[int] = None,
+        **targets: typing.Any,
+    ) -> dict[str, typing.Any]:
         """One change for every target given (module docstring); a dict with the same
         keys, ``change`` (the record) and the visibility of keypoints and boxes."""
         # The augmented camera is returned for a camera given with the sample.
         return _apply(self.draw(camera, seed, targets.get("depth_map")), image, mask, camera, targets)
 
     def __repr__(self) -> str:
-        what = (f"preset={self.preset!r}" if self.preset is not None else
-                f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}")
-        return (f"RandomViewpoint({what}, depth={self.depth!r}, p={self.p}, fill={self.fill}, "
-                f"fill_mask={self.fill_mask}, sampling={self.sampling!r}, depth_values={self.depth_values!r})")
+        what = (
+            f"preset={self.preset!r}"
+            if self.preset is not None
+            else f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}"
+        )
+        return (
+            f"RandomViewpoint({what}, depth={self.depth!r}, p={self.p}, fill={self.fill}, "
+            f"fill_mask={self.fill_mask}, sampling={self.sampling!r}, depth_values={self.depth_values!r})"
+        )
 
 
 _TARGETS = ("images", "depth_map", "keypoints", "boxes", "polygons")
 
 
-def _apply(sample_change: SampleChange, image: typing.Optional[Array], mask: typing.Optional[Array],
-           camera: typing.Optional[Camera], targets: typing.Dict[str, typing.Any]) -> typing.Dict[str, typing.Any]:
+def _apply(
+    sample_change: SampleChange,
+    image: typing.Optional[Array],
+    mask: typing.Optional[Array],
+    camera: typing.Optional[Camera],
+    targets: dict[str, typing.Any],
+) -> dict[str, typing.Any]:
     """The numpy transforms' call: every given target under one SampleChange; a dict
     with the same keys, plus ``change`` (the record) and, for keypoints and boxes,
     ``keypoints_visible`` and ``boxes_visibility``."""
@@ -643,7 +722,7 @@ def _apply(sample_change: SampleChange, image: typing.Optional[Array], mask: typ
         raise Error(f"unknown target {unknown[0]!r} (expected image, mask, camera, {', '.join(_TARGETS)})")
     if image is None and mask is None and not any(v is not None for v in targets.values()):
         raise Error("nothing to transform: pass image= and/or mask= (or another target)")
-    out: typing.Dict[str, typing.Any] = {"change": sample_change.record}
+    out: dict[str, typing.Any] = {"change": sample_change.record}
     if image is not None and mask is not None:
         out["image"], out["mask"] = sample_change.image_and_mask(image, mask)
     elif image is not None:
@@ -651,8 +730,9 @@ def _apply(sample_change: SampleChange, image: typing.Optional[Array], mask: typ
     elif mask is not None:
         out["mask"] = sample_change.mask(mask)
     if targets.get("images") is not None:
-        out["images"] = [sample_change.image(x, f"images[{i}]")
-                         for i, x in enumerate(_sequence(targets["images"], "images"))]
+        out["images"] = [
+            sample_change.image(x, f"images[{i}]") for i, x in enumerate(_sequence(targets["images"], "images"))
+        ]
     if targets.get("depth_map") is not None:
         out["depth_map"] = sample_change.depth_map(targets["depth_map"])
     if targets.get("keypoints") is not None:
@@ -660,8 +740,9 @@ def _apply(sample_change: SampleChange, image: typing.Optional[Array], mask: typ
     if targets.get("boxes") is not None:
         out["boxes"], out["boxes_visibility"] = sample_change.boxes(targets["boxes"])
     if targets.get("polygons") is not None:
-        out["polygons"] = [sample_change.polygon(x, f"polygons[{i}]")
-                           for i, x in enumerate(_sequence(targets["polygons"], "polygons"))]
+        out["polygons"] = [
+            sample_change.polygon(x, f"polygons[{i}]") for i, x in enumerate(_sequence(targets["polygons"], "polygons"))
+        ]
     if camera is not None:
         out["camera"] = sample_change.camera(camera)
     return out
@@ -680,14 +761,21 @@ class RandomAffine:
     seed gives the same change as ``fishcam augment --method affine --seed``.
     """
 
-    def __init__(self, preset: typing.Optional[str] = "train", max_rotation_deg: typing.Optional[float] = None,
-                 max_translation: typing.Optional[float] = None,
-                 scale_range: typing.Optional[typing.Tuple[float, float]] = None, p: float = 1.0, fill: Fill = 0,
-                 fill_mask: int = 0, rng: typing.Optional[np.random.Generator] = None) -> None:
+    def __init__(
+        self,
+        preset: typing.Optional[str] = "train",
+        max_rotation_deg: typing.Optional[float] = None,
+        max_translation: typing.Optional[float] = None,
+        scale_range: typing.Optional[tuple[float, float]] = None,
+        p: float = 1.0,
+        fill: Fill = 0,
+        fill_mask: int = 0,
+        rng: typing.Optional[np.random.Generator] = None,
+    ) -> None:
         custom = (max_rotation_deg, max_translation, scale_range)
         if any(v is not None for v in custom) and not all(v is not None for v in custom):
             raise Error("max_rotation_deg, max_translation and scale_range go together")
-        self.scale_range: typing.Optional[typing.Tuple[float, float]] = None
+        self.scale_range: typing.Optional[tuple[float, float]] = None
         if max_rotation_deg is not None:
             preset = None
             scales = [_number(v, "scale_range") for v in _sequence(scale_range, "scale_range", "(low, high)")]
@@ -695,8 +783,9 @@ class RandomAffine:
                 raise Error(f"scale_range: expected (low, high), got {_shown(scale_range)}")
             low, high = scales
             # The library checks the ranges (one message for every binding).
-            _fishcam.random_affine_in(_number(max_rotation_deg, "max_rotation_deg"),
-                                      _number(max_translation, "max_translation"), low, high, 0)
+            _fishcam.random_affine_in(
+                _number(max_rotation_deg, "max_rotation_deg"), _number(max_translation, "max_translation"), low, high, 0
+            )
             self.scale_range = (low, high)
         elif _preset_name(preset, _fishcam.affine_presets()) not in _fishcam.affine_presets():
             _fishcam.random_affine(typing.cast(str, preset), 0)  # raises naming the presets
@@ -717,7 +806,7 @@ class RandomAffine:
         assert self.max_rotation_deg is not None and self.max_translation is not None and self.scale_range
         return _fishcam.random_affine_in(self.max_rotation_deg, self.max_translation, *self.scale_range, seed)
 
-    def draw(self, size: typing.Tuple[int, int], seed: typing.Optional[int] = None) -> SampleChange:
+    def draw(self, size: tuple[int, int], seed: typing.Optional[int] = None) -> SampleChange:
         """The SampleChange of one call for images of ``size`` = (width, height)."""
         sides = [_integer(v, "size") for v in _sequence(size, "size", "(width, height)")]
         if len(sides) != 2 or not all(1 <= v <= _MAX_SIDE for v in sides):
@@ -728,15 +817,19 @@ class RandomAffine:
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.AffineChange()
 
-        def resample(image: typing.Optional[Array], labels: typing.Optional[Array],
-                     label_fill: int) -> typing.Dict[str, Array]:
+        def resample(
+            image: typing.Optional[Array], labels: typing.Optional[Array], label_fill: int
+        ) -> dict[str, Array]:
             given = image if image is not None else labels
             assert given is not None
             if given.shape[:2] != (height, width):
-                raise Error(f"{'image' if image is not None else 'mask'}: is {given.shape[1]}x{given.shape[0]} "
-                            f"but the sample is {width}x{height}")
-            return _fishcam.affine_warp(image=image, labels=labels, change=change, fill=self.fill,
-                                        label_fill=label_fill)
+                raise Error(
+                    f"{'image' if image is not None else 'mask'}: is {given.shape[1]}x{given.shape[0]} "
+                    f"but the sample is {width}x{height}"
+                )
+            return _fishcam.affine_warp(
+                image=image, labels=labels, change=change, fill=self.fill, label_fill=label_fill
+            )
 
         def depth_map(values: Array) -> Array:
             if values.shape != (height, width):
@@ -750,11 +843,18 @@ class RandomAffine:
             depth_map=depth_map,
             camera=lambda c: c,  # no camera model: the camera is passed on as it is
             size=(width, height),
-            fill_mask=self.fill_mask, fill=self.fill)
+            fill_mask=self.fill_mask,
+            fill=self.fill,
+        )
 
-    def __call__(self, image: typing.Optional[Array] = None, mask: typing.Optional[Array] = None,
-                 camera: typing.Optional[Camera] = None, seed: typing.Optional[int] = None,
-                 **targets: typing.Any) -> typing.Dict[str, typing.Any]:
+    def __call__(
+        self,
+        image: typing.Optional[Array] = None,
+        mask: typing.Optional[Array] = None,
+        camera: typing.Optional[Camera] = None,
+        seed: typing.Optional[int] = None,
+        **targets: typing.Any,
+    ) -> dict[str, typing.Any]:
         """As RandomViewpoint's; ``camera`` is passed on unchanged (the baseline has no
         camera model), depth maps keep their values (sampled as masks)."""
         given = next((x for x in (image, mask, targets.get("depth_map")) if x is not None), None)
@@ -767,9 +867,12 @@ class RandomAffine:
         return _apply(self.draw((given.shape[1], given.shape[0]), seed), image, mask, camera, targets)
 
     def __repr__(self) -> str:
-        what = (f"preset={self.preset!r}" if self.preset is not None else
-                f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}, "
-                f"scale_range={self.scale_range}")
+        what = (
+            f"preset={self.preset!r}"
+            if self.preset is not None
+            else f"max_rotation_deg={self.max_rotation_deg}, max_translation={self.max_translation}, "
+            f"scale_range={self.scale_range}"
+        )
         return f"RandomAffine({what}, p={self.p})"
 
 

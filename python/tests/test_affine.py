@@ -5,12 +5,11 @@ import os
 import subprocess
 
 import cv2
+import fishcam
+import fishcam.torch
 import numpy as np
 import pytest
 import torch
-
-import fishcam
-import fishcam.torch
 from fishcam.transforms import RandomAffine
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
@@ -34,10 +33,33 @@ def test_seeded_run_equals_fishcam_augment(scene, tmp_path):
     cv2.imwrite(str(tmp_path / "l.png"), labels)
     t = RandomAffine(preset="train", fill_mask=255)
     for seed in (3, 2**64 - 1):
-        result = subprocess.run([BINARY, "augment", CAMERA, "--image", tmp_path / "i.png", "--label", tmp_path / "l.png",
-                                 "--out-image", tmp_path / "a.png", "--out-label", tmp_path / "al.png", "--force",
-                                 "--method", "affine", "--preset", "train", "--seed", str(seed), "--label-fill", "255",
-                                 "--json"], capture_output=True, text=True)
+        result = subprocess.run(
+            [
+                BINARY,
+                "augment",
+                CAMERA,
+                "--image",
+                tmp_path / "i.png",
+                "--label",
+                tmp_path / "l.png",
+                "--out-image",
+                tmp_path / "a.png",
+                "--out-label",
+                tmp_path / "al.png",
+                "--force",
+                "--method",
+                "affine",
+                "--preset",
+                "train",
+                "--seed",
+                str(seed),
+                "--label-fill",
+                "255",
+                "--json",
+            ],
+            capture_output=True,
+            text=True,
+        )
         assert result.returncode == 0, result.stderr
         cli = json.loads(result.stdout)
         out = t(image=image, mask=labels, seed=seed)
@@ -81,6 +103,7 @@ def test_custom_ranges_and_bad_arguments():
 
 def test_torch_adapter_keeps_tensors_and_matches_numpy(scene):
     from torchvision import tv_tensors
+
     image, labels = scene
     module = fishcam.torch.RandomAffine(preset="medium")
     tensor = tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1))

@@ -5,15 +5,13 @@ the same seed, Compose(seed=) reproducibility, ReplayCompose replay."""
 import json
 import os
 
+import fishcam
 import numpy as np
 import pytest
-
-import fishcam
 
 if os.environ.get("FISHCAM_REQUIRE_PEERS") != "1":
     pytest.importorskip("albumentations")
 import albumentations as A  # noqa: E402
-
 import fishcam.albumentations as fa  # noqa: E402
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
@@ -28,21 +26,27 @@ def cam():
 def data(cam):
     rng = np.random.default_rng(0)
     h, w = cam.height, cam.width
-    return dict(image=rng.integers(0, 256, (h, w, 3), dtype=np.uint8),
-                image2=rng.integers(0, 256, (h, w), dtype=np.uint8),
-                mask=rng.integers(0, 10, (h, w)).astype(np.int64),
-                instances=rng.integers(0, 3, (h, w)).astype(np.int32),
-                bboxes=np.array([[100.0, 90.0, 160.0, 140.0], [2.0, 2.0, 12.0, 12.0]]), labels=[4, 7],
-                keypoints=np.array([[160.0, 121.0], [60.0, 50.0], [1.0, 1.0]]),
-                depth=np.full((h, w), 5.0, np.float32), polygons=[np.array([[100.0, 90], [160, 90], [160, 140]])])
+    return dict(
+        image=rng.integers(0, 256, (h, w, 3), dtype=np.uint8),
+        image2=rng.integers(0, 256, (h, w), dtype=np.uint8),
+        mask=rng.integers(0, 10, (h, w)).astype(np.int64),
+        instances=rng.integers(0, 3, (h, w)).astype(np.int32),
+        bboxes=np.array([[100.0, 90.0, 160.0, 140.0], [2.0, 2.0, 12.0, 12.0]]),
+        labels=[4, 7],
+        keypoints=np.array([[160.0, 121.0], [60.0, 50.0], [1.0, 1.0]]),
+        depth=np.full((h, w), 5.0, np.float32),
+        polygons=[np.array([[100.0, 90], [160, 90], [160, 140]])],
+    )
 
 
 def compose(cam, seed, min_visibility=0.0):
-    return A.Compose([fa.RandomViewpoint(cam, preset="large")],
-                     bbox_params=A.BboxParams(format="pascal_voc", label_fields=["labels"],
-                                              min_visibility=min_visibility),
-                     keypoint_params=A.KeypointParams(format="xy", remove_invisible=False),
-                     additional_targets={"image2": "image", "instances": "mask"}, seed=seed)
+    return A.Compose(
+        [fa.RandomViewpoint(cam, preset="large")],
+        bbox_params=A.BboxParams(format="pascal_voc", label_fields=["labels"], min_visibility=min_visibility),
+        keypoint_params=A.KeypointParams(format="xy", remove_invisible=False),
+        additional_targets={"image2": "image", "instances": "mask"},
+        seed=seed,
+    )
 
 
 def test_every_target_under_the_numpy_transforms_change(cam, data):
@@ -50,11 +54,19 @@ def test_every_target_under_the_numpy_transforms_change(cam, data):
     out = pipeline(**data, camera=cam)
     seed = pipeline.transforms[0].params["seed"]
     expected = fishcam.transforms.RandomViewpoint(cam, preset="large")(
-        image=data["image"], mask=data["mask"], depth_map=data["depth"], keypoints=data["keypoints"],
-        boxes=data["bboxes"], polygons=data["polygons"], camera=cam, seed=seed)
+        image=data["image"],
+        mask=data["mask"],
+        depth_map=data["depth"],
+        keypoints=data["keypoints"],
+        boxes=data["bboxes"],
+        polygons=data["polygons"],
+        camera=cam,
+        seed=seed,
+    )
     np.testing.assert_array_equal(out["image"], expected["image"])
-    np.testing.assert_array_equal(out["image2"], fishcam.transforms.RandomViewpoint(cam, preset="large")(
-        image=data["image2"], seed=seed)["image"])
+    np.testing.assert_array_equal(
+        out["image2"], fishcam.transforms.RandomViewpoint(cam, preset="large")(image=data["image2"], seed=seed)["image"]
+    )
     assert out["mask"].dtype == np.int64 and np.array_equal(out["mask"], expected["mask"])
     assert out["instances"].dtype == np.int32
     np.testing.assert_array_equal(out["depth"], expected["depth_map"])
@@ -106,16 +118,20 @@ def test_min_visibility_drops_boxes_that_leave(cam, data):
     for seed in range(12):
         pipeline = compose(cam, seed=seed, min_visibility=0.9)
         out = pipeline(**data)
-        _, visibility = fishcam.transforms.RandomViewpoint(cam, preset="large").draw(
-            seed=pipeline.transforms[0].params["seed"]).boxes(data["bboxes"])
+        _, visibility = (
+            fishcam.transforms.RandomViewpoint(cam, preset="large")
+            .draw(seed=pipeline.transforms[0].params["seed"])
+            .boxes(data["bboxes"])
+        )
         assert (7 in out["labels"]) == (visibility[1] >= 0.9), seed
         dropped += 7 not in out["labels"]
     assert dropped >= 3, "too few seeds moved the corner box out of view to test anything"
 
 
 def test_affine_and_errors(cam, data):
-    out = A.Compose([fa.RandomAffine(preset="small")], seed=0)(image=data["image"], mask=data["mask"],
-                                                               depth=data["depth"])
+    out = A.Compose([fa.RandomAffine(preset="small")], seed=0)(
+        image=data["image"], mask=data["mask"], depth=data["depth"]
+    )
     assert out["image"].shape == data["image"].shape and out["depth"].dtype == np.float32
     assert set(np.unique(out["depth"][np.isfinite(out["depth"])])) <= {5.0}
     with pytest.raises(fishcam.Error, match="camera: none given"):

@@ -7,9 +7,8 @@ import importlib
 import inspect
 import os
 
-import pytest
-
 import fishcam
+import pytest
 
 MODULES = ["fishcam", "fishcam.transforms", "fishcam.metrics", "fishcam.torch", "fishcam.albumentations"]
 
@@ -35,8 +34,11 @@ def public_api():
                 for attribute, value in vars(obj).items():
                     if attribute.startswith("_") and attribute not in ("__call__",):
                         continue
-                    if callable(value) or isinstance(value, (property, staticmethod)) or \
-                            type(value).__name__ in ("instancemethod", "builtin_function_or_method"):
+                    if (
+                        callable(value)
+                        or isinstance(value, (property, staticmethod))
+                        or type(value).__name__ in ("instancemethod", "builtin_function_or_method")
+                    ):
                         yield f"{module_name}.{name}.{attribute}", value
 
 
@@ -57,8 +59,12 @@ def test_reprs_show_the_parameters():
     import fishcam.albumentations as fa
     import fishcam.torch as ft
     from fishcam.transforms import RandomAffine, RandomViewpoint
-    for transform in [RandomViewpoint(preset="medium"), ft.RandomViewpoint(preset="medium"),
-                      fa.RandomViewpoint(preset="medium")]:
+
+    for transform in [
+        RandomViewpoint(preset="medium"),
+        ft.RandomViewpoint(preset="medium"),
+        fa.RandomViewpoint(preset="medium"),
+    ]:
         assert "preset='medium'" in repr(transform) and "depth" in repr(transform), repr(transform)
     for transform in [RandomAffine(preset="small"), ft.RandomAffine(preset="small"), fa.RandomAffine(preset="small")]:
         assert "preset='small'" in repr(transform), repr(transform)

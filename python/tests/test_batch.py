@@ -4,12 +4,11 @@ per-sample path (CPU tensors here; the code path is the device's)."""
 import os
 
 import cv2
+import fishcam
+import fishcam.torch as ft
 import numpy as np
 import pytest
 import torch
-
-import fishcam
-import fishcam.torch as ft
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 
@@ -18,13 +17,18 @@ DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__)
 def scene(tmp_path_factory):
     """A rendered street scene (real edges and labels) and its camera at 320x242."""
     import subprocess
-    binary = os.environ.get("FISHCAM_BINARY", os.path.join(os.path.dirname(__file__), "..", "..", "build", "tools",
-                                                            "fishcam"))
+
+    binary = os.environ.get(
+        "FISHCAM_BINARY", os.path.join(os.path.dirname(__file__), "..", "..", "build", "tools", "fishcam")
+    )
     out = tmp_path_factory.mktemp("batch")
     camera = fishcam.Camera.read(os.path.join(DATA, "woodscape_front.json")).resized(320, 242)
     camera.write(str(out / "cam.json"))
-    subprocess.run([binary, "render", str(out / "cam.json"), "--out-image", str(out / "i.png"), "--out-label",
-                    str(out / "l.png")], check=True, capture_output=True)
+    subprocess.run(
+        [binary, "render", str(out / "cam.json"), "--out-image", str(out / "i.png"), "--out-label", str(out / "l.png")],
+        check=True,
+        capture_output=True,
+    )
     image = cv2.imread(str(out / "i.png"), cv2.IMREAD_UNCHANGED)
     labels = cv2.imread(str(out / "l.png"), cv2.IMREAD_UNCHANGED)
     return camera, image, labels

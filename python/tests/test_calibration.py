@@ -6,10 +6,9 @@ import pickle
 from pathlib import Path
 from typing import Any
 
+import fishcam
 import numpy as np
 import pytest
-
-import fishcam
 
 DATA = Path(os.environ.get("FISHCAM_DATA_DIR", Path(__file__).resolve().parents[2] / "data"))
 BOARD = (9, 6)
@@ -35,8 +34,9 @@ def board_points() -> np.ndarray:
     return points
 
 
-def stereo_boards(camera: fishcam.Camera, baseline: float, count: int, noise: float,
-                  seed: int) -> tuple[list[Any], list[Any]]:
+def stereo_boards(
+    camera: fishcam.Camera, baseline: float, count: int, noise: float, seed: int
+) -> tuple[list[Any], list[Any]]:
     """Boards in front of a stereo pair (camera 1 at +baseline along x, turned 10 degrees):
     each camera observes the boards it sees whole, images named by instant."""
     random = np.random.default_rng(seed)
@@ -90,8 +90,9 @@ def test_calibrate_rig_recovers_a_stereo_pair() -> None:
     camera = lens()
     left, right = stereo_boards(camera, 0.2, 60, 0.0, 3)
     assert len(set(n for n, _ in left) & set(n for n, _ in right)) >= 5
-    rig = fishcam.calibrate_rig([(left, (640, 483), "kannala-brandt"), (right, (640, 483), "kannala-brandt")],
-                                BOARD, SPACING, threads=2)
+    rig = fishcam.calibrate_rig(
+        [(left, (640, 483), "kannala-brandt"), (right, (640, 483), "kannala-brandt")], BOARD, SPACING, threads=2
+    )
     assert isinstance(rig, fishcam.RigCalibration) and len(rig.cameras) == 2
     assert rig.rms_px < 1e-6
     r, t = rig.cameras[1].camera.pose  # camera 1 -> camera 0

@@ -9,10 +9,9 @@ import re
 import subprocess
 from pathlib import Path
 
+import fishcam
 import numpy as np
 import pytest
-
-import fishcam
 
 PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "calibration"
 BOARD = (9, 6)
@@ -29,8 +28,11 @@ def observations(tmp_path_factory: pytest.TempPathFactory) -> list:
         pytest.skip("FISHCAM_BINARY (the fishcam program) is not set")
     out = tmp_path_factory.mktemp("real_corners") / "corners.vnl"
     images = sorted(PHOTOS.glob("right*.jpg"), key=lambda p: int(re.findall(r"\d+", p.name)[0]))
-    subprocess.run([binary, "detect-corners", *map(str, images), "--board", "9x6", "--out", str(out)], check=True,
-                   capture_output=True)
+    subprocess.run(
+        [binary, "detect-corners", *map(str, images), "--board", "9x6", "--out", str(out)],
+        check=True,
+        capture_output=True,
+    )
     found = fishcam.read_corners(str(out), BOARD)
     assert len(found) == 29 and all(len(c) == 54 for _, c in found)
     return found
@@ -56,12 +58,16 @@ def test_kannala_brandt_agrees_with_cv2_fisheye_calibrate(observations: list) ->
     # OpenCV's own initialisation fails on these boards (InitExtrinsics asserts): start it
     # from the usual guess, f = W / 4 at the image centre.
     guess = np.array([[240.0, 0, 479.5], [0, 240.0, 299.5], [0, 0, 1]])
-    flags = (cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW |
-             cv2.fisheye.CALIB_USE_INTRINSIC_GUESS)
-    _, k, d, _, _ = cv2.fisheye.calibrate([board.reshape(-1, 1, 3)] * len(observations),
-                                          [c.reshape(-1, 1, 2) for _, c in observations], SIZE, guess, np.zeros(4),
-                                          flags=flags,
-                                          criteria=(cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-15))
+    flags = cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW | cv2.fisheye.CALIB_USE_INTRINSIC_GUESS
+    _, k, d, _, _ = cv2.fisheye.calibrate(
+        [board.reshape(-1, 1, 3)] * len(observations),
+        [c.reshape(-1, 1, 2) for _, c in observations],
+        SIZE,
+        guess,
+        np.zeros(4),
+        flags=flags,
+        criteria=(cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-15),
+    )
     camera = ours.camera
     pixels = data_pixels(camera)
     assert len(pixels) > 1500
@@ -90,7 +96,7 @@ def test_projection_uncertainty_predicts_the_odd_even_difference(observations: l
     assert (ok & seen).all()
     difference = np.linalg.norm(projected - pixels, axis=1)
     predicted = np.sqrt(a.projection_uncertainty(pixels) ** 2 + b.projection_uncertainty(pixels) ** 2)
-    ratio = np.sqrt(np.mean(difference ** 2)) / np.sqrt(np.mean(predicted ** 2))
+    ratio = np.sqrt(np.mean(difference**2)) / np.sqrt(np.mean(predicted**2))
     # A 2-D difference of two independent calibrations is sqrt(trace) of their summed
     # covariance: between 1 and sqrt(2) times the worst-direction sigma. Real corners also
     # carry what no Gaussian noise model holds (a measured 1.6).

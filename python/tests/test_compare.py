@@ -6,10 +6,9 @@ import math
 import os
 import subprocess
 
+import fishcam
 import numpy as np
 import pytest
-
-import fishcam
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 BINARY = os.environ.get("FISHCAM_BINARY")
@@ -25,8 +24,16 @@ def cli(*args):
 
 
 def fishcam_map(camera, change, out):
-    cli("map", camera, "--rotate", ",".join(repr(x) for x in change["rotation_deg"]),
-        "--translate", ",".join(repr(x) for x in change["translation"]), "--out", out)
+    cli(
+        "map",
+        camera,
+        "--rotate",
+        ",".join(repr(x) for x in change["rotation_deg"]),
+        "--translate",
+        ",".join(repr(x) for x in change["translation"]),
+        "--out",
+        out,
+    )
     return np.load(out).astype(np.float64)
 
 
@@ -36,14 +43,28 @@ def inside(m, width, height):
 
 def test_figures_agree_with_fishcam_map(tmp_path):
     # --out is created (it was refused as "no such folder"); the figures go into it.
-    report = json.loads(cli("compare", CAMERA, "--models", "kannala-brandt,stereographic", "--samples", 2,
-                            "--seed", 3, "--out", tmp_path / "figures" / "new", "--json"))
+    report = json.loads(
+        cli(
+            "compare",
+            CAMERA,
+            "--models",
+            "kannala-brandt,stereographic",
+            "--samples",
+            2,
+            "--seed",
+            3,
+            "--out",
+            tmp_path / "figures" / "new",
+            "--json",
+        )
+    )
     assert (tmp_path / "figures" / "new" / "sphere.png").is_file()
     for name in ["kannala-brandt", "stereographic"]:
         (tmp_path / f"{name}.json").write_bytes((tmp_path / "figures" / "new" / f"{name}.json").read_bytes())
     cam = fishcam.Camera.read(CAMERA)
-    rays, ok = cam.unproject(np.stack(np.meshgrid(np.arange(cam.width), np.arange(cam.height)), -1)
-                             .reshape(-1, 2).astype(float))
+    rays, ok = cam.unproject(
+        np.stack(np.meshgrid(np.arange(cam.width), np.arange(cam.height)), -1).reshape(-1, 2).astype(float)
+    )
     theta = np.degrees(np.arctan2(np.hypot(rays[:, 0], rays[:, 1]), rays[:, 2])).reshape(cam.height, cam.width)
     for model in report["models"]:
         name = model["name"]
@@ -78,8 +99,19 @@ def test_figures_agree_with_fishcam_map(tmp_path):
 
 
 def test_method_paper_uses_eqs_13_and_14(tmp_path):
-    report = json.loads(cli("compare", CAMERA, "--models", "equidistant,stereographic,kannala-brandt", "--method",
-                            "paper", "--samples", 1, "--json"))
+    report = json.loads(
+        cli(
+            "compare",
+            CAMERA,
+            "--models",
+            "equidistant,stereographic,kannala-brandt",
+            "--method",
+            "paper",
+            "--samples",
+            1,
+            "--json",
+        )
+    )
     cam = fishcam.Camera.read(CAMERA)
     rho = cam.width / 2
     theta = math.radians(cam.field_of_view_deg.horizontal / 2)
@@ -99,12 +131,16 @@ def test_python_compare_equals_the_cli():
     result = fishcam.compare(cam, ["kannala-brandt", ("itself", cam)], samples=1, seed=9)
     assert isinstance(result, fishcam.Comparison) and result.preset == "train" and result.seed == 9
     # Typed values, the same numbers as the CLI's JSON; to_json() is that JSON.
-    assert [list(c.rotation_deg) + list(c.translation) for c in result.changes] == \
-        [c["rotation_deg"] + c["translation"] for c in report["changes"]]
+    assert [list(c.rotation_deg) + list(c.translation) for c in result.changes] == [
+        c["rotation_deg"] + c["translation"] for c in report["changes"]
+    ]
     kb = result.models[0]
-    assert {"mean_px": kb.displacement.mean_px, "p95_px": kb.displacement.p95_px, "max_px": kb.displacement.max_px,
-            "pixels": kb.displacement.pixels} == {k: report["models"][0]["displacement"][k]
-                                                  for k in ("mean_px", "p95_px", "max_px", "pixels")}
+    assert {
+        "mean_px": kb.displacement.mean_px,
+        "p95_px": kb.displacement.p95_px,
+        "max_px": kb.displacement.max_px,
+        "pixels": kb.displacement.pixels,
+    } == {k: report["models"][0]["displacement"][k] for k in ("mean_px", "p95_px", "max_px", "pixels")}
     assert kb.name == "kannala-brandt" and kb.how == "least-squares fit" and kb.camera.model == "kannala-brandt"
     assert len(kb.by_angle) == len(result.angle_bands_deg) - 1
     assert kb.mean_displacement.shape == (cam.height, cam.width) and kb.mean_displacement.dtype == np.float32
@@ -123,6 +159,7 @@ def test_bad_inputs_fail_in_one_line_and_write_nothing(tmp_path):
     if not BINARY:
         pytest.skip("FISHCAM_BINARY not set (run through CTest)")
     import cv2
+
     cv2.imwrite(str(tmp_path / "small.png"), np.zeros((10, 10), np.uint8))
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "sphere.png").write_bytes(b"mine")
@@ -138,8 +175,9 @@ def test_bad_inputs_fail_in_one_line_and_write_nothing(tmp_path):
         (["--samples", 0], "--samples"),
     ]
     for args, message in cases:
-        result = subprocess.run([BINARY, "compare", CAMERA, "--samples", "1", *map(str, args)], capture_output=True,
-                                text=True)
+        result = subprocess.run(
+            [BINARY, "compare", CAMERA, "--samples", "1", *map(str, args)], capture_output=True, text=True
+        )
         assert result.returncode != 0, args
         assert message in result.stderr and result.stderr.count("\n") == 1, (args, result.stderr)
     assert (tmp_path / "out" / "sphere.png").read_bytes() == b"mine"

@@ -9,14 +9,13 @@ import re
 import subprocess
 import sys
 
-import pytest
-
 import fishcam
+import pytest
 
 REPO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 DOCS = ["docs/python.md", "README.md"]
 
-GIVEN = '''\
+GIVEN = """\
 import typing
 import numpy as np
 import numpy.typing as npt
@@ -60,7 +59,7 @@ p: npt.NDArray[np.float64]
 outlines: list[npt.NDArray[np.float64]]
 left: list[tuple[str, npt.NDArray[np.float64]]]
 right: typing.Any  # an image in one block, a camera's corners in another
-'''
+"""
 
 
 def python_blocks():
@@ -89,9 +88,23 @@ def test_every_python_block_of_the_docs_passes_mypy_strict(tmp_path):
     env = dict(os.environ)
     if os.path.basename(package_parent) not in ("site-packages", "dist-packages"):
         env["MYPYPATH"] = package_parent
-    result = subprocess.run([sys.executable, "-m", "mypy", "--config-file", os.path.join(REPO, "pyproject.toml"),
-                             "--cache-dir", str(tmp_path / "cache"), *sorted(names)],
-                            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=900)
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mypy",
+            "--config-file",
+            os.path.join(REPO, "pyproject.toml"),
+            "--cache-dir",
+            str(tmp_path / "cache"),
+            *sorted(names),
+        ],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
 
     def where(match):  # blockK.py:N -> docs/python.md:M
         doc, offset = names[match.group(1)]

@@ -9,9 +9,8 @@ import shutil
 import subprocess
 import sys
 
-import pytest
-
 import fishcam
+import pytest
 
 torch = pytest.importorskip("torch")
 experiment = pytest.importorskip("fishcam.experiment")
@@ -24,17 +23,39 @@ def dataset(tmp_path_factory):
     if not BINARY:
         pytest.skip("FISHCAM_BINARY not set (run through CTest)")
     root = tmp_path_factory.mktemp("experiment") / "sv"
-    subprocess.run([BINARY, "sample-dataset", str(root), "--scenes", "4", "--size", "96x73", "--seed", "5",
-                    "--splits", "0.5,0,0.5", "--test-sets", "small,large", "--supersampling", "1", "--depth"],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [
+            BINARY,
+            "sample-dataset",
+            str(root),
+            "--scenes",
+            "4",
+            "--size",
+            "96x73",
+            "--seed",
+            "5",
+            "--splits",
+            "0.5,0,0.5",
+            "--test-sets",
+            "small,large",
+            "--supersampling",
+            "1",
+            "--depth",
+        ],
+        check=True,
+        capture_output=True,
+    )
     return root
 
 
 def _mious(out):
     with open(os.path.join(out, "results.json")) as f:
         results = json.load(f)
-    return {(r["config"], r["seed"], test_set): value["miou"]
-            for r in results["runs"] for test_set, value in r["test"].items()}
+    return {
+        (r["config"], r["seed"], test_set): value["miou"]
+        for r in results["runs"]
+        for test_set, value in r["test"].items()
+    }
 
 
 def test_quick_run_writes_the_tables_and_reproduces(dataset, tmp_path):
@@ -76,8 +97,10 @@ def test_quick_run_writes_the_tables_and_reproduces(dataset, tmp_path):
 def test_dataset_fidelity(dataset, tmp_path):
     rows = fishcam.dataset_fidelity(str(dataset))
     assert [(r["test_set"], r["prior"]) for r in rows] == [
-        (s, p) for s in ("test-large", "test-large-rotation", "test-small", "test-small-rotation")
-        for p in ("source-sphere", "target-sphere", "infinity", "map")]
+        (s, p)
+        for s in ("test-large", "test-large-rotation", "test-small", "test-small-rotation")
+        for p in ("source-sphere", "target-sphere", "infinity", "map")
+    ]
     for r in rows:
         assert r["samples"] == 8 and 0.5 < r["valid_share"] <= 1
         # Rotations are exact under every prior; the depth map is exact for translations too.
@@ -112,8 +135,22 @@ def test_two_ddp_processes(dataset, tmp_path):
         pytest.skip("no torchrun next to this Python")
     out = tmp_path / "ddp"
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
-    result = subprocess.run([torchrun, "--nproc_per_node=2", "--master_port=29533", "-m", "fishcam.experiment",
-                             str(dataset), str(out), "--quick"], capture_output=True, text=True, env=env, timeout=600)
+    result = subprocess.run(
+        [
+            torchrun,
+            "--nproc_per_node=2",
+            "--master_port=29533",
+            "-m",
+            "fishcam.experiment",
+            str(dataset),
+            str(out),
+            "--quick",
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
     assert result.returncode == 0, result.stderr[-2000:]
     mious = _mious(out)
     assert len(mious) == 2 * 2 * 5 and all(math.isfinite(v) for v in mious.values())

@@ -24,9 +24,27 @@ RUN = os.path.join("runs", "none-seed0.json")
 
 
 def _make(root, seed):
-    subprocess.run([BINARY, "sample-dataset", str(root), "--scenes", "2", "--size", "64x49", "--seed", str(seed),
-                    "--splits", "0.5,0,0.5", "--test-sets", "small", "--supersampling", "1"],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [
+            BINARY,
+            "sample-dataset",
+            str(root),
+            "--scenes",
+            "2",
+            "--size",
+            "64x49",
+            "--seed",
+            str(seed),
+            "--splits",
+            "0.5,0,0.5",
+            "--test-sets",
+            "small",
+            "--supersampling",
+            "1",
+        ],
+        check=True,
+        capture_output=True,
+    )
     return root
 
 
@@ -50,32 +68,79 @@ def _refused(capsys, argv, *expected):
 
 
 def _tree(root):
-    return sorted((os.path.relpath(os.path.join(d, f), root), os.path.getsize(os.path.join(d, f)))
-                  for d, _, files in os.walk(root) for f in files)
+    return sorted(
+        (os.path.relpath(os.path.join(d, f), root), os.path.getsize(os.path.join(d, f)))
+        for d, _, files in os.walk(root)
+        for f in files
+    )
 
 
 def test_a_run_made_with_other_settings_is_refused_or_rerun(dataset, tmp_path, capsys, monkeypatch):
     out = tmp_path / "out"
     assert experiment.main([str(dataset), str(out)] + TINY) == 0
     run = json.loads((out / RUN).read_text())
-    assert run["settings"] == {"epochs": 1, "batch_size": 8, "width": 4, "class_weights": "balanced", "device": "cpu",
-                               "processes": 1}
+    assert run["settings"] == {
+        "epochs": 1,
+        "batch_size": 8,
+        "width": 4,
+        "class_weights": "balanced",
+        "device": "cpu",
+        "processes": 1,
+    }
     # 2 scenes x 4 cameras: train, test, test-small, test-small-rotation; image, label, calibration each.
     assert run["dataset"]["files"] == 4 * 4 * 3 and len(run["dataset"]["sha256"]) == 64
     stored = (out / RUN).read_bytes()
     # The probe's case: --epochs 3 --width 8 after a --quick run named the first difference.
-    _refused(capsys, [dataset, out, "--configs", "none", "--seeds", "1", "--epochs", "3", "--width", "8",
-                      "--no-figures", "--no-fidelity"], str(out / RUN), "--epochs 1, now 3", "--rerun")
-    for option, value, named in (("--width", "8", "--width 4, now 8"), ("--batch-size", "4", "--batch-size 8, now 4"),
-                                 ("--class-weights", "none", "--class-weights balanced, now none")):
+    _refused(
+        capsys,
+        [
+            dataset,
+            out,
+            "--configs",
+            "none",
+            "--seeds",
+            "1",
+            "--epochs",
+            "3",
+            "--width",
+            "8",
+            "--no-figures",
+            "--no-fidelity",
+        ],
+        str(out / RUN),
+        "--epochs 1, now 3",
+        "--rerun",
+    )
+    for option, value, named in (
+        ("--width", "8", "--width 4, now 8"),
+        ("--batch-size", "4", "--batch-size 8, now 4"),
+        ("--class-weights", "none", "--class-weights balanced, now none"),
+    ):
         _refused(capsys, [dataset, out] + TINY + [option, value], named)
     monkeypatch.setenv("WORLD_SIZE", "2")  # refused before torchrun's process group would be needed
     _refused(capsys, [dataset, out] + TINY, "--nproc_per_node (torchrun's processes) 1, now 2")
     monkeypatch.delenv("WORLD_SIZE")
     assert (out / RUN).read_bytes() == stored
     # The same settings spelt out (what --quick means) reuse it.
-    assert experiment.main([str(dataset), str(out), "--configs", "none", "--seeds", "1", "--epochs", "1", "--width",
-                            "4", "--no-figures", "--no-fidelity"]) == 0
+    assert (
+        experiment.main(
+            [
+                str(dataset),
+                str(out),
+                "--configs",
+                "none",
+                "--seeds",
+                "1",
+                "--epochs",
+                "1",
+                "--width",
+                "4",
+                "--no-figures",
+                "--no-fidelity",
+            ]
+        )
+        == 0
+    )
     assert (out / RUN).read_bytes() == stored
     # --rerun recomputes it under the new settings, which are reused from then on.
     assert experiment.main([str(dataset), str(out)] + TINY + ["--width", "8", "--rerun"]) == 0
@@ -122,34 +187,48 @@ def test_out_is_neither_the_dataset_nor_inside_it_nor_a_file(dataset, tmp_path, 
     link.symlink_to(dataset)
     a_file = tmp_path / "a-file"
     a_file.write_text("keep")
-    for data, out, named in ((dataset, dataset, "OUT is the dataset"),
-                             (dataset, dataset / "results", "OUT is inside the dataset"),
-                             (dataset, dataset / "train", "OUT is inside the dataset"),
-                             (dataset, link, "OUT is the dataset"),
-                             (dataset, link / "results", "OUT is inside the dataset"),
-                             (link, dataset / "results", "OUT is inside the dataset"),
-                             (dataset, a_file, "exists and is not a folder")):
+    for data, out, named in (
+        (dataset, dataset, "OUT is the dataset"),
+        (dataset, dataset / "results", "OUT is inside the dataset"),
+        (dataset, dataset / "train", "OUT is inside the dataset"),
+        (dataset, link, "OUT is the dataset"),
+        (dataset, link / "results", "OUT is inside the dataset"),
+        (link, dataset / "results", "OUT is inside the dataset"),
+        (dataset, a_file, "exists and is not a folder"),
+    ):
         _refused(capsys, [data, out] + TINY, named)
     assert _tree(dataset) == before and a_file.read_text() == "keep"
 
 
 def test_configs_must_be_a_list_of_distinct_names(dataset, tmp_path, capsys):
     out = tmp_path / "out"
-    for configs, named in (("", "--configs: empty"), (" ", "--configs: empty"), (",", "an empty name"),
-                           ("none,,viewpoint", "an empty name"), ("none,", "an empty name"),
-                           ("none,none", "none is given twice"), ("none,viewpoint,none", "none is given twice"),
-                           ("none,rotate", "--configs: expected one of")):
+    for configs, named in (
+        ("", "--configs: empty"),
+        (" ", "--configs: empty"),
+        (",", "an empty name"),
+        ("none,,viewpoint", "an empty name"),
+        ("none,", "an empty name"),
+        ("none,none", "none is given twice"),
+        ("none,viewpoint,none", "none is given twice"),
+        ("none,rotate", "--configs: expected one of"),
+    ):
         _refused(capsys, [dataset, out, "--configs", configs, "--no-figures"], named)
     assert not out.exists()
 
 
 def test_bad_arguments_are_one_line(dataset, tmp_path, capsys, monkeypatch):
     out = tmp_path / "out"
-    cases = [(["--workers", "-1"], "--workers -1: must be >= 0"), (["--seeds", "0"], "--seeds 0: must be >= 1"),
-             (["--batch-size", "0"], "--batch-size 0"), (["--width", "0"], "--width 0"),
-             (["--width", "100000"], "--width 100000: at most 256"), (["--width", "257"], "at most 256"),
-             (["--device", "x"], "--device 'x': expected cpu or cuda"), (["--device", "cpu:3"], "expected cpu or cuda"),
-             (["--device", "tpu"], "expected cpu or cuda")]
+    cases = [
+        (["--workers", "-1"], "--workers -1: must be >= 0"),
+        (["--seeds", "0"], "--seeds 0: must be >= 1"),
+        (["--batch-size", "0"], "--batch-size 0"),
+        (["--width", "0"], "--width 0"),
+        (["--width", "100000"], "--width 100000: at most 256"),
+        (["--width", "257"], "at most 256"),
+        (["--device", "x"], "--device 'x': expected cpu or cuda"),
+        (["--device", "cpu:3"], "expected cpu or cuda"),
+        (["--device", "tpu"], "expected cpu or cuda"),
+    ]
     if not torch.cuda.is_available():
         cases += [(["--device", "cuda"], "--device cuda: no CUDA device"), (["--device", "cuda:0"], "no CUDA device")]
     for extra, named in cases:
@@ -159,10 +238,15 @@ def test_bad_arguments_are_one_line(dataset, tmp_path, capsys, monkeypatch):
     _refused(capsys, [dataset, out] + TINY, "--width 4 with --batch-size 8 at 64x49 needs about", "lower --width")
     assert not out.exists()
     # And through the command line: no traceback.
-    result = subprocess.run([sys.executable, "-m", "fishcam.experiment", str(dataset), str(out), "--workers", "-1"],
-                            capture_output=True, text=True, timeout=300)
+    result = subprocess.run(
+        [sys.executable, "-m", "fishcam.experiment", str(dataset), str(out), "--workers", "-1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert result.returncode == 2 and result.stderr.splitlines() == [
-        "fishcam-experiment: error: --workers -1: must be >= 0"], result.stderr
+        "fishcam-experiment: error: --workers -1: must be >= 0"
+    ], result.stderr
 
 
 def test_a_bad_dataset_names_the_file(dataset, tmp_path, capsys):

@@ -6,12 +6,11 @@ stay tight. Checked against the warp's own validity (ViewpointWarp.warp's
 
 import os
 
+import fishcam
+import fishcam.torch as ft
 import numpy as np
 import pytest
 import torch
-
-import fishcam
-import fishcam.torch as ft
 from torchvision import tv_tensors
 from torchvision.ops import masks_to_boxes
 from torchvision.transforms import v2
@@ -45,8 +44,9 @@ def reference(cam, seed, masks):
     change = fishcam.transforms.RandomViewpoint(cam, preset="large").change_for(seed)
     warp = fishcam.ViewpointWarp(cam)
     valid = warp.warp(labels=np.ones((H, W), np.uint8), change=change, return_valid=True)["valid"]
-    planes = np.stack([warp.warp(labels=m.numpy().astype(np.uint8), change=change, label_fill=255)["labels"] != 0
-                       for m in masks])
+    planes = np.stack(
+        [warp.warp(labels=m.numpy().astype(np.uint8), change=change, label_fill=255)["labels"] != 0 for m in masks]
+    )
     return valid, planes & valid
 
 
@@ -68,9 +68,12 @@ def test_instance_masks_never_take_no_source_pixels(cam, seed, fill):
     assert (~valid).sum() >= 1300, "too small a no-source region to test anything"
     assert expected[0].sum() > 2000 and expected[1].sum() > 2000 and expected[2].sum() == 0
     boxes = tv_tensors.BoundingBoxes([tight_box(m.numpy()) for m in masks], format="XYXY", canvas_size=(H, W))
-    sample = (tv_tensors.Image(torch.full((3, H, W), 9, dtype=torch.uint8)),
-              {"boxes": boxes, "labels": torch.tensor([1, 2, 3]), "masks": tv_tensors.Mask(masks)},
-              tv_tensors.Mask(instances()), tv_tensors.Mask(torch.ones((H, W), dtype=torch.int64)))
+    sample = (
+        tv_tensors.Image(torch.full((3, H, W), 9, dtype=torch.uint8)),
+        {"boxes": boxes, "labels": torch.tensor([1, 2, 3]), "masks": tv_tensors.Mask(masks)},
+        tv_tensors.Mask(instances()),
+        tv_tensors.Mask(torch.ones((H, W), dtype=torch.int64)),
+    )
     with ft.sample_seed(seed):
         image, target, loose, semantic = ft.RandomViewpoint(cam, preset="large", **fill)(sample)
 
@@ -98,7 +101,8 @@ def test_instance_masks_never_take_no_source_pixels(cam, seed, fill):
     # SanitizeBoundingBoxes drops the instance that left the view, with its label and mask.
     with ft.sample_seed(seed):
         image, target = v2.Compose([ft.RandomViewpoint(cam, preset="large", **fill), v2.SanitizeBoundingBoxes()])(
-            sample[:2])
+            sample[:2]
+        )
     assert target["labels"].tolist() == [1, 2] and len(target["masks"]) == 2 and len(target["boxes"]) == 2
 
 
@@ -109,12 +113,16 @@ def test_how_masks_are_classified(cam):
     valid, _ = reference(cam, seed, instances())
     no_source = torch.from_numpy(~valid)
     ones = torch.ones((H, W), dtype=torch.uint8)
-    sample = {"image": tv_tensors.Image(torch.zeros((3, H, W), dtype=torch.uint8)),
-              "hw": tv_tensors.Mask(ones), "one_hw": tv_tensors.Mask(ones[None]),
-              "bool_hw": tv_tensors.Mask(ones.bool()), "bool_one_hw": tv_tensors.Mask(ones[None].bool()),
-              "two_hw": tv_tensors.Mask(torch.stack([ones, ones])),
-              "masks": tv_tensors.Mask(ones[None]),  # one instance: under "masks", still an instance
-              "target": {"masks": [tv_tensors.Mask(ones)]}}
+    sample = {
+        "image": tv_tensors.Image(torch.zeros((3, H, W), dtype=torch.uint8)),
+        "hw": tv_tensors.Mask(ones),
+        "one_hw": tv_tensors.Mask(ones[None]),
+        "bool_hw": tv_tensors.Mask(ones.bool()),
+        "bool_one_hw": tv_tensors.Mask(ones[None].bool()),
+        "two_hw": tv_tensors.Mask(torch.stack([ones, ones])),
+        "masks": tv_tensors.Mask(ones[None]),  # one instance: under "masks", still an instance
+        "target": {"masks": [tv_tensors.Mask(ones)]},
+    }
     with ft.sample_seed(seed):
         out = ft.RandomViewpoint(cam, preset="large", fill_mask=255)(sample)
     for key in ["hw", "one_hw"]:
@@ -140,19 +148,23 @@ def test_the_dict_fill_and_the_old_fill_mask_agree(cam):
     def run(**kwargs):
         with ft.sample_seed(6):
             return ft.RandomViewpoint(cam, preset="large", **kwargs)(
-                (tv_tensors.Image(torch.from_numpy(image)), tv_tensors.Mask(torch.from_numpy(labels))))
+                (tv_tensors.Image(torch.from_numpy(image)), tv_tensors.Mask(torch.from_numpy(labels)))
+            )
 
     old_image, old_mask = run(fill=7, fill_mask=255)
     numpy_side = fishcam.transforms.RandomViewpoint(cam, preset="large", fill=7, fill_mask=255)(
-        image=np.ascontiguousarray(np.moveaxis(image, 0, -1)), mask=labels, seed=6)
+        image=np.ascontiguousarray(np.moveaxis(image, 0, -1)), mask=labels, seed=6
+    )
     assert np.array_equal(old_image.permute(1, 2, 0).numpy(), numpy_side["image"])
     assert np.array_equal(old_mask.numpy(), numpy_side["mask"])
     valid, _ = reference(cam, 6, instances())
     assert (old_mask.numpy()[~valid] == 255).all() and (old_image.numpy()[:, ~valid] == 7).all()
     assert (old_mask.numpy()[valid] < 10).all()
-    for kwargs in [dict(fill={tv_tensors.Image: 7, tv_tensors.Mask: 255}),
-                   dict(fill={tv_tensors.Image: 7, tv_tensors.Mask: 255}, fill_mask=255),  # agreeing: fine
-                   dict(fill={tv_tensors.Image: 7}, fill_mask=255)]:
+    for kwargs in [
+        dict(fill={tv_tensors.Image: 7, tv_tensors.Mask: 255}),
+        dict(fill={tv_tensors.Image: 7, tv_tensors.Mask: 255}, fill_mask=255),  # agreeing: fine
+        dict(fill={tv_tensors.Image: 7}, fill_mask=255),
+    ]:
         new_image, new_mask = run(**kwargs)
         assert torch.equal(new_image, old_image) and torch.equal(new_mask, old_mask), kwargs
     assert "fill=7, fill_mask=255" in repr(ft.RandomViewpoint(cam, fill={tv_tensors.Image: 7, tv_tensors.Mask: 255}))
@@ -160,7 +172,8 @@ def test_the_dict_fill_and_the_old_fill_mask_agree(cam):
     assert "fill=0, fill_mask=200" in repr(only_mask)
     # The numpy transforms: the same dict with string keys.
     keyed = fishcam.transforms.RandomViewpoint(cam, preset="large", fill={"image": 7, "mask": 255})(
-        image=np.ascontiguousarray(np.moveaxis(image, 0, -1)), mask=labels, seed=6)
+        image=np.ascontiguousarray(np.moveaxis(image, 0, -1)), mask=labels, seed=6
+    )
     assert np.array_equal(keyed["image"], numpy_side["image"]) and np.array_equal(keyed["mask"], numpy_side["mask"])
     # SampleChange: instance=True (or a bool mask) gives 0 / False where there is no source.
     change = fishcam.transforms.RandomViewpoint(cam, preset="large", fill_mask=255).draw(seed=6)
@@ -181,8 +194,12 @@ def test_affine_instance_masks_too(cam):
     assert (~valid).sum() > 1000
     with ft.sample_seed(seed):
         image, target, semantic = ft.RandomAffine(preset="train", fill={tv_tensors.Image: 0, tv_tensors.Mask: 255})(
-            (tv_tensors.Image(torch.zeros((3, H, W), dtype=torch.uint8)), {"masks": tv_tensors.Mask(masks)},
-             tv_tensors.Mask(torch.ones((H, W), dtype=torch.uint8))))
+            (
+                tv_tensors.Image(torch.zeros((3, H, W), dtype=torch.uint8)),
+                {"masks": tv_tensors.Mask(masks)},
+                tv_tensors.Mask(torch.ones((H, W), dtype=torch.uint8)),
+            )
+        )
     assert not target["masks"][:, torch.from_numpy(~valid)].any() and target["masks"].sum() > 1000
     assert torch.equal(semantic == 255, torch.from_numpy(~valid))
 
@@ -195,8 +212,10 @@ def test_bad_fills_are_refused_in_one_line(cam):
         (lambda: ft.RandomViewpoint(cam, fill={"image": 0}), "expected tv_tensors.Image and/or tv_tensors.Mask"),
         (lambda: ft.RandomAffine(fill={tv_tensors.Video: 0}), "unknown key tv_tensors.Video"),
         (lambda: ft.RandomViewpoint(cam, fill={tv_tensors.Mask: 255}, fill_mask=254), "disagree"),
-        (lambda: ft.RandomViewpoint(cam, fill={tv_tensors.Mask: 70000}),
-         r"fill\[tv_tensors.Mask\]: 70000 outside 0..65535"),
+        (
+            lambda: ft.RandomViewpoint(cam, fill={tv_tensors.Mask: 70000}),
+            r"fill\[tv_tensors.Mask\]: 70000 outside 0..65535",
+        ),
         (lambda: ft.RandomViewpoint(cam, fill={tv_tensors.Mask: -1}), r"fill\[tv_tensors.Mask\]: -1 outside"),
         (lambda: ft.RandomViewpoint(cam, fill={tv_tensors.Mask: 1.5}), "expected an integer"),
         (lambda: ft.RandomViewpoint(cam, fill={tv_tensors.Mask: True}), "expected an integer"),
@@ -207,8 +226,10 @@ def test_bad_fills_are_refused_in_one_line(cam):
         (lambda: fishcam.transforms.RandomViewpoint(cam, fill={tv_tensors.Image: 0}), "unknown key tv_tensors.Image"),
         (lambda: fishcam.transforms.RandomAffine(fill={"image": 0, "masks": 0}), "unknown key 'masks'"),
         (lambda: fishcam.transforms.RandomViewpoint(cam, fill={"mask": 3}, fill_mask=4), "disagree"),
-        (lambda: ft.warp_batch(torch.zeros((1, 3, H, W)), cam, [fishcam.ViewpointChange()], fill={"x": 1}),
-         "unknown key 'x'"),
+        (
+            lambda: ft.warp_batch(torch.zeros((1, 3, H, W)), cam, [fishcam.ViewpointChange()], fill={"x": 1}),
+            "unknown key 'x'",
+        ),
     ]
     for call, message in cases:
         with pytest.raises(fishcam.Error, match=message) as error:
@@ -232,8 +253,9 @@ def test_bad_fills_are_refused_in_one_line(cam):
 def test_warp_batch_takes_the_fill_by_type(cam):
     changes = [fishcam.random_change("large", 2), fishcam.random_change("large", 6)]
     warp = fishcam.ViewpointWarp(cam)
-    valid = np.stack([warp.warp(labels=np.ones((H, W), np.uint8), change=c, return_valid=True)["valid"]
-                      for c in changes])
+    valid = np.stack(
+        [warp.warp(labels=np.ones((H, W), np.uint8), change=c, return_valid=True)["valid"] for c in changes]
+    )
     images = torch.full((2, 3, H, W), 9, dtype=torch.uint8)
     labels = torch.ones((2, H, W), dtype=torch.int64)
     out = ft.warp_batch(images, cam, changes, masks=labels, fill={tv_tensors.Image: 5, tv_tensors.Mask: 255})
@@ -255,13 +277,12 @@ def test_albumentations_masks_are_instances(cam):
     pytest.importorskip("albumentations")
     import albumentations as A
     import fishcam.albumentations as fa
+
     pipeline = A.Compose([fa.RandomViewpoint(cam, preset="large", fill={"image": 0, "mask": 255})], seed=0)
-    out = pipeline(image=np.zeros((H, W, 3), np.uint8), mask=np.ones((H, W), np.uint8),
-                   masks=instances().numpy())
+    out = pipeline(image=np.zeros((H, W, 3), np.uint8), mask=np.ones((H, W), np.uint8), masks=instances().numpy())
     seed = pipeline.transforms[0].params["seed"]
     change = fishcam.transforms.RandomViewpoint(cam, preset="large").change_for(seed)
-    valid = fishcam.ViewpointWarp(cam).warp(labels=np.ones((H, W), np.uint8), change=change,
-                                            return_valid=True)["valid"]
+    valid = fishcam.ViewpointWarp(cam).warp(labels=np.ones((H, W), np.uint8), change=change, return_valid=True)["valid"]
     assert (~valid).sum() > 300
     assert np.array_equal(out["mask"] == 255, ~valid)
     masks = np.asarray(out["masks"])
@@ -276,6 +297,7 @@ def test_image_fills_an_integer_image_cannot_hold_are_refused(cam, fill):
     pytest.importorskip("albumentations")
     import albumentations as A
     import fishcam.albumentations as fa
+
     image = np.full((H, W, 3), 9, np.uint8)
     calls = [
         lambda: fishcam.transforms.RandomViewpoint(cam, preset="large", fill=fill)(image=image, seed=0),
@@ -284,8 +306,9 @@ def test_image_fills_an_integer_image_cannot_hold_are_refused(cam, fill):
         lambda: ft.RandomViewpoint(cam, fill=fill)(tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1))),
         lambda: ft.RandomAffine(fill={tv_tensors.Image: fill})(torch.from_numpy(image).permute(2, 0, 1)),
         lambda: A.Compose([fa.RandomViewpoint(cam, fill=fill)], seed=0)(image=image),
-        lambda: ft.warp_batch(torch.from_numpy(image).permute(2, 0, 1)[None], cam, [fishcam.random_change("large", 0)],
-                              fill=fill),
+        lambda: ft.warp_batch(
+            torch.from_numpy(image).permute(2, 0, 1)[None], cam, [fishcam.random_change("large", 0)], fill=fill
+        ),
     ]
     for call in calls:
         with pytest.raises(fishcam.Error, match="no-source fill .* dtype (torch.)?uint8") as error:
@@ -302,6 +325,7 @@ def test_image_fills_an_integer_image_cannot_hold_are_refused(cam, fill):
 def test_image_fills_the_dtype_holds_are_exact(cam, dtype, fill):
     image = np.full((H, W, 3), 9, dtype)
     out = fishcam.transforms.RandomViewpoint(cam, preset="large", fill=fill)(image=image, seed=SEEDS[0])["image"]
-    valid = fishcam.ViewpointWarp(cam).warp(image=image, change=fishcam.random_change("large", SEEDS[0]),
-                                            return_valid=True)["valid"]
+    valid = fishcam.ViewpointWarp(cam).warp(
+        image=image, change=fishcam.random_change("large", SEEDS[0]), return_valid=True
+    )["valid"]
     assert (~valid).sum() > 1000 and (out[~valid] == np.array(fill, dtype)).all() and (out[valid] != fill).any()

@@ -5,18 +5,21 @@ import json
 import os
 import pickle
 import subprocess
-import sys
-
-import numpy as np
-import pytest
 
 import fishcam
+import numpy as np
+import pytest
 from fishcam.transforms import RandomViewpoint
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 BINARY = os.environ.get("FISHCAM_BINARY")
-BUNDLED = ["woodscape_front.json", "stereographic.cameramodel", "pinhole.cameramodel", "kannala_brandt.yaml",
-           "equidistant.json"]
+BUNDLED = [
+    "woodscape_front.json",
+    "stereographic.cameramodel",
+    "pinhole.cameramodel",
+    "kannala_brandt.yaml",
+    "equidistant.json",
+]
 
 
 def data(name):
@@ -55,8 +58,9 @@ def test_info_has_the_cli_fields(cam, tmp_path):
     assert cam.domain.theta_max_deg == cli["theta_max_deg"] and cam.domain.closed == cli["theta_max_closed"]
     assert cam.domain.limited_by == cli["theta_max_limited_by"] and cam.domain.rho_max_px == cli["rho_max_px"]
     fov = cam.field_of_view_deg
-    assert [fov.horizontal, fov.vertical, fov.diagonal] == [cli["fov_deg"][k] for k in ("horizontal", "vertical",
-                                                                                        "diagonal")]
+    assert [fov.horizontal, fov.vertical, fov.diagonal] == [
+        cli["fov_deg"][k] for k in ("horizontal", "vertical", "diagonal")
+    ]
     assert list(cam.principal_point) == [cli["cx"], cli["cy"]] and cam.parameters == cli["parameters"]
 
 
@@ -68,8 +72,11 @@ def test_project_unproject_agree_with_the_cli(name):
     points[:5] = [[0, 0, 1], [0, 0, -1], [0, 0, 0], [np.nan, 1, 1], [1e300, 1e300, 1]]
     px, ok = camera.project(points)
     text = "\n".join(" ".join(repr(float(v)) for v in p) for p in points) + "\n"
-    result = subprocess.run([BINARY, "project", data(name)], input=text, capture_output=True, text=True) \
-        if BINARY else pytest.skip("no CLI")
+    result = (
+        subprocess.run([BINARY, "project", data(name)], input=text, capture_output=True, text=True)
+        if BINARY
+        else pytest.skip("no CLI")
+    )
     cli = np.array([[float(v) for v in line.split()] for line in result.stdout.split("\n") if line.strip()])
     np.testing.assert_array_equal(np.isnan(cli[:, 0]), ~ok)
     np.testing.assert_array_equal(px[ok], cli[ok])  # %.17g: bit for bit
@@ -96,15 +103,28 @@ def test_theta_from_rho_keeps_the_shape(cam):
 def test_random_change_equals_the_cli(cam, tmp_path):
     for seed in [0, 7, 2**63 + 5, 2**64 - 1]:
         change = fishcam.random_change("train", seed)
-        cli = json.loads(run_cli("augment", data("woodscape_front.json"), "--image", make_image(tmp_path, cam),
-                                 "--out-image", tmp_path / f"o{seed}.png", "--preset", "train", "--seed", seed,
-                                 "--json"))
+        cli = json.loads(
+            run_cli(
+                "augment",
+                data("woodscape_front.json"),
+                "--image",
+                make_image(tmp_path, cam),
+                "--out-image",
+                tmp_path / f"o{seed}.png",
+                "--preset",
+                "train",
+                "--seed",
+                seed,
+                "--json",
+            )
+        )
         assert list(change.rotation_deg) == cli["rotation_deg"]
         assert list(change.translation) == cli["translation"]
 
 
 def make_image(tmp_path, cam):
     import cv2
+
     path = tmp_path / "image.png"
     if not path.exists():
         rng = np.random.default_rng(0)
@@ -118,8 +138,18 @@ def make_image(tmp_path, cam):
 def test_maps_are_bit_identical_to_fishcam_map(cam, tmp_path, depth):
     change = fishcam.ViewpointChange(rotation_deg=(10, -20, 5), translation=(0.1, 0, 0.2))
     map_x, map_y, valid = fishcam.ViewpointWarp(cam).maps(change, depth=depth)
-    run_cli("map", data("woodscape_front.json"), "--rotate", "10,-20,5", "--translate", "0.1,0,0.2",
-            "--depth", depth, "--out", tmp_path / "m.npy")
+    run_cli(
+        "map",
+        data("woodscape_front.json"),
+        "--rotate",
+        "10,-20,5",
+        "--translate",
+        "0.1,0,0.2",
+        "--depth",
+        depth,
+        "--out",
+        tmp_path / "m.npy",
+    )
     cli = read_npy(tmp_path / "m.npy")
     assert cli.shape == (cam.height, cam.width, 2)
     np.testing.assert_array_equal(map_x, cli[..., 0])
@@ -129,14 +159,30 @@ def test_maps_are_bit_identical_to_fishcam_map(cam, tmp_path, depth):
 
 def test_augmented_images_and_labels_are_byte_identical_to_fishcam_augment(cam, tmp_path):
     import cv2
+
     image_path = make_image(tmp_path, cam)
     image = cv2.imread(str(image_path), cv2.IMREAD_UNCHANGED)
     labels = cv2.imread(str(tmp_path / "labels.png"), cv2.IMREAD_UNCHANGED)
     warp = fishcam.ViewpointWarp(cam)
     for seed in [1, 2]:
-        run_cli("augment", data("woodscape_front.json"), "--image", image_path, "--label", tmp_path / "labels.png",
-                "--out-image", tmp_path / f"a{seed}.png", "--out-label", tmp_path / f"l{seed}.png",
-                "--preset", "train", "--seed", seed, "--label-fill", 255)
+        run_cli(
+            "augment",
+            data("woodscape_front.json"),
+            "--image",
+            image_path,
+            "--label",
+            tmp_path / "labels.png",
+            "--out-image",
+            tmp_path / f"a{seed}.png",
+            "--out-label",
+            tmp_path / f"l{seed}.png",
+            "--preset",
+            "train",
+            "--seed",
+            seed,
+            "--label-fill",
+            255,
+        )
         out = warp(image=image, labels=labels, change=fishcam.random_change("train", seed), label_fill=255)
         np.testing.assert_array_equal(out["image"], cv2.imread(str(tmp_path / f"a{seed}.png"), cv2.IMREAD_UNCHANGED))
         np.testing.assert_array_equal(out["labels"], cv2.imread(str(tmp_path / f"l{seed}.png"), cv2.IMREAD_UNCHANGED))
@@ -154,8 +200,12 @@ def test_image_types_channels_and_fill(cam):
     change = fishcam.random_change("large", 3)
     _, _, valid = warp.maps(change)
     for dtype in [np.uint8, np.uint16, np.float32]:
-        for shape in [(cam.height, cam.width), (cam.height, cam.width, 1), (cam.height, cam.width, 3),
-                      (cam.height, cam.width, 4)]:
+        for shape in [
+            (cam.height, cam.width),
+            (cam.height, cam.width, 1),
+            (cam.height, cam.width, 3),
+            (cam.height, cam.width, 4),
+        ]:
             image = np.full(shape, 7, dtype=dtype)
             out = warp.warp(image=image, change=change, fill=42, return_valid=True)
             assert out["image"].dtype == dtype and out["image"].shape == shape
@@ -180,8 +230,10 @@ def test_inputs_are_not_copied_when_contiguous(cam, monkeypatch):
     image = rng.integers(0, 256, size=(cam.height, cam.width * 2, 3), dtype=np.uint8)
     view = image[:, ::2]
     change = fishcam.random_change("small", 1)
-    np.testing.assert_array_equal(warp.warp(image=view, change=change)["image"],
-                                  warp.warp(image=np.ascontiguousarray(view), change=change)["image"])
+    np.testing.assert_array_equal(
+        warp.warp(image=view, change=change)["image"],
+        warp.warp(image=np.ascontiguousarray(view), change=change)["image"],
+    )
     # Inputs need not be writeable (np.asarray of a PIL image, np.load(mmap_mode='r')).
     frozen = np.ascontiguousarray(view)
     labels = rng.integers(0, 10, size=(cam.height, cam.width), dtype=np.uint8)
@@ -199,6 +251,7 @@ def test_zero_copy_is_measured_by_the_data_pointer(cam):
 
     def pointer(a):
         return a.__array_interface__["data"][0]
+
     points = np.zeros((7, 3))
     assert address(points, "points3") == pointer(points)
     pixels = np.zeros((7, 2))
@@ -220,8 +273,9 @@ def test_zero_copy_is_measured_by_the_data_pointer(cam):
 def test_resized_follows_the_pixel_centre_convention(cam):
     small = cam.resized(640, 483)
     assert (small.width, small.height) == (640, 483)
-    np.testing.assert_allclose(small.principal_point, (np.array(cam.principal_point) + 0.5) * 0.5 - 0.5, rtol=0,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        small.principal_point, (np.array(cam.principal_point) + 0.5) * 0.5 - 0.5, rtol=0, atol=1e-12
+    )
     rays = np.random.default_rng(5).normal(size=(50, 3))
     rays[:, 2] = np.abs(rays[:, 2])
     big_px, ok = cam.project(rays)
@@ -233,8 +287,11 @@ def test_resized_follows_the_pixel_centre_convention(cam):
 def test_convert_matches_the_cli(cam, tmp_path):
     conversion = fishcam.convert(cam, to="kannala-brandt")
     kb, report = conversion
-    cli = json.loads(run_cli("convert", data("woodscape_front.json"), "--to", "kannala-brandt", "--out",
-                             tmp_path / "kb.json", "--json"))
+    cli = json.loads(
+        run_cli(
+            "convert", data("woodscape_front.json"), "--to", "kannala-brandt", "--out", tmp_path / "kb.json", "--json"
+        )
+    )
     assert kb.parameters == cli["parameters"] and conversion.camera == kb
     assert isinstance(report, fishcam.FitReport) and report.rms_px == cli["rms_px"]
     assert report.p99_px == cli["p99_px"] and report.samples_below_90 == cli["below_90_deg"]["samples"]
@@ -267,8 +324,9 @@ def test_warp_is_callable_and_needs_a_change(cam):
     warp = fishcam.ViewpointWarp(cam)
     image = np.full((cam.height, cam.width), 5, np.uint8)
     change = fishcam.random_change("small", 2)
-    np.testing.assert_array_equal(warp(image=image, change=change)["image"],
-                                  warp.warp(image=image, change=change)["image"])
+    np.testing.assert_array_equal(
+        warp(image=image, change=change)["image"], warp.warp(image=image, change=change)["image"]
+    )
     with pytest.raises(fishcam.Error, match="change"):
         warp(image=image)
 
@@ -299,17 +357,27 @@ def test_pickling_works_at_every_protocol(cam, protocol):
 
 def test_objects_made_without_init_raise_instead_of_crashing(cam):
     # cls.__new__(cls) alone: to_json segfaulted, width read uninitialised memory.
-    for cls, use in [(fishcam.Camera, lambda o: o.to_json()), (fishcam.Camera, lambda o: o.width),
-                     (fishcam.Camera, lambda o: o.domain), (fishcam.ViewpointWarp, lambda o: o.source),
-                     (fishcam.ViewpointChange, lambda o: o.rotation_deg)]:
+    for cls, use in [
+        (fishcam.Camera, lambda o: o.to_json()),
+        (fishcam.Camera, lambda o: o.width),
+        (fishcam.Camera, lambda o: o.domain),
+        (fishcam.ViewpointWarp, lambda o: o.source),
+        (fishcam.ViewpointChange, lambda o: o.rotation_deg),
+    ]:
         with pytest.raises(fishcam.Error, match="made without __init__"):
             use(cls.__new__(cls))
 
 
 def test_setstate_validates_its_input(cam):
-    for cls, state in [(fishcam.Camera, (1, 2)), (fishcam.Camera, "{not json"), (fishcam.Camera, 5),
-                       (fishcam.ViewpointChange, (1,)), (fishcam.ViewpointChange, ("a", "b")),
-                       (fishcam.ViewpointWarp, ("x",)), (fishcam.ViewpointWarp, (1, 2))]:
+    for cls, state in [
+        (fishcam.Camera, (1, 2)),
+        (fishcam.Camera, "{not json"),
+        (fishcam.Camera, 5),
+        (fishcam.ViewpointChange, (1,)),
+        (fishcam.ViewpointChange, ("a", "b")),
+        (fishcam.ViewpointWarp, ("x",)),
+        (fishcam.ViewpointWarp, (1, 2)),
+    ]:
         obj = cls.__new__(cls)
         with pytest.raises(fishcam.Error):
             obj.__setstate__(state)
@@ -361,6 +429,7 @@ def test_bad_input_raises_fishcam_error(cam):
 
 def test_num_threads_are_opencvs(cam):
     import cv2
+
     before = fishcam.get_num_threads()
     fishcam.set_num_threads(1)
     assert fishcam.get_num_threads() == 1
@@ -375,10 +444,18 @@ def test_camera_read_options(cam):
     assert fishcam.Camera.read(data("woodscape_front.json"), format="woodscape") == cam
 
 
-@pytest.mark.parametrize("model,fmt,ext", [("double-sphere", "basalt", "json"), ("extended-unified", "kalibr", "yaml"),
-                                           ("unified", "kalibr", "yaml"), ("mei", "camodocal", "yaml"),
-                                           ("kannala-brandt", "colmap", "txt"), ("kannala-brandt", "ros", "yaml"),
-                                           ("kannala-brandt", "orbslam3", "yaml")])
+@pytest.mark.parametrize(
+    "model,fmt,ext",
+    [
+        ("double-sphere", "basalt", "json"),
+        ("extended-unified", "kalibr", "yaml"),
+        ("unified", "kalibr", "yaml"),
+        ("mei", "camodocal", "yaml"),
+        ("kannala-brandt", "colmap", "txt"),
+        ("kannala-brandt", "ros", "yaml"),
+        ("kannala-brandt", "orbslam3", "yaml"),
+    ],
+)
 def test_every_model_and_format_reaches_python(cam, tmp_path, model, fmt, ext):
     fitted, report = fishcam.convert(cam, model)
     assert fitted.model == model and report.rms_px < 1.0
@@ -398,21 +475,36 @@ def test_cameras_of_a_multi_camera_file(cam, tmp_path):
     fitted.write(str(tmp_path / "a.yaml"), format="kalibr")
     text = (tmp_path / "a.yaml").read_text()
     (tmp_path / "chain.yaml").write_text(text + text.replace("cam0:", "cam1:"))
-    assert fishcam.Camera.read(str(tmp_path / "chain.yaml"), camera="cam1") == fishcam.Camera.read(str(tmp_path / "chain.yaml"))
+    assert fishcam.Camera.read(str(tmp_path / "chain.yaml"), camera="cam1") == fishcam.Camera.read(
+        str(tmp_path / "chain.yaml")
+    )
     with pytest.raises(fishcam.Error, match="no camera 'cam9'"):
         fishcam.Camera.read(str(tmp_path / "chain.yaml"), camera="cam9")
 
 
 def test_sampling_exact_and_grid_equal_the_cli(cam, tmp_path):
     import cv2
+
     image_path = make_image(tmp_path, cam)
     image = cv2.imread(str(image_path), cv2.IMREAD_UNCHANGED)
     warp = fishcam.ViewpointWarp(cam)
     assert warp.grid_spacing == 4 and 0 < warp.grid_error_px <= 1 / 32
     change = fishcam.random_change("train", 5)
     for sampling in ("grid", "exact"):
-        run_cli("augment", data("woodscape_front.json"), "--image", image_path, "--out-image",
-                tmp_path / f"{sampling}.png", "--preset", "train", "--seed", 5, "--sampling", sampling)
+        run_cli(
+            "augment",
+            data("woodscape_front.json"),
+            "--image",
+            image_path,
+            "--out-image",
+            tmp_path / f"{sampling}.png",
+            "--preset",
+            "train",
+            "--seed",
+            5,
+            "--sampling",
+            sampling,
+        )
         out = warp(image=image, change=change, sampling=sampling)
         np.testing.assert_array_equal(out["image"], cv2.imread(str(tmp_path / f"{sampling}.png"), cv2.IMREAD_UNCHANGED))
     grid = warp(image=image, change=change)["image"].astype(float)
@@ -440,8 +532,10 @@ def test_arguments_of_the_wrong_type_are_one_line_fishcam_errors(cam):
         (lambda: fishcam.compare(cam, ["equidistant"], samples="x"), "samples: expected an integer"),
         (lambda: fishcam.transforms.RandomViewpoint(cam, p="x"), "p: expected a number"),
         (lambda: fishcam.transforms.RandomViewpoint(cam, fill="x"), "fill: expected a number"),
-        (lambda: fishcam.transforms.RandomViewpoint(cam, max_rotation_deg="x", max_translation=0.1),
-         "max_rotation_deg: expected a number"),
+        (
+            lambda: fishcam.transforms.RandomViewpoint(cam, max_rotation_deg="x", max_translation=0.1),
+            "max_rotation_deg: expected a number",
+        ),
         (lambda: fishcam.transforms.RandomViewpoint(cam, fill_mask="x"), "fill_mask: expected an integer"),
         (lambda: fishcam.transforms.RandomAffine(fill_mask=1.5), "fill_mask: expected an integer"),
     ]
@@ -477,8 +571,8 @@ def test_the_package_under_test_is_the_installed_one():
     """The README's test command tests what `pip install .` installed (CTest says so),
     and the wheel's version is the library's."""
     import tomllib
+
     if os.environ.get("FISHCAM_EXPECT_INSTALLED") == "1":
         assert "site-packages" in fishcam.__file__, fishcam.__file__
     with open(os.path.join(os.path.dirname(__file__), "..", "..", "pyproject.toml"), "rb") as f:
         assert tomllib.load(f)["project"]["version"] == fishcam.__version__
-

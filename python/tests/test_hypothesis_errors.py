@@ -17,15 +17,14 @@ import math
 import os
 import warnings
 
+import fishcam
+import fishcam.torch as ft
+import fishcam.transforms as fx
 import numpy as np
 import pytest
 import torch
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-import fishcam
-import fishcam.torch as ft
-import fishcam.transforms as fx
 from torchvision import tv_tensors
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
@@ -37,10 +36,13 @@ CHANGE = fishcam.random_change("large", 3)
 
 
 def properties(examples: int = 60) -> settings:
-    return settings(max_examples=examples * int(os.environ.get("FISHCAM_HYPOTHESIS_SCALE", "1")),
-                    deadline=None, database=None, derandomize=not os.environ.get("FISHCAM_HYPOTHESIS_SEARCH"),
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                           HealthCheck.filter_too_much])
+    return settings(
+        max_examples=examples * int(os.environ.get("FISHCAM_HYPOTHESIS_SCALE", "1")),
+        deadline=None,
+        database=None,
+        derandomize=not os.environ.get("FISHCAM_HYPOTHESIS_SEARCH"),
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much],
+    )
 
 
 def one_line_or_success(call, *args, **kwargs):
@@ -61,30 +63,73 @@ def one_line_or_success(call, *args, **kwargs):
 
 # --- strategies --------------------------------------------------------------------
 
-HUGE_INTS = st.sampled_from([2**31, 2**32, 2**63 - 1, 2**63, 2**64, 2**64 + 1, -2**31 - 1, -2**63 - 1, 10**400,
-                             -10**400])
+HUGE_INTS = st.sampled_from(
+    [2**31, 2**32, 2**63 - 1, 2**63, 2**64, 2**64 + 1, -(2**31) - 1, -(2**63) - 1, 10**400, -(10**400)]
+)
 INTS = st.one_of(st.integers(-3, 70), st.integers(), HUGE_INTS)
 FLOATS = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.sampled_from([0.5, -0.0, 1e-300, 1e300]))
-NUMPY_SCALARS = st.builds(lambda value, kind: kind(value), st.integers(0, 100),
-                          st.sampled_from([np.int8, np.uint8, np.int64, np.uint64, np.float16, np.float32, np.float64,
-                                           np.bool_]))
+NUMPY_SCALARS = st.builds(
+    lambda value, kind: kind(value),
+    st.integers(0, 100),
+    st.sampled_from([np.int8, np.uint8, np.int64, np.uint64, np.float16, np.float32, np.float64, np.bool_]),
+)
 NUMBERS = st.one_of(INTS, FLOATS, st.booleans(), NUMPY_SCALARS, st.complex_numbers(max_magnitude=10))
 # Strings of a few characters (st.text would cache Unicode tables in ./.hypothesis).
-TEXTS = st.one_of(st.lists(st.sampled_from(list("ab.j/\\ \n\x00\udc80é")), max_size=6).map("".join),
-                  st.sampled_from(["", ".", "\x00", "a\udc80", "a\nb", "train", "map", "grid"]))
+TEXTS = st.one_of(
+    st.lists(st.sampled_from(list("ab.j/\\ \n\x00\udc80é")), max_size=6).map("".join),
+    st.sampled_from(["", ".", "\x00", "a\udc80", "a\nb", "train", "map", "grid"]),
+)
 
-NUMPY_DTYPES = [np.bool_, np.int8, np.uint8, np.int16, np.uint16, np.int32, np.uint32, np.int64, np.uint64,
-                np.float16, np.float32, np.float64, np.complex64, object]
-TORCH_DTYPES = [torch.bool, torch.uint8, torch.int8, torch.int16, torch.int32, torch.int64, torch.float16,
-                torch.bfloat16, torch.float32, torch.float64, torch.complex64] + [
-                    getattr(torch, name) for name in ("uint16", "uint32") if hasattr(torch, name)]
+NUMPY_DTYPES = [
+    np.bool_,
+    np.int8,
+    np.uint8,
+    np.int16,
+    np.uint16,
+    np.int32,
+    np.uint32,
+    np.int64,
+    np.uint64,
+    np.float16,
+    np.float32,
+    np.float64,
+    np.complex64,
+    object,
+]
+TORCH_DTYPES = [
+    torch.bool,
+    torch.uint8,
+    torch.int8,
+    torch.int16,
+    torch.int32,
+    torch.int64,
+    torch.float16,
+    torch.bfloat16,
+    torch.float32,
+    torch.float64,
+    torch.complex64,
+] + [getattr(torch, name) for name in ("uint16", "uint32") if hasattr(torch, name)]
 VALUES = [0, 1, -1, 7, 255, 65535, 2**31, 2**63, float("nan"), float("inf"), float("-inf"), 1e300, 0.5]
 # Shapes near what the calls take (so the draws get past the first check), and any.
-IMAGE_SHAPES = [(H, W), (H, W, 1), (H, W, 3), (H, W, 4), (H, W, 5), (H, W, 0), (3, H, W), (1, H, W), (2, 3, H, W),
-                (1, 1, 3, H, W), (W, H), (H, 1), (0, 0), (0, H, W), (5, H, W)]
+IMAGE_SHAPES = [
+    (H, W),
+    (H, W, 1),
+    (H, W, 3),
+    (H, W, 4),
+    (H, W, 5),
+    (H, W, 0),
+    (3, H, W),
+    (1, H, W),
+    (2, 3, H, W),
+    (1, 1, 3, H, W),
+    (W, H),
+    (H, 1),
+    (0, 0),
+    (0, H, W),
+    (5, H, W),
+]
 POINT_SHAPES = [(5, 2), (5, 3), (5, 4), (0, 2), (0, 3), (0, 4), (2,), (3,), (), (1, 1, 2), (2, 5)]
-SHAPES = st.one_of(st.sampled_from(IMAGE_SHAPES + POINT_SHAPES),
-                   st.lists(st.integers(0, 4), max_size=5).map(tuple))
+SHAPES = st.one_of(st.sampled_from(IMAGE_SHAPES + POINT_SHAPES), st.lists(st.integers(0, 4), max_size=5).map(tuple))
 
 
 def full(make, shape, value, dtype, zeros):
@@ -107,13 +152,24 @@ def arrays(draw, shapes=SHAPES):
 
 
 @st.composite
-def tensors(draw, shapes=SHAPES, dtypes=st.sampled_from(TORCH_DTYPES)):
+def tensors(draw, shapes=SHAPES, dtypes=st.sampled_from(TORCH_DTYPES)):  # noqa: B008 (a strategy, built once)
     return full(torch.full, draw(shapes), draw(st.sampled_from(VALUES)), draw(dtypes), torch.zeros)
 
 
-JUNK = st.one_of(st.none(), NUMBERS, TEXTS, st.binary(max_size=3), st.lists(NUMBERS, max_size=4),
-                 st.tuples(NUMBERS, NUMBERS), st.dictionaries(TEXTS, NUMBERS, max_size=2), arrays(), tensors(),
-                 st.just(object()), st.just(CAMERA), st.just(CHANGE))
+JUNK = st.one_of(
+    st.none(),
+    NUMBERS,
+    TEXTS,
+    st.binary(max_size=3),
+    st.lists(NUMBERS, max_size=4),
+    st.tuples(NUMBERS, NUMBERS),
+    st.dictionaries(TEXTS, NUMBERS, max_size=2),
+    arrays(),
+    tensors(),
+    st.just(object()),
+    st.just(CAMERA),
+    st.just(CHANGE),
+)
 
 
 def either(plausible, junk=JUNK):
@@ -146,13 +202,19 @@ CAMERA_CALLS = {
     "parameters_key": lambda d: CAMERA.parameters_key(d.draw(either(st.booleans()))),
     "augmented": lambda d: CAMERA.augmented(d.draw(CHANGES)),
     "projection_uncertainty": lambda d: CAMERA.projection_uncertainty(d.draw(POINTS2), d.draw(either(FLOATS))),
-    "read": lambda d: fishcam.Camera.read(d.draw(either(st.sampled_from([CAMERA_FILE, DATA, "missing.json"]))),
-                                          **optional_kwargs(d.draw, camera=either(INTS),
-                                                            image_size=either(st.tuples(SIDES, SIDES)),
-                                                            format=either(st.sampled_from(["woodscape", "x\ny"])),
-                                                            distortion_model=either(st.just("fisheye")))),
-    "from_json": lambda d: fishcam.Camera.from_json(d.draw(either(st.sampled_from(
-        [CAMERA.to_json(), CAMERA.to_json()[:-9], "{", "[]", "null", '{"model": 5}'])))),
+    "read": lambda d: fishcam.Camera.read(
+        d.draw(either(st.sampled_from([CAMERA_FILE, DATA, "missing.json"]))),
+        **optional_kwargs(
+            d.draw,
+            camera=either(INTS),
+            image_size=either(st.tuples(SIDES, SIDES)),
+            format=either(st.sampled_from(["woodscape", "x\ny"])),
+            distortion_model=either(st.just("fisheye")),
+        ),
+    ),
+    "from_json": lambda d: fishcam.Camera.from_json(
+        d.draw(either(st.sampled_from([CAMERA.to_json(), CAMERA.to_json()[:-9], "{", "[]", "null", '{"model": 5}'])))
+    ),
     "constructor": lambda d: fishcam.Camera(*d.draw(st.lists(JUNK, max_size=2))),
     "equality": lambda d: (CAMERA == d.draw(JUNK), CAMERA != d.draw(JUNK), hash(CAMERA)),
 }
@@ -168,9 +230,16 @@ def test_camera(call, data):
 
 VECTORS = either(st.one_of(st.lists(NUMBERS, min_size=3, max_size=3), arrays(st.sampled_from([(3,), (2,), (3, 1)]))))
 DEPTHS = either(st.sampled_from(["source-sphere", "target-sphere", "infinity", "map"]))
-WARP_KWARGS = dict(labels=IMAGES, depth=DEPTHS, fill=either(NUMBERS), label_fill=either(INTS),
-                   return_valid=either(st.booleans()), sampling=either(st.sampled_from(["grid", "exact"])),
-                   depth_map=IMAGES, depth_values=either(st.sampled_from(["range", "z"])))
+WARP_KWARGS = dict(
+    labels=IMAGES,
+    depth=DEPTHS,
+    fill=either(NUMBERS),
+    label_fill=either(INTS),
+    return_valid=either(st.booleans()),
+    sampling=either(st.sampled_from(["grid", "exact"])),
+    depth_map=IMAGES,
+    depth_values=either(st.sampled_from(["range", "z"])),
+)
 
 
 def unpickled(cls, state):
@@ -183,27 +252,52 @@ def unpickled(cls, state):
 def warp_calls():
     return {
         "ViewpointChange": lambda d: fishcam.ViewpointChange(
-            **optional_kwargs(d.draw, rotation_deg=VECTORS, translation=VECTORS)),
+            **optional_kwargs(d.draw, rotation_deg=VECTORS, translation=VECTORS)
+        ),
         "AffineChange": lambda d: fishcam._fishcam.AffineChange(
-            **optional_kwargs(d.draw, rotation_deg=either(FLOATS), translation=VECTORS, scale=either(FLOATS))),
+            **optional_kwargs(d.draw, rotation_deg=either(FLOATS), translation=VECTORS, scale=either(FLOATS))
+        ),
         "ViewpointWarp": lambda d: fishcam.ViewpointWarp(
-            d.draw(either(st.just(CAMERA))), **optional_kwargs(d.draw, target=either(st.sampled_from(
-                [CAMERA, CAMERA.resized(20, 15), CAMERA.resized(2**15, 2**15)])))),
-        "maps": lambda d: WARP.maps(d.draw(CHANGES), **optional_kwargs(
-            d.draw, depth=DEPTHS, kind=either(st.sampled_from(["geometric", "sampling"])),
-            exact=either(st.booleans()), grid=either(st.booleans()))),
+            d.draw(either(st.just(CAMERA))),
+            **optional_kwargs(
+                d.draw, target=either(st.sampled_from([CAMERA, CAMERA.resized(20, 15), CAMERA.resized(2**15, 2**15)]))
+            ),
+        ),
+        "maps": lambda d: WARP.maps(
+            d.draw(CHANGES),
+            **optional_kwargs(
+                d.draw,
+                depth=DEPTHS,
+                kind=either(st.sampled_from(["geometric", "sampling"])),
+                exact=either(st.booleans()),
+                grid=either(st.booleans()),
+            ),
+        ),
         "sampling_grid": lambda d: WARP.sampling_grid(d.draw(CHANGES), **optional_kwargs(d.draw, depth=DEPTHS)),
-        "forward": lambda d: WARP.forward(d.draw(POINTS2), d.draw(CHANGES), **optional_kwargs(
-            d.draw, depth=DEPTHS, depth_map=IMAGES, depth_values=WARP_KWARGS["depth_values"])),
-        "warp": lambda d: WARP.warp(image=d.draw(IMAGES), change=d.draw(CHANGES),
-                                    **optional_kwargs(d.draw, **WARP_KWARGS)),
-        "__call__": lambda d: WARP(image=d.draw(IMAGES), change=d.draw(CHANGES),
-                                   **optional_kwargs(d.draw, **WARP_KWARGS)),
-        "warp_depth": lambda d: WARP.warp_depth(d.draw(IMAGES), d.draw(CHANGES), **optional_kwargs(
-            d.draw, depth=DEPTHS, values=WARP_KWARGS["depth_values"], fill=either(NUMBERS))),
-        "setstate": lambda d: unpickled(d.draw(st.sampled_from([fishcam.ViewpointWarp, fishcam.ViewpointChange,
-                                                                 fishcam.Camera, fishcam._fishcam.AffineChange])),
-                                        d.draw(st.one_of(JUNK, st.tuples(JUNK, JUNK), st.tuples(JUNK, JUNK, JUNK)))),
+        "forward": lambda d: WARP.forward(
+            d.draw(POINTS2),
+            d.draw(CHANGES),
+            **optional_kwargs(d.draw, depth=DEPTHS, depth_map=IMAGES, depth_values=WARP_KWARGS["depth_values"]),
+        ),
+        "warp": lambda d: WARP.warp(
+            image=d.draw(IMAGES), change=d.draw(CHANGES), **optional_kwargs(d.draw, **WARP_KWARGS)
+        ),
+        "__call__": lambda d: WARP(
+            image=d.draw(IMAGES), change=d.draw(CHANGES), **optional_kwargs(d.draw, **WARP_KWARGS)
+        ),
+        "warp_depth": lambda d: WARP.warp_depth(
+            d.draw(IMAGES),
+            d.draw(CHANGES),
+            **optional_kwargs(d.draw, depth=DEPTHS, values=WARP_KWARGS["depth_values"], fill=either(NUMBERS)),
+        ),
+        "setstate": lambda d: unpickled(
+            d.draw(
+                st.sampled_from(
+                    [fishcam.ViewpointWarp, fishcam.ViewpointChange, fishcam.Camera, fishcam._fishcam.AffineChange]
+                )
+            ),
+            d.draw(st.one_of(JUNK, st.tuples(JUNK, JUNK), st.tuples(JUNK, JUNK, JUNK))),
+        ),
     }
 
 
@@ -221,8 +315,9 @@ def test_viewpoint_change_and_warp(call, data):
 PRESETS = either(st.sampled_from(["small", "medium", "large", "train", "huge"]))
 SEED_CALLS = {
     "random_change": lambda d: fishcam.random_change(d.draw(PRESETS), d.draw(SEEDS)),
-    "random_change_in": lambda d: fishcam.random_change_in(d.draw(either(FLOATS)), d.draw(either(FLOATS)),
-                                                           d.draw(SEEDS)),
+    "random_change_in": lambda d: fishcam.random_change_in(
+        d.draw(either(FLOATS)), d.draw(either(FLOATS)), d.draw(SEEDS)
+    ),
     "derive_seed": lambda d: fishcam.derive_seed(d.draw(SEEDS), d.draw(either(TEXTS)), d.draw(SEEDS)),
     "change_for": lambda d: fx.RandomViewpoint(CAMERA).change_for(d.draw(SEEDS)),
     "affine_change_for": lambda d: fx.RandomAffine().change_for(d.draw(SEEDS)),
@@ -238,27 +333,51 @@ def test_seeds_and_changes(call, data):
 
 # --- fishcam.transforms ---------------------------------------------------------------
 
+
 def viewpoint_kwargs(draw):
     return optional_kwargs(
-        draw, camera=either(st.just(CAMERA)), preset=PRESETS, max_rotation_deg=either(FLOATS),
-        max_translation=either(FLOATS), depth=DEPTHS, p=either(FLOATS),
+        draw,
+        camera=either(st.just(CAMERA)),
+        preset=PRESETS,
+        max_rotation_deg=either(FLOATS),
+        max_translation=either(FLOATS),
+        depth=DEPTHS,
+        p=either(FLOATS),
         fill=either(st.one_of(NUMBERS, st.dictionaries(st.sampled_from(["image", "mask", "others"]), NUMBERS))),
-        fill_mask=either(INTS), rng=either(st.just(np.random.default_rng(0))),
-        sampling=either(st.sampled_from(["grid", "exact"])), depth_values=WARP_KWARGS["depth_values"])
+        fill_mask=either(INTS),
+        rng=either(st.just(np.random.default_rng(0))),
+        sampling=either(st.sampled_from(["grid", "exact"])),
+        depth_values=WARP_KWARGS["depth_values"],
+    )
 
 
 def affine_kwargs(draw):
     return optional_kwargs(
-        draw, preset=PRESETS, max_rotation_deg=either(FLOATS), max_translation=either(FLOATS),
-        scale_range=either(st.tuples(FLOATS, FLOATS)), p=either(FLOATS), fill=either(NUMBERS),
-        fill_mask=either(INTS), rng=either(st.just(np.random.default_rng(0))))
+        draw,
+        preset=PRESETS,
+        max_rotation_deg=either(FLOATS),
+        max_translation=either(FLOATS),
+        scale_range=either(st.tuples(FLOATS, FLOATS)),
+        p=either(FLOATS),
+        fill=either(NUMBERS),
+        fill_mask=either(INTS),
+        rng=either(st.just(np.random.default_rng(0))),
+    )
 
 
 def target_kwargs(draw):
     return optional_kwargs(
-        draw, image=IMAGES, mask=IMAGES, seed=SEEDS, camera=either(st.just(CAMERA)),
-        keypoints=POINTS2, boxes=POINTS2, polygons=either(st.lists(POINTS2, max_size=2)),
-        images=either(st.lists(IMAGES, max_size=2)), depth_map=IMAGES)
+        draw,
+        image=IMAGES,
+        mask=IMAGES,
+        seed=SEEDS,
+        camera=either(st.just(CAMERA)),
+        keypoints=POINTS2,
+        boxes=POINTS2,
+        polygons=either(st.lists(POINTS2, max_size=2)),
+        images=either(st.lists(IMAGES, max_size=2)),
+        depth_map=IMAGES,
+    )
 
 
 @properties(100)
@@ -271,9 +390,11 @@ def test_numpy_transform_constructors(data):
 @properties(100)
 @given(st.sampled_from(["viewpoint", "viewpoint-map", "affine"]), st.data())
 def test_numpy_transform_calls(kind, data):
-    transform = {"viewpoint": fx.RandomViewpoint(CAMERA, preset="large"),
-                 "viewpoint-map": fx.RandomViewpoint(CAMERA, preset="large", depth="map"),
-                 "affine": fx.RandomAffine()}[kind]
+    transform = {
+        "viewpoint": fx.RandomViewpoint(CAMERA, preset="large"),
+        "viewpoint-map": fx.RandomViewpoint(CAMERA, preset="large", depth="map"),
+        "affine": fx.RandomAffine(),
+    }[kind]
     one_line_or_success(lambda: transform(**target_kwargs(data.draw)))
     if kind == "affine":
         one_line_or_success(lambda: transform.draw(data.draw(either(st.tuples(SIDES, SIDES))), data.draw(SEEDS)))
@@ -287,17 +408,25 @@ TENSOR_SHAPES = st.one_of(st.sampled_from(IMAGE_SHAPES), SHAPES)
 @st.composite
 def samples(draw):
     """A sample of odd tensors: plain, tv_tensors.Image, Mask, DepthMap; in a tuple or dict."""
-    kinds = draw(st.lists(st.sampled_from(["plain", "image", "mask", "depth", "boxes", "keypoints", "polygon",
-                                           "camera"]), min_size=1, max_size=3))
+    kinds = draw(
+        st.lists(
+            st.sampled_from(["plain", "image", "mask", "depth", "boxes", "keypoints", "polygon", "camera"]),
+            min_size=1,
+            max_size=3,
+        )
+    )
     out = []
     for kind in kinds:
         if kind == "camera":
             out.append(CAMERA)
             continue
         if kind in ("boxes", "keypoints", "polygon"):
-            values = draw(tensors(st.sampled_from([(2, 4), (0, 4), (2, 2), (3, 2), (1, 2)]),
-                                  st.sampled_from([torch.float32, torch.float64, torch.int64, torch.float16,
-                                                   torch.bfloat16])))
+            values = draw(
+                tensors(
+                    st.sampled_from([(2, 4), (0, 4), (2, 2), (3, 2), (1, 2)]),
+                    st.sampled_from([torch.float32, torch.float64, torch.int64, torch.float16, torch.bfloat16]),
+                )
+            )
             if kind == "boxes" and values.shape[-1] == 4:
                 out.append(tv_tensors.BoundingBoxes(values, format="XYXY", canvas_size=(H, W)))
             elif kind == "keypoints" and values.shape[-1] == 2:
@@ -315,15 +444,22 @@ def samples(draw):
 def torch_transform(kind, fill, fill_mask, min_visibility):
     if kind == "affine":
         return ft.RandomAffine(preset="large", fill=fill, fill_mask=fill_mask, min_visibility=min_visibility)
-    return ft.RandomViewpoint(CAMERA, preset="large", fill=fill, fill_mask=fill_mask, min_visibility=min_visibility,
-                              depth="map" if kind == "viewpoint-map" else "source-sphere")
+    return ft.RandomViewpoint(
+        CAMERA,
+        preset="large",
+        fill=fill,
+        fill_mask=fill_mask,
+        min_visibility=min_visibility,
+        depth="map" if kind == "viewpoint-map" else "source-sphere",
+    )
 
 
 @properties(100)
 @given(st.sampled_from(["viewpoint", "viewpoint-map", "affine"]), samples(), st.data())
 def test_torch_transforms_on_odd_tensors(kind, sample, data):
-    transform = one_line_or_success(torch_transform, kind, data.draw(either(NUMBERS)), data.draw(either(INTS)),
-                                    data.draw(either(FLOATS)))
+    transform = one_line_or_success(
+        torch_transform, kind, data.draw(either(NUMBERS)), data.draw(either(INTS)), data.draw(either(FLOATS))
+    )
     if transform is not None:
         one_line_or_success(transform, sample)
 
@@ -333,15 +469,22 @@ def test_torch_transforms_on_odd_tensors(kind, sample, data):
 def test_warp_batch(images, data):
     batch = images.shape[0] if images.ndim == 4 else 1
     masks = data.draw(either(tensors(st.sampled_from([(batch, H, W), (batch, H, W, 1)]))))
-    one_line_or_success(ft.warp_batch, images, data.draw(either(st.just(CAMERA))),
-                        data.draw(either(st.just([CHANGE] * batch))), masks=masks, fill=data.draw(either(NUMBERS)),
-                        fill_mask=data.draw(either(INTS)))
+    one_line_or_success(
+        ft.warp_batch,
+        images,
+        data.draw(either(st.just(CAMERA))),
+        data.draw(either(st.just([CHANGE] * batch))),
+        masks=masks,
+        fill=data.draw(either(NUMBERS)),
+        fill_mask=data.draw(either(INTS)),
+    )
 
 
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory):
     """A WoodScape-layout folder of two samples."""
     import cv2
+
     root = tmp_path_factory.mktemp("woodscape")
     for sub in ["rgb_images", "semantic_annotations/gtLabels", "calibration"]:
         (root / sub).mkdir(parents=True)
@@ -357,8 +500,9 @@ TORCH_CALLS = {
     "DepthMap": lambda d, _: ft.DepthMap(d.draw(either(tensors()))),
     "EpochSampler": lambda d, _: ft.EpochSampler(range(3), d.draw(either(INTS))).set_epoch(d.draw(either(INTS))),
     "set_epoch": lambda d, dataset: dataset.set_epoch(d.draw(either(INTS))),
-    "item": lambda d, dataset: dataset[d.draw(either(st.one_of(st.integers(-2, 1), st.tuples(INTS, st.integers(-2, 1)),
-                                                                   st.tuples(INTS, INTS, INTS))))],
+    "item": lambda d, dataset: dataset[
+        d.draw(either(st.one_of(st.integers(-2, 1), st.tuples(INTS, st.integers(-2, 1)), st.tuples(INTS, INTS, INTS))))
+    ],
     "min_visibility": lambda d, _: ft.RandomViewpoint(min_visibility=d.draw(either(FLOATS))),
 }
 
@@ -375,6 +519,7 @@ def test_torch_objects(dataset, call, data):
 
 # --- the round's bugs as properties -----------------------------------------------------
 
+
 def holds(dtype, value):
     """Whether images of ``dtype`` hold ``value`` exactly (float: within its range)."""
     if isinstance(value, float) and not np.isfinite(value):
@@ -390,8 +535,11 @@ assert NO_SOURCE.any()
 
 
 @properties(80)
-@given(st.sampled_from([np.uint8, np.uint16, np.float32]), st.one_of(INTS, FLOATS),
-       st.sampled_from(["numpy", "torch", "albumentations"]))
+@given(
+    st.sampled_from([np.uint8, np.uint16, np.float32]),
+    st.one_of(INTS, FLOATS),
+    st.sampled_from(["numpy", "torch", "albumentations"]),
+)
 def test_image_fill_is_a_value_of_the_dtype_or_refused(dtype, fill, adapter):
     """The no-source pixels hold exactly ``fill`` (never a wrapped or saturated value);
     a fill the image's dtype cannot hold is refused."""
@@ -403,10 +551,12 @@ def test_image_fill_is_a_value_of_the_dtype_or_refused(dtype, fill, adapter):
         transform = one_line_or_success(ft.RandomViewpoint, CAMERA, preset="large", fill=fill)
         with ft.sample_seed(3):
             out = transform and one_line_or_success(
-                lambda: transform(tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1))).permute(1, 2, 0).numpy())
+                lambda: transform(tv_tensors.Image(torch.from_numpy(image).permute(2, 0, 1))).permute(1, 2, 0).numpy()
+            )
     else:
         import albumentations as A
         import fishcam.albumentations as fa
+
         transform = one_line_or_success(fa.RandomViewpoint, CAMERA, preset="large", fill=fill)
         pipeline = transform and A.Compose([transform], seed=0)
         out = pipeline and one_line_or_success(lambda: pipeline(image=image)["image"])
@@ -431,8 +581,10 @@ COORDINATES = st.one_of(st.floats(-1e12, 1e12), st.sampled_from([-np.inf, np.inf
 
 
 @properties(60)
-@given(st.lists(st.tuples(COORDINATES, COORDINATES, COORDINATES, COORDINATES), min_size=1, max_size=4),
-       st.sampled_from([None, 1, 3, 6]))
+@given(
+    st.lists(st.tuples(COORDINATES, COORDINATES, COORDINATES, COORDINATES), min_size=1, max_size=4),
+    st.sampled_from([None, 1, 3, 6]),
+)
 def test_boxes_cost_a_bounded_number_of_points(corners, seed):
     """However large a box, its outline costs at most BOX_MAX_POINTS mapped points, and
     the result is finite; a box holding the whole image keeps the content in view."""

@@ -5,11 +5,10 @@ import os
 import subprocess
 
 import cv2
+import fishcam
 import numpy as np
 import pytest
 import torch
-
-import fishcam
 
 BINARY = os.environ.get("FISHCAM_BINARY")
 
@@ -19,7 +18,7 @@ def reference_iou(preds, gts, num_classes, ignore=None):
     pred = np.concatenate([p.ravel() for p in preds]).astype(np.int64)
     gt = np.concatenate([g.ravel() for g in gts]).astype(np.int64)
     keep = gt != ignore if ignore is not None else np.ones_like(gt, bool)
-    matrix = np.bincount(gt[keep] * num_classes + pred[keep], minlength=num_classes ** 2)
+    matrix = np.bincount(gt[keep] * num_classes + pred[keep], minlength=num_classes**2)
     matrix = matrix.reshape(num_classes, num_classes)
     tp = np.diag(matrix).astype(float)
     union = matrix.sum(0) + matrix.sum(1) - tp
@@ -66,16 +65,21 @@ def test_torch_batches_and_validity_masks():
 def test_validity_masks_are_bool_or_zero_one_integers():
     """256 and 0.5 once cast to 0 and silently left pixels unscored."""
     gt = np.array([[0, 1, 2, 1]], np.uint8)
-    for mask in [np.array([[True, True, False, True]]), np.array([[1, 1, 0, 1]], np.int64),
-                 np.array([[1, 1, 0, 1]], np.uint16)]:
+    for mask in [
+        np.array([[True, True, False, True]]),
+        np.array([[1, 1, 0, 1]], np.int64),
+        np.array([[1, 1, 0, 1]], np.uint16),
+    ]:
         matrix = fishcam.metrics.ConfusionMatrix(3)
         matrix.update(gt, gt, valid=mask)
         assert matrix.scored_pixels == 3, mask.dtype
     matrix = fishcam.metrics.ConfusionMatrix(3)
-    for mask, message in [(np.array([[256, 256, 1, 1]]), "only 0 and 1"),
-                          (np.array([[-1, 1, 1, 1]], np.int8), "only 0 and 1"),
-                          (np.array([[0.5, 1, 1, 1]]), "got dtype float64"),
-                          (np.array([["a", "b", "c", "d"]]), "got dtype")]:
+    for mask, message in [
+        (np.array([[256, 256, 1, 1]]), "only 0 and 1"),
+        (np.array([[-1, 1, 1, 1]], np.int8), "only 0 and 1"),
+        (np.array([[0.5, 1, 1, 1]]), "got dtype float64"),
+        (np.array([["a", "b", "c", "d"]]), "got dtype"),
+    ]:
         with pytest.raises(fishcam.Error, match=message):
             matrix.update(gt, gt, valid=mask)
     assert matrix.scored_pixels == 0
@@ -147,8 +151,18 @@ def test_evaluate_equals_the_reference_and_prints_table_2(tmp_path):
             assert row["degradation_pct"] == pytest.approx(100 * (np.nanmean(iou) - first) / first, rel=1e-12)
     text = cli("evaluate", *args, "--ignore", 255).stdout
     assert "mIoU (%)" in text and "degrades (%)" in text and "left out of its mIoU: bicycle" in text
-    single = json.loads(cli("evaluate", "--pred", tmp_path / "small" / "pred", "--gt", tmp_path / "small" / "gt",
-                            "--ignore", 255, "--json").stdout)
+    single = json.loads(
+        cli(
+            "evaluate",
+            "--pred",
+            tmp_path / "small" / "pred",
+            "--gt",
+            tmp_path / "small" / "gt",
+            "--ignore",
+            255,
+            "--json",
+        ).stdout
+    )
     assert single["miou"] == pytest.approx(100 * np.nanmean(sets["small"]), rel=1e-12)
 
 
@@ -158,8 +172,9 @@ def test_evaluate_reads_the_layout_augment_dataset_writes(tmp_path):
         labels = [random_labels(rng, (8, 8), 3) for _ in range(2)]
         write_set(tmp_path / "gt" / preset / "semantic_annotations" / "gtLabels", labels)
         write_set(tmp_path / "pred" / preset, labels)
-    result = json.loads(cli("evaluate", "--pred", tmp_path / "pred", "--gt", tmp_path / "gt", "--classes", 3,
-                            "--json").stdout)
+    result = json.loads(
+        cli("evaluate", "--pred", tmp_path / "pred", "--gt", tmp_path / "gt", "--classes", 3, "--json").stdout
+    )
     assert [s["name"] for s in result["sets"]] == ["small", "large"]
     assert all(s["miou"] == 100 for s in result["sets"])
 
@@ -180,8 +195,10 @@ def test_evaluate_bad_inputs_name_the_file(tmp_path):
     assert str(gt / "img01.png") + ": ground truth value 255" in err
     cli("evaluate", "--pred", pred, "--gt", gt, "--ignore", 255)  # ignored before the range check
     assert cv2.imwrite(str(pred / "extra.png"), np.zeros((4, 4), np.uint8))
-    assert "extra.png: no ground truth named extra" in cli("evaluate", "--pred", pred, "--gt", gt, "--ignore", 255,
-                                                            ok=False).stderr
+    assert (
+        "extra.png: no ground truth named extra"
+        in cli("evaluate", "--pred", pred, "--gt", gt, "--ignore", 255, ok=False).stderr
+    )
     os.remove(pred / "extra.png")
     assert "--classes" in cli("evaluate", "--pred", pred, "--gt", gt, "--classes", "x", ok=False).stderr
     assert "--set" in cli("evaluate", "--set", "nope", ok=False).stderr

@@ -4,11 +4,10 @@ kannala-brandt camera, to 1e-6 px."""
 
 import os
 
+import fishcam
 import numpy as np
 import pytest
 import torch
-
-import fishcam
 
 if os.environ.get("FISHCAM_REQUIRE_PEERS") != "1":
     pytest.importorskip("kornia")

@@ -3,11 +3,10 @@ geometry (a rotation-only change moves points exactly) and against bad input."""
 
 import os
 
-import numpy as np
-import pytest
-
 import fishcam
 import fishcam.transforms
+import numpy as np
+import pytest
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 
@@ -70,6 +69,7 @@ def test_bad_input(camera):
 
 # --- depth="map": the sample's own depth map places the scene points ---
 
+
 def _away_from_boundaries(labels, valid):
     """Pixels whose 5x5 neighbourhood holds one label and has a source all around."""
     windows = np.lib.stride_tricks.sliding_window_view(np.pad(labels, 2, mode="edge"), (5, 5))
@@ -87,8 +87,15 @@ def test_depth_map_augmentation_matches_the_moved_camera_render(camera):
     change = _translated_change()
     truth = fishcam.render(camera, scene_seed=13, change=change, supersampling=1)
     warp = fishcam.ViewpointWarp(camera)
-    result = warp.warp(image=source["image"], labels=source["mask"], change=change, depth="map",
-                       depth_map=source["depth"], label_fill=255, return_valid=True)
+    result = warp.warp(
+        image=source["image"],
+        labels=source["mask"],
+        change=change,
+        depth="map",
+        depth_map=source["depth"],
+        label_fill=255,
+        return_valid=True,
+    )
     where = _away_from_boundaries(truth["mask"], result["valid"])
     assert where.sum() > 20000
     assert (result["labels"][where] == truth["mask"][where]).mean() > 0.98
@@ -98,8 +105,10 @@ def test_depth_map_augmentation_matches_the_moved_camera_render(camera):
     relative = np.abs(depth[finite] - truth["depth"][finite]) / truth["depth"][finite]
     # Nearest-neighbour values along the exact ray of the sampled position: within half
     # a pixel's change of range along the surface.
-    assert finite.sum() > 10000 and np.median(relative) < 5e-3 and np.percentile(relative, 95) < 0.03, \
-        (np.median(relative), np.percentile(relative, 95))
+    assert finite.sum() > 10000 and np.median(relative) < 5e-3 and np.percentile(relative, 95) < 0.03, (
+        np.median(relative),
+        np.percentile(relative, 95),
+    )
     # Keypoints: each pixel's scene point moved and projected (independently, here).
     v, u = np.mgrid[30:210:9, 30:290:9]
     points = np.stack([u.ravel(), v.ravel()], axis=1).astype(np.float64)
@@ -139,10 +148,14 @@ def test_depth_map_in_a_torchvision_pipeline(camera):
     torch = pytest.importorskip("torch")
     fishcam_torch = pytest.importorskip("fishcam.torch")
     from torchvision import tv_tensors
+
     source = fishcam.render(camera, scene_seed=13, supersampling=1)
-    sample = {"image": tv_tensors.Image(torch.from_numpy(source["image"]).permute(2, 0, 1)),
-              "mask": tv_tensors.Mask(torch.from_numpy(source["mask"])),
-              "depth": fishcam_torch.DepthMap(torch.from_numpy(source["depth"])), "camera": camera}
+    sample = {
+        "image": tv_tensors.Image(torch.from_numpy(source["image"]).permute(2, 0, 1)),
+        "mask": tv_tensors.Mask(torch.from_numpy(source["mask"])),
+        "depth": fishcam_torch.DepthMap(torch.from_numpy(source["depth"])),
+        "camera": camera,
+    }
     t = fishcam_torch.RandomViewpoint(depth="map", preset="small", fill_mask=255)
     with fishcam_torch.sample_seed(11) as records:
         out = t(sample)

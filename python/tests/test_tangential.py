@@ -6,10 +6,9 @@ import json
 import pickle
 from pathlib import Path
 
+import fishcam
 import numpy as np
 import pytest
-
-import fishcam
 
 EXTERNAL = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "external"
 needs_shared = pytest.mark.skipif(not (EXTERNAL / "README.md").exists(), reason="no ../shared/data/external")
@@ -38,16 +37,34 @@ def mei(points, fx, fy, cx, cy, xi, k1, k2, p1, p2):
 def mei_camera(tmp_path_factory):
     """The T265 fisheye's MEI calibration (vinsfusion_t265_fisheye1_MEI.yaml) as fishcam JSON."""
     path = tmp_path_factory.mktemp("tangential") / "mei.json"
-    path.write_text(json.dumps({
-        "fishcam_camera": 1, "width": 848, "height": 800, "principal_point": [426.05865129, 400.00487828],
-        "pixel_scale": [1.0, 841.73955011 / 840.35417863], "model": "mei",
-        "parameters": [840.35417863, 2.00109674298, 0.26251514, -0.85422959],
-        "tangential": {"p1": 0.00501238, "p2": 0.00039633}}))
+    path.write_text(
+        json.dumps(
+            {
+                "fishcam_camera": 1,
+                "width": 848,
+                "height": 800,
+                "principal_point": [426.05865129, 400.00487828],
+                "pixel_scale": [1.0, 841.73955011 / 840.35417863],
+                "model": "mei",
+                "parameters": [840.35417863, 2.00109674298, 0.26251514, -0.85422959],
+                "tangential": {"p1": 0.00501238, "p2": 0.00039633},
+            }
+        )
+    )
     return fishcam.Camera.read(str(path))
 
 
-MEI_ARGS = (840.35417863, 841.73955011, 426.05865129, 400.00487828, 2.00109674298, 0.26251514, -0.85422959,
-            0.00501238, 0.00039633)
+MEI_ARGS = (
+    840.35417863,
+    841.73955011,
+    426.05865129,
+    400.00487828,
+    2.00109674298,
+    0.26251514,
+    -0.85422959,
+    0.00501238,
+    0.00039633,
+)
 
 
 def test_a_mei_camera_with_tangential_terms_projects_as_the_paper_says(mei_camera):
@@ -90,8 +107,13 @@ def test_conversion_to_a_radial_model_reports_the_non_radial_part(mei_camera):
     assert errors.shape == (200, 212) and errors.dtype == np.float32
     every_other = errors[::2, ::2]
     assert np.sqrt(np.nanmean(every_other.astype(np.float64) ** 2)) == pytest.approx(conversion.report.rms_px, abs=1e-5)
-    assert fishcam.convert(fishcam.Camera.read(str(Path(__file__).resolve().parents[2] / "data" / "kannala_brandt.yaml")),
-                           "equidistant").non_radial_px is None
+    assert (
+        fishcam.convert(
+            fishcam.Camera.read(str(Path(__file__).resolve().parents[2] / "data" / "kannala_brandt.yaml")),
+            "equidistant",
+        ).non_radial_px
+        is None
+    )
 
 
 @needs_shared
@@ -101,8 +123,9 @@ def test_real_radial_tangential_files_agree_with_cv2_project_points():
     assert camera.model == "opencv" and camera.tangential["p1"] == 0.00019359
     points = rays(5000, 70, 2)
     K = np.array([[458.654, 0, 367.215], [0, 457.296, 248.375], [0, 0, 1]])
-    expected, _ = cv2.projectPoints(points, np.zeros(3), np.zeros(3), K,
-                                    np.array([-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]))
+    expected, _ = cv2.projectPoints(
+        points, np.zeros(3), np.zeros(3), K, np.array([-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05])
+    )
     pixels, ok = camera.project(points)
     assert ok.all()
     assert np.abs(pixels - expected[:, 0]).max() < 1e-7
@@ -123,10 +146,19 @@ def spline_camera_json():
     for y in range(6):
         for x in range(8):
             values += [0.004 * np.cos(0.7 * x + 0.3 * y) + 0.001 * x, 0.003 * np.sin(0.5 * x - 0.9 * y) - 0.0015 * y]
-    return {"fishcam_camera": 1, "width": 640, "height": 483, "principal_point": [321.5, 240.0],
-            "pixel_scale": [1.0, 1.0045], "model": "stereographic", "parameters": [165.0],
-            "mrcal_lens": {"lensmodel": "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
-                       "values": [float(v) for v in values]}}
+    return {
+        "fishcam_camera": 1,
+        "width": 640,
+        "height": 483,
+        "principal_point": [321.5, 240.0],
+        "pixel_scale": [1.0, 1.0045],
+        "model": "stereographic",
+        "parameters": [165.0],
+        "mrcal_lens": {
+            "lensmodel": "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
+            "values": [float(v) for v in values],
+        },
+    }
 
 
 def test_a_splined_camera_is_mrcals_projection(tmp_path):
@@ -180,8 +212,14 @@ def test_a_splined_camera_is_mrcals_projection(tmp_path):
 
 MRCAL_LENSES = [  # (lensmodel, values, base model, fx, image, whether warps take the float kernel)
     ("LENSMODEL_CAHVOR", [0.03, -0.02, 0.01, -0.05, 0.01], "pinhole", 420.0, (1280, 966), True),
-    ("LENSMODEL_CAHVORE_linearity=0.50", [0.03, -0.02, 0.01, -0.05, 0.01, 1.2, 0.5, -0.3], "stereographic",
-     420.0, (1280, 966), True),
+    (
+        "LENSMODEL_CAHVORE_linearity=0.50",
+        [0.03, -0.02, 0.01, -0.05, 0.01, 1.2, 0.5, -0.3],
+        "stereographic",
+        420.0,
+        (1280, 966),
+        True,
+    ),
     ("LENSMODEL_LONLAT", [], "stereographic", 450.0, (1280, 966), True),  # the image inside the poles
     # The image reaches 81.5 deg of latitude at its sides, next to the pole, where the
     # chart is singular: no table of its offsets holds 1e-4 px (docs/augmentation.md).
@@ -221,7 +259,9 @@ def test_mrcal_lenses_are_mrcals_projection(tmp_path, lensmodel, values, base, f
         again = fishcam.Camera.read(str(tmp_path / name))
         assert again.model == base and again.mrcal_lens == camera.mrcal_lens
         assert np.abs(again.project(points)[0] - pixels).max() < 1e-9
-    refusal = "mrcal_lens: the opencv format cannot hold mrcal's " + lensmodel if base == "pinhole" else "not stereographic"
+    refusal = (
+        "mrcal_lens: the opencv format cannot hold mrcal's " + lensmodel if base == "pinhole" else "not stereographic"
+    )
     with pytest.raises(fishcam.Error, match=refusal):
         camera.write(str(tmp_path / "lens.yaml"), format="opencv")
     # Augmentation: the float kernel from a table of mrcal's offsets, within 1e-3 px of
@@ -265,8 +305,15 @@ def test_the_real_ocamcalib_file_is_cam2world(tmp_path):
     pixels = np.stack([u.ravel(), v.ravel()], axis=1)
     rays, ok = camera.unproject(pixels)
     assert ok.all()
-    expected = ocam_cam2world(pixels, [-7.463674e+02, 0.0, 8.872435e-04, -1.024379e-06, 9.406640e-10],
-                              630.102940, 958.314910, 0.996974, -0.014257, 0.013102)
+    expected = ocam_cam2world(
+        pixels,
+        [-7.463674e02, 0.0, 8.872435e-04, -1.024379e-06, 9.406640e-10],
+        630.102940,
+        958.314910,
+        0.996974,
+        -0.014257,
+        0.013102,
+    )
     assert np.abs(rays - expected).max() < 1e-13
     again, ok = camera.project(rays)
     assert ok.all() and np.abs(again - pixels).max() < 1e-9

@@ -5,10 +5,9 @@ moved scene, polygons against the densely mapped true curve; bad input refused."
 
 import os
 
+import fishcam
 import numpy as np
 import pytest
-
-import fishcam
 from fishcam.transforms import POLYGON_TOLERANCE_PX, RandomAffine, RandomViewpoint
 
 DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
@@ -84,8 +83,9 @@ def test_depth_maps_match_the_moved_scene_for_rotations(cam):
     """A plane z = 2 in front of the camera: its z map under a rotation equals the z of
     the plane seen from the rotated camera (computed from the output rays); a sphere
     of radius 3 keeps its range."""
-    rays, ok = cam.unproject(np.stack(np.meshgrid(np.arange(cam.width), np.arange(cam.height)), -1)
-                             .reshape(-1, 2).astype(float))
+    rays, ok = cam.unproject(
+        np.stack(np.meshgrid(np.arange(cam.width), np.arange(cam.height)), -1).reshape(-1, 2).astype(float)
+    )
     rays = rays.reshape(cam.height, cam.width, 3)
     with np.errstate(divide="ignore", invalid="ignore"):
         plane_z = np.where(rays[..., 2] > 0.05, 2.0, np.nan).astype(np.float32)
@@ -120,8 +120,9 @@ def test_polygons_stay_within_half_a_pixel_of_the_true_curve(cam, seed):
     out = t(polygons=[polygon], seed=seed)["polygons"][0]
     assert len(out) >= len(polygon)
     change = t.change_for(seed)
-    dense = np.concatenate([np.linspace(a, b, 200, endpoint=False)
-                            for a, b in zip(polygon, np.roll(polygon, -1, axis=0))])
+    dense = np.concatenate(
+        [np.linspace(a, b, 200, endpoint=False) for a, b in zip(polygon, np.roll(polygon, -1, axis=0))]
+    )
     curve, ok = forward_reference(cam, change, dense)
     curve = curve[ok & np.isfinite(curve).all(axis=1)]
     chain = np.concatenate([out, out[:1]])
@@ -129,8 +130,11 @@ def test_polygons_stay_within_half_a_pixel_of_the_true_curve(cam, seed):
     a, b = chain[:-1][finite[:-1] & finite[1:]], chain[1:][finite[:-1] & finite[1:]]
     # Distance of every true curve point to the nearest segment of the output.
     ab = b - a
-    tt = np.clip(np.einsum("sj,csj->cs", ab, curve[:, None, :] - a[None]) /
-                 np.maximum(np.einsum("sj,sj->s", ab, ab), 1e-12), 0, 1)
+    tt = np.clip(
+        np.einsum("sj,csj->cs", ab, curve[:, None, :] - a[None]) / np.maximum(np.einsum("sj,sj->s", ab, ab), 1e-12),
+        0,
+        1,
+    )
     nearest = a[None] + tt[..., None] * ab[None]
     distance = np.linalg.norm(nearest - curve[:, None, :], axis=2).min(axis=1)
     assert distance.max() <= POLYGON_TOLERANCE_PX, distance.max()
@@ -196,8 +200,14 @@ def dense_box(sample_change, box, step=0.25):
     x0, y0, x1, y1 = np.asarray(box, dtype=float) - 0.5
     xs = np.linspace(x0, x1, max(int(np.ceil((x1 - x0) / step)), 1) + 1)
     ys = np.linspace(y0, y1, max(int(np.ceil((y1 - y0) / step)), 1) + 1)
-    outline = np.concatenate([np.stack([xs, np.full_like(xs, y0)], 1), np.stack([xs, np.full_like(xs, y1)], 1),
-                              np.stack([np.full_like(ys, x0), ys], 1), np.stack([np.full_like(ys, x1), ys], 1)])
+    outline = np.concatenate(
+        [
+            np.stack([xs, np.full_like(xs, y0)], 1),
+            np.stack([xs, np.full_like(xs, y1)], 1),
+            np.stack([np.full_like(ys, x0), ys], 1),
+            np.stack([np.full_like(ys, x1), ys], 1),
+        ]
+    )
     mapped = sample_change.points(outline)[0]
     mapped = mapped[np.isfinite(mapped).all(axis=1)] + 0.5
     return np.concatenate([mapped.min(0), mapped.max(0)])
@@ -223,6 +233,7 @@ def test_huge_boxes_are_clipped_before_their_outline_is_sampled(cam, size):
     past the image on every side, keeps the content in view rather than becoming
     [0, 0, 0, 0] where its outline leaves the field of view."""
     import time
+
     sample_change = RandomViewpoint(cam, preset="large").draw(seed=1)
     counted = []
     forward = sample_change._forward

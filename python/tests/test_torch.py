@@ -7,12 +7,11 @@ import json
 import os
 import pickle
 
+import fishcam
+import fishcam.torch as ft
 import numpy as np
 import pytest
 import torch
-
-import fishcam
-import fishcam.torch as ft
 from torchvision import tv_tensors
 from torchvision.transforms import v2
 
@@ -29,6 +28,7 @@ def small_camera():
 def dataset_root(tmp_path_factory, small_camera):
     """A WoodScape-layout folder with 6 small samples."""
     import cv2
+
     root = tmp_path_factory.mktemp("woodscape")
     for sub in ["rgb_images", "semantic_annotations/gtLabels", "calibration"]:
         (root / sub).mkdir(parents=True)
@@ -36,8 +36,9 @@ def dataset_root(tmp_path_factory, small_camera):
     for i in range(6):
         name = f"{i:05d}_FV"
         cv2.imwrite(str(root / "rgb_images" / f"{name}.png"), rng.integers(0, 256, (121, 160, 3), dtype=np.uint8))
-        cv2.imwrite(str(root / "semantic_annotations/gtLabels" / f"{name}.png"),
-                    rng.integers(0, 10, (121, 160), dtype=np.uint8))
+        cv2.imwrite(
+            str(root / "semantic_annotations/gtLabels" / f"{name}.png"), rng.integers(0, 10, (121, 160), dtype=np.uint8)
+        )
         small_camera.write(str(root / "calibration" / f"{name}.json"), format="woodscape")
     return root
 
@@ -65,9 +66,14 @@ def changes(loader, epochs=2):
 
 def test_changes_differ_across_workers_and_epochs_and_reproduce(small_camera):
     def loader(seed):
-        return torch.utils.data.DataLoader(Images(small_camera), batch_size=2, num_workers=2,
-                                           worker_init_fn=ft.worker_init_fn,
-                                           generator=torch.Generator().manual_seed(seed))
+        return torch.utils.data.DataLoader(
+            Images(small_camera),
+            batch_size=2,
+            num_workers=2,
+            worker_init_fn=ft.worker_init_fn,
+            generator=torch.Generator().manual_seed(seed),
+        )
+
     a = changes(loader(1))
     rows = torch.cat(a)
     assert len({tuple(r.tolist()) for r in rows}) == rows.shape[0], "a change repeated across workers or epochs"
@@ -112,9 +118,15 @@ def test_every_epoch_reaches_every_worker(dataset_root, workers, persistent):
     transform = v2.Compose([ft.RandomViewpoint(preset="medium"), v2.ColorJitter(0.4, 0.4), v2.GaussianBlur(3)])
     ds = ft.WoodScapeDataset(dataset_root, transform=transform, seed=11)
     sampler = ft.EpochSampler(torch.utils.data.RandomSampler(ds, generator=torch.Generator().manual_seed(3)))
-    loader = torch.utils.data.DataLoader(ds, batch_size=4, num_workers=workers, persistent_workers=persistent,
-                                         sampler=sampler, worker_init_fn=ft.worker_init_fn if workers else None,
-                                         collate_fn=ft.collate)
+    loader = torch.utils.data.DataLoader(
+        ds,
+        batch_size=4,
+        num_workers=workers,
+        persistent_workers=persistent,
+        sampler=sampler,
+        worker_init_fn=ft.worker_init_fn if workers else None,
+        collate_fn=ft.collate,
+    )
     images = {}
     epochs = epoch_seeds(loader, ds, 3, images)
     assert len(epochs) == 3
@@ -134,13 +146,16 @@ def test_distributed_ranks_share_the_epoch_seeds(dataset_root):
     """Two DistributedSampler ranks: together every index once per epoch, with the
     epoch's seed; the inner sampler is told the epoch (its shuffle changes)."""
     ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"), seed=4)
-    ranks = [ft.EpochSampler(torch.utils.data.DistributedSampler(ds, num_replicas=2, rank=r, shuffle=True, seed=0))
-             for r in range(2)]
+    ranks = [
+        ft.EpochSampler(torch.utils.data.DistributedSampler(ds, num_replicas=2, rank=r, shuffle=True, seed=0))
+        for r in range(2)
+    ]
     for e in range(2):
         seeds = {}
         for sampler in ranks:
-            loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=1, sampler=sampler,
-                                                 collate_fn=ft.collate)
+            loader = torch.utils.data.DataLoader(
+                ds, batch_size=2, num_workers=1, sampler=sampler, collate_fn=ft.collate
+            )
             for batch in loader:
                 for name, changes in zip(batch["name"], batch["changes"]):
                     seeds[ds.names.index(name)] = seed_of(changes)
@@ -150,8 +165,9 @@ def test_distributed_ranks_share_the_epoch_seeds(dataset_root):
 
 def test_a_seeded_dataset_without_the_epoch_in_workers_is_refused(dataset_root):
     ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"), seed=4)
-    loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=1, persistent_workers=True,
-                                         collate_fn=ft.collate)
+    loader = torch.utils.data.DataLoader(
+        ds, batch_size=2, num_workers=1, persistent_workers=True, collate_fn=ft.collate
+    )
     with pytest.raises(fishcam.Error, match="EpochSampler"):
         next(iter(loader))
     # In the main process too, without EpochSampler: a bare index before set_epoch would
@@ -183,8 +199,9 @@ def test_what_reproduces_an_unseeded_run(dataset_root):
         if manual_seed is not None:
             torch.manual_seed(manual_seed)
         generator = None if generator_seed is None else torch.Generator().manual_seed(generator_seed)
-        loader = torch.utils.data.DataLoader(ds, batch_size=2, num_workers=workers, generator=generator,
-                                             collate_fn=ft.collate)
+        loader = torch.utils.data.DataLoader(
+            ds, batch_size=2, num_workers=workers, generator=generator, collate_fn=ft.collate
+        )
         return [seed_of(c) for _ in range(2) for batch in loader for c in batch["changes"]]
 
     with_workers = run(1, generator_seed=5)
@@ -235,8 +252,15 @@ def test_v2_pipelines_on_dicts_and_tuples(small_camera):
     """Inside v2.Compose beside photometric and other geometric transforms: the same
     structure and types back; every target under the one change the numpy
     transform applies for the same seed."""
-    pipeline = v2.Compose([ft.RandomViewpoint(preset="large"), v2.ColorJitter(0.3, 0.3), v2.GaussianBlur(3),
-                           v2.RandomHorizontalFlip(p=0.0), v2.ToDtype(torch.float32, scale=True)])
+    pipeline = v2.Compose(
+        [
+            ft.RandomViewpoint(preset="large"),
+            v2.ColorJitter(0.3, 0.3),
+            v2.GaussianBlur(3),
+            v2.RandomHorizontalFlip(p=0.0),
+            v2.ToDtype(torch.float32, scale=True),
+        ]
+    )
     given = sample(small_camera)
     with ft.sample_seed(9) as records:
         out = pipeline(given)
@@ -251,9 +275,15 @@ def test_v2_pipelines_on_dicts_and_tuples(small_camera):
     with ft.sample_seed(9):
         viewpoint_only = alone(sample(small_camera))
     numpy_side = fishcam.transforms.RandomViewpoint(small_camera, preset="large")(
-        image=given["image"].permute(1, 2, 0).numpy(), mask=given["mask"].numpy(),
-        keypoints=given["points"].numpy(), boxes=given["boxes"].numpy(), depth_map=given["depth"].numpy(),
-        polygons=[p.numpy() for p in given["polygons"]], camera=small_camera, seed=9)
+        image=given["image"].permute(1, 2, 0).numpy(),
+        mask=given["mask"].numpy(),
+        keypoints=given["points"].numpy(),
+        boxes=given["boxes"].numpy(),
+        depth_map=given["depth"].numpy(),
+        polygons=[p.numpy() for p in given["polygons"]],
+        camera=small_camera,
+        seed=9,
+    )
     np.testing.assert_array_equal(viewpoint_only["image"].permute(1, 2, 0).numpy(), numpy_side["image"])
     np.testing.assert_array_equal(viewpoint_only["mask"].numpy(), numpy_side["mask"])
     np.testing.assert_allclose(viewpoint_only["points"].numpy(), numpy_side["keypoints"], rtol=1e-6)
@@ -278,12 +308,16 @@ def test_v2_pipelines_on_dicts_and_tuples(small_camera):
 
 def test_several_fishcam_transforms_in_one_sample_draw_different_changes(small_camera):
     image = torch.zeros(3, small_camera.height, small_camera.width, dtype=torch.uint8)
-    pipeline = v2.Compose([ft.RandomViewpoint(small_camera, preset="small"), ft.RandomViewpoint(small_camera),
-                           ft.RandomAffine()])
+    pipeline = v2.Compose(
+        [ft.RandomViewpoint(small_camera, preset="small"), ft.RandomViewpoint(small_camera), ft.RandomAffine()]
+    )
     with ft.sample_seed(21) as records:
         pipeline(image)
-    assert [r["seed"] for r in records] == [21, fishcam.derive_seed(21, "fishcam-transform", 1),
-                                            fishcam.derive_seed(21, "fishcam-transform", 2)]
+    assert [r["seed"] for r in records] == [
+        21,
+        fishcam.derive_seed(21, "fishcam-transform", 1),
+        fishcam.derive_seed(21, "fishcam-transform", 2),
+    ]
     assert [r["method"] for r in records] == ["viewpoint", "viewpoint", "affine"]
 
 
@@ -295,13 +329,21 @@ def test_instance_masks_give_tight_boxes_and_unseen_boxes_collapse(small_camera)
     instances = torch.zeros((2, h, w), dtype=torch.uint8)
     instances[0, 30:70, 40:90] = 1
     instances[1, 0:4, 0:4] = 1  # in the corner, outside the lens's image circle: nothing maps
-    t = v2.Compose([ft.RandomViewpoint(small_camera, preset="small", min_visibility=0.5),
-                    v2.SanitizeBoundingBoxes(labels_getter=lambda s: s["labels"])])
+    t = v2.Compose(
+        [
+            ft.RandomViewpoint(small_camera, preset="small", min_visibility=0.5),
+            v2.SanitizeBoundingBoxes(labels_getter=lambda s: s["labels"]),
+        ]
+    )
     with ft.sample_seed(3):
-        out = t({"image": tv_tensors.Image(torch.zeros(3, h, w, dtype=torch.uint8)),
-                 "masks": tv_tensors.Mask(instances),
-                 "boxes": tv_tensors.BoundingBoxes([[40, 30, 50, 40], [0, 0, 4, 4]], format="XYWH", canvas_size=(h, w)),
-                 "labels": torch.tensor([1, 2])})
+        out = t(
+            {
+                "image": tv_tensors.Image(torch.zeros(3, h, w, dtype=torch.uint8)),
+                "masks": tv_tensors.Mask(instances),
+                "boxes": tv_tensors.BoundingBoxes([[40, 30, 50, 40], [0, 0, 4, 4]], format="XYWH", canvas_size=(h, w)),
+                "labels": torch.tensor([1, 2]),
+            }
+        )
     assert out["boxes"].format == tv_tensors.BoundingBoxFormat.XYWH
     assert out["labels"].tolist() == [1] and len(out["masks"]) == 1
     ys, xs = torch.nonzero(out["masks"][0], as_tuple=True)
@@ -311,6 +353,7 @@ def test_instance_masks_give_tight_boxes_and_unseen_boxes_collapse(small_camera)
 
 def test_bad_samples_are_refused_in_one_line(small_camera):
     import PIL.Image
+
     t = ft.RandomViewpoint(small_camera)
     h, w = small_camera.height, small_camera.width
     cases = [
@@ -319,10 +362,19 @@ def test_bad_samples_are_refused_in_one_line(small_camera):
         ((torch.zeros(3, 10, 10, dtype=torch.uint8),), "is 10x10 but the camera is 160x121"),
         ((torch.zeros(3, h, w, dtype=torch.int64),), "dtype"),
         ((torch.zeros(3, h, w, dtype=torch.uint8, device="meta"),), "CPU"),
-        (({"image": tv_tensors.Image(torch.zeros(3, h, w, dtype=torch.uint8)),
-           "depth": ft.DepthMap(torch.zeros(h, w, dtype=torch.float64))},), "float32"),
-        (({"image": torch.zeros(3, h, w, dtype=torch.uint8), "a": small_camera, "b": small_camera.resized(80, 60)},),
-         "several different cameras"),
+        (
+            (
+                {
+                    "image": tv_tensors.Image(torch.zeros(3, h, w, dtype=torch.uint8)),
+                    "depth": ft.DepthMap(torch.zeros(h, w, dtype=torch.float64)),
+                },
+            ),
+            "float32",
+        ),
+        (
+            ({"image": torch.zeros(3, h, w, dtype=torch.uint8), "a": small_camera, "b": small_camera.resized(80, 60)},),
+            "several different cameras",
+        ),
     ]
     for args, message in cases:
         with pytest.raises(fishcam.Error, match=message) as error:
@@ -343,9 +395,10 @@ def test_no_hang_after_fork(tmp_path):
     import subprocess
     import sys
     import textwrap
+
     script = textwrap.dedent(f"""
         import fishcam, fishcam.torch as ft, torch
-        cam = fishcam.Camera.read({os.path.join(DATA, 'woodscape_front.json')!r}).resized(320, 242)
+        cam = fishcam.Camera.read({os.path.join(DATA, "woodscape_front.json")!r}).resized(320, 242)
         t = ft.RandomViewpoint(cam)
         img = torch.full((3, 242, 320), 9, dtype=torch.uint8)
         for s in range(3):
@@ -379,7 +432,8 @@ def test_masks_keep_their_dtype(small_camera):
     assert flags.dtype == np.bool_ and np.array_equal(flags, expected > 4)
     with ft.sample_seed(3):
         mask = ft.RandomViewpoint(small_camera, preset="medium")(
-            (torch.zeros(3, 121, 160, dtype=torch.uint8), tv_tensors.Mask(torch.from_numpy(labels.astype(np.int64)))))[1]
+            (torch.zeros(3, 121, 160, dtype=torch.uint8), tv_tensors.Mask(torch.from_numpy(labels.astype(np.int64))))
+        )[1]
     assert mask.dtype == torch.int64 and torch.equal(mask, torch.from_numpy(expected.astype(np.int64)))
     with pytest.raises(fishcam.Error, match="outside 0..65535"):
         transform(mask=np.full((121, 160), 70000, np.int64), seed=1)
@@ -390,12 +444,14 @@ def test_masks_keep_their_dtype(small_camera):
 def test_a_sample_with_two_images_is_refused(tmp_path, small_camera):
     """NAME.png beside NAME.jpg listed one sample twice (reading the .png both times): refused, naming both."""
     import cv2
+
     for sub in ["rgb_images", "semantic_annotations/gtLabels", "calibration"]:
         (tmp_path / sub).mkdir(parents=True)
     image = np.zeros((121, 160, 3), np.uint8)
     for name in ["a.png", "a.jpg", "b.png", "b.txt"]:
-        cv2.imwrite(str(tmp_path / "rgb_images" / name), image) if not name.endswith(".txt") else \
-            (tmp_path / "rgb_images" / name).write_text("notes")
+        cv2.imwrite(str(tmp_path / "rgb_images" / name), image) if not name.endswith(".txt") else (
+            tmp_path / "rgb_images" / name
+        ).write_text("notes")
     with pytest.raises(fishcam.Error, match=r"two images of sample 'a', 'a.jpg' and 'a.png'") as error:
         ft.WoodScapeDataset(tmp_path)
     assert "\n" not in str(error.value)
