@@ -10,10 +10,9 @@ import fishcam.torch
 import numpy as np
 import pytest
 import torch
+from conftest import BINARY, DATA
 from fishcam.transforms import RandomAffine
 
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
-BINARY = os.environ.get("FISHCAM_BINARY")
 CAMERA = os.path.join(DATA, "woodscape_front.json")
 
 

@@ -13,8 +13,7 @@ if os.environ.get("FISHCAM_REQUIRE_PEERS") != "1":
     pytest.importorskip("albumentations")
 import albumentations as A  # noqa: E402
 import fishcam.albumentations as fa  # noqa: E402
-
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
+from conftest import DATA
 
 
 @pytest.fixture(scope="module")

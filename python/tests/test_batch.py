@@ -9,8 +9,7 @@ import fishcam.torch as ft
 import numpy as np
 import pytest
 import torch
-
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
+from conftest import DATA
 
 
 @pytest.fixture(scope="module")

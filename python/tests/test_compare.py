@@ -9,9 +9,8 @@ import subprocess
 import fishcam
 import numpy as np
 import pytest
+from conftest import BINARY, DATA
 
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
-BINARY = os.environ.get("FISHCAM_BINARY")
 CAMERA = os.path.join(DATA, "woodscape_front.json")
 
 

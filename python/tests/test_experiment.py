@@ -11,11 +11,10 @@ import sys
 
 import fishcam
 import pytest
+from conftest import BINARY
 
 torch = pytest.importorskip("torch")
 experiment = pytest.importorskip("fishcam.experiment")
-
-BINARY = os.environ.get("FISHCAM_BINARY")
 
 
 @pytest.fixture(scope="module")

@@ -11,12 +11,12 @@ import subprocess
 import sys
 
 import pytest
+from conftest import BINARY
 
 torch = pytest.importorskip("torch")
 cv2 = pytest.importorskip("cv2")
 experiment = pytest.importorskip("fishcam.experiment")
 
-BINARY = os.environ.get("FISHCAM_BINARY")
 
 # One run (none, seed 0, 1 epoch, width 4), without the fidelity table and figures.
 TINY = ["--quick", "--configs", "none", "--seeds", "1", "--no-figures", "--no-fidelity"]

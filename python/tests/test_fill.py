@@ -11,11 +11,11 @@ import fishcam.torch as ft
 import numpy as np
 import pytest
 import torch
+from conftest import DATA
 from torchvision import tv_tensors
 from torchvision.ops import masks_to_boxes
 from torchvision.transforms import v2
 
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 H, W = 121, 160
 # Seeds whose "large" change leaves >= 1300 no-source pixels and moves the corner
 # instance wholly out of view (checked in the test, not assumed).

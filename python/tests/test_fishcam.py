@@ -9,10 +9,9 @@ import subprocess
 import fishcam
 import numpy as np
 import pytest
+from conftest import BINARY, DATA
 from fishcam.transforms import RandomViewpoint
 
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
-BINARY = os.environ.get("FISHCAM_BINARY")
 BUNDLED = [
     "woodscape_front.json",
     "stereographic.cameramodel",

@@ -23,11 +23,11 @@ import fishcam.transforms as fx
 import numpy as np
 import pytest
 import torch
+from conftest import DATA
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from torchvision import tv_tensors
 
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 CAMERA_FILE = os.path.join(DATA, "woodscape_front.json")
 W, H = 40, 30
 CAMERA = fishcam.Camera.read(CAMERA_FILE).resized(W, H)

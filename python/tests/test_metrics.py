@@ -9,8 +9,7 @@ import fishcam
 import numpy as np
 import pytest
 import torch
-
-BINARY = os.environ.get("FISHCAM_BINARY")
+from conftest import BINARY
 
 
 def reference_iou(preds, gts, num_classes, ignore=None):

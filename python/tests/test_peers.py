@@ -11,9 +11,8 @@ import torch
 
 if os.environ.get("FISHCAM_REQUIRE_PEERS") != "1":
     pytest.importorskip("kornia")
+from conftest import DATA
 from kornia.geometry.camera import distort_points_kannala_brandt, undistort_points_kannala_brandt  # noqa: E402
-
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 
 
 @pytest.fixture(scope="module")

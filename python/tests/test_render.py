@@ -7,8 +7,7 @@ import fishcam
 import fishcam.transforms
 import numpy as np
 import pytest
-
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
+from conftest import DATA
 
 
 @pytest.fixture(scope="module")

@@ -8,9 +8,9 @@ import os
 import fishcam
 import numpy as np
 import pytest
+from conftest import DATA
 from fishcam.transforms import POLYGON_TOLERANCE_PX, RandomAffine, RandomViewpoint
 
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 SEEDS = range(6)
 
 

@@ -12,10 +12,9 @@ import fishcam.torch as ft
 import numpy as np
 import pytest
 import torch
+from conftest import DATA
 from torchvision import tv_tensors
 from torchvision.transforms import v2
-
-DATA = os.environ.get("FISHCAM_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "data"))
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,25 @@
+"""What the package's tests share: where the bundled data and the fishcam program are.
+
+CTest sets FISHCAM_DATA_DIR and FISHCAM_BINARY (tests/CMakeLists.txt); run by hand,
+the data falls back to the source tree's data/ and tests that need the program skip.
+Test modules import the constants (``from conftest import DATA``) or take the
+fixtures.
+"""
+
+import os
+from pathlib import Path
+
+import pytest
+
+# The bundled cameras (data/ of the source tree).
+DATA = os.environ.get("FISHCAM_DATA_DIR", str(Path(__file__).resolve().parents[2] / "data"))
+# The fishcam program under test, or None.
+BINARY = os.environ.get("FISHCAM_BINARY")
+
+
+@pytest.fixture(scope="session")
+def fishcam_binary() -> str:
+    """The fishcam program; skips the test when CTest did not say where it is."""
+    if not BINARY:
+        pytest.skip("FISHCAM_BINARY not set (run through CTest)")
+    return BINARY
