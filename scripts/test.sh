@@ -18,4 +18,19 @@ if /usr/bin/ctest --test-dir build -N -LE . | grep -q "Test *#"; then
   /usr/bin/ctest --test-dir build -N -LE . | grep "Test *#" >&2
   exit 1
 fi
-/usr/bin/ctest --test-dir build --output-on-failure -j "$(nproc)"
+# What skipped, and why (tests that read ../shared's real files skip without it): the
+# Python tests append theirs to skipped-python.txt (python/tests/conftest.py), CTest
+# lists the C++ ones.
+rm -f build/tests/skipped-python.txt
+status=0
+/usr/bin/ctest --test-dir build --output-on-failure -j "$(nproc)" | tee build/tests/ctest-output.txt || status=$?
+cpp_skipped=$(grep -c "(Skipped)" build/tests/ctest-output.txt || true)
+python_skipped=0
+[ -f build/tests/skipped-python.txt ] && python_skipped=$(wc -l < build/tests/skipped-python.txt)
+shared_state="present"
+[ -d ../shared/data ] || shared_state="absent: the tests of real files skip"
+echo "test.sh: skipped: $cpp_skipped C++ tests (listed above), $python_skipped Python tests (../shared $shared_state)"
+if [ "$python_skipped" -gt 0 ]; then
+  cut -f2 build/tests/skipped-python.txt | sort | uniq -c | sort -rn | sed 's/^/test.sh:   /'
+fi
+exit "$status"

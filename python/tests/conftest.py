@@ -8,6 +8,7 @@ fixtures.
 
 import os
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -23,3 +24,18 @@ def fishcam_binary() -> str:
     if not BINARY:
         pytest.skip("FISHCAM_BINARY not set (run through CTest)")
     return BINARY
+
+
+def pytest_terminal_summary(terminalreporter: Any) -> None:
+    """Appends each skipped test and its reason to FISHCAM_SKIP_LOG (scripts/test.sh
+    counts them: the tests of ../shared's real files skip without it)."""
+    log = os.environ.get("FISHCAM_SKIP_LOG")
+    if not log:
+        return
+    lines = []
+    for report in terminalreporter.stats.get("skipped", []):
+        reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else str(report.longrepr)
+        lines.append(f"{report.nodeid}\t{reason.removeprefix('Skipped: ')}\n")
+    if lines:
+        with open(log, "a", encoding="utf-8") as out:  # one write per test file: CTest runs them in parallel
+            out.write("".join(lines))
