@@ -107,6 +107,43 @@ TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
   r = run_fishcam("fidelity " + quoted(dir / "a" / "train"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("no test/ folder"), std::string::npos) << r.err;
+
+  // Table 5 by geometry: 2 sets x 3 models. The camera's own model is the truth on
+  // rotations; the paper's equidistant fit of a WoodScape lens moves pixels, most at
+  // large angles, and agrees less.
+  r = run_fishcam("fidelity " + quoted(dir / "a") + " --models own,equidistant:paper,kannala-brandt --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto by_model = nlohmann::json::parse(r.out).at("rows");
+  ASSERT_EQ(by_model.size(), 6u) << r.out;
+  std::map<std::pair<std::string, std::string>, nlohmann::json> row_of;
+  for (const auto& row : by_model) {
+    EXPECT_EQ(row.at("samples").get<int>(), 8);
+    row_of[{row.at("test_set").get<std::string>(), row.at("model").get<std::string>()}] = row;
+  }
+  const auto own = row_of[{"test-small-rotation", "own"}], paper = row_of[{"test-small-rotation", "equidistant:paper"}],
+             kb = row_of[{"test-small-rotation", "kannala-brandt"}];
+  EXPECT_EQ(own.at("how"), "the camera itself");
+  EXPECT_EQ(paper.at("how"), "the paper's eqs. 13-14");
+  EXPECT_EQ(kb.at("how"), "least-squares fit");
+  EXPECT_GE(own.at("label_agreement").get<double>(), 0.99) << own.dump();
+  EXPECT_EQ(own.at("endpoint_px").get<double>(), 0.0) << own.dump();
+  EXPECT_LT(paper.at("label_agreement").get<double>(), own.at("label_agreement").get<double>()) << paper.dump();
+  EXPECT_GT(paper.at("endpoint_px").get<double>(), 1.0) << paper.dump();
+  EXPECT_LT(kb.at("endpoint_px").get<double>(), paper.at("endpoint_px").get<double>()) << kb.dump();
+  const auto bands = paper.at("endpoint_by_angle_px");
+  ASSERT_EQ(bands.size(), 4u);
+  EXPECT_GT(bands[2].get<double>(), bands[0].get<double>()) << paper.dump();  // 60-90 degrees against 0-30
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {" --models own,own", "--models: 'own' is given twice"},
+           {" --models ''", "--models: expected one or more names"},
+           {" --models kannala-brandt:paper", "kannala-brandt has no closed form in the paper"},
+           {" --models fisheye", "models: 'fisheye': not 'own' or a model"},
+           {" --depth infinity", "--depth: used by the --models table only"}}) {
+    r = run_fishcam("fidelity " + quoted(dir / "a") + args);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
 }
 
 TEST(CliAugmentation, RenderAugmentAndMap) {

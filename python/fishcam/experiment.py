@@ -577,13 +577,46 @@ def fidelity_table(rows: typing.Sequence[dict[str, typing.Any]]) -> list[str]:
     return lines + [""]
 
 
+# The models of Table 5 by geometry (fishcam.dataset_model_fidelity): the camera's
+# own, then the fitted models the Table 5 configurations train with.
+FIDELITY_MODELS = ("own",) + tuple(c[len("viewpoint:") :] for c in CONFIGS if c.startswith("viewpoint:"))
+
+
+def model_fidelity_table(rows: typing.Sequence[dict[str, typing.Any]]) -> list[str]:
+    """fishcam.dataset_model_fidelity's rows as markdown: Table 5 answered by geometry."""
+
+    def px(value: typing.Optional[float]) -> str:
+        return "–" if value is None or not math.isfinite(value) else f"{value:.2f}"
+
+    lines = [
+        "### Table 5 by geometry - the model used for augmenting, against the re-rendered truth",
+        "",
+        "Each test sample augmented by its test set's change computed through the model (source-sphere prior) "
+        "against the re-render from the truly moved camera; endpoint: the distance (px) of the model's map from "
+        "the camera's own, by the output pixel's angle of incidence. No training involved.",
+        "",
+        "| test set | model | with a source (%) | labels agree (%) | PSNR (dB) | endpoint (px) | 0-30° | 30-60° "
+        "| 60-90° | 90°+ |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    lines += [
+        f"| {r['test_set'][len('test-') :]} | {r['model']} | {100 * r['valid_share']:.1f} | "
+        f"{100 * r['label_agreement']:.2f} | {r['psnr_db']:.1f} | {px(r['endpoint_px'])} | "
+        + " | ".join(px(b) for b in r["endpoint_by_angle_px"])
+        + " |"
+        for r in rows
+    ]
+    return lines + [""]
+
+
 def tables(
     results: list[dict[str, typing.Any]],
     configs: typing.Sequence[str],
     fidelity: typing.Sequence[dict[str, typing.Any]] = (),
+    model_fidelity: typing.Sequence[dict[str, typing.Any]] = (),
 ) -> str:
     """The paper's tables as markdown: mIoU (%) per test set, mean ± std over seeds;
-    then the fidelity rows."""
+    Table 5 by geometry beside Table 5; then the fidelity rows."""
     sets = ["original"] + [s for name in TEST_SETS for s in (name, f"{name}-rotation")]
     present = [s for s in sets if any(s in r["test"] for r in results)]
 
@@ -615,6 +648,8 @@ def tables(
         ]
         lines += [f"| {c} | " + " | ".join(mean_std(miou(c, s)) for s in present) + " |" for c in rows]
         lines.append("")
+    if model_fidelity:
+        lines += model_fidelity_table(model_fidelity)
     if "none" in configs:
         lines += [
             "### Table 2 - no augmentation: per-class IoU (%) and degradation",
@@ -771,7 +806,9 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
         help="cross-entropy class weights: balanced (ENet's 1/ln(1.02 + share) from train/) or none",
     )
     parser.add_argument("--no-figures", action="store_true", help="skip figures/ (they need matplotlib)")
-    parser.add_argument("--no-fidelity", action="store_true", help="skip the fidelity table")
+    parser.add_argument(
+        "--no-fidelity", action="store_true", help="skip the fidelity tables (per depth prior, and Table 5 by geometry)"
+    )
     parser.add_argument(
         "--quick",
         action="store_true",
@@ -849,6 +886,11 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
             os.path.exists(os.path.join(args.dataset, f"test-{name}", "changes.jsonl")) for name in TEST_SETS
         )
         fidelity = fishcam.dataset_fidelity(args.dataset) if has_test_sets and not args.no_fidelity else []
+        model_fidelity = (
+            fishcam.dataset_model_fidelity(args.dataset, list(FIDELITY_MODELS))
+            if has_test_sets and not args.no_fidelity
+            else []
+        )
         written = [] if args.no_figures else figures(args, results, configs, device)
         summary = {
             "dataset": os.path.abspath(args.dataset),
@@ -866,11 +908,12 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
             "train_seconds_total": sum(r["train_seconds"] for r in results),
             "runs": results,
             "fidelity": fidelity,
+            "model_fidelity": model_fidelity,
         }
         with open(os.path.join(args.out, "results.json"), "w") as f:
             json.dump(summary, f, indent=1)
         with open(os.path.join(args.out, "tables.md"), "w") as f:
-            f.write(tables(results, configs, fidelity))
+            f.write(tables(results, configs, fidelity, model_fidelity))
         print(
             f"wrote {os.path.join(args.out, 'results.json')}, tables.md"
             + "".join(f", {os.path.relpath(w, args.out)}" for w in written)

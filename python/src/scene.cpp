@@ -79,6 +79,36 @@ void bind_scene(py::module_& m) {
       "the re-render from the moved camera. One dict per test set and prior: test_set, prior, samples, "
       "valid_share (pixels with a source), label_agreement (away from class boundaries), psnr_db; means over the "
       "samples.");
+
+  m.def(
+      "dataset_model_fidelity",
+      [](const std::string& dataset, const std::vector<std::string>& models, const std::string& depth) {
+        const DepthPrior prior = depth_prior(depth, "depth");
+        std::vector<ModelFidelity> rows;
+        {
+          py::gil_scoped_release release;
+          rows = fishcam::dataset_model_fidelity(dataset, models, prior);
+        }
+        std::vector<py::dict> out;
+        for (const ModelFidelity& r : rows) {
+          py::dict row;
+          row["test_set"] = r.test_set, row["model"] = r.model, row["how"] = r.how, row["samples"] = r.samples;
+          row["valid_share"] = r.valid_share, row["label_agreement"] = r.label_agreement, row["psnr_db"] = r.psnr_db;
+          row["endpoint_px"] = r.endpoint_px;
+          row["endpoint_by_angle_px"] =
+              std::vector<double>(r.endpoint_by_angle_px.begin(), r.endpoint_by_angle_px.end());
+          out.push_back(row);
+        }
+        return out;
+      },
+      py::arg("dataset"), py::arg("models"), py::arg("depth") = "source-sphere",
+      "The paper's Table 5 by geometry (as `fishcam fidelity --models`): each true viewpoint test set of a dataset "
+      "of `fishcam sample-dataset --scenes N` augmented through each of `models` -- 'own' (the camera itself) or a "
+      "model fitted to each sample's camera, 'NAME' or 'NAME:paper' / 'NAME:lsq' (eqs. 13-14 or least squares) -- "
+      "under the depth prior `depth`, against the re-render from the moved camera. One dict per test set and "
+      "model: test_set, model, how, samples, valid_share, label_agreement, psnr_db (means over the samples), "
+      "endpoint_px (mean distance of the model's map from the camera's own, px) and endpoint_by_angle_px (by the "
+      "output pixel's angle of incidence: 0-30, 30-60, 60-90, 90+ degrees; NaN for a band without pixels).");
 }
 
 }  // namespace fishcam::python

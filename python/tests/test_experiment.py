@@ -73,6 +73,9 @@ def test_quick_run_writes_the_tables_and_reproduces(dataset, tmp_path):
         results = json.load(f)
     # 4 test sets (small, large, each with its rotation-only variant) x 4 priors.
     assert len(results["fidelity"]) == 4 * 4
+    # Table 5 by geometry: 4 test sets x the camera's own model and the Table 5 models.
+    assert len(results["model_fidelity"]) == 4 * len(experiment.FIDELITY_MODELS)
+    assert "Table 5 by geometry" in tables
     assert len(results["class_weights"]) == 10
     for name in ("miou_vs_change.png", "predictions.png"):
         assert (out / "figures" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -112,6 +115,39 @@ def test_dataset_fidelity(dataset, tmp_path):
     (broken / "test-small" / "changes.jsonl").write_text('{"name": "00002_FV"}\n')
     with pytest.raises(fishcam.Error, match="changes.jsonl: a line lacks name, rotation_deg or translation"):
         fishcam.dataset_fidelity(str(broken))
+
+
+def test_dataset_model_fidelity(dataset):
+    rows = fishcam.dataset_model_fidelity(str(dataset), ["own", "equidistant:paper", "stereographic:lsq"])
+    assert [(r["test_set"], r["model"]) for r in rows] == [
+        (s, m)
+        for s in ("test-large", "test-large-rotation", "test-small", "test-small-rotation")
+        for m in ("own", "equidistant:paper", "stereographic:lsq")
+    ]
+    by = {(r["test_set"], r["model"]): r for r in rows}
+    for s in ("test-large-rotation", "test-small-rotation"):
+        own, paper = by[s, "own"], by[s, "equidistant:paper"]
+        # The camera's own model is the truth on rotations; a fitted model moves pixels.
+        assert own["label_agreement"] >= 0.995 and own["endpoint_px"] == 0, own
+        assert paper["endpoint_px"] > 0.5 and paper["label_agreement"] < own["label_agreement"], paper
+        assert len(paper["endpoint_by_angle_px"]) == 4
+    # The same rows as the program prints.
+    out = subprocess.run(
+        [BINARY, "fidelity", str(dataset), "--models", "own,equidistant:paper,stereographic:lsq", "--json"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    program = json.loads(out)["rows"]
+    assert [(r["test_set"], r["model"], r["samples"]) for r in program] == [
+        (r["test_set"], r["model"], r["samples"]) for r in rows
+    ]
+    for a, b in zip(program, rows):
+        assert a["label_agreement"] == pytest.approx(b["label_agreement"], abs=1e-12)
+    with pytest.raises(fishcam.Error, match="given twice"):
+        fishcam.dataset_model_fidelity(str(dataset), ["own", "own"])
+    with pytest.raises(fishcam.Error, match="depth"):
+        fishcam.dataset_model_fidelity(str(dataset), ["own"], depth="sphere")
 
 
 def test_figures_need_matplotlib(dataset, tmp_path, capsys, monkeypatch):

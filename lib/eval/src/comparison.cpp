@@ -54,9 +54,14 @@ struct Accumulator {
   }
 };
 
-// The band of each output pixel by its angle of incidence under the camera; -1
-// where the pixel has no ray.
-std::vector<signed char> angle_bands(const Camera& camera) {
+double distance(const WarpMaps& a, const WarpMaps& b, int v, int u) {
+  return std::hypot(double(a.map_x.at<float>(v, u)) - double(b.map_x.at<float>(v, u)),
+                    double(a.map_y.at<float>(v, u)) - double(b.map_y.at<float>(v, u)));
+}
+
+}  // namespace
+
+std::vector<signed char> incidence_angle_bands(const Camera& camera) {
   const std::size_t n = std::size_t(camera.width()) * std::size_t(camera.height());
   std::vector<float> rays(3 * n);
   camera.unproject_image(rays, InversePath::robust);
@@ -71,13 +76,6 @@ std::vector<signed char> angle_bands(const Camera& camera) {
   }
   return band;
 }
-
-double distance(const WarpMaps& a, const WarpMaps& b, int v, int u) {
-  return std::hypot(double(a.map_x.at<float>(v, u)) - double(b.map_x.at<float>(v, u)),
-                    double(a.map_y.at<float>(v, u)) - double(b.map_y.at<float>(v, u)));
-}
-
-}  // namespace
 
 AlternativeModel alternative_from_file(const std::string& path, Camera camera) {
   return {path, "read from " + path, std::move(camera), std::nullopt};
@@ -147,7 +145,7 @@ Comparison compare_models(const Camera& reference, const std::vector<Alternative
   for (int i = 0; i < options.samples; ++i) {
     out.changes.push_back(random_pose(options.preset, derive_seed(options.seed, "compare", std::uint64_t(i))));
   }
-  const std::vector<signed char> band = angle_bands(reference);
+  const std::vector<signed char> band = incidence_angle_bands(reference);
   const ViewpointWarp reference_warp(reference);
   // The reference's maps and augmented labels per change, computed once for every alternative.
   std::vector<WarpMaps> reference_maps(out.changes.size());

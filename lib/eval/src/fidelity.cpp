@@ -8,14 +8,21 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 
+#include "fishcam/core/model_registry.hpp"
+#include "fishcam/fit/fit.hpp"
 #include "fishcam/io/camera_io.hpp"
 #include "fishcam/io/file_input.hpp"
 #include "fishcam/io/image_io.hpp"
 #include "fishcam/io/npy.hpp"
 
 namespace fishcam {
+namespace {
+Fidelity fidelity_of_maps(const WarpMaps& maps, const cv::Mat& source_image, const cv::Mat& source_labels,
+                          const cv::Mat& truth_image, const cv::Mat& truth_labels);
+}  // namespace
 
 Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange& change,
                                std::optional<DepthPrior> prior, const cv::Mat& source_image,
@@ -36,6 +43,14 @@ Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange&
     if (source_depth.empty()) throw Error("fidelity: the depth-map prior needs the source's depth map");
     warp.compute_from_depth(change, source_depth, DepthValues::range, &maps);
   }
+  return fidelity_of_maps(maps, source_image, source_labels, truth_image, truth_labels);
+}
+
+namespace {
+
+// The source image and labels resampled by `maps` against the truth.
+Fidelity fidelity_of_maps(const WarpMaps& maps, const cv::Mat& source_image, const cv::Mat& source_labels,
+                          const cv::Mat& truth_image, const cv::Mat& truth_labels) {
   cv::Mat image, labels;
   warp_image(source_image, maps, &image);
   warp_labels(source_labels, maps, 255, &labels);
@@ -66,8 +81,6 @@ Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange&
   f.psnr_db = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
   return f;
 }
-
-namespace {
 
 namespace fs = std::filesystem;
 
@@ -122,13 +135,11 @@ ViewpointChange change_of(const nlohmann::json& entry, const fs::path& file, std
   }
 }
 
-}  // namespace
-
-std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
+// The dataset's true viewpoint test sets (test-*/ with their changes.jsonl), sorted.
+std::vector<fs::path> true_test_sets(const fs::path& root) {
   if (!fs::is_directory(root / "test")) {
     throw Error(path_for_message(root) + ": no test/ folder (expected a dataset of fishcam sample-dataset --scenes N)");
   }
-  const bool depth = fs::is_directory(root / "test" / "depth");
   std::vector<fs::path> sets;
   for (const auto& entry : fs::directory_iterator(root)) {
     if (entry.is_directory() && entry.path().filename().string().starts_with("test-")) {
@@ -144,6 +155,66 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
   }
   std::sort(sets.begin(), sets.end());
   if (sets.empty()) throw Error(path_for_message(root) + ": no true viewpoint test sets (test-PRESET/changes.jsonl)");
+  return sets;
+}
+
+// SET/changes.jsonl: each sample's name and true change, in the file's order.
+std::vector<std::pair<std::string, ViewpointChange>> true_changes(const fs::path& set) {
+  const fs::path changes = set / "changes.jsonl";
+  std::istringstream lines(read_bounded_file(changes, std::size_t(64) << 20, "a changes.jsonl file"));
+  std::vector<std::pair<std::string, ViewpointChange>> out;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.empty()) continue;
+    nlohmann::json entry;
+    try {
+      entry = nlohmann::json::parse(line);
+    } catch (const nlohmann::json::exception&) {
+      throw Error(path_for_message(changes) + ": a line is not JSON");
+    }
+    std::string name;
+    const ViewpointChange change = change_of(entry, changes, &name);
+    out.emplace_back(std::move(name), change);
+  }
+  return out;
+}
+
+// A token of check_fidelity_models: the camera itself, or a model spec and the
+// conversion method.
+struct FidelityModel {
+  bool own = false;
+  std::string spec, method = "lsq";
+};
+
+FidelityModel parse_fidelity_model(const std::string& token) {
+  if (token == "own") return {true, "", ""};
+  FidelityModel m{false, token, "lsq"};
+  const std::size_t colon = token.rfind(':');
+  if (colon != std::string::npos) {
+    const std::string suffix = token.substr(colon + 1);
+    const auto& methods = conversion_method_names();
+    if (std::find(methods.begin(), methods.end(), suffix) != methods.end()) {
+      m.spec = token.substr(0, colon), m.method = suffix;
+    }
+  }
+  ModelSpec spec;
+  try {
+    spec = parse_model_spec(m.spec);
+  } catch (const Error& e) {
+    throw Error("models: " + quoted_for_message(token) + ": not 'own' or a model (" + model_names_text() +
+                ") with an optional :METHOD (" + choices_for_message(conversion_method_names()) + "): " + e.what());
+  }
+  if (m.method == "paper" && !model_has_paper_form(spec.name)) {
+    throw Error("models: " + quoted_for_message(token) + ": " + spec.name +
+                " has no closed form in the paper (eqs. 13-14 give equidistant and stereographic): use :lsq");
+  }
+  return m;
+}
+
+}  // namespace
+
+std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
+  const std::vector<fs::path> sets = true_test_sets(root);
+  const bool depth = fs::is_directory(root / "test" / "depth");
   std::vector<std::pair<std::string, std::optional<DepthPrior>>> priors;
   for (DepthPrior p : {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity}) {
     priors.emplace_back(std::string(to_string(p)), p);
@@ -155,18 +226,7 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
     std::vector<DatasetFidelity> set_rows;
     for (const auto& [prior_name, prior] : priors)
       set_rows.push_back({set.filename().string(), prior_name, 0, 0, 0, 0});
-    const fs::path changes = set / "changes.jsonl";
-    std::istringstream lines(read_bounded_file(changes, std::size_t(64) << 20, "a changes.jsonl file"));
-    for (std::string line; std::getline(lines, line);) {
-      if (line.empty()) continue;
-      nlohmann::json entry;
-      try {
-        entry = nlohmann::json::parse(line);
-      } catch (const nlohmann::json::exception&) {
-        throw Error(path_for_message(changes) + ": a line is not JSON");
-      }
-      std::string name;
-      const ViewpointChange change = change_of(entry, changes, &name);
+    for (const auto& [name, change] : true_changes(set)) {
       const fs::path calibration = root / "test" / "calibration" / (name + ".json");
       auto warp = warps.find(calibration.string());
       if (warp == warps.end())
@@ -184,6 +244,105 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
     for (DatasetFidelity& row : set_rows) {
       if (row.samples == 0) continue;
       row.valid_share /= row.samples, row.label_agreement /= row.samples, row.psnr_db /= row.samples;
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
+std::vector<std::string> check_fidelity_models(const std::vector<std::string>& models) {
+  if (models.empty()) throw Error("models: expected at least one model (own, equidistant:paper, ...)");
+  std::set<std::string> seen;
+  for (const std::string& token : models) {
+    if (!seen.insert(token).second) throw Error("models: " + quoted_for_message(token) + " is given twice");
+    parse_fidelity_model(token);
+  }
+  return models;
+}
+
+std::vector<ModelFidelity> dataset_model_fidelity(const fs::path& root, const std::vector<std::string>& models,
+                                                  DepthPrior prior) {
+  check_fidelity_models(models);
+  const std::vector<fs::path> sets = true_test_sets(root);
+  // Per calibration file: the camera's own warp, each model's, and the bands of its pixels.
+  struct CameraModels {
+    std::vector<ViewpointWarp> warps;  // own first, then one per model
+    std::vector<std::string> how;
+    std::vector<signed char> band;
+  };
+  std::map<std::string, CameraModels> cameras;
+  const auto models_of = [&](const fs::path& calibration) -> const CameraModels& {
+    auto found = cameras.find(calibration.string());
+    if (found != cameras.end()) return found->second;
+    const Camera camera = read_camera(calibration);
+    CameraModels c;
+    c.warps.emplace_back(camera);
+    c.band = incidence_angle_bands(camera);
+    for (const std::string& token : models) {
+      const FidelityModel m = parse_fidelity_model(token);
+      if (m.own) {
+        c.warps.emplace_back(camera);
+        c.how.emplace_back("the camera itself");
+        continue;
+      }
+      try {
+        AlternativeModel alternative = alternative_model(camera, m.spec, m.method);
+        c.warps.emplace_back(alternative.camera);
+        c.how.push_back(alternative.how);
+      } catch (const Error& e) {
+        throw Error(path_for_message(calibration) + ": model " + quoted_for_message(token) + ": " + e.what());
+      }
+    }
+    return cameras.emplace(calibration.string(), std::move(c)).first->second;
+  };
+  constexpr std::size_t kBands = Comparison::kAngleBandsDeg.size() - 1;
+  std::vector<ModelFidelity> rows;
+  for (const fs::path& set : sets) {
+    std::vector<ModelFidelity> set_rows(models.size());
+    // Endpoint distances: sum and count per model and band (the last slot: all bands).
+    std::vector<std::array<double, kBands + 1>> sum(models.size()), count(models.size());
+    for (const auto& [name, change] : true_changes(set)) {
+      const CameraModels& c = models_of(root / "test" / "calibration" / (name + ".json"));
+      const SampleFiles source = read_sample(root / "test", name, false);
+      const SampleFiles truth = read_sample(set, name, false);
+      if (truth.image.cols != c.warps[0].target().width() || truth.image.rows != c.warps[0].target().height()) {
+        throw Error(path_for_message(set / "rgb_images" / (name + ".png")) + ": not its camera's size");
+      }
+      WarpMaps own;
+      c.warps[0].compute(change, prior, &own);
+      const cv::Mat own_valid = own.validity();
+      for (std::size_t k = 0; k < models.size(); ++k) {
+        WarpMaps maps;
+        c.warps[k + 1].compute(change, prior, &maps);
+        const Fidelity f = fidelity_of_maps(maps, source.image, source.labels, truth.image, truth.labels);
+        ModelFidelity& row = set_rows[k];
+        row.valid_share += f.valid_share, row.label_agreement += f.label_agreement, row.psnr_db += f.psnr_db;
+        ++row.samples;
+        const cv::Mat valid = maps.validity();
+        for (int v = 0; v < maps.map_x.rows; ++v) {
+          for (int u = 0; u < maps.map_x.cols; ++u) {
+            if (!valid.at<uchar>(v, u) || !own_valid.at<uchar>(v, u)) continue;
+            const double d = std::hypot(double(maps.map_x.at<float>(v, u)) - double(own.map_x.at<float>(v, u)),
+                                        double(maps.map_y.at<float>(v, u)) - double(own.map_y.at<float>(v, u)));
+            const signed char b = c.band[std::size_t(v) * std::size_t(maps.map_x.cols) + std::size_t(u)];
+            if (b >= 0) sum[k][std::size_t(b)] += d, count[k][std::size_t(b)] += 1;
+            sum[k][kBands] += d, count[k][kBands] += 1;
+          }
+        }
+      }
+    }
+    for (std::size_t k = 0; k < models.size(); ++k) {
+      ModelFidelity& row = set_rows[k];
+      if (row.samples == 0) continue;
+      row.test_set = set.filename().string();
+      row.model = models[k];
+      row.how = cameras.begin()->second.how[k];
+      row.valid_share /= row.samples, row.label_agreement /= row.samples, row.psnr_db /= row.samples;
+      const auto mean = [](double total, double n) {
+        return n > 0 ? total / n : std::numeric_limits<double>::quiet_NaN();
+      };
+      row.endpoint_px = mean(sum[k][kBands], count[k][kBands]);
+      for (std::size_t b = 0; b < kBands; ++b) row.endpoint_by_angle_px[b] = mean(sum[k][b], count[k][b]);
       rows.push_back(row);
     }
   }

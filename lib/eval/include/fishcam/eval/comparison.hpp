@@ -81,6 +81,10 @@ struct Comparison {
   static constexpr std::array<double, 5> kAngleBandsDeg = {0, 30, 60, 90, 360};
 };
 
+// The band of each pixel (row-major) by its angle of incidence under the camera,
+// an index into Comparison::kAngleBandsDeg's bands; -1 where the pixel has no ray.
+std::vector<signed char> incidence_angle_bands(const Camera& camera);
+
 // Compares each alternative (same image size as the reference) with the
 // reference. Throws Error for a size mismatch, samples outside 1..1000, or more
 // than 64 million (change, pixel) pairs (the exact percentiles keep them all).

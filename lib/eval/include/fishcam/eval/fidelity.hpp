@@ -5,12 +5,14 @@
 
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "fishcam/augment/augmentation.hpp"
+#include "fishcam/eval/comparison.hpp"
 
 namespace fishcam {
 
@@ -49,5 +51,39 @@ struct DatasetFidelity {
 // folder. Rows by test set (sorted by name), then prior. Throws Error naming the
 // file for a missing or malformed dataset.
 std::vector<DatasetFidelity> dataset_fidelity(const std::filesystem::path& root);
+
+// One row of the paper's Table 5 answered by geometry: a true viewpoint test set
+// augmented through one model of each sample's camera (the change applied by
+// unprojecting with that model, moving, reprojecting with it: what a user who only
+// has that model does), against the re-render from the truly moved camera.
+struct ModelFidelity {
+  std::string test_set;  // test-small, test-small-rotation, ...
+  std::string model;     // as asked: "own", "equidistant:paper", "kannala-brandt", "polynomial:4:lsq"
+  std::string how;       // "the camera itself", "the paper's eqs. 13-14", "least-squares fit"
+  int samples = 0;
+  // Means over the samples, as DatasetFidelity's.
+  double valid_share = 0, label_agreement = 0, psnr_db = 0;
+  // The model's sampling map against the camera's own under the same change and
+  // prior: mean distance (px) over the output pixels with a source in both, over
+  // all the set's pixels, and by the output pixel's angle of incidence under the
+  // camera (Comparison::kAngleBandsDeg; NaN for a band without pixels).
+  double endpoint_px = 0;
+  std::array<double, 4> endpoint_by_angle_px{};
+};
+
+// The models `fishcam fidelity --models` takes: "own" (the camera itself), or a
+// model (a registry name, "polynomial:N") fitted to each sample's camera, optionally
+// with ":METHOD" (conversion_method_names(): "paper" -- eqs. 13-14, for the models
+// that have them -- or "lsq", the default). Checks a list (not empty, no duplicates,
+// every token a model) and returns it; throws Error naming the token.
+std::vector<std::string> check_fidelity_models(const std::vector<std::string>& models);
+
+// Every true viewpoint test set of a dataset (as dataset_fidelity) augmented through
+// each of `models` (check_fidelity_models) under `prior`. Rows by test set (sorted
+// by name), then model in the order given. Throws Error naming the file for a
+// missing or malformed dataset, or the model for one that cannot be fitted.
+std::vector<ModelFidelity> dataset_model_fidelity(const std::filesystem::path& root,
+                                                  const std::vector<std::string>& models,
+                                                  DepthPrior prior = DepthPrior::source_sphere);
 
 }  // namespace fishcam
