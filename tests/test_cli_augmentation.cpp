@@ -109,8 +109,8 @@ TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
   EXPECT_NE(r.err.find("no test/ folder"), std::string::npos) << r.err;
 
   // Table 5 by geometry: 2 sets x 3 models. The camera's own model is the truth on
-  // rotations; the paper's equidistant fit of a WoodScape lens moves pixels, most at
-  // large angles, and agrees less.
+  // rotations; the paper's equidistant fit of a WoodScape lens moves pixels, most
+  // beyond 90 degrees, and agrees less.
   r = run_fishcam("fidelity " + quoted(dir / "a") + " --models own,equidistant:paper,kannala-brandt --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto by_model = nlohmann::json::parse(r.out).at("rows");
@@ -132,7 +132,9 @@ TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
   EXPECT_LT(kb.at("endpoint_px").get<double>(), paper.at("endpoint_px").get<double>()) << kb.dump();
   const auto bands = paper.at("endpoint_by_angle_px");
   ASSERT_EQ(bands.size(), 4u);
-  EXPECT_GT(bands[2].get<double>(), bands[0].get<double>()) << paper.dump();  // 60-90 degrees against 0-30
+  for (int b = 0; b < 3; ++b) {  // beyond 90 degrees, where the fit and the lens part most
+    EXPECT_GT(bands[3].get<double>(), bands[b].get<double>()) << paper.dump();
+  }
   for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
            {" --models own,own", "--models: 'own' is given twice"},
            {" --models ''", "--models: expected one or more names"},

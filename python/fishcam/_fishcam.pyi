@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'dataset_fidelity', 'depth_priors', 'depth_priors_and_map', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'reprojection_error_map', 'sampling_names', 'set_num_threads', 'woodscape_classes']
+__all__: list[str] = ['AffineChange', 'AngleBin', 'Calibration', 'Camera', 'Comparison', 'ConfusionMatrix', 'Conversion', 'DisplacementStats', 'Error', 'FieldOfView', 'FitReport', 'ModelComparison', 'RigCalibration', 'ValidDomain', 'ViewpointChange', 'ViewpointWarp', 'affine_forward', 'affine_presets', 'affine_warp', 'affine_warp_depth', 'calibrate', 'calibrate_rig', 'check_depth_prior', 'check_preset', 'compare', 'convert', 'dataset_fidelity', 'dataset_model_fidelity', 'depth_priors', 'depth_priors_and_map', 'depth_values_names', 'derive_seed', 'get_num_threads', 'presets', 'random_affine', 'random_affine_in', 'random_change', 'random_change_in', 'read_corners', 'render', 'reprojection_error_map', 'sampling_names', 'set_num_threads', 'woodscape_classes']
 class Error(ValueError):
     pass
 class ValidDomain:
@@ -725,6 +725,10 @@ def convert(camera: Camera, to: str, method: str = 'lsq', max_angle: float | Non
 def dataset_fidelity(dataset: str) -> list[dict[str, typing.Any]]:
     """
     How faithful the augmentation is to the truth on a dataset of `fishcam sample-dataset --scenes N [--depth]` (as `fishcam fidelity`): each test sample augmented by the change of each true viewpoint test set (test-*/changes.jsonl) under every depth prior, and its depth map when the dataset has test/depth/, against the re-render from the moved camera. One dict per test set and prior: test_set, prior, samples, valid_share (pixels with a source), label_agreement (away from class boundaries), psnr_db; means over the samples.
+    """
+def dataset_model_fidelity(dataset: str, models: list[str], depth: str = 'source-sphere') -> list[dict[str, typing.Any]]:
+    """
+    The paper's Table 5 by geometry (as `fishcam fidelity --models`): each true viewpoint test set of a dataset of `fishcam sample-dataset --scenes N` augmented through each of `models` -- 'own' (the camera itself) or a model fitted to each sample's camera, 'NAME' or 'NAME:paper' / 'NAME:lsq' (eqs. 13-14 or least squares) -- under the depth prior `depth`, against the re-render from the moved camera. One dict per test set and model: test_set, model, how, samples, valid_share, label_agreement, psnr_db (means over the samples), endpoint_px (mean distance of the model's map from the camera's own, px) and endpoint_by_angle_px (by the output pixel's angle of incidence: 0-30, 30-60, 60-90, 90+ degrees; NaN for a band without pixels).
     """
 def depth_priors() -> list[str]:
     """
