@@ -5,7 +5,8 @@
 // the float warp kernel's form, the CLI's help texts and the every-model tests.
 //
 // How to add a radial model (docs/conventions.md has the conventions):
-//   1. Write one class in radial_models.hpp, templated on the scalar: kName,
+//   1. Write one class in its own header, models/NAME.hpp (included by
+//      radial_models.hpp, which lists every member), templated on the scalar: kName,
 //      kParamNames, rho, drho, theta_limit/limit_is_open (its exact valid domain),
 //      invalid(), scaled(), params(), initial_params(); plus theta_from_rho if it
 //      has a closed-form inverse, basis/from_basis if rho is linear in its
@@ -87,7 +88,7 @@ decltype(auto) with_model_class(std::string_view name, F&& f) {
   return detail::dispatch_list(static_cast<ModelRegistry*>(nullptr), name, std::forward<F>(f));
 }
 
-// Model traits generic code asks instead of testing names (radial_models.hpp).
+// Model traits generic code asks instead of testing names (models/model_base.hpp).
 template <template <typename> class Model>
 constexpr bool has_paper_form = requires {
   Model<double>::from_paper(1.0, 1.0);

@@ -53,7 +53,7 @@ struct PowerSeriesFit {
 };
 PowerSeriesFit fit_power_series(std::span<const double> x, std::span<const double> y, int first, int last);
 
-// first_positive_root (radial_models.hpp): the smallest root in (0, limit].
+// first_positive_root (models/model_base.hpp): the smallest root in (0, limit].
 
 // The first theta in (0, limit) where drho/dtheta stops being positive, found
 // numerically (a scan of 4096 steps, then bisection to adjacent doubles): the fold

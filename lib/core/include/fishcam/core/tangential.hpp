@@ -1,6 +1,6 @@
 // The non-radial part of OpenCV's distortion (tangential p1, p2 and thin-prism
 // s1..s4), added on a model's undistorted plane. For the models that have one
-// (HasUndistortedPlane in radial_models.hpp: pinhole and opencv with m = (X, Y) / Z,
+// (HasUndistortedPlane in models/model_base.hpp: pinhole and opencv with m = (X, Y) / Z,
 // mei with m = (X, Y) / (Z + xi |P|)) a camera projects
 //   pixel = c + a (.) f (m R(|m|^2) + T(m)),
 // where f R(|m|^2) |m| = rho(theta) is the radial model and, with r2 = |m|^2,
