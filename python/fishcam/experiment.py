@@ -687,10 +687,12 @@ def figures(
     results: list[dict[str, typing.Any]],
     configs: typing.Sequence[str],
     device: torch.device,
+    model_fidelity: typing.Sequence[dict[str, typing.Any]] = (),
 ) -> list[str]:
-    """figures/miou_vs_change.png (mean ± std over seeds against the change size) and
-    figures/predictions.png (seed 0 of each configuration on test-large samples);
-    returns the files written."""
+    """figures/miou_vs_change.png (mean ± std over seeds against the change size),
+    figures/predictions.png (seed 0 of each configuration on test-large samples) and,
+    given Table 5 by geometry's rows, figures/model_fidelity.png; returns the files
+    written."""
     import matplotlib  # type: ignore[import-untyped]
 
     matplotlib.use("Agg")
@@ -763,7 +765,36 @@ def figures(
     written.append(os.path.join(folder, "predictions.png"))
     fig.savefig(written[-1], dpi=110)
     plt.close(fig)
+    if model_fidelity:
+        written.append(model_fidelity_figure(plt, model_fidelity, os.path.join(folder, "model_fidelity.png")))
     return written
+
+
+def model_fidelity_figure(plt: typing.Any, rows: typing.Sequence[dict[str, typing.Any]], path: str) -> str:
+    """Table 5 by geometry as bars: per test set, each model's endpoint distance from
+    the camera's own map (px) and its label agreement with the re-rendered truth."""
+    sets = list(dict.fromkeys(r["test_set"] for r in rows))
+    models = list(dict.fromkeys(r["model"] for r in rows))
+    by = {(r["test_set"], r["model"]): r for r in rows}
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
+    width = 0.8 / len(models)
+    for ax, key, scale, label in (
+        (axes[0], "endpoint_px", 1.0, "endpoint vs the camera's own map (px)"),
+        (axes[1], "label_agreement", 100.0, "labels agree with the truth (%)"),
+    ):
+        for m, model in enumerate(models):
+            values = [scale * by[s, model][key] if (s, model) in by else float("nan") for s in sets]
+            ax.bar([k + (m - (len(models) - 1) / 2) * width for k in range(len(sets))], values, width, label=model)
+        ax.set_xticks(range(len(sets)), [s[len("test-") :] for s in sets], rotation=20, fontsize=8)
+        ax.set_ylabel(label)
+        ax.grid(axis="y", alpha=0.3)
+    axes[1].set_ylim(max(0.0, 100 * min(r["label_agreement"] for r in rows) - 2), 100.5)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Table 5 by geometry: the augmentation computed through each model (source-sphere prior)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def main(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
@@ -891,7 +922,7 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
             if has_test_sets and not args.no_fidelity
             else []
         )
-        written = [] if args.no_figures else figures(args, results, configs, device)
+        written = [] if args.no_figures else figures(args, results, configs, device, model_fidelity)
         summary = {
             "dataset": os.path.abspath(args.dataset),
             "dataset_identity": dataset_record,

@@ -77,7 +77,7 @@ def test_quick_run_writes_the_tables_and_reproduces(dataset, tmp_path):
     assert len(results["model_fidelity"]) == 4 * len(experiment.FIDELITY_MODELS)
     assert "Table 5 by geometry" in tables
     assert len(results["class_weights"]) == 10
-    for name in ("miou_vs_change.png", "predictions.png"):
+    for name in ("miou_vs_change.png", "predictions.png", "model_fidelity.png"):
         assert (out / "figures" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out / "runs" / "viewpoint-seed1.pt").stat().st_size > 0
     # Resuming: stored runs are not repeated (a changed run file is taken as it is).

@@ -120,24 +120,42 @@ Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& r) {
 
 // What projection uncertainty needs of the full covariance (mrcal's definition):
 // a point fixed relative to the boards moves, in the camera frame, by the mean of
-// the boards' motions. Board b's pose perturbed by (dr, dt) moves a camera-frame
-// point p to p + w x p + t' with w = J_l(r_b) dr and t' = dt + t_b x w; the record
-// keeps the intrinsics and the mean (w, t') over the boards.
+// the boards' motions. Board b's pose perturbed by (dr, dt) moves a point p of its
+// frame's to p + w x p + t' with w = J_l(r_b) dr and t' = dt + t_b x w. Seen from a
+// camera whose pose relative to that frame is (R, t) -- itself perturbed to add
+// (w_c, t'_c) the same way -- the motion is (R w + w_c, R t' + t x R w + t'_c). The
+// record keeps the intrinsics and the mean (w, t') over the boards.
+Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const CovarianceLayout& layout,
+                                         const std::vector<std::array<double, 6>>& boards) {
+  const Eigen::Index n = layout.intrinsic_count, count = Eigen::Index(boards.size());
+  Eigen::MatrixXd map = Eigen::MatrixXd::Zero(n + 6, full.covariance.cols());
+  map.block(0, layout.intrinsics, n, n).setIdentity();
+  const auto& c = layout.frame_to_camera;
+  const Eigen::Vector3d camera_r(c[0], c[1], c[2]), camera_t(c[3], c[4], c[5]);
+  const Eigen::Matrix3d rotation = pose_of(c).rotation.toRotationMatrix();
+  if (layout.pose >= 0) {
+    const Eigen::Matrix3d jl = left_jacobian(camera_r);
+    map.block<3, 3>(n, layout.pose) = jl;
+    map.block<3, 3>(n + 3, layout.pose) = cross_matrix(camera_t) * jl;
+    map.block<3, 3>(n + 3, layout.pose + 3) = Eigen::Matrix3d::Identity();
+  }
+  for (Eigen::Index b = 0; b < count; ++b) {
+    const auto& pose = boards[size_t(b)];
+    const Eigen::Matrix3d jl = left_jacobian({pose[0], pose[1], pose[2]});
+    const Eigen::Index col = layout.boards + 6 * b;
+    const Eigen::Matrix3d w = rotation * jl / double(count);  // d(R w) / d dr
+    map.block<3, 3>(n, col) = w;
+    map.block<3, 3>(n + 3, col) = rotation * cross_matrix({pose[3], pose[4], pose[5]}) * jl / double(count) +
+                                  cross_matrix(camera_t) * w;
+    map.block<3, 3>(n + 3, col + 3) = rotation / double(count);
+  }
+  Eigen::MatrixXd covariance = map * full.covariance * map.transpose();
+  return (covariance + covariance.transpose()) / 2;
+}
+
 Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s) {
   const Eigen::Index intrinsics = Eigen::Index(s.model.size()) + 3;
-  const Eigen::Index boards = Eigen::Index(s.poses.size());
-  Eigen::MatrixXd map = Eigen::MatrixXd::Zero(intrinsics + 6, intrinsics + 6 * boards);
-  map.topLeftCorner(intrinsics, intrinsics).setIdentity();
-  for (Eigen::Index b = 0; b < boards; ++b) {
-    const auto& pose = s.poses[size_t(b)];
-    const Eigen::Matrix3d jl = left_jacobian({pose[0], pose[1], pose[2]});
-    const Eigen::Index col = intrinsics + 6 * b;
-    map.block<3, 3>(intrinsics, col) = jl / double(boards);
-    map.block<3, 3>(intrinsics + 3, col) = cross_matrix({pose[3], pose[4], pose[5]}) * jl / double(boards);
-    map.block<3, 3>(intrinsics + 3, col + 3) = Eigen::Matrix3d::Identity() / double(boards);
-  }
-  Eigen::MatrixXd c = map * full.covariance * map.transpose();
-  return (c + c.transpose()) / 2;
+  return projection_covariance_of(full, {0, intrinsics, -1, intrinsics, {}}, s.poses);
 }
 
 }  // namespace detail

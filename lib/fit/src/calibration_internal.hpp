@@ -152,6 +152,20 @@ ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<dou
 // record's (n + 9)^2 matrix; calibration_covariance.cpp says how).
 Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s);
 
+// Where one camera's parameters lie in a covariance: its intrinsics (n + 3 from
+// `intrinsics`), its pose relative to the frame the boards are kept in (`pose`, 6
+// columns, -1: the boards are in this camera's frame; `frame_to_camera` is that
+// pose as a block), and the boards (6 columns each from `boards`).
+struct CovarianceLayout {
+  Eigen::Index intrinsics = 0, intrinsic_count = 0, pose = -1, boards = 0;
+  std::array<double, 6> frame_to_camera{};
+};
+// The record's matrix for that camera: its intrinsics, and the mean motion of every
+// board, seen from the camera (a rig's camera k: the boards of every instant, kept
+// in camera 0's frame, moved by their own uncertainty and by camera k's pose).
+Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const CovarianceLayout& layout,
+                                         const std::vector<std::array<double, 6>>& boards);
+
 // "f, xi and alpha trade against each other", with a hint where a model is degenerate.
 std::string undetermined_text(const std::vector<std::string>& names, bool poses, const std::string& model,
                               const std::vector<double>& parameters);

@@ -399,9 +399,13 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();
     double sum2 = 0;
     CalibrationRecord& record = *p.calibration;
-    const Eigen::MatrixXd own_covariance = record.covariance;
     record = CalibrationRecord::nothing_observed();
-    record.covariance = own_covariance;
+    // Projection uncertainty from the joint solve, as the intrinsics and sigmas are:
+    // this camera's intrinsics, its pose relative to camera 0, every instant's board.
+    record.covariance = detail::projection_covariance_of(
+        full,
+        {intrinsic_start[k], Eigen::Index(intrinsics[k].model.size()) + 3, pose_start[k], column, camera_blocks[k]},
+        board_blocks);
     for (const auto& [i, o] : observed[k]) {
       const Pose board_pose = compose(rig_to_camera, pose_of(board_blocks[size_t(i)]));
       double board_sum2 = 0;

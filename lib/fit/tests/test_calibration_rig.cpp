@@ -178,6 +178,32 @@ void expect_rig_truth(const RigCalibrationResult& r, const SyntheticRig& rig, do
   EXPECT_LT((got.translation - expected.translation).norm(), metres);
 }
 
+// The rig file's record describes the intrinsics it holds: its covariance is the
+// joint solve's (the intrinsic block equals the reported sigmas squared) and holds
+// where the camera sits in the rig (camera 1 at infinity: at least the spread its
+// rotation relative to camera 0 gives at the image centre).
+TEST(Rig, TheRecordsCovarianceIsTheJointSolves) {
+  const SyntheticRig rig = stereo_rig(0.3, 11);
+  const RigCalibrationResult r = calibrate_rig(rig.cameras, kBoard);
+  ASSERT_EQ(r.cameras.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    const CalibrationResult& c = r.cameras[k];
+    const Eigen::MatrixXd& covariance = c.camera.calibration->covariance;
+    ASSERT_EQ(covariance.rows(), Eigen::Index(c.parameters.size()) + 6) << k;
+    for (size_t i = 0; i < c.parameters.size(); ++i) {
+      EXPECT_NEAR(std::sqrt(covariance(Eigen::Index(i), Eigen::Index(i))), c.sigmas[i], 1e-9 * c.sigmas[i])
+          << "camera " << k << " " << c.parameter_names[i];
+    }
+  }
+  const Camera right(r.cameras[1].camera);
+  const Eigen::Vector2d centre = right.principal_point();
+  const double focal = right.parameters().pixel_scale.x() * model_params(right.parameters().model)[0];
+  const double at_infinity = projection_uncertainty(right, centre, std::nullopt);
+  std::printf("camera 1: uncertainty at infinity %.4f px, rotation sigma x f %.4f px\n", at_infinity,
+              focal * r.rotation_sigma_rad[1]);
+  EXPECT_GE(at_infinity, focal * r.rotation_sigma_rad[1]);
+}
+
 // The same corners given for both cameras (one file twice) would make a rig with no
 // baseline: refused naming both cameras.
 TEST(Rig, IdenticalCamerasAreRefused) {

@@ -63,9 +63,10 @@ struct RigCamera {
   ModelSpec model;
 };
 struct RigCalibrationResult {
-  // Per camera: its report (intrinsics and sigmas from the joint solve; the record's
-  // observed angles from the joint solve, its covariance from the camera's own
-  // boards), camera.pose = camera -> camera 0 (camera 0: identity).
+  // Per camera: its report (intrinsics, sigmas and the record -- observed angles and
+  // the covariance projection uncertainty uses, with this camera's pose relative to
+  // camera 0 and every instant's board -- from the joint solve), camera.pose =
+  // camera -> camera 0 (camera 0: identity).
   std::vector<CalibrationResult> cameras;
   // Per camera, 1-sigma of its pose relative to camera 0 from the joint covariance:
   // rotation (rad, the angle-axis components' largest) and translation (board units,
