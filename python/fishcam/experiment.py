@@ -553,6 +553,56 @@ def mean_std(values: typing.Sequence[float]) -> str:
     return f"{mean:.1f} ± {std:.1f}"
 
 
+# Student's t, the 0.975 quantile by degrees of freedom (1..30; beyond, the normal's).
+_T975 = (
+    12.706,
+    4.303,
+    3.182,
+    2.776,
+    2.571,
+    2.447,
+    2.365,
+    2.306,
+    2.262,
+    2.228,
+    2.201,
+    2.179,
+    2.160,
+    2.145,
+    2.131,
+    2.120,
+    2.110,
+    2.101,
+    2.093,
+    2.086,
+    2.080,
+    2.074,
+    2.069,
+    2.064,
+    2.060,
+    2.056,
+    2.052,
+    2.048,
+    2.045,
+    2.042,
+)
+
+
+def paired_difference(
+    config: typing.Sequence[float], baseline: typing.Sequence[float]
+) -> typing.Optional[tuple[float, float, float]]:
+    """The mean of config - baseline over pairs (the same training seed, scored on the
+    same test images) and its 95 % interval (Student's t over the pairs); None with
+    fewer than 2 pairs."""
+    differences = [a - b for a, b in zip(config, baseline)]
+    n = len(differences)
+    if n < 2:
+        return None
+    mean = float(np.mean(differences))
+    half = (_T975[n - 2] if n - 1 <= len(_T975) else 1.96) * float(np.std(differences, ddof=1)) / math.sqrt(n)
+    return mean, mean - half, mean + half
+
+
 def class_names() -> list[str]:
     return [name for name, _ in fishcam.woodscape_classes()][:CLASSES]
 
@@ -609,6 +659,41 @@ def model_fidelity_table(rows: typing.Sequence[dict[str, typing.Any]]) -> list[s
     return lines + [""]
 
 
+def difference_table(
+    results: list[dict[str, typing.Any]], configs: typing.Sequence[str], present: typing.Sequence[str]
+) -> list[str]:
+    """Each configuration's mIoU minus none's, paired by training seed (both scored on
+    the same test images), with its 95 % interval; * where the interval excludes 0."""
+
+    def by_seed(config: str, test_set: str) -> dict[int, float]:
+        return {
+            r["seed"]: r["test"][test_set]["miou"] for r in results if r["config"] == config and test_set in r["test"]
+        }
+
+    lines = [
+        "### Differences from none (mIoU points, paired by seed; 95 % interval; * excludes 0)",
+        "",
+        "| configuration | " + " | ".join(present) + " |",
+        "|---|" + "---:|" * len(present),
+    ]
+    for config in configs:
+        if config == "none":
+            continue
+        cells = []
+        for test_set in present:
+            mine, base = by_seed(config, test_set), by_seed("none", test_set)
+            seeds = sorted(set(mine) & set(base))
+            d = paired_difference([mine[s] for s in seeds], [base[s] for s in seeds])
+            if d is None:
+                cells.append("–")
+                continue
+            mean, low, high = (100 * v for v in d)
+            mark = "*" if low > 0 or high < 0 else ""
+            cells.append(f"{mean:+.1f} [{low:+.1f}, {high:+.1f}]{mark}")
+        lines.append(f"| {config} | " + " | ".join(cells) + " |")
+    return lines + [""]
+
+
 def tables(
     results: list[dict[str, typing.Any]],
     configs: typing.Sequence[str],
@@ -648,6 +733,8 @@ def tables(
         ]
         lines += [f"| {c} | " + " | ".join(mean_std(miou(c, s)) for s in present) + " |" for c in rows]
         lines.append("")
+    if "none" in configs:
+        lines += difference_table(results, configs, present)
     if model_fidelity:
         lines += model_fidelity_table(model_fidelity)
     if "none" in configs:

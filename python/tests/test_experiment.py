@@ -65,7 +65,7 @@ def test_quick_run_writes_the_tables_and_reproduces(dataset, tmp_path):
     assert len(mious) == 2 * 2 * 5
     assert all(math.isfinite(v) and 0 <= v <= 1 for v in mious.values())
     tables = (out / "tables.md").read_text()
-    for heading in ("Table 2", "Table 3", "Table 5", "Fidelity"):
+    for heading in ("Table 2", "Table 3", "Table 5", "Fidelity", "Differences from none"):
         assert heading in tables
     assert "| none |" in tables and "large-rotation" in tables
     assert "| test set | mIoU | degrades (%) | background | road |" in tables
@@ -115,6 +115,24 @@ def test_dataset_fidelity(dataset, tmp_path):
     (broken / "test-small" / "changes.jsonl").write_text('{"name": "00002_FV"}\n')
     with pytest.raises(fishcam.Error, match="changes.jsonl: a line lacks name, rotation_deg or translation"):
         fishcam.dataset_fidelity(str(broken))
+
+
+def test_paired_differences_against_a_hand_computation():
+    # Differences 0.10, 0.15, 0.05: mean 0.10, sd 0.05, t(0.975, 2) = 4.303.
+    mean, low, high = experiment.paired_difference([0.5, 0.6, 0.7], [0.4, 0.45, 0.65])
+    half = 4.303 * 0.05 / math.sqrt(3)
+    assert (mean, low, high) == pytest.approx((0.10, 0.10 - half, 0.10 + half), abs=1e-12)
+    assert experiment.paired_difference([0.5], [0.4]) is None
+    lines = experiment.difference_table(
+        [
+            {"config": c, "seed": s, "test": {"original": {"miou": v}}}
+            for c, s, v in [("none", 0, 0.40), ("none", 1, 0.42), ("base", 0, 0.50), ("base", 1, 0.51)]
+        ],
+        ["none", "base"],
+        ["original"],
+    )
+    # 0.10 and 0.09: mean 9.5 points, half-width 12.706 * 0.7071 / sqrt(2) = 6.4: significant.
+    assert lines[4] == "| base | +9.5 [+3.1, +15.9]* |"
 
 
 def test_dataset_model_fidelity(dataset):

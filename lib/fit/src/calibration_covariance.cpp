@@ -145,8 +145,8 @@ Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const 
     const Eigen::Index col = layout.boards + 6 * b;
     const Eigen::Matrix3d w = rotation * jl / double(count);  // d(R w) / d dr
     map.block<3, 3>(n, col) = w;
-    map.block<3, 3>(n + 3, col) = rotation * cross_matrix({pose[3], pose[4], pose[5]}) * jl / double(count) +
-                                  cross_matrix(camera_t) * w;
+    map.block<3, 3>(n + 3, col) =
+        rotation * cross_matrix({pose[3], pose[4], pose[5]}) * jl / double(count) + cross_matrix(camera_t) * w;
     map.block<3, 3>(n + 3, col + 3) = rotation / double(count);
   }
   Eigen::MatrixXd covariance = map * full.covariance * map.transpose();

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <numeric>
@@ -29,6 +30,8 @@ namespace {
 // kIntrinsicsMoveSigmas of their own sigma from its own calibration's (docs/fitting.md).
 constexpr double kJointRmsFactor = 1.5;
 constexpr double kIntrinsicsMoveSigmas = 3;
+// The error of a corner whose board point does not project at the joint solution.
+constexpr double kUnprojectedError = std::numeric_limits<double>::infinity();
 
 // A number for a warning, to 3 significant digits.
 std::string three_digits(double value) {
@@ -212,6 +215,98 @@ InstantConsensus instant_consensus(const std::map<int, Pose>& seen0, const std::
   return out;
 }
 
+// The joint problem's parameters: every camera's intrinsics, cameras 1.. relative
+// to camera 0 (camera 0 -> camera k; camera 0's block is the identity), and each
+// instant's board relative to camera 0.
+struct JointParameters {
+  std::vector<Solve> intrinsics;
+  std::vector<std::array<double, 6>> cameras, boards;
+};
+
+// Corners left out of the joint solve, per camera: (image, corner).
+using CornerSet = std::set<std::pair<std::string, int>>;
+
+// Every corner of every camera not in `excluded`, as residuals of `problem` over
+// `p` (under `loss`; nullptr: plain least squares). Returns the corners used per
+// camera.
+std::vector<long> add_joint_residuals(ceres::Problem* problem, JointParameters* p,
+                                      const std::vector<RigCamera>& cameras,
+                                      const std::vector<std::map<int, const BoardObservation*>>& observed,
+                                      const std::vector<Eigen::Vector3d>& points,
+                                      const std::vector<CornerSet>& excluded, ceres::LossFunction* loss) {
+  std::vector<long> corners_of(cameras.size(), 0);
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    const int params = int(p->intrinsics[k].model.size());
+    with_model_class(cameras[k].model.name, [&]<template <typename> class Model>() {
+      for (const auto& [i, o] : observed[k]) {
+        for (size_t c = 0; c < o->corners.size(); ++c) {
+          if (excluded[k].count({o->filename, int(c)})) continue;
+          auto* cost = new ceres::DynamicAutoDiffCostFunction<RigCornerResidual<Model>, 8>(
+              new RigCornerResidual<Model>{points[c], o->corners[c], params, k > 0});
+          cost->AddParameterBlock(params);
+          cost->AddParameterBlock(2);
+          cost->AddParameterBlock(1);
+          Solve& intrinsics = p->intrinsics[k];
+          std::vector<double*> blocks = {intrinsics.model.data(), intrinsics.center.data(), &intrinsics.ay};
+          if (k > 0) cost->AddParameterBlock(6), blocks.push_back(p->cameras[k].data());
+          cost->AddParameterBlock(6);
+          blocks.push_back(p->boards[size_t(i)].data());
+          cost->SetNumResiduals(2);
+          problem->AddResidualBlock(cost, loss, blocks);
+          ++corners_of[k];
+        }
+      }
+      detail::bound_model_block<Model>(problem, p->intrinsics[k].model.data(), params);
+    });
+  }
+  return corners_of;
+}
+
+// Camera k's camera at the joint solution `p`.
+Camera joint_camera(const JointParameters& p, const std::vector<RigCamera>& cameras, size_t k) {
+  CameraParameters c;
+  c.width = cameras[k].width, c.height = cameras[k].height;
+  c.model = make_model(cameras[k].model.name, p.intrinsics[k].model);
+  c.principal_point = p.intrinsics[k].center;
+  c.pixel_scale = {1.0, p.intrinsics[k].ay};
+  return Camera(c);
+}
+
+// The joint solve's outliers, per camera: corners of the robust joint solution `p`
+// beyond 5 robust sigmas of that camera's errors (median * 1.4826) and beyond 0.1 px,
+// as one camera's calibration finds its own; a corner that agrees with its camera's
+// boards but not with the other cameras' at the same instant is one (mrcal's joint
+// solve drops them likewise).
+std::vector<std::vector<CalibrationResult::Outlier>> joint_outliers(
+    const JointParameters& p, const std::vector<RigCamera>& cameras,
+    const std::vector<std::map<int, const BoardObservation*>>& observed, const std::vector<Eigen::Vector3d>& points,
+    const std::vector<CornerSet>& excluded) {
+  std::vector<std::vector<CalibrationResult::Outlier>> out(cameras.size());
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    const Camera camera = joint_camera(p, cameras, k);
+    const Pose rig_to_camera = pose_of(p.cameras[k]);
+    std::vector<CalibrationResult::Outlier> errors;
+    for (const auto& [i, o] : observed[k]) {
+      const Pose board_pose = compose(rig_to_camera, pose_of(p.boards[size_t(i)]));
+      for (size_t c = 0; c < o->corners.size(); ++c) {
+        if (excluded[k].count({o->filename, int(c)})) continue;
+        Eigen::Vector2d q;
+        const bool seen = camera.project(board_pose.rotation * points[c] + board_pose.translation, &q);
+        errors.push_back({o->filename, int(c), seen ? (q - o->corners[c]).norm() : kUnprojectedError});
+      }
+    }
+    if (errors.empty()) continue;
+    std::vector<double> sorted;
+    for (const auto& e : errors) sorted.push_back(e.error_px);
+    std::nth_element(sorted.begin(), sorted.begin() + long(sorted.size() / 2), sorted.end());
+    const double sigma = std::max(1.4826 * sorted[sorted.size() / 2], 1e-9);
+    for (const auto& e : errors) {
+      if (!(e.error_px <= std::max(5 * sigma, 0.1))) out[k].push_back(e);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
@@ -313,60 +408,67 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     }
   }
   // 3. The joint solve: every camera's intrinsics, cameras 1.. relative to camera 0,
-  // each instant's board relative to camera 0 (placed from the first camera that saw it).
+  // each instant's board relative to camera 0 (placed from the first camera that saw
+  // it), the outliers of step 1 left out.
   const int instants = int(instant_index.size());
-  std::vector<Solve> intrinsics(n);
+  JointParameters joint;
   for (size_t k = 0; k < n; ++k) {
     const auto& p = singles[k].camera;
-    intrinsics[k] = Solve{model_params(p.model), p.principal_point, p.pixel_scale.y(), {}};
+    joint.intrinsics.push_back(Solve{model_params(p.model), p.principal_point, p.pixel_scale.y(), {}});
+    joint.cameras.push_back(pose_block(*from_rig[k]));
   }
-  std::vector<std::array<double, 6>> camera_blocks(n);
-  std::vector<std::array<double, 6>> board_blocks(static_cast<size_t>(instants));
-  for (size_t k = 0; k < n; ++k) camera_blocks[k] = pose_block(*from_rig[k]);
+  joint.boards.resize(size_t(instants));
   std::vector<bool> placed(size_t(instants), false);
   for (size_t k = 0; k < n; ++k) {
     for (const auto& [i, pose] : seen[k]) {
       if (placed[size_t(i)]) continue;
-      board_blocks[size_t(i)] = pose_block(compose(inverse(*from_rig[k]), pose));
+      joint.boards[size_t(i)] = pose_block(compose(inverse(*from_rig[k]), pose));
       placed[size_t(i)] = true;
     }
   }
   const auto points = board_points(board);
-  std::vector<std::set<std::pair<std::string, int>>> outliers(n);  // (image, corner) per camera, from step 1
+  std::vector<CornerSet> excluded(n);  // (image, corner) per camera: step 1's outliers, then the joint solve's
   for (size_t k = 0; k < n; ++k) {
     const int last = board.corners() - 1;
     for (const auto& o : singles[k].outliers) {
-      outliers[k].insert({o.filename, renumbered_images[k].count(o.filename) ? last - o.corner : o.corner});
+      excluded[k].insert({o.filename, renumbered_images[k].count(o.filename) ? last - o.corner : o.corner});
     }
   }
-  ceres::Problem problem;
-  std::vector<long> corners_of(n, 0);
-  for (size_t k = 0; k < n; ++k) {
-    const int params = int(intrinsics[k].model.size());
-    with_model_class(cameras[k].model.name, [&]<template <typename> class Model>() {
-      for (const auto& [i, o] : observed[k]) {
-        for (size_t c = 0; c < o->corners.size(); ++c) {
-          if (outliers[k].count({o->filename, int(c)})) continue;
-          auto* cost = new ceres::DynamicAutoDiffCostFunction<RigCornerResidual<Model>, 8>(
-              new RigCornerResidual<Model>{points[c], o->corners[c], params, k > 0});
-          cost->AddParameterBlock(params);
-          cost->AddParameterBlock(2);
-          cost->AddParameterBlock(1);
-          std::vector<double*> blocks = {intrinsics[k].model.data(), intrinsics[k].center.data(), &intrinsics[k].ay};
-          if (k > 0) cost->AddParameterBlock(6), blocks.push_back(camera_blocks[k].data());
-          cost->AddParameterBlock(6);
-          blocks.push_back(board_blocks[size_t(i)].data());
-          cost->SetNumResiduals(2);
-          problem.AddResidualBlock(cost, nullptr, blocks);
-          ++corners_of[k];
-        }
-      }
-      detail::bound_model_block<Model>(&problem, intrinsics[k].model.data(), params);
-    });
+  // Robust first (Cauchy), as one camera's solve: corners that agree with their own
+  // camera but not with the others at the same instant become the joint outliers.
+  {
+    ceres::Problem::Options robust_options;
+    robust_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem robust(robust_options);
+    ceres::CauchyLoss loss(1.0);
+    add_joint_residuals(&robust, &joint, cameras, observed, points, excluded, &loss);
+    ceres::Solver::Summary summary;
+    ceres::Solve(detail::solver_options(ceres::DENSE_SCHUR), &robust, &summary);
+    if (!summary.IsSolutionUsable()) throw Error("calibrate rig: the joint solve failed: " + summary.message);
   }
+  const auto outliers = joint_outliers(joint, cameras, observed, points, excluded);
+  for (size_t k = 0; k < n; ++k) {
+    std::map<std::string, int> per_image;
+    for (const auto& o : outliers[k]) excluded[k].insert({o.filename, o.corner}), ++per_image[o.filename];
+    if (outliers[k].empty()) continue;
+    std::string worst;
+    for (const auto& [image, count] : per_image) {
+      if (2 * count > board.corners()) worst += (worst.empty() ? "" : ", ") + image;
+    }
+    warnings.push_back(camera_name(k) + ": the joint solve leaves out " + std::to_string(outliers[k].size()) +
+                       " corner(s) that disagree with the other cameras' boards at the same instants" +
+                       (worst.empty() ? "" : " (most of the board in " + worst + ": not taken at the same time?)"));
+  }
+  // Then plain least squares without them: the solution, its covariance.
+  ceres::Problem problem;
+  const std::vector<long> corners_of =
+      add_joint_residuals(&problem, &joint, cameras, observed, points, excluded, nullptr);
   ceres::Solver::Summary summary;
   ceres::Solve(detail::solver_options(ceres::DENSE_SCHUR), &problem, &summary);
   if (!summary.IsSolutionUsable()) throw Error("calibrate rig: the joint solve failed: " + summary.message);
+  std::vector<Solve>& intrinsics = joint.intrinsics;
+  std::vector<std::array<double, 6>>& camera_blocks = joint.cameras;
+  std::vector<std::array<double, 6>>& board_blocks = joint.boards;
   // 4. Covariance of everything; the report per camera.
   std::vector<double*> blocks;
   std::vector<Eigen::Index> intrinsic_start(n), pose_start(n, -1);
@@ -377,8 +479,13 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     column += Eigen::Index(intrinsics[k].model.size()) + 3;
   }
   for (size_t k = 1; k < n; ++k) pose_start[k] = column, blocks.push_back(camera_blocks[k].data()), column += 6;
+  // The instants whose board kept a corner (an instant only one camera saw may lose
+  // them all to the joint outliers).
   std::vector<double*> boards;
-  for (auto& b : board_blocks) boards.push_back(b.data());
+  std::vector<std::array<double, 6>> used_boards;
+  for (auto& b : board_blocks) {
+    if (problem.HasParameterBlock(b.data())) boards.push_back(b.data()), used_boards.push_back(b);
+  }
   const ParameterCovariance full = detail::covariance_of(&problem, blocks, boards);
 
   RigCalibrationResult out;
@@ -405,19 +512,20 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     record.covariance = detail::projection_covariance_of(
         full,
         {intrinsic_start[k], Eigen::Index(intrinsics[k].model.size()) + 3, pose_start[k], column, camera_blocks[k]},
-        board_blocks);
+        used_boards);
     for (const auto& [i, o] : observed[k]) {
       const Pose board_pose = compose(rig_to_camera, pose_of(board_blocks[size_t(i)]));
       double board_sum2 = 0;
       long used = 0;
       for (size_t c = 0; c < o->corners.size(); ++c) {
-        if (outliers[k].count({o->filename, int(c)})) continue;
+        if (excluded[k].count({o->filename, int(c)})) continue;
         const Eigen::Vector3d point = board_pose.rotation * points[c] + board_pose.translation;
         Eigen::Vector2d q;
         camera.project(point, &q);
         board_sum2 += (q - o->corners[c]).squaredNorm(), ++used;
         record.observe(point);
       }
+      if (used == 0) continue;  // every corner an outlier of the joint solve
       sum2 += board_sum2;
       r.poses.push_back(board_pose);
       r.used_images.push_back(o->filename);
@@ -425,6 +533,10 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     }
     r.rms_px = std::sqrt(sum2 / double(std::max(1L, corners_of[k])));
     r.observations = corners_of[k];
+    for (CalibrationResult::Outlier o : outliers[k]) {  // numbered as in the corners file
+      if (renumbered_images[k].count(o.filename)) o.corner = board.corners() - 1 - o.corner;
+      r.outliers.push_back(o);
+    }
     r.parameters = intrinsics[k].model;
     r.parameters.insert(r.parameters.end(), {intrinsics[k].center.x(), intrinsics[k].center.y(), intrinsics[k].ay});
     r.undetermined.clear();

@@ -204,6 +204,30 @@ TEST(Rig, TheRecordsCovarianceIsTheJointSolves) {
   EXPECT_GE(at_infinity, focal * r.rotation_sigma_rad[1]);
 }
 
+// One view of camera 1 not taken with camera 0's (its board 6 px away from where
+// camera 0's board puts it; on its own the view is a consistent board): the joint
+// solve leaves its corners out, says which image, and the rig stays within 3 sigma.
+TEST(Rig, CornersThatDisagreeWithTheOtherCamerasAreLeftOut) {
+  SyntheticRig rig = stereo_rig(0.2, 12);
+  ASSERT_GE(rig.cameras[1].observations.size(), 8u);
+  BoardObservation& late = rig.cameras[1].observations[3];
+  for (auto& c : late.corners) c += Eigen::Vector2d(6, -2);
+  const RigCalibrationResult r = calibrate_rig(rig.cameras, kBoard);
+  long in_late = 0;
+  for (const auto& o : r.cameras[1].outliers) {
+    EXPECT_EQ(o.filename, late.filename);
+    in_late += o.filename == late.filename;
+  }
+  EXPECT_GE(in_late, 45) << "of 54 corners";
+  bool said = false;
+  for (const auto& w : r.warnings) said = said || w.find("most of the board in " + late.filename) != std::string::npos;
+  EXPECT_TRUE(said);
+  const Pose expected = relative(rig.truth, 1);
+  const Pose& got = *r.cameras[1].camera.pose;
+  EXPECT_LT(got.rotation.angularDistance(expected.rotation), 3 * std::sqrt(3.0) * r.rotation_sigma_rad[1]);
+  EXPECT_LT((got.translation - expected.translation).norm(), 3 * std::sqrt(3.0) * r.translation_sigma[1]);
+}
+
 // The same corners given for both cameras (one file twice) would make a rig with no
 // baseline: refused naming both cameras.
 TEST(Rig, IdenticalCamerasAreRefused) {
