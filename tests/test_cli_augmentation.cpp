@@ -72,6 +72,33 @@ TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
   EXPECT_EQ(count(dir / "a" / "test" / "depth"), 8);
   EXPECT_EQ(count(dir / "a" / "test-small" / "rgb_images"), 8);
   EXPECT_EQ(count(dir / "a" / "test-small-rotation" / "calibration"), 8);
+  EXPECT_EQ(count(dir / "a" / "test-small-paper" / "rgb_images"), 8);
+  // The paper's protocol: each original test image augmented by its recorded change,
+  // byte for byte what fishcam augment (augment-dataset's warp) writes from the files.
+  {
+    std::istringstream paper(test::read_file(dir / "a" / "test-small-paper" / "changes.jsonl"));
+    std::string line;
+    ASSERT_TRUE(std::getline(paper, line));
+    const auto change = nlohmann::json::parse(line);
+    const std::string name = change.at("name");
+    const auto numbers = [&](const char* key) {
+      const auto v = change.at(key);
+      return v[0].dump() + "," + v[1].dump() + "," + v[2].dump();
+    };
+    const auto test = dir / "a" / "test";
+    r = run_fishcam("augment " + quoted(test / "calibration" / (name + ".json")) + " --image " +
+                    quoted(test / "rgb_images" / (name + ".png")) + " --label " +
+                    quoted(test / "semantic_annotations" / "gtLabels" / (name + ".png")) + " --out-image " +
+                    quoted(dir / "paper.png") + " --out-label " + quoted(dir / "paper-labels.png") + " --rotate " +
+                    numbers("rotation_deg") + " --translate " + numbers("translation") +
+                    " --depth source-sphere --sampling grid --label-fill 0");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto set = dir / "a" / "test-small-paper";
+    EXPECT_TRUE(test::read_file(dir / "paper.png") == test::read_file(set / "rgb_images" / (name + ".png")));
+    EXPECT_TRUE(test::read_file(dir / "paper-labels.png") ==
+                test::read_file(set / "semantic_annotations" / "gtLabels" / (name + ".png")));
+    EXPECT_EQ(test::read_file(set / "changes.jsonl"), test::read_file(dir / "a" / "test-small" / "changes.jsonl"));
+  }
   for (const char* file :
        {"scenes.jsonl", "test-small/changes.jsonl", "test/rgb_images/00002_MVR.png", "test-small/depth/00001_RV.npy"}) {
     EXPECT_EQ(test::read_file(dir / "a" / file), test::read_file(dir / "b" / file)) << file;

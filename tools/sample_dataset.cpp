@@ -10,6 +10,7 @@
 #include <charconv>
 #include <cstdio>
 #include <map>
+#include <optional>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -97,6 +98,20 @@ class SampleWriter {
   long written_ = 0, skipped_ = 0;
 };
 
+// One line of a test set's changes.jsonl.
+std::string change_line(const std::string& name, const PosePreset& preset, std::uint64_t seed,
+                        const RandomPose& change) {
+  const auto& r = change.rotation_deg;
+  const auto& t = change.translation;
+  return nlohmann::json{{"name", name},
+                        {"preset", preset.name},
+                        {"seed", seed},
+                        {"rotation_deg", {r.x(), r.y(), r.z()}},
+                        {"translation", {t.x(), t.y(), t.z()}}}
+             .dump() +
+         "\n";
+}
+
 Camera sized(Camera camera, const std::string& size) {
   if (size.empty()) return camera;
   const auto [width, height] = parse_image_size(size, "--size");
@@ -107,10 +122,24 @@ Camera sized(Camera camera, const std::string& size) {
 
 struct Options {
   std::string out, camera, size, cameras = "FV,MVL,MVR,RV", splits = "0.7,0.15,0.15", test_sets = "small,medium,large";
+  // The paper protocol's label where the augmentation has no source: the paper's
+  // "empty values" (0, WoodScape's void class) or "ignore" (255, left out of training
+  // and scoring).
+  std::string paper_label_fill = "0";
   int images = 0, scenes = 0, supersampling = 2;
   std::uint64_t seed = 0;
   bool depth = false;
 };
+
+int paper_label_fill(const std::string& text) {
+  if (text == "ignore") return 255;
+  int value = -1;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || value < 0 || value > 255) {
+    throw Error("--paper-label-fill: expected a label 0 to 255 or 'ignore', got " + quoted_for_message(text));
+  }
+  return value;
+}
 
 // Everything the samples depend on, recorded in OUT/sample-dataset.json.
 OutputSettings settings_of(const Options& o, const fs::path& camera_path) {
@@ -123,7 +152,8 @@ OutputSettings settings_of(const Options& o, const fs::path& camera_path) {
     settings.values.insert(settings.values.end(), {{"--scenes", std::to_string(o.scenes)},
                                                    {"--cameras", o.cameras},
                                                    {"--splits", o.splits},
-                                                   {"--test-sets", o.test_sets}});
+                                                   {"--test-sets", o.test_sets},
+                                                   {"--paper-label-fill", o.paper_label_fill}});
   } else {
     settings.values.insert(settings.values.end(),
                            {{"--images", std::to_string(o.images)},
@@ -219,7 +249,12 @@ void surround_view_dataset(const Options& o) {
   for (const PosePreset& preset : test_sets) {
     manifest_paths.push_back(out / ("test-" + std::string(preset.name)) / "changes.jsonl");
     manifest_paths.push_back(out / ("test-" + std::string(preset.name) + "-rotation") / "changes.jsonl");
+    manifest_paths.push_back(out / ("test-" + std::string(preset.name) + "-paper") / "changes.jsonl");
   }
+  const int label_fill = paper_label_fill(o.paper_label_fill);
+  // The paper protocol's camera per camera name, as its calibration file holds it (what
+  // augment-dataset reads), and its warp.
+  std::map<std::string, std::pair<CameraParameters, ViewpointWarp>> paper_cameras;
   const bool resuming = claim_output_settings(out / "sample-dataset.json", settings_of(o, {}), false);
   const long skipped = write_samples(out, settings_of(o, {}), o.depth, manifest_paths, [&](SampleWriter& writer) {
     if (writer.writing()) {
@@ -227,6 +262,7 @@ void surround_view_dataset(const Options& o) {
       for (const PosePreset& preset : test_sets) {
         make_layout(out / ("test-" + std::string(preset.name)), o.depth);
         make_layout(out / ("test-" + std::string(preset.name) + "-rotation"), o.depth);
+        make_layout(out / ("test-" + std::string(preset.name) + "-paper"), o.depth);
       }
     }
     scenes_manifest.clear();
@@ -247,7 +283,12 @@ void surround_view_dataset(const Options& o) {
         char name[48];
         std::snprintf(name, sizeof name, "%05d_%s", k, camera_name.c_str());
         const CameraParameters& p = camera.parameters();
-        writer.sample(out / split, name, p, [&] { return scene_of().render(camera, *p.pose, o.supersampling); });
+        std::optional<SceneRender> original;  // rendered once for the split and the paper protocol
+        const auto original_of = [&]() -> const SceneRender& {
+          if (!original) original = scene_of().render(camera, *p.pose, o.supersampling);
+          return *original;
+        };
+        writer.sample(out / split, name, p, original_of);
         scenes_manifest +=
             nlohmann::json{{"name", name}, {"split", split}, {"scene_seed", scene_seed}, {"camera", camera_name}}
                 .dump() +
@@ -267,16 +308,32 @@ void surround_view_dataset(const Options& o) {
             moved.pose = moved_camera(*p.pose, change.change());
             writer.sample(out / folder, name, moved,
                           [&] { return scene_of().render(camera, *moved.pose, o.supersampling); });
-            const auto& r = change.rotation_deg;
-            const auto& t = change.translation;
-            changes[folder] += nlohmann::json{{"name", name},
-                                              {"preset", preset.name},
-                                              {"seed", seed},
-                                              {"rotation_deg", {r.x(), r.y(), r.z()}},
-                                              {"translation", {t.x(), t.y(), t.z()}}}
-                                   .dump() +
-                               "\n";
+            changes[folder] += change_line(name, preset, seed, change);
           }
+          // The paper's protocol: the original test image augmented by the same change
+          // (source-sphere prior, the translation in the sphere's units), as
+          // augment-dataset --depth source-sphere --sampling grid --label-fill FILL writes it.
+          const std::string paper = set + "-paper";
+          auto as_written = paper_cameras.find(camera_name);
+          if (as_written == paper_cameras.end()) {
+            const CameraParameters read_back = parse_camera(format_camera(p, CameraFormat::woodscape), name);
+            as_written =
+                paper_cameras.emplace(camera_name, std::pair{read_back, ViewpointWarp(Camera(read_back))}).first;
+          }
+          const ViewpointWarp& warp = as_written->second.second;
+          writer.sample(out / paper, name, augmented_camera(as_written->second.first, full.change()), [&] {
+            const SceneRender& source = original_of();
+            SceneRender augmented;
+            const AugmentIO io{&source.image,     &augmented.image, 0,      &source.labels,
+                               &augmented.labels, label_fill,       nullptr};
+            warp.augment(full.change(), DepthPrior::source_sphere, io, Sampling::grid);
+            if (o.depth) {
+              warp.warp_depth(full.change(), DepthPrior::source_sphere, source.range, DepthValues::range,
+                              &augmented.range);
+            }
+            return augmented;
+          });
+          changes[paper] += change_line(name, preset, seed, full);
         }
       }
     }
@@ -317,7 +374,9 @@ void register_sample_dataset(CLI::App& app) {
   cmd->add_option("--splits", o->splits, "--scenes: train,val,test fractions of the scenes (in scene order)")
       ->capture_default_str()
       ->excludes(images);
-  cmd->add_option("--test-sets", o->test_sets, "--scenes: presets of the true viewpoint test sets, or none")
+  cmd->add_option("--test-sets", o->test_sets,
+                  "--scenes: presets of the true viewpoint test sets (test-PRESET/, test-PRESET-rotation/ and the "
+                  "paper's protocol test-PRESET-paper/), or none")
       ->capture_default_str()
       ->excludes(images);
   cmd->add_option("--size", o->size, "Render at WxH or W,H (the same lens, resized; default: the camera's size)");
@@ -325,6 +384,12 @@ void register_sample_dataset(CLI::App& app) {
       ->check(CLI::Range(1, 4))
       ->capture_default_str();
   cmd->add_flag("--depth", o->depth, "Also write each sample's range (depth/NAME.npy, float32, metres along the ray)");
+  cmd->add_option("--paper-label-fill", o->paper_label_fill,
+                  "--scenes: the label of pixels without a source in the paper-protocol test sets "
+                  "(test-PRESET-paper/): 0, the paper's empty value (WoodScape's void class), another label, "
+                  "or ignore (255)")
+      ->capture_default_str()
+      ->excludes(images);
   cmd->callback([o] {
     if (o->out.empty()) throw Error("OUT: expected a folder, got ''");
     if (o->scenes > 0) return surround_view_dataset(*o);

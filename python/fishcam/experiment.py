@@ -187,10 +187,11 @@ def class_weights(counts: npt.NDArray[np.int64]) -> torch.Tensor:
 
 def evaluation_folders(dataset_root: str) -> list[tuple[str, str]]:
     """(test set, folder) of every split a run is scored on: ``original`` (test/), then
-    each true viewpoint test set present (test-PRESET/, test-PRESET-rotation/)."""
+    each true viewpoint test set present (test-PRESET/, test-PRESET-rotation/) and the
+    paper's protocol (test-PRESET-paper/: the original test images augmented)."""
     folders = [("original", os.path.join(dataset_root, "test"))]
     for name in TEST_SETS:
-        for variant in (f"test-{name}", f"test-{name}-rotation"):
+        for variant in (f"test-{name}", f"test-{name}-rotation", f"test-{name}-paper"):
             folder = os.path.join(dataset_root, variant)
             if os.path.isdir(folder):
                 folders.append((variant[len("test-") :], folder))
@@ -702,7 +703,7 @@ def tables(
 ) -> str:
     """The paper's tables as markdown: mIoU (%) per test set, mean ± std over seeds;
     Table 5 by geometry beside Table 5; then the fidelity rows."""
-    sets = ["original"] + [s for name in TEST_SETS for s in (name, f"{name}-rotation")]
+    sets = ["original"] + [s for name in TEST_SETS for s in (name, f"{name}-rotation", f"{name}-paper")]
     present = [s for s in sets if any(s in r["test"] for r in results)]
 
     def miou(config: str, test_set: str) -> list[float]:
@@ -711,7 +712,8 @@ def tables(
     lines = [
         "mIoU (%) on the original test split and the true viewpoint test sets (`small` = the re-rendered "
         "test scenes from cameras moved by the preset's changes; `-rotation`: the same changes without "
-        "translation); mean ± std over training seeds.",
+        "translation; `-paper`: the paper's protocol, the original test images augmented by the same changes "
+        "with the unit-sphere prior); mean ± std over training seeds.",
         "",
     ]
     for title, chosen in (
@@ -789,8 +791,12 @@ def figures(
     os.makedirs(folder, exist_ok=True)
     written = []
     sizes = ["original"] + list(TEST_SETS)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
-    for ax, suffix, title in ((axes[0], "", "rotation + translation"), (axes[1], "-rotation", "rotation only")):
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2), sharey=True)
+    for ax, suffix, title in (
+        (axes[0], "", "true: rotation + translation"),
+        (axes[1], "-rotation", "true: rotation only"),
+        (axes[2], "-paper", "the paper's protocol (augmented)"),
+    ):
         for config in configs:
             xs: list[int] = []
             means: list[float] = []
@@ -805,11 +811,11 @@ def figures(
             if xs:
                 ax.errorbar(xs, means, yerr=stds, marker="o", capsize=3, label=config)
         ax.set_xticks(range(len(sizes)), sizes)
-        ax.set_title(f"true viewpoint test sets: {title}")
+        ax.set_title(f"test sets, {title}")
         ax.set_xlabel("test set (change size)")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("mIoU (%), mean ± std over seeds")
-    axes[1].legend(fontsize=7, loc="lower left")
+    axes[2].legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     written.append(os.path.join(folder, "miou_vs_change.png"))
     fig.savefig(written[-1], dpi=110)

@@ -61,13 +61,13 @@ def test_quick_run_writes_the_tables_and_reproduces(dataset, tmp_path):
     out = tmp_path / "a"
     assert experiment.main([str(dataset), str(out), "--quick"]) == 0
     mious = _mious(out)
-    # 2 configurations x 2 seeds x (original + 2 test sets x 2 variants).
-    assert len(mious) == 2 * 2 * 5
+    # 2 configurations x 2 seeds x (original + 2 test sets x 3 variants: true, rotation, the paper's protocol).
+    assert len(mious) == 2 * 2 * 7
     assert all(math.isfinite(v) and 0 <= v <= 1 for v in mious.values())
     tables = (out / "tables.md").read_text()
     for heading in ("Table 2", "Table 3", "Table 5", "Fidelity", "Differences from none"):
         assert heading in tables
-    assert "| none |" in tables and "large-rotation" in tables
+    assert "| none |" in tables and "large-rotation" in tables and "large-paper" in tables
     assert "| test set | mIoU | degrades (%) | background | road |" in tables
     with open(out / "results.json") as f:
         results = json.load(f)
@@ -206,4 +206,4 @@ def test_two_ddp_processes(dataset, tmp_path):
     )
     assert result.returncode == 0, result.stderr[-2000:]
     mious = _mious(out)
-    assert len(mious) == 2 * 2 * 5 and all(math.isfinite(v) for v in mious.values())
+    assert len(mious) == 2 * 2 * 7 and all(math.isfinite(v) for v in mious.values())

@@ -135,14 +135,16 @@ ViewpointChange change_of(const nlohmann::json& entry, const fs::path& file, std
   }
 }
 
-// The dataset's true viewpoint test sets (test-*/ with their changes.jsonl), sorted.
+// The dataset's true viewpoint test sets (test-*/ with their changes.jsonl), sorted;
+// not the paper protocol's (test-*-paper/: augmented images, no truth to score against).
 std::vector<fs::path> true_test_sets(const fs::path& root) {
   if (!fs::is_directory(root / "test")) {
     throw Error(path_for_message(root) + ": no test/ folder (expected a dataset of fishcam sample-dataset --scenes N)");
   }
   std::vector<fs::path> sets;
   for (const auto& entry : fs::directory_iterator(root)) {
-    if (entry.is_directory() && entry.path().filename().string().starts_with("test-")) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_directory() && name.starts_with("test-") && !name.ends_with("-paper")) {
       // A test set without its changes cannot be scored: an interrupted sample-dataset
       // or a folder of something else, never skipped in silence.
       if (!fs::exists(entry.path() / "changes.jsonl")) {
