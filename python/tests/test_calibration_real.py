@@ -84,7 +84,8 @@ def test_kannala_brandt_agrees_with_cv2_fisheye_calibrate(observations: list) ->
 
 
 def test_projection_uncertainty_predicts_the_odd_even_difference(observations: list) -> None:
-    number = {name: int(re.findall(r"\d+", name)[0]) for name, _ in observations}
+    # The photo's number from its file name (the folders above it may hold digits too).
+    number = {name: int(re.findall(r"\d+", os.path.basename(name))[0]) for name, _ in observations}
     odd = [o for o in observations if number[o[0]] % 2 == 1]
     even = [o for o in observations if number[o[0]] % 2 == 0]
     a = fishcam.calibrate(odd, BOARD, SPACING, SIZE, "kannala-brandt").camera
