@@ -25,7 +25,9 @@ import hashlib
 import json
 import math
 import os
+import shutil
 import struct
+import subprocess
 import sys
 import time
 import typing
@@ -385,6 +387,126 @@ def check_out(out: str, dataset: str) -> None:
     if os.path.commonpath([real_out, real_dataset]) == real_dataset:
         where = "is the dataset" if real_out == real_dataset else f"is inside the dataset {real_dataset}"
         raise Error(f"{out}: OUT {where}; give an output folder outside it")
+
+
+def is_flat_layout(root: str) -> bool:
+    """A WoodScape-layout folder without splits (rgb_images/ at its top), as the real
+    dataset comes."""
+    return os.path.isdir(os.path.join(root, "rgb_images")) and not os.path.isdir(os.path.join(root, "train"))
+
+
+def split_names(root: str, split: typing.Optional[str], seed: typing.Optional[int], test_share: float) -> list[str]:
+    """The test images of a flat dataset, by name (no extension): those a split file
+    lists (one image per line, as WoodScape's own lists: NAME.png or NAME; blank lines
+    and # comments ignored), or a seeded share of the images."""
+    images = os.path.join(root, "rgb_images")
+    names = sorted(os.path.splitext(f)[0] for f in os.listdir(images) if f.lower().endswith((".png", ".jpg", ".jpeg")))
+    if not names:
+        raise Error(f"{images}: no images")
+    if split is not None:
+        try:
+            with open(split, encoding="utf-8") as f:
+                listed = [line.split("#")[0].strip() for line in f]
+        except (OSError, UnicodeDecodeError) as e:
+            raise Error(f"{split}: cannot be read as a split file ({type(e).__name__})") from None
+        test = [os.path.splitext(os.path.basename(n))[0] for n in listed if n]
+        if not test:
+            raise Error(f"{split}: names no image (expected one test image per line, e.g. 00001_FV.png)")
+        missing = sorted(set(test) - set(names))
+        if missing:
+            raise Error(f"{split}: names {len(missing)} image(s) not in {images}, e.g. {missing[0]}")
+        if len(set(test)) == len(names):
+            raise Error(f"{split}: lists every image as a test image; nothing would be left to train on")
+        return sorted(set(test))
+    if seed is None:
+        raise Error(f"{root}: a folder without splits needs --split FILE or --split-seed S")
+    if not 0 < test_share < 1:
+        raise Error(f"--test-share {test_share}: must be in (0, 1)")
+    count = max(1, min(len(names) - 1, round(test_share * len(names))))
+    if len(names) < 2:
+        raise Error(f"{images}: one image cannot be split into training and test images")
+    order = np.random.default_rng(fishcam.derive_seed(seed, "split", 0)).permutation(len(names))
+    return sorted(names[i] for i in order[:count])
+
+
+def prepare_flat_dataset(args: argparse.Namespace) -> str:
+    """A flat (real) dataset made into the harness's layout under OUT/dataset: train/
+    and test/ of links to the images, labels and calibrations (by the split), and the
+    paper's protocol test sets test-PRESET-paper/ made by `fishcam augment-dataset`
+    itself (--seed, --label-fill 0: the paper's empty value). Real data has no
+    re-rendered truth: no true viewpoint test sets and no fidelity tables. Returns the
+    folder."""
+    root = os.path.abspath(args.dataset)
+    test = set(split_names(root, args.split, args.split_seed, args.test_share))
+    binary = args.fishcam or os.environ.get("FISHCAM_BINARY") or shutil.which("fishcam")
+    if not binary or not os.access(binary, os.X_OK):
+        raise Error("the paper-protocol test sets are made by the fishcam program: give --fishcam PATH")
+    out = os.path.join(args.out, "dataset")
+    # One split per OUT: links of another split would leave images in both halves.
+    record = os.path.join(out, "split.json")
+    split_record = {"dataset": root, "test": sorted(test)}
+    if os.path.exists(record):
+        with open(record, encoding="utf-8") as f:
+            if json.load(f) != split_record:
+                raise Error(f"{record}: OUT holds another split of another dataset; use another OUT")
+    else:
+        os.makedirs(out, exist_ok=True)
+        with open(record, "w", encoding="utf-8") as f:
+            json.dump(split_record, f, indent=1)
+    parts = (("rgb_images", None), ("semantic_annotations/gtLabels", ".png"), ("calibration", ".json"))
+    images = os.path.join(root, "rgb_images")
+    for name in sorted(os.path.splitext(f)[0] for f in os.listdir(images)):
+        split = "test" if name in test else "train"
+        for part, extension in parts:
+            folder = os.path.join(root, part)
+            file = (
+                next((f for f in os.listdir(folder) if os.path.splitext(f)[0] == name), None)
+                if extension is None
+                else name + extension
+            )
+            if file is None or not os.path.isfile(os.path.join(folder, file)):
+                raise Error(f"{os.path.join(folder, name + (extension or '.png'))}: missing (the {part} of {name})")
+            link = os.path.join(out, split, part, file)
+            os.makedirs(os.path.dirname(link), exist_ok=True)
+            target = os.path.join(folder, file)
+            try:
+                os.symlink(target, link)
+            except FileExistsError:  # an earlier run's (or another process's): the same split only
+                if os.path.realpath(link) != os.path.realpath(target):
+                    raise Error(
+                        f"{link}: exists and is not a link to {target} (another split? use another OUT)"
+                    ) from None
+    for preset in TEST_SETS:
+        made = subprocess.run(
+            [
+                binary,
+                "augment-dataset",
+                os.path.join(out, "test"),
+                "--preset",
+                preset,
+                "--seed",
+                str(args.split_seed or 0),
+                "--label-fill",
+                "0",
+                "--depth",
+                "source-sphere",
+                "--out",
+                os.path.join(out, f"test-{preset}-paper"),
+            ],
+            capture_output=True,
+            text=True,
+        )
+        if made.returncode != 0:
+            raise Error(
+                f"fishcam augment-dataset ({preset}): {made.stderr.strip().splitlines()[-1] if made.stderr.strip() else 'failed'}"
+            )
+    print(
+        f"{args.dataset}: {len(test)} test and the other images train; real data has no re-rendered truth, so the "
+        "test sets are the paper's protocol only (test-PRESET-paper/, fishcam augment-dataset) and there are no "
+        "fidelity tables",
+        flush=True,
+    )
+    return out
 
 
 def run_settings(args: argparse.Namespace, device: torch.device, processes: int) -> dict[str, typing.Any]:
@@ -907,7 +1029,9 @@ def main(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
 def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="fishcam-experiment", description=__doc__.split("\n")[0])
     parser.add_argument(
-        "dataset", help="a dataset of `fishcam sample-dataset --scenes N` (train/, test/, test-PRESET/)"
+        "dataset",
+        help="a dataset of `fishcam sample-dataset --scenes N` (train/, test/, test-PRESET/), or a WoodScape-layout "
+        "folder without splits (rgb_images/, semantic_annotations/gtLabels/, calibration/; with --split or --split-seed)",
     )
     parser.add_argument(
         "out", help="output folder (runs/, results.json, tables.md), outside the dataset; existing runs are kept"
@@ -939,6 +1063,16 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
         help="tiny settings: configs none,viewpoint, 2 seeds, 1 epoch, width 4 (options given explicitly win)",
     )
     parser.add_argument(
+        "--split", help="a folder without splits: a file listing its test images, one per line (WoodScape's lists)"
+    )
+    parser.add_argument("--split-seed", type=int, help="a folder without splits: draw the test images with this seed")
+    parser.add_argument(
+        "--test-share", type=float, default=0.2, help="--split-seed: the share of the images drawn for test"
+    )
+    parser.add_argument(
+        "--fishcam", help="the fishcam program (a folder without splits; default: FISHCAM_BINARY, then PATH)"
+    )
+    parser.add_argument(
         "--rerun",
         action="store_true",
         help="recompute the stored runs made with other settings or from another dataset (refused without it)",
@@ -960,10 +1094,16 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     if args.width > MAX_WIDTH:
         raise Error(f"--width {args.width}: at most {MAX_WIDTH} (16 times the default; docs/experiment.md)")
     device = parse_device(args.device)
+    check_out(args.out, args.dataset)
+    if is_flat_layout(args.dataset):
+        if (args.split is None) == (args.split_seed is None):
+            raise Error(f"{args.dataset}: a folder without splits needs one of --split FILE and --split-seed S")
+        args.dataset = prepare_flat_dataset(args)
+    elif args.split is not None or args.split_seed is not None:
+        raise Error(f"{args.dataset}: already split (train/, test/): --split and --split-seed are for a folder without")
     for sub in ("train", "test"):
         if not os.path.isdir(os.path.join(args.dataset, sub, "rgb_images")):
             raise Error(f"{args.dataset}: no {sub}/rgb_images (make it with fishcam sample-dataset --scenes N)")
-    check_out(args.out, args.dataset)
     if not args.no_figures:
         try:
             import matplotlib  # noqa: F401

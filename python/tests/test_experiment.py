@@ -207,3 +207,47 @@ def test_two_ddp_processes(dataset, tmp_path):
     assert result.returncode == 0, result.stderr[-2000:]
     mious = _mious(out)
     assert len(mious) == 2 * 2 * 7 and all(math.isfinite(v) for v in mious.values())
+
+
+def test_a_folder_without_splits(tmp_path):
+    """The real dataset's layout (rgb_images/ at the top): split by a file or a seed, the
+    paper-protocol test sets made by augment-dataset, no truth and so no fidelity."""
+    if not BINARY:
+        pytest.skip("FISHCAM_BINARY not set (run through CTest)")
+    flat = tmp_path / "woodscape"
+    subprocess.run(
+        [BINARY, "sample-dataset", str(flat), "--images", "6", "--size", "64x49", "--seed", "3"],
+        check=True,
+        capture_output=True,
+    )
+    split = tmp_path / "test.txt"
+    split.write_text("# WoodScape's list format: one image per line\n00001_FV.png\n00004_FV\n")
+    out = tmp_path / "out"
+    common = ["--quick", "--configs", "none", "--seeds", "1", "--no-figures", "--fishcam", BINARY]
+    assert experiment.main([str(flat), str(out), "--split", str(split)] + common) == 0
+    assert sorted(os.listdir(out / "dataset" / "test" / "rgb_images")) == ["00001_FV.png", "00004_FV.png"]
+    assert len(os.listdir(out / "dataset" / "train" / "rgb_images")) == 4
+    with open(out / "results.json") as f:
+        results = json.load(f)
+    assert sorted(results["runs"][0]["test"]) == ["large-paper", "medium-paper", "original", "small-paper"]
+    assert results["fidelity"] == [] and results["model_fidelity"] == []
+    assert "small-paper" in (out / "tables.md").read_text()
+    # A seeded split, and what is refused.
+    assert experiment.main([str(flat), str(tmp_path / "seeded"), "--split-seed", "4"] + common) == 0
+    assert len(os.listdir(tmp_path / "seeded" / "dataset" / "test" / "rgb_images")) == 1  # 20 % of 6
+    for extra, message in (
+        ([], "needs one of --split FILE and --split-seed S"),
+        (["--split", str(split), "--split-seed", "1"], "needs one of --split FILE and --split-seed S"),
+        (["--split", str(tmp_path / "none.txt")], "cannot be read as a split file"),
+    ):
+        with pytest.raises(fishcam.Error, match=message):
+            experiment.run([str(flat), str(tmp_path / "bad")] + extra + common)
+    (tmp_path / "missing.txt").write_text("00009_FV.png\n")
+    (tmp_path / "empty.txt").write_text("# nothing\n")
+    for name, message in (("missing.txt", "not in"), ("empty.txt", "names no image")):
+        with pytest.raises(fishcam.Error, match=message):
+            experiment.run([str(flat), str(tmp_path / "bad"), "--split", str(tmp_path / name)] + common)
+    other = tmp_path / "other.txt"
+    other.write_text("00002_FV.png\n")
+    with pytest.raises(fishcam.Error, match="another split"):
+        experiment.run([str(flat), str(out), "--split", str(other)] + common)
