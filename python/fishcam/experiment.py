@@ -62,6 +62,8 @@ SETTINGS = (
     ("width", "--width"),
     ("class_weights", "--class-weights"),
     ("device", "--device"),
+    ("amp", "--amp"),
+    ("channels_last", "--channels-last"),
     ("processes", "--nproc_per_node (torchrun's processes)"),
 )
 
@@ -517,6 +519,8 @@ def run_settings(args: argparse.Namespace, device: torch.device, processes: int)
         "width": args.width,
         "class_weights": args.class_weights,
         "device": device.type,
+        "amp": args.amp,
+        "channels_last": args.channels_last,
         "processes": processes,
     }
 
@@ -559,6 +563,11 @@ def stored_run(
     return typing.cast(dict[str, typing.Any], result)
 
 
+def autocast(device: torch.device, amp: bool) -> typing.Any:
+    """Mixed precision (--amp): bfloat16 on the CPU, float16 on a GPU; off: a no-op."""
+    return torch.autocast(device.type, dtype=torch.bfloat16 if device.type == "cpu" else torch.float16, enabled=amp)
+
+
 def train(
     dataset_root: str,
     config: str,
@@ -569,6 +578,8 @@ def train(
     workers: int,
     device: torch.device,
     weights: typing.Optional[torch.Tensor],
+    amp: bool = False,
+    channels_last: bool = False,
 ) -> torch.nn.Module:
     rank, world = distributed()
     dataset = ft.WoodScapeDataset(os.path.join(dataset_root, "train"), transform=transform_for(config), seed=seed)
@@ -586,7 +597,10 @@ def train(
         collate_fn=ft.collate,
     )
     torch.manual_seed(seed)
-    net: torch.nn.Module = UNet(width).to(device)
+    layout = torch.channels_last if channels_last else torch.contiguous_format
+    net: torch.nn.Module = UNet(width).to(device).to(memory_format=layout)
+    # float16 gradients underflow without loss scaling; bfloat16 has float32's range.
+    scaler = torch.amp.GradScaler(device.type, enabled=amp and device.type == "cuda")
     if world > 1:
         net = torch.nn.parallel.DistributedDataParallel(net)
     optimiser = torch.optim.AdamW(net.parameters(), lr=2e-3, weight_decay=1e-4)
@@ -595,28 +609,34 @@ def train(
     net.train()
     for _ in range(epochs):
         for batch in loader:
-            image, mask = batch["image"].to(device), batch["mask"].to(device)
-            loss = torch.nn.functional.cross_entropy(
-                net(image), mask, weight=None if weights is None else weights.to(device), ignore_index=NO_SOURCE
-            )
+            image, mask = batch["image"].to(device, memory_format=layout), batch["mask"].to(device)
+            with autocast(device, amp):
+                loss = torch.nn.functional.cross_entropy(
+                    net(image), mask, weight=None if weights is None else weights.to(device), ignore_index=NO_SOURCE
+                )
             if not torch.isfinite(loss):
                 raise Error(f"{config}, seed {seed}: the loss is not finite")
             optimiser.zero_grad()
-            loss.backward()  # type: ignore[no-untyped-call]
-            optimiser.step()
+            scaler.scale(loss).backward()  # type: ignore[no-untyped-call]
+            scaler.step(optimiser)
+            scaler.update()
             schedule.step()
     return net.module if isinstance(net, torch.nn.parallel.DistributedDataParallel) else net
 
 
 @torch.no_grad()
-def evaluate(net: torch.nn.Module, root: str, device: torch.device, batch_size: int) -> dict[str, typing.Any]:
-    """mIoU and per-class IoU over a WoodScape-layout folder."""
+def evaluate(
+    net: torch.nn.Module, root: str, device: torch.device, batch_size: int, amp: bool = False
+) -> dict[str, typing.Any]:
+    """mIoU and per-class IoU over a WoodScape-layout folder (under --amp's precision)."""
     dataset = ft.WoodScapeDataset(root, transform=evaluation_transform())
     loader = torch.utils.data.DataLoader(dataset, batch_size=batch_size, collate_fn=ft.collate)
     confusion = fishcam.metrics.ConfusionMatrix(CLASSES, NO_SOURCE)
     net.eval()
     for batch in loader:
-        prediction = net(batch["image"].to(device)).argmax(1).cpu().numpy().astype(np.uint8)
+        with autocast(device, amp):
+            scores = net(batch["image"].to(device))
+        prediction = scores.argmax(1).cpu().numpy().astype(np.uint8)
         for p, t in zip(prediction, batch["mask"].numpy()):
             confusion.update(p, t)
     iou = confusion.iou()
@@ -646,7 +666,19 @@ def run_one(
     if rank == 0 and os.path.exists(path):  # --rerun: not complete until the new run is written
         os.remove(path)
     start = time.perf_counter()
-    net = train(args.dataset, config, seed, args.epochs, args.batch_size, args.width, args.workers, device, weights)
+    net = train(
+        args.dataset,
+        config,
+        seed,
+        args.epochs,
+        args.batch_size,
+        args.width,
+        args.workers,
+        device,
+        weights,
+        args.amp,
+        args.channels_last,
+    )
     if rank != 0:
         return None
     result: dict[str, typing.Any] = {
@@ -657,7 +689,7 @@ def run_one(
         "test": {},
     }
     for test_set, folder in evaluation_folders(args.dataset):
-        result["test"][test_set] = evaluate(net, folder, device, args.batch_size)
+        result["test"][test_set] = evaluate(net, folder, device, args.batch_size, args.amp)
     os.makedirs(os.path.dirname(path), exist_ok=True)
     weights_path = run_path(args.out, config, seed) + ".pt"
     torch.save(net.state_dict(), weights_path + ".tmp")
@@ -1047,6 +1079,12 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     )
     parser.add_argument("--workers", type=int, default=0, help="DataLoader workers")
     parser.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
+    parser.add_argument(
+        "--amp",
+        action="store_true",
+        help="mixed precision: float16 with loss scaling on a GPU, bfloat16 on the CPU (the GPU recipe, tested there)",
+    )
+    parser.add_argument("--channels-last", action="store_true", help="the network and its inputs in NHWC memory layout")
     parser.add_argument(
         "--class-weights",
         choices=("balanced", "none"),

@@ -251,3 +251,18 @@ def test_a_folder_without_splits(tmp_path):
     other.write_text("00002_FV.png\n")
     with pytest.raises(fishcam.Error, match="another split"):
         experiment.run([str(flat), str(out), "--split", str(other)] + common)
+
+
+def test_the_gpu_recipe_runs_on_the_cpu(dataset, tmp_path):
+    """--amp --channels-last (the one-GPU recipe) exercised on the CPU: bfloat16 autocast,
+    NHWC layout; recorded in the run's settings, so it never resumes a float32 run."""
+    out = tmp_path / "amp"
+    tiny = ["--quick", "--configs", "none", "--seeds", "1", "--no-figures", "--no-fidelity"]
+    assert experiment.main([str(dataset), str(out), "--amp", "--channels-last"] + tiny) == 0
+    with open(out / "results.json") as f:
+        results = json.load(f)
+    assert results["settings"]["amp"] is True and results["settings"]["channels_last"] is True
+    assert all(math.isfinite(t["miou"]) for t in results["runs"][0]["test"].values())
+    # The same OUT without --amp: the stored run was made with other settings.
+    with pytest.raises(fishcam.Error, match="amp"):
+        experiment.run([str(dataset), str(out)] + tiny)
