@@ -16,11 +16,13 @@ set(FISHCAM_TEST_TIMEOUT 300 CACHE STRING "Time limit of each C++ test, seconds"
 #   python    the Python package's tests, stubs and types
 #   install   installs and builds a consumer        fuzz     replays a fuzz harness's corpus
 #   style     the tree's style (scripts/style.sh)
-# fishcam_test(NAME [LABEL cli] [SWEEPS GTEST_FILTER]): the tests of NAME.cpp; those
-# matching SWEEPS (a GoogleTest filter, kept here beside the executable they belong
-# to) are labelled sweep, the others LABEL (default unit).
+#   real-data besides its kind: reads ../shared's real files (skips without them)
+# fishcam_test(NAME [LABEL cli] [SWEEPS GTEST_FILTER] [REAL_DATA GTEST_FILTER]): the
+# tests of NAME.cpp; those matching SWEEPS (a GoogleTest filter, kept here beside the
+# executable they belong to) are labelled sweep, those matching REAL_DATA (and not
+# SWEEPS) LABEL and real-data, the others LABEL (default unit).
 function(fishcam_test name)
-  cmake_parse_arguments(ARG "" "LABEL;SWEEPS" "" ${ARGN})
+  cmake_parse_arguments(ARG "" "LABEL;SWEEPS;REAL_DATA" "" ${ARGN})
   if(NOT ARG_LABEL)
     set(ARG_LABEL unit)
   endif()
@@ -32,10 +34,27 @@ function(fishcam_test name)
   # No paths compiled in (test_support.hpp reads fishcam_test_paths.txt, below): the
   # objects are the same wherever the tree lies, so a clone elsewhere hits ccache.
   target_compile_definitions(${name} PRIVATE $<$<TARGET_EXISTS:fishcam_cli>:FISHCAM_HAS_CLI>)
+  set(rest "")  # the filter of the others: "-SWEEPS:REAL_DATA"
   if(ARG_SWEEPS)
     gtest_discover_tests(${name} TEST_FILTER "${ARG_SWEEPS}" DISCOVERY_TIMEOUT 60
                          PROPERTIES TIMEOUT ${FISHCAM_TEST_TIMEOUT} LABELS sweep)
-    gtest_discover_tests(${name} TEST_FILTER "-${ARG_SWEEPS}" DISCOVERY_TIMEOUT 60
+    set(rest "${ARG_SWEEPS}")
+  endif()
+  if(ARG_REAL_DATA)
+    set(real "${ARG_REAL_DATA}")
+    if(ARG_SWEEPS)
+      set(real "${ARG_REAL_DATA}-${ARG_SWEEPS}")
+    endif()
+    gtest_discover_tests(${name} TEST_FILTER "${real}" DISCOVERY_TIMEOUT 60
+                         PROPERTIES TIMEOUT ${FISHCAM_TEST_TIMEOUT} LABELS "${ARG_LABEL};real-data")
+    if(rest)
+      set(rest "${rest}:${ARG_REAL_DATA}")
+    else()
+      set(rest "${ARG_REAL_DATA}")
+    endif()
+  endif()
+  if(rest)
+    gtest_discover_tests(${name} TEST_FILTER "-${rest}" DISCOVERY_TIMEOUT 60
                          PROPERTIES TIMEOUT ${FISHCAM_TEST_TIMEOUT} LABELS ${ARG_LABEL})
   else()
     gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT ${FISHCAM_TEST_TIMEOUT} LABELS ${ARG_LABEL})

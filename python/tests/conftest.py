@@ -16,6 +16,9 @@ import pytest
 DATA = os.environ.get("FISHCAM_DATA_DIR", str(Path(__file__).resolve().parents[2] / "data"))
 # The fishcam program under test, or None.
 BINARY = os.environ.get("FISHCAM_BINARY")
+# ../shared beside the source tree: real calibration files and photos (the tests that
+# read them skip without it; their CTest entries carry the label real-data).
+SHARED = Path(__file__).resolve().parents[3] / "shared"
 
 
 @pytest.fixture(scope="session")

@@ -7,13 +7,13 @@ where ../shared is absent."""
 import os
 import re
 import subprocess
-from pathlib import Path
 
 import fishcam
 import numpy as np
 import pytest
+from conftest import SHARED
 
-PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "calibration"
+PHOTOS = SHARED / "data" / "calibration"
 BOARD = (9, 6)
 SPACING = 0.03  # not given with the photos; intrinsics do not depend on it
 SIZE = (960, 600)

@@ -9,8 +9,9 @@ from pathlib import Path
 import fishcam
 import numpy as np
 import pytest
+from conftest import SHARED
 
-EXTERNAL = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "external"
+EXTERNAL = SHARED / "data" / "external"
 needs_shared = pytest.mark.skipif(not (EXTERNAL / "README.md").exists(), reason="no ../shared/data/external")
 
 
