@@ -16,11 +16,13 @@ set(FISHCAM_TEST_TIMEOUT 300 CACHE STRING "Time limit of each C++ test, seconds"
 #   python    the Python package's tests, stubs and types
 #   install   installs and builds a consumer        fuzz     replays a fuzz harness's corpus
 #   style     the tree's style (scripts/style.sh)
-#   real-data besides its kind: reads ../shared's real files (skips without them)
+#   real-data a library test of ../shared's real files (skips without them); the
+#             Python files that read them carry python and real-data
 # fishcam_test(NAME [LABEL cli] [SWEEPS GTEST_FILTER] [REAL_DATA GTEST_FILTER]): the
 # tests of NAME.cpp; those matching SWEEPS (a GoogleTest filter, kept here beside the
 # executable they belong to) are labelled sweep, those matching REAL_DATA (and not
-# SWEEPS) LABEL and real-data, the others LABEL (default unit).
+# SWEEPS) real-data (gtest_discover_tests passes one label), the others LABEL
+# (default unit).
 function(fishcam_test name)
   cmake_parse_arguments(ARG "" "LABEL;SWEEPS;REAL_DATA" "" ${ARGN})
   if(NOT ARG_LABEL)
@@ -46,7 +48,7 @@ function(fishcam_test name)
       set(real "${ARG_REAL_DATA}-${ARG_SWEEPS}")
     endif()
     gtest_discover_tests(${name} TEST_FILTER "${real}" DISCOVERY_TIMEOUT 60
-                         PROPERTIES TIMEOUT ${FISHCAM_TEST_TIMEOUT} LABELS "${ARG_LABEL};real-data")
+                         PROPERTIES TIMEOUT ${FISHCAM_TEST_TIMEOUT} LABELS real-data)
     if(rest)
       set(rest "${rest}:${ARG_REAL_DATA}")
     else()

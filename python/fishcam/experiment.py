@@ -1132,8 +1132,8 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     if args.width > MAX_WIDTH:
         raise Error(f"--width {args.width}: at most {MAX_WIDTH} (16 times the default; docs/experiment.md)")
     device = parse_device(args.device)
-    check_out(args.out, args.dataset)
     if is_flat_layout(args.dataset):
+        check_out(args.out, args.dataset)  # before OUT/dataset is written
         if (args.split is None) == (args.split_seed is None):
             raise Error(f"{args.dataset}: a folder without splits needs one of --split FILE and --split-seed S")
         args.dataset = prepare_flat_dataset(args)
@@ -1142,6 +1142,7 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     for sub in ("train", "test"):
         if not os.path.isdir(os.path.join(args.dataset, sub, "rgb_images")):
             raise Error(f"{args.dataset}: no {sub}/rgb_images (make it with fishcam sample-dataset --scenes N)")
+    check_out(args.out, args.dataset)
     if not args.no_figures:
         try:
             import matplotlib  # noqa: F401

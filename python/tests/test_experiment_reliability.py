@@ -85,10 +85,13 @@ def test_a_run_made_with_other_settings_is_refused_or_rerun(dataset, tmp_path, c
         "width": 4,
         "class_weights": "balanced",
         "device": "cpu",
+        "amp": False,
+        "channels_last": False,
         "processes": 1,
     }
-    # 2 scenes x 4 cameras: train, test, test-small, test-small-rotation; image, label, calibration each.
-    assert run["dataset"]["files"] == 4 * 4 * 3 and len(run["dataset"]["sha256"]) == 64
+    # 2 scenes x 4 cameras: train, test, test-small, test-small-rotation, test-small-paper; image, label,
+    # calibration each.
+    assert run["dataset"]["files"] == 4 * 5 * 3 and len(run["dataset"]["sha256"]) == 64
     stored = (out / RUN).read_bytes()
     # The probe's case: --epochs 3 --width 8 after a --quick run named the first difference.
     _refused(

@@ -199,8 +199,6 @@ TEST(Rig, TheRecordsCovarianceIsTheJointSolves) {
   const Eigen::Vector2d centre = right.principal_point();
   const double focal = right.parameters().pixel_scale.x() * model_params(right.parameters().model)[0];
   const double at_infinity = projection_uncertainty(right, centre, std::nullopt);
-  std::printf("camera 1: uncertainty at infinity %.4f px, rotation sigma x f %.4f px\n", at_infinity,
-              focal * r.rotation_sigma_rad[1]);
   EXPECT_GE(at_infinity, focal * r.rotation_sigma_rad[1]);
 }
 
