@@ -303,11 +303,12 @@ class _FishcamTransform(v2.Transform):
 
     _transformed_types = (torch.Tensor, Camera)
 
-    def __init__(self, min_visibility: float) -> None:
+    def __init__(self, min_visibility: float, boxes: str = "outline") -> None:
         super().__init__()
         if not 0 <= _transforms._number(min_visibility, "min_visibility") <= 1:
             raise Error(f"min_visibility: must be in [0, 1], got {min_visibility}")
         self.min_visibility = float(min_visibility)
+        self.boxes = _transforms._choice(boxes, BOX_MODES, "boxes")
 
     def _seed(self) -> int:
         """The sample's seed (sample_seed) for the first fishcam transform of the
@@ -349,15 +350,41 @@ class _FishcamTransform(v2.Transform):
         if records is not None:
             records.append(sample_change.record)
         instance_ids = _instance_mask_ids.get()
-        boxes = [x for x in flat_inputs if isinstance(x, tv_tensors.BoundingBoxes)]
-        instance_masks = [x for x in flat_inputs if isinstance(x, tv_tensors.Mask) and x.ndim == 3]
-        pairs = [m for m in instance_masks if boxes and m.shape[0] == boxes[0].shape[0] and m.shape[0] > 0]
         return {
             "change": sample_change,
-            "instance_masks": pairs[0] if pairs else None,
+            "instance_masks": self._paired_masks(flat_inputs, instance_ids) if self.boxes == "from_masks" else None,
             "instance_ids": instance_ids,
             "done": self._image_and_mask(flat_inputs, sample_change, instance_ids),
         }
+
+    @staticmethod
+    def _paired_masks(flat_inputs: list[typing.Any], instance_ids: typing.AbstractSet[int]) -> torch.Tensor:
+        """boxes="from_masks": the NxHxW instance masks paired by index with the
+        sample's N boxes, as torchvision's detection targets pair them -- those under
+        the key "masks" (a {"boxes", "labels", "masks"} target), else the one set of
+        instance masks in the sample; a count that differs, or a choice that would be a
+        guess, is refused."""
+        boxes = [x for x in flat_inputs if isinstance(x, tv_tensors.BoundingBoxes)]
+        if len(boxes) != 1:
+            raise Error(f'boxes="from_masks": expected one BoundingBoxes in the sample, got {len(boxes)}')
+        masks = [
+            x
+            for x in flat_inputs
+            if isinstance(x, tv_tensors.Mask) and x.ndim == 3 and is_instance_mask(x, id(x) in instance_ids)
+        ]
+        targets = [m for m in masks if id(m) in instance_ids]
+        chosen = targets if len(targets) == 1 else masks
+        if len(chosen) != 1:
+            raise Error(
+                f'boxes="from_masks": expected the instance masks under "masks" or one NxHxW instance Mask in the '
+                f"sample, got {len(masks)} instance masks"
+            )
+        if boxes[0].shape[0] != chosen[0].shape[0]:
+            raise Error(
+                f'boxes="from_masks": {boxes[0].shape[0]} boxes but {chosen[0].shape[0]} instance masks (box i is '
+                "mask i's: the counts must match)"
+            )
+        return chosen[0]
 
     @staticmethod
     def _image_and_mask(
@@ -453,23 +480,31 @@ class _FishcamTransform(v2.Transform):
         xyxy = v2.functional.convert_bounding_box_format(
             boxes.as_subclass(torch.Tensor), old_format=fmt, new_format=tv_tensors.BoundingBoxFormat.XYXY
         )
-        if instance_masks is not None:  # the tight box of each transformed instance (no-source pixels: none)
+        # Each box's own outline, densely transformed: its place and, in both modes, its
+        # visibility (the share of the transformed box inside the image).
+        mapped, seen = change.boxes(_cpu(xyxy, "boxes").double().numpy())
+        out, visibility = torch.from_numpy(mapped), torch.from_numpy(seen)
+        if instance_masks is not None:  # from_masks: the tight box of mask i (no-source pixels: in none)
             warped = self._masks(instance_masks, change, instance=True)
             out = torch.zeros((len(warped), 4), dtype=torch.float64)
             for i, plane in enumerate(warped):
                 ys, xs = torch.nonzero(plane, as_tuple=True)
                 if len(xs):
                     out[i] = torch.tensor([xs.min(), ys.min(), xs.max() + 1, ys.max() + 1], dtype=torch.float64)
-            visibility = (out[:, 2] > out[:, 0]).double()
-        else:
-            mapped, seen = change.boxes(_cpu(xyxy, "boxes").double().numpy())
-            out, visibility = torch.from_numpy(mapped), torch.from_numpy(seen)
+                else:
+                    visibility[i] = 0  # the instance left the image
         # Boxes seen too little collapse to nothing: v2.SanitizeBoundingBoxes drops them.
         out[visibility < self.min_visibility] = 0
         out = v2.functional.convert_bounding_box_format(
             out.to(boxes.dtype), old_format=tv_tensors.BoundingBoxFormat.XYXY, new_format=fmt
         )
         return tv_tensors.wrap(out, like=boxes)
+
+
+# How BoundingBoxes follow the change: "outline" -- each box from its own outline,
+# densely transformed (amodal boxes stay amodal; the default) -- or "from_masks" --
+# the tight box of the instance mask of the same index.
+BOX_MODES = ("outline", "from_masks")
 
 
 class RandomViewpoint(_FishcamTransform):
@@ -482,10 +517,11 @@ class RandomViewpoint(_FishcamTransform):
     sharing the camera; uint8, uint16, float32; bilinear), ``tv_tensors.Mask`` (HxW
     class ids or NxHxW instance masks, any integer or bool dtype, kept; nearest;
     no-source pixels as ``fill`` below),
-    ``tv_tensors.BoundingBoxes`` (the tight box of each transformed instance mask
-    when NxHxW masks pair with the N boxes, else of the densely transformed
-    outline; clipped; boxes seen less than ``min_visibility`` collapse to zero size,
-    which ``v2.SanitizeBoundingBoxes`` drops), ``tv_tensors.KeyPoints`` (mapped
+    ``tv_tensors.BoundingBoxes`` (each box from its own densely transformed outline,
+    so amodal and loose boxes keep their meaning; with ``boxes="from_masks"`` the
+    tight box of the transformed instance mask of the same index instead; clipped;
+    boxes seen less than ``min_visibility`` collapse to zero size, which
+    ``v2.SanitizeBoundingBoxes`` drops), ``tv_tensors.KeyPoints`` (mapped
     exactly; points that leave the view keep their coordinates outside the canvas,
     NaN where they have no image), ``fishcam.torch.DepthMap``, ``fishcam.torch.Polygon``.
     Without a seeded dataset, the seed comes from torch's generator.
@@ -518,7 +554,10 @@ class RandomViewpoint(_FishcamTransform):
             per-pixel map) or "exact".
         depth_values: what a DepthMap holds, "range" (along the ray) or "z".
         min_visibility: boxes seen less than this share of their area collapse to
-            zero size.
+            zero size (the same share in both box modes: of the box's transformed outline).
+        boxes: "outline" (default) or "from_masks": box i becomes the tight box of
+            instance mask i (the sample's one NxHxW instance Mask, N = the number of
+            boxes, else fishcam.Error), as torchvision pairs detection targets.
     """
 
     def __init__(
@@ -534,8 +573,9 @@ class RandomViewpoint(_FishcamTransform):
         sampling: str = "grid",
         depth_values: str = "range",
         min_visibility: float = 0.0,
+        boxes: str = "outline",
     ) -> None:
-        super().__init__(min_visibility)
+        super().__init__(min_visibility, boxes)
         if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
             fill, fill_mask = _split_fill(fill, fill_mask)
         self.numpy_transform = _transforms.RandomViewpoint(
@@ -569,14 +609,18 @@ class RandomViewpoint(_FishcamTransform):
         return self.numpy_transform.draw(camera, self._seed(), depth_map)
 
     def extra_repr(self) -> str:
-        return repr(self.numpy_transform)[len("RandomViewpoint(") : -1] + f", min_visibility={self.min_visibility}"
+        return (
+            repr(self.numpy_transform)[len("RandomViewpoint(") : -1]
+            + f", min_visibility={self.min_visibility}, boxes={self.boxes!r}"
+        )
 
 
 class RandomAffine(_FishcamTransform):
     """The paper's affine baseline (fishcam.transforms.RandomAffine) as a torchvision
     v2 transform, with the targets of RandomViewpoint (depth maps keep their values;
     a camera in the sample is passed on unchanged: the baseline has no camera model)
-    and its ``fill`` and ``fill_mask`` (instance masks get 0 / False)."""
+    and its ``fill`` and ``fill_mask`` (instance masks get 0 / False), ``min_visibility``
+    and ``boxes`` ("outline" or "from_masks", as RandomViewpoint's)."""
 
     def __init__(
         self,
@@ -588,8 +632,9 @@ class RandomAffine(_FishcamTransform):
         fill: Fill = 0,
         fill_mask: int = 0,
         min_visibility: float = 0.0,
+        boxes: str = "outline",
     ) -> None:
-        super().__init__(min_visibility)
+        super().__init__(min_visibility, boxes)
         if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
             fill, fill_mask = _split_fill(fill, fill_mask)
         self.numpy_transform = _transforms.RandomAffine(
@@ -606,7 +651,10 @@ class RandomAffine(_FishcamTransform):
         return self.numpy_transform.draw(_size_of(flat_inputs), self._seed())
 
     def extra_repr(self) -> str:
-        return repr(self.numpy_transform)[len("RandomAffine(") : -1] + f", min_visibility={self.min_visibility}"
+        return (
+            repr(self.numpy_transform)[len("RandomAffine(") : -1]
+            + f", min_visibility={self.min_visibility}, boxes={self.boxes!r}"
+        )
 
 
 class WarpedBatch(typing.NamedTuple):

@@ -75,7 +75,7 @@ def test_instance_masks_never_take_no_source_pixels(cam, seed, fill):
         tv_tensors.Mask(torch.ones((H, W), dtype=torch.int64)),
     )
     with ft.sample_seed(seed):
-        image, target, loose, semantic = ft.RandomViewpoint(cam, preset="large", **fill)(sample)
+        image, target, loose, semantic = ft.RandomViewpoint(cam, preset="large", boxes="from_masks", **fill)(sample)
 
     # The semantic mask: 255 exactly where the warp has no source; the image: 0 there.
     assert semantic.dtype == torch.int64
@@ -100,9 +100,9 @@ def test_instance_masks_never_take_no_source_pixels(cam, seed, fill):
 
     # SanitizeBoundingBoxes drops the instance that left the view, with its label and mask.
     with ft.sample_seed(seed):
-        image, target = v2.Compose([ft.RandomViewpoint(cam, preset="large", **fill), v2.SanitizeBoundingBoxes()])(
-            sample[:2]
-        )
+        image, target = v2.Compose(
+            [ft.RandomViewpoint(cam, preset="large", boxes="from_masks", **fill), v2.SanitizeBoundingBoxes()]
+        )(sample[:2])
     assert target["labels"].tolist() == [1, 2] and len(target["masks"]) == 2 and len(target["boxes"]) == 2
 
 

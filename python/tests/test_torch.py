@@ -321,7 +321,7 @@ def test_several_fishcam_transforms_in_one_sample_draw_different_changes(small_c
 
 
 def test_instance_masks_give_tight_boxes_and_unseen_boxes_collapse(small_camera):
-    """N instance masks paired with N boxes: each box becomes the tight box of its
+    """boxes="from_masks", N instance masks paired with N boxes: each box becomes the tight box of its
     transformed mask (in the boxes' own format); an instance the change moves out of
     view collapses and v2.SanitizeBoundingBoxes drops it with its label and mask."""
     h, w = small_camera.height, small_camera.width
@@ -330,7 +330,7 @@ def test_instance_masks_give_tight_boxes_and_unseen_boxes_collapse(small_camera)
     instances[1, 0:4, 0:4] = 1  # in the corner, outside the lens's image circle: nothing maps
     t = v2.Compose(
         [
-            ft.RandomViewpoint(small_camera, preset="small", min_visibility=0.5),
+            ft.RandomViewpoint(small_camera, preset="small", min_visibility=0.5, boxes="from_masks"),
             v2.SanitizeBoundingBoxes(labels_getter=lambda s: s["labels"]),
         ]
     )
