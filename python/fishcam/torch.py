@@ -384,7 +384,7 @@ class _FishcamTransform(v2.Transform):
                 f'boxes="from_masks": {boxes[0].shape[0]} boxes but {chosen[0].shape[0]} instance masks (box i is '
                 "mask i's: the counts must match)"
             )
-        return chosen[0]
+        return typing.cast(torch.Tensor, chosen[0])
 
     @staticmethod
     def _image_and_mask(
