@@ -552,7 +552,9 @@ class RandomViewpoint:
     preset: "small", "medium", "large" or "train"; or give max_rotation_deg and
         max_translation instead (uniform per axis in [-max, max]).
     depth: the depth prior, "source-sphere" (default), "target-sphere" or "infinity":
-        where a pixel's scene point is assumed to be when the camera moves; or "map":
+        where a pixel's scene point is assumed to be when the camera moves ("infinity"
+        sees rotations only: the change's translation is dropped, from the image, the
+        returned camera and the record alike); or "map":
         at the sample's own depth map (``depth_map=``, in the units of the change's
         translation; exact, and pixels the source never saw get no source).
     p: probability of applying a change (else the identity, still reported).
@@ -638,6 +640,10 @@ class RandomViewpoint:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.ViewpointChange()
+        if self.depth == "infinity":
+            # The prior at infinity sees no translation: the image gets the rotation
+            # alone, and so do the returned camera and the record (what the image got).
+            change = ViewpointChange(rotation_deg=change.rotation_deg.ravel(), translation=(0.0, 0.0, 0.0))
         warp = self._warps.get(camera)
         if self.depth == "map":
             if depth_map is None:

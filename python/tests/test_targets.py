@@ -247,3 +247,21 @@ def test_huge_boxes_are_clipped_before_their_outline_is_sampled(cam, size):
     assert out[0][2] >= xs.max() and out[0][3] >= ys.max() and visibility[0] > 0
     identity = RandomViewpoint(cam, preset="large", p=0).draw(seed=1)
     np.testing.assert_array_equal(identity.boxes([[-size, -size, size, size]])[0], [[0, 0, cam.width, cam.height]])
+
+
+def test_depth_at_infinity_drops_the_translation_everywhere(cam):
+    """depth="infinity" ignores the translation in the image; the returned camera and
+    the record say so too (issue 37, item 3: they kept it, 19 px apart at 5 m)."""
+    t = fishcam.transforms.RandomViewpoint(cam, preset="large", depth="infinity")
+    full = t.change_for(5)
+    assert np.abs(full.translation).max() > 0.1, "the preset's change has a translation to drop"
+    image = (np.arange(cam.height * cam.width * 3) % 251).astype(np.uint8).reshape(cam.height, cam.width, 3)
+    out = t(image=image, camera=cam, seed=5)
+    assert out["change"]["translation"] == [0.0, 0.0, 0.0]
+    assert out["change"]["rotation_deg"] == pytest.approx(full.rotation_deg.ravel().tolist(), abs=0)
+    rotation_only = fishcam.ViewpointChange(rotation_deg=full.rotation_deg.ravel(), translation=(0, 0, 0))
+    assert out["camera"] == cam.augmented(rotation_only)
+    # The image: what the warp gives the full change at infinity (translation ignored there too).
+    warp = fishcam.ViewpointWarp(cam)
+    reference = warp.warp(image=image, change=full, depth="infinity")["image"]
+    assert np.array_equal(out["image"], reference)
