@@ -17,7 +17,8 @@ set(FISHCAM_TEST_TIMEOUT 300 CACHE STRING "Time limit of each C++ test, seconds"
 #   install   installs and builds a consumer        fuzz     replays a fuzz harness's corpus
 #   style     the tree's style (scripts/style.sh)
 #   real-data a library test of ../shared's real files (skips without them); the
-#             Python files that read them carry python and real-data
+#             Python files that read them carry python and real-data; a sweep that
+#             reads them stays sweep (one label per discovered test)
 # fishcam_test(NAME [LABEL cli] [SWEEPS GTEST_FILTER] [REAL_DATA GTEST_FILTER]): the
 # tests of NAME.cpp; those matching SWEEPS (a GoogleTest filter, kept here beside the
 # executable they belong to) are labelled sweep, those matching REAL_DATA (and not

@@ -175,6 +175,39 @@ TEST(CliAugmentation, SurroundViewDatasetAndFidelity) {
   }
 }
 
+// The prior at infinity sees rotations only: augment's record and augment-dataset's
+// manifest and calibration files drop the translation the image never got (as the
+// Python transforms do), the image being the full change's.
+TEST(CliAugmentation, DepthAtInfinityDropsTheTranslationEverywhere) {
+  const auto dir = test::scratch_dir("cli_infinity");
+  auto r = run_fishcam("sample-dataset " + quoted(dir / "ds") + " --images 2 --seed 1 --size 96x73");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto image = dir / "ds" / "rgb_images" / "00000_FV.png";
+  const auto camera = dir / "ds" / "calibration" / "00000_FV.json";
+  const std::string augment = "augment " + quoted(camera) + " --image " + quoted(image) + " --preset large --seed 5";
+  r = run_fishcam(augment + " --depth infinity --json --out-image " + quoted(dir / "infinity.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto infinity = nlohmann::json::parse(r.out);
+  EXPECT_EQ(infinity.at("translation"), nlohmann::json({0.0, 0.0, 0.0})) << r.out;
+  r = run_fishcam(augment + " --depth source-sphere --json --out-image " + quoted(dir / "sphere.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto sphere = nlohmann::json::parse(r.out);
+  EXPECT_NE(sphere.at("translation"), nlohmann::json({0.0, 0.0, 0.0})) << "the preset's change has a translation";
+  EXPECT_EQ(infinity.at("rotation_deg"), sphere.at("rotation_deg"));
+  r = run_fishcam("augment-dataset " + quoted(dir / "ds") + " --preset large --seed 5 --depth infinity --out " +
+                  quoted(dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::istringstream manifest(test::read_file(dir / "out" / "manifest.jsonl"));
+  int lines = 0;
+  for (std::string line; std::getline(manifest, line);) {
+    const auto entry = nlohmann::json::parse(line);
+    if (!entry.contains("translation")) continue;  // the settings record
+    EXPECT_EQ(entry.at("translation"), nlohmann::json({0.0, 0.0, 0.0})) << line;
+    ++lines;
+  }
+  EXPECT_EQ(lines, 2);
+}
+
 TEST(CliAugmentation, RenderAugmentAndMap) {
   const auto dir = test::scratch_dir("cli_augment");
   auto r = run_fishcam("render " + data("woodscape_front.json") + " --out-image " + quoted(dir / "render.png") +

@@ -33,6 +33,7 @@ AugmentChange change_of(const AugmentOptions& o, bool affine) {
   c.pose = o.preset.empty() ? RandomPose{{o.pose.rotate[0], o.pose.rotate[1], o.pose.rotate[2]},
                                          {o.pose.translate[0], o.pose.translate[1], o.pose.translate[2]}}
                             : random_pose(pose_preset(o.preset, "--preset"), o.seed);
+  if (const auto prior = parse_depth_prior(o.pose.depth); prior && !affine) c.pose = applied_under(c.pose, *prior);
   if (affine && !o.preset.empty()) {
     c.affine = random_affine(affine_preset(o.preset, "--preset"), o.seed);
   } else if (!o.affine.empty()) {

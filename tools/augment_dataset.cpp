@@ -485,7 +485,7 @@ class DatasetAugmentation {
       const std::vector<fs::path> files =
           copy_files(output.dir, copy_name(image_path, output.preset, copy), image_path);
       const std::uint64_t seed = derive_seed(o_.seed, stem + "/" + preset_name, copy);
-      const RandomPose pose = random_pose(output.preset, seed);
+      const RandomPose pose = applied_under(random_pose(output.preset, seed), prior_);
       const AffineChange affine_change = affine_ ? random_affine(affine_preset(preset_name), seed) : AffineChange{};
       const std::string listed = fs::relative(files[0], output.dir).string();
       // Its own manifest's, or another run's of the same settings (the unsharded run

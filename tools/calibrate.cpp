@@ -43,23 +43,6 @@ std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, c
   return kept;
 }
 
-nlohmann::json poses_json(const CalibrationResult& result) {
-  nlohmann::json poses = nlohmann::json::array();
-  for (size_t i = 0; i < result.poses.size(); ++i) {
-    const auto& q = result.poses[i].rotation;
-    const auto& t = result.poses[i].translation;
-    poses.push_back({{"image", result.used_images[i]},
-                     {"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}},
-                     {"translation", {t.x(), t.y(), t.z()}},
-                     {"rms_px", result.per_image_rms_px[i]}});
-  }
-  return poses;
-}
-
-constexpr const char* kPoseConvention =
-    "p_camera = R(quaternion) p_board + translation; board corner (i, j) at (i * spacing, j * spacing, 0), in board "
-    "order (rows of W corners)";
-
 struct CalibrateOptions {
   std::vector<std::string> corners, imagersize;
   std::string board, model, images, poses, theta_limit;
@@ -97,42 +80,7 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
   std::vector<CameraParameters> written;
   for (const auto& r : rig.cameras) written.push_back(apply_theta_limit(r.camera, o.theta_limit));
   std::vector<std::pair<std::filesystem::path, std::string>> files = {{o.output.out, format_rig(written, format)}};
-  nlohmann::json report = {{"rms_px", rig.rms_px},
-                           {"rms_per_coordinate_px", rig.rms_px / std::sqrt(2.0)},
-                           {"instants", rig.instants},
-                           {"warnings", rig.warnings},
-                           {"out", o.output.out},
-                           {"pose_convention",
-                            "camera -> camera 0: p_camera0 = R(quaternion) p_camera + translation; "
-                            "board poses as for one camera, in each camera's frame"}};
-  nlohmann::json all_poses = nlohmann::json::array();
-  for (size_t k = 0; k < n; ++k) {
-    const CalibrationResult& r = rig.cameras[k];
-    const Pose& pose = *r.camera.pose;
-    nlohmann::json camera = {
-        {"corners_file", o.corners[k]},
-        {"model", model_name(r.camera.model)},
-        {"rms_px", r.rms_px},
-        {"corners", r.observations},
-        {"images", r.used_images.size()},
-        {"undetermined", r.undetermined},
-        {"pose",
-         {{"quaternion_xyzw", {pose.rotation.x(), pose.rotation.y(), pose.rotation.z(), pose.rotation.w()}},
-          {"translation", {pose.translation.x(), pose.translation.y(), pose.translation.z()}},
-          {"rotation_sigma_deg", rig.rotation_sigma_rad[k] * 180 / std::numbers::pi},
-          {"translation_sigma", rig.translation_sigma[k]}}}};
-    for (size_t i = 0; i < r.parameters.size(); ++i) {
-      camera["parameters"][r.parameter_names[i]] = {
-          {"value", r.parameters[i]},
-          {"sigma", std::isnan(r.sigmas[i]) ? nlohmann::json(nullptr) : nlohmann::json(r.sigmas[i])}};
-    }
-    report["cameras"].push_back(camera);
-    all_poses.push_back({{"camera", k}, {"poses", poses_json(r)}});
-  }
-  if (!o.poses.empty()) {
-    files.emplace_back(o.poses,
-                       nlohmann::json({{"convention", kPoseConvention}, {"cameras", all_poses}}).dump(2) + "\n");
-  }
+  if (!o.poses.empty()) files.emplace_back(o.poses, rig_calibration_poses_json(rig) + "\n");
   write_files_atomically(files, o.output.force);
   for (const auto& warning : rig.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
   for (size_t k = 0; k < n; ++k) {
@@ -144,7 +92,7 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
     note_dropped_record(written[0], format, o.output.out);
   }
   if (o.output.json) {
-    std::printf("%s\n", report.dump(2).c_str());
+    std::printf("%s\n", rig_calibration_report_json(rig, o.corners, o.output.out).c_str());
     return;
   }
   std::printf("calibrated a rig of %zu cameras from %ld instants: rms %.4f px (2-D; %.4f per coordinate); wrote %s\n",
@@ -206,11 +154,8 @@ void register_calibrate(CLI::App& app) {
     const CalibrationResult result = calibrate(observations, board, width, height, spec, {o->threads});
     const CameraParameters camera = apply_theta_limit(result.camera, o->theta_limit);
     // Everything is computed (and every output checked) before the first file is written.
-    const nlohmann::json poses = poses_json(result);
     std::vector<std::pair<std::filesystem::path, std::string>> files = {{o->output.out, format_camera(camera, format)}};
-    if (!o->poses.empty()) {
-      files.emplace_back(o->poses, nlohmann::json({{"convention", kPoseConvention}, {"poses", poses}}).dump(2) + "\n");
-    }
+    if (!o->poses.empty()) files.emplace_back(o->poses, calibration_poses_json(result) + "\n");
     write_files_atomically(files, o->output.force);
     note_dropped_record(camera, format, o->output.out);
     for (const auto& warning : result.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
@@ -219,37 +164,8 @@ void register_calibrate(CLI::App& app) {
     }
     constexpr double kDeg = 180 / std::numbers::pi;
     const CalibrationRecord& record = *result.camera.calibration;
-    // rms_px: the root mean square of the corners' 2-D reprojection error (the
-    // norm); mrcal and OpenCV print it per coordinate, which is rms_px / sqrt(2).
-    nlohmann::json outliers = nlohmann::json::array();
-    for (const auto& outlier : result.outliers) {
-      outliers.push_back({{"image", outlier.filename}, {"corner", outlier.corner}, {"error_px", outlier.error_px}});
-    }
-    nlohmann::json j = {{"model", model_name(result.camera.model)},
-                        {"rms_px", result.rms_px},
-                        {"rms_per_coordinate_px", result.rms_px / std::sqrt(2.0)},
-                        {"noise_px", result.noise_px},
-                        {"corners", result.observations},
-                        {"images", result.used_images.size()},
-                        {"outliers", outliers},
-                        {"undetermined", result.undetermined},
-                        {"observed_theta_max_deg", record.theta_max * kDeg},
-                        {"theta_limit_deg", camera.theta_limit ? nlohmann::json(*camera.theta_limit * kDeg) : nullptr},
-                        {"poses", poses},
-                        {"pose_convention", kPoseConvention},
-                        {"warnings", result.warnings},
-                        {"out", o->output.out}};
-    for (size_t i = 0; i < result.parameters.size(); ++i) {
-      const double sigma = result.sigmas[i];
-      j["parameters"][result.parameter_names[i]] = {
-          {"value", result.parameters[i]},
-          {"sigma", std::isnan(sigma) ? nlohmann::json(nullptr) : nlohmann::json(sigma)},
-          {"determined", !std::isnan(sigma)}};
-    }
-    for (size_t i = 0; i < result.used_images.size(); ++i)
-      j["per_image_rms_px"][result.used_images[i]] = result.per_image_rms_px[i];
     if (o->output.json) {
-      std::printf("%s\n", j.dump(2).c_str());
+      std::printf("%s\n", calibration_report_json(result, camera, o->output.out).c_str());
       return;
     }
     std::printf(

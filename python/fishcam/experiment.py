@@ -48,6 +48,8 @@ from . import Error
 CLASSES = 10
 NO_SOURCE = 255
 TEST_SETS = ("small", "medium", "large")
+# The image files a dataset's rgb_images/ holds (other files there are ignored).
+IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg")
 # --width's bound: 16 times the harness's default (the network's parameters grow as
 # 454 width^2: 30 M at 256, 0.5 GB with AdamW's state; its activations as 40 width
 # floats per pixel and image, checked against the memory available by
@@ -66,6 +68,8 @@ SETTINGS = (
     ("channels_last", "--channels-last"),
     ("processes", "--nproc_per_node (torchrun's processes)"),
 )
+# The value a setting had before the harness recorded it (runs stored by then).
+SETTING_DEFAULTS = {"amp": False, "channels_last": False}
 
 # Augmentation configurations: Table 3 (none, base, viewpoint, base + viewpoint),
 # Table 4 (affine vs viewpoint), Table 5 (viewpoint computed with a model fitted to
@@ -402,7 +406,7 @@ def split_names(root: str, split: typing.Optional[str], seed: typing.Optional[in
     lists (one image per line, as WoodScape's own lists: NAME.png or NAME; blank lines
     and # comments ignored), or a seeded share of the images."""
     images = os.path.join(root, "rgb_images")
-    names = sorted(os.path.splitext(f)[0] for f in os.listdir(images) if f.lower().endswith((".png", ".jpg", ".jpeg")))
+    names = sorted(os.path.splitext(f)[0] for f in os.listdir(images) if f.lower().endswith(IMAGE_EXTENSIONS))
     if not names:
         raise Error(f"{images}: no images")
     if split is not None:
@@ -444,36 +448,52 @@ def prepare_flat_dataset(args: argparse.Namespace) -> str:
     if not binary or not os.access(binary, os.X_OK):
         raise Error("the paper-protocol test sets are made by the fishcam program: give --fishcam PATH")
     out = os.path.join(args.out, "dataset")
+    done = os.path.join(out, "prepared")
+    # Under torchrun the first process prepares; the others wait for its marker.
+    if int(os.environ.get("RANK", "0")) != 0:
+        for _ in range(3600):
+            if os.path.exists(done):
+                return out
+            time.sleep(1)
+        raise Error(f"{done}: the first process did not prepare the dataset within an hour")
     # One split per OUT: links of another split would leave images in both halves.
     record = os.path.join(out, "split.json")
     split_record = {"dataset": root, "test": sorted(test)}
     if os.path.exists(record):
-        with open(record, encoding="utf-8") as f:
-            if json.load(f) != split_record:
-                raise Error(f"{record}: OUT holds another split of another dataset; use another OUT")
+        try:
+            with open(record, encoding="utf-8") as f:
+                stored = json.load(f)
+        except (OSError, ValueError):
+            raise Error(f"{record}: unreadable (not this harness's split record); use another OUT") from None
+        if stored != split_record:
+            raise Error(f"{record}: OUT holds another split of another dataset; use another OUT")
     else:
         os.makedirs(out, exist_ok=True)
-        with open(record, "w", encoding="utf-8") as f:
+        with open(record + ".tmp", "w", encoding="utf-8") as f:
             json.dump(split_record, f, indent=1)
-    parts = (("rgb_images", None), ("semantic_annotations/gtLabels", ".png"), ("calibration", ".json"))
-    images = os.path.join(root, "rgb_images")
-    for name in sorted(os.path.splitext(f)[0] for f in os.listdir(images)):
+        os.replace(record + ".tmp", record)
+    files = {
+        part: {os.path.splitext(f)[0]: f for f in os.listdir(os.path.join(root, part))}
+        for part in ("rgb_images", "semantic_annotations/gtLabels", "calibration")
+        if os.path.isdir(os.path.join(root, part))
+    }
+    for name in sorted(n for n, f in files["rgb_images"].items() if f.lower().endswith(IMAGE_EXTENSIONS)):
         split = "test" if name in test else "train"
-        for part, extension in parts:
-            folder = os.path.join(root, part)
-            file = (
-                next((f for f in os.listdir(folder) if os.path.splitext(f)[0] == name), None)
-                if extension is None
-                else name + extension
-            )
-            if file is None or not os.path.isfile(os.path.join(folder, file)):
-                raise Error(f"{os.path.join(folder, name + (extension or '.png'))}: missing (the {part} of {name})")
+        for part, extension in (
+            ("rgb_images", None),
+            ("semantic_annotations/gtLabels", ".png"),
+            ("calibration", ".json"),
+        ):
+            file = files.get(part, {}).get(name)
+            if file is None or (extension is not None and file != name + extension):
+                expected = os.path.join(root, part, name + (extension or ".png"))
+                raise Error(f"{expected}: missing (the {part} of {name})")
+            target = os.path.join(root, part, file)
             link = os.path.join(out, split, part, file)
             os.makedirs(os.path.dirname(link), exist_ok=True)
-            target = os.path.join(folder, file)
             try:
                 os.symlink(target, link)
-            except FileExistsError:  # an earlier run's (or another process's): the same split only
+            except FileExistsError:  # an earlier run's: the same split only
                 if os.path.realpath(link) != os.path.realpath(target):
                     raise Error(
                         f"{link}: exists and is not a link to {target} (another split? use another OUT)"
@@ -499,9 +519,10 @@ def prepare_flat_dataset(args: argparse.Namespace) -> str:
             text=True,
         )
         if made.returncode != 0:
-            raise Error(
-                f"fishcam augment-dataset ({preset}): {made.stderr.strip().splitlines()[-1] if made.stderr.strip() else 'failed'}"
-            )
+            last = made.stderr.strip().splitlines()[-1] if made.stderr.strip() else "failed"
+            raise Error(f"fishcam augment-dataset ({preset}): {last}")
+    with open(done, "w") as f:
+        f.write("prepared\n")
     print(
         f"{args.dataset}: {len(test)} test and the other images train; real data has no re-rendered truth, so the "
         "test sets are the paper's protocol only (test-PRESET-paper/, fishcam augment-dataset) and there are no "
@@ -556,11 +577,25 @@ def stored_run(
             f"{dataset['files']} files, sha256 {dataset['sha256'][:12]}); {hint}"
         )
     for key, option in SETTINGS:
-        if stored_settings.get(key) != settings[key]:
+        # Settings added since a run was stored had their default then.
+        stored_value = stored_settings.get(key, SETTING_DEFAULTS.get(key))
+        if stored_value != settings[key]:
             if rerun:
                 return None
-            raise Error(f"{path}: made with {option} {stored_settings.get(key)}, now {settings[key]}; {hint}")
+            raise Error(f"{path}: made with {option} {stored_value}, now {settings[key]}; {hint}")
     return typing.cast(dict[str, typing.Any], result)
+
+
+def finite_or_none(value: typing.Any) -> typing.Any:
+    """value with every non-finite float (an angle band without pixels, a set without
+    compared pixels) as None, through dicts and lists."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: finite_or_none(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite_or_none(v) for v in value]
+    return value
 
 
 def autocast(device: torch.device, amp: bool) -> typing.Any:
@@ -1035,7 +1070,9 @@ def model_fidelity_figure(plt: typing.Any, rows: typing.Sequence[dict[str, typin
         ax.set_xticks(range(len(sets)), [s[len("test-") :] for s in sets], rotation=20, fontsize=8)
         ax.set_ylabel(label)
         ax.grid(axis="y", alpha=0.3)
-    axes[1].set_ylim(max(0.0, 100 * min(r["label_agreement"] for r in rows) - 2), 100.5)
+    agreements = [r["label_agreement"] for r in rows if math.isfinite(r["label_agreement"])]
+    if agreements:
+        axes[1].set_ylim(max(0.0, 100 * min(agreements) - 2), 100.5)
     axes[0].legend(fontsize=7)
     fig.suptitle("Table 5 by geometry: the augmentation computed through each model (source-sphere prior)", fontsize=9)
     fig.tight_layout()
@@ -1214,7 +1251,7 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
             "model_fidelity": model_fidelity,
         }
         with open(os.path.join(args.out, "results.json"), "w") as f:
-            json.dump(summary, f, indent=1)
+            json.dump(finite_or_none(summary), f, indent=1)  # NaN is not JSON: null, as the program writes
         with open(os.path.join(args.out, "tables.md"), "w") as f:
             f.write(tables(results, configs, fidelity, model_fidelity))
         print(

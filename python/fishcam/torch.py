@@ -358,13 +358,17 @@ class _FishcamTransform(v2.Transform):
         }
 
     @staticmethod
-    def _paired_masks(flat_inputs: list[typing.Any], instance_ids: typing.AbstractSet[int]) -> torch.Tensor:
+    def _paired_masks(
+        flat_inputs: list[typing.Any], instance_ids: typing.AbstractSet[int]
+    ) -> typing.Optional[torch.Tensor]:
         """boxes="from_masks": the NxHxW instance masks paired by index with the
         sample's N boxes, as torchvision's detection targets pair them -- those under
         the key "masks" (a {"boxes", "labels", "masks"} target), else the one set of
         instance masks in the sample; a count that differs, or a choice that would be a
-        guess, is refused."""
+        guess, is refused. A sample without boxes has nothing to pair (None)."""
         boxes = [x for x in flat_inputs if isinstance(x, tv_tensors.BoundingBoxes)]
+        if not boxes:
+            return None
         if len(boxes) != 1:
             raise Error(f'boxes="from_masks": expected one BoundingBoxes in the sample, got {len(boxes)}')
         masks = [

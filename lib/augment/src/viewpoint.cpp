@@ -159,6 +159,11 @@ std::optional<PosePreset> find_pose_preset(std::string_view name) {
   return std::nullopt;
 }
 
+RandomPose applied_under(RandomPose pose, DepthPrior prior) {
+  if (prior == DepthPrior::infinity) pose.translation.setZero();
+  return pose;
+}
+
 RandomPose random_pose(const PosePreset& preset, std::uint64_t seed) {
   SeededUniform uniform(seed);
   RandomPose pose;

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <set>
 #include <sstream>
 
 #include "fishcam/core/model_registry.hpp"
@@ -29,10 +28,6 @@ Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange&
                                const cv::Mat& source_labels, const cv::Mat& source_depth, const cv::Mat& truth_image,
                                const cv::Mat& truth_labels) {
   const cv::Size out(warp.target().width(), warp.target().height());
-  if (source_image.type() != CV_8UC3 || truth_image.type() != CV_8UC3 || source_labels.type() != CV_8UC1 ||
-      truth_labels.type() != CV_8UC1) {
-    throw Error("fidelity: expected 8-bit 3-channel images and 8-bit labels");
-  }
   if (truth_image.size() != out || truth_labels.size() != out) {
     throw Error("fidelity: the truth is not the output camera's size");
   }
@@ -51,6 +46,14 @@ namespace {
 // The source image and labels resampled by `maps` against the truth.
 Fidelity fidelity_of_maps(const WarpMaps& maps, const cv::Mat& source_image, const cv::Mat& source_labels,
                           const cv::Mat& truth_image, const cv::Mat& truth_labels) {
+  if (source_image.type() != CV_8UC3 || truth_image.type() != CV_8UC3 || source_labels.type() != CV_8UC1 ||
+      truth_labels.type() != CV_8UC1) {
+    throw Error("fidelity: expected 8-bit 3-channel images and 8-bit labels");
+  }
+  if (source_labels.size() != source_image.size() || truth_labels.size() != truth_image.size() ||
+      truth_image.size() != maps.map_x.size()) {
+    throw Error("fidelity: the images and labels are not their cameras' sizes");
+  }
   cv::Mat image, labels;
   warp_image(source_image, maps, &image);
   warp_labels(source_labels, maps, 255, &labels);
@@ -254,10 +257,17 @@ std::vector<DatasetFidelity> dataset_fidelity(const fs::path& root) {
 
 std::vector<std::string> check_fidelity_models(const std::vector<std::string>& models) {
   if (models.empty()) throw Error("models: expected at least one model (own, equidistant:paper, ...)");
-  std::set<std::string> seen;
+  std::map<std::string, std::string> seen;  // by meaning: "equidistant" is "equidistant:lsq"
   for (const std::string& token : models) {
-    if (!seen.insert(token).second) throw Error("models: " + quoted_for_message(token) + " is given twice");
-    parse_fidelity_model(token);
+    const FidelityModel m = parse_fidelity_model(token);
+    const std::string key = m.own ? "own"
+                                  : std::string(parse_model_spec(m.spec).name) + "/" +
+                                        std::to_string(parse_model_spec(m.spec).order) + "/" + m.method;
+    const auto [at, inserted] = seen.emplace(key, token);
+    if (!inserted) {
+      throw Error("models: " + quoted_for_message(token) +
+                  (at->second == token ? " is given twice" : " is " + quoted_for_message(at->second) + " again"));
+    }
   }
   return models;
 }
@@ -307,16 +317,25 @@ std::vector<ModelFidelity> dataset_model_fidelity(const fs::path& root, const st
       const CameraModels& c = models_of(root / "test" / "calibration" / (name + ".json"));
       const SampleFiles source = read_sample(root / "test", name, false);
       const SampleFiles truth = read_sample(set, name, false);
-      if (truth.image.cols != c.warps[0].target().width() || truth.image.rows != c.warps[0].target().height()) {
-        throw Error(path_for_message(set / "rgb_images" / (name + ".png")) + ": not its camera's size");
+      const cv::Size size(c.warps[0].target().width(), c.warps[0].target().height());
+      for (const auto& [what, image] :
+           {std::pair{"rgb_images", &truth.image}, std::pair{"labels", &truth.labels},
+            std::pair{"rgb_images (source)", &source.image}, std::pair{"labels (source)", &source.labels}}) {
+        if (image->size() != size) {
+          throw Error(path_for_message(set) + ": " + name + ": " + what + " is not its camera's size");
+        }
       }
+      // The endpoint on geometric maps (the sampling maps clamp coordinates near the
+      // source's border), as compare measures it; the images through the sampling maps.
       WarpMaps own;
-      c.warps[0].compute(change, prior, &own);
+      c.warps[0].compute(change, prior, &own, MapKind::geometric);
       const cv::Mat own_valid = own.validity();
       for (std::size_t k = 0; k < models.size(); ++k) {
+        WarpMaps sampling;
+        c.warps[k + 1].compute(change, prior, &sampling);
+        const Fidelity f = fidelity_of_maps(sampling, source.image, source.labels, truth.image, truth.labels);
         WarpMaps maps;
-        c.warps[k + 1].compute(change, prior, &maps);
-        const Fidelity f = fidelity_of_maps(maps, source.image, source.labels, truth.image, truth.labels);
+        c.warps[k + 1].compute(change, prior, &maps, MapKind::geometric);
         ModelFidelity& row = set_rows[k];
         row.valid_share += f.valid_share, row.label_agreement += f.label_agreement, row.psnr_db += f.psnr_db;
         ++row.samples;

@@ -90,6 +90,10 @@ class SeededUniform {
 
 // Draw order: rx, ry, rz, tx, ty, tz (SeededUniform::symmetric each).
 RandomPose random_pose(const PosePreset& preset, std::uint64_t seed);
+// The change `prior` applies of `pose`: the prior at infinity sees rotations only, so
+// the translation is dropped -- what the image gets, and so what the moved camera and
+// the records say (fishcam.transforms does the same).
+RandomPose applied_under(RandomPose pose, DepthPrior prior);
 // A seed per (key, index) from one user seed (SplitMix64 over FNV-1a of the key).
 std::uint64_t derive_seed(std::uint64_t seed, std::string_view key, std::uint64_t index);
 

@@ -82,6 +82,25 @@ struct RigCalibrationResult {
 RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
                                    const CalibrationOptions& options = {});
 
+// The reports `fishcam calibrate --json` prints, built here as convert's is
+// (fit_report_json). One camera: model, rms_px (the corners' 2-D reprojection error;
+// mrcal and OpenCV print it per coordinate, rms_per_coordinate_px = rms_px / sqrt 2),
+// noise_px, corners, images, outliers, undetermined, observed_theta_max_deg,
+// theta_limit_deg (of `written`, the camera as written), poses, pose_convention,
+// warnings, out, parameters {name: {value, sigma, determined}}, per_image_rms_px.
+std::string calibration_report_json(const CalibrationResult& result, const CameraParameters& written,
+                                    const std::string& out);
+// A rig: rms_px, rms_per_coordinate_px, instants, warnings, out, pose_convention, and
+// per camera its corners file, model, rms_px, corners, images, outliers, undetermined,
+// pose (camera -> camera 0, with sigmas) and parameters {name: {value, sigma}}.
+std::string rig_calibration_report_json(const RigCalibrationResult& rig, const std::vector<std::string>& corners_files,
+                                        const std::string& out);
+// The board poses of `--poses FILE`: {"convention", "poses": [{image,
+// quaternion_xyzw, translation, rms_px}, ...]}, or for a rig {"convention",
+// "cameras": [{"camera", "poses"}, ...]}.
+std::string calibration_poses_json(const CalibrationResult& result);
+std::string rig_calibration_poses_json(const RigCalibrationResult& rig);
+
 // Projection uncertainty as mrcal defines it: the spread of the projection of a
 // point fixed relative to the calibration boards, seen at `pixel`, through
 // calibrations perturbed by the corner noise -- propagated (to first order) from

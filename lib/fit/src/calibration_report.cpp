@@ -1,0 +1,118 @@
+// The JSON reports of a calibration (calibration.hpp): what `fishcam calibrate --json`
+// prints and `--poses` writes.
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <numbers>
+
+#include "fishcam/fit/calibration.hpp"
+
+namespace fishcam {
+namespace {
+
+constexpr double kDegreesPerRadian = 180 / std::numbers::pi;
+
+constexpr const char* kPoseConvention =
+    "p_camera = R(quaternion) p_board + translation; board corner (i, j) at (i * spacing, j * spacing, 0), in board "
+    "order (rows of W corners)";
+
+nlohmann::json poses_of(const CalibrationResult& result) {
+  nlohmann::json poses = nlohmann::json::array();
+  for (size_t i = 0; i < result.poses.size(); ++i) {
+    const auto& q = result.poses[i].rotation;
+    const auto& t = result.poses[i].translation;
+    poses.push_back({{"image", result.used_images[i]},
+                     {"quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}},
+                     {"translation", {t.x(), t.y(), t.z()}},
+                     {"rms_px", result.per_image_rms_px[i]}});
+  }
+  return poses;
+}
+
+nlohmann::json outliers_of(const CalibrationResult& result) {
+  nlohmann::json outliers = nlohmann::json::array();
+  for (const auto& outlier : result.outliers) {
+    outliers.push_back({{"image", outlier.filename}, {"corner", outlier.corner}, {"error_px", outlier.error_px}});
+  }
+  return outliers;
+}
+
+nlohmann::json sigma_of(double sigma) { return std::isnan(sigma) ? nlohmann::json(nullptr) : nlohmann::json(sigma); }
+
+}  // namespace
+
+std::string calibration_report_json(const CalibrationResult& result, const CameraParameters& written,
+                                    const std::string& out) {
+  const CalibrationRecord& record = *result.camera.calibration;
+  nlohmann::json j = {
+      {"model", model_name(result.camera.model)},
+      {"rms_px", result.rms_px},
+      {"rms_per_coordinate_px", result.rms_px / std::sqrt(2.0)},
+      {"noise_px", result.noise_px},
+      {"corners", result.observations},
+      {"images", result.used_images.size()},
+      {"outliers", outliers_of(result)},
+      {"undetermined", result.undetermined},
+      {"observed_theta_max_deg", record.theta_max * kDegreesPerRadian},
+      {"theta_limit_deg", written.theta_limit ? nlohmann::json(*written.theta_limit * kDegreesPerRadian) : nullptr},
+      {"poses", poses_of(result)},
+      {"pose_convention", kPoseConvention},
+      {"warnings", result.warnings},
+      {"out", out}};
+  for (size_t i = 0; i < result.parameters.size(); ++i) {
+    const double sigma = result.sigmas[i];
+    j["parameters"][result.parameter_names[i]] = {
+        {"value", result.parameters[i]}, {"sigma", sigma_of(sigma)}, {"determined", !std::isnan(sigma)}};
+  }
+  for (size_t i = 0; i < result.used_images.size(); ++i) {
+    j["per_image_rms_px"][result.used_images[i]] = result.per_image_rms_px[i];
+  }
+  return j.dump(2);
+}
+
+std::string rig_calibration_report_json(const RigCalibrationResult& rig, const std::vector<std::string>& corners_files,
+                                        const std::string& out) {
+  nlohmann::json report = {{"rms_px", rig.rms_px},
+                           {"rms_per_coordinate_px", rig.rms_px / std::sqrt(2.0)},
+                           {"instants", rig.instants},
+                           {"warnings", rig.warnings},
+                           {"out", out},
+                           {"pose_convention",
+                            "camera -> camera 0: p_camera0 = R(quaternion) p_camera + translation; "
+                            "board poses as for one camera, in each camera's frame"}};
+  for (size_t k = 0; k < rig.cameras.size(); ++k) {
+    const CalibrationResult& r = rig.cameras[k];
+    const Pose& pose = *r.camera.pose;
+    nlohmann::json camera = {
+        {"corners_file", k < corners_files.size() ? corners_files[k] : ""},
+        {"model", model_name(r.camera.model)},
+        {"rms_px", r.rms_px},
+        {"corners", r.observations},
+        {"images", r.used_images.size()},
+        {"outliers", outliers_of(r)},
+        {"undetermined", r.undetermined},
+        {"pose",
+         {{"quaternion_xyzw", {pose.rotation.x(), pose.rotation.y(), pose.rotation.z(), pose.rotation.w()}},
+          {"translation", {pose.translation.x(), pose.translation.y(), pose.translation.z()}},
+          {"rotation_sigma_deg", rig.rotation_sigma_rad[k] * kDegreesPerRadian},
+          {"translation_sigma", rig.translation_sigma[k]}}}};
+    for (size_t i = 0; i < r.parameters.size(); ++i) {
+      camera["parameters"][r.parameter_names[i]] = {{"value", r.parameters[i]}, {"sigma", sigma_of(r.sigmas[i])}};
+    }
+    report["cameras"].push_back(camera);
+  }
+  return report.dump(2);
+}
+
+std::string calibration_poses_json(const CalibrationResult& result) {
+  return nlohmann::json({{"convention", kPoseConvention}, {"poses", poses_of(result)}}).dump(2);
+}
+
+std::string rig_calibration_poses_json(const RigCalibrationResult& rig) {
+  nlohmann::json cameras = nlohmann::json::array();
+  for (size_t k = 0; k < rig.cameras.size(); ++k)
+    cameras.push_back({{"camera", k}, {"poses", poses_of(rig.cameras[k])}});
+  return nlohmann::json({{"convention", kPoseConvention}, {"cameras", cameras}}).dump(2);
+}
+
+}  // namespace fishcam
