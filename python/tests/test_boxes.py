@@ -84,6 +84,10 @@ def test_from_masks_pairs_by_index_and_counts_must_match(cam):
         t(loose)
     with pytest.raises(fishcam.Error, match="boxes: expected outline or from_masks"):
         ft.RandomViewpoint(cam, boxes="tight")
+    # A sample without boxes (an unlabelled image in the same pipeline) has nothing to pair.
+    with ft.sample_seed(SEED):
+        alone = t({"image": tv_tensors.Image(torch.zeros((3, H, W), dtype=torch.uint8))})
+    assert alone["image"].shape == (3, H, W)
 
 
 def test_min_visibility_means_the_same_in_both_modes(cam):
