@@ -149,7 +149,7 @@ class Camera:
     @property
     def model(self) -> str:
         """
-        The model's name (docs/models.md), e.g. 'polynomial', 'kannala-brandt'.
+        The model's name (docs/conventions.md lists them), e.g. 'polynomial', 'kannala-brandt'.
         """
     @property
     def mrcal_lens(self) -> tuple[str, list[float]] | None:
@@ -164,7 +164,7 @@ class Camera:
     @property
     def parameters(self) -> list[float]:
         """
-        The model's parameters (list of float), in the order docs/models.md gives.
+        The model's parameters (list of float), in the order docs/conventions.md gives.
         """
     @property
     def pixel_scale(self) -> numpy.ndarray[tuple[typing.Literal[2], typing.Literal[1]], numpy.dtype[numpy.float64]]:

@@ -189,10 +189,10 @@ void bind_camera(py::module_& m) {
           "height", [](const Camera& self) -> decltype(auto) { return self.height(); }, "Image height in pixels (int).")
       .def_property_readonly(
           "model", [](const Camera& c) { return std::string(model_name(c.model())); },
-          "The model's name (docs/models.md), e.g. 'polynomial', 'kannala-brandt'.")
+          "The model's name (docs/conventions.md lists them), e.g. 'polynomial', 'kannala-brandt'.")
       .def_property_readonly(
           "parameters", [](const Camera& c) { return model_params(c.model()); },
-          "The model's parameters (list of float), in the order docs/models.md gives.")
+          "The model's parameters (list of float), in the order docs/conventions.md gives.")
       .def_property_readonly(
           "tangential",
           [](const Camera& c) {

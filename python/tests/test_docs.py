@@ -112,3 +112,38 @@ def test_every_python_block_of_the_docs_passes_mypy_strict(tmp_path):
 
     report = re.sub(r"(block\d+\.py):(\d+)", where, result.stdout + result.stderr)
     assert result.returncode == 0, report
+
+
+# Where the tree cites its docs: sources, scripts, stubs, the docs themselves.
+CITING = ["lib", "tools", "python", "tests", "scripts", "cmake", "docs", "README.md", "CHANGELOG.md", "CMakeLists.txt"]
+TEXT = (".cpp", ".hpp", ".py", ".pyi", ".md", ".sh", ".txt", ".cmake", ".toml")
+
+
+def test_every_docs_reference_resolves():
+    """Every "docs/NAME.ext" a file names, and every relative link of a Markdown file,
+    is a file of the tree (the stubs once cited a models page that never existed)."""
+    cited = 0
+    missing = []
+    for top in CITING:
+        path = os.path.join(REPO, top)
+        files = (
+            [path]
+            if os.path.isfile(path)
+            else [os.path.join(d, f) for d, _, fs in os.walk(path) for f in fs if f.endswith(TEXT)]
+        )
+        for file in files:
+            if f"{os.sep}fuzz{os.sep}" in file or f"{os.sep}build" in file:
+                continue
+            with open(file, encoding="utf-8", errors="replace") as f:
+                text = f.read()
+            for name in re.findall(r"\bdocs/[A-Za-z0-9_.-]+\.(?:md|svg|png|json)", text):
+                cited += 1
+                if not os.path.exists(os.path.join(REPO, name)):
+                    missing.append(f"{os.path.relpath(file, REPO)}: {name}")
+            if file.endswith(".md"):
+                for link in re.findall(r"\]\(([^)#:\s]+)(?:#[^)]*)?\)", text):
+                    cited += 1
+                    if not os.path.exists(os.path.join(os.path.dirname(file), link)):
+                        missing.append(f"{os.path.relpath(file, REPO)}: ({link})")
+    assert cited > 100, f"only {cited} references found: is the tree there?"
+    assert not missing, "\n".join(missing)
