@@ -307,16 +307,24 @@ std::vector<std::vector<CalibrationResult::Outlier>> joint_outliers(
   return out;
 }
 
-}  // namespace
+std::string camera_name(size_t k) { return "camera " + std::to_string(k); }
 
-RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
-                                   const CalibrationOptions& options) {
-  const size_t n = cameras.size();
-  if (n < 2) throw Error("calibrate rig: needs at least 2 cameras, got " + std::to_string(n));
-  const auto camera_name = [](size_t k) { return "camera " + std::to_string(k); };
-  // 1. Each camera alone: intrinsics, its boards' poses, its outliers.
+// What the cameras saw, by instant: each camera's board poses (in its own frame) and
+// views, the views renumbered from the other end, and the warnings so far.
+struct RigViews {
+  std::map<std::string, int> instant_index;  // instant (file name) -> index
+  std::vector<std::map<int, Pose>> seen;
+  std::vector<std::map<int, const BoardObservation*>> observed;
+  std::deque<BoardObservation> renumbered_views;  // what observed points to for those
+  std::vector<std::set<std::string>> renumbered_images;
+  std::vector<std::string> warnings;
+};
+
+// Step 1: each camera alone (intrinsics, its boards' poses, its outliers).
+std::vector<CalibrationResult> calibrate_each(const std::vector<RigCamera>& cameras, const BoardSpec& board,
+                                              const CalibrationOptions& options) {
   std::vector<CalibrationResult> singles;
-  for (size_t k = 0; k < n; ++k) {
+  for (size_t k = 0; k < cameras.size(); ++k) {
     try {
       singles.push_back(
           calibrate(cameras[k].observations, board, cameras[k].width, cameras[k].height, cameras[k].model, options));
@@ -324,34 +332,36 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
       throw Error(camera_name(k) + ": " + e.what());
     }
   }
-  // The instants, and which camera saw which board (in that camera's frame).
-  std::map<std::string, int> instant_index;
-  std::vector<std::map<int, Pose>> seen(n);
-  std::vector<std::map<int, const BoardObservation*>> observed(n);
+  return singles;
+}
+
+// The instants, and which camera saw which board; refuses two cameras with one's corners.
+void index_views(const std::vector<RigCamera>& cameras, const std::vector<CalibrationResult>& singles, RigViews* v) {
+  const size_t n = cameras.size();
+  v->seen.resize(n), v->observed.resize(n), v->renumbered_images.resize(n);
   for (size_t k = 0; k < n; ++k) {
     std::map<std::string, const BoardObservation*> by_name;
     for (const auto& o : cameras[k].observations) by_name[o.filename] = &o;
     for (size_t b = 0; b < singles[k].used_images.size(); ++b) {
       const std::string instant = instant_of(singles[k].used_images[b]);
-      const int i = instant_index.emplace(instant, int(instant_index.size())).first->second;
-      if (seen[k].count(i)) throw Error(camera_name(k) + ": two images of the instant " + instant);
-      seen[k][i] = singles[k].poses[b];
-      observed[k][i] = by_name.at(singles[k].used_images[b]);
+      const int i = v->instant_index.emplace(instant, int(v->instant_index.size())).first->second;
+      if (v->seen[k].count(i)) throw Error(camera_name(k) + ": two images of the instant " + instant);
+      v->seen[k][i] = singles[k].poses[b];
+      v->observed[k][i] = by_name.at(singles[k].used_images[b]);
     }
   }
-  check_distinct_cameras(observed);
-  // Views a camera numbers from the other end than camera 0: renumbered (corners
-  // reversed, pose turned, outliers' corner numbers mirrored), and said.
-  std::vector<std::string> warnings;
-  std::deque<BoardObservation> renumbered_views;
-  std::vector<std::set<std::string>> renumbered_images(n);
+  check_distinct_cameras(v->observed);
+}
+
+// Views a camera numbers from the other end than camera 0: renumbered (corners
+// reversed, pose turned, outliers' corner numbers mirrored later), and said; pairs
+// whose relative poses mostly disagree refused as unsynchronised.
+void resolve_numbering(const BoardSpec& board, RigViews* v) {
   const Pose half_turn = board_half_turn(board);
   std::map<int, std::string> instant_names;
-  for (const auto& [name, i] : instant_index) instant_names[i] = name;
-  for (size_t k = 1; k < n; ++k) {
-    const InstantConsensus consensus = instant_consensus(seen[0], seen[k], half_turn);
-    // Most instants disagreeing with each other: the images of one instant were not
-    // taken at the same time (or are not of one instant at all).
+  for (const auto& [name, i] : v->instant_index) instant_names[i] = name;
+  for (size_t k = 1; k < v->seen.size(); ++k) {
+    const InstantConsensus consensus = instant_consensus(v->seen[0], v->seen[k], half_turn);
     if (consensus.shared >= 3 && 2 * long(consensus.disagreeing.size()) > consensus.shared) {
       throw Error(
           "calibrate rig: " + camera_name(k) + " and camera 0 disagree on their relative pose at " +
@@ -364,24 +374,28 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
       for (size_t j = 0; j < consensus.disagreeing.size() && j < 5; ++j) {
         names += (j ? ", " : "") + instant_names[consensus.disagreeing[j]];
       }
-      warnings.push_back(camera_name(k) + ": " + std::to_string(consensus.disagreeing.size()) +
-                         " instant(s) disagree " + "with the others on the pose relative to camera 0 (" + names +
-                         (consensus.disagreeing.size() > 5 ? ", ..." : "") + "): not synchronised?");
+      v->warnings.push_back(camera_name(k) + ": " + std::to_string(consensus.disagreeing.size()) +
+                            " instant(s) disagree " + "with the others on the pose relative to camera 0 (" + names +
+                            (consensus.disagreeing.size() > 5 ? ", ..." : "") + "): not synchronised?");
     }
     for (const int i : consensus.renumbered) {
-      BoardObservation view = *observed[k][i];
+      BoardObservation view = *v->observed[k][i];
       std::reverse(view.corners.begin(), view.corners.end());
-      renumbered_views.push_back(std::move(view));
-      observed[k][i] = &renumbered_views.back();
-      seen[k][i] = compose(seen[k][i], half_turn);
-      renumbered_images[k].insert(renumbered_views.back().filename);
-      warnings.push_back(camera_name(k) + ": image " + renumbered_views.back().filename +
-                         ": the board's corners are numbered from the other end than in camera 0 (a chessboard "
-                         "looks the same turned by 180 degrees): renumbered");
+      v->renumbered_views.push_back(std::move(view));
+      v->observed[k][i] = &v->renumbered_views.back();
+      v->seen[k][i] = compose(v->seen[k][i], half_turn);
+      v->renumbered_images[k].insert(v->renumbered_views.back().filename);
+      v->warnings.push_back(camera_name(k) + ": image " + v->renumbered_views.back().filename +
+                            ": the board's corners are numbered from the other end than in camera 0 (a chessboard "
+                            "looks the same turned by 180 degrees): renumbered");
     }
   }
-  // 2. Camera poses relative to camera 0 (cam0 -> cam k), through shared instants,
-  // breadth first from camera 0.
+}
+
+// Step 2: each camera's pose relative to camera 0 (camera 0 -> camera k), through
+// shared instants, breadth first from camera 0; refuses a camera linked to none.
+std::vector<Pose> relative_poses(const RigViews& v) {
+  const size_t n = v.seen.size();
   std::vector<std::optional<Pose>> from_rig(n);
   from_rig[0] = Pose{};
   for (bool grew = true; grew;) {
@@ -391,8 +405,8 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
       for (size_t a = 0; a < n && !from_rig[b]; ++a) {
         if (!from_rig[a]) continue;
         std::vector<Pose> estimates;
-        for (const auto& [i, pose_b] : seen[b]) {
-          if (const auto it = seen[a].find(i); it != seen[a].end()) {
+        for (const auto& [i, pose_b] : v.seen[b]) {
+          if (const auto it = v.seen[a].find(i); it != v.seen[a].end()) {
             estimates.push_back(compose(compose(pose_b, inverse(it->second)), *from_rig[a]));
           }
         }
@@ -400,170 +414,219 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
       }
     }
   }
+  std::vector<Pose> out;
   for (size_t k = 0; k < n; ++k) {
     if (!from_rig[k]) {
       throw Error(camera_name(k) +
                   " shares no board instant with camera 0 or the cameras linked to it (images of "
                   "the same instant must have the same file name)");
     }
+    out.push_back(*from_rig[k]);
   }
-  // 3. The joint solve: every camera's intrinsics, cameras 1.. relative to camera 0,
-  // each instant's board relative to camera 0 (placed from the first camera that saw
-  // it), the outliers of step 1 left out.
-  const int instants = int(instant_index.size());
+  return out;
+}
+
+// Step 3's start: the single calibrations' intrinsics, the relative poses, each
+// instant's board relative to camera 0 (placed from the first camera that saw it).
+JointParameters joint_start(const std::vector<CalibrationResult>& singles, const std::vector<Pose>& from_rig,
+                            const RigViews& v) {
   JointParameters joint;
-  for (size_t k = 0; k < n; ++k) {
+  for (size_t k = 0; k < singles.size(); ++k) {
     const auto& p = singles[k].camera;
     joint.intrinsics.push_back(Solve{model_params(p.model), p.principal_point, p.pixel_scale.y(), {}});
-    joint.cameras.push_back(pose_block(*from_rig[k]));
+    joint.cameras.push_back(pose_block(from_rig[k]));
   }
-  joint.boards.resize(size_t(instants));
-  std::vector<bool> placed(size_t(instants), false);
-  for (size_t k = 0; k < n; ++k) {
-    for (const auto& [i, pose] : seen[k]) {
+  joint.boards.resize(v.instant_index.size());
+  std::vector<bool> placed(v.instant_index.size(), false);
+  for (size_t k = 0; k < singles.size(); ++k) {
+    for (const auto& [i, pose] : v.seen[k]) {
       if (placed[size_t(i)]) continue;
-      joint.boards[size_t(i)] = pose_block(compose(inverse(*from_rig[k]), pose));
+      joint.boards[size_t(i)] = pose_block(compose(inverse(from_rig[k]), pose));
       placed[size_t(i)] = true;
     }
   }
-  const auto points = board_points(board);
-  std::vector<CornerSet> excluded(n);  // (image, corner) per camera: step 1's outliers, then the joint solve's
-  for (size_t k = 0; k < n; ++k) {
-    const int last = board.corners() - 1;
-    for (const auto& o : singles[k].outliers) {
-      excluded[k].insert({o.filename, renumbered_images[k].count(o.filename) ? last - o.corner : o.corner});
-    }
-  }
-  // Robust first (Cauchy), as one camera's solve: corners that agree with their own
-  // camera but not with the others at the same instant become the joint outliers.
-  {
-    ceres::Problem::Options robust_options;
-    robust_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem robust(robust_options);
-    ceres::CauchyLoss loss(1.0);
-    add_joint_residuals(&robust, &joint, cameras, observed, points, excluded, &loss);
-    ceres::Solver::Summary summary;
-    ceres::Solve(detail::solver_options(ceres::DENSE_SCHUR), &robust, &summary);
-    if (!summary.IsSolutionUsable()) throw Error("calibrate rig: the joint solve failed: " + summary.message);
-  }
-  const auto outliers = joint_outliers(joint, cameras, observed, points, excluded);
-  for (size_t k = 0; k < n; ++k) {
+  return joint;
+}
+
+// The robust joint solve (Cauchy), as one camera's: the corners that agree with their
+// own camera but not with the others at the same instant are the joint outliers; added
+// to `excluded` and said, per camera, naming the images that lost most of their board.
+std::vector<std::vector<CalibrationResult::Outlier>> reject_joint_outliers(
+    JointParameters* joint, const std::vector<RigCamera>& cameras, const RigViews& v,
+    const std::vector<Eigen::Vector3d>& points, const BoardSpec& board, std::vector<CornerSet>* excluded,
+    std::vector<std::string>* warnings) {
+  ceres::Problem::Options robust_options;
+  robust_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem robust(robust_options);
+  ceres::CauchyLoss loss(1.0);
+  add_joint_residuals(&robust, joint, cameras, v.observed, points, *excluded, &loss);
+  ceres::Solver::Summary summary;
+  ceres::Solve(detail::solver_options(ceres::DENSE_SCHUR), &robust, &summary);
+  if (!summary.IsSolutionUsable()) throw Error("calibrate rig: the joint solve failed: " + summary.message);
+  auto outliers = joint_outliers(*joint, cameras, v.observed, points, *excluded);
+  for (size_t k = 0; k < cameras.size(); ++k) {
     std::map<std::string, int> per_image;
-    for (const auto& o : outliers[k]) excluded[k].insert({o.filename, o.corner}), ++per_image[o.filename];
+    for (const auto& o : outliers[k]) (*excluded)[k].insert({o.filename, o.corner}), ++per_image[o.filename];
     if (outliers[k].empty()) continue;
     std::string worst;
     for (const auto& [image, count] : per_image) {
       if (2 * count > board.corners()) worst += (worst.empty() ? "" : ", ") + image;
     }
-    warnings.push_back(camera_name(k) + ": the joint solve leaves out " + std::to_string(outliers[k].size()) +
-                       " corner(s) that disagree with the other cameras' boards at the same instants" +
-                       (worst.empty() ? "" : " (most of the board in " + worst + ": not taken at the same time?)"));
+    warnings->push_back(camera_name(k) + ": the joint solve leaves out " + std::to_string(outliers[k].size()) +
+                        " corner(s) that disagree with the other cameras' boards at the same instants" +
+                        (worst.empty() ? "" : " (most of the board in " + worst + ": not taken at the same time?)"));
   }
-  // Then plain least squares without them: the solution, its covariance.
-  ceres::Problem problem;
-  const std::vector<long> corners_of =
-      add_joint_residuals(&problem, &joint, cameras, observed, points, excluded, nullptr);
-  ceres::Solver::Summary summary;
-  ceres::Solve(detail::solver_options(ceres::DENSE_SCHUR), &problem, &summary);
-  if (!summary.IsSolutionUsable()) throw Error("calibrate rig: the joint solve failed: " + summary.message);
-  std::vector<Solve>& intrinsics = joint.intrinsics;
-  std::vector<std::array<double, 6>>& camera_blocks = joint.cameras;
-  std::vector<std::array<double, 6>>& board_blocks = joint.boards;
-  // 4. Covariance of everything; the report per camera.
+  return outliers;
+}
+
+// The joint solution's covariance and where each camera's parameters lie in it:
+// intrinsics, then cameras 1..'s poses, then the boards that kept a corner.
+struct JointCovariance {
+  ParameterCovariance full;
+  std::vector<Eigen::Index> intrinsic_start, pose_start;
+  Eigen::Index boards_start = 0;
+  std::vector<std::array<double, 6>> used_boards;
+};
+
+JointCovariance joint_covariance(ceres::Problem* problem, JointParameters* joint) {
+  const size_t n = joint->intrinsics.size();
+  JointCovariance c;
+  c.intrinsic_start.resize(n), c.pose_start.assign(n, -1);
   std::vector<double*> blocks;
-  std::vector<Eigen::Index> intrinsic_start(n), pose_start(n, -1);
   Eigen::Index column = 0;
   for (size_t k = 0; k < n; ++k) {
-    intrinsic_start[k] = column;
-    blocks.insert(blocks.end(), {intrinsics[k].model.data(), intrinsics[k].center.data(), &intrinsics[k].ay});
-    column += Eigen::Index(intrinsics[k].model.size()) + 3;
+    Solve& s = joint->intrinsics[k];
+    c.intrinsic_start[k] = column;
+    blocks.insert(blocks.end(), {s.model.data(), s.center.data(), &s.ay});
+    column += Eigen::Index(s.model.size()) + 3;
   }
-  for (size_t k = 1; k < n; ++k) pose_start[k] = column, blocks.push_back(camera_blocks[k].data()), column += 6;
+  for (size_t k = 1; k < n; ++k) c.pose_start[k] = column, blocks.push_back(joint->cameras[k].data()), column += 6;
+  c.boards_start = column;
   // The instants whose board kept a corner (an instant only one camera saw may lose
   // them all to the joint outliers).
   std::vector<double*> boards;
-  std::vector<std::array<double, 6>> used_boards;
-  for (auto& b : board_blocks) {
-    if (problem.HasParameterBlock(b.data())) boards.push_back(b.data()), used_boards.push_back(b);
+  for (auto& b : joint->boards) {
+    if (problem->HasParameterBlock(b.data())) boards.push_back(b.data()), c.used_boards.push_back(b);
   }
-  const ParameterCovariance full = detail::covariance_of(&problem, blocks, boards);
+  c.full = detail::covariance_of(problem, blocks, boards);
+  return c;
+}
 
+// Step 4 for camera k: its report from the joint solution -- intrinsics and sigmas,
+// reprojection, board poses and observed angles in its frame, the record's
+// covariance (its intrinsics, its pose relative to camera 0, every instant's board),
+// its outliers numbered as in its corners file.
+CalibrationResult joint_report(size_t k, const CalibrationResult& single, const RigCamera& rig_camera,
+                               const JointParameters& joint, const JointCovariance& c, const RigViews& v,
+                               const std::vector<Eigen::Vector3d>& points, const CornerSet& excluded,
+                               const std::vector<CalibrationResult::Outlier>& outliers, long corners,
+                               const BoardSpec& board) {
+  CalibrationResult r = single;
+  const Solve& s = joint.intrinsics[k];
+  const Pose rig_to_camera = pose_of(joint.cameras[k]);
+  CameraParameters p = r.camera;
+  p.model = make_model(rig_camera.model.name, s.model);
+  p.principal_point = s.center;
+  p.pixel_scale = {1.0, s.ay};
+  p.pose = inverse(rig_to_camera);  // camera -> camera 0
+  const Camera camera(p);
+  r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();
+  double sum2 = 0;
+  CalibrationRecord& record = *p.calibration;
+  record = CalibrationRecord::nothing_observed();
+  record.covariance = detail::projection_covariance_of(
+      c.full,
+      {c.intrinsic_start[k], Eigen::Index(s.model.size()) + 3, c.pose_start[k], c.boards_start, joint.cameras[k]},
+      c.used_boards);
+  for (const auto& [i, o] : v.observed[k]) {
+    const Pose board_pose = compose(rig_to_camera, pose_of(joint.boards[size_t(i)]));
+    double board_sum2 = 0;
+    long used = 0;
+    for (size_t corner = 0; corner < o->corners.size(); ++corner) {
+      if (excluded.count({o->filename, int(corner)})) continue;
+      const Eigen::Vector3d point = board_pose.rotation * points[corner] + board_pose.translation;
+      Eigen::Vector2d q;
+      camera.project(point, &q);
+      board_sum2 += (q - o->corners[corner]).squaredNorm(), ++used;
+      record.observe(point);
+    }
+    if (used == 0) continue;  // every corner an outlier of the joint solve
+    sum2 += board_sum2;
+    r.poses.push_back(board_pose);
+    r.used_images.push_back(o->filename);
+    r.per_image_rms_px.push_back(std::sqrt(board_sum2 / double(used)));
+  }
+  r.rms_px = std::sqrt(sum2 / double(std::max(1L, corners)));
+  r.observations = corners;
+  for (CalibrationResult::Outlier o : outliers) {  // numbered as in the corners file
+    if (v.renumbered_images[k].count(o.filename)) o.corner = board.corners() - 1 - o.corner;
+    r.outliers.push_back(o);
+  }
+  r.parameters = s.model;
+  r.parameters.insert(r.parameters.end(), {s.center.x(), s.center.y(), s.ay});
+  r.undetermined.clear();
+  for (size_t i = 0; i < r.parameters.size(); ++i) {
+    const Eigen::Index at = c.intrinsic_start[k] + Eigen::Index(i);
+    r.sigmas[i] = std::sqrt(c.full.covariance(at, at));
+  }
+  for (const Eigen::VectorXd& direction : c.full.undetermined) {
+    std::vector<std::string> names;
+    for (size_t i = 0; i < r.parameters.size(); ++i) {
+      if (std::abs(direction[c.intrinsic_start[k] + Eigen::Index(i)]) >= 0.1) {
+        names.push_back(r.parameter_names[i]);
+        r.sigmas[i] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+    if (!names.empty()) r.undetermined.push_back(undetermined_text(names, false, rig_camera.model.name, r.parameters));
+  }
+  r.noise_px = std::sqrt(c.full.variance);
+  r.camera = p;
+  check_solution(r, rig_camera.width, rig_camera.height, camera_name(k) + " " + rig_camera.model.name);
+  return r;
+}
+
+}  // namespace
+
+RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const BoardSpec& board,
+                                   const CalibrationOptions& options) {
+  const size_t n = cameras.size();
+  if (n < 2) throw Error("calibrate rig: needs at least 2 cameras, got " + std::to_string(n));
+  const std::vector<CalibrationResult> singles = calibrate_each(cameras, board, options);
+  RigViews views;
+  index_views(cameras, singles, &views);
+  resolve_numbering(board, &views);
+  JointParameters joint = joint_start(singles, relative_poses(views), views);
+  // 3. The joint solve, the outliers of step 1 left out, then the joint outliers.
+  const auto points = board_points(board);
+  std::vector<CornerSet> excluded(n);  // (image, corner) per camera
+  for (size_t k = 0; k < n; ++k) {
+    for (const auto& o : singles[k].outliers) {
+      const bool renumbered = views.renumbered_images[k].count(o.filename) != 0;
+      excluded[k].insert({o.filename, renumbered ? board.corners() - 1 - o.corner : o.corner});
+    }
+  }
+  const auto outliers = reject_joint_outliers(&joint, cameras, views, points, board, &excluded, &views.warnings);
+  ceres::Problem problem;  // plain least squares without them: the solution, its covariance
+  const std::vector<long> corners_of =
+      add_joint_residuals(&problem, &joint, cameras, views.observed, points, excluded, nullptr);
+  ceres::Solver::Summary summary;
+  ceres::Solve(detail::solver_options(ceres::DENSE_SCHUR), &problem, &summary);
+  if (!summary.IsSolutionUsable()) throw Error("calibrate rig: the joint solve failed: " + summary.message);
+  // 4. Covariance of everything; the report per camera.
+  const JointCovariance covariance = joint_covariance(&problem, &joint);
   RigCalibrationResult out;
-  out.warnings = warnings;
-  out.instants = instants;
+  out.warnings = views.warnings;
+  out.instants = long(views.instant_index.size());
   out.rms_px = std::sqrt(2 * summary.final_cost /
                          double(std::max(1L, std::accumulate(corners_of.begin(), corners_of.end(), 0L))));
   for (size_t k = 0; k < n; ++k) {
-    CalibrationResult r = singles[k];
-    const Pose rig_to_camera = pose_of(camera_blocks[k]);
-    CameraParameters p = r.camera;
-    p.model = make_model(cameras[k].model.name, intrinsics[k].model);
-    p.principal_point = intrinsics[k].center;
-    p.pixel_scale = {1.0, intrinsics[k].ay};
-    p.pose = inverse(rig_to_camera);  // camera -> camera 0
-    const Camera camera(p);
-    // Reprojection, board poses (in this camera's frame) and observed angles from the joint solution.
-    r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();
-    double sum2 = 0;
-    CalibrationRecord& record = *p.calibration;
-    record = CalibrationRecord::nothing_observed();
-    // Projection uncertainty from the joint solve, as the intrinsics and sigmas are:
-    // this camera's intrinsics, its pose relative to camera 0, every instant's board.
-    record.covariance = detail::projection_covariance_of(
-        full,
-        {intrinsic_start[k], Eigen::Index(intrinsics[k].model.size()) + 3, pose_start[k], column, camera_blocks[k]},
-        used_boards);
-    for (const auto& [i, o] : observed[k]) {
-      const Pose board_pose = compose(rig_to_camera, pose_of(board_blocks[size_t(i)]));
-      double board_sum2 = 0;
-      long used = 0;
-      for (size_t c = 0; c < o->corners.size(); ++c) {
-        if (excluded[k].count({o->filename, int(c)})) continue;
-        const Eigen::Vector3d point = board_pose.rotation * points[c] + board_pose.translation;
-        Eigen::Vector2d q;
-        camera.project(point, &q);
-        board_sum2 += (q - o->corners[c]).squaredNorm(), ++used;
-        record.observe(point);
-      }
-      if (used == 0) continue;  // every corner an outlier of the joint solve
-      sum2 += board_sum2;
-      r.poses.push_back(board_pose);
-      r.used_images.push_back(o->filename);
-      r.per_image_rms_px.push_back(std::sqrt(board_sum2 / double(std::max(1L, used))));
-    }
-    r.rms_px = std::sqrt(sum2 / double(std::max(1L, corners_of[k])));
-    r.observations = corners_of[k];
-    for (CalibrationResult::Outlier o : outliers[k]) {  // numbered as in the corners file
-      if (renumbered_images[k].count(o.filename)) o.corner = board.corners() - 1 - o.corner;
-      r.outliers.push_back(o);
-    }
-    r.parameters = intrinsics[k].model;
-    r.parameters.insert(r.parameters.end(), {intrinsics[k].center.x(), intrinsics[k].center.y(), intrinsics[k].ay});
-    r.undetermined.clear();
-    for (size_t i = 0; i < r.parameters.size(); ++i) {
-      const Eigen::Index at = intrinsic_start[k] + Eigen::Index(i);
-      r.sigmas[i] = std::sqrt(full.covariance(at, at));
-    }
-    for (const Eigen::VectorXd& direction : full.undetermined) {
-      std::vector<std::string> names;
-      for (size_t i = 0; i < r.parameters.size(); ++i) {
-        if (std::abs(direction[intrinsic_start[k] + Eigen::Index(i)]) >= 0.1) {
-          names.push_back(r.parameter_names[i]);
-          r.sigmas[i] = std::numeric_limits<double>::quiet_NaN();
-        }
-      }
-      if (!names.empty())
-        r.undetermined.push_back(undetermined_text(names, false, cameras[k].model.name, r.parameters));
-    }
-    r.noise_px = std::sqrt(full.variance);
-    r.camera = p;
-    check_solution(r, cameras[k].width, cameras[k].height, camera_name(k) + " " + cameras[k].model.name);
+    CalibrationResult r = joint_report(k, singles[k], cameras[k], joint, covariance, views, points, excluded[k],
+                                       outliers[k], corners_of[k], board);
     double rotation = 0, translation = 0;
-    if (k > 0) {
-      for (int j = 0; j < 3; ++j) {
-        rotation = std::max(rotation, std::sqrt(full.covariance(pose_start[k] + j, pose_start[k] + j)));
-        translation = std::max(translation, std::sqrt(full.covariance(pose_start[k] + 3 + j, pose_start[k] + 3 + j)));
-      }
+    for (int j = 0; j < 3 && k > 0; ++j) {
+      const Eigen::Index at = covariance.pose_start[k] + j;
+      rotation = std::max(rotation, std::sqrt(covariance.full.covariance(at, at)));
+      translation = std::max(translation, std::sqrt(covariance.full.covariance(at + 3, at + 3)));
     }
     out.rotation_sigma_rad.push_back(rotation);
     out.translation_sigma.push_back(translation);
@@ -571,16 +634,17 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
     for (std::string& w : joint_solve_warnings(camera_name(k), singles[k], r)) out.warnings.push_back(std::move(w));
     out.cameras.push_back(std::move(r));
   }
-  for (const Eigen::VectorXd& direction : full.undetermined) {
+  for (const Eigen::VectorXd& direction : covariance.full.undetermined) {
     bool intrinsic = false;
     for (size_t k = 0; k < n; ++k) {
-      intrinsic = intrinsic ||
-                  direction.segment(intrinsic_start[k], Eigen::Index(out.cameras[k].parameters.size())).norm() >= 0.1;
+      const Eigen::Index count = Eigen::Index(out.cameras[k].parameters.size());
+      intrinsic = intrinsic || direction.segment(covariance.intrinsic_start[k], count).norm() >= 0.1;
     }
-    if (!intrinsic)
+    if (!intrinsic) {
       out.warnings.push_back(
           "the data do not determine the cameras' relative poses fully (a direction of the joint solve has no "
           "curvature)");
+    }
   }
   return out;
 }
