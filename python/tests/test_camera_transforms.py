@@ -1,0 +1,51 @@
+"""A camera that stays true (issue 37, item 3, in part): fishcam.torch.Resize resizes a
+sample's camera with its images, so the camera projects scene points onto the resized
+image exactly as torchvision maps pixel centres; after RandomViewpoint the chain's
+camera is the final image's."""
+
+import os
+
+import fishcam
+import fishcam.torch as ft
+import numpy as np
+import pytest
+import torch
+from conftest import DATA
+from torchvision import tv_tensors
+from torchvision.transforms import v2
+
+
+@pytest.fixture(scope="module")
+def cam():
+    return fishcam.Camera.read(os.path.join(DATA, "woodscape_front.json")).resized(320, 242)
+
+
+def test_resize_keeps_the_camera_true(cam):
+    points = np.array([[0.3, -0.2, 1.0], [-0.8, 0.1, 0.6], [0.05, 0.4, 2.0]])
+    before, seen = cam.project(points)
+    assert seen.all()
+    image = tv_tensors.Image(torch.zeros((3, cam.height, cam.width), dtype=torch.uint8))
+    out_image, out_camera = ft.Resize((121, 160))(image, cam)
+    assert out_image.shape == (3, 121, 160) and (out_camera.width, out_camera.height) == (160, 121)
+    after, _ = out_camera.project(points)
+    # torchvision maps a pixel centre x to (x + 0.5) * s - 0.5: the camera does the same.
+    np.testing.assert_allclose(after, (before + 0.5) * np.array([160 / 320, 121 / 242]) - 0.5, atol=1e-9)
+    # An int size (the shorter side), as v2.Resize takes it.
+    _, shorter = ft.Resize(121)(image, cam)
+    assert (shorter.width, shorter.height) == (160, 121)
+
+
+def test_a_chain_ends_with_the_final_images_camera(cam):
+    t = v2.Compose([ft.RandomViewpoint(preset="small"), ft.Resize((121, 160))])
+    image = tv_tensors.Image(torch.zeros((3, cam.height, cam.width), dtype=torch.uint8))
+    with ft.sample_seed(3):
+        out = t({"image": image, "camera": cam})
+    change = ft.RandomViewpoint(preset="small").numpy_transform.change_for(3)
+    assert out["camera"] == cam.augmented(change).resized(160, 121)
+    assert out["image"].shape[-2:] == (121, 160)
+
+
+def test_a_camera_that_no_longer_matches_is_refused(cam):
+    image = tv_tensors.Image(torch.zeros((3, 100, 100), dtype=torch.uint8))
+    with pytest.raises(fishcam.Error, match="camera: 320x242 but the images are 100x100"):
+        ft.Resize((50, 50))(image, cam)
