@@ -48,6 +48,8 @@ from . import Error
 CLASSES = 10
 NO_SOURCE = 255
 TEST_SETS = ("small", "medium", "large")
+# A split file's size at most (WoodScape's lists of ~10k names are ~150 KB).
+MAX_SPLIT_FILE_BYTES = 16 << 20
 # The image files a dataset's rgb_images/ holds (other files there are ignored).
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg")
 # --width's bound: 16 times the harness's default (the network's parameters grow as
@@ -410,6 +412,11 @@ def split_names(root: str, split: typing.Optional[str], seed: typing.Optional[in
     if not names:
         raise Error(f"{images}: no images")
     if split is not None:
+        # A regular file of a bounded size: a FIFO or /dev/zero is refused, not read.
+        if not os.path.isfile(split):
+            raise Error(f"{split}: not a regular file (expected a split file, one test image per line)")
+        if os.path.getsize(split) > MAX_SPLIT_FILE_BYTES:
+            raise Error(f"{split}: larger than {MAX_SPLIT_FILE_BYTES >> 20} MiB: not a split file")
         try:
             with open(split, encoding="utf-8") as f:
                 listed = [line.split("#")[0].strip() for line in f]

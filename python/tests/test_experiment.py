@@ -232,13 +232,17 @@ def test_a_folder_without_splits(tmp_path):
     assert sorted(results["runs"][0]["test"]) == ["large-paper", "medium-paper", "original", "small-paper"]
     assert results["fidelity"] == [] and results["model_fidelity"] == []
     assert "small-paper" in (out / "tables.md").read_text()
+    fifo = tmp_path / "split.fifo"
+    os.mkfifo(fifo)  # never opened: refused before any read
     # A seeded split, and what is refused.
     assert experiment.main([str(flat), str(tmp_path / "seeded"), "--split-seed", "4"] + common) == 0
     assert len(os.listdir(tmp_path / "seeded" / "dataset" / "test" / "rgb_images")) == 1  # 20 % of 6
     for extra, message in (
         ([], "needs one of --split FILE and --split-seed S"),
         (["--split", str(split), "--split-seed", "1"], "needs one of --split FILE and --split-seed S"),
-        (["--split", str(tmp_path / "none.txt")], "cannot be read as a split file"),
+        (["--split", str(tmp_path / "none.txt")], "not a regular file"),
+        (["--split", "/dev/zero"], "not a regular file"),
+        (["--split", str(fifo)], "not a regular file"),
     ):
         with pytest.raises(fishcam.Error, match=message):
             experiment.run([str(flat), str(tmp_path / "bad")] + extra + common)
