@@ -132,6 +132,11 @@ class Camera:
         Writes the camera in `format` (default: from the extension); refuses an existing file unless overwrite=True, and a format that cannot hold the model. Only fishcam JSON keeps a calibration record (a UserWarning says when it is left out).
         """
     @property
+    def distortion(self) -> str:
+        """
+        The plane distortion's name: 'none', 'tangential' (the tangential property gives its terms) or 'mrcal_lens' (the mrcal_lens property gives it); docs/architecture.md lists the parts of a camera.
+        """
+    @property
     def domain(self) -> ValidDomain:
         """
         The model's valid domain (ValidDomain).
@@ -184,7 +189,7 @@ class Camera:
     @property
     def radial(self) -> bool:
         """
-        Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do rho and theta_from_rho describe its whole projection.
+        Whether the camera is radially symmetric (no plane distortion, no skew): only then do rho and theta_from_rho describe its whole projection.
         """
     @property
     def skew(self) -> tuple[float, float]:
@@ -194,7 +199,7 @@ class Camera:
     @property
     def tangential(self) -> dict[str, float]:
         """
-        The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's undistorted plane (docs/conventions.md); all 0 for a radially symmetric camera.
+        The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's undistorted plane (docs/conventions.md); all 0 unless distortion is 'tangential'.
         """
     @property
     def width(self) -> int:

@@ -22,23 +22,23 @@ std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
 }
 
 // The camera's numbers as bytes: equal exactly when the cameras are (model, its
-// parameters, size, principal point, pixel scale, tangential terms, skew, theta limit
-// and, with_pose, the pose). A cache key that costs microseconds, where to_json() formats and reads
-// back a file (milliseconds).
+// parameters, size, principal point, pixel scale, its plane distortion's numbers
+// (numbers_of), skew, theta limit and, with_pose, the pose). A cache key that costs microseconds, where to_json()
+// formats and reads back a file (milliseconds).
 std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
   std::string key(model_name(p.model));
   key.push_back('\0');
   std::vector<double> numbers = model_params(p.model);
   numbers.insert(numbers.end(), {double(p.width), double(p.height), p.principal_point.x(), p.principal_point.y(),
                                  p.pixel_scale.x(), p.pixel_scale.y(), p.theta_limit.value_or(-1.0)});
-  const auto terms = p.tangential.values();
-  numbers.insert(numbers.end(), terms.begin(), terms.end());
   numbers.insert(numbers.end(), {p.skew.xy, p.skew.yx});
-  if (p.mrcal_lens) {  // its lensmodel, then its values after the other numbers
-    key += p.mrcal_lens->lensmodel();
-    key.push_back('\0');
-    numbers.insert(numbers.end(), p.mrcal_lens->values().begin(), p.mrcal_lens->values().end());
-  }
+  const PlaneDistortionNumbers part = numbers_of(p.distortion);  // its name and configuration, then its values
+  key += part.name;
+  key.push_back('\0');
+  key += part.configuration;
+  key.push_back('\0');
+  numbers.push_back(double(part.values.size()));
+  numbers.insert(numbers.end(), part.values.begin(), part.values.end());
   if (with_pose && p.pose) {
     const auto& q = p.pose->rotation;
     numbers.insert(numbers.end(), {q.w(), q.x(), q.y(), q.z(), p.pose->translation.x(), p.pose->translation.y(),
@@ -58,8 +58,9 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
 // table, milliseconds), given the pickled pose (microseconds).
 py::object camera_pickle_state(const Camera& c) {
   const CameraParameters& p = c.parameters();
-  // The record, an mrcal lens or a skew travel as fishcam JSON.
-  if (p.calibration || p.mrcal_lens || p.skew.any()) return py::str(format_camera(p, CameraFormat::fishcam));
+  const PlaneDistortionNumbers part = numbers_of(p.distortion);
+  // The record travels as fishcam JSON.
+  if (p.calibration) return py::str(format_camera(p, CameraFormat::fishcam));
   py::object pose = py::none();
   if (p.pose) {
     const auto& q = p.pose->rotation;
@@ -68,21 +69,31 @@ py::object camera_pickle_state(const Camera& c) {
   }
   return py::make_tuple(std::string(model_name(p.model)), model_params(p.model), p.width, p.height,
                         p.principal_point.x(), p.principal_point.y(), p.pixel_scale.x(), p.pixel_scale.y(),
-                        p.theta_limit ? py::cast(*p.theta_limit) : py::none(), pose, p.tangential.values());
+                        p.theta_limit ? py::cast(*p.theta_limit) : py::none(), pose,
+                        py::make_tuple(part.name, part.configuration, part.values),
+                        py::make_tuple(p.skew.xy, p.skew.yx));
 }
 
 Camera camera_from_pickle_state(const py::object& state) {
   if (py::isinstance<py::str>(state)) return camera_from_state(state.cast<std::string>());  // earlier pickles
   const py::tuple t = state.cast<py::tuple>();
-  if (t.size() != 10 && t.size() != 11)
-    throw Error("pickled camera: expected 11 fields, got " + std::to_string(t.size()));
+  if (t.size() < 10 || t.size() > 12) {
+    throw Error("pickled camera: expected 12 fields, got " + std::to_string(t.size()));
+  }
   CameraParameters p;
   p.model = make_model(t[0].cast<std::string>(), t[1].cast<std::vector<double>>());
   p.width = t[2].cast<int>(), p.height = t[3].cast<int>();
   p.principal_point = {t[4].cast<double>(), t[5].cast<double>()};
   p.pixel_scale = {t[6].cast<double>(), t[7].cast<double>()};
   if (!t[8].is_none()) p.theta_limit = t[8].cast<double>();
-  if (t.size() == 11) p.tangential = TangentialTerms::from_values(t[10].cast<std::array<double, 6>>());
+  if (t.size() == 12) {  // the plane distortion's numbers (numbers_of), the skew
+    const auto part = t[10].cast<std::tuple<std::string, std::string, std::vector<double>>>();
+    p.distortion = make_plane_distortion(std::get<0>(part), std::get<1>(part), std::get<2>(part));
+    const auto skew = t[11].cast<std::array<double, 2>>();
+    p.skew = {skew[0], skew[1]};
+  } else if (t.size() == 11) {  // earlier pickles: the tangential terms
+    p.distortion = TangentialDistortion{TangentialTerms::from_values(t[10].cast<std::array<double, 6>>())};
+  }
   std::optional<Pose> pose;
   if (!t[9].is_none()) {
     const auto v = t[9].cast<std::array<double, 7>>();
@@ -198,17 +209,22 @@ void bind_camera(py::module_& m) {
           [](const Camera& c) {
             std::map<std::string, double> terms;
             for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
-              terms[std::string(TangentialTerms::kNames[i])] = c.tangential().values()[i];
+              terms[std::string(TangentialTerms::kNames[i])] = c.parameters().tangential_terms().values()[i];
             }
             return terms;
           },
           "The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's "
-          "undistorted plane (docs/conventions.md); all 0 for a radially symmetric camera.")
+          "undistorted plane (docs/conventions.md); all 0 unless distortion is 'tangential'.")
+      .def_property_readonly(
+          "distortion", [](const Camera& c) { return std::string(distortion_name(c.distortion())); },
+          "The plane distortion's name: 'none', 'tangential' (the tangential property gives its terms) or "
+          "'mrcal_lens' (the mrcal_lens property gives it); docs/architecture.md lists the parts of a camera.")
       .def_property_readonly(
           "mrcal_lens",
           [](const Camera& c) -> std::optional<std::pair<std::string, std::vector<double>>> {
-            if (!c.parameters().mrcal_lens) return std::nullopt;
-            return std::pair(c.parameters().mrcal_lens->lensmodel(), c.parameters().mrcal_lens->values());
+            const MrcalLens* lens = c.parameters().mrcal_lens();
+            if (!lens) return std::nullopt;
+            return std::pair(lens->lensmodel(), lens->values());
           },
           "mrcal's lens model on the plane of the camera's model, evaluated by libmrcal (splined stereographic, "
           "CAHVOR on pinhole, CAHVORE, LONLAT and LATLON on stereographic): (lensmodel, its values after fx, fy, cx, "
@@ -220,7 +236,7 @@ void bind_camera(py::module_& m) {
           "(docs/conventions.md); (0, 0) for the usual grid.")
       .def_property_readonly(
           "radial", [](const Camera& self) -> decltype(auto) { return self.radial(); },
-          "Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do rho and "
+          "Whether the camera is radially symmetric (no plane distortion, no skew): only then do rho and "
           "theta_from_rho describe its whole projection.")
       .def_property_readonly(
           "principal_point", [](const Camera& c) { return Eigen::Vector2d(c.principal_point()); },

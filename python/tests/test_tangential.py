@@ -85,12 +85,21 @@ def test_a_mei_camera_with_tangential_terms_projects_as_the_paper_says(mei_camer
 def test_pickles_and_keys_carry_the_tangential_terms(mei_camera, tmp_path):
     copy = pickle.loads(pickle.dumps(mei_camera))
     assert copy == mei_camera and copy.tangential == mei_camera.tangential
+    assert mei_camera.distortion == copy.distortion == "tangential"
+    # The pickle holds the part's one serialisation (name, configuration, values) and the
+    # skew; a pickle of an earlier fishcam (the six terms in field 11) still loads.
+    state = mei_camera.__getstate__()
+    assert state[10] == ("tangential", "", [mei_camera.tangential[n] for n in ("p1", "p2", "s1", "s2", "s3", "s4")])
+    assert state[11] == (0.0, 0.0)
+    earlier = fishcam.Camera.__new__(fishcam.Camera)
+    earlier.__setstate__((*state[:10], tuple(state[10][2])))
+    assert earlier == mei_camera
     radial_json = json.loads(mei_camera.to_json())
     del radial_json["tangential"]
     path = tmp_path / "radial.json"
     path.write_text(json.dumps(radial_json))
     radial = fishcam.Camera.read(str(path))
-    assert radial.radial
+    assert radial.radial and radial.distortion == "none"
     assert radial != mei_camera
     assert radial.parameters_key(False) != mei_camera.parameters_key(False)
     assert json.loads(mei_camera.info_json())["tangential"]["p1"] == 0.00501238
@@ -171,7 +180,8 @@ def test_a_splined_camera_is_mrcals_projection(tmp_path):
     assert lensmodel.startswith("LENSMODEL_SPLINED_STEREOGRAPHIC") and len(values) == 96
     assert json.loads(camera.info_json())["mrcal_lens"]["values"] == 96
     copy = pickle.loads(pickle.dumps(camera))
-    assert copy == camera and copy.mrcal_lens == camera.mrcal_lens
+    assert copy == camera and copy.mrcal_lens == camera.mrcal_lens and copy.distortion == "mrcal_lens"
+    assert camera.__getstate__()[10] == ("mrcal_lens", lensmodel, values)
     # Files written before CAHVOR and LONLAT/LATLON were read call it "spline".
     old = dict(spline_camera_json())
     old["spline"] = old.pop("mrcal_lens")
@@ -180,7 +190,7 @@ def test_a_splined_camera_is_mrcals_projection(tmp_path):
     assert fishcam.Camera.read(str(old_path)) == camera
     both = dict(spline_camera_json(), spline=old["spline"])
     old_path.write_text(json.dumps(both))
-    with pytest.raises(fishcam.Error, match="give mrcal_lens only"):
+    with pytest.raises(fishcam.Error, match="one plane distortion"):
         fishcam.Camera.read(str(old_path))
     plain = dict(spline_camera_json())
     del plain["mrcal_lens"]
@@ -318,7 +328,7 @@ def test_the_real_ocamcalib_file_is_cam2world(tmp_path):
     assert np.abs(rays - expected).max() < 1e-13
     again, ok = camera.project(rays)
     assert ok.all() and np.abs(again - pixels).max() < 1e-9
-    # A skewed camera pickles (as fishcam JSON) and keys on its skew.
+    # A skewed camera pickles (its skew the state's last field) and keys on its skew.
     copy = pickle.loads(pickle.dumps(camera))
     assert copy == camera and copy.skew == camera.skew
     unskewed_json = json.loads(camera.to_json())

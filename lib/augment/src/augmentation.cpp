@@ -317,6 +317,69 @@ std::optional<LensTable> lens_table(const Camera& camera, const MrcalLens& lens,
   return std::nullopt;
 }
 
+// The float kernel's form of each plane distortion (fishcam/core/plane_distortion.hpp)
+// in p; false where float arithmetic cannot be trusted (the warp takes the exact path).
+// A part without an overload here does not compile: give it one, returning false if
+// the kernel has no form of it.
+bool kernel_plane_form(const Camera&, const NoPlaneDistortion&, SourceParams*, KernelSource*) { return true; }
+
+bool kernel_plane_form(const Camera&, const TangentialDistortion& part, SourceParams* p, KernelSource*) {
+  // Tangential terms on the unified form's plane m = P_xy / D: alpha = 0 only.
+  if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return false;
+  const TangentialTerms& t = part.terms;
+  for (double x : t.values()) {
+    if (!float_exact_enough(x)) return false;
+  }
+  p->tangential = true;
+  p->p1 = float(t.p1), p->p2 = float(t.p2);
+  p->s1 = float(t.s[0]), p->s2 = float(t.s[1]), p->s3 = float(t.s[2]), p->s4 = float(t.s[3]);
+  return true;
+}
+
+bool kernel_plane_form(const Camera& camera, const MrcalLensDistortion& part, SourceParams* p, KernelSource* source) {
+  const MrcalLens* lens = part.lens.get();
+  // On the stereographic or pinhole plane (unified, alpha = 0): u = m * plane_per_m.
+  if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return false;
+  std::optional<double> focal, plane_per_m;
+  double reach = std::numeric_limits<double>::infinity();  // the plane radius of the domain's end
+  std::visit(
+      [&](const auto& m) {
+        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
+          const auto ratio = [&](double theta) {
+            double derivative;
+            return m.plane_radius(theta, &derivative) * (p->xi + std::cos(theta)) / std::sin(theta);
+          };
+          focal = m.focal(), plane_per_m = ratio(0.5);
+          double derivative;
+          reach = m.plane_radius(camera.domain().theta_max, &derivative);
+          if (!(std::abs(ratio(1.0) - *plane_per_m) <= 1e-12 * *plane_per_m)) plane_per_m.reset();
+        }
+      },
+      camera.model());
+  if (!focal || !plane_per_m) return false;
+  std::optional<MrcalLens::PolynomialCells> layout = lens->polynomial_cells();
+  if (layout) {
+    source->lens_cells = lens_kernel_cells(*lens, *layout, *focal);
+    for (float x : source->lens_cells) {  // absolute values in pixels: only overflow matters
+      if (!std::isfinite(x)) return false;
+    }
+  } else {
+    std::optional<LensTable> table = lens_table(camera, *lens, *focal, p->xi, *plane_per_m, reach);
+    if (!table) return false;
+    for (float& x : table->cells) {  // overflow: no projection the kernel can trust
+      if (std::isinf(x)) x = std::numeric_limits<float>::quiet_NaN();
+    }
+    layout = table->layout;
+    source->lens_cells = std::move(table->cells);
+    p->lens_bounded = true;
+  }
+  p->lens_nx = layout->nx, p->lens_ny = layout->ny;
+  p->lens_scale = float(*plane_per_m * layout->cells_per_u);
+  p->lens_origin_x = float(layout->origin.x()), p->lens_origin_y = float(layout->origin.y());
+  p->lens_cells = source->lens_cells.data();
+  return true;
+}
+
 // The source camera for the float kernel, or null where float arithmetic
 // cannot be trusted to kFloatTolerancePx: the one place that decides.
 std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
@@ -324,46 +387,10 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
   std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
   if (!p) return nullptr;
   if (p->kind == SourceParams::Kind::ray_polynomial && !ray_polynomial_start(camera, &*p)) return nullptr;
-  if (const auto& lens = camera.parameters().mrcal_lens) {
-    // On the stereographic or pinhole plane (unified, alpha = 0): u = m * plane_per_m.
-    if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return nullptr;
-    std::optional<double> focal, plane_per_m;
-    double reach = std::numeric_limits<double>::infinity();  // the plane radius of the domain's end
-    std::visit(
-        [&](const auto& m) {
-          if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
-            const auto ratio = [&](double theta) {
-              double derivative;
-              return m.plane_radius(theta, &derivative) * (p->xi + std::cos(theta)) / std::sin(theta);
-            };
-            focal = m.focal(), plane_per_m = ratio(0.5);
-            double derivative;
-            reach = m.plane_radius(camera.domain().theta_max, &derivative);
-            if (!(std::abs(ratio(1.0) - *plane_per_m) <= 1e-12 * *plane_per_m)) plane_per_m.reset();
-          }
-        },
-        camera.model());
-    if (!focal || !plane_per_m) return nullptr;
-    std::optional<MrcalLens::PolynomialCells> layout = lens->polynomial_cells();
-    if (layout) {
-      source->lens_cells = lens_kernel_cells(*lens, *layout, *focal);
-      for (float x : source->lens_cells) {  // absolute values in pixels: only overflow matters
-        if (!std::isfinite(x)) return nullptr;
-      }
-    } else {
-      std::optional<LensTable> table = lens_table(camera, *lens, *focal, p->xi, *plane_per_m, reach);
-      if (!table) return nullptr;
-      for (float& x : table->cells) {  // overflow: no projection the kernel can trust
-        if (std::isinf(x)) x = std::numeric_limits<float>::quiet_NaN();
-      }
-      layout = table->layout;
-      source->lens_cells = std::move(table->cells);
-      p->lens_bounded = true;
-    }
-    p->lens_nx = layout->nx, p->lens_ny = layout->ny;
-    p->lens_scale = float(*plane_per_m * layout->cells_per_u);
-    p->lens_origin_x = float(layout->origin.x()), p->lens_origin_y = float(layout->origin.y());
-    p->lens_cells = source->lens_cells.data();
+  if (displaces(camera.distortion()) &&
+      !std::visit([&](const auto& part) { return kernel_plane_form(camera, part, &*p, source.get()); },
+                  camera.distortion())) {
+    return nullptr;
   }
   if (camera.skew().any()) {
     for (double x : {camera.skew().xy, camera.skew().yx}) {
@@ -371,16 +398,6 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
     }
     p->skewed = true;
     p->xy = float(camera.skew().xy), p->yx = float(camera.skew().yx);
-  }
-  if (camera.tangential().any()) {  // tangential terms on the unified form's plane m = P_xy / D: alpha = 0 only
-    if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return nullptr;
-    const TangentialTerms& t = camera.tangential();
-    for (double x : t.values()) {
-      if (!float_exact_enough(x)) return nullptr;
-    }
-    p->tangential = true;
-    p->p1 = float(t.p1), p->p2 = float(t.p2);
-    p->s1 = float(t.s[0]), p->s2 = float(t.s[1]), p->s3 = float(t.s[2]), p->s4 = float(t.s[3]);
   }
   const double cx = camera.principal_point().x(), cy = camera.principal_point().y();
   // Every coordinate the kernel adds up must have float spacing well below the tolerance.

@@ -299,7 +299,7 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
   // LATLON whose image reaches next to its pole (76 deg at the sides), where the chart is
   // singular: no table of its offsets (kLensTableMaxCells) holds 1e-4 px.
   CameraParameters latlon = test::with_model(small, Stereographic<double>(60.0));
-  latlon.mrcal_lens = std::make_shared<const MrcalLens>("LENSMODEL_LATLON", std::vector<double>{});
+  latlon.distortion = MrcalLensDistortion{std::make_shared<const MrcalLens>("LENSMODEL_LATLON", std::vector<double>{})};
   const std::pair<const char*, CameraParameters> cases[] = {
       {"LATLON next to its pole", latlon},
       {"degree 17", test::with_model(small, Polynomial<double>(k17))},
@@ -776,7 +776,7 @@ TEST(Augmentation, MrcalSplinedSourceTakesTheKernelAndTheGrid) {
   const auto path = test::shared_path("data/external/mrcal_cam0.splined.cameramodel");
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "no ../shared checkout";
   const Camera full = read_camera(path);
-  ASSERT_TRUE(full.parameters().mrcal_lens);
+  ASSERT_TRUE(full.parameters().mrcal_lens());
   EXPECT_TRUE(ViewpointWarp(full, Camera(resized(full.parameters(), 400, 220))).float_kernel());
   const Camera camera(resized(full.parameters(), 1000, 550));
   const ViewpointWarp warp(camera, camera);
@@ -808,7 +808,7 @@ TEST(Augmentation, MrcalSplinedSourceTakesTheKernelAndTheGrid) {
 TEST(Augmentation, LensTablesEndOutsideTheImage) {
   int tables = 0;
   for (const auto& [name, p] : test::mrcal_lens_cameras()) {
-    if (p.mrcal_lens->polynomial_cells()) continue;  // the spline: its own cells, extrapolated as mrcal does
+    if (p.mrcal_lens()->polynomial_cells()) continue;  // the spline: its own cells, extrapolated as mrcal does
     const Camera source(resized(p, 320, 242));
     const ViewpointWarp warp(source, source);
     ASSERT_TRUE(warp.float_kernel()) << name;
@@ -851,7 +851,7 @@ TEST(Augmentation, ExtremeMrcalLensesTakeTheKernelOnlyWhereItAgrees) {
   const auto lens = [&](double f, bool pinhole, const char* lensmodel, std::vector<double> values) {
     CameraParameters p =
         pinhole ? test::with_model(small, Pinhole<double>(f)) : test::with_model(small, Stereographic<double>(f));
-    p.mrcal_lens = std::make_shared<const MrcalLens>(lensmodel, std::move(values));
+    p.distortion = MrcalLensDistortion{std::make_shared<const MrcalLens>(lensmodel, std::move(values))};
     return p;
   };
   struct Case {

@@ -116,8 +116,8 @@ bool ray_of(const Model& model, const ValidDomain& domain, const InverseTable& t
   return true;
 }
 
-// ---- cameras that are not radially symmetric: T(m) on the model's undistorted plane,
-// OpenCV's tangential terms (fishcam/core/tangential.hpp) or an mrcal lens (fishcam/core/mrcal_lens.hpp)
+// ---- cameras that are not radially symmetric: a plane distortion's offset T(m) on the
+// model's undistorted plane (fishcam/core/plane_distortion.hpp)
 
 // The plane radius u(theta) as a radial "model", so project_one gives m and dm/dP.
 template <class Model>
@@ -327,19 +327,21 @@ std::optional<double> distortion_fold(const Model& model, const Distortion& term
   }
 }
 
-// A camera's projection and unprojection: radial, or with its non-radial part on
-// the plane, then its pixel skew (CameraParameters::skew) if any.
+// A camera's projection and unprojection: one visit over its parts -- the radial
+// model, its plane distortion if it displaces anything, then its pixel skew
+// (CameraParameters::skew) if any.
 template <bool kWithJacobian, class Model>
 bool project_unskewed(const Model& model, const CameraParameters& params, const double* mapping,
                       const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                       Eigen::Matrix<double, 2, 3>* jacobian) {
-  if (params.mrcal_lens) {
-    return project_distorted<kWithJacobian>(model, mapping, domain, *params.mrcal_lens, point, pixel, jacobian);
-  }
-  if (params.tangential.any()) {
-    return project_distorted<kWithJacobian>(model, mapping, domain, params.tangential, point, pixel, jacobian);
-  }
-  return project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian);
+  return std::visit(
+      [&](const auto& part) {
+        if constexpr (!std::is_same_v<std::decay_t<decltype(part)>, NoPlaneDistortion>) {
+          if (part.any()) return project_distorted<kWithJacobian>(model, mapping, domain, part, point, pixel, jacobian);
+        }
+        return project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian);
+      },
+      params.distortion);
 }
 
 template <bool kWithJacobian, class Model>
@@ -373,13 +375,14 @@ bool ray_of_point(const Model& model, const CameraParameters& params, const Vali
     const double qx = (x - xy * y) / det, qy = (y - yx * x) / det;
     x = qx, y = qy;
   }
-  if (params.mrcal_lens) {
-    return distorted_ray_of(model, domain, table, *params.mrcal_lens, params.pixel_scale, x, y, ray, start);
-  }
-  if (params.tangential.any()) {
-    return distorted_ray_of(model, domain, table, params.tangential, params.pixel_scale, x, y, ray, start);
-  }
-  return ray_of(model, domain, table, x, y, path, ray);
+  return std::visit(
+      [&](const auto& part) {
+        if constexpr (!std::is_same_v<std::decay_t<decltype(part)>, NoPlaneDistortion>) {
+          if (part.any()) return distorted_ray_of(model, domain, table, part, params.pixel_scale, x, y, ray, start);
+        }
+        return ray_of(model, domain, table, x, y, path, ray);
+      },
+      params.distortion);
 }
 
 // Runs body(begin, end) over [0, n) on the installed thread pool, in chunks worth a thread.
@@ -423,6 +426,16 @@ void unproject_pixels(const CameraParameters& params, const ValidDomain& domain,
 }
 
 }  // namespace
+
+TangentialTerms CameraParameters::tangential_terms() const {
+  const auto* part = std::get_if<TangentialDistortion>(&distortion);
+  return part ? part->terms : TangentialTerms{};
+}
+
+const MrcalLens* CameraParameters::mrcal_lens() const {
+  const auto* part = std::get_if<MrcalLensDistortion>(&distortion);
+  return part ? part->lens.get() : nullptr;
+}
 
 CameraParameters resized(const CameraParameters& camera, int width, int height) {
   if (width < 1 || height < 1) fail("resized: width and height must be >= 1, got ", width, "x", height);
@@ -536,21 +549,20 @@ bool lens_finite_on_ring(const MrcalLens& lens, double u, int azimuths) {
 // The domain's rays, 64 rings by 360 azimuths up to theta_max: libmrcal must evaluate
 // each without a complaint on standard error, or the lens is refused in one line (a
 // projection whose own iteration failed cannot be right).
-void check_lens_evaluates(const CameraParameters& p, double theta_max) {
+void check_lens_evaluates(const CameraParameters& p, const MrcalLens& lens, double theta_max) {
   detail::StderrCapture libmrcal;
   std::visit(
       [&](const auto& m) {
         if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
           double derivative;
           for (int ring = 1; ring <= 64; ++ring) {
-            (void)lens_finite_on_ring(*p.mrcal_lens, m.plane_radius(theta_max * (1 - 1e-9) * ring / 64, &derivative),
-                                      360);
+            (void)lens_finite_on_ring(lens, m.plane_radius(theta_max * (1 - 1e-9) * ring / 64, &derivative), 360);
           }
         }
       },
       p.model);
   if (const std::string said = libmrcal.summary(); !said.empty()) {
-    fail("mrcal_lens: libmrcal cannot evaluate ", p.mrcal_lens->lensmodel().substr(0, 80),
+    fail("mrcal_lens: libmrcal cannot evaluate ", lens.lensmodel().substr(0, 80),
          " everywhere in its domain (it said: ", quoted_for_message(said, 200), ")");
   }
 }
@@ -561,7 +573,7 @@ void check_lens_evaluates(const CameraParameters& p, double theta_max) {
 // reach there), libmrcal evaluates at 1440 azimuths without a word. CAHVORE's own
 // iteration fails at and past its fold, which the fold scan finds to a few ulps.
 // None: libmrcal fails even 1 % inside (the camera is refused).
-std::optional<double> lens_evaluation_end(const CameraParameters& p, double theta_max) {
+std::optional<double> lens_evaluation_end(const CameraParameters& p, const MrcalLens& lens, double theta_max) {
   std::optional<double> end;
   std::visit(
       [&](const auto& m) {
@@ -571,8 +583,8 @@ std::optional<double> lens_evaluation_end(const CameraParameters& p, double thet
             const double theta = theta_max * (1 - inside);
             const double u = m.plane_radius(theta, &derivative);
             detail::StderrCapture libmrcal;
-            const bool evaluates = lens_finite_on_ring(*p.mrcal_lens, u, 1440) &&
-                                   lens_finite_on_ring(*p.mrcal_lens, u * (1 + 1e-9) + 2e-5 * (1 + u), 1440);
+            const bool evaluates =
+                lens_finite_on_ring(lens, u, 1440) && lens_finite_on_ring(lens, u * (1 + 1e-9) + 2e-5 * (1 + u), 1440);
             if (evaluates && libmrcal.summary().empty()) {
               end = theta;
               return;
@@ -616,7 +628,7 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   if (!(1 - skew.xy * skew.yx > 0)) {
     fail("skew: the pixel grid must keep its orientation (1 - xy yx > 0), got xy ", skew.xy, ", yx ", skew.yx);
   }
-  if (params_.distorted_plane()) {
+  if (displaces(params_.distortion)) {
     // libmrcal says on standard error where its own projection fails (CAHVORE's
     // iteration: "too many iterations"), never to the terminal from here: the scans
     // meet such rays at and past the fold, so what it said is checked over the domain.
@@ -626,10 +638,11 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
       limit_to_plane_fold();
       libmrcal_said = libmrcal.summary();
     }
-    if (!libmrcal_said.empty() && params_.mrcal_lens) {
-      const std::optional<double> end = lens_evaluation_end(params_, domain_.theta_max);
+    const MrcalLens* lens = params_.mrcal_lens();
+    if (!libmrcal_said.empty() && lens) {
+      const std::optional<double> end = lens_evaluation_end(params_, *lens, domain_.theta_max);
       if (!end) {
-        fail("mrcal_lens: libmrcal cannot evaluate ", params_.mrcal_lens->lensmodel().substr(0, 80),
+        fail("mrcal_lens: libmrcal cannot evaluate ", lens->lensmodel().substr(0, 80),
              " next to the end of its domain (it said: ", quoted_for_message(libmrcal_said, 200), ")");
       }
       if (*end < domain_.theta_max) {
@@ -643,37 +656,33 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
       bound_plane_reach();
       if (libmrcal_said.empty()) libmrcal_said = libmrcal.summary();
     }
-    if (!libmrcal_said.empty() && params_.mrcal_lens) check_lens_evaluates(params_, domain_.theta_max);
+    if (!libmrcal_said.empty() && lens) check_lens_evaluates(params_, *lens, domain_.theta_max);
   }
   table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
 }
 
 void Camera::limit_to_plane_fold() {
-  const TangentialTerms& terms = params_.tangential;
-  for (size_t i = 0; i < terms.kNames.size(); ++i) {
-    if (!std::isfinite(terms.values()[i])) fail("tangential.", terms.kNames[i], ": must be finite");
+  const std::string part(distortion_name(params_.distortion));
+  if (const std::string problem = std::visit([](const auto& d) { return d.invalid(); }, params_.distortion);
+      !problem.empty()) {
+    fail(part, ".", problem);
   }
-  std::optional<double> fold;
-  if (const auto& lens = params_.mrcal_lens) {
-    if (terms.any()) fail("tangential: a camera has tangential terms or an mrcal lens, not both");
-    if (model_name(params_.model) != lens->base_model()) {
-      fail("mrcal_lens: ", lens->lensmodel().substr(0, 80), " displaces the ", lens->base_model(),
-           " plane: the model must be ", lens->base_model(), ", got ", model_name(params_.model));
-    }
-    fold = std::visit([&](const auto& m) { return distortion_fold(m, *lens, domain_); }, params_.model);
-  } else {
-    const bool takes =
-        std::visit([](const auto& m) { return TakesTangentialTerms<std::decay_t<decltype(m)>>; }, params_.model);
-    if (!takes) {
-      fail("tangential: the ", model_name(params_.model),
-           " model takes no tangential terms (pinhole, opencv and mei do, on their undistorted plane)");
-    }
-    fold = std::visit([&](const auto& m) { return distortion_fold(m, terms, domain_); }, params_.model);
+  const std::vector<std::string> bases = std::visit([](const auto& d) { return d.base_models(); }, params_.distortion);
+  if (std::find(bases.begin(), bases.end(), model_name(params_.model)) == bases.end()) {
+    std::string list;
+    for (size_t i = 0; i < bases.size(); ++i) list += (i == 0 ? "" : i + 1 == bases.size() ? " or " : ", ") + bases[i];
+    fail(part, ": only the ", list, " model's undistorted plane takes ",
+         std::visit([](const auto& d) { return d.description(); }, params_.distortion), " (the model is ",
+         model_name(params_.model), ")");
   }
+  const std::optional<double> fold = std::visit(
+      [&](const auto& m) {
+        return std::visit([&](const auto& d) { return distortion_fold(m, d, domain_); }, params_.distortion);
+      },
+      params_.model);
   if (fold && *fold < domain_.theta_max * (1 - 1e-12)) {  // else the radial limit comes first
     if (!(*fold > 0)) {
-      fail(params_.mrcal_lens ? "mrcal_lens" : "tangential",
-           ": the distortion is not one-to-one even next to the principal point");
+      fail(part, ": the distortion is not one-to-one even next to the principal point");
     }
     domain_.theta_max = *fold;
     domain_.closed = true;
@@ -698,11 +707,7 @@ void Camera::bound_plane_reach() {
   std::visit(
       [&](const auto& m) {
         if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
-          if (params_.mrcal_lens) {
-            domain_.plane_reach = reach(m, *params_.mrcal_lens);
-          } else if constexpr (TakesTangentialTerms<std::decay_t<decltype(m)>>) {
-            domain_.plane_reach = reach(m, params_.tangential);
-          }
+          domain_.plane_reach = std::visit([&](const auto& d) { return reach(m, d); }, params_.distortion);
         }
       },
       params_.model);

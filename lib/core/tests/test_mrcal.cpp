@@ -124,7 +124,7 @@ TEST(Mrcal, OpenCV8WithoutTangentialTermsAgreesWithLibmrcal) {
 // libmrcal's).
 TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
   const Camera synthetic(test::spline_camera().second);
-  const MrcalLens& spline = *synthetic.parameters().mrcal_lens;
+  const MrcalLens& spline = *synthetic.parameters().mrcal_lens();
   ASSERT_GT(synthetic.domain().theta_max, 60 * M_PI / 180);
   check_against_mrcal({"spline (synthetic)", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC, 60 * M_PI / 180, synthetic,
                        spline.values(), spline.lensmodel()});
@@ -137,10 +137,10 @@ TEST(Mrcal, SplinedStereographicAgreesWithLibmrcal) {
   const int n = mrcal_lensmodel_num_params(&model->lensmodel);
   const std::vector<double> values(model->intrinsics + 4, model->intrinsics + n);
   EXPECT_EQ(model->intrinsics[0], model_params(camera.model())[0]);
-  EXPECT_EQ(values, camera.parameters().mrcal_lens->values());
+  EXPECT_EQ(values, camera.parameters().mrcal_lens()->values());
   mrcal_free_cameramodel(&model);
   check_against_mrcal({"mrcal_cam0.splined.cameramodel", MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC,
-                       camera.domain().theta_max, camera, values, camera.parameters().mrcal_lens->lensmodel()});
+                       camera.domain().theta_max, camera, values, camera.parameters().mrcal_lens()->lensmodel()});
 }
 
 // Every mrcal lens model fishcam evaluates (MrcalLens::kinds()), on its base model's
@@ -149,7 +149,7 @@ class EveryMrcalLens : public ::testing::TestWithParam<test::ModelCase> {};
 
 TEST_P(EveryMrcalLens, AgreesWithLibmrcal) {
   const Camera camera(GetParam().second);
-  const MrcalLens& lens = *camera.parameters().mrcal_lens;
+  const MrcalLens& lens = *camera.parameters().mrcal_lens();
   const double theta_max = camera.domain().theta_max;
   if (lens.kind() == MrcalLens::Kind::lonlat || lens.kind() == MrcalLens::Kind::latlon) {
     // The domain is a disk about the axis; these charts are singular at their poles (theta = 90 deg).
@@ -215,7 +215,7 @@ TEST(Mrcal, LibmrcalProjectsCahvoreByDirectionOnly) {
 // by any fraction of a cell fails). Cubic and quadratic splines of the same values.
 TEST(Mrcal, SplineIsOnePolynomialOnEachOfItsCells) {
   const CameraParameters example = test::spline_camera().second;  // keeps the spline alive
-  const MrcalLens& cubic = *example.mrcal_lens;
+  const MrcalLens& cubic = *example.mrcal_lens();
   int cases = 0;
   for (const char* lensmodel : {"LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150",
                                 "LENSMODEL_SPLINED_STEREOGRAPHIC_order=2_Nx=8_Ny=6_fov_x_deg=150"}) {
@@ -266,10 +266,10 @@ TEST(Mrcal, ConvertingASplinedCameraReportsWhatLibmrcalAndThePolynomialFind) {
   const Camera source(resized(test::spline_camera().second, 320, 242));
   const Conversion conversion = convert_camera(source, parse_model_spec("polynomial:4"));
   EXPECT_TRUE(conversion.center_and_aspect_fitted);
-  EXPECT_FALSE(conversion.camera.mrcal_lens);
+  EXPECT_FALSE(conversion.camera.mrcal_lens());
   const auto samples = sample_image(source, 2, 0);
   ASSERT_EQ(conversion.report.samples, long(samples.size()));
-  const MrcalLens& spline = *source.parameters().mrcal_lens;
+  const MrcalLens& spline = *source.parameters().mrcal_lens();
   mrcal_lensmodel_t lensmodel{};
   ASSERT_TRUE(mrcal_lensmodel_from_name(&lensmodel, spline.lensmodel().c_str()));
   const double f = model_params(source.model())[0];

@@ -21,7 +21,7 @@ std::vector<Eigen::Vector2d> opencv_projection(const CameraParameters& p, const 
   std::vector<cv::Point3d> in;
   for (const auto& x : points) in.emplace_back(x.x(), x.y(), x.z());
   std::vector<cv::Point2d> out;
-  const TangentialTerms& t = p.tangential;
+  const TangentialTerms t = p.tangential_terms();
   const std::string_view name = model_name(p.model);
   if (name == "mei") {
     cv::omnidir::projectPoints(in, out, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, q[1],
@@ -130,7 +130,7 @@ TEST(Tangential, EveryModelThatTakesTangentialTermsHasATangentialCase) {
 TEST(Tangential, TheDomainEndsWhereTheDistortionStopsBeingOneToOne) {
   CameraParameters p = test::woodscape_front();
   p.model = Pinhole<double>(400.0);
-  p.tangential = {0.05, -0.03, {}};
+  p.distortion = TangentialDistortion{{0.05, -0.03, {}}};
   const Camera camera(p);
   const ValidDomain& d = camera.domain();
   EXPECT_EQ(d.limited_by, ValidDomain::Limit::distortion_fold);
@@ -168,7 +168,7 @@ TEST(Tangential, TheDomainEndsWhereTheDistortionStopsBeingOneToOne) {
       const double x = scale * u_max * std::cos(phi), y = scale * u_max * std::sin(phi);
       if (scale > 1) {  // past the domain: the bare formula (a radial-free pinhole: pixel = c + f a (m + T(m)))
         Eigen::Matrix2d jt;
-        p.tangential.offset({x, y}, &jt);
+        p.tangential_terms().offset({x, y}, &jt);
         smallest_past = std::min(smallest_past, (Eigen::Matrix2d::Identity() + jt).determinant());
         continue;
       }
@@ -269,28 +269,28 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
     }
   };
   CameraParameters p = test::woodscape_front();
-  p.tangential = {0.001, 0, {}};
+  p.distortion = TangentialDistortion{{0.001, 0, {}}};
   refused(p,
-          "tangential: the polynomial model takes no tangential terms (pinhole, opencv and mei do, on their "
-          "undistorted plane)");
+          "tangential: only the pinhole, mei or opencv model's undistorted plane takes tangential terms (the model "
+          "is polynomial)");
   p.model = Mei<double>(640.0, 0.9, 0, 0);
-  p.tangential.p2 = std::numeric_limits<double>::quiet_NaN();
+  p.distortion = TangentialDistortion{{0.001, std::numeric_limits<double>::quiet_NaN(), {}}};
   refused(p, "tangential.p2: must be finite");
-  p.tangential = {0, 0, {0, 0, std::numeric_limits<double>::infinity(), 0}};
+  p.distortion = TangentialDistortion{{0, 0, {0, 0, std::numeric_limits<double>::infinity(), 0}}};
   refused(p, "tangential.s3: must be finite");
-  // An mrcal lens: on its base model only, never with tangential terms, its name,
-  // configuration and value count checked.
+  // An mrcal lens: on its base model only, its name, configuration and value count
+  // checked. (A camera holds one plane distortion: CameraParameters::distortion.)
   CameraParameters s = test::spline_camera().second;
-  s.tangential = {0.001, 0, {}};
-  refused(s, "tangential: a camera has tangential terms or an mrcal lens, not both");
-  s.tangential = {};
   s.model = Equidistant<double>(330.0);
   refused(s,
-          "mrcal_lens: LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150 displaces the stereographic "
-          "plane: the model must be stereographic, got equidistant");
-  s.mrcal_lens = std::make_shared<const MrcalLens>("LENSMODEL_CAHVOR", std::vector<double>(5, 0.0));
+          "mrcal_lens: only the stereographic model's undistorted plane takes mrcal's "
+          "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150 (the model is equidistant)");
+  s.distortion =
+      MrcalLensDistortion{std::make_shared<const MrcalLens>("LENSMODEL_CAHVOR", std::vector<double>(5, 0.0))};
   s.model = Stereographic<double>(330.0);
-  refused(s, "mrcal_lens: LENSMODEL_CAHVOR displaces the pinhole plane: the model must be pinhole, got stereographic");
+  refused(s,
+          "mrcal_lens: only the pinhole model's undistorted plane takes mrcal's LENSMODEL_CAHVOR (the model is "
+          "stereographic)");
   const auto spline_refused = [](const std::string& lensmodel, std::vector<double> values,
                                  const std::string& expected) {
     try {
@@ -332,21 +332,22 @@ TEST(Tangential, CamerasRefuseTermsTheyCannotHold) {
 TEST(Tangential, FormatsHoldTheTermsTheyCanAndRefuseTheRestInOneLine) {
   CameraParameters p = test::every_tangential_camera().back().second;  // opencv with thin-prism terms
   ASSERT_EQ(model_name(p.model), "opencv");
-  ASSERT_TRUE(p.tangential.any_thin_prism());
+  ASSERT_TRUE(p.tangential_terms().any_thin_prism());
   const Camera back(parse_camera(format_camera(p, CameraFormat::fishcam), "fishcam.json"));
-  EXPECT_EQ(back.tangential(), p.tangential);
+  EXPECT_EQ(back.parameters().tangential_terms(), p.tangential_terms());
   try {
     format_camera(p, CameraFormat::ros);
     ADD_FAILURE() << "ros took thin-prism terms";
   } catch (const Error& e) {
     EXPECT_STREQ(e.what(),
-                 "tangential: the ros format cannot hold thin-prism terms s1..s4 (mrcal, opencv, fishcam can)");
+                 "tangential: the ros format cannot hold s1, s2, s3, s4 of the tangential terms (mrcal, opencv, "
+                 "fishcam can)");
   }
-  p.tangential.s = {};
+  p.distortion = TangentialDistortion{{p.tangential_terms().p1, p.tangential_terms().p2, {}}};
   EXPECT_NE(format_camera(p, CameraFormat::ros).find("rational_polynomial"), std::string::npos);
-  EXPECT_TRUE(camera_format_holds(CameraFormat::colmap, p.tangential));
-  EXPECT_FALSE(camera_format_holds(CameraFormat::basalt, p.tangential));
-  EXPECT_FALSE(camera_format_holds(CameraFormat::woodscape, p.tangential));
+  EXPECT_TRUE(camera_format_holds(CameraFormat::colmap, p.distortion));
+  EXPECT_FALSE(camera_format_holds(CameraFormat::basalt, p.distortion));
+  EXPECT_FALSE(camera_format_holds(CameraFormat::woodscape, p.distortion));
   // An unknown term in fishcam JSON is an error, not a silent zero.
   try {
     parse_camera(R"({"fishcam_camera": 1, "width": 640, "height": 480, "principal_point": [320, 240],
@@ -369,7 +370,7 @@ TEST(Tangential, ConversionToARadialModelReportsWhatAnIndependentComparisonFinds
   const Camera source(p);
   const Conversion conversion = convert_camera(source, parse_model_spec("kannala-brandt"));
   EXPECT_TRUE(conversion.center_and_aspect_fitted);
-  EXPECT_TRUE(conversion.camera.tangential == TangentialTerms{});
+  EXPECT_FALSE(displaces(conversion.camera.distortion));
   EXPECT_NE(conversion.camera.principal_point, p.principal_point);
   const auto k = model_params(conversion.camera.model);
   const test::Intrinsics fitted{k[0] * conversion.camera.pixel_scale.x(), k[0] * conversion.camera.pixel_scale.y(),
@@ -405,7 +406,7 @@ TEST(Tangential, ConversionToARadialModelReportsWhatAnIndependentComparisonFinds
   // A radial source has no floor to report; the same lens without its terms comes
   // out near exact with the same centre.
   CameraParameters radial = p;
-  radial.tangential = {};
+  radial.distortion = NoPlaneDistortion{};
   EXPECT_EQ(convert_camera(Camera(radial), parse_model_spec("mei")).non_radial.samples, 0);
   std::printf("  mei + p1, p2 -> kannala-brandt: rms %.4f px, max %.4f px; no radial model below rms %.4f px\n",
               conversion.report.rms_px, conversion.report.max_px, conversion.non_radial.rms_px);

@@ -24,10 +24,9 @@ void drop_covariance(CameraParameters* p) {
   if (p->calibration) p->calibration->covariance.resize(0, 0);
 }
 
-// A fitted radial model replaces the whole projection: tangential terms, mrcal lens and skew go.
+// A fitted radial model replaces the whole projection: the plane distortion and the skew go.
 void drop_non_radial(CameraParameters* p) {
-  p->tangential = {};
-  p->mrcal_lens.reset();
+  p->distortion = NoPlaneDistortion{};
   p->skew = {};
 }
 

@@ -336,14 +336,15 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
         {"closed_form",
          std::visit([](const auto& m) { return ClosedFormInverse<std::decay_t<decltype(m)>>; }, p.model)}}},
   };
-  j["mrcal_lens"] = p.mrcal_lens ? json{{"lensmodel", p.mrcal_lens->lensmodel()},
-                                        {"base_model", p.mrcal_lens->base_model()},
-                                        {"values", p.mrcal_lens->values().size()}}
-                                 : json(nullptr);
+  const MrcalLens* lens = p.mrcal_lens();
+  j["mrcal_lens"] = lens ? json{{"lensmodel", lens->lensmodel()},
+                                {"base_model", lens->base_model()},
+                                {"values", lens->values().size()}}
+                         : json(nullptr);
   j["tangential"] = nullptr;  // radially symmetric
-  if (p.tangential.any()) {
+  if (const TangentialTerms terms = p.tangential_terms(); terms.any()) {
     for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
-      j["tangential"][std::string(TangentialTerms::kNames[i])] = p.tangential.values()[i];
+      j["tangential"][std::string(TangentialTerms::kNames[i])] = terms.values()[i];
     }
   }
   j["skew"] = p.skew.any() ? json{{"xy", p.skew.xy}, {"yx", p.skew.yx}} : json(nullptr);
@@ -357,10 +358,8 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
 }
 
 bool camera_format_holds_calibration_record(CameraFormat format) {
-  return format_spec(format).holds_calibration_record;
+  return format_spec(format).holds.calibration_record;
 }
-
-bool camera_format_holds_mrcal_lens(CameraFormat format) { return format_spec(format).holds_mrcal_lens; }
 
 std::vector<std::string> camera_format_models(CameraFormat format) {
   const auto& listed = format_spec(format).models;
@@ -379,33 +378,19 @@ std::string formats_that(const Predicate& holds) {
   }
   return names;
 }
-// "" when the format holds the terms, else why not.
-std::string cannot_hold_tangential(const detail::FormatSpec& spec, const TangentialTerms& terms) {
-  const bool prism = terms.any_thin_prism();
-  if (!terms.any() || (spec.holds_tangential && (!prism || spec.holds_thin_prism))) return "";
-  return "tangential: the " + std::string(spec.name) + " format cannot hold " +
-         (prism ? "thin-prism terms s1..s4" : "tangential terms p1, p2") + " (" +
-         formats_that([&](const detail::FormatSpec& s) { return prism ? s.holds_thin_prism : s.holds_tangential; }) +
-         " can)";
-}
 // "" when the format holds the camera's non-radial parts, else why not.
 std::string cannot_hold_non_radial(const detail::FormatSpec& spec, const CameraParameters& camera) {
-  if (std::string why = cannot_hold_tangential(spec, camera.tangential); !why.empty()) return why;
-  if (camera.mrcal_lens && !spec.holds_mrcal_lens) {
-    return "mrcal_lens: the " + std::string(spec.name) + " format cannot hold mrcal's " +
-           camera.mrcal_lens->lensmodel().substr(0, 80) + " (" +
-           formats_that([](const detail::FormatSpec& s) { return s.holds_mrcal_lens; }) + " can)";
-  }
-  if (camera.skew.any() && !spec.holds_skew) {
+  if (std::string why = spec.cannot_hold_distortion(camera.distortion); !why.empty()) return why;
+  if (camera.skew.any() && !spec.holds.skew) {
     return "skew: the " + std::string(spec.name) + " format cannot hold a skewed pixel grid (" +
-           formats_that([](const detail::FormatSpec& s) { return s.holds_skew; }) + " can)";
+           formats_that([](const detail::FormatSpec& s) { return s.holds.skew; }) + " can)";
   }
   return "";
 }
 }  // namespace
 
-bool camera_format_holds(CameraFormat format, const TangentialTerms& terms) {
-  return cannot_hold_tangential(format_spec(format), terms).empty();
+bool camera_format_holds(CameraFormat format, const PlaneDistortion& distortion) {
+  return format_spec(format).cannot_hold_distortion(distortion).empty();
 }
 
 std::string format_camera(const CameraParameters& camera, CameraFormat format) {
@@ -413,14 +398,14 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
   const detail::FormatSpec& spec = format_spec(format);
   // What a format holds is checked here, once, from its list: writers see only
   // cameras of their models.
-  if (camera.theta_limit && !spec.holds_theta_limit) {
+  if (camera.theta_limit && !spec.holds.theta_limit) {
     throw Error("theta_limit: the " + std::string(spec.name) +
                 " format cannot store a user field-of-view limit (fishcam JSON can)");
   }
-  if (!spec.holds(model_name(camera.model))) detail::cannot_hold(camera, format);
+  if (!spec.holds_model(model_name(camera.model))) detail::cannot_hold(camera, format);
   if (const std::string why = cannot_hold_non_radial(spec, camera); !why.empty()) throw Error(why);
-  CameraParameters written = spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera);
-  if (!spec.holds_calibration_record) written.calibration.reset();
+  CameraParameters written = spec.holds.pixel_scale ? camera : detail::with_unit_ax(camera);
+  if (!spec.holds.calibration_record) written.calibration.reset();
   std::string content = spec.write(written);
   // Nor a file our own reader refuses (a value that overflows in the format's
   // parameterisation, say): read it back before anyone can write it.
@@ -429,15 +414,13 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
     options.format = format;
     options.image_size = std::pair{camera.width, camera.height};
     const CameraParameters back = parse_camera(content, "", options);
-    if (back.tangential != camera.tangential) throw Error(": its tangential terms do not read back");
+    if (!same_distortion(back.distortion, camera.distortion)) {
+      throw Error(": its " + std::string(distortion_name(camera.distortion)) + " part does not read back");
+    }
     // A format may hold the skew in another unit (BoofCV: skew = xy fx): a few ulps.
     const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-13 * std::abs(b); };
     if (!near(back.skew.xy, camera.skew.xy) || !near(back.skew.yx, camera.skew.yx)) {
       throw Error(": its skew does not read back");
-    }
-    if (bool(back.mrcal_lens) != bool(camera.mrcal_lens) ||
-        (back.mrcal_lens && !(*back.mrcal_lens == *camera.mrcal_lens))) {
-      throw Error(": its mrcal lens does not read back");
     }
   } catch (const Error& e) {
     std::string why = e.what();
@@ -465,20 +448,20 @@ std::string format_rig(const std::vector<CameraParameters>& cameras, CameraForma
     Camera check(camera);
     const std::string which = "camera " + std::to_string(i) + ": ";
     if (!camera.pose) throw Error(which + "a rig camera needs its pose relative to camera 0");
-    if (camera.theta_limit && !spec.holds_theta_limit) {
+    if (camera.theta_limit && !spec.holds.theta_limit) {
       throw Error(which + "theta_limit: the " + std::string(spec.name) +
                   " format cannot store a user field-of-view limit (fishcam JSON can)");
     }
     if (const std::string why = cannot_hold_non_radial(spec, camera); !why.empty()) throw Error(which + why);
-    if (!spec.holds(model_name(camera.model))) {
+    if (!spec.holds_model(model_name(camera.model))) {
       try {
         detail::cannot_hold(camera, format);
       } catch (const Error& e) {
         throw Error(which + e.what());
       }
     }
-    CameraParameters w = spec.keeps_pixel_scale ? camera : detail::with_unit_ax(camera);
-    if (!spec.holds_calibration_record) w.calibration.reset();
+    CameraParameters w = spec.holds.pixel_scale ? camera : detail::with_unit_ax(camera);
+    if (!spec.holds.calibration_record) w.calibration.reset();
     written.push_back(std::move(w));
   }
   std::string content = spec.write_rig(written);

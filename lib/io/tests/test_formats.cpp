@@ -587,8 +587,7 @@ TEST_P(EveryFormat, RoundTripsTheModelsOfItsListAndRefusesTheOthers) {
   for (auto [label, p] : test::every_camera()) {
     p.pose = Pose{Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())), {0.1, -0.2, 1.5}};
     const bool model_listed = std::find(holds.begin(), holds.end(), model_name(p.model)) != holds.end();
-    const bool lens_held = !p.mrcal_lens || camera_format_holds_mrcal_lens(format);
-    const bool listed = model_listed && camera_format_holds(format, p.tangential) && lens_held;
+    const bool listed = model_listed && camera_format_holds(format, p.distortion);
     std::string text;
     try {
       text = format_camera(p, format);
@@ -599,13 +598,13 @@ TEST_P(EveryFormat, RoundTripsTheModelsOfItsListAndRefusesTheOthers) {
         EXPECT_NE(what.find("format holds"), std::string::npos) << what;
         EXPECT_NE(what.find(std::string("not ") + std::string(model_name(p.model))), std::string::npos) << what;
       } else {
-        const std::string part = lens_held ? "tangential" : "mrcal_lens";
+        const std::string part(distortion_name(p.distortion));
         EXPECT_EQ(what.rfind(part + ": the " + std::string(to_string(format)) + " format cannot hold ", 0), 0u) << what;
       }
       ++refused;
       continue;
     }
-    tangential_held += p.tangential.any();
+    tangential_held += p.tangential_terms().any();
     EXPECT_TRUE(listed) << label << ": written, but not in the format's list";
     ++held;
     CameraReadOptions options;
@@ -613,7 +612,7 @@ TEST_P(EveryFormat, RoundTripsTheModelsOfItsListAndRefusesTheOthers) {
     options.image_size = std::pair{p.width, p.height};
     const Camera back(parse_camera(text, label, options));
     const Camera original(p);
-    EXPECT_EQ(back.tangential(), p.tangential) << label;
+    EXPECT_TRUE(same_distortion(back.parameters().distortion, p.distortion)) << label;
     EXPECT_EQ(back.width(), p.width);
     EXPECT_EQ(back.height(), p.height);
     const double limit = original.domain().closed ? original.domain().theta_max : original.domain().theta_max - 1e-3;
@@ -639,7 +638,8 @@ TEST_P(EveryFormat, RoundTripsTheModelsOfItsListAndRefusesTheOthers) {
   EXPECT_EQ(held + refused, int(test::every_camera().size()));
   EXPECT_GT(held, 0);
   // Every format that holds p1, p2 holds at least one model with an undistorted plane.
-  EXPECT_EQ(tangential_held > 0, camera_format_holds(format, TangentialTerms{0.001, 0, {}})) << to_string(format);
+  EXPECT_EQ(tangential_held > 0, camera_format_holds(format, TangentialDistortion{{0.001, 0, {}}}))
+      << to_string(format);
 }
 
 // A user limit on the valid domain: fishcam JSON only; every other format refuses it.
@@ -835,7 +835,7 @@ TEST(Formats, ColmapRadialModelsAreOpenCVs) {
   const Camera tangential(parse_camera("1 OPENCV 640 480 500 505 320 240 -0.2 0.05 0.001 -0.002\n", "cameras.txt"));
   const Reference reference = opencv_radtan({500, 505, 319.5, 239.5}, {-0.2, 0.05, 0.001, -0.002});
   EXPECT_LE(worst_difference(tangential, reference, 40 * M_PI / 180), 1e-9);
-  EXPECT_EQ(tangential.tangential(), (TangentialTerms{0.001, -0.002, {}}));
+  EXPECT_EQ(tangential.parameters().tangential_terms(), (TangentialTerms{0.001, -0.002, {}}));
 }
 
 TEST(Formats, DetectionScoresTheFormatsOwnKeys) {

@@ -124,17 +124,15 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 }  // namespace
 
 extern const FormatSpec basalt_format{
-    CameraFormat::basalt,
-    "basalt",
-    "basalt calibration JSON",
-    {".json"},
-    {"kannala-brandt", "equidistant", "double-sphere", "extended-unified", "unified", "pinhole"},
-    score,
-    read,
-    write,
-    false,
-    false,
-    false,
-    write_rig};
+    .id = CameraFormat::basalt,
+    .name = "basalt",
+    .description = "basalt calibration JSON",
+    .extensions = {".json"},
+    .models = {"kannala-brandt", "equidistant", "double-sphere", "extended-unified", "unified", "pinhole"},
+    .score = score,
+    .read = read,
+    .write = write,
+    .write_rig = write_rig,
+};
 
 }  // namespace fishcam::detail

@@ -88,21 +88,16 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec boofcv_format{CameraFormat::boofcv,
-                                      "boofcv",
-                                      "BoofCV calibration YAML",
-                                      {".yaml", ".yml"},
-                                      {"mei", "unified", "pinhole"},
-                                      score,
-                                      read,
-                                      write,
-                                      false,
-                                      false,
-                                      false,
-                                      nullptr,
-                                      false,
-                                      false,
-                                      false,
-                                      true};
+extern const FormatSpec boofcv_format{
+    .id = CameraFormat::boofcv,
+    .name = "boofcv",
+    .description = "BoofCV calibration YAML",
+    .extensions = {".yaml", ".yml"},
+    .models = {"mei", "unified", "pinhole"},
+    .score = score,
+    .read = read,
+    .write = write,
+    .holds = {.skew = true},
+};
 
 }  // namespace fishcam::detail

@@ -30,7 +30,7 @@ std::vector<NamedCamera> read(const Content& c) {
     set_focal(&p, gamma1, k.number("gamma2"), [&](std::string_view problem) { k.fail("gamma1", problem); });
     p.principal_point = {k.number("u0"), k.number("v0")};
     p.model = Mei<double>(gamma1, f.object("mirror_parameters").number("xi"), d.number("k1"), d.number("k2"));
-    p.tangential = {d.number("p1"), d.number("p2"), {}};
+    p.distortion = TangentialDistortion{{d.number("p1"), d.number("p2"), {}}};
   } else if (type == "PINHOLE") {
     const DocFields k = f.object("projection_parameters");
     const DocFields d = f.object("distortion_parameters");
@@ -53,7 +53,7 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
-  const double p1 = p.tangential.p1, p2 = p.tangential.p2;
+  const double p1 = p.tangential_terms().p1, p2 = p.tangential_terms().p2;
   const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
   std::string out = "%YAML:1.0\n---\n";
   const KannalaBrandtLike kb = kannala_brandt_of(p);
@@ -90,18 +90,16 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec camodocal_format{CameraFormat::camodocal,
-                                         "camodocal",
-                                         "camodocal YAML",
-                                         {".yaml", ".yml"},
-                                         {"kannala-brandt", "equidistant", "mei", "unified", "pinhole"},
-                                         score,
-                                         read,
-                                         write,
-                                         false,
-                                         false,
-                                         false,
-                                         nullptr,
-                                         true};
+extern const FormatSpec camodocal_format{
+    .id = CameraFormat::camodocal,
+    .name = "camodocal",
+    .description = "camodocal YAML",
+    .extensions = {".yaml", ".yml"},
+    .models = {"kannala-brandt", "equidistant", "mei", "unified", "pinhole"},
+    .distortions = {{"tangential", {"p1", "p2"}}},
+    .score = score,
+    .read = read,
+    .write = write,
+};
 
 }  // namespace fishcam::detail

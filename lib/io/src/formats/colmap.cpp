@@ -124,7 +124,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   std::vector<double> params;
   std::string model;
   std::optional<RadialTangential> r = radial_tangential_of(p);
-  if (r && (r->rational || p.tangential.any())) {
+  if (r && (r->rational || p.tangential_terms().any())) {
     model = "FULL_OPENCV";
     r->d.resize(8, 0.0);
     params = {r->f, r->f * p.pixel_scale.y(), p.principal_point.x() + 0.5, p.principal_point.y() + 0.5};
@@ -149,18 +149,16 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec colmap_format{CameraFormat::colmap,
-                                      "colmap",
-                                      "COLMAP cameras.txt",
-                                      {".txt"},
-                                      {"kannala-brandt", "equidistant", "pinhole", "opencv"},
-                                      score,
-                                      read,
-                                      write,
-                                      false,
-                                      false,
-                                      false,
-                                      nullptr,
-                                      true};
+extern const FormatSpec colmap_format{
+    .id = CameraFormat::colmap,
+    .name = "colmap",
+    .description = "COLMAP cameras.txt",
+    .extensions = {".txt"},
+    .models = {"kannala-brandt", "equidistant", "pinhole", "opencv"},
+    .distortions = {{"tangential", {"p1", "p2"}}},
+    .score = score,
+    .read = read,
+    .write = write,
+};
 
 }  // namespace fishcam::detail

@@ -275,8 +275,55 @@ DocFields DocFields::item(std::string_view key, size_t index) const {
 }
 
 // ------------------------------------------------------------ models, poses, text
-bool FormatSpec::holds(std::string_view model) const {
+bool FormatSpec::holds_model(std::string_view model) const {
   return models.empty() || std::find(models.begin(), models.end(), model) != models.end();
+}
+
+namespace {
+// The parameters of the camera's part that the declaration does not hold and that
+// are not zero; nullopt when the format does not hold the part at all.
+std::optional<std::vector<std::string>> unheld_parameters(const std::vector<HeldDistortion>& held,
+                                                          const PlaneDistortion& distortion) {
+  const std::string_view part = distortion_name(distortion);
+  const auto it = std::find_if(held.begin(), held.end(), [&](const HeldDistortion& h) { return h.part == part; });
+  if (it == held.end()) return std::nullopt;
+  const auto [names, values] =
+      std::visit([](const auto& d) { return std::pair(d.parameter_names(), d.values()); }, distortion);
+  std::vector<std::string> unheld;
+  if (it->parameters.empty()) return unheld;
+  for (size_t i = 0; i < names.size(); ++i) {
+    const bool listed = std::find(it->parameters.begin(), it->parameters.end(), names[i]) != it->parameters.end();
+    if (!listed && values[i] != 0) unheld.push_back(names[i]);
+  }
+  return unheld;
+}
+
+bool holds_distortion(const FormatSpec& spec, const PlaneDistortion& distortion) {
+  if (!displaces(distortion)) return true;
+  const auto unheld = unheld_parameters(spec.distortions, distortion);
+  return unheld && unheld->empty();
+}
+}  // namespace
+
+std::string FormatSpec::cannot_hold_distortion(const PlaneDistortion& distortion) const {
+  if (holds_distortion(*this, distortion)) return "";
+  std::string others;
+  for (const FormatSpec* spec : format_table()) {
+    if (holds_distortion(*spec, distortion))
+      others += std::string(others.empty() ? "" : ", ") + std::string(spec->name);
+  }
+  const std::string part(distortion_name(distortion));
+  const std::string what = std::visit([](const auto& d) { return d.description(); }, distortion);
+  const auto unheld = unheld_parameters(distortions, distortion);
+  std::string why = part + ": the " + std::string(name) + " format cannot hold ";
+  if (unheld) {
+    std::string list;
+    for (const std::string& n : *unheld) list += std::string(list.empty() ? "" : ", ") + n;
+    why += list + " of the " + what;
+  } else {
+    why += what;
+  }
+  return why + " (" + (others.empty() ? "no format" : others) + " can)";
 }
 
 void cannot_hold(const CameraParameters& camera, CameraFormat format) {
@@ -325,7 +372,7 @@ KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, Came
 
 std::optional<RadialTangential> radial_tangential_of(const CameraParameters& p) {
   RadialTangential out;
-  const TangentialTerms& t = p.tangential;
+  const TangentialTerms t = p.tangential_terms();
   if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
     out.f = m->f();
     out.d = {0, 0, t.p1, t.p2, 0};
@@ -363,7 +410,8 @@ void set_radial_tangential(CameraParameters* p, const std::vector<double>& d, do
   } else {
     p->model = OpenCV<double>(f, k[0], k[1], k[2], k[3], k[4], k[5]);
   }
-  p->tangential = {coefficient(2), coefficient(3), {coefficient(8), coefficient(9), coefficient(10), coefficient(11)}};
+  p->distortion = TangentialDistortion{
+      {coefficient(2), coefficient(3), {coefficient(8), coefficient(9), coefficient(10), coefficient(11)}}};
 }
 
 Pose pose_from_rt_cam_ref(const std::vector<double>& rt) {

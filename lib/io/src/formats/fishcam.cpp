@@ -62,19 +62,72 @@ nlohmann::json calibration_json(const CalibrationRecord& r) {
 }
 
 // "tangential": {"p1", "p2", "s1", "s2", "s3", "s4"} (fishcam/core/tangential.hpp); absent terms are 0.
-TangentialTerms read_tangential(const DocFields& f) {
-  if (f.node().kind != DocNode::Kind::map) f.fail("", "expected an object of p1, p2, s1..s4");
-  for (const std::string& key : f.node().keys) {
-    if (std::find(TangentialTerms::kNames.begin(), TangentialTerms::kNames.end(), key) ==
-        TangentialTerms::kNames.end()) {
-      f.fail(key, "unknown tangential term (expected p1, p2, s1, s2, s3, s4)");
+// Each plane distortion under its registry name: "tangential": {"p1": ..., ...} (absent
+// terms are 0), "mrcal_lens": {"lensmodel": "LENSMODEL_...", "values": [...]}.
+template <class Part>
+Part read_part(const DocFields& parent, std::string_view key) {
+  const DocFields f = parent.object(key);
+  if constexpr (std::is_same_v<Part, TangentialDistortion>) {
+    if (f.node().kind != DocNode::Kind::map) f.fail("", "expected an object of p1, p2, s1..s4");
+    for (const std::string& key : f.node().keys) {
+      if (std::find(TangentialTerms::kNames.begin(), TangentialTerms::kNames.end(), key) ==
+          TangentialTerms::kNames.end()) {
+        f.fail(key, "unknown tangential term (expected p1, p2, s1, s2, s3, s4)");
+      }
     }
+    std::array<double, 6> values{};
+    for (size_t i = 0; i < values.size(); ++i) {
+      if (f.has(TangentialTerms::kNames[i])) values[i] = f.number(TangentialTerms::kNames[i]);
+    }
+    return {TangentialTerms::from_values(values)};
+  } else if constexpr (std::is_same_v<Part, MrcalLensDistortion>) {
+    try {
+      return Part::from_numbers(f.string("lensmodel"), f.numbers("values", 0, kMaxDocumentNodes));
+    } catch (const Error& e) {
+      parent.fail(key, e.what());
+    }
+  } else {
+    static_assert(sizeof(Part) == 0, "the fishcam JSON reader must read every plane distortion");
   }
-  std::array<double, 6> values{};
-  for (size_t i = 0; i < values.size(); ++i) {
-    if (f.has(TangentialTerms::kNames[i])) values[i] = f.number(TangentialTerms::kNames[i]);
-  }
-  return TangentialTerms::from_values(values);
+}
+
+nlohmann::json part_json(const PlaneDistortion& distortion) {
+  return std::visit(
+      [](const auto& part) -> nlohmann::json {
+        using Part = std::decay_t<decltype(part)>;
+        if constexpr (std::is_same_v<Part, NoPlaneDistortion>) {
+          return nullptr;
+        } else if constexpr (std::is_same_v<Part, TangentialDistortion>) {
+          nlohmann::json terms;
+          for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
+            terms[std::string(TangentialTerms::kNames[i])] = part.terms.values()[i];
+          }
+          return terms;
+        } else if constexpr (std::is_same_v<Part, MrcalLensDistortion>) {
+          return {{"lensmodel", part.lens->lensmodel()}, {"values", part.lens->values()}};
+        } else {
+          static_assert(sizeof(Part) == 0, "the fishcam JSON writer must write every plane distortion");
+        }
+      },
+      distortion);
+}
+
+// The camera's plane distortion: at most one registered part's key (files written
+// before CAHVOR and LONLAT/LATLON were read call mrcal_lens "spline").
+PlaneDistortion read_distortion(const DocFields& f) {
+  std::optional<PlaneDistortion> found;
+  std::string found_key;
+  const auto read_key = [&]<class Part>(std::string_view key) {
+    if (!f.has(key)) return;
+    if (found) f.fail(key, "a camera has one plane distortion, and " + found_key + " is given too");
+    found = read_part<Part>(f, key);
+    found_key = key;
+  };
+  PlaneDistortionRegistry::for_each([&]<class Part>() {
+    if constexpr (!std::is_same_v<Part, NoPlaneDistortion>) read_key.template operator()<Part>(Part::kName);
+  });
+  read_key.template operator()<MrcalLensDistortion>("spline");
+  return found ? *found : PlaneDistortion{};
 }
 
 CameraParameters read_camera_fields(const DocFields& f) {
@@ -92,20 +145,7 @@ CameraParameters read_camera_fields(const DocFields& f) {
   } catch (const Error& e) {
     f.fail("model", e.what());
   }
-  if (f.has("tangential")) p.tangential = read_tangential(f.object("tangential"));
-  // {"lensmodel": "LENSMODEL_...", "values": [...]} (fishcam/core/mrcal_lens.hpp); files written
-  // before CAHVOR and LONLAT/LATLON were read call it "spline".
-  if (f.has("mrcal_lens") && f.has("spline")) f.fail("spline", "a camera has one mrcal lens: give mrcal_lens only");
-  for (const char* key : {"mrcal_lens", "spline"}) {
-    if (!f.has(key)) continue;
-    const DocFields s = f.object(key);
-    try {
-      p.mrcal_lens =
-          std::make_shared<const MrcalLens>(s.string("lensmodel"), s.numbers("values", 0, kMaxDocumentNodes));
-    } catch (const Error& e) {
-      f.fail(key, e.what());
-    }
-  }
+  p.distortion = read_distortion(f);
   if (f.has("skew")) {  // {"xy": ..., "yx": ...} (CameraParameters::skew); an absent one is 0
     const DocFields s = f.object("skew");
     if (s.node().kind != DocNode::Kind::map) s.fail("", "expected an object of xy, yx");
@@ -147,13 +187,7 @@ nlohmann::json camera_json(const CameraParameters& p) {
                          {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
                          {"model", model_name(p.model)},
                          {"parameters", model_params(p.model)}};
-  if (p.tangential.any()) {
-    nlohmann::json& terms = root["tangential"];
-    for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
-      terms[std::string(TangentialTerms::kNames[i])] = p.tangential.values()[i];
-    }
-  }
-  if (p.mrcal_lens) root["mrcal_lens"] = {{"lensmodel", p.mrcal_lens->lensmodel()}, {"values", p.mrcal_lens->values()}};
+  if (displaces(p.distortion)) root[std::string(distortion_name(p.distortion))] = part_json(p.distortion);
   if (p.skew.any()) root["skew"] = {{"xy", p.skew.xy}, {"yx", p.skew.yx}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
@@ -179,21 +213,18 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 
 }  // namespace
 
-extern const FormatSpec fishcam_format{CameraFormat::fishcam,
-                                       "fishcam",
-                                       "fishcam camera JSON",
-                                       {".json"},
-                                       {},
-                                       score,
-                                       read,
-                                       write,
-                                       true,
-                                       true,
-                                       true,
-                                       write_rig,
-                                       true,
-                                       true,
-                                       true,
-                                       true};
+extern const FormatSpec fishcam_format{
+    .id = CameraFormat::fishcam,
+    .name = "fishcam",
+    .description = "fishcam camera JSON",
+    .extensions = {".json"},
+    .models = {},
+    .distortions = {{"tangential", {}}, {"mrcal_lens", {}}},
+    .score = score,
+    .read = read,
+    .write = write,
+    .write_rig = write_rig,
+    .holds = {.skew = true, .theta_limit = true, .pixel_scale = true, .calibration_record = true},
+};
 
 }  // namespace fishcam::detail

@@ -59,6 +59,29 @@ struct NamedCamera {
   std::vector<std::string> notes;  // what the reader did not take (said on stderr by the CLI)
 };
 
+// A plane distortion a format holds (fishcam/core/plane_distortion.hpp), named as the
+// registry names it, and which of its parameters (empty: every one). Every format
+// holds "none"; format_camera refuses a camera whose part, or a non-zero parameter
+// of it, its format does not list.
+struct HeldDistortion {
+  std::string_view part;
+  std::vector<std::string_view> parameters;
+};
+
+// What a format keeps of a camera beyond its model and plane distortion.
+struct HeldExtras {
+  bool skew = false;  // a skewed pixel grid (CameraParameters::skew)
+  // A user limit on the valid domain (fishcam JSON only).
+  bool theta_limit = false;
+  // Stores a_x as it is (fishcam JSON); every other writer is given the camera
+  // rescaled to a_x = 1 (f = fx, a_y = fy / fx) by format_camera.
+  bool pixel_scale = false;
+  // A calibration record (observed angles, covariance); format_camera drops the
+  // record for the others (callers say so: camera_format_holds_calibration_record).
+  bool calibration_record = false;
+};
+
+// One format, declared with designated initialisers (formats/NAME.cpp).
 struct FormatSpec {
   CameraFormat id;
   std::string_view name;
@@ -68,30 +91,21 @@ struct FormatSpec {
   // a camera against it before the writer runs; the tests and docs/formats.md's
   // table follow from it.
   std::vector<std::string_view> models;
+  // The plane distortions it holds besides "none", as models are declared.
+  std::vector<HeldDistortion> distortions = {};
   // How surely the content is this format: 0 = not it; higher = surer (by parsing
   // and looking for the format's own keys, never by substring order).
   int (*score)(const Content&);
   std::vector<NamedCamera> (*read)(const Content&);
   std::string (*write)(const CameraParameters&);  // throws Error when it cannot hold the camera
-  bool holds_theta_limit = false;                 // a user limit on the valid domain (fishcam JSON only)
-  // Stores a_x as it is (fishcam JSON); every other writer is given the camera
-  // rescaled to a_x = 1 (f = fx, a_y = fy / fx) by format_camera.
-  bool keeps_pixel_scale = false;
-  // Holds a calibration record (observed angles, covariance); format_camera drops
-  // the record for the others (callers say so: camera_format_holds_calibration_record).
-  bool holds_calibration_record = false;
   // Several cameras with their poses relative to the first (camera -> camera 0), in
   // one file; nullptr for formats that hold one camera.
   std::string (*write_rig)(const std::vector<CameraParameters>&) = nullptr;
-  // Holds tangential terms p1, p2, and the thin-prism terms s1..s4; format_camera
-  // refuses a camera with terms its format cannot hold. Which models take them:
-  // CameraParameters::tangential.
-  bool holds_tangential = false;
-  bool holds_thin_prism = false;
-  bool holds_mrcal_lens = false;  // an mrcal lens (CameraParameters::mrcal_lens)
-  bool holds_skew = false;        // a skewed pixel grid (CameraParameters::skew)
+  HeldExtras holds = {};
 
-  bool holds(std::string_view model) const;
+  bool holds_model(std::string_view model) const;
+  // "" when the format holds the camera's plane distortion, else why not.
+  std::string cannot_hold_distortion(const PlaneDistortion& distortion) const;
 };
 
 const std::vector<const FormatSpec*>& format_table();

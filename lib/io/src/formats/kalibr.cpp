@@ -104,7 +104,7 @@ std::vector<NamedCamera> read(const Content& c) {
       } else if (distortion == "radtan") {
         if (d.size() != 4) fail_d("radtan has 4 coefficients (k1, k2, p1, p2)");
         p.model = Mei<double>(fx, k[0], d[0], d[1]);
-        p.tangential = {d[2], d[3], {}};
+        p.distortion = TangentialDistortion{{d[2], d[3], {}}};
       } else {
         f.fail("distortion_model",
                "omni with " + quoted_for_message(distortion) +
@@ -149,13 +149,13 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const auto focal = [&](double f) { return std::vector<double>{f, f * ay, cx, cy}; };
   std::string model, distortion = "none";
   std::vector<double> intrinsics, coeffs;
-  const double p1 = p.tangential.p1, p2 = p.tangential.p2;
+  const double p1 = p.tangential_terms().p1, p2 = p.tangential_terms().p2;
   const KannalaBrandtLike kb = kannala_brandt_of(p);
   if (kb.ok) {
     model = "pinhole", distortion = "equidistant", intrinsics = focal(kb.f), coeffs = {kb.k.begin(), kb.k.end()};
   } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model)) {
     model = "pinhole", intrinsics = focal(m->f());
-    if (p.tangential.any()) distortion = "radtan", coeffs = {0, 0, p1, p2};
+    if (p.tangential_terms().any()) distortion = "radtan", coeffs = {0, 0, p1, p2};
   } else if (const auto* m = std::get_if<Unified<double>>(&p.model)) {
     const auto q = m->params();
     model = "omni", intrinsics = focal(q[0]), intrinsics.insert(intrinsics.begin(), q[1]);
@@ -213,18 +213,16 @@ std::string write_rig(const std::vector<CameraParameters>& cameras) {
 }  // namespace
 
 extern const FormatSpec kalibr_format{
-    CameraFormat::kalibr,
-    "kalibr",
-    "Kalibr camchain YAML",
-    {".yaml", ".yml"},
-    {"kannala-brandt", "equidistant", "pinhole", "unified", "mei", "double-sphere", "extended-unified"},
-    score,
-    read,
-    write,
-    false,
-    false,
-    false,
-    write_rig,
-    true};
+    .id = CameraFormat::kalibr,
+    .name = "kalibr",
+    .description = "Kalibr camchain YAML",
+    .extensions = {".yaml", ".yml"},
+    .models = {"kannala-brandt", "equidistant", "pinhole", "unified", "mei", "double-sphere", "extended-unified"},
+    .distortions = {{"tangential", {"p1", "p2"}}},
+    .score = score,
+    .read = read,
+    .write = write,
+    .write_rig = write_rig,
+};
 
 }  // namespace fishcam::detail

@@ -57,7 +57,7 @@ std::vector<NamedCamera> read(const Content& c) {
     });
   } else if (lens) {
     try {
-      p.mrcal_lens = std::make_shared<const MrcalLens>(lensmodel, std::vector<double>(k.begin() + 4, k.end()));
+      p.distortion = MrcalLensDistortion::from_numbers(lensmodel, std::vector<double>(k.begin() + 4, k.end()));
     } catch (const Error& e) {
       f.fail("intrinsics", e.what());
     }
@@ -66,7 +66,7 @@ std::vector<NamedCamera> read(const Content& c) {
     }
   }
   if (opencv_coefficients == 0) {  // LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC or a lens's base model
-    const std::string_view base = p.mrcal_lens ? p.mrcal_lens->base_model() : pinhole ? "pinhole" : "stereographic";
+    const std::string_view base = p.mrcal_lens() ? p.mrcal_lens()->base_model() : pinhole ? "pinhole" : "stereographic";
     p.model = make_model(base, std::span<const double>(k.data(), 1));
   }
   if (f.has("extrinsics")) p.pose = pose_from_rt_cam_ref(f.numbers("extrinsics", 6, 6));
@@ -85,7 +85,7 @@ std::string write(const CameraParameters& p) {
   std::vector<double> distortion;
   if (const auto* m = std::get_if<Stereographic<double>>(&p.model)) {
     f = m->f(), lensmodel = "LENSMODEL_STEREOGRAPHIC";
-  } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model); m && !p.tangential.any()) {
+  } else if (const auto* m = std::get_if<Pinhole<double>>(&p.model); m && !p.tangential_terms().any()) {
     f = m->f(), lensmodel = "LENSMODEL_PINHOLE";
   } else if (std::optional<RadialTangential> r = radial_tangential_of(p)) {
     r->d.resize(std::max<size_t>(r->d.size(), 8), 0.0);  // OPENCV8 or OPENCV12
@@ -93,7 +93,8 @@ std::string write(const CameraParameters& p) {
   } else {
     cannot_hold(p, CameraFormat::mrcal);
   }
-  if (p.mrcal_lens) lensmodel = p.mrcal_lens->lensmodel(), distortion = p.mrcal_lens->values();  // on its base model
+  if (const MrcalLens* lens = p.mrcal_lens())
+    lensmodel = lens->lensmodel(), distortion = lens->values();  // on its base model
   const std::array<double, 6> rt = p.pose ? rt_cam_ref_from_pose(*p.pose) : std::array<double, 6>{};
   std::string out = "{\n    'lensmodel':  '" + lensmodel + "',\n\n";
   out += std::string("    # intrinsics are fx,fy,cx,cy") + (distortion.empty() ? "" : ",distortion0,distortion1,....") +
@@ -111,20 +112,16 @@ std::string write(const CameraParameters& p) {
 
 }  // namespace
 
-extern const FormatSpec mrcal_format{CameraFormat::mrcal,
-                                     "mrcal",
-                                     "mrcal .cameramodel",
-                                     {".cameramodel"},
-                                     {"pinhole", "stereographic", "opencv"},
-                                     score,
-                                     read,
-                                     write,
-                                     false,
-                                     false,
-                                     false,
-                                     nullptr,
-                                     true,
-                                     true,
-                                     true};
+extern const FormatSpec mrcal_format{
+    .id = CameraFormat::mrcal,
+    .name = "mrcal",
+    .description = "mrcal .cameramodel",
+    .extensions = {".cameramodel"},
+    .models = {"pinhole", "stereographic", "opencv"},
+    .distortions = {{"tangential", {}}, {"mrcal_lens", {}}},
+    .score = score,
+    .read = read,
+    .write = write,
+};
 
 }  // namespace fishcam::detail

@@ -204,21 +204,16 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera), the 
 
 }  // namespace
 
-extern const FormatSpec ocamcalib_format{CameraFormat::ocamcalib,
-                                         "ocamcalib",
-                                         "OCamCalib calib_results.txt",
-                                         {".txt"},
-                                         {"ocam"},
-                                         score,
-                                         read,
-                                         write,
-                                         false,
-                                         false,
-                                         false,
-                                         nullptr,
-                                         false,
-                                         false,
-                                         false,
-                                         true};
+extern const FormatSpec ocamcalib_format{
+    .id = CameraFormat::ocamcalib,
+    .name = "ocamcalib",
+    .description = "OCamCalib calib_results.txt",
+    .extensions = {".txt"},
+    .models = {"ocam"},
+    .score = score,
+    .read = read,
+    .write = write,
+    .holds = {.skew = true},
+};
 
 }  // namespace fishcam::detail

@@ -109,19 +109,16 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec opencv_format{CameraFormat::opencv,
-                                      "opencv",
-                                      "OpenCV FileStorage YAML/XML",
-                                      {".yaml", ".yml", ".xml"},
-                                      {"kannala-brandt", "equidistant", "pinhole", "opencv"},
-                                      score,
-                                      read,
-                                      write,
-                                      false,
-                                      false,
-                                      false,
-                                      nullptr,
-                                      true,
-                                      true};
+extern const FormatSpec opencv_format{
+    .id = CameraFormat::opencv,
+    .name = "opencv",
+    .description = "OpenCV FileStorage YAML/XML",
+    .extensions = {".yaml", ".yml", ".xml"},
+    .models = {"kannala-brandt", "equidistant", "pinhole", "opencv"},
+    .distortions = {{"tangential", {}}},
+    .score = score,
+    .read = read,
+    .write = write,
+};
 
 }  // namespace fishcam::detail

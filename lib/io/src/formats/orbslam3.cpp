@@ -56,7 +56,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   auto line = [&](const std::string& key, double v) { out += "Camera." + key + ": " + yaml_number(v) + "\n"; };
   line("fx", kb.fx), line("fy", kb.fy), line("cx", kb.cx), line("cy", kb.cy);
   if (pinhole) {
-    line("k1", 0), line("k2", 0), line("p1", p.tangential.p1), line("p2", p.tangential.p2);
+    line("k1", 0), line("k2", 0), line("p1", p.tangential_terms().p1), line("p2", p.tangential_terms().p2);
   } else {
     line("k1", kb.k[0]), line("k2", kb.k[1]), line("k3", kb.k[2]), line("k4", kb.k[3]);
   }
@@ -66,18 +66,16 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec orbslam3_format{CameraFormat::orbslam3,
-                                        "orbslam3",
-                                        "ORB-SLAM3 settings YAML",
-                                        {".yaml", ".yml"},
-                                        {"kannala-brandt", "equidistant", "pinhole"},
-                                        score,
-                                        read,
-                                        write,
-                                        false,
-                                        false,
-                                        false,
-                                        nullptr,
-                                        true};
+extern const FormatSpec orbslam3_format{
+    .id = CameraFormat::orbslam3,
+    .name = "orbslam3",
+    .description = "ORB-SLAM3 settings YAML",
+    .extensions = {".yaml", ".yml"},
+    .models = {"kannala-brandt", "equidistant", "pinhole"},
+    .distortions = {{"tangential", {"p1", "p2"}}},
+    .score = score,
+    .read = read,
+    .write = write,
+};
 
 }  // namespace fishcam::detail

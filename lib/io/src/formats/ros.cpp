@@ -63,18 +63,16 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec ros_format{CameraFormat::ros,
-                                   "ros",
-                                   "ROS camera_info YAML",
-                                   {".yaml", ".yml"},
-                                   {"kannala-brandt", "equidistant", "pinhole", "opencv"},
-                                   score,
-                                   read,
-                                   write,
-                                   false,
-                                   false,
-                                   false,
-                                   nullptr,
-                                   true};
+extern const FormatSpec ros_format{
+    .id = CameraFormat::ros,
+    .name = "ros",
+    .description = "ROS camera_info YAML",
+    .extensions = {".yaml", ".yml"},
+    .models = {"kannala-brandt", "equidistant", "pinhole", "opencv"},
+    .distortions = {{"tangential", {"p1", "p2"}}},
+    .score = score,
+    .read = read,
+    .write = write,
+};
 
 }  // namespace fishcam::detail

@@ -91,13 +91,15 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
 
 }  // namespace
 
-extern const FormatSpec woodscape_format{CameraFormat::woodscape,
-                                         "woodscape",
-                                         "WoodScape / SynWoodScape calibration JSON",
-                                         {".json"},
-                                         {"polynomial", "equidistant"},
-                                         score,
-                                         read,
-                                         write};
+extern const FormatSpec woodscape_format{
+    .id = CameraFormat::woodscape,
+    .name = "woodscape",
+    .description = "WoodScape / SynWoodScape calibration JSON",
+    .extensions = {".json"},
+    .models = {"polynomial", "equidistant"},
+    .score = score,
+    .read = read,
+    .write = write,
+};
 
 }  // namespace fishcam::detail

@@ -19,10 +19,9 @@
 
 #include "fishcam/core/error.hpp"
 #include "fishcam/core/model_registry.hpp"
-#include "fishcam/core/mrcal_lens.hpp"
+#include "fishcam/core/plane_distortion.hpp"
 #include "fishcam/core/radial_inverse.hpp"
 #include "fishcam/core/radial_models.hpp"
-#include "fishcam/core/tangential.hpp"
 
 namespace fishcam {
 
@@ -85,7 +84,7 @@ struct CalibrationRecord {
 
 // A pixel grid whose axes are not perpendicular (OCamCalib's affine c, d, e; the skew of
 // BoofCV and of Bouguet's toolbox, alpha_c = xy): with q the model's image offset
-// (rho(theta) along the ray's azimuth, plus any tangential terms or mrcal lens),
+// (rho(theta) along the ray's azimuth, plus any plane distortion),
 //   pixel = c + a (.) (S q),   S = [1 xy; yx 1],   det S = 1 - xy yx > 0.
 // Both zero: the usual grid, pixel = c + a (.) q.
 struct PixelSkew {
@@ -101,22 +100,21 @@ struct CameraParameters {
   Eigen::Vector2d principal_point = Eigen::Vector2d::Zero();  // (cx, cy), pixels
   Eigen::Vector2d pixel_scale = Eigen::Vector2d::Ones();      // (a_x, a_y)
   RadialModel model;
-  // Non-radial terms on the model's undistorted plane (fishcam/core/tangential.hpp); all
-  // zero for a radial camera. Only models with a plane (pinhole, opencv, mei) take them.
-  TangentialTerms tangential;
-  // Or one of mrcal's lens models on the plane of its base model (splined, CAHVOR(E),
-  // LONLAT, LATLON; fishcam/core/mrcal_lens.hpp), evaluated by libmrcal; null for none.
-  std::shared_ptr<const MrcalLens> mrcal_lens;
+  // A displacement of the model's undistorted plane (fishcam/core/plane_distortion.hpp:
+  // none, OpenCV's tangential terms, an mrcal lens); NoPlaneDistortion for a radial camera.
+  PlaneDistortion distortion;
   // A skewed pixel grid (any model, with or without the above); zero for none.
   PixelSkew skew;
   std::optional<double> theta_limit;  // radians; a user cap on the valid domain
   std::optional<Pose> pose;
   std::optional<CalibrationRecord> calibration;
 
-  // No tangential terms, no mrcal lens, no skew: rho(theta) is the whole projection.
-  bool radially_symmetric() const { return !tangential.any() && !mrcal_lens && !skew.any(); }
-  // Tangential terms or an mrcal lens: a displacement on the model's undistorted plane.
-  bool distorted_plane() const { return tangential.any() || mrcal_lens; }
+  // No plane distortion, no skew: rho(theta) is the whole projection.
+  bool radially_symmetric() const { return !displaces(distortion) && !skew.any(); }
+  // The tangential terms of a TangentialDistortion (all zero for any other part).
+  TangentialTerms tangential_terms() const;
+  // The lens of an MrcalLensDistortion (null for any other part).
+  const MrcalLens* mrcal_lens() const;
 };
 
 // The same lens for the image resized to width x height: with pixel centres at
@@ -156,15 +154,15 @@ class Camera {
   const Eigen::Vector2d& principal_point() const { return params_.principal_point; }
   const Eigen::Vector2d& pixel_scale() const { return params_.pixel_scale; }
   const RadialModel& model() const { return params_.model; }
-  const TangentialTerms& tangential() const { return params_.tangential; }
+  const PlaneDistortion& distortion() const { return params_.distortion; }
   const PixelSkew& skew() const { return params_.skew; }
-  // Whether the camera is radially symmetric (no tangential terms, mrcal lens or skew): only then do
+  // Whether the camera is radially symmetric (no plane distortion, no skew): only then do
   // rho, theta_from_rho and rho_of_pixel describe its whole projection.
   bool radial() const { return params_.radially_symmetric(); }
   const ValidDomain& domain() const { return domain_; }
   const InverseTable& inverse_table() const { return table_; }
 
-  // The radial model (for a camera with tangential terms, its radial part).
+  // The radial model (for a camera with a plane distortion, its radial part).
   double rho(double theta) const;
   double drho(double theta) const;
   // The unique theta in the valid domain with rho(theta) = rho (robust solver or

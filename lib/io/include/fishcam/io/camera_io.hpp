@@ -83,10 +83,9 @@ void write_rig(const std::vector<CameraParameters>& cameras, const std::filesyst
 
 // Whether the format keeps a camera's calibration record (fishcam JSON only).
 bool camera_format_holds_calibration_record(CameraFormat format);
-// Whether the format can store these tangential terms (p1, p2; s1..s4 fewer formats can).
-bool camera_format_holds(CameraFormat format, const TangentialTerms& terms);
-// Whether the format keeps an mrcal lens (CameraParameters::mrcal_lens: mrcal and fishcam JSON).
-bool camera_format_holds_mrcal_lens(CameraFormat format);
+// Whether the format can store this plane distortion (fishcam/core/plane_distortion.hpp;
+// tangential p1, p2: most formats with a pinhole plane; s1..s4 and mrcal lenses: fewer).
+bool camera_format_holds(CameraFormat format, const PlaneDistortion& distortion);
 
 // The file content of a camera in a format; throws Error when the format cannot
 // hold the camera (e.g. a polynomial in mrcal's format) rather than dropping

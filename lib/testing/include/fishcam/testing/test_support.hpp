@@ -165,7 +165,7 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_model() {
 
 // Cameras that are not radially symmetric: tangential (and, on opencv, thin-prism)
 // terms on the examples of every registry model with an undistorted plane (the
-// models CameraParameters::tangential takes), labelled EXAMPLE_tangential; a plane
+// models the tangential part takes), labelled EXAMPLE_tangential; a plane
 // model without one fails the test that asks.
 inline std::vector<std::pair<std::string, CameraParameters>> every_tangential_camera() {
   std::vector<std::pair<std::string, CameraParameters>> out;
@@ -176,11 +176,11 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_tangential_ca
     CameraParameters q = p;
     const std::string_view name = model_name(p.model);
     if (name == "pinhole") {
-      q.tangential = {0.001, 0.0005, {}};
+      q.distortion = TangentialDistortion{{0.001, 0.0005, {}}};
     } else if (name == "mei") {  // vinsfusion_t265_fisheye1_MEI.yaml's p1, p2
-      q.tangential = {0.00501238, 0.00039633, {}};
+      q.distortion = TangentialDistortion{{0.00501238, 0.00039633, {}}};
     } else if (name == "opencv") {  // mrcal_cam0's p1, p2 ten times over, and thin-prism terms
-      q.tangential = {-0.002547, 0.005276, {0.001, -0.0005, -0.0008, 0.0003}};
+      q.distortion = TangentialDistortion{{-0.002547, 0.005276, {0.001, -0.0005, -0.0008, 0.0003}}};
     } else {
       ADD_FAILURE() << "model " << name << " takes tangential terms but has no example in every_tangential_camera()";
       continue;
@@ -203,8 +203,8 @@ inline std::pair<std::string, CameraParameters> spline_camera() {
         values.push_back(0.003 * std::sin(0.5 * x - 0.9 * y) - 0.0015 * y);
       }
     }
-    p.mrcal_lens =
-        std::make_shared<const MrcalLens>("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", values);
+    p.distortion =
+        MrcalLensDistortion::from_numbers("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=150", values);
     return {label + "_spline", p};
   }
   ADD_FAILURE() << "no stereographic example for the spline camera";
@@ -234,7 +234,7 @@ inline std::vector<std::pair<std::string, CameraParameters>> mrcal_lens_cameras(
       // LONLAT's and LATLON's domains end at their poles (theta = 90 deg): the image well
       // inside them (65 and 49 deg from the axis at the sides): the kernel's table holds there.
       if (kind.base_model == std::string_view("stereographic")) p.model = Stereographic<double>(560.0);
-      p.mrcal_lens = std::make_shared<const MrcalLens>(name, values);
+      p.distortion = MrcalLensDistortion{std::make_shared<const MrcalLens>(name, values)};
       out.emplace_back(label + "_" + label_name, p);
       found = true;
     }
@@ -284,6 +284,18 @@ inline std::vector<std::pair<std::string, CameraParameters>> every_camera() {
 // model_case_name) gives each example its own test, named by its label.
 using ModelCase = std::pair<std::string, CameraParameters>;
 inline std::string model_case_name(const ::testing::TestParamInfo<ModelCase>& info) { return info.param.first; }
+
+// The cameras of every_camera() whose plane distortion (fishcam/core/plane_distortion.hpp)
+// is the registered part `name` and displaces something (for "none": the radial ones).
+// A registered part without an example fails the test that asks: add one to every_camera().
+inline std::vector<ModelCase> distortion_examples(std::string_view name) {
+  std::vector<ModelCase> out;
+  for (auto& [label, p] : every_camera()) {
+    if (numbers_of(p.distortion).name == name) out.emplace_back(label, p);
+  }
+  if (out.empty()) ADD_FAILURE() << "plane distortion " << name << " has no example in every_camera()";
+  return out;
+}
 
 // Uniformly distributed unit vectors with theta in [0, theta_max].
 inline std::vector<Eigen::Vector3d> random_rays(size_t n, double theta_max, unsigned seed) {
