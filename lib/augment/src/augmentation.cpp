@@ -79,24 +79,24 @@ std::optional<SourceParams> kernel_model(const Model& m) {
   if constexpr (PolynomialInTheta<Model>) {
     std::vector<double> c = m.power_coefficients();
     while (c.size() > 2 && c.back() == 0) c.pop_back();  // equivalent parameterisations, one kernel input
-    if (c.size() - 1 > size_t(SourceParams::kMaxDegree)) return std::nullopt;
-    p.kind = SourceParams::Kind::polynomial;
-    p.n = static_cast<int>(c.size()) - 1;
-    for (size_t i = 0; i < c.size(); ++i) p.c[i] = static_cast<float>(c[i]);
+    if (c.size() - 1 > size_t(detail::RadialForm::kMaxDegree)) return std::nullopt;
+    p.radial.kind = SourceParams::Kind::polynomial;
+    p.radial.n = static_cast<int>(c.size()) - 1;
+    for (size_t i = 0; i < c.size(); ++i) p.radial.c[i] = static_cast<float>(c[i]);
   } else if constexpr (HasUnifiedForm<Model>) {
     const UnifiedForm u = m.unified_form();
     for (double x : {u.f, u.xi, u.alpha, u.beta, u.k1, u.k2, u.k3, u.k4, u.k5, u.k6}) {
       if (!float_exact_enough(x)) return std::nullopt;
     }
-    p.kind = SourceParams::Kind::unified;
-    p.f = float(u.f), p.xi = float(u.xi), p.alpha = float(u.alpha), p.beta = float(u.beta);
-    p.k1 = float(u.k1), p.k2 = float(u.k2), p.k3 = float(u.k3);
-    p.k4 = float(u.k4), p.k5 = float(u.k5), p.k6 = float(u.k6);
+    p.radial.kind = SourceParams::Kind::unified;
+    p.radial.f = float(u.f), p.radial.xi = float(u.xi), p.radial.alpha = float(u.alpha), p.radial.beta = float(u.beta);
+    p.radial.k1 = float(u.k1), p.radial.k2 = float(u.k2), p.radial.k3 = float(u.k3);
+    p.radial.k4 = float(u.k4), p.radial.k5 = float(u.k5), p.radial.k6 = float(u.k6);
   } else if constexpr (HasRayPolynomial<Model>) {
-    p.kind = SourceParams::Kind::ray_polynomial;  // the start polynomial: ray_polynomial_start()
+    p.radial.kind = SourceParams::Kind::ray_polynomial;  // the start polynomial: ray_polynomial_start()
     for (size_t i = 0; i < 5; ++i) {
       if (!float_exact_enough(m.ray_polynomial()[i])) return std::nullopt;
-      p.a[i] = float(m.ray_polynomial()[i]);
+      p.radial.a[i] = float(m.ray_polynomial()[i]);
     }
   } else {
     return std::nullopt;
@@ -131,10 +131,10 @@ bool ray_polynomial_start(const Camera& camera, SourceParams* p) {
   }
   const PowerSeriesFit fit = fit_power_series(theta, rho, 1, kDegree);
   if (!(fit.worst <= 0.05 * reach)) return false;
-  p->n = kDegree;
-  p->c[0] = 0;
-  for (int j = 0; j < kDegree; ++j) p->c[j + 1] = float(fit.coefficients[size_t(j)]);
-  p->theta_fit = float(theta_fit), p->rho_fit = float(camera.rho(theta_fit));
+  p->radial.n = kDegree;
+  p->radial.c[0] = 0;
+  for (int j = 0; j < kDegree; ++j) p->radial.c[j + 1] = float(fit.coefficients[size_t(j)]);
+  p->radial.theta_fit = float(theta_fit), p->radial.rho_fit = float(camera.rho(theta_fit));
   return true;
 }
 
@@ -325,21 +325,21 @@ bool kernel_plane_form(const Camera&, const NoPlaneDistortion&, SourceParams*, K
 
 bool kernel_plane_form(const Camera&, const TangentialDistortion& part, SourceParams* p, KernelSource*) {
   // Tangential terms on the unified form's plane m = P_xy / D: alpha = 0 only.
-  if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return false;
+  if (p->radial.kind != SourceParams::Kind::unified || p->radial.alpha != 0) return false;
   const TangentialTerms& t = part.terms;
   for (double x : t.values()) {
     if (!float_exact_enough(x)) return false;
   }
-  p->tangential = true;
-  p->p1 = float(t.p1), p->p2 = float(t.p2);
-  p->s1 = float(t.s[0]), p->s2 = float(t.s[1]), p->s3 = float(t.s[2]), p->s4 = float(t.s[3]);
+  p->plane.tangential = true;
+  p->plane.p1 = float(t.p1), p->plane.p2 = float(t.p2);
+  p->plane.s1 = float(t.s[0]), p->plane.s2 = float(t.s[1]), p->plane.s3 = float(t.s[2]), p->plane.s4 = float(t.s[3]);
   return true;
 }
 
 bool kernel_plane_form(const Camera& camera, const MrcalLensDistortion& part, SourceParams* p, KernelSource* source) {
   const MrcalLens* lens = part.lens.get();
   // On the stereographic or pinhole plane (unified, alpha = 0): u = m * plane_per_m.
-  if (p->kind != SourceParams::Kind::unified || p->alpha != 0) return false;
+  if (p->radial.kind != SourceParams::Kind::unified || p->radial.alpha != 0) return false;
   std::optional<double> focal, plane_per_m;
   double reach = std::numeric_limits<double>::infinity();  // the plane radius of the domain's end
   std::visit(
@@ -347,7 +347,7 @@ bool kernel_plane_form(const Camera& camera, const MrcalLensDistortion& part, So
         if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
           const auto ratio = [&](double theta) {
             double derivative;
-            return m.plane_radius(theta, &derivative) * (p->xi + std::cos(theta)) / std::sin(theta);
+            return m.plane_radius(theta, &derivative) * (p->radial.xi + std::cos(theta)) / std::sin(theta);
           };
           focal = m.focal(), plane_per_m = ratio(0.5);
           double derivative;
@@ -364,19 +364,19 @@ bool kernel_plane_form(const Camera& camera, const MrcalLensDistortion& part, So
       if (!std::isfinite(x)) return false;
     }
   } else {
-    std::optional<LensTable> table = lens_table(camera, *lens, *focal, p->xi, *plane_per_m, reach);
+    std::optional<LensTable> table = lens_table(camera, *lens, *focal, p->radial.xi, *plane_per_m, reach);
     if (!table) return false;
     for (float& x : table->cells) {  // overflow: no projection the kernel can trust
       if (std::isinf(x)) x = std::numeric_limits<float>::quiet_NaN();
     }
     layout = table->layout;
     source->lens_cells = std::move(table->cells);
-    p->lens_bounded = true;
+    p->plane.lens_bounded = true;
   }
-  p->lens_nx = layout->nx, p->lens_ny = layout->ny;
-  p->lens_scale = float(*plane_per_m * layout->cells_per_u);
-  p->lens_origin_x = float(layout->origin.x()), p->lens_origin_y = float(layout->origin.y());
-  p->lens_cells = source->lens_cells.data();
+  p->plane.lens_nx = layout->nx, p->plane.lens_ny = layout->ny;
+  p->plane.lens_scale = float(*plane_per_m * layout->cells_per_u);
+  p->plane.lens_origin_x = float(layout->origin.x()), p->plane.lens_origin_y = float(layout->origin.y());
+  p->plane.lens_cells = source->lens_cells.data();
   return true;
 }
 
@@ -386,7 +386,7 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
   auto source = std::make_shared<KernelSource>();
   std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
   if (!p) return nullptr;
-  if (p->kind == SourceParams::Kind::ray_polynomial && !ray_polynomial_start(camera, &*p)) return nullptr;
+  if (p->radial.kind == SourceParams::Kind::ray_polynomial && !ray_polynomial_start(camera, &*p)) return nullptr;
   if (displaces(camera.distortion()) &&
       !std::visit([&](const auto& part) { return kernel_plane_form(camera, part, &*p, source.get()); },
                   camera.distortion())) {
@@ -396,8 +396,8 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
     for (double x : {camera.skew().xy, camera.skew().yx}) {
       if (!float_exact_enough(x)) return nullptr;
     }
-    p->skewed = true;
-    p->xy = float(camera.skew().xy), p->yx = float(camera.skew().yx);
+    p->grid.skewed = true;
+    p->grid.xy = float(camera.skew().xy), p->grid.yx = float(camera.skew().yx);
   }
   const double cx = camera.principal_point().x(), cy = camera.principal_point().y();
   // Every coordinate the kernel adds up must have float spacing well below the tolerance.
@@ -406,18 +406,20 @@ std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
   for (double x : {cx, cy, camera.pixel_scale().x(), camera.pixel_scale().y()}) {
     if (!float_exact_enough(x)) return nullptr;
   }
-  for (int i = 0; i <= p->n; ++i) {
-    if (!std::isfinite(p->c[i]) || (p->c[i] != 0 && std::abs(p->c[i]) < std::numeric_limits<float>::min())) {
+  for (int i = 0; i <= p->radial.n; ++i) {
+    if (!std::isfinite(p->radial.c[i]) ||
+        (p->radial.c[i] != 0 && std::abs(p->radial.c[i]) < std::numeric_limits<float>::min())) {
       return nullptr;
     }
   }
-  p->cx = float(cx), p->cy = float(cy);
-  p->ax = float(camera.pixel_scale().x()), p->ay = float(camera.pixel_scale().y());
+  p->grid.cx = float(cx), p->grid.cy = float(cy);
+  p->grid.ax = float(camera.pixel_scale().x()), p->grid.ay = float(camera.pixel_scale().y());
   // A domain up to pi needs no angle test (the kernel excludes the -z axis itself):
   // float rays next to -z have z = -1 exactly, which a cos test would reject.
-  p->cos_theta_max = camera.domain().theta_max >= std::numbers::pi ? -2.0f : float(std::cos(camera.domain().theta_max));
-  p->closed = camera.domain().closed;
-  p->width = float(camera.width()), p->height = float(camera.height());
+  p->domain.cos_theta_max =
+      camera.domain().theta_max >= std::numbers::pi ? -2.0f : float(std::cos(camera.domain().theta_max));
+  p->domain.closed = camera.domain().closed;
+  p->grid.width = float(camera.width()), p->grid.height = float(camera.height());
   source->params = *p;
   return source;
 }
@@ -495,7 +497,7 @@ bool float_kernel_agrees(const Camera& camera, const SourceParams& src) {
         exact[i] = change.rotation.transpose() * Eigen::Vector3d(rx[i], ry[i], rz[i]);  // the very input, exactly
       }
     }
-    const detail::RangeKernel kernel = select_kernel_for_cpu(DepthPrior::infinity, true, src.kind, false);
+    const detail::RangeKernel kernel = select_kernel_for_cpu(DepthPrior::infinity, true, src.radial.kind, false);
     kernel(rx.data(), ry.data(), rz.data(), 0, count, pose_params(change), src,
            detail::KernelOutput{map_x.data(), map_y.data(), valid.data()});
     for (size_t i = 0; i < count; ++i) {
@@ -737,7 +739,7 @@ void ViewpointWarp::compute(const ViewpointChange& change, DepthPrior prior, War
   const PoseParams pose = pose_params(change);
   const bool sampling = kind == MapKind::sampling;
   const detail::RangeKernel kernel =
-      select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, sampling);
+      select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.radial.kind, sampling);
   const detail::KernelOutput out{maps->map_x.ptr<float>(), maps->map_y.ptr<float>(),
                                  sampling ? nullptr : maps->valid.ptr<uchar>()};
   const size_t n = size_t(target_.width()) * size_t(target_.height());

@@ -59,10 +59,10 @@ void node_maps(const GridPlan& plan, const SourceParams& src, const PoseParams& 
 struct FoldGuard {
   float cx, cy, kx, ky, radius2;
   FoldGuard(const GridPlan& plan, const SourceParams& src)
-      : cx(src.cx),
-        cy(src.cy),
-        kx(std::max(src.ax, src.ay) / src.ax),
-        ky(std::max(src.ax, src.ay) / src.ay),
+      : cx(src.grid.cx),
+        cy(src.grid.cy),
+        kx(std::max(src.grid.ax, src.grid.ay) / src.grid.ax),
+        ky(std::max(src.grid.ax, src.grid.ay) / src.grid.ay),
         radius2(plan.fold_guard_radius * plan.fold_guard_radius) {}
   bool operator()(float x, float y) const {
     const float dx = (x - cx) * kx, dy = (y - cy) * ky;
@@ -241,7 +241,7 @@ bool measured(const GridPlan& plan, const ViewpointChange& change) {
 GridChange prepare(const GridPlan& plan, const SourceParams& src, const ViewpointChange& change, DepthPrior prior) {
   GridChange out;
   out.pose = pose_params(change);
-  out.geometric = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.kind, false);
+  out.geometric = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.radial.kind, false);
   node_maps(plan, src, out.pose, out.geometric, &out.nodes);
   out.ok = cells_ok(plan, src, out.nodes);
   return out;
@@ -375,8 +375,8 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
   if (io.image) io.out_image->create(h, w, io.image->type());
   if (io.labels) io.out_labels->create(h, w, io.labels->type());
   if (io.valid) io.valid->create(h, w, CV_8UC1);
-  const float limit_x = src.width - 0.5f, limit_y = src.height - 0.5f;
-  const float max_x = src.width - 1, max_y = src.height - 1;
+  const float limit_x = src.grid.width - 0.5f, limit_y = src.grid.height - 0.5f;
+  const float max_x = src.grid.width - 1, max_y = src.grid.height - 1;
   const GridRowLoops loops = grid_row_loops_for_cpu();
   // 8-bit images with 1, 3 or 4 channels are interpolated row by row while the row's
   // maps are in L1 (byte for byte what cv::remap gives); others by cv::remap per tile.
@@ -443,11 +443,11 @@ bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pix
   const GridChange prepared = prepare(plan, src, change, prior);
   const int w = target.width(), h = target.height();
   maps->kind = MapKind::geometric;
-  maps->source_size = cv::Size(int(src.width), int(src.height));
+  maps->source_size = cv::Size(int(src.grid.width), int(src.grid.height));
   maps->map_x.create(h, w, CV_32FC1);
   maps->map_y.create(h, w, CV_32FC1);
   maps->valid.create(h, w, CV_8UC1);
-  const float limit_x = src.width - 0.5f, limit_y = src.height - 0.5f;
+  const float limit_x = src.grid.width - 0.5f, limit_y = src.grid.height - 0.5f;
   std::atomic<long> invalid{0};
   cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& range) {
     const std::size_t row_length = static_cast<std::size_t>(w) + kRowPadding;

@@ -10,14 +10,17 @@
 
 namespace fishcam::detail {
 
-// The source camera as the float kernel needs it. Which cameras the kernel can
-// evaluate accurately is decided in one place, float_source_params() in
-// augmentation.cpp; the others take the exact path.
-struct SourceParams {
-  // polynomial: rho(theta) as a polynomial; unified: the unified-camera form
-  // (fishcam::UnifiedForm: pinhole, stereographic, unified, extended-unified,
-  // double-sphere, mei, opencv); ray_polynomial: rho the root of rho Pz + chi P(rho)
-  // (ocam: the ray (rho, -P(rho))), three Newton steps from a polynomial start in theta.
+// The source camera as the float kernel needs it: the float forms of its parts
+// (docs/architecture.md, "A camera is a chain of parts"), each filled by the part's
+// kernel form in augmentation.cpp. Which cameras the kernel can evaluate accurately
+// is decided in one place, float_source_params() there; the others take the exact path.
+
+// The radial model. polynomial: rho(theta) as a polynomial; unified: the
+// unified-camera form (fishcam::UnifiedForm: pinhole, stereographic, unified,
+// extended-unified, double-sphere, mei, opencv); ray_polynomial: rho the root of
+// rho Pz + chi P(rho) (ocam: the ray (rho, -P(rho))), three Newton steps from a
+// polynomial start in theta.
+struct RadialForm {
   enum class Kind { polynomial, unified, ray_polynomial };
   // Polynomials up to this degree are evaluated in float (16 coefficients: its
   // fixed array); higher ones take the exact path.
@@ -26,16 +29,20 @@ struct SourceParams {
   float c[kMaxDegree + 1] = {};  // rho = c[1] theta + ... + c[n] theta^n, 1 <= n <= kMaxDegree
   int n = 0;
   float f = 0, xi = 0, alpha = 0, beta = 1, k1 = 0, k2 = 0, k3 = 0, k4 = 0, k5 = 0, k6 = 0;  // unified
-  // Tangential and thin-prism terms on the plane m = P_xy / D (unified with alpha = 0).
-  bool tangential = false;
-  float p1 = 0, p2 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0;
   // ray_polynomial: P's a0..a4, the start c[] (n) fitted on [0, theta_fit], past which
   // rho is at least rho_fit (beyond the source image: no Newton start is trusted there).
   float a[5] = {};
   float theta_fit = 0, rho_fit = 0;
+};
+
+// The plane distortion, on the plane m = P_xy / D of the unified form with alpha = 0.
+struct PlaneForm {
+  // Tangential and thin-prism terms.
+  bool tangential = false;
+  float p1 = 0, p2 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0;
   // An mrcal lens (fishcam/core/mrcal_lens.hpp) on a stereographic or pinhole camera
-  // (unified, xi = 1 or 0, alpha = 0): f delta_u per cell, cell coordinates
-  // g = m * lens_scale + lens_origin (m = P_xy / D, the plane u = m * lens_scale /
+  // (xi = 1 or 0): f delta_u per cell, cell coordinates
+  // g = m * lens_scale + lens_origin (the plane u = m * lens_scale /
   // cells_per_u); per cell 32 floats, x's then y's bicubic in (t, s) = g - cell - 1/2
   // (about the cell's centre, in pixels before a): coefficient of t^i s^j at 4 j + i;
   // NaN cells have no projection. mrcal's spline (its polynomial cells,
@@ -47,13 +54,30 @@ struct SourceParams {
   int lens_nx = 0, lens_ny = 0;
   bool lens_bounded = false;
   float lens_scale = 0, lens_origin_x = 0, lens_origin_y = 0;
-  // A skewed pixel grid (CameraParameters::skew): pixel = c + a (.) ([1 xy; yx 1] q).
+
+  bool any() const { return tangential || lens_cells; }
+};
+
+// The pixel grid: pixel = c + a (.) ([1 xy; yx 1] q) (CameraParameters::skew), and the image's size.
+struct GridForm {
   bool skewed = false;
   float xy = 0, yx = 0;
   float cx = 0, cy = 0, ax = 1, ay = 1;
+  float width = 0, height = 0;
+};
+
+// The valid domain: theta <= theta_max (closed) or < theta_max.
+struct DomainForm {
   float cos_theta_max = -1;
   bool closed = true;
-  float width = 0, height = 0;
+};
+
+struct SourceParams {
+  using Kind = RadialForm::Kind;
+  RadialForm radial;
+  PlaneForm plane;
+  GridForm grid;
+  DomainForm domain;
 };
 
 struct PoseParams {

@@ -36,21 +36,31 @@ inline v_float32 atan2_nonnegative_y(const v_float32& y, const v_float32& x) {
   return cv::v_select(x < cv::vx_setzero_f32(), cv::vx_setall_f32(float(std::numbers::pi)) - a, a);
 }
 
-// One vector of output pixels: rays d -> source pixel (x, y) and the inside mask.
-template <DepthPrior kPrior, bool kInsideSphere, SourceParams::Kind kKind>
-inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float32& dz, const PoseParams& pose,
-                        const SourceParams& src, v_float32* out_x, v_float32* out_y, v_float32* inside) {
+// The kernel's stages, one per part of the warp (docs/augmentation.md): the depth
+// prior, the rotation into the source camera, its domain, its radial model, its plane
+// distortion and its pixel grid. Each is evaluated as the whole formula was before
+// the split (the maps are bit-identical: lib/augment/tests).
+struct Vec3 {
+  v_float32 x, y, z;
+};
+struct Vec2 {
+  v_float32 x, y;
+};
+
+// The depth prior: the point the output ray d sees, relative to the source camera's
+// centre (t: the target's position in the source frame). valid loses the rays that
+// meet no point.
+template <DepthPrior kPrior, bool kInsideSphere>
+inline Vec3 prior_point(const Vec3& d, const PoseParams& pose, v_float32* valid) {
   const v_float32 zero = cv::vx_setzero_f32();
   const v_float32 tx = cv::vx_setall_f32(pose.t[0]), ty = cv::vx_setall_f32(pose.t[1]),
                   tz = cv::vx_setall_f32(pose.t[2]);
-  v_float32 qx = dx, qy = dy, qz = dz;
-  v_float32 valid = dz == dz;  // false for the NaN rays of invalid output pixels
   if constexpr (kPrior == DepthPrior::target_sphere) {
-    qx = dx - tx, qy = dy - ty, qz = dz - tz;
+    return {d.x - tx, d.y - ty, d.z - tz};
   } else if constexpr (kPrior == DepthPrior::source_sphere) {
     // |s d - t| = 1: s^2 - 2 b s + c = 0 with b = d.t, c = |t|^2 - 1 (docs/augmentation.md).
     const v_float32 c = cv::vx_setall_f32(pose.c);
-    const v_float32 b = mul_add(dx, tx, mul_add(dy, ty, dz * tz));
+    const v_float32 b = mul_add(d.x, tx, mul_add(d.y, ty, d.z * tz));
     const v_float32 disc = b * b - c;
     v_float32 s;
     if constexpr (kInsideSphere) {  // c < 0: one positive root; the form without cancellation
@@ -59,174 +69,225 @@ inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float3
     } else {  // c >= 0: the nearer of two positive roots, when the ray meets the sphere
       const v_float32 sq = cv::v_sqrt(cv::v_max(disc, zero));
       s = c / (b + sq);
-      valid = valid & (disc >= zero) & (b > zero) & (s > zero);
+      *valid = *valid & (disc >= zero) & (b > zero) & (s > zero);
     }
-    qx = mul_add(s, dx, zero - tx), qy = mul_add(s, dy, zero - ty), qz = mul_add(s, dz, zero - tz);
+    return {mul_add(s, d.x, zero - tx), mul_add(s, d.y, zero - ty), mul_add(s, d.z, zero - tz)};
+  } else {
+    (void)tx, (void)ty, (void)tz, (void)valid;
+    return d;
   }
-  const float* r = pose.rt;
-  const v_float32 px =
-      mul_add(cv::vx_setall_f32(r[0]), qx, mul_add(cv::vx_setall_f32(r[1]), qy, cv::vx_setall_f32(r[2]) * qz));
-  const v_float32 py =
-      mul_add(cv::vx_setall_f32(r[3]), qx, mul_add(cv::vx_setall_f32(r[4]), qy, cv::vx_setall_f32(r[5]) * qz));
-  const v_float32 pz =
-      mul_add(cv::vx_setall_f32(r[6]), qx, mul_add(cv::vx_setall_f32(r[7]), qy, cv::vx_setall_f32(r[8]) * qz));
+}
 
-  // Projection by the source camera (the direction of P is all that matters).
-  const v_float32 chi2 = mul_add(px, px, py * py);
-  const v_float32 norm = cv::v_sqrt(mul_add(pz, pz, chi2));
-  const v_float32 cos_limit = cv::vx_setall_f32(src.cos_theta_max) * norm;
-  valid = valid & (src.closed ? pz >= cos_limit : pz > cos_limit) & ((chi2 > zero) | (pz > zero));
+// Into the source camera's frame: P = R^T q.
+inline Vec3 rotated(const PoseParams& pose, const Vec3& q) {
+  const float* r = pose.rt;
+  return {mul_add(cv::vx_setall_f32(r[0]), q.x, mul_add(cv::vx_setall_f32(r[1]), q.y, cv::vx_setall_f32(r[2]) * q.z)),
+          mul_add(cv::vx_setall_f32(r[3]), q.x, mul_add(cv::vx_setall_f32(r[4]), q.y, cv::vx_setall_f32(r[5]) * q.z)),
+          mul_add(cv::vx_setall_f32(r[6]), q.x, mul_add(cv::vx_setall_f32(r[7]), q.y, cv::vx_setall_f32(r[8]) * q.z))};
+}
+
+// The source's valid domain (the direction of P is all that matters; the origin and
+// the -z axis are outside).
+inline v_float32 in_domain(const DomainForm& domain, const Vec3& p, const v_float32& chi2, const v_float32& norm) {
+  const v_float32 zero = cv::vx_setzero_f32();
+  const v_float32 cos_limit = cv::vx_setall_f32(domain.cos_theta_max) * norm;
+  return (domain.closed ? p.z >= cos_limit : p.z > cos_limit) & ((chi2 > zero) | (p.z > zero));
+}
+
+// The unified form's rho(theta) / chi, and its denominator D (the plane is m = P_xy / D).
+inline v_float32 unified_scale(const RadialForm& r, const Vec3& p, const v_float32& chi2, const v_float32& norm,
+                               v_float32* denominator) {
+  const v_float32 zero = cv::vx_setzero_f32();
+  // w = xi |P| + Pz; behind the camera (Pz < 0, xi > 0) as
+  // (xi^2 chi^2 + (xi^2 - 1) Pz^2) / (xi |P| - Pz), without the cancellation
+  // (stereographic, xi = 1: chi^2 / (|P| - Pz)).
+  const v_float32 xi = cv::vx_setall_f32(r.xi);
+  v_float32 w = mul_add(xi, norm, p.z);
+  if (r.xi > 0) {
+    const v_float32 numerator =
+        r.xi == 1 ? chi2
+                  : mul_add(cv::vx_setall_f32(r.xi * r.xi), chi2, cv::vx_setall_f32(r.xi * r.xi - 1) * p.z * p.z);
+    w = cv::v_select(p.z >= zero, w, numerator / mul_add(xi, norm, zero - p.z));
+  }
+  v_float32 d = w;
+  if (r.alpha != 0) {
+    const v_float32 alpha = cv::vx_setall_f32(r.alpha);
+    const v_float32 root = cv::v_sqrt(mul_add(cv::vx_setall_f32(r.beta), chi2, w * w));
+    d = mul_add(alpha, root, (cv::vx_setall_f32(1.0f) - alpha) * w);
+  }
+  v_float32 scale = cv::vx_setall_f32(r.f) / d;
+  const bool numerator = r.k1 != 0 || r.k2 != 0 || r.k3 != 0;
+  const bool denominator_terms = r.k4 != 0 || r.k5 != 0 || r.k6 != 0;
+  if (numerator || denominator_terms) {  // mei, opencv: radial distortion of r = chi / D
+    const v_float32 r2 = chi2 / (d * d);
+    if (numerator) {
+      v_float32 inner = cv::vx_setall_f32(r.k2);
+      if (r.k3 != 0) inner = mul_add(r2, cv::vx_setall_f32(r.k3), inner);
+      scale = scale * mul_add(r2, mul_add(r2, inner, cv::vx_setall_f32(r.k1)), cv::vx_setall_f32(1.0f));
+    }
+    if (denominator_terms) {  // opencv's rational denominator
+      const v_float32 k6_term = mul_add(r2, cv::vx_setall_f32(r.k6), cv::vx_setall_f32(r.k5));
+      scale = scale / mul_add(r2, mul_add(r2, k6_term, cv::vx_setall_f32(r.k4)), cv::vx_setall_f32(1.0f));
+    }
+  }
+  *denominator = d;
+  return scale;
+}
+
+// A polynomial rho(theta) (or an ocam ray polynomial's root) over chi.
+template <SourceParams::Kind kKind>
+inline v_float32 polynomial_scale(const RadialForm& r, const Vec3& p, const v_float32& chi2) {
+  const v_float32 zero = cv::vx_setzero_f32();
+  const v_float32 chi = cv::v_sqrt(chi2);
+  const v_float32 ray_theta = atan2_nonnegative_y(chi, p.z);
+  v_float32 theta = ray_theta;
+  if constexpr (kKind == SourceParams::Kind::ray_polynomial) theta = cv::v_min(theta, cv::vx_setall_f32(r.theta_fit));
+  v_float32 rho = cv::vx_setall_f32(r.c[r.n]);
+  for (int i = r.n - 1; i >= 1; --i) rho = mul_add(rho, theta, cv::vx_setall_f32(r.c[i]));
+  rho = rho * theta;
+  v_float32 slope0 = cv::vx_setall_f32(r.c[1]);  // rho'(0)
+  if constexpr (kKind == SourceParams::Kind::ray_polynomial) {
+    // Newton on g(rho) = rho Pz + chi P(rho) (zero where the ray (rho, -P(rho)) has P's direction).
+    for (int step = 0; step < 3; ++step) {  // from a start within a few px: float precision
+      v_float32 poly = cv::vx_setall_f32(r.a[4]), dpoly = zero;
+      for (int i = 3; i >= 0; --i) {
+        dpoly = mul_add(dpoly, rho, poly), poly = mul_add(poly, rho, cv::vx_setall_f32(r.a[i]));
+      }
+      rho = rho - mul_add(chi, poly, rho * p.z) / mul_add(chi, dpoly, p.z);
+    }
+    // Past theta_fit the start is not trusted; the root lies beyond rho_fit, outside the image.
+    rho = cv::v_select(ray_theta > cv::vx_setall_f32(r.theta_fit), cv::v_max(rho, cv::vx_setall_f32(r.rho_fit)), rho);
+    slope0 = cv::vx_setall_f32(-r.a[0]);
+  }
+  // On the axis rho / chi -> rho'(0) / Pz.
+  return cv::v_select(chi > zero, rho / chi, slope0 / p.z);
+}
+
+// f T(m): OpenCV's tangential and thin-prism terms (fishcam/core/tangential.hpp).
+inline Vec2 tangential_offset(const PlaneForm& plane, float focal, const Vec2& m) {
+  const v_float32 r2 = mul_add(m.x, m.x, m.y * m.y), mxy2 = cv::vx_setall_f32(2.0f) * m.x * m.y;
+  const v_float32 p1 = cv::vx_setall_f32(plane.p1), p2 = cv::vx_setall_f32(plane.p2), f = cv::vx_setall_f32(focal);
+  // T_x = 2 p1 x y + p2 (r2 + 2 x^2) + (s1 + s2 r2) r2, T_y = p1 (r2 + 2 y^2) + 2 p2 x y + (s3 + s4 r2) r2
+  const v_float32 prism_x = mul_add(cv::vx_setall_f32(plane.s2), r2, cv::vx_setall_f32(plane.s1)) * r2;
+  const v_float32 prism_y = mul_add(cv::vx_setall_f32(plane.s4), r2, cv::vx_setall_f32(plane.s3)) * r2;
+  return {f * mul_add(p1, mxy2, mul_add(p2, mul_add(cv::vx_setall_f32(2.0f) * m.x, m.x, r2), prism_x)),
+          f * mul_add(p2, mxy2, mul_add(p1, mul_add(cv::vx_setall_f32(2.0f) * m.y, m.y, r2), prism_y))};
+}
+
+// f delta_u of an mrcal lens, from its bicubic cells (PlaneForm). on_table: for a
+// bounded table, whether g lies on it.
+inline Vec2 lens_offset(const PlaneForm& plane, const Vec2& m, v_float32* on_table) {
+  const v_float32 zero = cv::vx_setzero_f32();
+  const v_float32 scale_g = cv::vx_setall_f32(plane.lens_scale);
+  v_float32 gx = mul_add(m.x, scale_g, cv::vx_setall_f32(plane.lens_origin_x));
+  v_float32 gy = mul_add(m.y, scale_g, cv::vx_setall_f32(plane.lens_origin_y));
+  if (plane.lens_bounded) {
+    // A table: past it the offset is its nearest edge's (NaN g: a corner's), and the
+    // source outside the image (finish()); the coordinates stay continuous for the grid.
+    const v_float32 cx = cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(plane.lens_nx)));
+    const v_float32 cy = cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(plane.lens_ny)));
+    *on_table = (cx == gx) & (cy == gy);
+    gx = cx, gy = cy;
+  }
+  // The cell: g clamped into the grid before the floor (so any g, huge or NaN, gives
+  // an index in it; max and min return their second operand for NaN).
+  const v_float32 fx =
+      cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(plane.lens_nx - 1)))));
+  const v_float32 fy =
+      cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(plane.lens_ny - 1)))));
+  const v_float32 half = cv::vx_setall_f32(0.5f), t = gx - fx - half, s = gy - fy - half;
+  // 32 (ny nx) < 2^24: the cell's first coefficient's index is exact in float.
+  const cv::v_int32 first =
+      cv::v_round(mul_add(fy, cv::vx_setall_f32(float(plane.lens_nx)), fx) * cv::vx_setall_f32(32.0f));
+  // Neighbouring pixels mostly share a cell: then its coefficients are broadcast,
+  // else gathered per lane (the same values either way).
+  alignas(64) int firsts[cv::v_int32::nlanes];
+  cv::v_store_aligned(firsts, first);
+  const bool one_cell = cv::v_check_all(first == cv::vx_setall_s32(firsts[0]));
+  const auto coefficient = [&](const float* at) {
+    return one_cell ? cv::vx_setall_f32(at[firsts[0]]) : cv::v_lut(at, first);
+  };
+  Vec2 offset{zero, zero};
+  v_float32* outputs[2] = {&offset.x, &offset.y};
+  for (int k = 0; k < 2; ++k) {
+    const float* cells = plane.lens_cells + 16 * k;
+    v_float32 value = zero;
+    for (int j = 3; j >= 0; --j) {
+      v_float32 row = coefficient(cells + 4 * j + 3);
+      for (int i = 2; i >= 0; --i) row = mul_add(row, t, coefficient(cells + 4 * j + i));
+      value = mul_add(value, s, row);
+    }
+    *outputs[k] = value;
+  }
+  return offset;
+}
+
+// The pixel grid: pixel = c + a (.) (S (scale P_xy + offset)), the offset (with_offset)
+// added before c: one rounding at the image's scale.
+inline Vec2 grid_pixel(const GridForm& grid, const v_float32& scale, const Vec3& p, const Vec2& offset,
+                       bool with_offset) {
+  if (grid.skewed) {  // pixel = c + a (.) (S q)
+    v_float32 qx = scale * p.x, qy = scale * p.y;
+    if (with_offset) qx = qx + offset.x, qy = qy + offset.y;
+    return {
+        mul_add(cv::vx_setall_f32(grid.ax), mul_add(cv::vx_setall_f32(grid.xy), qy, qx), cv::vx_setall_f32(grid.cx)),
+        mul_add(cv::vx_setall_f32(grid.ay), mul_add(cv::vx_setall_f32(grid.yx), qx, qy), cv::vx_setall_f32(grid.cy))};
+  }
+  if (with_offset) {
+    return {mul_add(cv::vx_setall_f32(grid.ax), mul_add(scale, p.x, offset.x), cv::vx_setall_f32(grid.cx)),
+            mul_add(cv::vx_setall_f32(grid.ay), mul_add(scale, p.y, offset.y), cv::vx_setall_f32(grid.cy))};
+  }
+  return {mul_add(cv::vx_setall_f32(grid.ax) * scale, p.x, cv::vx_setall_f32(grid.cx)),
+          mul_add(cv::vx_setall_f32(grid.ay) * scale, p.y, cv::vx_setall_f32(grid.cy))};
+}
+
+// One vector of output pixels: rays d -> source pixel (x, y) and the inside mask.
+template <DepthPrior kPrior, bool kInsideSphere, SourceParams::Kind kKind>
+inline void warp_vector(const v_float32& dx, const v_float32& dy, const v_float32& dz, const PoseParams& pose,
+                        const SourceParams& src, v_float32* out_x, v_float32* out_y, v_float32* inside) {
+  const v_float32 zero = cv::vx_setzero_f32();
+  v_float32 valid = dz == dz;  // false for the NaN rays of invalid output pixels
+  const Vec3 p = rotated(pose, prior_point<kPrior, kInsideSphere>({dx, dy, dz}, pose, &valid));
+  const v_float32 chi2 = mul_add(p.x, p.x, p.y * p.y);
+  const v_float32 norm = cv::v_sqrt(mul_add(p.z, p.z, chi2));
+  valid = valid & in_domain(src.domain, p, chi2, norm);
   if (!cv::v_check_any(valid)) {  // no ray in the domain (a view turned away from a narrow source): nothing to project
     *out_x = *out_y = cv::vx_setall_f32(kNaNf);
     *inside = zero;
     return;
   }
-  v_float32 scale;  // rho(theta) / chi
-  // f T(m) (fishcam/core/tangential.hpp) or f delta_u (an mrcal lens), added before a and the skew.
-  v_float32 offset_x = zero, offset_y = zero;
+  v_float32 scale;                    // rho(theta) / chi
+  Vec2 offset{zero, zero};            // the plane distortion's f T(m) or f delta_u, added before a and the skew
   v_float32 on_table = zero == zero;  // a lens table (lens_bounded): whether g lies on it
+  bool with_offset = false;
   if constexpr (kKind == SourceParams::Kind::unified) {
-    // w = xi |P| + Pz; behind the camera (Pz < 0, xi > 0) as
-    // (xi^2 chi^2 + (xi^2 - 1) Pz^2) / (xi |P| - Pz), without the cancellation
-    // (stereographic, xi = 1: chi^2 / (|P| - Pz)).
-    const v_float32 xi = cv::vx_setall_f32(src.xi);
-    v_float32 w = mul_add(xi, norm, pz);
-    if (src.xi > 0) {
-      const v_float32 numerator = src.xi == 1 ? chi2
-                                              : mul_add(cv::vx_setall_f32(src.xi * src.xi), chi2,
-                                                        cv::vx_setall_f32(src.xi * src.xi - 1) * pz * pz);
-      w = cv::v_select(pz >= zero, w, numerator / mul_add(xi, norm, zero - pz));
-    }
-    v_float32 d = w;
-    if (src.alpha != 0) {
-      const v_float32 alpha = cv::vx_setall_f32(src.alpha);
-      const v_float32 root = cv::v_sqrt(mul_add(cv::vx_setall_f32(src.beta), chi2, w * w));
-      d = mul_add(alpha, root, (cv::vx_setall_f32(1.0f) - alpha) * w);
-    }
-    scale = cv::vx_setall_f32(src.f) / d;
-    const bool numerator = src.k1 != 0 || src.k2 != 0 || src.k3 != 0;
-    const bool denominator = src.k4 != 0 || src.k5 != 0 || src.k6 != 0;
-    if (numerator || denominator) {  // mei, opencv: radial distortion of r = chi / D
-      const v_float32 r2 = chi2 / (d * d);
-      if (numerator) {
-        v_float32 inner = cv::vx_setall_f32(src.k2);
-        if (src.k3 != 0) inner = mul_add(r2, cv::vx_setall_f32(src.k3), inner);
-        scale = scale * mul_add(r2, mul_add(r2, inner, cv::vx_setall_f32(src.k1)), cv::vx_setall_f32(1.0f));
-      }
-      if (denominator) {  // opencv's rational denominator
-        const v_float32 k6_term = mul_add(r2, cv::vx_setall_f32(src.k6), cv::vx_setall_f32(src.k5));
-        scale = scale / mul_add(r2, mul_add(r2, k6_term, cv::vx_setall_f32(src.k4)), cv::vx_setall_f32(1.0f));
-      }
-    }
-    if (src.tangential) {  // the plane is m = P_xy / D (alpha = 0: D = w)
+    v_float32 d;
+    scale = unified_scale(src.radial, p, chi2, norm, &d);
+    if (src.plane.any()) {  // the plane is m = P_xy / D (alpha = 0: D = w)
       const v_float32 inverse = cv::vx_setall_f32(1.0f) / d;
-      const v_float32 mx = px * inverse, my = py * inverse;
-      const v_float32 r2 = mul_add(mx, mx, my * my), mxy2 = cv::vx_setall_f32(2.0f) * mx * my;
-      const v_float32 p1 = cv::vx_setall_f32(src.p1), p2 = cv::vx_setall_f32(src.p2), f = cv::vx_setall_f32(src.f);
-      // T_x = 2 p1 x y + p2 (r2 + 2 x^2) + (s1 + s2 r2) r2, T_y = p1 (r2 + 2 y^2) + 2 p2 x y + (s3 + s4 r2) r2
-      const v_float32 prism_x = mul_add(cv::vx_setall_f32(src.s2), r2, cv::vx_setall_f32(src.s1)) * r2;
-      const v_float32 prism_y = mul_add(cv::vx_setall_f32(src.s4), r2, cv::vx_setall_f32(src.s3)) * r2;
-      offset_x = f * mul_add(p1, mxy2, mul_add(p2, mul_add(cv::vx_setall_f32(2.0f) * mx, mx, r2), prism_x));
-      offset_y = f * mul_add(p2, mxy2, mul_add(p1, mul_add(cv::vx_setall_f32(2.0f) * my, my, r2), prism_y));
-    }
-    if (src.lens_cells) {  // the plane is m = P_xy / D (alpha = 0: D = w)
-      const v_float32 inverse = cv::vx_setall_f32(1.0f) / d;
-      const v_float32 scale_g = cv::vx_setall_f32(src.lens_scale);
-      v_float32 gx = mul_add(px * inverse, scale_g, cv::vx_setall_f32(src.lens_origin_x));
-      v_float32 gy = mul_add(py * inverse, scale_g, cv::vx_setall_f32(src.lens_origin_y));
-      if (src.lens_bounded) {
-        // A table: past it the offset is its nearest edge's (NaN g: a corner's), and the
-        // source outside the image (below); the coordinates stay continuous for the grid.
-        const v_float32 cx = cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(src.lens_nx)));
-        const v_float32 cy = cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(src.lens_ny)));
-        on_table = (cx == gx) & (cy == gy);
-        gx = cx, gy = cy;
-      }
-      // The cell: g clamped into the grid before the floor (so any g, huge or NaN, gives
-      // an index in it; max and min return their second operand for NaN).
-      const v_float32 fx =
-          cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gx, zero), cv::vx_setall_f32(float(src.lens_nx - 1)))));
-      const v_float32 fy =
-          cv::v_cvt_f32(cv::v_floor(cv::v_min(cv::v_max(gy, zero), cv::vx_setall_f32(float(src.lens_ny - 1)))));
-      const v_float32 half = cv::vx_setall_f32(0.5f), t = gx - fx - half, s = gy - fy - half;
-      // 32 (ny nx) < 2^24: the cell's first coefficient's index is exact in float.
-      const cv::v_int32 first =
-          cv::v_round(mul_add(fy, cv::vx_setall_f32(float(src.lens_nx)), fx) * cv::vx_setall_f32(32.0f));
-      // Neighbouring pixels mostly share a cell: then its coefficients are broadcast,
-      // else gathered per lane (the same values either way).
-      alignas(64) int firsts[cv::v_int32::nlanes];
-      cv::v_store_aligned(firsts, first);
-      const bool one_cell = cv::v_check_all(first == cv::vx_setall_s32(firsts[0]));
-      const auto coefficient = [&](const float* at) {
-        return one_cell ? cv::vx_setall_f32(at[firsts[0]]) : cv::v_lut(at, first);
-      };
-      v_float32* outputs[2] = {&offset_x, &offset_y};
-      for (int k = 0; k < 2; ++k) {
-        const float* cells = src.lens_cells + 16 * k;
-        v_float32 value = zero;
-        for (int j = 3; j >= 0; --j) {
-          v_float32 row = coefficient(cells + 4 * j + 3);
-          for (int i = 2; i >= 0; --i) row = mul_add(row, t, coefficient(cells + 4 * j + i));
-          value = mul_add(value, s, row);
-        }
-        *outputs[k] = value;
-      }
+      const Vec2 m{p.x * inverse, p.y * inverse};
+      offset =
+          src.plane.tangential ? tangential_offset(src.plane, src.radial.f, m) : lens_offset(src.plane, m, &on_table);
+      with_offset = true;
     }
   } else {
-    const v_float32 chi = cv::v_sqrt(chi2);
-    const v_float32 ray_theta = atan2_nonnegative_y(chi, pz);
-    v_float32 theta = ray_theta;
-    if constexpr (kKind == SourceParams::Kind::ray_polynomial)
-      theta = cv::v_min(theta, cv::vx_setall_f32(src.theta_fit));
-    v_float32 rho = cv::vx_setall_f32(src.c[src.n]);
-    for (int i = src.n - 1; i >= 1; --i) rho = mul_add(rho, theta, cv::vx_setall_f32(src.c[i]));
-    rho = rho * theta;
-    v_float32 slope0 = cv::vx_setall_f32(src.c[1]);  // rho'(0)
-    if constexpr (kKind == SourceParams::Kind::ray_polynomial) {
-      // Newton on g(rho) = rho Pz + chi P(rho) (zero where the ray (rho, -P(rho)) has P's direction).
-      for (int step = 0; step < 3; ++step) {  // from a start within a few px: float precision
-        v_float32 p = cv::vx_setall_f32(src.a[4]), dp = zero;
-        for (int i = 3; i >= 0; --i) dp = mul_add(dp, rho, p), p = mul_add(p, rho, cv::vx_setall_f32(src.a[i]));
-        rho = rho - mul_add(chi, p, rho * pz) / mul_add(chi, dp, pz);
-      }
-      // Past theta_fit the start is not trusted; the root lies beyond rho_fit, outside the image.
-      rho = cv::v_select(ray_theta > cv::vx_setall_f32(src.theta_fit), cv::v_max(rho, cv::vx_setall_f32(src.rho_fit)),
-                         rho);
-      slope0 = cv::vx_setall_f32(-src.a[0]);
-    }
-    // On the axis rho / chi -> rho'(0) / Pz.
-    scale = cv::v_select(chi > zero, rho / chi, slope0 / pz);
+    scale = polynomial_scale<kKind>(src.radial, p, chi2);
   }
-  const v_float32 nan = cv::vx_setall_f32(kNaNf);
-  const bool plane_offset = src.tangential || src.lens_cells;
-  v_float32 u, v;
-  if (src.skewed) {  // pixel = c + a (.) (S q)
-    v_float32 qx = scale * px, qy = scale * py;
-    if (kKind == SourceParams::Kind::unified && plane_offset) qx = qx + offset_x, qy = qy + offset_y;
-    u = mul_add(cv::vx_setall_f32(src.ax), mul_add(cv::vx_setall_f32(src.xy), qy, qx), cv::vx_setall_f32(src.cx));
-    v = mul_add(cv::vx_setall_f32(src.ay), mul_add(cv::vx_setall_f32(src.yx), qx, qy), cv::vx_setall_f32(src.cy));
-  } else {
-    if (kKind == SourceParams::Kind::unified &&
-        plane_offset) {  // the offset before c: one rounding at the image's scale
-      u = mul_add(cv::vx_setall_f32(src.ax), mul_add(scale, px, offset_x), cv::vx_setall_f32(src.cx));
-      v = mul_add(cv::vx_setall_f32(src.ay), mul_add(scale, py, offset_y), cv::vx_setall_f32(src.cy));
-    } else {
-      u = mul_add(cv::vx_setall_f32(src.ax) * scale, px, cv::vx_setall_f32(src.cx));
-      v = mul_add(cv::vx_setall_f32(src.ay) * scale, py, cv::vx_setall_f32(src.cy));
-    }
-  }
-  valid = valid & (u == u) & (v == v);
+  const Vec2 pixel = grid_pixel(src.grid, scale, p, offset, with_offset);
+  valid = valid & (pixel.x == pixel.x) & (pixel.y == pixel.y);
   const v_float32 half = cv::vx_setall_f32(-0.5f);
-  v_float32 in_image = valid & (u >= half) & (v >= half) & (u < cv::vx_setall_f32(src.width - 0.5f)) &
-                       (v < cv::vx_setall_f32(src.height - 0.5f));
-  if (kKind == SourceParams::Kind::unified && src.lens_bounded) {
+  v_float32 in_image = valid & (pixel.x >= half) & (pixel.y >= half) &
+                       (pixel.x < cv::vx_setall_f32(src.grid.width - 0.5f)) &
+                       (pixel.y < cv::vx_setall_f32(src.grid.height - 0.5f));
+  if (kKind == SourceParams::Kind::unified && src.plane.lens_bounded) {
     // Past the table the ray lands outside the image and its margin: coordinates that
     // say otherwise are none.
     valid = valid & (on_table | ~in_image);
     in_image = in_image & on_table;
   }
-  *out_x = cv::v_select(valid, u, nan);
-  *out_y = cv::v_select(valid, v, nan);
+  const v_float32 nan = cv::vx_setall_f32(kNaNf);
+  *out_x = cv::v_select(valid, pixel.x, nan);
+  *out_y = cv::v_select(valid, pixel.y, nan);
   *inside = in_image;
 }
 
@@ -239,7 +300,7 @@ long warp_range(const float* rx, const float* ry, const float* rz, std::size_t b
   constexpr int kLanes = v_float32::nlanes;
   alignas(64) float x[kLanes], y[kLanes], in[kLanes];
   const v_float32 zero = cv::vx_setzero_f32(), outside = cv::vx_setall_f32(kOutside);
-  const v_float32 max_x = cv::vx_setall_f32(src.width - 1), max_y = cv::vx_setall_f32(src.height - 1);
+  const v_float32 max_x = cv::vx_setall_f32(src.grid.width - 1), max_y = cv::vx_setall_f32(src.grid.height - 1);
   long invalid = 0;
   for (std::size_t i = begin; i < end; i += kLanes) {
     v_float32 u, v, inside;

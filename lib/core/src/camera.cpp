@@ -327,33 +327,36 @@ std::optional<double> distortion_fold(const Model& model, const Distortion& term
   }
 }
 
-// A camera's projection and unprojection: one visit over its parts -- the radial
-// model, its plane distortion if it displaces anything, then its pixel skew
-// (CameraParameters::skew) if any.
-template <bool kWithJacobian, class Model>
-bool project_unskewed(const Model& model, const CameraParameters& params, const double* mapping,
-                      const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
-                      Eigen::Matrix<double, 2, 3>* jacobian) {
-  return std::visit(
-      [&](const auto& part) {
-        if constexpr (!std::is_same_v<std::decay_t<decltype(part)>, NoPlaneDistortion>) {
-          if (part.any()) return project_distorted<kWithJacobian>(model, mapping, domain, part, point, pixel, jacobian);
-        }
-        return project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian);
-      },
-      params.distortion);
+// A camera's projection and unprojection through its parts: the radial model, its
+// plane distortion (NoPlaneDistortion: none), then its pixel skew
+// (CameraParameters::skew) if any. Callers visit the model and the part once per
+// call or batch (visit_parts), so the per-point code is inlined for each pair.
+template <class F>
+decltype(auto) visit_parts(const CameraParameters& params, F&& f) {
+  static const PlaneDistortion none = NoPlaneDistortion{};  // for a part that displaces nothing
+  return std::visit(std::forward<F>(f), params.model, displaces(params.distortion) ? params.distortion : none);
 }
 
-template <bool kWithJacobian, class Model>
-bool project_point(const Model& model, const CameraParameters& params, const double* mapping, const ValidDomain& domain,
-                   const Eigen::Vector3d& point, Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* jacobian) {
-  if (!params.skew.any())
-    return project_unskewed<kWithJacobian>(model, params, mapping, domain, point, pixel, jacobian);
+template <bool kWithJacobian, class Model, class Part>
+bool project_unskewed(const Model& model, const Part& part, const double* mapping, const ValidDomain& domain,
+                      const Eigen::Vector3d& point, Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* jacobian) {
+  if constexpr (std::is_same_v<Part, NoPlaneDistortion>) {
+    return project_one<kWithJacobian>(model, mapping, domain, point, pixel, jacobian);
+  } else {
+    return project_distorted<kWithJacobian>(model, mapping, domain, part, point, pixel, jacobian);
+  }
+}
+
+template <bool kWithJacobian, class Model, class Part>
+bool project_point(const Model& model, const Part& part, const CameraParameters& params, const double* mapping,
+                   const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                   Eigen::Matrix<double, 2, 3>* jacobian) {
+  if (!params.skew.any()) return project_unskewed<kWithJacobian>(model, part, mapping, domain, point, pixel, jacobian);
   // q with c = 0, a = 1, then pixel = c + a (.) (S q).
   const double unit[4] = {0, 0, 1, 1};
   Eigen::Vector2d q;
   Eigen::Matrix<double, 2, 3> dq;
-  if (!project_unskewed<kWithJacobian>(model, params, unit, domain, point, &q, &dq)) {
+  if (!project_unskewed<kWithJacobian>(model, part, unit, domain, point, &q, &dq)) {
     pixel->setConstant(kNaN);
     if constexpr (kWithJacobian) jacobian->setConstant(kNaN);
     return false;
@@ -365,9 +368,9 @@ bool project_point(const Model& model, const CameraParameters& params, const dou
 }
 
 // (x, y) = ((u - cx) / a_x, (v - cy) / a_y), which is S q for a skewed grid.
-// start: distorted_ray_of's guess, for a camera with a non-radial part.
-template <class Model>
-bool ray_of_point(const Model& model, const CameraParameters& params, const ValidDomain& domain,
+// start: distorted_ray_of's guess, for a camera with a plane distortion.
+template <class Model, class Part>
+bool ray_of_point(const Model& model, const Part& part, const CameraParameters& params, const ValidDomain& domain,
                   const InverseTable& table, double x, double y, InversePath path, double* ray,
                   Eigen::Vector2d* start = nullptr) {
   if (params.skew.any()) {
@@ -375,14 +378,11 @@ bool ray_of_point(const Model& model, const CameraParameters& params, const Vali
     const double qx = (x - xy * y) / det, qy = (y - yx * x) / det;
     x = qx, y = qy;
   }
-  return std::visit(
-      [&](const auto& part) {
-        if constexpr (!std::is_same_v<std::decay_t<decltype(part)>, NoPlaneDistortion>) {
-          if (part.any()) return distorted_ray_of(model, domain, table, part, params.pixel_scale, x, y, ray, start);
-        }
-        return ray_of(model, domain, table, x, y, path, ray);
-      },
-      params.distortion);
+  if constexpr (std::is_same_v<Part, NoPlaneDistortion>) {
+    return ray_of(model, domain, table, x, y, path, ray);
+  } else {
+    return distorted_ray_of(model, domain, table, part, params.pixel_scale, x, y, ray, start);
+  }
 }
 
 // Runs body(begin, end) over [0, n) on the installed thread pool, in chunks worth a thread.
@@ -403,26 +403,24 @@ void unproject_pixels(const CameraParameters& params, const ValidDomain& domain,
                       float* y, float* z, InversePath path) {
   const size_t w = static_cast<size_t>(params.width), h = static_cast<size_t>(params.height);
   const Eigen::Vector2d c = params.principal_point, inv_scale = params.pixel_scale.cwiseInverse();
-  std::visit(
-      [&](const auto& m) {
-        parallel_for(static_cast<int>(h), [&](int first_row, int end_row) {
-          for (int row = first_row; row < end_row; ++row) {
-            const double v = (row - c.y()) * inv_scale.y();
-            const size_t first = w * static_cast<size_t>(row);
-            // Along a row, a non-radial camera's Newton starts from the pixel before's
-            // solution (the row on one thread: the rays do not depend on the threads).
-            Eigen::Vector2d start = Eigen::Vector2d::Constant(kNaN);
-            for (size_t col = 0; col < w; ++col) {
-              const double u = (double(col) - c.x()) * inv_scale.x();
-              double ray[3] = {kNaN, kNaN, kNaN};
-              ray_of_point(m, params, domain, table, u, v, path, ray, &start);
-              const size_t i = (first + col) * kStride;
-              x[i] = float(ray[0]), y[i] = float(ray[1]), z[i] = float(ray[2]);
-            }
-          }
-        });
-      },
-      params.model);
+  visit_parts(params, [&](const auto& m, const auto& part) {
+    parallel_for(static_cast<int>(h), [&](int first_row, int end_row) {
+      for (int row = first_row; row < end_row; ++row) {
+        const double v = (row - c.y()) * inv_scale.y();
+        const size_t first = w * static_cast<size_t>(row);
+        // Along a row, a non-radial camera's Newton starts from the pixel before's
+        // solution (the row on one thread: the rays do not depend on the threads).
+        Eigen::Vector2d start = Eigen::Vector2d::Constant(kNaN);
+        for (size_t col = 0; col < w; ++col) {
+          const double u = (double(col) - c.x()) * inv_scale.x();
+          double ray[3] = {kNaN, kNaN, kNaN};
+          ray_of_point(m, part, params, domain, table, u, v, path, ray, &start);
+          const size_t i = (first + col) * kStride;
+          x[i] = float(ray[0]), y[i] = float(ray[1]), z[i] = float(ray[2]);
+        }
+      }
+    });
+  });
 }
 
 }  // namespace
@@ -739,20 +737,18 @@ bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                      Eigen::Matrix<double, 2, 3>* jacobian) const {
   const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(), params_.pixel_scale.x(),
                                       params_.pixel_scale.y()};
-  return std::visit(
-      [&](const auto& m) {
-        return jacobian ? project_point<true>(m, params_, mapping.data(), domain_, point, pixel, jacobian)
-                        : project_point<false>(m, params_, mapping.data(), domain_, point, pixel, nullptr);
-      },
-      params_.model);
+  return visit_parts(params_, [&](const auto& m, const auto& part) {
+    return jacobian ? project_point<true>(m, part, params_, mapping.data(), domain_, point, pixel, jacobian)
+                    : project_point<false>(m, part, params_, mapping.data(), domain_, point, pixel, nullptr);
+  });
 }
 
 bool Camera::unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const {
   const double x = (pixel.x() - params_.principal_point.x()) / params_.pixel_scale.x();
   const double y = (pixel.y() - params_.principal_point.y()) / params_.pixel_scale.y();
-  const bool ok = std::visit(
-      [&](const auto& m) { return ray_of_point(m, params_, domain_, table_, x, y, InversePath::robust, ray->data()); },
-      params_.model);
+  const bool ok = visit_parts(params_, [&](const auto& m, const auto& part) {
+    return ray_of_point(m, part, params_, domain_, table_, x, y, InversePath::robust, ray->data());
+  });
   if (!ok) ray->setConstant(kNaN);
   return ok;
 }
@@ -764,16 +760,14 @@ void Camera::project(std::span<const Eigen::Vector3d> points, std::span<Eigen::V
   }
   const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(), params_.pixel_scale.x(),
                                       params_.pixel_scale.y()};
-  std::visit(
-      [&](const auto& m) {
-        parallel_chunks(points.size(), [&](size_t begin, size_t end) {
-          for (size_t i = begin; i < end; ++i) {
-            const bool ok = project_point<false>(m, params_, mapping.data(), domain_, points[i], &pixels[i], nullptr);
-            if (!valid.empty()) valid[i] = ok;
-          }
-        });
-      },
-      params_.model);
+  visit_parts(params_, [&](const auto& m, const auto& part) {
+    parallel_chunks(points.size(), [&](size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) {
+        const bool ok = project_point<false>(m, part, params_, mapping.data(), domain_, points[i], &pixels[i], nullptr);
+        if (!valid.empty()) valid[i] = ok;
+      }
+    });
+  });
 }
 
 void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen::Vector3d> rays,
@@ -782,18 +776,16 @@ void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen:
     throw Error("unproject: output sizes must match the number of pixels");
   }
   const Eigen::Vector2d c = params_.principal_point, inv_scale = params_.pixel_scale.cwiseInverse();
-  std::visit(
-      [&](const auto& m) {
-        parallel_chunks(pixels.size(), [&](size_t begin, size_t end) {
-          for (size_t i = begin; i < end; ++i) {
-            const double x = (pixels[i].x() - c.x()) * inv_scale.x(), y = (pixels[i].y() - c.y()) * inv_scale.y();
-            const bool ok = ray_of_point(m, params_, domain_, table_, x, y, path, rays[i].data());
-            if (!ok) rays[i].setConstant(kNaN);
-            if (!valid.empty()) valid[i] = ok;
-          }
-        });
-      },
-      params_.model);
+  visit_parts(params_, [&](const auto& m, const auto& part) {
+    parallel_chunks(pixels.size(), [&](size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) {
+        const double x = (pixels[i].x() - c.x()) * inv_scale.x(), y = (pixels[i].y() - c.y()) * inv_scale.y();
+        const bool ok = ray_of_point(m, part, params_, domain_, table_, x, y, path, rays[i].data());
+        if (!ok) rays[i].setConstant(kNaN);
+        if (!valid.empty()) valid[i] = ok;
+      }
+    });
+  });
 }
 
 void Camera::unproject_image(std::span<float> rays_xyz, InversePath path) const {

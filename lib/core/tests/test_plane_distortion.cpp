@@ -59,8 +59,7 @@ TEST_P(EveryPlaneDistortion, SerialisesProjectsAndUnprojects) {
         Eigen::Vector2d plus, minus;
         ASSERT_TRUE(camera.project(ray + h, &plus) && camera.project(ray - h, &minus));
         const Eigen::Vector2d numeric = (plus - minus) / 2e-7;
-        worst_jacobian =
-            std::max(worst_jacobian, (numeric - jacobian.col(k)).norm() / (1 + jacobian.col(k).norm()));
+        worst_jacobian = std::max(worst_jacobian, (numeric - jacobian.col(k)).norm() / (1 + jacobian.col(k).norm()));
       }
     }
     EXPECT_LE(worst_ray, 1e-9);
