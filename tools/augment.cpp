@@ -73,7 +73,7 @@ void print_change(const AugmentOptions& o, const AugmentChange& c, bool affine) 
 }
 
 // --depth map: the maps from the source image's depth map (.npy, H x W float32).
-void augment_from_depth_file(const ViewpointWarp& warp, const ViewpointChange& change, const AugmentOptions& o,
+void augment_with_depth_file(const ViewpointWarp& warp, const ViewpointChange& change, const AugmentOptions& o,
                              const AugmentIO& io) {
   const NpyArray array = read_npy(o.depth_file);
   const size_t h = size_t(warp.source().height()), w = size_t(warp.source().width());
@@ -82,7 +82,7 @@ void augment_from_depth_file(const ViewpointWarp& warp, const ViewpointChange& c
                 " depth map (the source camera's size)");
   }
   const cv::Mat depth(int(h), int(w), CV_32FC1, const_cast<float*>(array.data.data()));
-  warp.augment_from_depth(change, depth, *parse_depth_values(o.depth_values), io);
+  warp.augment(change, DepthMap{depth, *parse_depth_values(o.depth_values)}, io);
 }
 
 void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, const CLI::App& cmd,
@@ -119,7 +119,7 @@ void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, co
     if (affine) {
       affine_augment(change.affine, cv::Size(warp.source().width(), warp.source().height()), io);
     } else if (depth_map) {
-      augment_from_depth_file(warp, change.pose.change(), o, io);
+      augment_with_depth_file(warp, change.pose.change(), o, io);
     } else {
       warp.augment(change.pose.change(), o.pose.prior(), io, *parse_sampling(o.sampling));
     }

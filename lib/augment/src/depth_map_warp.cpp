@@ -1,5 +1,5 @@
-// ViewpointWarp::compute_from_depth: the maps under a per-pixel depth map, by
-// forward rasterisation of the source image's pixel grid (augmentation.hpp).
+// ViewpointWarp under a depth map (DepthMap): the maps by forward rasterisation of the
+// source image's pixel grid (augmentation.hpp), and the points and depths they move.
 #include <opencv2/core.hpp>
 
 #include <algorithm>
@@ -22,17 +22,19 @@ struct Landing {
 
 }  // namespace
 
-void ViewpointWarp::compute_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
-                                       WarpMaps* maps, MapKind kind, double edge_ratio) const {
+void ViewpointWarp::compute_from_map(const ViewpointChange& change, const DepthMap& map, WarpMaps* maps,
+                                     MapKind kind) const {
   check_change(change);
-  if (depth.type() != CV_32FC1) throw Error("compute_from_depth: expected a float32 single-channel depth map");
+  const cv::Mat& depth = map.depth;
+  const DepthValues values = map.values;
+  const double edge_ratio = map.edge_ratio;
+  if (depth.type() != CV_32FC1) throw Error("depth map: expected a float32 single-channel depth map");
   const int sw = source_.width(), sh = source_.height();
   if (depth.cols != sw || depth.rows != sh) {
-    throw Error("compute_from_depth: the depth map is " + std::to_string(depth.cols) + "x" +
-                std::to_string(depth.rows) + " but the source camera is " + std::to_string(sw) + "x" +
-                std::to_string(sh));
+    throw Error("depth map: it is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+                " but the source camera is " + std::to_string(sw) + "x" + std::to_string(sh));
   }
-  if (!(edge_ratio > 1)) throw Error("compute_from_depth: edge_ratio must be > 1");
+  if (!(edge_ratio > 1)) throw Error("depth map: edge_ratio must be > 1");
   if (change.translation.isZero(0)) {
     // A rotation moves every point along with its direction, whatever its depth: the
     // priors' maps are exact and complete, where the triangles below would drop a
@@ -127,15 +129,6 @@ void ViewpointWarp::compute_from_depth(const ViewpointChange& change, const cv::
   maps->map_x = map_x, maps->map_y = map_y;
 }
 
-void ViewpointWarp::augment_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
-                                       const AugmentIO& io) const {
-  WarpMaps maps;
-  compute_from_depth(change, depth, values, &maps);
-  if (io.image) warp_image(*io.image, maps, io.out_image, io.fill);
-  if (io.labels) warp_labels(*io.labels, maps, io.label_fill, io.out_labels);
-  if (io.valid) maps.validity().copyTo(*io.valid);  // in place: the caller may have allocated it
-}
-
 namespace {
 
 // The scene point of source pixel p (subpixel) at its depth value (range or z along the ray).
@@ -150,14 +143,13 @@ std::optional<Eigen::Vector3d> point_at(const Camera& source, const Eigen::Vecto
 
 }  // namespace
 
-void ViewpointWarp::forward_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
-                                       std::span<const Eigen::Vector2d> source_pixels,
-                                       std::span<Eigen::Vector2d> pixels, std::span<std::uint8_t> visible) const {
-  if (pixels.size() != source_pixels.size() || visible.size() != source_pixels.size()) {
-    throw Error("ViewpointWarp::forward_from_depth: outputs of the wrong size");
-  }
+void ViewpointWarp::forward_from_map(const ViewpointChange& change, const DepthMap& map,
+                                     std::span<const Eigen::Vector2d> source_pixels, std::span<Eigen::Vector2d> pixels,
+                                     std::span<std::uint8_t> visible) const {
+  const cv::Mat& depth = map.depth;
+  const DepthValues values = map.values;
   WarpMaps maps;
-  compute_from_depth(change, depth, values, &maps, MapKind::geometric);
+  compute_from_map(change, map, &maps, MapKind::geometric);
   for (size_t i = 0; i < source_pixels.size(); ++i) {
     pixels[i] = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
     visible[i] = 0;
@@ -186,10 +178,10 @@ void ViewpointWarp::forward_from_depth(const ViewpointChange& change, const cv::
   }
 }
 
-void ViewpointWarp::warp_depth_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
-                                          cv::Mat* out, float fill) const {
+void ViewpointWarp::warp_depth_from_map(const ViewpointChange& change, const DepthMap& map, const cv::Mat& depth,
+                                        DepthValues values, cv::Mat* out, float fill) const {
   WarpMaps maps;
-  compute_from_depth(change, depth, values, &maps, MapKind::geometric);
+  compute_from_map(change, map, &maps, MapKind::geometric);
   out->create(maps.map_x.size(), CV_32FC1);
   cv::parallel_for_(cv::Range(0, out->rows), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {

@@ -216,7 +216,7 @@ TEST_P(EveryModelSeededScene, RotationOnlyAugmentationEqualsTheRotatedRender) {
 INSTANTIATE_TEST_SUITE_P(SeededScene, EveryModelSeededScene, ::testing::ValuesIn(test::every_model()),
                          test::model_case_name);
 
-// The depth-map prior (ViewpointWarp::compute_from_depth) with the renderer's own
+// The depth-map source (ViewpointWarp::compute with a DepthMap) with the renderer's own
 // range: a translated camera's view agrees with the re-render where it has a source,
 // and better than any sphere prior.
 TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
@@ -235,7 +235,7 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
       const ViewpointChange change = random_pose(*find_pose_preset(preset), seed).change();  // t in metres
       const SceneRender truth = scene.render(camera, moved_camera(mount, change));
       WarpMaps maps;
-      warp.compute_from_depth(change, source.range, DepthValues::range, &maps);
+      warp.compute(change, DepthMap{source.range, DepthValues::range}, &maps);
       cv::Mat labels;
       warp_labels(source.labels, maps, 255, &labels);
       const cv::Mat where = away_from_boundaries(truth.labels, maps.validity());
@@ -268,7 +268,7 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
     const SceneRender source = scene.render(camera, mount);
     const ViewpointChange rotation = ViewpointChange::from_euler_deg({4, -9, 3}, {0, 0, 0});
     WarpMaps from_depth, prior;
-    warp.compute_from_depth(rotation, source.range, DepthValues::range, &from_depth, MapKind::geometric);
+    warp.compute(rotation, DepthMap{source.range, DepthValues::range}, &from_depth, MapKind::geometric);
     warp.compute(rotation, DepthPrior::source_sphere, &prior, MapKind::geometric);
     EXPECT_EQ(from_depth.invalid_count, prior.invalid_count);
     EXPECT_LE(cv::norm(from_depth.map_x, prior.map_x, cv::NORM_INF, prior.validity()), 1e-3);
@@ -276,9 +276,8 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
   }
   // Bad input: a depth map of the wrong size or type.
   WarpMaps maps;
-  EXPECT_THROW(warp.compute_from_depth(ViewpointChange{}, cv::Mat(10, 10, CV_32FC1), DepthValues::range, &maps), Error);
-  EXPECT_THROW(warp.compute_from_depth(ViewpointChange{}, cv::Mat(483, 640, CV_64FC1), DepthValues::range, &maps),
-               Error);
+  EXPECT_THROW(warp.compute(ViewpointChange{}, DepthMap{cv::Mat(10, 10, CV_32FC1)}, &maps), Error);
+  EXPECT_THROW(warp.compute(ViewpointChange{}, DepthMap{cv::Mat(483, 640, CV_64FC1)}, &maps), Error);
 }
 
 }  // namespace

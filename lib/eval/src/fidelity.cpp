@@ -36,7 +36,7 @@ Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange&
     warp.compute(change, *prior, &maps);
   } else {
     if (source_depth.empty()) throw Error("fidelity: the depth-map prior needs the source's depth map");
-    warp.compute_from_depth(change, source_depth, DepthValues::range, &maps);
+    warp.compute(change, DepthMap{source_depth, DepthValues::range}, &maps);
   }
   return fidelity_of_maps(maps, source_image, source_labels, truth_image, truth_labels);
 }

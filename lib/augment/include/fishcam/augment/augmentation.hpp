@@ -12,6 +12,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "fishcam/augment/viewpoint.hpp"
@@ -80,6 +81,20 @@ std::optional<DepthValues> parse_depth_values(std::string_view name);  // "range
 const std::vector<std::string>& depth_values_names();                  // the choices, Python, messages
 std::string_view to_string(DepthValues values);
 
+// A depth map of the source image in place of a prior (the paper's future work):
+// `depth` (CV_32FC1, source size; range or z per `values`, in the units of the
+// change's translation) along each source pixel's ray. A triangle of neighbouring
+// source pixels whose corners' depths differ by more than `edge_ratio` (a depth
+// edge) is not drawn (ViewpointWarp::compute).
+struct DepthMap {
+  cv::Mat depth;
+  DepthValues values = DepthValues::range;
+  double edge_ratio = 1.1;
+};
+// Where a source pixel's scene point lies: on a prior's surface (depth_prior.hpp) or
+// at a depth map's value. Every ViewpointWarp operation takes either.
+using DepthSource = std::variant<DepthPrior, DepthMap>;
+
 // One sample to augment: any of the image and the labels (with their outputs),
 // and optionally where the output has a source.
 struct AugmentIO {
@@ -108,72 +123,62 @@ class ViewpointWarp {
   const Camera& source() const { return source_; }
   const Camera& target() const { return target_; }
 
-  // The maps, in float with SIMD (OpenCV universal intrinsics; AVX2 where the CPU
-  // has it) on OpenCV's threads; accuracy against compute_exact: <= 1e-3 px. Where
-  // float cannot promise that (float_kernel() false: models without a float form,
-  // polynomials past degree 15, coordinates past 8192 px, parameters outside
-  // float's range, or a failed check of the kernel against Camera::project over
-  // the source's valid domain at construction), the maps come from the exact path.
-  // Throws Error for a non-finite or non-rotation change.
-  void compute(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind = MapKind::sampling) const;
-  // Geometric maps in double through Camera::project, pixel by pixel: the reference.
+  // The maps. Under a prior: in float with SIMD (OpenCV universal intrinsics; AVX2
+  // where the CPU has it) on OpenCV's threads; accuracy against compute_exact:
+  // <= 1e-3 px. Where float cannot promise that (float_kernel() false: models without
+  // a float form, polynomials past degree 15, coordinates past 8192 px, parameters
+  // outside float's range, or a failed check of the kernel against Camera::project
+  // over the source's valid domain at construction), the maps come from the exact
+  // path.
+  // Under a depth map: every source pixel's scene point moves by the change;
+  // neighbouring source pixels form triangles, each rasterised into the output with
+  // a z-buffer (the nearest surface wins) and its source coordinates interpolated. A
+  // triangle across a depth edge (DepthMap::edge_ratio) or with a corner without
+  // depth is not drawn, so pixels that nothing lands on (disocclusions) have no
+  // source: never invented. Infinite depths (the sky) move as directions. A pure
+  // rotation needs no depth: its maps are the priors' (exact, and without the bands
+  // the triangles lose at depth edges).
+  // Throws Error for a non-finite or non-rotation change, and for a depth map of the
+  // wrong type or size.
+  void compute(const ViewpointChange& change, const DepthSource& depth, WarpMaps* maps,
+               MapKind kind = MapKind::sampling) const;
+  // Geometric maps in double through Camera::project, pixel by pixel: the reference
+  // (under a prior).
   void compute_exact(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
   // Whether compute() uses the float kernel (decided once, at construction).
   bool float_kernel() const { return kernel_source_ != nullptr; }
 
-  // One augmented sample (what `fishcam augment` writes): Sampling::grid by default,
-  // Sampling::exact for compute()'s maps. Outputs are written in place when they
-  // already have the output size and the input's type. Throws Error for bad inputs
-  // (as warp_image / warp_labels) and non-finite changes.
-  void augment(const ViewpointChange& change, DepthPrior prior, const AugmentIO& io,
+  // One augmented sample (what `fishcam augment` writes). Under a prior:
+  // Sampling::grid by default, Sampling::exact for compute()'s maps; under a depth
+  // map, compute()'s maps whatever the sampling. Outputs are written in place when
+  // they already have the output size and the input's type. Throws Error for bad
+  // inputs (as warp_image / warp_labels) and non-finite changes.
+  void augment(const ViewpointChange& change, const DepthSource& depth, const AugmentIO& io,
                Sampling sampling = Sampling::grid) const;
   // The forward direction, for points (keypoints, polygon vertices, box outlines):
-  // where the scene point of each source pixel (on its ray at the depth prior's
-  // distance) appears in the output, exactly (double; the maps' inverse). NaN where
-  // the source pixel has no ray or the moved point no projection. visible[i] is 1
-  // where the output pixel lies inside the output image and its own source point
-  // is this one: 0 where the point left the view or is hidden (the far side of the
-  // prior's sphere). Throws Error for a non-finite change.
-  void forward(const ViewpointChange& change, DepthPrior prior, std::span<const Eigen::Vector2d> source_pixels,
+  // where the scene point of each source pixel appears in the output, exactly
+  // (double; the maps' inverse). Under a prior, the point on its ray at the prior's
+  // distance, visible[i] 1 where the output pixel lies inside the output image and
+  // its own source point is this one (0 where the point left the view or is hidden:
+  // the far side of the prior's sphere). Under a depth map, the point at the depth of
+  // its nearest source pixel, visible where it lands inside the output and the output
+  // pixel there samples it (within 1.5 px), not a nearer surface. NaN where the
+  // source pixel has no ray or the moved point no projection. Throws Error for a
+  // non-finite change.
+  void forward(const ViewpointChange& change, const DepthSource& depth, std::span<const Eigen::Vector2d> source_pixels,
                std::span<Eigen::Vector2d> pixels, std::span<std::uint8_t> visible) const;
-  // A depth map (CV_32FC1, source size) seen from the moved camera: sampled as the
-  // labels are (nearest neighbour, so never blended across depth edges), each value
-  // re-expressed as the range or z of its scene point in the moved camera (the
-  // point at that range or z along the source ray the output pixel samples): exact
-  // for rotations; with a translation the point is where the depth map says, but it
-  // is drawn at the pixel the depth prior puts it. Values that are not finite and
-  // positive (no-depth markers, the sky's infinity) are copied as they are; pixels
-  // without a source become `fill`. *out may be preallocated (output size, CV_32FC1).
-  void warp_depth(const ViewpointChange& change, DepthPrior prior, const cv::Mat& depth, DepthValues values,
+  // A depth map (CV_32FC1, source size; `values`) seen from the moved camera: sampled
+  // as the labels are (nearest neighbour, so never blended across depth edges), each
+  // value re-expressed as the range or z of its scene point in the moved camera (the
+  // point at that range or z along the source ray the output pixel samples, under
+  // `depth`'s maps): exact for rotations; under a prior with a translation the point
+  // is where the depth map says, but it is drawn at the pixel the prior puts it.
+  // Values that are not finite and positive (no-depth markers, the sky's infinity)
+  // are copied as they are; pixels without a source become `fill`. *out may be
+  // preallocated (output size, CV_32FC1).
+  void warp_depth(const ViewpointChange& change, const DepthSource& depth, const cv::Mat& depth_map, DepthValues values,
                   cv::Mat* out, float fill = std::numeric_limits<float>::quiet_NaN()) const;
 
-  // The maps under a depth map of the source image instead of a prior (the paper's
-  // future work): every source pixel's scene point -- `depth` (CV_32FC1, source
-  // size; range or z per `values`, in the units of the change's translation) along
-  // its ray -- moves by the change; neighbouring source pixels form triangles, each
-  // rasterised into the output with a z-buffer (the nearest surface wins) and its
-  // source coordinates interpolated. A triangle whose corners' depths differ by more
-  // than `edge_ratio` (a depth edge) is not drawn, nor is one with a corner without
-  // depth, so pixels that nothing lands on (disocclusions) have no source: never
-  // invented. Infinite depths (the sky) move as directions. A pure rotation needs no
-  // depth: its maps are compute()'s (exact, and without the bands the triangles lose
-  // at depth edges). Throws Error for a depth map of the wrong type or size and for
-  // a non-finite change.
-  void compute_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values, WarpMaps* maps,
-                          MapKind kind = MapKind::sampling, double edge_ratio = 1.1) const;
-  // augment(), forward() and warp_depth() under a depth map of the source image
-  // (compute_from_depth's maps; `fishcam augment --depth map`, Python depth="map").
-  // forward: each point at the depth of its nearest source pixel; visible where it
-  // lands inside the output and the output pixel there samples it (within 1.5 px),
-  // not a nearer surface. warp_depth_from_depth: `depth` itself seen from the moved
-  // camera (nearest neighbour, re-expressed along the source ray the output samples).
-  void augment_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
-                          const AugmentIO& io) const;
-  void forward_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values,
-                          std::span<const Eigen::Vector2d> source_pixels, std::span<Eigen::Vector2d> pixels,
-                          std::span<std::uint8_t> visible) const;
-  void warp_depth_from_depth(const ViewpointChange& change, const cv::Mat& depth, DepthValues values, cv::Mat* out,
-                             float fill = std::numeric_limits<float>::quiet_NaN()) const;
   // The grid's node spacing (px) and its measured worst interpolation error (px)
   // against the per-pixel float map; 0 and 0 where there is no grid (no float
   // kernel, or no spacing from 16 down to 2 px interpolates 80 % of the cells within
@@ -188,6 +193,13 @@ class ViewpointWarp {
 
  private:
   void compute_double(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const;
+  // compute(), forward() and warp_depth() under a depth map (depth_map_warp.cpp).
+  void compute_from_map(const ViewpointChange& change, const DepthMap& map, WarpMaps* maps, MapKind kind) const;
+  void forward_from_map(const ViewpointChange& change, const DepthMap& map,
+                        std::span<const Eigen::Vector2d> source_pixels, std::span<Eigen::Vector2d> pixels,
+                        std::span<std::uint8_t> visible) const;
+  void warp_depth_from_map(const ViewpointChange& change, const DepthMap& map, const cv::Mat& depth_map,
+                           DepthValues values, cv::Mat* out, float fill) const;
 
   Camera source_, target_;
   // The source camera in the float kernel's form, decided once at construction;

@@ -22,7 +22,7 @@ const std::vector<std::string>& depth_prior_names();
 // infinity, got 'NAME'".
 DepthPrior depth_prior(std::string_view name, std::string_view what = "depth");
 
-// A depth map of the source image in place of a prior (ViewpointWarp::compute_from_depth):
+// A depth map of the source image in place of a prior (DepthMap, augmentation.hpp):
 // the name `fishcam augment --depth` and Python's depth= take for it. Not a
 // DepthPrior: it needs the per-pixel data, which the priors' callers do not have.
 inline constexpr std::string_view kDepthMapName = "map";

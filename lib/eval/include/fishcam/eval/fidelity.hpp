@@ -29,7 +29,7 @@ struct Fidelity {
 
 // The source image and labels (source size, CV_8UC3 and CV_8UC1) augmented by
 // `change` under `prior` -- or, without one, under the source's depth map
-// (`source_depth`, range, ViewpointWarp::compute_from_depth) -- against the truth
+// (`source_depth`, range, a DepthMap) -- against the truth
 // (output size). Throws Error for mismatched inputs.
 Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange& change,
                                std::optional<DepthPrior> prior, const cv::Mat& source_image,
