@@ -92,33 +92,24 @@ Sampling sampling_of(const std::string& name) {
 }
 
 // depth=: a prior's name, or "map" with the source image's depth map (depth_map=,
-// HxW float32, range or z per depth_values=).
-struct DepthChoice {
-  std::optional<DepthPrior> prior;  // none: the map
-  cv::Mat map;                      // a header on the numpy array (kept alive by the caller)
-  DepthValues values = DepthValues::range;
-};
-
-DepthChoice depth_choice(const std::string& depth, std::optional<py::array>& depth_map, const std::string& values) {
-  DepthChoice choice;
+// HxW float32, range or z per depth_values=; the DepthMap holds a header on the numpy
+// array, kept alive by the caller).
+DepthSource depth_choice(const std::string& depth, std::optional<py::array>& depth_map, const std::string& values) {
   const auto kind = parse_depth_values(values);
   if (!kind) {
     throw Error("depth_values: expected " + choices_for_message(depth_values_names()) + ", got " +
                 quoted_for_message(values));
   }
-  choice.values = *kind;
   if (depth != kDepthMapName) {
-    choice.prior = depth_prior(depth, "depth");
     if (depth_map) throw Error("depth_map: only used with depth=\"map\"");
-    return choice;
+    return depth_prior(depth, "depth");
   }
   if (!depth_map) throw Error("depth=\"map\" needs depth_map= (the source image's HxW float32 depth)");
   if (!py::isinstance<py::array_t<float>>(*depth_map) || depth_map->ndim() != 2) {
     throw Error("depth_map: expected an HxW float32 array, got " + std::string(py::str(depth_map->dtype())) + " with " +
                 std::to_string(depth_map->ndim()) + " dimensions");
   }
-  choice.map = as_mat(*depth_map, "depth_map", false);
-  return choice;
+  return DepthMap{as_mat(*depth_map, "depth_map", false), *kind};
 }
 
 // One augmented sample, what `fishcam augment` writes (ViewpointWarp.warp and __call__).
@@ -126,22 +117,16 @@ py::dict augment_sample(const ViewpointWarp& warp, std::optional<py::array> imag
                         const RandomPose& change, const std::string& depth, double fill, int label_fill,
                         bool return_valid, const std::string& sampling, std::optional<py::array> depth_map,
                         const std::string& depth_values) {
-  const DepthChoice choice = depth_choice(depth, depth_map, depth_values);
+  const DepthSource depth_source = depth_choice(depth, depth_map, depth_values);
   const Sampling how = sampling_of(sampling);
   const cv::Size source(warp.source().width(), warp.source().height());
   const cv::Size target(warp.target().width(), warp.target().height());
-  return resample(image, labels, source, target, fill, label_fill, return_valid, [&](const AugmentIO& io) {
-    if (choice.prior) {
-      warp.augment(change.change(), *choice.prior, io, how);
-    } else {
-      warp.augment_from_depth(change.change(), choice.map, choice.values, io);
-    }
-  });
+  return resample(image, labels, source, target, fill, label_fill, return_valid,
+                  [&](const AugmentIO& io) { warp.augment(change.change(), depth_source, io, how); });
 }
 
-}  // namespace
-
-void bind_augmentation(py::module_& m) {
+// RandomPose (C++ ViewpointChange with its pose draw), Camera.augmented, the presets and seeds.
+void bind_viewpoint_changes(py::module_& m) {
   py::class_<RandomPose>(
       m, "ViewpointChange",
       "A viewpoint change (the paper's eq. 7): a point P of the camera frame is at R P + t in the "
@@ -219,64 +204,68 @@ void bind_augmentation(py::module_& m) {
   m.def("derive_seed", &derive_seed, py::arg("seed"), py::arg("key"), py::arg("index"),
         "A 64-bit seed per (key, index) from one user seed (SplitMix64 over FNV-1a of the key): "
         "the seeds of augment-dataset, compare and WoodScapeDataset(seed=).");
+}
 
-  py::class_<ViewpointWarp>(m, "ViewpointWarp",
-                            "The viewpoint augmentation of one calibration (source camera -> target camera, the same "
-                            "by default): caches the target's rays and the grid plan, so keep one per calibration.")
-      .def(py::init([](const Camera& source, std::optional<Camera> target) {
-             py::gil_scoped_release release;
-             return target ? ViewpointWarp(source, *target) : ViewpointWarp(source);
-           }),
-           py::arg("camera"), py::arg("target") = py::none(),
-           "camera: the images' camera; target: the output camera (default: the same).")
+// Its construction and cameras.
+void def_warp_cameras(py::class_<ViewpointWarp>& cls) {
+  cls.def(py::init([](const Camera& source, std::optional<Camera> target) {
+            py::gil_scoped_release release;
+            return target ? ViewpointWarp(source, *target) : ViewpointWarp(source);
+          }),
+          py::arg("camera"), py::arg("target") = py::none(),
+          "camera: the images' camera; target: the output camera (default: the same).")
       .def_property_readonly(
           "source", [](const ViewpointWarp& self) -> decltype(auto) { return self.source(); }, "The images' camera.")
       .def_property_readonly(
           "target", [](const ViewpointWarp& self) -> decltype(auto) { return self.target(); }, "The output camera.")
       .def_property_readonly(
           "float_kernel", [](const ViewpointWarp& self) -> decltype(auto) { return self.float_kernel(); },
-          "Whether maps come from the float kernel (within 1e-3 px), else the exact path.")
-      .def(
-          "maps",
-          [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth, const std::string& kind,
-             bool exact, bool grid) {
-            const DepthPrior prior = depth_prior(depth);
-            const MapKind map = map_kind(kind);
-            if (exact && map != MapKind::geometric) throw Error("exact: only geometric maps have an exact path");
-            if (grid && (exact || map != MapKind::geometric)) throw Error("grid: gives geometric maps, not exact ones");
-            const int h = warp.target().height(), w = warp.target().width();
-            py::array_t<float> map_x({h, w}), map_y({h, w});
-            py::array_t<bool> valid({h, w});
-            WarpMaps maps;
-            // Preallocated outputs: the library writes into the numpy buffers.
-            maps.map_x = cv::Mat(h, w, CV_32FC1, map_x.mutable_data());
-            maps.map_y = cv::Mat(h, w, CV_32FC1, map_y.mutable_data());
-            if (map == MapKind::geometric) maps.valid = cv::Mat(h, w, CV_8UC1, valid.mutable_data());
-            {
-              py::gil_scoped_release release;
-              if (exact) {
-                warp.compute_exact(change.change(), prior, &maps);
-              } else if (grid) {
-                warp.compute_grid(change.change(), prior, &maps);
-              } else {
-                warp.compute(change.change(), prior, &maps, map);
-              }
-              if (maps.map_x.data != static_cast<void*>(map_x.mutable_data()) ||
-                  maps.map_y.data != static_cast<void*>(map_y.mutable_data())) {
-                throw Error("internal: a map was reallocated");
-              }
-              if (map == MapKind::sampling) {
-                cv::Mat header(h, w, CV_8UC1, valid.mutable_data());
-                maps.validity().copyTo(header);  // same size and type: written in place
-              }
-            }
-            return std::tuple(map_x, map_y, valid);
-          },
-          py::arg("change"), py::arg("depth") = "source-sphere", py::arg("kind") = "geometric",
-          py::arg("exact") = false, py::arg("grid") = false,
-          "The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source "
-          "coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision "
-          "reference; grid=True: the grid path's (within 1/32 px), geometric.")
+          "Whether maps come from the float kernel (within 1e-3 px), else the exact path.");
+}
+
+// Its maps: per pixel, for remap, and for torch's grid_sample.
+void def_warp_maps(py::class_<ViewpointWarp>& cls) {
+  cls.def(
+         "maps",
+         [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth, const std::string& kind,
+            bool exact, bool grid) {
+           const DepthPrior prior = depth_prior(depth);
+           const MapKind map = map_kind(kind);
+           if (exact && map != MapKind::geometric) throw Error("exact: only geometric maps have an exact path");
+           if (grid && (exact || map != MapKind::geometric)) throw Error("grid: gives geometric maps, not exact ones");
+           const int h = warp.target().height(), w = warp.target().width();
+           py::array_t<float> map_x({h, w}), map_y({h, w});
+           py::array_t<bool> valid({h, w});
+           WarpMaps maps;
+           // Preallocated outputs: the library writes into the numpy buffers.
+           maps.map_x = cv::Mat(h, w, CV_32FC1, map_x.mutable_data());
+           maps.map_y = cv::Mat(h, w, CV_32FC1, map_y.mutable_data());
+           if (map == MapKind::geometric) maps.valid = cv::Mat(h, w, CV_8UC1, valid.mutable_data());
+           {
+             py::gil_scoped_release release;
+             if (exact) {
+               warp.compute_exact(change.change(), prior, &maps);
+             } else if (grid) {
+               warp.compute_grid(change.change(), prior, &maps);
+             } else {
+               warp.compute(change.change(), prior, &maps, map);
+             }
+             if (maps.map_x.data != static_cast<void*>(map_x.mutable_data()) ||
+                 maps.map_y.data != static_cast<void*>(map_y.mutable_data())) {
+               throw Error("internal: a map was reallocated");
+             }
+             if (map == MapKind::sampling) {
+               cv::Mat header(h, w, CV_8UC1, valid.mutable_data());
+               maps.validity().copyTo(header);  // same size and type: written in place
+             }
+           }
+           return std::tuple(map_x, map_y, valid);
+         },
+         py::arg("change"), py::arg("depth") = "source-sphere", py::arg("kind") = "geometric", py::arg("exact") = false,
+         py::arg("grid") = false,
+         "The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source "
+         "coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision "
+         "reference; grid=True: the grid path's (within 1/32 px), geometric.")
       .def("warp", &augment_sample, py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(),
            py::arg("change"), py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
            py::arg("return_valid") = false, py::arg("sampling") = "grid", py::arg("depth_map") = py::none(),
@@ -318,30 +307,28 @@ void bind_augmentation(py::module_& m) {
           },
           py::arg("change"), py::arg("depth") = "source-sphere",
           "The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): "
-          "(grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)")
-      .def(
-          "forward",
-          [](const ViewpointWarp& warp, const py::handle& points, const RandomPose& change, const std::string& depth,
-             std::optional<py::array> depth_map, const std::string& depth_values) {
-            const DepthChoice choice = depth_choice(depth, depth_map, depth_values);
-            return batch<2, 2>(points, "points", [&](auto in, auto out, auto ok) {
-              if (choice.prior) {
-                warp.forward(change.change(), *choice.prior, in, out, ok);
-              } else {
-                warp.forward_from_depth(change.change(), choice.map, choice.values, in, out, ok);
-              }
-            });
-          },
-          py::arg("points"), py::arg("change"), py::arg("depth") = "source-sphere", py::arg("depth_map") = py::none(),
-          py::arg("depth_values") = "range",
-          "Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; "
-          "visible (N,) bool: inside the output and not hidden)")
+          "(grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)");
+}
+
+// What it moves besides images: points and depth maps; a sample by call.
+void def_warp_targets(py::class_<ViewpointWarp>& cls) {
+  cls.def(
+         "forward",
+         [](const ViewpointWarp& warp, const py::handle& points, const RandomPose& change, const std::string& depth,
+            std::optional<py::array> depth_map, const std::string& depth_values) {
+           const DepthSource source = depth_choice(depth, depth_map, depth_values);
+           return batch<2, 2>(points, "points",
+                              [&](auto in, auto out, auto ok) { warp.forward(change.change(), source, in, out, ok); });
+         },
+         py::arg("points"), py::arg("change"), py::arg("depth") = "source-sphere", py::arg("depth_map") = py::none(),
+         py::arg("depth_values") = "range",
+         "Where source pixels (N, 2) appear after the change: (pixels (N, 2) float64, NaN where none; "
+         "visible (N,) bool: inside the output and not hidden)")
       .def(
           "warp_depth",
           [](const ViewpointWarp& warp, py::array depth_map, const RandomPose& change, const std::string& depth,
              const std::string& values, float fill) {
-            const bool map = depth == kDepthMapName;  // the depth map is its own prior
-            const DepthPrior prior = map ? DepthPrior::source_sphere : depth_prior(depth);  // unused with the map
+            const bool map = depth == kDepthMapName;  // the depth map is its own source
             const auto kind = parse_depth_values(values);
             if (!kind) {
               throw Error("values: expected " + choices_for_message(depth_values_names()) + ", got " +
@@ -352,16 +339,13 @@ void bind_augmentation(py::module_& m) {
                           " with " + std::to_string(depth_map.ndim()) + " dimensions");
             }
             cv::Mat in = as_mat(depth_map, "depth_map", false);
+            const DepthSource source = map ? DepthSource(DepthMap{in, *kind}) : DepthSource(depth_prior(depth));
             cv::Mat out_header;
             py::array out = new_image(depth_map, warp.target().height(), warp.target().width(), &out_header);
             const uchar* before = out_header.data;
             {
               py::gil_scoped_release release;
-              if (!map) {
-                warp.warp_depth(change.change(), prior, in, *kind, &out_header, fill);
-              } else {
-                warp.warp_depth_from_depth(change.change(), in, *kind, &out_header, fill);
-              }
+              warp.warp_depth(change.change(), source, in, *kind, &out_header, fill);
             }
             if (out_header.data != before) throw Error("internal: an output was reallocated");
             return out;
@@ -378,10 +362,14 @@ void bind_augmentation(py::module_& m) {
            "warp(...): one augmented sample (what `fishcam augment` writes): image HxW or HxWxC (uint8, uint16, "
            "float32; "
            "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
-           "asked.")
-      .def_property_readonly(
-          "grid_spacing", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_spacing(); },
-          "The grid path's node spacing in pixels (0: no grid, per-pixel maps).")
+           "asked.");
+}
+
+// Its grid path, and pickling.
+void def_warp_grid_and_pickle(py::class_<ViewpointWarp>& cls) {
+  cls.def_property_readonly(
+         "grid_spacing", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_spacing(); },
+         "The grid path's node spacing in pixels (0: no grid, per-pixel maps).")
       .def_property_readonly(
           "grid_error_px", [](const ViewpointWarp& self) -> decltype(auto) { return self.grid_error_px(); },
           "The grid's measured worst interpolation error against the per-pixel map (px).")
@@ -395,7 +383,22 @@ void bind_augmentation(py::module_& m) {
                                    camera_from_state(t[1].cast<std::string>()));
             });
           }));
+}
 
+// ViewpointWarp: the maps, samples, points and depth maps of a viewpoint change.
+void bind_viewpoint_warp(py::module_& m) {
+  py::class_<ViewpointWarp> warp_class(
+      m, "ViewpointWarp",
+      "The viewpoint augmentation of one calibration (source camera -> target camera, the same "
+      "by default): caches the target's rays and the grid plan, so keep one per calibration.");
+  def_warp_cameras(warp_class);
+  def_warp_maps(warp_class);
+  def_warp_targets(warp_class);
+  def_warp_grid_and_pickle(warp_class);
+}
+
+// AffineChange: one draw of the affine baseline.
+void bind_affine_change(py::module_& m) {
   py::class_<AffineChange>(m, "AffineChange")
       .def(py::init([](double rotation_deg, const Eigen::Vector2d& translation, double scale) {
              AffineChange change{rotation_deg, translation, scale};
@@ -423,6 +426,10 @@ void bind_augmentation(py::module_& m) {
                       c.translation.x(), c.translation.y(), c.scale);
         return std::string(buffer);
       });
+}
+
+// The affine baseline's draws, presets and warp.
+void bind_affine_functions(py::module_& m) {
   m.def(
       "random_affine",
       [](const std::string& preset, std::uint64_t seed) { return random_affine(affine_preset(preset), seed); },
@@ -495,7 +502,16 @@ void bind_augmentation(py::module_& m) {
       },
       py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(), py::arg("change"),
       py::arg("fill") = 0.0, py::arg("label_fill") = 0, py::arg("return_valid") = false);
+}
 
+// The affine baseline: AffineChange, its draws and its warp.
+void bind_affine(py::module_& m) {
+  bind_affine_change(m);
+  bind_affine_functions(m);
+}
+
+// The thread count, and what the zero-copy tests ask.
+void bind_threads_and_test_hooks(py::module_& m) {
   m.def("set_num_threads", [](int n) {
     if (n < 1 || n > 1024) throw Error("set_num_threads: expected 1 to 1024, got " + std::to_string(n));
     cv::setNumThreads(n);
@@ -512,6 +528,15 @@ void bind_augmentation(py::module_& m) {
     py::array array = py::array::ensure(input);
     return reinterpret_cast<std::uintptr_t>(as_mat(array, as.c_str(), as == "labels").data);
   });
+}
+
+}  // namespace
+
+void bind_augmentation(py::module_& m) {
+  bind_viewpoint_changes(m);
+  bind_viewpoint_warp(m);
+  bind_affine(m);
+  bind_threads_and_test_hooks(m);
 }
 
 }  // namespace fishcam::python

@@ -33,9 +33,8 @@ std::vector<BoardObservation> observations_of(const py::list& items) {
   return out;
 }
 
-}  // namespace
-
-void bind_calibration(py::module_& m) {
+// Calibration (one camera) and the functions that calibrate and measure.
+void bind_camera_calibration(py::module_& m) {
   py::class_<CalibrationResult>(m, "Calibration",
                                 "A chessboard calibration (what `fishcam calibrate --json` reports), typed.")
       .def_property_readonly(
@@ -126,6 +125,10 @@ void bind_calibration(py::module_& m) {
       "board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for "
       "the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot "
       "determine a camera (a transposed board, one pose, a principal point off the image, ...).");
+}
+
+// RigCalibration and calibrate_rig.
+void bind_rig_calibration(py::module_& m) {
   py::class_<RigCalibrationResult>(m, "RigCalibration",
                                    "A camera rig's joint calibration (what `fishcam calibrate --corners A --corners B "
                                    "... --json` reports), typed.")
@@ -172,6 +175,13 @@ void bind_calibration(py::module_& m) {
       "camera, observations as read_corners gives them; images of one instant share their file name (the last "
       "path component). Every camera's intrinsics, its pose relative to camera 0 and the boards' poses: a "
       "RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.");
+}
+
+}  // namespace
+
+void bind_calibration(py::module_& m) {
+  bind_camera_calibration(m);
+  bind_rig_calibration(m);
 }
 
 void bind_calibration_record(py::class_<Camera>& camera) {

@@ -111,65 +111,25 @@ Camera camera_from_pickle_state(const py::object& state) {
   return it->second.with_pose(pose);
 }
 
-}  // namespace
-
-void bind_camera(py::module_& m) {
-  py::class_<ValidDomain>(m, "ValidDomain",
-                          "Where a camera's model is valid: theta in [0, theta_max] (closed) or [0, theta_max).")
-      .def_property_readonly(
-          "theta_max_deg", [](const ValidDomain& d) { return d.theta_max * 180 / std::numbers::pi; },
-          "The largest valid angle of incidence (degrees).")
-      .def_readonly("closed", &ValidDomain::closed, "Whether theta_max itself is valid.")
-      .def_property_readonly(
-          "limited_by", [](const ValidDomain& d) { return std::string(to_string(d.limited_by)); },
-          "What sets theta_max: 'model', 'fold' (rho stops increasing) or 'user' (a theta limit).")
-      .def_property_readonly(
-          "rho_max_px",
-          [](const ValidDomain& d) -> std::optional<double> {
-            return d.closed ? std::optional(d.rho_max) : std::nullopt;
-          },
-          "rho(theta_max) in pixel-scale units, or None where the model diverges there.")
-      .def("__repr__", [](const ValidDomain& d) {
-        char buffer[128];
-        std::snprintf(buffer, sizeof buffer, "ValidDomain(theta_max_deg=%.6g, closed=%s, limited_by='%s')",
-                      d.theta_max * 180 / std::numbers::pi, d.closed ? "True" : "False", to_string(d.limited_by));
-        return std::string(buffer);
-      });
-  py::class_<Camera::FieldOfView>(m, "FieldOfView",
-                                  "The image's angular coverage through the principal point (degrees).")
-      .def_readonly("horizontal", &Camera::FieldOfView::horizontal, "Degrees across the image's width.")
-      .def_readonly("vertical", &Camera::FieldOfView::vertical, "Degrees across its height.")
-      .def_readonly("diagonal", &Camera::FieldOfView::diagonal, "Degrees across its diagonal.")
-      .def("__repr__", [](const Camera::FieldOfView& f) {
-        char buffer[128];
-        std::snprintf(buffer, sizeof buffer, "FieldOfView(horizontal=%.6g, vertical=%.6g, diagonal=%.6g)", f.horizontal,
-                      f.vertical, f.diagonal);
-        return std::string(buffer);
-      });
-
-  py::class_<Camera>(
-      m, "Camera",
-      "A calibrated camera: a radial model rho(theta) (with tangential terms for some models), principal "
-      "point, pixel scale, image size and "
-      "an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z "
-      "forward. Immutable; equal cameras compare equal and hash alike.")
-      .def_static(
-          "read",
-          [](const std::string& path, std::optional<py::object> camera, std::optional<std::pair<int, int>> image_size,
-             std::optional<std::string> format, std::optional<std::string> distortion_model) {
-            CameraReadOptions options;
-            options.format = format_of(format);
-            options.distortion_model = distortion_model;
-            if (camera && !camera->is_none()) options.camera = py::str(*camera);
-            options.image_size = image_size;
-            py::gil_scoped_release release;
-            return read_camera(path, options);
-          },
-          py::arg("path"), py::arg("camera") = py::none(), py::arg("image_size") = py::none(),
-          py::arg("format") = py::none(), py::arg("distortion_model") = py::none(),
-          "Reads a camera file in any format fishcam knows (docs/formats.md). camera: which camera of a "
-          "multi-camera file (index or name); image_size: (width, height) for files without one; format: force a "
-          "reader; distortion_model: 'fisheye' or 'plumb_bob' for OpenCV files that do not say.")
+// The files it reads from and writes to.
+void def_camera_files(py::class_<Camera>& cls) {
+  cls.def_static(
+         "read",
+         [](const std::string& path, std::optional<py::object> camera, std::optional<std::pair<int, int>> image_size,
+            std::optional<std::string> format, std::optional<std::string> distortion_model) {
+           CameraReadOptions options;
+           options.format = format_of(format);
+           options.distortion_model = distortion_model;
+           if (camera && !camera->is_none()) options.camera = py::str(*camera);
+           options.image_size = image_size;
+           py::gil_scoped_release release;
+           return read_camera(path, options);
+         },
+         py::arg("path"), py::arg("camera") = py::none(), py::arg("image_size") = py::none(),
+         py::arg("format") = py::none(), py::arg("distortion_model") = py::none(),
+         "Reads a camera file in any format fishcam knows (docs/formats.md). camera: which camera of a "
+         "multi-camera file (index or name); image_size: (width, height) for files without one; format: force a "
+         "reader; distortion_model: 'fisheye' or 'plumb_bob' for OpenCV files that do not say.")
       .def(
           "write",
           [](const Camera& camera, const std::string& path, std::optional<std::string> format, bool overwrite) {
@@ -193,9 +153,13 @@ void bind_camera(py::module_& m) {
           py::arg("path"), py::arg("format") = py::none(), py::arg("overwrite") = false,
           "Writes the camera in `format` (default: from the extension); refuses an existing file unless "
           "overwrite=True, and a format that cannot hold the model. Only fishcam JSON keeps a calibration record "
-          "(a UserWarning says when it is left out).")
-      .def_property_readonly(
-          "width", [](const Camera& self) -> decltype(auto) { return self.width(); }, "Image width in pixels (int).")
+          "(a UserWarning says when it is left out).");
+}
+
+// Its parts: the size, the radial model, the plane distortion, the pixel grid, the pose.
+void def_camera_parts(py::class_<Camera>& cls) {
+  cls.def_property_readonly(
+         "width", [](const Camera& self) -> decltype(auto) { return self.width(); }, "Image width in pixels (int).")
       .def_property_readonly(
           "height", [](const Camera& self) -> decltype(auto) { return self.height(); }, "Image height in pixels (int).")
       .def_property_readonly(
@@ -251,15 +215,19 @@ void bind_camera(py::module_& m) {
           "The pose camera to reference, p_ref = R p_cam + t: a tuple of R (3, 3) and t (3,), or None")
       .def_property_readonly(
           "pixel_scale", [](const Camera& c) { return Eigen::Vector2d(c.pixel_scale()); },
-          "(a_x, a_y): pixel = c + a * rho(theta) * direction; float64 array (2,).")
-      .def(
-          "project",
-          [](const Camera& camera, const py::handle& points) {
-            return batch<3, 2>(points, "points", [&](auto in, auto out, auto ok) { camera.project(in, out, ok); });
-          },
-          py::arg("points"),
-          "Projects points (N, 3) of the camera frame: (pixels (N, 2) float64, ok (N,) bool); NaN where the "
-          "point is outside the valid field of view.")
+          "(a_x, a_y): pixel = c + a * rho(theta) * direction; float64 array (2,).");
+}
+
+// What it computes: projection, unprojection, theta(rho), its domain and field of view.
+void def_camera_geometry(py::class_<Camera>& cls) {
+  cls.def(
+         "project",
+         [](const Camera& camera, const py::handle& points) {
+           return batch<3, 2>(points, "points", [&](auto in, auto out, auto ok) { camera.project(in, out, ok); });
+         },
+         py::arg("points"),
+         "Projects points (N, 3) of the camera frame: (pixels (N, 2) float64, ok (N,) bool); NaN where the "
+         "point is outside the valid field of view.")
       .def(
           "unproject",
           [](const Camera& camera, const py::handle& pixels) {
@@ -298,14 +266,18 @@ void bind_camera(py::module_& m) {
           "The model's valid domain (ValidDomain).")
       .def_property_readonly(
           "field_of_view_deg", [](const Camera& self) -> decltype(auto) { return self.field_of_view_deg(); },
-          "The image's angular coverage (FieldOfView, degrees).")
-      .def(
-          "__eq__",
-          [](const Camera& a, const py::object& b) {
-            return py::isinstance<Camera>(b) &&
-                   std::string(parameters_key(a, true)) == std::string(parameters_key(b.cast<const Camera&>(), true));
-          },
-          py::arg("other"), "Equal when every number of the two cameras is (parameters_key).")
+          "The image's angular coverage (FieldOfView, degrees).");
+}
+
+// Its identity: equality, hashing, JSON, pickling.
+void def_camera_identity(py::class_<Camera>& cls) {
+  cls.def(
+         "__eq__",
+         [](const Camera& a, const py::object& b) {
+           return py::isinstance<Camera>(b) &&
+                  std::string(parameters_key(a, true)) == std::string(parameters_key(b.cast<const Camera&>(), true));
+         },
+         py::arg("other"), "Equal when every number of the two cameras is (parameters_key).")
       .def(
           "__hash__", [](const Camera& c) { return py::hash(parameters_key(c, true)); },
           "The hash of parameters_key(): equal cameras hash alike.")
@@ -324,9 +296,61 @@ void bind_camera(py::module_& m) {
         return "<fishcam.Camera " + std::string(model_name(c.model())) + " " + std::to_string(c.width()) + "x" +
                std::to_string(c.height()) + ">";
       });
-  auto camera_class = py::reinterpret_borrow<py::class_<Camera>>(m.attr("Camera"));
-  bind_calibration_record(camera_class);
+}
 
+// ValidDomain and FieldOfView: what a camera reports of its coverage.
+void bind_domain_and_field_of_view(py::module_& m) {
+  py::class_<ValidDomain>(m, "ValidDomain",
+                          "Where a camera's model is valid: theta in [0, theta_max] (closed) or [0, theta_max).")
+      .def_property_readonly(
+          "theta_max_deg", [](const ValidDomain& d) { return d.theta_max * 180 / std::numbers::pi; },
+          "The largest valid angle of incidence (degrees).")
+      .def_readonly("closed", &ValidDomain::closed, "Whether theta_max itself is valid.")
+      .def_property_readonly(
+          "limited_by", [](const ValidDomain& d) { return std::string(to_string(d.limited_by)); },
+          "What sets theta_max: 'model', 'fold' (rho stops increasing) or 'user' (a theta limit).")
+      .def_property_readonly(
+          "rho_max_px",
+          [](const ValidDomain& d) -> std::optional<double> {
+            return d.closed ? std::optional(d.rho_max) : std::nullopt;
+          },
+          "rho(theta_max) in pixel-scale units, or None where the model diverges there.")
+      .def("__repr__", [](const ValidDomain& d) {
+        char buffer[128];
+        std::snprintf(buffer, sizeof buffer, "ValidDomain(theta_max_deg=%.6g, closed=%s, limited_by='%s')",
+                      d.theta_max * 180 / std::numbers::pi, d.closed ? "True" : "False", to_string(d.limited_by));
+        return std::string(buffer);
+      });
+  py::class_<Camera::FieldOfView>(m, "FieldOfView",
+                                  "The image's angular coverage through the principal point (degrees).")
+      .def_readonly("horizontal", &Camera::FieldOfView::horizontal, "Degrees across the image's width.")
+      .def_readonly("vertical", &Camera::FieldOfView::vertical, "Degrees across its height.")
+      .def_readonly("diagonal", &Camera::FieldOfView::diagonal, "Degrees across its diagonal.")
+      .def("__repr__", [](const Camera::FieldOfView& f) {
+        char buffer[128];
+        std::snprintf(buffer, sizeof buffer, "FieldOfView(horizontal=%.6g, vertical=%.6g, diagonal=%.6g)", f.horizontal,
+                      f.vertical, f.diagonal);
+        return std::string(buffer);
+      });
+}
+
+// Camera, its members defined by job.
+void bind_camera_class(py::module_& m) {
+  py::class_<Camera> camera(
+      m, "Camera",
+      "A calibrated camera: a radial model rho(theta) (with tangential terms for some models), principal "
+      "point, pixel scale, image size and "
+      "an optional pose. Pixel centres at integer coordinates; camera frame x right, y down, z "
+      "forward. Immutable; equal cameras compare equal and hash alike.");
+  def_camera_files(camera);
+  def_camera_parts(camera);
+  def_camera_geometry(camera);
+  def_camera_identity(camera);
+  bind_calibration_record(camera);
+}
+
+// AngleBin and FitReport: a fit's error, overall and by angle.
+void bind_fit_report(py::module_& m) {
   // fishcam convert's result, typed: the fitted camera and its error report.
   py::class_<ErrorReport::Bin>(m, "AngleBin", "A fit's error over the rays of one 10-degree band of theta.")
       .def_readonly("theta_from_deg", &ErrorReport::Bin::theta_from_deg, "The band's lower edge (degrees).")
@@ -353,6 +377,10 @@ void bind_camera(py::module_& m) {
                       r.p99_px, r.max_px, r.samples);
         return std::string(buffer);
       });
+}
+
+// Conversion, and the functions that convert.
+void bind_conversion_class(py::module_& m) {
   py::class_<Conversion>(m, "Conversion",
                          "fishcam.convert's result: the fitted camera and its FitReport; unpacks as "
                          "(camera, report).")
@@ -412,6 +440,20 @@ void bind_camera(py::module_& m) {
       py::arg("source"), py::arg("fitted"),
       "The pixel error of `fitted` at every pixel of `source`'s image (float32 (H, W), NaN where the source has no "
       "ray or `fitted` none): what `fishcam convert --error-map` writes.");
+}
+
+// fishcam convert's result, typed: the fitted camera and its error report; the conversions.
+void bind_conversion(py::module_& m) {
+  bind_fit_report(m);
+  bind_conversion_class(m);
+}
+
+}  // namespace
+
+void bind_camera(py::module_& m) {
+  bind_domain_and_field_of_view(m);
+  bind_camera_class(m);
+  bind_conversion(m);
 }
 
 }  // namespace fishcam::python

@@ -7,8 +7,9 @@
 #include <opencv2/imgproc.hpp>
 
 namespace fishcam::python {
-
-void bind_scene(py::module_& m) {
+namespace {
+// The street scenes: rendering and the WoodScape classes.
+void bind_rendering(py::module_& m) {
   m.def(
       "render",
       [](const Camera& camera, std::optional<std::uint64_t> scene_seed, std::optional<RandomPose> change,
@@ -54,7 +55,10 @@ void bind_scene(py::module_& m) {
         return out;
       },
       "The WoodScape classes the renderer labels, by id: [(name, (r, g, b) display colour), ...].");
+}
 
+// Augmentation fidelity against re-rendered truth.
+void bind_fidelity(py::module_& m) {
   m.def(
       "dataset_fidelity",
       [](const std::string& dataset) {
@@ -109,6 +113,13 @@ void bind_scene(py::module_& m) {
       "model: test_set, model, how, samples, valid_share, label_agreement, psnr_db (means over the samples), "
       "endpoint_px (mean distance of the model's map from the camera's own, px) and endpoint_by_angle_px (by the "
       "output pixel's angle of incidence: 0-30, 30-60, 60-90, 90+ degrees; NaN for a band without pixels).");
+}
+
+}  // namespace
+
+void bind_scene(py::module_& m) {
+  bind_rendering(m);
+  bind_fidelity(m);
 }
 
 }  // namespace fishcam::python
