@@ -54,12 +54,27 @@ Array = npt.NDArray[typing.Any]
 Params = dict[str, typing.Any]
 
 
+class _Call:
+    """What one call of a transform computed before albumentations applies it target by
+    target: its SampleChange, and the image and mask warped together (one pass, the
+    maps computed once), each kept with the very input it belongs to."""
+
+    def __init__(self, seed: int, camera: object, depth: object, change: _transforms.SampleChange) -> None:
+        self.seed, self.camera, self.depth, self.change = seed, camera, depth, change
+        self.fused: dict[str, tuple[Array, Array]] = {}
+
+
 class _FishcamDualTransform(_DualTransform):
     """The albumentations side: the seed in get_params (from the transform's
-    generator), the camera and size from the data, one SampleChange per call."""
+    generator), the camera and size from the data, one SampleChange per call for every
+    target, the image and mask warped in one pass."""
 
     def __init__(self, p: float) -> None:
         super().__init__(p=p)
+        # Made in get_params_dependent_on_data, found by the call's seed, camera and
+        # depth (params carry only those, so ReplayCompose stores and replays numbers;
+        # a replay, whose params are copies, draws again: the same change).
+        self._call: typing.Optional[_Call] = None
 
     @property
     def targets(self) -> dict[str, typing.Callable[..., typing.Any]]:
@@ -78,13 +93,41 @@ class _FishcamDualTransform(_DualTransform):
         if camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
         # The depth target, for depth="map" (the scene points of the whole sample).
-        return {"source_camera": camera, "source_depth": data.get("depth")}
+        dependent = {"source_camera": camera, "source_depth": data.get("depth")}
+        self._call = None
+        call = _Call(params["seed"], camera, dependent["source_depth"], self._change({**params, **dependent}))
+        image, mask = data.get("image"), data.get("mask")
+        if isinstance(image, np.ndarray) and isinstance(mask, np.ndarray) and mask.ndim == 2:
+            out_image, out_mask = call.change.image_and_mask(image, mask)
+            call.fused = {"image": (image, out_image), "mask": (mask, out_mask)}
+        self._call = call
+        return dependent
+
+    def _sample_change(self, params: Params) -> _transforms.SampleChange:
+        """This call's SampleChange (made once), or one drawn from params (a replay)."""
+        call = self._call
+        if (
+            call is not None
+            and call.seed == params["seed"]
+            and call.camera is params.get("source_camera")
+            and call.depth is params.get("source_depth")
+        ):
+            return call.change
+        return self._change(params)
+
+    def _fused(self, key: str, array: Array, params: Params) -> typing.Optional[Array]:
+        """The output warped with the other raster target, if ``array`` is the input it was made from."""
+        call = self._call
+        if call is None or call.seed != params["seed"] or key not in call.fused or call.fused[key][0] is not array:
+            return None
+        return call.fused.pop(key)[1]
 
     def _change(self, params: Params) -> _transforms.SampleChange:
         raise NotImplementedError
 
     def apply(self, img: Array, **params: typing.Any) -> Array:
-        return self._change(params).image(img)
+        fused = self._fused("image", img, params)
+        return fused if fused is not None else self._sample_change(params).image(img)
 
     def _mask(self, mask: Array, params: Params, instance: bool) -> Array:
         if mask.ndim == 3:  # albumentations' multi-channel mask: each channel a plane
@@ -92,10 +135,11 @@ class _FishcamDualTransform(_DualTransform):
                 [self._mask(np.ascontiguousarray(mask[..., c]), params, instance) for c in range(mask.shape[2])],
                 axis=-1,
             )
-        return self._change(params).mask(mask, instance=instance)
+        return self._sample_change(params).mask(mask, instance=instance)
 
     def apply_to_mask(self, mask: Array, **params: typing.Any) -> Array:
-        return self._mask(mask, params, instance=False)  # semantic labels: fill_mask (bool: False)
+        fused = self._fused("mask", mask, params)
+        return fused if fused is not None else self._mask(mask, params, instance=False)  # semantic: fill_mask
 
     def apply_to_masks(self, masks: Array, **params: typing.Any) -> Array:
         # albumentations' instance masks: 0 / False where there is no source, whatever fill_mask says.
@@ -109,7 +153,7 @@ class _FishcamDualTransform(_DualTransform):
             return bboxes
         height, width = params["shape"][:2]
         scale = np.array([width, height, width, height], dtype=np.float64)
-        boxes, _ = self._change(params).boxes(bboxes[:, :4].astype(np.float64) * scale, clip=False)
+        boxes, _ = self._sample_change(params).boxes(bboxes[:, :4].astype(np.float64) * scale, clip=False)
         out = bboxes.copy()
         out[:, :4] = boxes / scale
         return out
@@ -117,7 +161,7 @@ class _FishcamDualTransform(_DualTransform):
     def apply_to_keypoints(self, keypoints: Array, **params: typing.Any) -> Array:
         if len(keypoints) == 0:
             return keypoints
-        mapped, visible = self._change(params).points(keypoints[:, :2].astype(np.float64))
+        mapped, visible = self._sample_change(params).points(keypoints[:, :2].astype(np.float64))
         height, width = params["shape"][:2]
         inside = (
             (mapped[:, 0] >= -0.5)
@@ -131,14 +175,14 @@ class _FishcamDualTransform(_DualTransform):
         return out
 
     def apply_to_depth(self, depth: Array, **params: typing.Any) -> Array:
-        return self._change(params).depth_map(depth, "depth")
+        return self._sample_change(params).depth_map(depth, "depth")
 
     def apply_to_polygons(self, polygons: typing.Sequence[Array], **params: typing.Any) -> list[Array]:
-        change = self._change(params)
+        change = self._sample_change(params)
         return [change.polygon(p, f"polygons[{i}]") for i, p in enumerate(polygons)]
 
     def apply_to_camera(self, value: Camera, **params: typing.Any) -> Camera:
-        return self._change(params).camera(value)
+        return self._sample_change(params).camera(value)
 
 
 class RandomViewpoint(_FishcamDualTransform):

@@ -138,3 +138,45 @@ def test_affine_and_errors(cam, data):
     with pytest.raises(fishcam.Error, match="is 10x10 but the camera is 320x242"):
         A.Compose([fa.RandomViewpoint(cam)])(image=np.zeros((10, 10), np.uint8))
     assert "preset='large'" in repr(fa.RandomViewpoint(cam, preset="large"))
+
+
+def test_one_draw_per_call_and_the_image_and_mask_in_one_pass(cam, data, monkeypatch):
+    """albumentations applies a transform target by target: the change is drawn once
+    for all of them, and the image and the mask are warped together (the maps computed
+    once), with the same outputs as the numpy transform's."""
+    draws, passes = [], []
+    draw, warp = fishcam.transforms.RandomViewpoint.draw, fishcam.ViewpointWarp.warp
+
+    def counted_draw(self, *args, **kwargs):
+        draws.append(1)
+        return draw(self, *args, **kwargs)
+
+    def counted_warp(self, *args, **kwargs):
+        passes.append((kwargs.get("image") is not None, kwargs.get("labels") is not None))
+        return warp(self, *args, **kwargs)
+
+    monkeypatch.setattr(fishcam.transforms.RandomViewpoint, "draw", counted_draw)
+    monkeypatch.setattr(fishcam.ViewpointWarp, "warp", counted_warp)
+    pipeline = compose(cam, seed=3)
+    out = pipeline(
+        image=data["image"],
+        mask=data["mask"],
+        bboxes=data["bboxes"],
+        labels=data["labels"],
+        keypoints=data["keypoints"],
+        depth=data["depth"],
+        camera=cam,
+    )
+    assert len(draws) == 1
+    assert passes == [(True, True)]  # image and mask together, nothing else rasterised
+    seed = pipeline.transforms[0].params["seed"]
+    expected = fishcam.transforms.RandomViewpoint(cam, preset="large")(
+        image=data["image"], mask=data["mask"], seed=seed
+    )
+    np.testing.assert_array_equal(out["image"], expected["image"])
+    np.testing.assert_array_equal(out["mask"], expected["mask"])
+    # A replay (its params are copies) draws again, to the same outputs.
+    replay = A.ReplayCompose([fa.RandomViewpoint(cam, preset="medium")])
+    first = replay(image=data["image"], mask=data["mask"])
+    again = A.ReplayCompose.replay(first["replay"], image=data["image"], mask=data["mask"])
+    assert np.array_equal(first["image"], again["image"]) and np.array_equal(first["mask"], again["mask"])

@@ -147,3 +147,33 @@ def test_every_docs_reference_resolves():
                         missing.append(f"{os.path.relpath(file, REPO)}: ({link})")
     assert cited > 100, f"only {cited} references found: is the tree there?"
     assert not missing, "\n".join(missing)
+
+
+def test_every_recipe_of_the_architecture_names_files_that_exist():
+    """docs/architecture.md's recipes ("Add a radial model in 3 steps", ...): the steps
+    are numbered as the title counts them, and every file a recipe names exists (a
+    placeholder NAME: its folder), so a recipe cannot outlive the code it describes."""
+    with open(os.path.join(REPO, "docs/architecture.md"), encoding="utf-8") as f:
+        text = f.read()
+    words = {"3": 3, "4": 4, "5": 5, "three": 3, "four": 4, "five": 5}
+    recipes = re.findall(r"^## (Add .*?) in (\w+) steps\n(.*?)(?=^## |\Z)", text, re.S | re.M)
+    assert len(recipes) >= 3, [r[0] for r in recipes]
+    basenames = {
+        name
+        for top in ("lib", "tools", "python", "docs", "tests", "cmake", "scripts")
+        for _, _, files in os.walk(os.path.join(REPO, top))
+        for name in files
+    }
+    checked = 0
+    for title, count, body in recipes:
+        steps = re.findall(r"^(\d+)\. ", body, re.M)
+        assert steps == [str(i) for i in range(1, words[count] + 1)], f"{title}: steps {steps}, title says {count}"
+        for name in re.findall(r"`([A-Za-z0-9_./-]+\.(?:hpp|cpp|md|py|cmake))`", body):
+            checked += 1
+            if "NAME" in name:
+                assert os.path.isdir(os.path.join(REPO, os.path.dirname(name))), f"{title}: {name}"
+            elif "/" in name:
+                assert os.path.exists(os.path.join(REPO, name)), f"{title}: {name}"
+            else:
+                assert name in basenames, f"{title}: {name}"
+    assert checked >= 10, f"only {checked} files named by the recipes"

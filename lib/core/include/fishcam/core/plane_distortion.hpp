@@ -31,7 +31,7 @@
 //   3. Document its formula in docs/conventions.md and declare it in the formats that
 //      hold it (FormatSpec::distortions, lib/io/src/formats/); the fishcam JSON
 //      writer and reader do not compile until they handle it. A float-kernel form
-//      for the augmentation (lib/augment/src/augmentation.cpp, kernel_plane_form) is
+//      for the augmentation (lib/augment/src/kernel_source.cpp, kernel_plane_form) is
 //      optional: without one, warps from such a camera take the exact path.
 #pragma once
 
