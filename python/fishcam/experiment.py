@@ -227,8 +227,8 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 def _decode(data: bytes, path: str) -> npt.NDArray[typing.Any]:
-    image: typing.Optional[npt.NDArray[typing.Any]] = ft._cv2().imdecode(
-        np.frombuffer(data, np.uint8), ft._cv2().IMREAD_UNCHANGED
+    image: typing.Optional[npt.NDArray[typing.Any]] = ft.data._cv2().imdecode(
+        np.frombuffer(data, np.uint8), ft.data._cv2().IMREAD_UNCHANGED
     )
     if image is None:
         raise Error(f"{path}: cannot read image")

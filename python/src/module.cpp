@@ -1,7 +1,7 @@
 // fishcam._fishcam: the C++ library for Python. Thin: argument checks and array
 // plumbing only, the GIL released around every computation; one file per area
 // (camera.cpp, augmentation.cpp, metrics.cpp, calibration.cpp, scene.cpp; shared plumbing in arrays.cpp). The
-// package's Python modules (fishcam/__init__.py, transforms.py, torch.py,
+// package's Python modules (fishcam/__init__.py, transforms.py, torch/,
 // albumentations.py) build the documented API on top.
 #include "bindings.hpp"
 

@@ -95,7 +95,6 @@ bool ray_polynomial_start(const Camera& camera, SourceParams* p) {
   return true;
 }
 
-
 // Where a lens table must hold: the source image and this margin around it.
 constexpr double kLensTableMarginPx = 16;
 

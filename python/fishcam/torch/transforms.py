@@ -1,0 +1,424 @@
+"""RandomViewpoint, RandomAffine and Resize as torchvision.transforms.v2 transforms:
+one change per call for every target of the sample."""
+
+import typing
+
+import numpy as np
+import PIL.Image
+import torch
+from torchvision import tv_tensors
+from torchvision.transforms import v2
+
+from .. import Camera, Error, derive_seed
+from .. import transforms as _transforms
+from .seeding import _sample_records, _sample_seed, torch_seed
+from .targets import (
+    _MASK_DTYPES,
+    DepthMap,
+    Fill,
+    Params,
+    Polygon,
+    _cpu,
+    _image_to_numpy,
+    _instance_mask_ids,
+    _masks_under_instance_keys,
+    _numpy,
+    _numpy_to_image,
+    _size_of,
+    _split_fill,
+    is_instance_mask,
+)
+
+
+class _FishcamTransform(v2.Transform):
+    """The v2 side of fishcam's transforms: one SampleChange per call (make_params),
+    applied to every input it knows by type (transform)."""
+
+    _transformed_types = (torch.Tensor, Camera)
+
+    def __init__(self, min_visibility: float, boxes: str = "outline") -> None:
+        super().__init__()
+        if not 0 <= _transforms._number(min_visibility, "min_visibility") <= 1:
+            raise Error(f"min_visibility: must be in [0, 1], got {min_visibility}")
+        self.min_visibility = float(min_visibility)
+        self.boxes = _transforms._choice(boxes, BOX_MODES, "boxes")
+
+    def _seed(self) -> int:
+        """The sample's seed (sample_seed) for the first fishcam transform of the
+        sample, seeds derived from it for any later one; else one from torch's generator."""
+        seed = _sample_seed.get()
+        if seed is None:
+            return torch_seed()
+        records = _sample_records.get()
+        made = len(records) if records is not None else 0
+        return seed if made == 0 else derive_seed(seed, "fishcam-transform", made)
+
+    def check_inputs(self, flat_inputs: list[typing.Any]) -> None:
+        for x in flat_inputs:
+            # Passed through by torchvision, an image or mask in these forms would silently
+            # keep its geometry while the rest of the sample moves.
+            if isinstance(x, np.ndarray) and x.ndim >= 2:
+                raise Error(
+                    f"a numpy array {x.shape} in a torchvision pipeline: convert it (torch.from_numpy, "
+                    "tv_tensors.Image / Mask), or use fishcam.transforms for numpy samples"
+                )
+            if isinstance(x, PIL.Image.Image):
+                raise Error("PIL images: convert them first (v2.PILToTensor() or v2.ToImage() before this transform)")
+
+    def _draw(self, flat_inputs: list[typing.Any]) -> _transforms.SampleChange:
+        raise NotImplementedError
+
+    def forward(self, *inputs: typing.Any) -> typing.Any:
+        # The structure is flattened before make_params sees it: the masks under a
+        # "masks" key (instance masks) are found here, by id, for the call.
+        token = _instance_mask_ids.set(frozenset(_masks_under_instance_keys(inputs)))
+        try:
+            return super().forward(*inputs)
+        finally:
+            _instance_mask_ids.reset(token)
+
+    def make_params(self, flat_inputs: list[typing.Any]) -> Params:
+        sample_change = self._draw(flat_inputs)
+        records = _sample_records.get()
+        if records is not None:
+            records.append(sample_change.record)
+        instance_ids = _instance_mask_ids.get()
+        return {
+            "change": sample_change,
+            "instance_masks": self._paired_masks(flat_inputs, instance_ids) if self.boxes == "from_masks" else None,
+            "instance_ids": instance_ids,
+            "done": self._image_and_mask(flat_inputs, sample_change, instance_ids),
+        }
+
+    @staticmethod
+    def _paired_masks(
+        flat_inputs: list[typing.Any], instance_ids: typing.AbstractSet[int]
+    ) -> typing.Optional[torch.Tensor]:
+        """boxes="from_masks": the NxHxW instance masks paired by index with the
+        sample's N boxes, as torchvision's detection targets pair them -- those under
+        the key "masks" (a {"boxes", "labels", "masks"} target), else the one set of
+        instance masks in the sample; a count that differs, or a choice that would be a
+        guess, is refused. A sample without boxes has nothing to pair (None)."""
+        boxes = [x for x in flat_inputs if isinstance(x, tv_tensors.BoundingBoxes)]
+        if not boxes:
+            return None
+        if len(boxes) != 1:
+            raise Error(f'boxes="from_masks": expected one BoundingBoxes in the sample, got {len(boxes)}')
+        masks = [
+            x
+            for x in flat_inputs
+            if isinstance(x, tv_tensors.Mask) and x.ndim == 3 and is_instance_mask(x, id(x) in instance_ids)
+        ]
+        targets = [m for m in masks if id(m) in instance_ids]
+        chosen = targets if len(targets) == 1 else masks
+        if len(chosen) != 1:
+            raise Error(
+                f'boxes="from_masks": expected the instance masks under "masks" or one NxHxW instance Mask in the '
+                f"sample, got {len(masks)} instance masks"
+            )
+        if boxes[0].shape[0] != chosen[0].shape[0]:
+            raise Error(
+                f'boxes="from_masks": {boxes[0].shape[0]} boxes but {chosen[0].shape[0]} instance masks (box i is '
+                "mask i's: the counts must match)"
+            )
+        return typing.cast(torch.Tensor, chosen[0])
+
+    @staticmethod
+    def _image_and_mask(
+        flat_inputs: list[typing.Any],
+        change: _transforms.SampleChange,
+        instance_ids: typing.AbstractSet[int] = frozenset(),
+    ) -> dict[int, torch.Tensor]:
+        """The sample's first image and first HxW mask resampled in one pass (the maps
+        computed once for both), keyed by the inputs' ids for transform()."""
+        images = [
+            x
+            for x in flat_inputs
+            if isinstance(x, torch.Tensor)
+            and x.ndim == 3
+            and (isinstance(x, tv_tensors.Image) or not isinstance(x, tv_tensors.TVTensor))
+        ]
+        masks = [x for x in flat_inputs if isinstance(x, tv_tensors.Mask) and x.ndim == 2]
+        if not images or not masks:
+            return {}
+        image, mask = images[0], masks[0]
+        out_image, out_mask = change.image_and_mask(
+            _image_to_numpy(image, "image"),
+            _numpy(mask, "mask", _MASK_DTYPES),
+            instance=is_instance_mask(mask, id(mask) in instance_ids),
+        )
+        return {
+            id(image): _numpy_to_image(out_image, image),
+            id(mask): tv_tensors.wrap(torch.from_numpy(out_mask), like=mask),
+        }
+
+    def transform(self, inpt: typing.Any, params: Params) -> typing.Any:
+        done = params["done"].get(id(inpt))
+        if done is not None:
+            return done
+        change = params["change"]
+        if isinstance(inpt, Camera):
+            return change.camera(inpt)
+        if isinstance(inpt, tv_tensors.BoundingBoxes):
+            return self._boxes(inpt, change, params["instance_masks"])
+        if isinstance(inpt, tv_tensors.KeyPoints):
+            points = _cpu(inpt, "keypoints").reshape(-1, 2).double().numpy()
+            mapped, visible = change.points(points)
+            out = torch.from_numpy(mapped).to(inpt.dtype).reshape(inpt.shape)
+            return tv_tensors.wrap(out, like=inpt)
+        if isinstance(inpt, Polygon):
+            mapped = change.polygon(_cpu(inpt, "polygon").double().numpy())
+            return tv_tensors.wrap(torch.from_numpy(mapped).to(inpt.dtype), like=inpt)
+        if isinstance(inpt, DepthMap):
+            tensor = _cpu(inpt, "depth map")
+            flat = tensor.reshape(tensor.shape[-2:]) if tensor.ndim == 3 and tensor.shape[0] == 1 else tensor
+            if flat.ndim != 2 or flat.dtype != torch.float32:
+                raise Error(f"depth map: expected HxW or 1xHxW float32, got {tuple(tensor.shape)} {tensor.dtype}")
+            out = torch.from_numpy(change.depth_map(flat.numpy())).reshape(tensor.shape)
+            return tv_tensors.wrap(out, like=inpt)
+        if isinstance(inpt, tv_tensors.Mask):
+            instance = is_instance_mask(inpt, id(inpt) in params.get("instance_ids", ()))
+            return tv_tensors.wrap(self._masks(inpt, change, instance), like=inpt)
+        if isinstance(inpt, tv_tensors.TVTensor) and not isinstance(inpt, (tv_tensors.Image, tv_tensors.Video)):
+            raise Error(f"{type(inpt).__name__}: not a target fishcam's transforms know")
+        return self._images(inpt, change)
+
+    @staticmethod
+    def _masks(mask: torch.Tensor, change: _transforms.SampleChange, instance: bool) -> torch.Tensor:
+        """HxW or NxHxW masks resampled (each plane on its own); where there is no
+        source, 0 (False) for instance masks, else the semantic masks' fill."""
+        tensor = _cpu(mask, "mask")
+        if tensor.ndim == 2:
+            return torch.from_numpy(change.mask(_numpy(tensor, "mask", _MASK_DTYPES), instance=instance))
+        if tensor.ndim == 3:  # instance masks (N, H, W), or a 1xHxW label map: each plane on its own
+            planes = [
+                change.mask(_numpy(plane, f"mask[{i}]", _MASK_DTYPES), f"mask[{i}]", instance)
+                for i, plane in enumerate(tensor)
+            ]
+            return torch.from_numpy(np.stack(planes)) if planes else tensor.clone()
+        raise Error(f"mask: expected HxW or NxHxW, got shape {tuple(tensor.shape)}")
+
+    @staticmethod
+    def _images(image: torch.Tensor, change: _transforms.SampleChange) -> torch.Tensor:
+        if image.ndim == 4:  # a batch of images sharing the camera
+            return torch.stack([_FishcamTransform._images(x, change) for x in image])
+        array = _image_to_numpy(image, "image")
+        return _numpy_to_image(change.image(array), image)
+
+    def _boxes(
+        self,
+        boxes: tv_tensors.BoundingBoxes,
+        change: _transforms.SampleChange,
+        instance_masks: typing.Optional[torch.Tensor],
+    ) -> tv_tensors.BoundingBoxes:
+        fmt = boxes.format
+        if "ROTATED" in str(fmt).upper() or "XYXYXYXY" in str(fmt).upper():
+            raise Error(f"boxes: rotated boxes ({fmt}) are not supported; use keypoints for their corners")
+        xyxy = v2.functional.convert_bounding_box_format(
+            boxes.as_subclass(torch.Tensor), old_format=fmt, new_format=tv_tensors.BoundingBoxFormat.XYXY
+        )
+        # Each box's own outline, densely transformed: its place and, in both modes, its
+        # visibility (the share of the transformed box inside the image).
+        mapped, seen = change.boxes(_cpu(xyxy, "boxes").double().numpy())
+        out, visibility = torch.from_numpy(mapped), torch.from_numpy(seen)
+        if instance_masks is not None:  # from_masks: the tight box of mask i (no-source pixels: in none)
+            warped = self._masks(instance_masks, change, instance=True)
+            out = torch.zeros((len(warped), 4), dtype=torch.float64)
+            for i, plane in enumerate(warped):
+                ys, xs = torch.nonzero(plane, as_tuple=True)
+                if len(xs):
+                    out[i] = torch.tensor([xs.min(), ys.min(), xs.max() + 1, ys.max() + 1], dtype=torch.float64)
+                else:
+                    visibility[i] = 0  # the instance left the image
+        # Boxes seen too little collapse to nothing: v2.SanitizeBoundingBoxes drops them.
+        out[visibility < self.min_visibility] = 0
+        out = v2.functional.convert_bounding_box_format(
+            out.to(boxes.dtype), old_format=tv_tensors.BoundingBoxFormat.XYXY, new_format=fmt
+        )
+        return tv_tensors.wrap(out, like=boxes)
+
+
+# How BoundingBoxes follow the change: "outline" -- each box from its own outline,
+# densely transformed (amodal boxes stay amodal; the default) -- or "from_masks" --
+# the tight box of the instance mask of the same index.
+BOX_MODES = ("outline", "from_masks")
+
+
+class RandomViewpoint(_FishcamTransform):
+    """The paper's viewpoint change as a torchvision v2 transform: one random change
+    per call for everything in the sample (any structure v2 takes; the same structure
+    back). The camera comes from the constructor or from a fishcam.Camera in the
+    sample (which comes back as the augmented camera: its pose moved by the change).
+
+    Targets: ``tv_tensors.Image`` or plain image tensors (CxHxW or a batch BxCxHxW
+    sharing the camera; uint8, uint16, float32; bilinear), ``tv_tensors.Mask`` (HxW
+    class ids or NxHxW instance masks, any integer or bool dtype, kept; nearest;
+    no-source pixels as ``fill`` below),
+    ``tv_tensors.BoundingBoxes`` (each box from its own densely transformed outline,
+    so amodal and loose boxes keep their meaning; with ``boxes="from_masks"`` the
+    tight box of the transformed instance mask of the same index instead; clipped;
+    boxes seen less than ``min_visibility`` collapse to zero size, which
+    ``v2.SanitizeBoundingBoxes`` drops), ``tv_tensors.KeyPoints`` (mapped
+    exactly; points that leave the view keep their coordinates outside the canvas,
+    NaN where they have no image), ``fishcam.torch.DepthMap``, ``fishcam.torch.Polygon``.
+    Without a seeded dataset, the seed comes from torch's generator.
+
+    Fill, where the moved camera has no source, per target type as torchvision's
+    ``fill``: a number is the images' value; a dict, ``{tv_tensors.Image: 0,
+    tv_tensors.Mask: 255}``, gives the images' and the semantic masks' (either may
+    be left out; other keys, torchvision's "others" included, are refused).
+    Semantic masks (HxW or 1xHxW, integer dtype) get ``fill_mask`` (or
+    ``fill[tv_tensors.Mask]``; an integer in 0..65535 that fits the mask's dtype;
+    given both ways, they must agree), e.g. the loss's ``ignore_index``. Instance
+    masks get 0 (False) whatever either says, so no-source pixels join no instance
+    and the boxes taken from the masks stay tight: bool masks, NxHxW masks with
+    N >= 2, and the masks under the key "masks" of a dict (a detection target
+    ``{"boxes", "labels", "masks"}``; ``is_instance_mask``).
+
+    Args:
+        camera: the fishcam.Camera of the images, or None: then the sample must hold one.
+        preset: "small", "medium", "large" or "train" (the paper's ranges); None, or
+            max_rotation_deg and max_translation given, draws uniformly per axis in
+            [-max, max] instead.
+        max_rotation_deg, max_translation: the ranges without a preset (degrees; units
+            of the depth prior: the unit sphere's, or the depth map's).
+        depth: where a pixel's scene point is assumed to be when the camera moves:
+            "source-sphere" (default), "target-sphere", "infinity" (rotation only
+            matters), or "map" (the sample's fishcam.torch.DepthMap; exact).
+        p: probability of applying a change (else the identity, still recorded).
+        fill, fill_mask: the no-source values per target type (above).
+        sampling: "grid" (maps interpolated from grid nodes, within 1/32 px of the
+            per-pixel map) or "exact".
+        depth_values: what a DepthMap holds, "range" (along the ray) or "z".
+        min_visibility: boxes seen less than this share of their area collapse to
+            zero size (the same share in both box modes: of the box's transformed outline).
+        boxes: "outline" (default) or "from_masks": box i becomes the tight box of
+            instance mask i (the sample's one NxHxW instance Mask, N = the number of
+            boxes, else fishcam.Error), as torchvision pairs detection targets.
+    """
+
+    def __init__(
+        self,
+        camera: typing.Optional[Camera] = None,
+        preset: typing.Optional[str] = "train",
+        max_rotation_deg: typing.Optional[float] = None,
+        max_translation: typing.Optional[float] = None,
+        depth: str = "source-sphere",
+        p: float = 1.0,
+        fill: Fill = 0,
+        fill_mask: int = 0,
+        sampling: str = "grid",
+        depth_values: str = "range",
+        min_visibility: float = 0.0,
+        boxes: str = "outline",
+    ) -> None:
+        super().__init__(min_visibility, boxes)
+        if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
+            fill, fill_mask = _split_fill(fill, fill_mask)
+        self.numpy_transform = _transforms.RandomViewpoint(
+            camera,
+            preset=preset,
+            max_rotation_deg=max_rotation_deg,
+            max_translation=max_translation,
+            depth=depth,
+            p=p,
+            fill=fill,
+            fill_mask=fill_mask,
+            sampling=sampling,
+            depth_values=depth_values,
+        )
+
+    def _draw(self, flat_inputs: list[typing.Any]) -> _transforms.SampleChange:
+        cameras = [x for x in flat_inputs if isinstance(x, Camera)]
+        if len(cameras) > 1 and any(c != cameras[0] for c in cameras[1:]):
+            raise Error("camera: the sample holds several different cameras; one change needs one camera")
+        camera = cameras[0] if cameras else self.numpy_transform.camera
+        if camera is None:
+            raise Error("camera: none given (pass one to the constructor or put a fishcam.Camera in the sample)")
+        depth_map = None
+        if self.numpy_transform.depth == "map":  # the sample's DepthMap places the scene points
+            maps = [x for x in flat_inputs if isinstance(x, DepthMap)]
+            if len(maps) != 1:
+                raise Error(f"depth='map' needs exactly one fishcam.torch.DepthMap in the sample, got {len(maps)}")
+            tensor = _cpu(maps[0], "depth map")
+            plane = tensor.reshape(tensor.shape[-2:]) if tensor.ndim == 3 and tensor.shape[0] == 1 else tensor
+            depth_map = _numpy(plane, "depth map", "HxW or 1xHxW float32")
+        return self.numpy_transform.draw(camera, self._seed(), depth_map)
+
+    def extra_repr(self) -> str:
+        return (
+            repr(self.numpy_transform)[len("RandomViewpoint(") : -1]
+            + f", min_visibility={self.min_visibility}, boxes={self.boxes!r}"
+        )
+
+
+class RandomAffine(_FishcamTransform):
+    """The paper's affine baseline (fishcam.transforms.RandomAffine) as a torchvision
+    v2 transform, with the targets of RandomViewpoint (depth maps keep their values;
+    a camera in the sample is passed on unchanged: the baseline has no camera model)
+    and its ``fill`` and ``fill_mask`` (instance masks get 0 / False), ``min_visibility``
+    and ``boxes`` ("outline" or "from_masks", as RandomViewpoint's)."""
+
+    def __init__(
+        self,
+        preset: typing.Optional[str] = "train",
+        max_rotation_deg: typing.Optional[float] = None,
+        max_translation: typing.Optional[float] = None,
+        scale_range: typing.Optional[tuple[float, float]] = None,
+        p: float = 1.0,
+        fill: Fill = 0,
+        fill_mask: int = 0,
+        min_visibility: float = 0.0,
+        boxes: str = "outline",
+    ) -> None:
+        super().__init__(min_visibility, boxes)
+        if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
+            fill, fill_mask = _split_fill(fill, fill_mask)
+        self.numpy_transform = _transforms.RandomAffine(
+            preset=preset,
+            max_rotation_deg=max_rotation_deg,
+            max_translation=max_translation,
+            scale_range=scale_range,
+            p=p,
+            fill=fill,
+            fill_mask=fill_mask,
+        )
+
+    def _draw(self, flat_inputs: list[typing.Any]) -> _transforms.SampleChange:
+        return self.numpy_transform.draw(_size_of(flat_inputs), self._seed())
+
+    def extra_repr(self) -> str:
+        return (
+            repr(self.numpy_transform)[len("RandomAffine(") : -1]
+            + f", min_visibility={self.min_visibility}, boxes={self.boxes!r}"
+        )
+
+
+class Resize(v2.Resize):
+    """torchvision's ``v2.Resize`` that keeps the sample's camera true: images, masks,
+    boxes and keypoints as ``v2.Resize`` resizes them, and a fishcam.Camera in the
+    sample resized to the same size (``Camera.resized``: the same lens, c' = (c + 0.5)
+    s - 0.5, a' = a s; pixel centres map as torchvision's resize maps them), so the
+    camera still projects scene points onto the resized image. torchvision's own
+    geometric transforms (flips, crops, rotations, perspective, ``v2.Resize``) pass a
+    camera through unchanged: after them it no longer describes the image."""
+
+    _transformed_types = (*v2.Resize._transformed_types, Camera)
+
+    def make_params(self, flat_inputs: list[typing.Any]) -> Params:
+        params: Params = super().make_params(flat_inputs)
+        height, width = v2.query_size(flat_inputs)
+        probe = v2.functional.resize(
+            torch.zeros((1, height, width), dtype=torch.uint8), self.size, max_size=self.max_size, antialias=False
+        )
+        return {**params, "size": (width, height), "camera_size": (int(probe.shape[-1]), int(probe.shape[-2]))}
+
+    def transform(self, inpt: typing.Any, params: Params) -> typing.Any:
+        if isinstance(inpt, Camera):
+            if (inpt.width, inpt.height) != params["size"]:
+                raise Error(
+                    f"camera: {inpt.width}x{inpt.height} but the images are {params['size'][0]}x{params['size'][1]} "
+                    "(a transform before this one changed them without the camera)"
+                )
+            return inpt.resized(*params["camera_size"])
+        return super().transform(inpt, params)
