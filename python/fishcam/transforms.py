@@ -640,6 +640,22 @@ class RandomViewpoint:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.ViewpointChange()
+        return self.sample_change(camera, change, seed, depth_map)
+
+    def sample_change(
+        self,
+        camera: Camera,
+        change: ViewpointChange,
+        seed: typing.Optional[int] = None,
+        depth_map: typing.Optional[Array] = None,
+    ) -> SampleChange:
+        """The SampleChange of a given ``change`` for images of ``camera``, under this
+        transform's depth, fill and sampling (``seed``: what the record says; the
+        functional API, fishcam.torch.functional, comes here)."""
+        if not isinstance(camera, Camera):
+            raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
+        if not isinstance(change, ViewpointChange):
+            raise Error(f"change: expected a fishcam.ViewpointChange, got {type(change).__name__}")
         if self.depth == "infinity":
             # The prior at infinity sees no translation: the image gets the rotation
             # alone, and so do the returned camera and the record (what the image got).
@@ -822,6 +838,19 @@ class RandomAffine:
             seed = draw_seed(self.rng)
         seed = _check_seed(seed)
         change = self.change_for(seed) if _applies(self.p, seed) else _fishcam.AffineChange()
+        return self.sample_change((width, height), change, seed)
+
+    def sample_change(
+        self, size: tuple[int, int], change: _fishcam.AffineChange, seed: typing.Optional[int] = None
+    ) -> SampleChange:
+        """The SampleChange of a given ``change`` for images of ``size`` = (width,
+        height), under this transform's fill (``seed``: what the record says)."""
+        sides = [_integer(v, "size") for v in _sequence(size, "size", "(width, height)")]
+        if len(sides) != 2 or not all(1 <= v <= _MAX_SIDE for v in sides):
+            raise Error(f"size: expected (width, height), each in 1..{_MAX_SIDE}, got {_shown(size)}")
+        width, height = sides
+        if not isinstance(change, _fishcam.AffineChange):
+            raise Error(f"change: expected a fishcam AffineChange, got {type(change).__name__}")
 
         def resample(
             image: typing.Optional[Array], labels: typing.Optional[Array], label_fill: int

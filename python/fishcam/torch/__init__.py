@@ -38,6 +38,7 @@ except ImportError as error:  # pragma: no cover - the message is the point
 if not hasattr(tv_tensors, "KeyPoints"):  # pragma: no cover
     raise ImportError("fishcam.torch needs torchvision >= 0.23 (tv_tensors.KeyPoints); pip install -U torchvision")
 
+from . import functional
 from .batch import WarpedBatch, collate, warp_batch
 from .data import EpochSampler, WoodScapeDataset
 from .seeding import record_changes, sample_seed, torch_seed, worker_init_fn
@@ -45,6 +46,7 @@ from .targets import DepthMap, Polygon, is_instance_mask
 from .transforms import RandomAffine, RandomViewpoint, Resize
 
 __all__ = [
+    "functional",
     "RandomViewpoint",
     "RandomAffine",
     "Resize",

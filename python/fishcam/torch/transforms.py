@@ -11,13 +11,13 @@ from torchvision.transforms import v2
 
 from .. import Camera, Error, derive_seed
 from .. import transforms as _transforms
+from . import functional
 from .seeding import _sample_records, _sample_seed, torch_seed
 from .targets import (
     _MASK_DTYPES,
     DepthMap,
     Fill,
     Params,
-    Polygon,
     _cpu,
     _image_to_numpy,
     _instance_mask_ids,
@@ -156,86 +156,11 @@ class _FishcamTransform(v2.Transform):
         done = params["done"].get(id(inpt))
         if done is not None:
             return done
-        change = params["change"]
-        if isinstance(inpt, Camera):
-            return change.camera(inpt)
-        if isinstance(inpt, tv_tensors.BoundingBoxes):
-            return self._boxes(inpt, change, params["instance_masks"])
-        if isinstance(inpt, tv_tensors.KeyPoints):
-            points = _cpu(inpt, "keypoints").reshape(-1, 2).double().numpy()
-            mapped, visible = change.points(points)
-            out = torch.from_numpy(mapped).to(inpt.dtype).reshape(inpt.shape)
-            return tv_tensors.wrap(out, like=inpt)
-        if isinstance(inpt, Polygon):
-            mapped = change.polygon(_cpu(inpt, "polygon").double().numpy())
-            return tv_tensors.wrap(torch.from_numpy(mapped).to(inpt.dtype), like=inpt)
-        if isinstance(inpt, DepthMap):
-            tensor = _cpu(inpt, "depth map")
-            flat = tensor.reshape(tensor.shape[-2:]) if tensor.ndim == 3 and tensor.shape[0] == 1 else tensor
-            if flat.ndim != 2 or flat.dtype != torch.float32:
-                raise Error(f"depth map: expected HxW or 1xHxW float32, got {tuple(tensor.shape)} {tensor.dtype}")
-            out = torch.from_numpy(change.depth_map(flat.numpy())).reshape(tensor.shape)
-            return tv_tensors.wrap(out, like=inpt)
+        instance = None
         if isinstance(inpt, tv_tensors.Mask):
             instance = is_instance_mask(inpt, id(inpt) in params.get("instance_ids", ()))
-            return tv_tensors.wrap(self._masks(inpt, change, instance), like=inpt)
-        if isinstance(inpt, tv_tensors.TVTensor) and not isinstance(inpt, (tv_tensors.Image, tv_tensors.Video)):
-            raise Error(f"{type(inpt).__name__}: not a target fishcam's transforms know")
-        return self._images(inpt, change)
-
-    @staticmethod
-    def _masks(mask: torch.Tensor, change: _transforms.SampleChange, instance: bool) -> torch.Tensor:
-        """HxW or NxHxW masks resampled (each plane on its own); where there is no
-        source, 0 (False) for instance masks, else the semantic masks' fill."""
-        tensor = _cpu(mask, "mask")
-        if tensor.ndim == 2:
-            return torch.from_numpy(change.mask(_numpy(tensor, "mask", _MASK_DTYPES), instance=instance))
-        if tensor.ndim == 3:  # instance masks (N, H, W), or a 1xHxW label map: each plane on its own
-            planes = [
-                change.mask(_numpy(plane, f"mask[{i}]", _MASK_DTYPES), f"mask[{i}]", instance)
-                for i, plane in enumerate(tensor)
-            ]
-            return torch.from_numpy(np.stack(planes)) if planes else tensor.clone()
-        raise Error(f"mask: expected HxW or NxHxW, got shape {tuple(tensor.shape)}")
-
-    @staticmethod
-    def _images(image: torch.Tensor, change: _transforms.SampleChange) -> torch.Tensor:
-        if image.ndim == 4:  # a batch of images sharing the camera
-            return torch.stack([_FishcamTransform._images(x, change) for x in image])
-        array = _image_to_numpy(image, "image")
-        return _numpy_to_image(change.image(array), image)
-
-    def _boxes(
-        self,
-        boxes: tv_tensors.BoundingBoxes,
-        change: _transforms.SampleChange,
-        instance_masks: typing.Optional[torch.Tensor],
-    ) -> tv_tensors.BoundingBoxes:
-        fmt = boxes.format
-        if "ROTATED" in str(fmt).upper() or "XYXYXYXY" in str(fmt).upper():
-            raise Error(f"boxes: rotated boxes ({fmt}) are not supported; use keypoints for their corners")
-        xyxy = v2.functional.convert_bounding_box_format(
-            boxes.as_subclass(torch.Tensor), old_format=fmt, new_format=tv_tensors.BoundingBoxFormat.XYXY
-        )
-        # Each box's own outline, densely transformed: its place and, in both modes, its
-        # visibility (the share of the transformed box inside the image).
-        mapped, seen = change.boxes(_cpu(xyxy, "boxes").double().numpy())
-        out, visibility = torch.from_numpy(mapped), torch.from_numpy(seen)
-        if instance_masks is not None:  # from_masks: the tight box of mask i (no-source pixels: in none)
-            warped = self._masks(instance_masks, change, instance=True)
-            out = torch.zeros((len(warped), 4), dtype=torch.float64)
-            for i, plane in enumerate(warped):
-                ys, xs = torch.nonzero(plane, as_tuple=True)
-                if len(xs):
-                    out[i] = torch.tensor([xs.min(), ys.min(), xs.max() + 1, ys.max() + 1], dtype=torch.float64)
-                else:
-                    visibility[i] = 0  # the instance left the image
-        # Boxes seen too little collapse to nothing: v2.SanitizeBoundingBoxes drops them.
-        out[visibility < self.min_visibility] = 0
-        out = v2.functional.convert_bounding_box_format(
-            out.to(boxes.dtype), old_format=tv_tensors.BoundingBoxFormat.XYXY, new_format=fmt
-        )
-        return tv_tensors.wrap(out, like=boxes)
+        options = functional.ChangeOptions(instance, self.min_visibility, params["instance_masks"])
+        return functional.apply_change(inpt, params["change"], options)
 
 
 # How BoundingBoxes follow the change: "outline" -- each box from its own outline,
