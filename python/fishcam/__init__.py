@@ -72,6 +72,11 @@ __all__ = [
     "set_num_threads",
     "presets",
     "change_to_dict",
+    "DepthSource",
+    "Sampling",
+    "DepthValues",
+    "Preset",
+    "BoxMode",
     "__version__",
 ]
 
@@ -300,3 +305,4 @@ def change_to_dict(
 
 # Submodules that need the names above (``fishcam.metrics`` without a separate import).
 from . import metrics  # noqa: E402,F401
+from .options import BoxMode, DepthSource, DepthValues, Preset, Sampling  # noqa: E402,F401

@@ -46,6 +46,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import Camera, Error, ViewpointChange, ViewpointWarp, _check_seed, _fishcam, _shown, change_to_dict
+from . import options as _options
 
 __all__ = [
     "RandomViewpoint",
@@ -91,14 +92,18 @@ def _integer(value: object, what: str) -> int:
 
 
 def _choice(value: object, choices: typing.Sequence[str], what: str, separator: str = " or ") -> str:
-    """value, one of the names ``choices``, or fishcam.Error listing them."""
+    """value (a name, or its enum member from fishcam.options: the plain name is
+    returned), one of the names ``choices``, or fishcam.Error listing them."""
+    value = _options.plain(value)
     if not isinstance(value, str) or value not in choices:
         raise Error(f"{what}: expected {separator.join(choices)}, got {_shown(value)}")
     return value
 
 
 def _preset_name(preset: object, presets: typing.Mapping[str, typing.Any]) -> str:
-    """preset if it is a string (the library refuses unknown names), else fishcam.Error."""
+    """preset (or its fishcam.Preset member) as a plain string (the library refuses
+    unknown names), else fishcam.Error."""
+    preset = _options.plain(preset)
     if not isinstance(preset, str):
         raise Error(f"preset: expected a name ({', '.join(presets)}), got {_shown(preset)}")
     return preset
@@ -583,8 +588,8 @@ class RandomViewpoint:
         sampling: str = "grid",
         depth_values: str = "range",
     ) -> None:
-        _choice(sampling, _fishcam.sampling_names(), "sampling")
-        _choice(depth_values, _fishcam.depth_values_names(), "depth_values")
+        sampling = _choice(sampling, _fishcam.sampling_names(), "sampling")
+        depth_values = _choice(depth_values, _fishcam.depth_values_names(), "depth_values")
         if camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
         if (max_rotation_deg is None) != (max_translation is None):
@@ -598,8 +603,9 @@ class RandomViewpoint:
             if not (np.isfinite(translation) and translation >= 0):
                 raise Error(f"max_translation: must be finite and >= 0, got {max_translation}")
         else:
-            _fishcam.check_preset(_preset_name(preset, _fishcam.presets()))
-        _choice(depth, _fishcam.depth_priors_and_map(), "depth", ", ")
+            preset = _preset_name(preset, _fishcam.presets())
+            _fishcam.check_preset(preset)
+        depth = _choice(depth, _fishcam.depth_priors_and_map(), "depth", ", ")
         _check_p(p)
         _check_rng(rng)
         self.fill, self.fill_mask = _split_fill(fill, fill_mask)  # the images', the semantic masks'
@@ -809,8 +815,8 @@ class RandomAffine:
                 _number(max_rotation_deg, "max_rotation_deg"), _number(max_translation, "max_translation"), low, high, 0
             )
             self.scale_range = (low, high)
-        elif _preset_name(preset, _fishcam.affine_presets()) not in _fishcam.affine_presets():
-            _fishcam.random_affine(typing.cast(str, preset), 0)  # raises naming the presets
+        elif (preset := _preset_name(preset, _fishcam.affine_presets())) not in _fishcam.affine_presets():
+            _fishcam.random_affine(preset, 0)  # raises naming the presets
         _check_p(p)
         _check_rng(rng)
         self.fill, self.fill_mask = _split_fill(fill, fill_mask)  # the images', the semantic masks'
