@@ -6,6 +6,7 @@ library's one-line message. See docs/python.md.
 """
 
 import functools as _functools
+import os as _os
 import typing as _typing
 
 import numpy as _np
@@ -105,6 +106,26 @@ def _shown(value: object, limit: int = 40) -> str:
     """repr(value) on one line, shortened for a message (a 400-digit integer, an array...)."""
     text = " ".join(repr(value).split())
     return text if len(text) <= limit else f"{text[: limit // 2]}... ({len(text)} characters)"
+
+
+# The largest camera file the library reads (lib/io/src/document.hpp, kMaxDocumentBytes).
+_MAX_CAMERA_FILE_BYTES = 16 << 20
+
+
+def _read_regular_file(path: str, max_bytes: int, what: str) -> bytes:
+    """The bytes of ``path``, a regular file of at most ``max_bytes``: a FIFO, a device
+    (/dev/zero) or a missing file is refused in one line before anything is read."""
+    if not _os.path.isfile(path):
+        missing = not _os.path.exists(path)
+        raise Error(f"{path}: {'missing' if missing else 'not a regular file'} (expected {what})")
+    try:
+        with open(path, "rb") as f:
+            data = f.read(max_bytes + 1)
+    except OSError as e:
+        raise Error(f"{path}: cannot be read ({e.strerror or type(e).__name__})") from None
+    if len(data) > max_bytes:
+        raise Error(f"{path}: larger than {max_bytes >> 20} MiB, not {what}")
+    return data
 
 
 def _first_line(text: str) -> str:

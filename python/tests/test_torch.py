@@ -465,3 +465,33 @@ def test_a_sample_with_two_images_is_refused(tmp_path, small_camera):
             ds[key]
     with pytest.raises(IndexError):  # the sequence protocol's: iteration stops there
         ds[2]
+
+
+def test_a_dataset_refuses_files_it_cannot_read_without_blocking(tmp_path, small_camera):
+    """A calibration or image that is a FIFO, a device or missing is refused in one
+    line before any read: a FIFO would block the DataLoader, /dev/zero fill the memory."""
+    import cv2
+
+    for sub in ["rgb_images", "semantic_annotations/gtLabels", "calibration"]:
+        (tmp_path / sub).mkdir(parents=True)
+    image = np.zeros((121, 160, 3), np.uint8)
+    for name in ["a", "b", "c"]:
+        cv2.imwrite(str(tmp_path / "rgb_images" / f"{name}.png"), image)
+        cv2.imwrite(str(tmp_path / "semantic_annotations/gtLabels" / f"{name}.png"), image[..., 0])
+    small_camera.write(str(tmp_path / "calibration" / "a.json"), format="woodscape")
+    os.mkfifo(tmp_path / "calibration" / "b.json")
+    (tmp_path / "calibration" / "c.json").symlink_to("/dev/zero")
+    ds = ft.WoodScapeDataset(tmp_path)
+    assert ds[0]["name"] == "a"
+    with pytest.raises(fishcam.Error, match=r"b\.json: not a regular file \(expected a camera file\)"):
+        ds[1]
+    with pytest.raises(fishcam.Error, match=r"c\.json: not a regular file"):
+        ds[2]
+    (tmp_path / "calibration" / "c.json").unlink()
+    with pytest.raises(fishcam.Error, match=r"c\.json: missing"):
+        ds[2]
+    (tmp_path / "rgb_images" / "c.png").unlink()
+    os.mkfifo(tmp_path / "rgb_images" / "c.png")
+    small_camera.write(str(tmp_path / "calibration" / "c.json"), format="woodscape")
+    with pytest.raises(fishcam.Error, match=r"c\.png: not a regular file \(expected an image\)"):
+        ds[2]

@@ -10,7 +10,7 @@ import numpy as np
 import torch
 from torchvision import tv_tensors
 
-from .. import Camera, Error, _check_seed, _shown, derive_seed
+from .. import _MAX_CAMERA_FILE_BYTES, Camera, Error, _check_seed, _read_regular_file, _shown, derive_seed
 from .. import transforms as _transforms
 from .seeding import record_changes, sample_seed
 from .targets import Sample
@@ -164,8 +164,7 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
     def camera(self, name: str) -> Camera:
         """The fishcam.Camera of sample ``name`` (read once per distinct file content)."""
         path = os.path.join(self.root, "calibration", name + ".json")
-        with open(path, "rb") as f:
-            key = f.read()
+        key = _read_regular_file(path, _MAX_CAMERA_FILE_BYTES, "a camera file")
         camera = self._cameras.get(key)
         if camera is None:
             camera = Camera.read(path)
@@ -174,6 +173,10 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
 
     @staticmethod
     def _read(path: str, flags: int) -> _transforms.Array:
+        if not os.path.isfile(path):  # a FIFO would block imread, a device be read without end
+            raise Error(
+                f"{path}: {'missing' if not os.path.exists(path) else 'not a regular file'} (expected an image)"
+            )
         image: typing.Optional[_transforms.Array] = _cv2().imread(path, flags)
         if image is None:
             raise Error(f"{path}: cannot read image")
