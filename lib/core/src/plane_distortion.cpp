@@ -69,8 +69,13 @@ std::string TangentialDistortion::invalid() const {
 
 std::vector<std::string> MrcalLensDistortion::parameter_names() const {
   std::vector<std::string> names;
-  for (size_t i = 0; i < lens->values().size(); ++i) names.push_back("values[" + std::to_string(i) + "]");
+  for (size_t i = 0; i < values().size(); ++i) names.push_back("values[" + std::to_string(i) + "]");
   return names;
+}
+
+std::vector<std::string> MrcalLensDistortion::base_models() const {
+  if (!lens) return {};
+  return {lens->base_model()};
 }
 
 MrcalLensDistortion MrcalLensDistortion::from_numbers(std::string_view configuration, std::vector<double> values) {

@@ -103,6 +103,15 @@ TEST(PlaneDistortionRegistry, RefusesUnknownPartsAndWrongNumbersInOneLine) {
   refused("tangential", "", {0.1, 0.2}, "tangential: expected 6 values (p1, p2, s1, s2, s3, s4), got 2");
   refused("tangential", "x", std::vector<double>(6, 0.0), "tangential: takes no configuration, got 'x'");
   EXPECT_THROW(make_plane_distortion("mrcal_lens", "LENSMODEL_NOPE", {}), Error);
+  // A part without its lens is refused by the camera in one line, never dereferenced.
+  CameraParameters lensless = test::spline_camera().second;
+  lensless.distortion = MrcalLensDistortion{};
+  try {
+    Camera camera(lensless);
+    ADD_FAILURE() << "a camera without its mrcal lens accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "mrcal_lens.lens: none given");
+  }
   // Terms all zero displace nothing: they serialise as "none", and equal "none".
   EXPECT_TRUE(same_distortion(TangentialDistortion{}, NoPlaneDistortion{}));
   EXPECT_FALSE(same_distortion(TangentialDistortion{{1e-3, 0, {}}}, NoPlaneDistortion{}));

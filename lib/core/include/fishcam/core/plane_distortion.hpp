@@ -87,20 +87,23 @@ struct TangentialDistortion {
 // One of mrcal's lens models (mrcal_lens.hpp), evaluated by libmrcal, as a part.
 struct MrcalLensDistortion {
   static constexpr std::string_view kName = "mrcal_lens";
-  std::shared_ptr<const MrcalLens> lens;  // never null
+  std::shared_ptr<const MrcalLens> lens;  // null: refused by Camera (invalid())
 
-  std::string configuration() const { return lens->lensmodel(); }
-  std::vector<double> values() const { return lens->values(); }
+  std::string configuration() const { return lens ? lens->lensmodel() : ""; }
+  std::vector<double> values() const { return lens ? lens->values() : std::vector<double>{}; }
   std::vector<std::string> parameter_names() const;
   static MrcalLensDistortion from_numbers(std::string_view configuration, std::vector<double> values);
   bool any() const { return true; }
-  std::string description() const { return "mrcal's " + lens->lensmodel().substr(0, 80); }
-  std::vector<std::string> base_models() const { return {lens->base_model()}; }
-  std::string invalid() const { return ""; }  // MrcalLens checks its numbers when it is made
+  std::string description() const { return lens ? "mrcal's " + lens->lensmodel().substr(0, 80) : "no mrcal lens"; }
+  std::vector<std::string> base_models() const;
+  // MrcalLens checks its numbers when it is made: only its absence is left.
+  std::string invalid() const { return lens ? "" : "lens: none given"; }
   Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const {
     return lens->offset(m, jacobian);
   }
-  bool operator==(const MrcalLensDistortion& other) const { return *lens == *other.lens; }
+  bool operator==(const MrcalLensDistortion& other) const {
+    return lens && other.lens ? *lens == *other.lens : lens == other.lens;
+  }
 };
 
 template <class... Parts>
