@@ -18,8 +18,11 @@ TEST_P(EveryPlaneDistortion, SerialisesProjectsAndUnprojects) {
   const std::vector<test::ModelCase> examples = test::distortion_examples(name);
   ASSERT_FALSE(examples.empty());
   int checked = 0;
-  for (const auto& [label, p] : examples) {
-    SCOPED_TRACE(label);
+  for (const test::ModelCase& example : examples) {
+    // Not a structured binding: the lambdas below capture the camera (clang 14 refuses
+    // to capture a binding).
+    const CameraParameters& p = example.second;
+    SCOPED_TRACE(example.first);
     // The one serialisation reads back to the same part.
     const PlaneDistortionNumbers numbers = numbers_of(p.distortion);
     EXPECT_EQ(numbers.name, name);
