@@ -87,6 +87,10 @@ class Camera:
         """
         The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera without a pose gets one relative to its own frame)
         """
+    def cropped(self, left: int, top: int, width: int, height: int) -> Camera:
+        """
+        The same lens for the image cropped to the width x height window whose top-left pixel is (left, top) (negative, or past the edges: a padded crop): c' = c - (left, top).
+        """
     def info_json(self) -> str:
         """
         What `fishcam info --json` prints (str); the same values typed: model, parameters, principal_point, pixel_scale, domain, field_of_view_deg, pose.

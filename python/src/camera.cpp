@@ -261,6 +261,14 @@ void def_camera_geometry(py::class_<Camera>& cls) {
           [](const Camera& c, int width, int height) { return Camera(resized(c.parameters(), width, height)); },
           py::arg("width"), py::arg("height"),
           "The same lens for the image resized to width x height: c' = (c + 0.5) s - 0.5, a' = a s.")
+      .def(
+          "cropped",
+          [](const Camera& c, int left, int top, int width, int height) {
+            return Camera(cropped(c.parameters(), left, top, width, height));
+          },
+          py::arg("left"), py::arg("top"), py::arg("width"), py::arg("height"),
+          "The same lens for the image cropped to the width x height window whose top-left pixel is (left, top) "
+          "(negative, or past the edges: a padded crop): c' = c - (left, top).")
       .def_property_readonly(
           "domain", [](const Camera& self) -> decltype(auto) { return self.domain(); },
           "The model's valid domain (ValidDomain).")

@@ -49,3 +49,54 @@ def test_a_camera_that_no_longer_matches_is_refused(cam):
     image = tv_tensors.Image(torch.zeros((3, 100, 100), dtype=torch.uint8))
     with pytest.raises(fishcam.Error, match="camera: 320x242 but the images are 100x100"):
         ft.Resize((50, 50))(image, cam)
+
+
+def coordinates_image(cam):
+    """A 2xHxW float image whose pixels hold their own (row + 1, column + 1): 0 is padding."""
+    rows = torch.arange(1, cam.height + 1, dtype=torch.float32).view(cam.height, 1).expand(cam.height, cam.width)
+    cols = torch.arange(1, cam.width + 1, dtype=torch.float32).view(1, cam.width).expand(cam.height, cam.width)
+    return tv_tensors.Image(torch.stack([rows, cols]))
+
+
+def assert_camera_describes(before, after, image):
+    """Every output pixel that shows a source pixel: the new camera sees there the ray the
+    old camera saw at that source pixel (to 1e-9 px)."""
+    ys, xs = torch.nonzero(image[0] > 0, as_tuple=True)
+    assert len(xs) > 100
+    source = np.stack([image[1, ys, xs].numpy() - 1, image[0, ys, xs].numpy() - 1], axis=1).astype(np.float64)
+    rays, ok = before.unproject(source)
+    pixels, seen = after.project(rays[ok])
+    assert seen.all()
+    np.testing.assert_allclose(pixels, np.stack([xs.numpy(), ys.numpy()], axis=1)[ok].astype(np.float64), atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "transform",
+    [
+        ft.RandomCrop((100, 150)),
+        ft.RandomCrop((100, 150), padding=(7, 3, 5, 11)),
+        ft.RandomCrop((300, 400), pad_if_needed=True),
+        ft.CenterCrop((101, 151)),
+        ft.CenterCrop((300, 401)),
+        ft.CenterCrop(120),
+    ],
+    ids=["crop", "crop-padded", "crop-pad-if-needed", "center", "center-padded", "center-square"],
+)
+def test_crops_keep_the_camera_true(cam, transform):
+    torch.manual_seed(2)
+    for _ in range(3):
+        image, out_camera = transform(coordinates_image(cam), cam)
+        assert (out_camera.width, out_camera.height) == (image.shape[-1], image.shape[-2])
+        assert_camera_describes(cam, out_camera, image)
+    # After a viewpoint change too: the chain's camera is the final image's.
+    chain = v2.Compose([ft.RandomViewpoint(preset="small", sampling="exact"), transform])
+    _, chained = chain(coordinates_image(cam), cam)
+    assert (chained.width, chained.height) == (image.shape[-1], image.shape[-2])
+
+
+def test_a_crop_refuses_a_stale_camera(cam):
+    image = tv_tensors.Image(torch.zeros((3, cam.height, cam.width), dtype=torch.uint8))
+    with pytest.raises(fishcam.Error, match="camera: 320x242 but the images are 160x121"):
+        v2.Compose([v2.Resize((121, 160)), ft.CenterCrop(100)])(image, cam)
+    with pytest.raises(fishcam.Error, match="cropped: width and height must be >= 1"):
+        cam.cropped(0, 0, 0, 10)

@@ -452,6 +452,14 @@ CameraParameters resized(const CameraParameters& camera, int width, int height) 
   return out;
 }
 
+CameraParameters cropped(const CameraParameters& camera, int left, int top, int width, int height) {
+  if (width < 1 || height < 1) fail("cropped: width and height must be >= 1, got ", width, "x", height);
+  CameraParameters out = camera;
+  out.width = width, out.height = height;
+  out.principal_point -= Eigen::Vector2d(left, top);
+  return out;
+}
+
 namespace {
 
 void check_calibration_record(const CalibrationRecord& r, size_t model_params) {

@@ -41,15 +41,18 @@ if not hasattr(tv_tensors, "KeyPoints"):  # pragma: no cover
 from . import functional
 from .batch import WarpedBatch, collate, warp_batch
 from .data import EpochSampler, WoodScapeDataset
+from .geometry import CenterCrop, RandomCrop, Resize
 from .seeding import record_changes, sample_seed, torch_seed, worker_init_fn
 from .targets import DepthMap, Polygon, is_instance_mask
-from .transforms import RandomAffine, RandomViewpoint, Resize
+from .transforms import RandomAffine, RandomViewpoint
 
 __all__ = [
     "functional",
     "RandomViewpoint",
     "RandomAffine",
     "Resize",
+    "RandomCrop",
+    "CenterCrop",
     "DepthMap",
     "Polygon",
     "WoodScapeDataset",

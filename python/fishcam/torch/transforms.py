@@ -317,33 +317,3 @@ class RandomAffine(_FishcamTransform):
             repr(self.numpy_transform)[len("RandomAffine(") : -1]
             + f", min_visibility={self.min_visibility}, boxes={self.boxes!r}"
         )
-
-
-class Resize(v2.Resize):
-    """torchvision's ``v2.Resize`` that keeps the sample's camera true: images, masks,
-    boxes and keypoints as ``v2.Resize`` resizes them, and a fishcam.Camera in the
-    sample resized to the same size (``Camera.resized``: the same lens, c' = (c + 0.5)
-    s - 0.5, a' = a s; pixel centres map as torchvision's resize maps them), so the
-    camera still projects scene points onto the resized image. torchvision's own
-    geometric transforms (flips, crops, rotations, perspective, ``v2.Resize``) pass a
-    camera through unchanged: after them it no longer describes the image."""
-
-    _transformed_types = (*v2.Resize._transformed_types, Camera)
-
-    def make_params(self, flat_inputs: list[typing.Any]) -> Params:
-        params: Params = super().make_params(flat_inputs)
-        height, width = v2.query_size(flat_inputs)
-        probe = v2.functional.resize(
-            torch.zeros((1, height, width), dtype=torch.uint8), self.size, max_size=self.max_size, antialias=False
-        )
-        return {**params, "size": (width, height), "camera_size": (int(probe.shape[-1]), int(probe.shape[-2]))}
-
-    def transform(self, inpt: typing.Any, params: Params) -> typing.Any:
-        if isinstance(inpt, Camera):
-            if (inpt.width, inpt.height) != params["size"]:
-                raise Error(
-                    f"camera: {inpt.width}x{inpt.height} but the images are {params['size'][0]}x{params['size'][1]} "
-                    "(a transform before this one changed them without the camera)"
-                )
-            return inpt.resized(*params["camera_size"])
-        return super().transform(inpt, params)

@@ -123,6 +123,13 @@ struct CameraParameters {
 // covariance re-expressed for the new cx, cy, a_y. Throws Error for sizes < 1.
 CameraParameters resized(const CameraParameters& camera, int width, int height);
 
+// The same lens for the image cropped to the width x height window whose top-left
+// pixel is (left, top) of this image (a window past the image's edges is what a padded
+// crop gives): c' = c - (left, top); model, pixel scale, user limit, pose and
+// calibration record unchanged (a shift does not change their uncertainty). Throws
+// Error for sizes < 1.
+CameraParameters cropped(const CameraParameters& camera, int left, int top, int width, int height);
+
 // The camera with its valid domain capped (theta_limit) at the largest incidence
 // angle its calibration observed plus margin (radians, >= 0), so unprojection and
 // augmentation stop where the calibration stops knowing. Throws Error when the
