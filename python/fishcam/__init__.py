@@ -112,12 +112,17 @@ def _shown(value: object, limit: int = 40) -> str:
 _MAX_CAMERA_FILE_BYTES = 16 << 20
 
 
-def _read_regular_file(path: str, max_bytes: int, what: str) -> bytes:
-    """The bytes of ``path``, a regular file of at most ``max_bytes``: a FIFO, a device
-    (/dev/zero) or a missing file is refused in one line before anything is read."""
+def _check_regular_file(path: str, what: str) -> None:
+    """fishcam.Error unless ``path`` is a regular file: a FIFO would block a reader, a
+    device (/dev/zero) be read without end; refused in one line before any read."""
     if not _os.path.isfile(path):
         missing = not _os.path.exists(path)
         raise Error(f"{path}: {'missing' if missing else 'not a regular file'} (expected {what})")
+
+
+def _read_regular_file(path: str, max_bytes: int, what: str) -> bytes:
+    """The bytes of ``path``, a regular file (``_check_regular_file``) of at most ``max_bytes``."""
+    _check_regular_file(path, what)
     try:
         with open(path, "rb") as f:
             data = f.read(max_bytes + 1)

@@ -10,7 +10,16 @@ import numpy as np
 import torch
 from torchvision import tv_tensors
 
-from .. import _MAX_CAMERA_FILE_BYTES, Camera, Error, _check_seed, _read_regular_file, _shown, derive_seed
+from .. import (
+    _MAX_CAMERA_FILE_BYTES,
+    Camera,
+    Error,
+    _check_regular_file,
+    _check_seed,
+    _read_regular_file,
+    _shown,
+    derive_seed,
+)
 from .. import transforms as _transforms
 from .seeding import record_changes, sample_seed
 from .targets import Sample
@@ -173,10 +182,7 @@ class WoodScapeDataset(torch.utils.data.Dataset[Sample]):
 
     @staticmethod
     def _read(path: str, flags: int) -> _transforms.Array:
-        if not os.path.isfile(path):  # a FIFO would block imread, a device be read without end
-            raise Error(
-                f"{path}: {'missing' if not os.path.exists(path) else 'not a regular file'} (expected an image)"
-            )
+        _check_regular_file(path, "an image")  # a FIFO would block imread
         image: typing.Optional[_transforms.Array] = _cv2().imread(path, flags)
         if image is None:
             raise Error(f"{path}: cannot read image")
