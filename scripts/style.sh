@@ -2,6 +2,8 @@
 # The tree's style, one line length (120) for both languages:
 #   C++     .clang-format (clang-format 14, Debian's clang-format-14)
 #   Python  pyproject.toml's [tool.ruff] (ruff, python/requirements-test.txt)
+#   Both    no function over 80 lines in the library, the CLI, the bindings and the
+#           package (lizard, python/requirements-test.txt; tests are exempt)
 # scripts/style.sh [--fix] [PYTHON]   checks (CTest entry `style`), or with --fix
 # rewrites the files; PYTHON is the interpreter whose ruff runs (default: the
 # virtual environment scripts/python-env.sh makes, build/venv).
@@ -15,10 +17,12 @@ if [ -z "$clang_format" ]; then
   echo "style: clang-format-14 not found (scripts/install-deps.sh installs it)" >&2
   exit 1
 fi
-if ! "$python" -m ruff --version >/dev/null 2>&1; then
-  echo "style: $python has no ruff (scripts/python-env.sh installs python/requirements-test.txt)" >&2
-  exit 1
-fi
+for tool in ruff lizard; do
+  if ! "$python" -m "$tool" --version >/dev/null 2>&1; then
+    echo "style: $python has no $tool (scripts/python-env.sh installs python/requirements-test.txt)" >&2
+    exit 1
+  fi
+done
 mapfile -t cpp < <(git ls-files '*.cpp' '*.hpp')
 status=0
 if [ "$fix" = 1 ]; then
@@ -30,5 +34,8 @@ else
   "$python" -m ruff check --quiet . || status=1
   "$python" -m ruff format --check --quiet . || status=1
 fi
-[ "$status" = 0 ] && echo "style: ${#cpp[@]} C++ files and the Python tree as .clang-format and pyproject.toml say"
+# Function length is not rewritten by --fix: a long function is split by hand.
+"$python" -m lizard --length 80 --CCN 100000 --arguments 100 --warnings_only -x '*/tests/*' \
+  lib tools python/src python/fishcam || status=1
+[ "$status" = 0 ] && echo "style: ${#cpp[@]} C++ files and the Python tree as .clang-format and pyproject.toml say, no function over 80 lines"
 exit "$status"

@@ -336,6 +336,77 @@ void run_fit(bool json, int repeats) {
               out["calibrate_50_boards_ms"].get<double>());
 }
 
+struct CornerMethod {
+  const char* name;
+  std::function<std::optional<std::vector<Eigen::Vector2d>>(const cv::Mat&)> detect;
+  double seconds = 0;
+  long found = 0, corners = 0;
+  double sum2 = 0, worst = 0;
+};
+
+// OpenCV's findChessboardCorners + cornerSubPix (the baseline), fishcam's detector, and
+// findChessboardCornersSB for reference.
+std::vector<CornerMethod> corner_methods(const BoardSpec& board) {
+  const cv::TermCriteria until(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.01);
+  const auto as_eigen = [](const std::vector<cv::Point2f>& c) {
+    std::vector<Eigen::Vector2d> out;
+    for (const auto& p : c) out.emplace_back(p.x, p.y);
+    return out;
+  };
+  return {
+      {"findChessboardCorners + cornerSubPix",
+       [=](const cv::Mat& gray) -> std::optional<std::vector<Eigen::Vector2d>> {
+         std::vector<cv::Point2f> c;
+         if (!cv::findChessboardCorners(gray, {board.cols, board.rows}, c,
+                                        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
+           return std::nullopt;
+         }
+         cv::cornerSubPix(gray, c, {5, 5}, {-1, -1}, until);
+         return as_eigen(c);
+       }},
+      {"fishcam detect_chessboard", [=](const cv::Mat& gray) { return detect_chessboard(gray, board); }},
+      {"findChessboardCornersSB (exhaustive, accuracy)",
+       [=](const cv::Mat& gray) -> std::optional<std::vector<Eigen::Vector2d>> {
+         std::vector<cv::Point2f> c;
+         if (!cv::findChessboardCornersSB(gray, {board.cols, board.rows}, c,
+                                          cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY)) {
+           return std::nullopt;
+         }
+         return as_eigen(c);
+       }},
+  };
+}
+
+// A detection's corners against the truth, in the closer of the two orders (OpenCV may
+// number the corners from either end), added to the method's error.
+void score_corners(const std::vector<Eigen::Vector2d>& found, const std::vector<Eigen::Vector2d>& truth,
+                   CornerMethod* m) {
+  double direct = 0, reversed = 0;
+  const size_t n = truth.size();
+  for (size_t i = 0; i < n; ++i) {
+    direct += (found[i] - truth[i]).squaredNorm();
+    reversed += (found[n - 1 - i] - truth[i]).squaredNorm();
+  }
+  const bool flip = reversed < direct;
+  for (size_t i = 0; i < n; ++i) m->worst = std::max(m->worst, (found[flip ? n - 1 - i : i] - truth[i]).norm());
+  m->sum2 += std::min(direct, reversed);
+  m->corners += long(n);
+  ++m->found;
+}
+
+void print_corners(const nlohmann::json& out, size_t images, const Camera& camera, int repeats) {
+  std::printf(
+      "chessboard detection, %zu rendered %dx%d images (9x6 boards, blur 0.8 px, noise 2), %d repeats, one "
+      "thread:\n",
+      images, camera.width(), camera.height(), repeats);
+  for (const auto& m : out["methods"]) {
+    std::printf("  %-48s %7.1f ms/image (%.2fx)  found %ld, corner error rms %.3f px, max %.3f px\n",
+                m["name"].get<std::string>().c_str(), m["ms_per_image"].get<double>(),
+                m["ratio_to_findChessboardCorners"].get<double>(), m["found"].get<long>(), m["rms_px"].get<double>(),
+                m["max_px"].get<double>());
+  }
+}
+
 // Chessboard detection on rendered photographs with known corners (the Kannala-Brandt
 // camera at 960 px wide, boards all over the image, blur 0.8 px, noise 2 grey levels):
 // time per image of detect_chessboard against OpenCV's findChessboardCorners +
@@ -347,40 +418,7 @@ void run_corners(bool json, int boards_count, int repeats) {
   const BoardSpec board{9, 6, 0.1};
   const auto poses = testing::synthesize_boards(camera, board, boards_count, 0.0, 1).poses;
   const auto points = board_points(board);
-  struct Method {
-    const char* name;
-    std::function<std::optional<std::vector<Eigen::Vector2d>>(const cv::Mat&)> detect;
-    double seconds = 0;
-    long found = 0, corners = 0;
-    double sum2 = 0, worst = 0;
-  };
-  const cv::TermCriteria until(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.01);
-  std::vector<Method> methods = {
-      {"findChessboardCorners + cornerSubPix",
-       [&](const cv::Mat& gray) -> std::optional<std::vector<Eigen::Vector2d>> {
-         std::vector<cv::Point2f> c;
-         if (!cv::findChessboardCorners(gray, {board.cols, board.rows}, c,
-                                        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
-           return std::nullopt;
-         }
-         cv::cornerSubPix(gray, c, {5, 5}, {-1, -1}, until);
-         std::vector<Eigen::Vector2d> out;
-         for (const auto& p : c) out.emplace_back(p.x, p.y);
-         return out;
-       }},
-      {"fishcam detect_chessboard", [&](const cv::Mat& gray) { return detect_chessboard(gray, board); }},
-      {"findChessboardCornersSB (exhaustive, accuracy)",
-       [&](const cv::Mat& gray) -> std::optional<std::vector<Eigen::Vector2d>> {
-         std::vector<cv::Point2f> c;
-         if (!cv::findChessboardCornersSB(gray, {board.cols, board.rows}, c,
-                                          cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY)) {
-           return std::nullopt;
-         }
-         std::vector<Eigen::Vector2d> out;
-         for (const auto& p : c) out.emplace_back(p.x, p.y);
-         return out;
-       }},
-  };
+  std::vector<CornerMethod> methods = corner_methods(board);
   std::vector<cv::Mat> images;
   std::vector<std::vector<Eigen::Vector2d>> truths;
   for (size_t b = 0; b < poses.size(); ++b) {
@@ -403,22 +441,7 @@ void run_corners(bool json, int boards_count, int repeats) {
         const auto start = std::chrono::steady_clock::now();
         const auto found = m.detect(images[b]);
         m.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (r > 0 || !found) continue;
-        // OpenCV may number the corners from either end: compare in the closer order.
-        double direct = 0, reversed = 0;
-        const size_t n = truths[b].size();
-        for (size_t i = 0; i < n; ++i) {
-          direct += ((*found)[i] - truths[b][i]).squaredNorm();
-          reversed += ((*found)[n - 1 - i] - truths[b][i]).squaredNorm();
-        }
-        const bool flip = reversed < direct;
-        for (size_t i = 0; i < n; ++i) {
-          const double e = ((*found)[flip ? n - 1 - i : i] - truths[b][i]).norm();
-          m.worst = std::max(m.worst, e);
-        }
-        m.sum2 += std::min(direct, reversed);
-        m.corners += long(n);
-        ++m.found;
+        if (r == 0 && found) score_corners(*found, truths[b], &m);
       }
     }
   }
@@ -437,16 +460,7 @@ void run_corners(bool json, int boards_count, int repeats) {
     std::printf("%s\n", out.dump(2).c_str());
     return;
   }
-  std::printf(
-      "chessboard detection, %zu rendered %dx%d images (9x6 boards, blur 0.8 px, noise 2), %d repeats, one "
-      "thread:\n",
-      images.size(), camera.width(), camera.height(), repeats);
-  for (const auto& m : out["methods"]) {
-    std::printf("  %-48s %7.1f ms/image (%.2fx)  found %ld, corner error rms %.3f px, max %.3f px\n",
-                m["name"].get<std::string>().c_str(), m["ms_per_image"].get<double>(),
-                m["ratio_to_findChessboardCorners"].get<double>(), m["found"].get<long>(), m["rms_px"].get<double>(),
-                m["max_px"].get<double>());
-  }
+  print_corners(out, images.size(), camera, repeats);
 }
 
 }  // namespace

@@ -94,57 +94,11 @@ def loader_cost(fishcam, binary, samples, epochs, photo=None):
     with tempfile.TemporaryDirectory() as tmp:
         for width, height in ((640, 483), (1280, 966)):
             root = f"{tmp}/ws{width}"
-            subprocess.run(
-                [
-                    binary,
-                    "sample-dataset",
-                    root,
-                    "--images",
-                    str(samples),
-                    "--seed",
-                    "1",
-                    "--size",
-                    f"{width}x{height}",
-                ],
-                check=True,
-                capture_output=True,
-            )
-            if photo:
-                import cv2
-
-                picture = cv2.imread(photo, cv2.IMREAD_COLOR)
-                if picture is None:
-                    raise SystemExit(f"{photo}: cannot read image")
-                picture = cv2.resize(picture, (width, height), interpolation=cv2.INTER_AREA)
-                for name in os.listdir(f"{root}/rgb_images"):
-                    cv2.imwrite(f"{root}/rgb_images/{name}", picture)
+            _make_loader_dataset(binary, root, samples, width, height, photo)
             for workers in (0, 2):
-                loaders = {}
-                for augment in (False, True):
-                    ds = ft.WoodScapeDataset(
-                        root, transform=ft.RandomViewpoint(preset="train") if augment else None, seed=1
-                    )
-                    loaders[augment] = torch.utils.data.DataLoader(
-                        ds,
-                        batch_size=4,
-                        num_workers=workers,
-                        persistent_workers=workers > 0,
-                        sampler=ft.EpochSampler(torch.utils.data.SequentialSampler(ds)),
-                        worker_init_fn=ft.worker_init_fn if workers else None,
-                        collate_fn=ft.collate,
-                    )
+                loaders = _plain_and_augmented_loaders(ft, torch, root, workers)
                 fishcam.set_num_threads(2 if workers == 0 else 1)
-                per_sample = {False: [], True: []}
-                first = {}
-                for epoch in range(epochs + 1):
-                    for augment in (False, True):
-                        start = time.perf_counter()
-                        n = sum(len(batch["name"]) for batch in loaders[augment])
-                        seconds = (time.perf_counter() - start) / n
-                        if epoch == 0:
-                            first[augment] = seconds
-                        else:
-                            per_sample[augment].append(seconds)
+                first, per_sample = _interleaved_epoch_seconds(loaders, epochs)
                 plain, augmented = statistics.median(per_sample[False]), statistics.median(per_sample[True])
                 rows.append(
                     {
@@ -160,6 +114,72 @@ def loader_cost(fishcam, binary, samples, epochs, photo=None):
                 )
                 del loaders
     return rows
+
+
+def _make_loader_dataset(binary, root, samples, width, height, photo):
+    """`fishcam sample-dataset` of ``samples`` images at width x height in ``root``;
+    with ``photo``, its RGB images replaced by that photo resized."""
+    subprocess.run(
+        [
+            binary,
+            "sample-dataset",
+            root,
+            "--images",
+            str(samples),
+            "--seed",
+            "1",
+            "--size",
+            f"{width}x{height}",
+        ],
+        check=True,
+        capture_output=True,
+    )
+    if photo:
+        import cv2
+
+        picture = cv2.imread(photo, cv2.IMREAD_COLOR)
+        if picture is None:
+            raise SystemExit(f"{photo}: cannot read image")
+        picture = cv2.resize(picture, (width, height), interpolation=cv2.INTER_AREA)
+        for name in os.listdir(f"{root}/rgb_images"):
+            cv2.imwrite(f"{root}/rgb_images/{name}", picture)
+
+
+def _plain_and_augmented_loaders(ft, torch, root, workers):
+    """{False: the loader without RandomViewpoint, True: with it} over ``root``,
+    persistent when they have workers, seeded, EpochSampler, fishcam.torch.collate
+    (``ft``, ``torch``: the modules, imported by the caller)."""
+    loaders = {}
+    for augment in (False, True):
+        ds = ft.WoodScapeDataset(root, transform=ft.RandomViewpoint(preset="train") if augment else None, seed=1)
+        loaders[augment] = torch.utils.data.DataLoader(
+            ds,
+            batch_size=4,
+            num_workers=workers,
+            persistent_workers=workers > 0,
+            sampler=ft.EpochSampler(torch.utils.data.SequentialSampler(ds)),
+            worker_init_fn=ft.worker_init_fn if workers else None,
+            collate_fn=ft.collate,
+        )
+    return loaders
+
+
+def _interleaved_epoch_seconds(loaders, epochs):
+    """(the first epoch's seconds per sample, {augment: [seconds per sample of each
+    later epoch]}) of the loaders' epochs, A, B, A, B, ... so that both see the same
+    machine; the first (warps built) apart."""
+    per_sample = {False: [], True: []}
+    first = {}
+    for epoch in range(epochs + 1):
+        for augment in (False, True):
+            start = time.perf_counter()
+            n = sum(len(batch["name"]) for batch in loaders[augment])
+            seconds = (time.perf_counter() - start) / n
+            if epoch == 0:
+                first[augment] = seconds
+            else:
+                per_sample[augment].append(seconds)
+    return first, per_sample
 
 
 def peers(fishcam, data, samples, rounds, batch=8):

@@ -11,6 +11,38 @@
 
 namespace fishcam::cli {
 
+namespace {
+
+// Our geometric map against mrcal's (x, y per pixel) where mrcal's source lies inside
+// the source image: the largest and the summed squared distance, over `count` pixels;
+// `missing`: pixels where mrcal has a source and we have none.
+struct MapAgreement {
+  double worst = 0, sum2 = 0;
+  long count = 0, missing = 0;
+};
+
+MapAgreement map_agreement(const WarpMaps& ours, const NpyArray& theirs, int source_width, int source_height) {
+  MapAgreement out;
+  const int w = ours.map_x.cols, h = ours.map_x.rows;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const float x = theirs.data[2 * (size_t(v) * w + u)], y = theirs.data[2 * (size_t(v) * w + u) + 1];
+      if (!(x >= -0.5f && x < source_width - 0.5f && y >= -0.5f && y < source_height - 0.5f)) continue;
+      const double e = std::hypot(ours.map_x.at<float>(v, u) - x, ours.map_y.at<float>(v, u) - y);
+      if (!std::isfinite(e)) {
+        ++out.missing;
+        continue;
+      }
+      out.worst = std::max(out.worst, e);
+      out.sum2 += e * e;
+      ++out.count;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 void register_check_mrcal(CLI::App& app) {
   auto* cmd = app.add_subcommand("check-mrcal",
                                  "Compare our map with mrcal.image_transformation_map (needs "
@@ -67,23 +99,9 @@ void register_check_mrcal(CLI::App& app) {
     const NpyArray theirs = read_npy(dir / "map.npy");
     WarpMaps ours;
     warp.compute(change, o->pose.prior(), &ours, MapKind::geometric);
-    const int w = ours.map_x.cols, h = ours.map_x.rows;
-    double worst = 0, sum2 = 0;
-    long count = 0, missing = 0;
-    for (int v = 0; v < h; ++v) {
-      for (int u = 0; u < w; ++u) {
-        const float x = theirs.data[2 * (size_t(v) * w + u)], y = theirs.data[2 * (size_t(v) * w + u) + 1];
-        if (!(x >= -0.5f && x < source.width - 0.5f && y >= -0.5f && y < source.height - 0.5f)) continue;
-        const double e = std::hypot(ours.map_x.at<float>(v, u) - x, ours.map_y.at<float>(v, u) - y);
-        if (!std::isfinite(e)) {
-          ++missing;
-          continue;
-        }
-        worst = std::max(worst, e);
-        sum2 += e * e;
-        ++count;
-      }
-    }
+    const MapAgreement agreement = map_agreement(ours, theirs, source.width, source.height);
+    const double worst = agreement.worst, sum2 = agreement.sum2;
+    const long count = agreement.count, missing = agreement.missing;
     std::printf("compared %ld pixels whose mrcal source lies inside the source image (%s, depth %s)\n", count,
                 describe(change.euler_deg(), change.translation).c_str(), o->pose.depth.c_str());
     std::printf("max difference %.3g px, rms %.3g px", worst, count ? std::sqrt(sum2 / double(count)) : 0.0);

@@ -14,6 +14,38 @@ namespace {
 
 constexpr double kDeg = 180 / std::numbers::pi;
 
+// The warning a camera written for OpenCV's fisheye functions needs: they go through
+// the pinhole plane, so a camera past 90 degrees is only partly theirs ("" if not).
+std::string opencv_range_warning(CameraFormat format, const Conversion& conversion) {
+  if (format != CameraFormat::opencv || conversion.widest_theta <= std::numbers::pi / 2) return "";
+  char buffer[256];
+  std::snprintf(buffer, sizeof buffer,
+                "OpenCV's fisheye functions go through the pinhole plane and handle theta < 90 deg only; this "
+                "camera covers %.1f deg (error below 90 deg: rms %.3f px, max %.3f px)",
+                conversion.widest_theta * kDeg, conversion.report.rms_below_90_px, conversion.report.max_below_90_px);
+  return buffer;
+}
+
+// --json's object: the fit report and what this run did.
+nlohmann::json convert_json(const Camera& source, const Conversion& conversion, const CameraParameters& fitted,
+                            const std::string& method, const CameraOutputOptions& output, double fit_ms,
+                            const std::string& warning, const std::string& error_map) {
+  const Conversion::NonRadial& non_radial = conversion.non_radial;
+  nlohmann::json j = nlohmann::json::parse(fit_report_json(fitted, conversion.report));
+  j["method"] = method;
+  j["out"] = output.out;
+  j["format"] = to_string(output.resolved_format());
+  j["fit_ms"] = fit_ms;
+  if (!warning.empty()) j["warning"] = warning;
+  j["center_and_aspect_fitted"] = conversion.center_and_aspect_fitted;
+  j["non_radial"] = source.radial() ? nlohmann::json(nullptr)
+                                    : nlohmann::json{{"samples", non_radial.samples},
+                                                     {"rms_px", non_radial.rms_px},
+                                                     {"max_px", non_radial.max_px}};
+  if (!error_map.empty()) j["error_map"] = error_map;
+  return j;
+}
+
 }  // namespace
 
 void register_convert(CLI::App& app) {
@@ -59,16 +91,7 @@ void register_convert(CLI::App& app) {
     const double fit_ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     const CameraParameters fitted = apply_theta_limit(conversion.camera, o->theta_limit);
     const ErrorReport& report = conversion.report;
-    const double widest = conversion.widest_theta;
-    std::string warning;
-    if (format == CameraFormat::opencv && widest > std::numbers::pi / 2) {
-      char buffer[256];
-      std::snprintf(buffer, sizeof buffer,
-                    "OpenCV's fisheye functions go through the pinhole plane and handle theta < 90 deg only; this "
-                    "camera covers %.1f deg (error below 90 deg: rms %.3f px, max %.3f px)",
-                    widest * kDeg, report.rms_below_90_px, report.max_below_90_px);
-      warning = buffer;
-    }
+    const std::string warning = opencv_range_warning(format, conversion);
     write_camera_file(fitted, o->output.out, format, o->output.force);
     if (!o->error_map.empty()) {
       const std::vector<float> map = reprojection_error_map(source, Camera(fitted));
@@ -77,18 +100,8 @@ void register_convert(CLI::App& app) {
     const Conversion::NonRadial& non_radial = conversion.non_radial;
     if (!warning.empty()) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
     if (o->output.json) {
-      nlohmann::json j = nlohmann::json::parse(fit_report_json(fitted, report));
-      j["method"] = o->method;
-      j["out"] = o->output.out;
-      j["format"] = to_string(format);
-      j["fit_ms"] = fit_ms;
-      if (!warning.empty()) j["warning"] = warning;
-      j["center_and_aspect_fitted"] = conversion.center_and_aspect_fitted;
-      j["non_radial"] = source.radial() ? nlohmann::json(nullptr)
-                                        : nlohmann::json{{"samples", non_radial.samples},
-                                                         {"rms_px", non_radial.rms_px},
-                                                         {"max_px", non_radial.max_px}};
-      if (!o->error_map.empty()) j["error_map"] = o->error_map;
+      const nlohmann::json j =
+          convert_json(source, conversion, fitted, o->method, o->output, fit_ms, warning, o->error_map);
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }

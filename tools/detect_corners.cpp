@@ -17,6 +17,54 @@
 
 namespace fishcam::cli {
 
+namespace {
+
+// One photo under two spellings (x.png, ./x.png, a symlink) would count twice: the
+// corners file would hold the same board twice, which calibrate refuses.
+void check_distinct_images(const std::vector<std::string>& images) {
+  std::map<std::filesystem::path, size_t> seen;
+  for (size_t k = 0; k < images.size(); ++k) {
+    std::error_code ec;
+    const auto resolved = std::filesystem::weakly_canonical(std::filesystem::absolute(images[k]), ec);
+    const auto [at, fresh] = seen.emplace(ec ? std::filesystem::path(images[k]) : resolved, k);
+    if (!fresh) {
+      throw Error(path_for_message(images[k]) + ": the same image as " + path_for_message(images[at->second]) +
+                  " (given twice)");
+    }
+  }
+}
+
+// Every image's board corners (none where no board was found), on `threads` threads;
+// failures[k] says why image k could not be read ("" if it could).
+std::vector<BoardObservation> detect_boards(const std::vector<std::string>& images, const BoardSpec& board, int threads,
+                                            std::vector<std::string>* failures) {
+  const size_t count = images.size();
+  std::vector<BoardObservation> observations(count);
+  failures->assign(count, "");
+  std::atomic<int> done{0};
+  const bool progress = isatty(fileno(stderr));
+  std::mutex print;
+  for_each_index(int(count), threads, [&](int k) {
+    const std::string& path = images[size_t(k)];
+    observations[size_t(k)].filename = path;
+    try {
+      const cv::Mat gray = read_image(path, cv::IMREAD_GRAYSCALE);
+      if (auto corners = detect_chessboard(gray, board)) observations[size_t(k)].corners = std::move(*corners);
+    } catch (const Error& e) {
+      (*failures)[size_t(k)] = e.what();
+    }
+    const int finished = ++done;
+    if (progress) {
+      const std::lock_guard lock(print);
+      std::fprintf(stderr, "\rdetect-corners: %d/%zu images", finished, count);
+      if (size_t(finished) == count) std::fprintf(stderr, "\n");
+    }
+  });
+  return observations;
+}
+
+}  // namespace
+
 void register_detect_corners(CLI::App& app) {
   auto* cmd = app.add_subcommand("detect-corners",
                                  "Find chessboard corners (OpenCV) and write them in mrcal's "
@@ -40,43 +88,13 @@ void register_detect_corners(CLI::App& app) {
       std::vector<OutputFile> outputs{{o->out}};
       check_outputs(outputs, o->images, o->force);
     }
-    // One photo under two spellings (x.png, ./x.png, a symlink) would count twice:
-    // the corners file would hold the same board twice, which calibrate refuses.
-    std::map<std::filesystem::path, size_t> seen;
-    for (size_t k = 0; k < o->images.size(); ++k) {
-      std::error_code ec;
-      const auto resolved = std::filesystem::weakly_canonical(std::filesystem::absolute(o->images[k]), ec);
-      const auto [at, fresh] = seen.emplace(ec ? std::filesystem::path(o->images[k]) : resolved, k);
-      if (!fresh) {
-        throw Error(path_for_message(o->images[k]) + ": the same image as " + path_for_message(o->images[at->second]) +
-                    " (given twice)");
-      }
-    }
+    check_distinct_images(o->images);
     const BoardSpec board = parse_board(o->board, 1.0);
     // OpenCV's detector needs more than 2 corners per side.
     if (board.cols < 3 || board.rows < 3) throw Error("--board: detection needs at least 3x3 inner corners");
     const size_t count = o->images.size();
-    std::vector<BoardObservation> observations(count);
-    std::vector<std::string> failures(count);
-    std::atomic<int> done{0};
-    const bool progress = isatty(fileno(stderr));
-    std::mutex print;
-    for_each_index(int(count), o->threads, [&](int k) {
-      const std::string& path = o->images[size_t(k)];
-      observations[size_t(k)].filename = path;
-      try {
-        const cv::Mat gray = read_image(path, cv::IMREAD_GRAYSCALE);
-        if (auto corners = detect_chessboard(gray, board)) observations[size_t(k)].corners = std::move(*corners);
-      } catch (const Error& e) {
-        failures[size_t(k)] = e.what();
-      }
-      const int finished = ++done;
-      if (progress) {
-        const std::lock_guard lock(print);
-        std::fprintf(stderr, "\rdetect-corners: %d/%zu images", finished, count);
-        if (size_t(finished) == count) std::fprintf(stderr, "\n");
-      }
-    });
+    std::vector<std::string> failures;
+    std::vector<BoardObservation> observations = detect_boards(o->images, board, o->threads, &failures);
     // Images that could not be read are left out of the file (and reported); the
     // others keep the order they were given in.
     std::vector<BoardObservation> readable;

@@ -12,6 +12,45 @@
 
 namespace fishcam::cli {
 
+namespace {
+
+// Where `fishcam diff` compares (options->region), and its description: the convex
+// hull of the corners in `corners` (held in *hull), else the angles a calibration
+// record observed, else every pixel valid in both cameras (refused for --region data).
+std::string data_region(const std::string& region_option, const std::string& corners, const std::string& board,
+                        const Camera& a, const Camera& b, std::vector<cv::Point2f>* hull,
+                        ProjectionDiffOptions* options) {
+  const auto& record_a = a.parameters().calibration;
+  const auto& record_b = b.parameters().calibration;
+  if (region_option == "all") return "every pixel valid in both cameras";
+  if (!corners.empty()) {
+    std::vector<cv::Point2f> points;
+    for (const auto& observation : read_corners(corners, parse_board(board, 1.0))) {
+      for (const auto& c : observation.corners) points.emplace_back(float(c.x()), float(c.y()));
+    }
+    if (points.size() < 3) throw Error(corners + ": fewer than 3 corners: no region");
+    cv::convexHull(points, *hull);
+    options->region = [hull](const Eigen::Vector2d& pixel, const Eigen::Vector3d&) {
+      return cv::pointPolygonTest(*hull, cv::Point2f(float(pixel.x()), float(pixel.y())), false) >= 0;
+    };
+    return "the convex hull of the corners in " + corners;
+  }
+  if (record_a || record_b) {
+    const CalibrationRecord record = record_a ? *record_a : *record_b;
+    options->region = [record](const Eigen::Vector2d&, const Eigen::Vector3d& ray) { return record.observed(ray); };
+    return std::string("the angles the calibration of ") + (record_a ? "CAMERA_A" : "CAMERA_B") +
+           " observed (its calibration record)";
+  }
+  if (region_option == "data") {
+    throw Error(
+        "--region data: neither camera carries a calibration record (fishcam calibrate writes one); pass "
+        "--corners FILE --board WxH");
+  }
+  return "every pixel valid in both cameras";
+}
+
+}  // namespace
+
 void register_diff(CLI::App& app) {
   auto* cmd = app.add_subcommand("diff",
                                  "Projection difference of two calibrations of one camera, after fitting the "
@@ -64,31 +103,8 @@ void register_diff(CLI::App& app) {
     const auto& record_b = b.parameters().calibration;
     ProjectionDiffOptions options;
     options.step = o->step, options.fit_rotation = !o->no_rotation;
-    std::string region = "every pixel valid in both cameras";
     std::vector<cv::Point2f> hull;
-    if (o->region != "all") {
-      if (!o->corners.empty()) {
-        std::vector<cv::Point2f> points;
-        for (const auto& observation : read_corners(o->corners, parse_board(o->board, 1.0))) {
-          for (const auto& c : observation.corners) points.emplace_back(float(c.x()), float(c.y()));
-        }
-        if (points.size() < 3) throw Error(o->corners + ": fewer than 3 corners: no region");
-        cv::convexHull(points, hull);
-        options.region = [&hull](const Eigen::Vector2d& pixel, const Eigen::Vector3d&) {
-          return cv::pointPolygonTest(hull, cv::Point2f(float(pixel.x()), float(pixel.y())), false) >= 0;
-        };
-        region = "the convex hull of the corners in " + o->corners;
-      } else if (record_a || record_b) {
-        const CalibrationRecord record = record_a ? *record_a : *record_b;
-        options.region = [record](const Eigen::Vector2d&, const Eigen::Vector3d& ray) { return record.observed(ray); };
-        region = std::string("the angles the calibration of ") + (record_a ? "CAMERA_A" : "CAMERA_B") +
-                 " observed (its calibration record)";
-      } else if (o->region == "data") {
-        throw Error(
-            "--region data: neither camera carries a calibration record (fishcam calibrate writes one); pass "
-            "--corners FILE --board WxH");
-      }
-    }
+    const std::string region = data_region(o->region, o->corners, o->board, a, b, &hull, &options);
     const bool both_uncertain = record_a && record_b && record_a->covariance.size() && record_b->covariance.size();
     if (o->weights == "uncertainty" && !both_uncertain) {
       throw Error(

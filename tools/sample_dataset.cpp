@@ -7,8 +7,10 @@
 // the small/medium/large presets (docs/experiment.md).
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <charconv>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <optional>
 
@@ -211,20 +213,11 @@ void bundled_street_dataset(const Options& o) {
               skipped > 0 ? (" (" + std::to_string(skipped) + " already there)").c_str() : "");
 }
 
-void surround_view_dataset(const Options& o) {
-  const fs::path out = o.out;
-  std::vector<std::pair<std::string, Camera>> cameras;
-  std::vector<fs::path> inputs;
-  for (const std::string& name : distinct_names(o.cameras, "--cameras")) {
-    const fs::path path = bundled_data("synwoodscape_" + name + ".json");
-    cameras.emplace_back(name, sized(read_camera(path), o.size));
-    inputs.push_back(path);
-  }
-  if (cameras.empty()) throw Error("--cameras: expected camera names such as FV,MVL,MVR,RV");
-  check_output_not_input(out, inputs, true);
-  const std::vector<std::string> fractions = split_commas(o.splits);
+// --splits TRAIN,VAL,TEST: three fractions >= 0 that sum to 1.
+std::array<double, 3> split_shares(const std::string& splits) {
+  const std::vector<std::string> fractions = split_commas(splits);
   std::array<double, 3> share{};
-  if (fractions.size() != 3) throw Error("--splits: expected TRAIN,VAL,TEST fractions, got '" + o.splits + "'");
+  if (fractions.size() != 3) throw Error("--splits: expected TRAIN,VAL,TEST fractions, got '" + splits + "'");
   for (size_t k = 0; k < 3; ++k) {
     const char* begin = fractions[k].data();
     const auto [end, error] = std::from_chars(begin, begin + fractions[k].size(), share[k]);
@@ -233,45 +226,56 @@ void surround_view_dataset(const Options& o) {
     }
   }
   if (!(share[0] >= 0 && share[1] >= 0 && share[2] >= 0 && std::abs(share[0] + share[1] + share[2] - 1) < 1e-9)) {
-    throw Error("--splits: expected three fractions >= 0 that sum to 1, got '" + o.splits + "'");
+    throw Error("--splits: expected three fractions >= 0 that sum to 1, got '" + splits + "'");
   }
-  const int train = int(std::lround(share[0] * o.scenes)), val = int(std::lround(share[1] * o.scenes));
-  const auto split_of = [&](int k) { return k < train ? "train" : k < train + val ? "val" : "test"; };
-  std::vector<PosePreset> test_sets;
-  if (o.test_sets != "none") {
-    for (const std::string& name : distinct_names(o.test_sets, "--test-sets")) {
-      test_sets.push_back(pose_preset(name, "--test-sets"));
-    }
-  }
-  std::string scenes_manifest;
-  std::map<std::string, std::string> changes;  // test set -> its changes.jsonl
-  std::vector<fs::path> manifest_paths{out / "scenes.jsonl"};
-  for (const PosePreset& preset : test_sets) {
-    manifest_paths.push_back(out / ("test-" + std::string(preset.name)) / "changes.jsonl");
-    manifest_paths.push_back(out / ("test-" + std::string(preset.name) + "-rotation") / "changes.jsonl");
-    manifest_paths.push_back(out / ("test-" + std::string(preset.name) + "-paper") / "changes.jsonl");
-  }
-  const int label_fill = paper_label_fill(o.paper_label_fill);
+  return share;
+}
+
+// What one --scenes run writes, and what its sample loop shares (write_samples runs the
+// loop twice: once to see what is there, once to write).
+struct SurroundViewRun {
+  const Options& o;
+  fs::path out;
+  std::vector<std::pair<std::string, Camera>> cameras = {};
+  std::vector<PosePreset> test_sets = {};
+  int train = 0, val = 0;
+  int label_fill = 0;
+  std::string scenes_manifest = {};
+  std::map<std::string, std::string> changes = {};  // test set -> its changes.jsonl
   // The paper protocol's camera per camera name, as its calibration file holds it (what
   // augment-dataset reads), and its warp.
-  std::map<std::string, std::pair<CameraParameters, ViewpointWarp>> paper_cameras;
-  const bool resuming = claim_output_settings(out / "sample-dataset.json", settings_of(o, {}), false);
-  const long skipped = write_samples(out, settings_of(o, {}), o.depth, manifest_paths, [&](SampleWriter& writer) {
-    if (writer.writing()) {
-      for (const char* split : {"train", "val", "test"}) make_layout(out / split, o.depth);
-      for (const PosePreset& preset : test_sets) {
-        make_layout(out / ("test-" + std::string(preset.name)), o.depth);
-        make_layout(out / ("test-" + std::string(preset.name) + "-rotation"), o.depth);
-        make_layout(out / ("test-" + std::string(preset.name) + "-paper"), o.depth);
+  std::map<std::string, std::pair<CameraParameters, ViewpointWarp>> paper_cameras = {};
+
+  const char* split_of(int k) const { return k < train ? "train" : k < train + val ? "val" : "test"; }
+
+  std::vector<fs::path> manifest_paths() const {
+    std::vector<fs::path> paths{out / "scenes.jsonl"};
+    for (const PosePreset& preset : test_sets) {
+      for (const char* suffix : {"", "-rotation", "-paper"}) {
+        paths.push_back(out / ("test-" + std::string(preset.name) + suffix) / "changes.jsonl");
       }
     }
+    return paths;
+  }
+
+  void make_folders() const {
+    for (const char* split : {"train", "val", "test"}) make_layout(out / split, o.depth);
+    for (const PosePreset& preset : test_sets) {
+      for (const char* suffix : {"", "-rotation", "-paper"}) {
+        make_layout(out / ("test-" + std::string(preset.name) + suffix), o.depth);
+      }
+    }
+  }
+
+  void write(SampleWriter& writer) {
+    if (writer.writing()) make_folders();
     scenes_manifest.clear();
     changes.clear();
     int samples = 0;
     for (int k = 0; k < o.scenes; ++k) {
       const std::uint64_t scene_seed = derive_seed(o.seed, "scene", std::uint64_t(k));
       std::optional<StreetScene> scene;  // generated when a sample of it is rendered
-      const auto scene_of = [&]() -> const StreetScene& {
+      const std::function<const StreetScene&()> scene_of = [&]() -> const StreetScene& {
         if (!scene) scene = StreetScene::generate(scene_seed);
         return *scene;
       };
@@ -284,7 +288,7 @@ void surround_view_dataset(const Options& o) {
         std::snprintf(name, sizeof name, "%05d_%s", k, camera_name.c_str());
         const CameraParameters& p = camera.parameters();
         std::optional<SceneRender> original;  // rendered once for the split and the paper protocol
-        const auto original_of = [&]() -> const SceneRender& {
+        const std::function<const SceneRender&()> original_of = [&]() -> const SceneRender& {
           if (!original) original = scene_of().render(camera, *p.pose, o.supersampling);
           return *original;
         };
@@ -294,59 +298,93 @@ void surround_view_dataset(const Options& o) {
                 .dump() +
             "\n";
         ++samples;
-        if (split != std::string("test")) continue;
-        // The true viewpoint test sets: the camera really moved (t read as metres), and
-        // the same change without its translation.
-        for (const PosePreset& preset : test_sets) {
-          const std::string set = "test-" + std::string(preset.name);
-          const std::uint64_t seed = derive_seed(o.seed, set, std::uint64_t(samples));
-          const RandomPose full = random_pose(preset, seed);
-          RandomPose rotation = full;
-          rotation.translation.setZero();
-          for (const auto& [folder, change] : {std::pair{set, full}, std::pair{set + "-rotation", rotation}}) {
-            CameraParameters moved = p;
-            moved.pose = moved_camera(*p.pose, change.change());
-            writer.sample(out / folder, name, moved,
-                          [&] { return scene_of().render(camera, *moved.pose, o.supersampling); });
-            changes[folder] += change_line(name, preset, seed, change);
-          }
-          // The paper's protocol: the original test image augmented by the same change
-          // (source-sphere prior, the translation in the sphere's units), as
-          // augment-dataset --depth source-sphere --sampling grid --label-fill FILL writes it.
-          const std::string paper = set + "-paper";
-          auto as_written = paper_cameras.find(camera_name);
-          if (as_written == paper_cameras.end()) {
-            const CameraParameters read_back = parse_camera(format_camera(p, CameraFormat::woodscape), name);
-            as_written =
-                paper_cameras.emplace(camera_name, std::pair{read_back, ViewpointWarp(Camera(read_back))}).first;
-          }
-          const ViewpointWarp& warp = as_written->second.second;
-          writer.sample(out / paper, name, augmented_camera(as_written->second.first, full.change()), [&] {
-            const SceneRender& source = original_of();
-            SceneRender augmented;
-            const AugmentIO io{&source.image,     &augmented.image, 0,      &source.labels,
-                               &augmented.labels, label_fill,       nullptr};
-            warp.augment(full.change(), DepthPrior::source_sphere, io, Sampling::grid);
-            if (o.depth) {
-              warp.warp_depth(full.change(), DepthPrior::source_sphere, source.range, DepthValues::range,
-                              &augmented.range);
-            }
-            return augmented;
-          });
-          changes[paper] += change_line(name, preset, seed, full);
-        }
+        if (split == std::string("test")) write_test_sets(writer, name, entry, samples, scene_of, original_of);
       }
     }
-  });
+  }
+
+  // The true viewpoint test sets of one test sample: the camera really moved (t read as
+  // metres), and the same change without its translation; and the paper's protocol.
+  void write_test_sets(SampleWriter& writer, const std::string& name, const std::pair<std::string, Camera>& entry,
+                       int samples, const std::function<const StreetScene&()>& scene_of,
+                       const std::function<const SceneRender&()>& original_of) {
+    const Camera& camera = entry.second;
+    const CameraParameters& p = camera.parameters();
+    for (const PosePreset& preset : test_sets) {
+      const std::string set = "test-" + std::string(preset.name);
+      const std::uint64_t seed = derive_seed(o.seed, set, std::uint64_t(samples));
+      const RandomPose full = random_pose(preset, seed);
+      RandomPose rotation = full;
+      rotation.translation.setZero();
+      for (const auto& [folder, change] : {std::pair{set, full}, std::pair{set + "-rotation", rotation}}) {
+        CameraParameters moved = p;
+        moved.pose = moved_camera(*p.pose, change.change());
+        writer.sample(out / folder, name, moved,
+                      [&] { return scene_of().render(camera, *moved.pose, o.supersampling); });
+        changes[folder] += change_line(name, preset, seed, change);
+      }
+      write_paper_sample(writer, set + "-paper", name, entry, full, original_of);
+      changes[set + "-paper"] += change_line(name, preset, seed, full);
+    }
+  }
+
+  // The paper's protocol: the original test image augmented by the same change
+  // (source-sphere prior, the translation in the sphere's units), as
+  // augment-dataset --depth source-sphere --sampling grid --label-fill FILL writes it.
+  void write_paper_sample(SampleWriter& writer, const std::string& folder, const std::string& name,
+                          const std::pair<std::string, Camera>& entry, const RandomPose& full,
+                          const std::function<const SceneRender&()>& original_of) {
+    auto as_written = paper_cameras.find(entry.first);
+    if (as_written == paper_cameras.end()) {
+      const CameraParameters read_back =
+          parse_camera(format_camera(entry.second.parameters(), CameraFormat::woodscape), name);
+      as_written = paper_cameras.emplace(entry.first, std::pair{read_back, ViewpointWarp(Camera(read_back))}).first;
+    }
+    const ViewpointWarp& warp = as_written->second.second;
+    writer.sample(out / folder, name, augmented_camera(as_written->second.first, full.change()), [&] {
+      const SceneRender& source = original_of();
+      SceneRender augmented;
+      const AugmentIO io{&source.image, &augmented.image, 0, &source.labels, &augmented.labels, label_fill, nullptr};
+      warp.augment(full.change(), DepthPrior::source_sphere, io, Sampling::grid);
+      if (o.depth) {
+        warp.warp_depth(full.change(), DepthPrior::source_sphere, source.range, DepthValues::range, &augmented.range);
+      }
+      return augmented;
+    });
+  }
+};
+
+void surround_view_dataset(const Options& o) {
+  SurroundViewRun run{.o = o, .out = o.out};
+  std::vector<fs::path> inputs;
+  for (const std::string& name : distinct_names(o.cameras, "--cameras")) {
+    const fs::path path = bundled_data("synwoodscape_" + name + ".json");
+    run.cameras.emplace_back(name, sized(read_camera(path), o.size));
+    inputs.push_back(path);
+  }
+  if (run.cameras.empty()) throw Error("--cameras: expected camera names such as FV,MVL,MVR,RV");
+  check_output_not_input(run.out, inputs, true);
+  const std::array<double, 3> share = split_shares(o.splits);
+  run.train = int(std::lround(share[0] * o.scenes)), run.val = int(std::lround(share[1] * o.scenes));
+  if (o.test_sets != "none") {
+    for (const std::string& name : distinct_names(o.test_sets, "--test-sets")) {
+      run.test_sets.push_back(pose_preset(name, "--test-sets"));
+    }
+  }
+  run.label_fill = paper_label_fill(o.paper_label_fill);
+  const fs::path& out = run.out;
+  const bool resuming = claim_output_settings(out / "sample-dataset.json", settings_of(o, {}), false);
+  const long skipped = write_samples(out, settings_of(o, {}), o.depth, run.manifest_paths(),
+                                     [&](SampleWriter& writer) { run.write(writer); });
   // The manifests describe every sample (those of an earlier, interrupted run of the
   // same settings too): written last, replacing only a resumed run's own.
-  std::vector<std::pair<fs::path, std::string>> manifests = {{out / "scenes.jsonl", scenes_manifest}};
-  for (const auto& [folder, text] : changes) manifests.emplace_back(out / folder / "changes.jsonl", text);
+  std::vector<std::pair<fs::path, std::string>> manifests = {{out / "scenes.jsonl", run.scenes_manifest}};
+  for (const auto& [folder, text] : run.changes) manifests.emplace_back(out / folder / "changes.jsonl", text);
   write_outputs(manifests, resuming);
   std::printf(
       "wrote %d scenes x %zu cameras (%d train, %d val, %d test scenes; %zu true viewpoint test sets) to %s%s\n",
-      o.scenes, cameras.size(), train, val, o.scenes - train - val, test_sets.size(), out.c_str(),
-      skipped > 0 ? (" (" + std::to_string(skipped) + " samples already there)").c_str() : "");
+      o.scenes, run.cameras.size(), run.train, run.val, o.scenes - run.train - run.val, run.test_sets.size(),
+      out.c_str(), skipped > 0 ? (" (" + std::to_string(skipped) + " samples already there)").c_str() : "");
 }
 
 }  // namespace

@@ -78,6 +78,8 @@ __all__ = [
     "DepthValues",
     "Preset",
     "BoxMode",
+    "ViewpointOptions",
+    "AffineOptions",
     "__version__",
 ]
 
@@ -332,3 +334,4 @@ def change_to_dict(
 # Submodules that need the names above (``fishcam.metrics`` without a separate import).
 from . import metrics  # noqa: E402,F401
 from .options import BoxMode, DepthSource, DepthValues, Preset, Sampling  # noqa: E402,F401
+from .transforms.options import AffineOptions, ViewpointOptions  # noqa: E402,F401

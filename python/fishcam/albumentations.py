@@ -43,6 +43,8 @@ except ImportError as error:  # pragma: no cover - the message is the point
 
 from . import Camera, Error
 from . import transforms as _transforms
+from .transforms import options as _options
+from .transforms.options import AffineOptions, Unpack, ViewpointOptions
 
 __all__ = ["RandomViewpoint", "RandomAffine"]
 
@@ -185,29 +187,42 @@ class _FishcamDualTransform(_DualTransform):
         return self._sample_change(params).camera(value)
 
 
-class RandomViewpoint(_FishcamDualTransform):
-    """fishcam.transforms.RandomViewpoint as an albumentations transform (see the
-    module). The camera comes from the constructor or from ``camera=`` in the call;
-    ``p`` is albumentations' (its generator decides). ``fill``: a number (the
-    images') or ``{"image": ..., "mask": ...}``; ``fill_mask``: the semantic masks'
-    (``mask``) label; ``masks`` and bool masks get 0 / False. ``A.to_dict`` writes a
-    constructor camera as its fishcam JSON object (``Camera.to_json``), which the
-    constructor (and so ``A.from_dict``) takes back as ``camera``."""
+_CAMERA = (
+    "the fishcam.Camera of the images, or its fishcam JSON object (what A.to_dict writes), "
+    "or None: then every call passes camera=."
+)
 
+
+def _init_args(defaults: typing.Mapping[str, typing.Any]) -> tuple[str, ...]:
+    """The options A.to_dict writes (p is albumentations' own, written by it)."""
+    return tuple(name for name in defaults if name != "p")
+
+
+def _keep(transform: _FishcamDualTransform, options: typing.Mapping[str, typing.Any]) -> None:
+    """The options as given, as attributes (what get_transform_init_args reads)."""
+    for name in _init_args(options):
+        setattr(transform, name, options[name])
+
+
+class RandomViewpoint(_FishcamDualTransform):
+    __doc__ = _options.docstring(
+        """fishcam.transforms.RandomViewpoint as an albumentations transform (see the
+        module). The camera comes from the constructor or from ``camera=`` in the call;
+        ``p`` is albumentations' (its generator decides). ``mask`` is a semantic mask
+        (``fill_mask`` where there is no source); ``masks`` and bool masks get 0 / False.
+        ``A.to_dict`` writes a constructor camera as its fishcam JSON object
+        (``Camera.to_json``), which the constructor (and so ``A.from_dict``) takes back.
+        """,
+        {"camera": _CAMERA},
+        _options.VIEWPOINT_TEXTS,
+    )
+
+    @_options.takes_options(ViewpointOptions, _options.VIEWPOINT_DEFAULTS)
     def __init__(
-        self,
-        camera: typing.Union[Camera, dict[str, typing.Any], None] = None,
-        preset: str = "train",
-        max_rotation_deg: typing.Optional[float] = None,
-        max_translation: typing.Optional[float] = None,
-        depth: str = "source-sphere",
-        fill: _transforms.Fill = 0,
-        fill_mask: int = 0,
-        sampling: str = "grid",
-        depth_values: str = "range",
-        p: float = 1.0,
+        self, camera: typing.Union[Camera, dict[str, typing.Any], None] = None, **options: Unpack[ViewpointOptions]
     ) -> None:
-        super().__init__(p)
+        given = _options.resolved(options, _options.VIEWPOINT_DEFAULTS, "RandomViewpoint")
+        super().__init__(given["p"])
         if isinstance(camera, dict):  # what get_transform_init_args (A.to_dict) writes
             try:
                 camera = Camera.from_json(json.dumps(camera))
@@ -215,34 +230,13 @@ class RandomViewpoint(_FishcamDualTransform):
                 raise Error(f"camera: not a fishcam JSON camera ({error})") from None
         elif camera is not None and not isinstance(camera, Camera):
             raise Error(f"camera: expected a fishcam.Camera or its fishcam JSON object, got {type(camera).__name__}")
-        self._viewpoint = _transforms.RandomViewpoint(
-            camera,
-            preset=preset,
-            max_rotation_deg=max_rotation_deg,
-            max_translation=max_translation,
-            depth=depth,
-            fill=fill,
-            fill_mask=fill_mask,
-            sampling=sampling,
-            depth_values=depth_values,
-        )
-        self.camera, self.preset = camera, preset
-        self.max_rotation_deg, self.max_translation = max_rotation_deg, max_translation
-        self.depth, self.fill, self.fill_mask = depth, fill, fill_mask
-        self.sampling, self.depth_values = sampling, depth_values
+        options.pop("p", None)  # albumentations' (above)
+        self._viewpoint = _transforms.RandomViewpoint(camera, **options)
+        self.camera = camera
+        _keep(self, given)
 
     def get_transform_init_args_names(self) -> tuple[str, ...]:
-        return (
-            "camera",
-            "preset",
-            "max_rotation_deg",
-            "max_translation",
-            "depth",
-            "fill",
-            "fill_mask",
-            "sampling",
-            "depth_values",
-        )
+        return ("camera", *_init_args(_options.VIEWPOINT_DEFAULTS))
 
     def get_transform_init_args(self) -> dict[str, typing.Any]:
         """The constructor's arguments for A.to_dict: the camera as its fishcam JSON object."""
@@ -262,34 +256,24 @@ class RandomViewpoint(_FishcamDualTransform):
 
 
 class RandomAffine(_FishcamDualTransform):
-    """fishcam.transforms.RandomAffine (the paper's affine baseline) as an
-    albumentations transform; depth maps keep their values, a camera is passed on;
-    ``fill`` and ``fill_mask`` as RandomViewpoint's."""
+    __doc__ = _options.docstring(
+        """fishcam.transforms.RandomAffine (the paper's affine baseline) as an
+        albumentations transform; depth maps keep their values, a camera is passed on;
+        ``p`` is albumentations', the fills as RandomViewpoint's.
+        """,
+        _options.AFFINE_TEXTS,
+    )
 
-    def __init__(
-        self,
-        preset: str = "train",
-        max_rotation_deg: typing.Optional[float] = None,
-        max_translation: typing.Optional[float] = None,
-        scale_range: typing.Optional[tuple[float, float]] = None,
-        fill: _transforms.Fill = 0,
-        fill_mask: int = 0,
-        p: float = 1.0,
-    ) -> None:
-        super().__init__(p)
-        self._affine = _transforms.RandomAffine(
-            preset=preset,
-            max_rotation_deg=max_rotation_deg,
-            max_translation=max_translation,
-            scale_range=scale_range,
-            fill=fill,
-            fill_mask=fill_mask,
-        )
-        self.preset, self.max_rotation_deg, self.max_translation = preset, max_rotation_deg, max_translation
-        self.scale_range, self.fill, self.fill_mask = scale_range, fill, fill_mask
+    @_options.takes_options(AffineOptions, _options.AFFINE_DEFAULTS)
+    def __init__(self, **options: Unpack[AffineOptions]) -> None:
+        given = _options.resolved(options, _options.AFFINE_DEFAULTS, "RandomAffine")
+        super().__init__(given["p"])
+        options.pop("p", None)  # albumentations' (above)
+        self._affine = _transforms.RandomAffine(**options)
+        _keep(self, given)
 
     def get_transform_init_args_names(self) -> tuple[str, ...]:
-        return ("preset", "max_rotation_deg", "max_translation", "scale_range", "fill", "fill_mask")
+        return _init_args(_options.AFFINE_DEFAULTS)
 
     def _change(self, params: Params) -> _transforms.SampleChange:
         height, width = params["shape"][:2]

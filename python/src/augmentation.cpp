@@ -223,49 +223,84 @@ void def_warp_cameras(py::class_<ViewpointWarp>& cls) {
           "Whether maps come from the float kernel (within 1e-3 px), else the exact path.");
 }
 
+// ViewpointWarp.maps: the maps of a change, written into new numpy arrays.
+std::tuple<py::array_t<float>, py::array_t<float>, py::array_t<bool>> warp_maps(const ViewpointWarp& warp,
+                                                                                const RandomPose& change,
+                                                                                const std::string& depth,
+                                                                                const std::string& kind, bool exact,
+                                                                                bool grid) {
+  const DepthPrior prior = depth_prior(depth);
+  const MapKind map = map_kind(kind);
+  if (exact && map != MapKind::geometric) throw Error("exact: only geometric maps have an exact path");
+  if (grid && (exact || map != MapKind::geometric)) throw Error("grid: gives geometric maps, not exact ones");
+  const int h = warp.target().height(), w = warp.target().width();
+  py::array_t<float> map_x({h, w}), map_y({h, w});
+  py::array_t<bool> valid({h, w});
+  WarpMaps maps;
+  // Preallocated outputs: the library writes into the numpy buffers.
+  maps.map_x = cv::Mat(h, w, CV_32FC1, map_x.mutable_data());
+  maps.map_y = cv::Mat(h, w, CV_32FC1, map_y.mutable_data());
+  if (map == MapKind::geometric) maps.valid = cv::Mat(h, w, CV_8UC1, valid.mutable_data());
+  {
+    py::gil_scoped_release release;
+    if (exact) {
+      warp.compute_exact(change.change(), prior, &maps);
+    } else if (grid) {
+      warp.compute_grid(change.change(), prior, &maps);
+    } else {
+      warp.compute(change.change(), prior, &maps, map);
+    }
+    if (maps.map_x.data != static_cast<void*>(map_x.mutable_data()) ||
+        maps.map_y.data != static_cast<void*>(map_y.mutable_data())) {
+      throw Error("internal: a map was reallocated");
+    }
+    if (map == MapKind::sampling) {
+      cv::Mat header(h, w, CV_8UC1, valid.mutable_data());
+      maps.validity().copyTo(header);  // same size and type: written in place
+    }
+  }
+  return std::tuple(map_x, map_y, valid);
+}
+
+// ViewpointWarp.sampling_grid: the grid path's maps in grid_sample's coordinates.
+std::pair<py::array_t<float>, py::array_t<bool>> warp_sampling_grid(const ViewpointWarp& warp, const RandomPose& change,
+                                                                    const std::string& depth) {
+  const DepthPrior prior = depth_prior(depth);
+  const int h = warp.target().height(), w = warp.target().width();
+  const int sw = warp.source().width(), sh = warp.source().height();
+  py::array_t<float> grid({h, w, 2});
+  py::array_t<bool> valid({h, w});
+  {
+    py::gil_scoped_release release;
+    WarpMaps maps;
+    warp.compute_grid(change.change(), prior, &maps);
+    // torch.nn.functional.grid_sample's coordinates with align_corners=True:
+    // -1 and 1 on the outer pixel centres; sources in the outer half pixel
+    // clamped onto them (as fishcam's resampling does); 0 where there is none.
+    const float sx = sw > 1 ? 2.0f / float(sw - 1) : 0.0f, sy = sh > 1 ? 2.0f / float(sh - 1) : 0.0f;
+    float* out = grid.mutable_data();
+    bool* ok = valid.mutable_data();
+    for (int v = 0; v < h; ++v) {
+      const float* x = maps.map_x.ptr<float>(v);
+      const float* y = maps.map_y.ptr<float>(v);
+      const uchar* inside = maps.valid.ptr<uchar>(v);
+      for (int u = 0; u < w; ++u, out += 2, ++ok) {
+        *ok = inside[u] != 0;
+        out[0] = *ok ? std::clamp(x[u], 0.0f, float(sw - 1)) * sx - 1 : 0.0f;
+        out[1] = *ok ? std::clamp(y[u], 0.0f, float(sh - 1)) * sy - 1 : 0.0f;
+      }
+    }
+  }
+  return std::pair(grid, valid);
+}
+
 // Its maps: per pixel, for remap, and for torch's grid_sample.
 void def_warp_maps(py::class_<ViewpointWarp>& cls) {
-  cls.def(
-         "maps",
-         [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth, const std::string& kind,
-            bool exact, bool grid) {
-           const DepthPrior prior = depth_prior(depth);
-           const MapKind map = map_kind(kind);
-           if (exact && map != MapKind::geometric) throw Error("exact: only geometric maps have an exact path");
-           if (grid && (exact || map != MapKind::geometric)) throw Error("grid: gives geometric maps, not exact ones");
-           const int h = warp.target().height(), w = warp.target().width();
-           py::array_t<float> map_x({h, w}), map_y({h, w});
-           py::array_t<bool> valid({h, w});
-           WarpMaps maps;
-           // Preallocated outputs: the library writes into the numpy buffers.
-           maps.map_x = cv::Mat(h, w, CV_32FC1, map_x.mutable_data());
-           maps.map_y = cv::Mat(h, w, CV_32FC1, map_y.mutable_data());
-           if (map == MapKind::geometric) maps.valid = cv::Mat(h, w, CV_8UC1, valid.mutable_data());
-           {
-             py::gil_scoped_release release;
-             if (exact) {
-               warp.compute_exact(change.change(), prior, &maps);
-             } else if (grid) {
-               warp.compute_grid(change.change(), prior, &maps);
-             } else {
-               warp.compute(change.change(), prior, &maps, map);
-             }
-             if (maps.map_x.data != static_cast<void*>(map_x.mutable_data()) ||
-                 maps.map_y.data != static_cast<void*>(map_y.mutable_data())) {
-               throw Error("internal: a map was reallocated");
-             }
-             if (map == MapKind::sampling) {
-               cv::Mat header(h, w, CV_8UC1, valid.mutable_data());
-               maps.validity().copyTo(header);  // same size and type: written in place
-             }
-           }
-           return std::tuple(map_x, map_y, valid);
-         },
-         py::arg("change"), py::arg("depth") = "source-sphere", py::arg("kind") = "geometric", py::arg("exact") = false,
-         py::arg("grid") = false,
-         "The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source "
-         "coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision "
-         "reference; grid=True: the grid path's (within 1/32 px), geometric.")
+  cls.def("maps", &warp_maps, py::arg("change"), py::arg("depth") = "source-sphere", py::arg("kind") = "geometric",
+          py::arg("exact") = false, py::arg("grid") = false,
+          "The maps of a change: (map_x, map_y (H, W) float32, valid (H, W) bool). kind='geometric': source "
+          "coordinates, NaN where none; 'sampling': what resampling uses. exact=True: the double-precision "
+          "reference; grid=True: the grid path's (within 1/32 px), geometric.")
       .def("warp", &augment_sample, py::kw_only(), py::arg("image") = py::none(), py::arg("labels") = py::none(),
            py::arg("change"), py::arg("depth") = "source-sphere", py::arg("fill") = 0.0, py::arg("label_fill") = 0,
            py::arg("return_valid") = false, py::arg("sampling") = "grid", py::arg("depth_map") = py::none(),
@@ -274,40 +309,9 @@ void def_warp_maps(py::class_<ViewpointWarp>& cls) {
            "bilinear) and labels HxW (uint8, uint16; nearest); a dict of new arrays: image, labels, valid when "
            "asked. depth: a prior, or \"map\" with depth_map (the source's HxW float32 range or z, "
            "depth_values; exact, no source where the source never saw the scene).")
-      .def(
-          "sampling_grid",
-          [](const ViewpointWarp& warp, const RandomPose& change, const std::string& depth) {
-            const DepthPrior prior = depth_prior(depth);
-            const int h = warp.target().height(), w = warp.target().width();
-            const int sw = warp.source().width(), sh = warp.source().height();
-            py::array_t<float> grid({h, w, 2});
-            py::array_t<bool> valid({h, w});
-            {
-              py::gil_scoped_release release;
-              WarpMaps maps;
-              warp.compute_grid(change.change(), prior, &maps);
-              // torch.nn.functional.grid_sample's coordinates with align_corners=True:
-              // -1 and 1 on the outer pixel centres; sources in the outer half pixel
-              // clamped onto them (as fishcam's resampling does); 0 where there is none.
-              const float sx = sw > 1 ? 2.0f / float(sw - 1) : 0.0f, sy = sh > 1 ? 2.0f / float(sh - 1) : 0.0f;
-              float* out = grid.mutable_data();
-              bool* ok = valid.mutable_data();
-              for (int v = 0; v < h; ++v) {
-                const float* x = maps.map_x.ptr<float>(v);
-                const float* y = maps.map_y.ptr<float>(v);
-                const uchar* inside = maps.valid.ptr<uchar>(v);
-                for (int u = 0; u < w; ++u, out += 2, ++ok) {
-                  *ok = inside[u] != 0;
-                  out[0] = *ok ? std::clamp(x[u], 0.0f, float(sw - 1)) * sx - 1 : 0.0f;
-                  out[1] = *ok ? std::clamp(y[u], 0.0f, float(sh - 1)) * sy - 1 : 0.0f;
-                }
-              }
-            }
-            return std::pair(grid, valid);
-          },
-          py::arg("change"), py::arg("depth") = "source-sphere",
-          "The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): "
-          "(grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)");
+      .def("sampling_grid", &warp_sampling_grid, py::arg("change"), py::arg("depth") = "source-sphere",
+           "The grid path's maps as torch.nn.functional.grid_sample takes them (align_corners=True): "
+           "(grid (H, W, 2) float32 in [-1, 1], valid (H, W) bool)");
 }
 
 // What it moves besides images: points and depth maps; a sample by call.

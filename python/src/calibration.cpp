@@ -33,8 +33,8 @@ std::vector<BoardObservation> observations_of(const py::list& items) {
   return out;
 }
 
-// Calibration (one camera) and the functions that calibrate and measure.
-void bind_camera_calibration(py::module_& m) {
+// The Calibration class (one camera's result).
+void bind_calibration_result(py::module_& m) {
   py::class_<CalibrationResult>(m, "Calibration",
                                 "A chessboard calibration (what `fishcam calibrate --json` reports), typed.")
       .def_property_readonly(
@@ -93,7 +93,11 @@ void bind_camera_calibration(py::module_& m) {
                       std::string(model_name(r.camera.model)).c_str(), r.used_images.size(), r.rms_px);
         return std::string(buffer);
       });
+}
 
+// Calibration (one camera) and the functions that calibrate and measure.
+void bind_camera_calibration(py::module_& m) {
+  bind_calibration_result(m);
   m.def(
       "read_corners",
       [](const std::string& path, std::pair<int, int> board) {

@@ -74,3 +74,55 @@ def test_stubs_and_py_typed_ship_with_the_package():
     folder = os.path.dirname(fishcam.__file__)
     assert os.path.isfile(os.path.join(folder, "py.typed"))
     assert os.path.isfile(os.path.join(folder, "_fishcam.pyi"))
+
+
+# The extras each adapter adds to the options it shares with the others (documented
+# in its docstring); nothing else may differ between the three constructors.
+EXTRAS = {"fishcam.transforms": ["rng"], "fishcam.torch": ["min_visibility", "boxes"], "fishcam.albumentations": []}
+
+
+@pytest.mark.parametrize("kind", ["RandomViewpoint", "RandomAffine"])
+def test_the_three_adapters_take_one_set_of_options(kind):
+    """The numpy, torch and albumentations constructors of a transform take exactly
+    the options of its one definition (fishcam.ViewpointOptions / AffineOptions, each
+    with the default of VIEWPOINT_DEFAULTS / AFFINE_DEFAULTS, keyword-only) plus their
+    documented extras, and document each once: they were three hand copies that
+    drifted (issue 38, item 4)."""
+    import typing
+
+    import fishcam.transforms as fx
+
+    options, defaults = {
+        "RandomViewpoint": (fishcam.ViewpointOptions, fx.VIEWPOINT_DEFAULTS),
+        "RandomAffine": (fishcam.AffineOptions, fx.AFFINE_DEFAULTS),
+    }[kind]
+    shared = list(typing.get_type_hints(options))
+    assert shared == list(defaults) and len(shared) >= 7
+    leading = ["camera"] if kind == "RandomViewpoint" else []
+    for module_name, extras in EXTRAS.items():
+        cls = getattr(importlib.import_module(module_name), kind)
+        parameters = inspect.signature(cls).parameters
+        assert list(parameters) == leading + shared + extras, f"{module_name}.{kind}"
+        for name in shared:
+            assert parameters[name].kind is inspect.Parameter.KEYWORD_ONLY
+            assert parameters[name].default == defaults[name], f"{module_name}.{kind}: {name}"
+        doc = inspect.getdoc(cls)
+        for name in leading + shared + extras:
+            assert doc.count(f"\n    {name}: ") == 1, f"{module_name}.{kind} documents {name} once"
+        # What the constructor takes is what its signature says: every name, and no other.
+        cls(**{name: defaults[name] for name in shared})
+        others = {name for names in EXTRAS.values() for name in names} - set(extras)
+        for name in sorted(others) + ["nonsense"]:
+            with pytest.raises(TypeError, match=f"unexpected keyword argument '{name}'"):
+                cls(**{name: None})
+    assert inspect.getdoc(options).count("\n    ") >= len(shared)
+
+
+def test_albumentations_serialises_the_shared_options():
+    """A.to_dict writes the shared options (p being albumentations' own) and the camera."""
+    import fishcam.albumentations as fa
+    import fishcam.transforms as fx
+
+    viewpoint, affine = fa.RandomViewpoint(), fa.RandomAffine()
+    assert viewpoint.get_transform_init_args_names() == ("camera", *[n for n in fx.VIEWPOINT_DEFAULTS if n != "p"])
+    assert affine.get_transform_init_args_names() == tuple(n for n in fx.AFFINE_DEFAULTS if n != "p")

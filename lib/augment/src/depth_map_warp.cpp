@@ -20,33 +20,15 @@ struct Landing {
   bool ok = false;
 };
 
-}  // namespace
-
-void ViewpointWarp::compute_from_map(const ViewpointChange& change, const DepthMap& map, WarpMaps* maps,
-                                     MapKind kind) const {
-  check_change(change);
-  const cv::Mat& depth = map.depth;
-  const DepthValues values = map.values;
-  const double edge_ratio = map.edge_ratio;
-  if (depth.type() != CV_32FC1) throw Error("depth map: expected a float32 single-channel depth map");
-  const int sw = source_.width(), sh = source_.height();
-  if (depth.cols != sw || depth.rows != sh) {
-    throw Error("depth map: it is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
-                " but the source camera is " + std::to_string(sw) + "x" + std::to_string(sh));
-  }
-  if (!(edge_ratio > 1)) throw Error("depth map: edge_ratio must be > 1");
-  if (change.translation.isZero(0)) {
-    // A rotation moves every point along with its direction, whatever its depth: the
-    // priors' maps are exact and complete, where the triangles below would drop a
-    // band at every depth edge.
-    compute(change, DepthPrior::infinity, maps, kind);
-    return;
-  }
+// 1. Every source pixel's landing in the target camera: where its scene point (at its
+// depth value, moved by the change) projects, and its distance from the moved camera.
+std::vector<Landing> source_landings(const Camera& source, const Camera& target, const ViewpointChange& change,
+                                     const cv::Mat& depth, DepthValues values) {
+  const int sw = source.width(), sh = source.height();
   const Eigen::Matrix3d& r = change.rotation;
   const Eigen::Vector3d t = change.translation;
   std::vector<float> rays(3 * size_t(sw) * size_t(sh));
-  source_.unproject_image(rays, InversePath::table);
-  // 1. Every source pixel's landing in the output.
+  source.unproject_image(rays, InversePath::table);
   std::vector<Landing> landing(size_t(sw) * size_t(sh));
   cv::parallel_for_(cv::Range(0, sh), [&](const cv::Range& range) {
     for (int v = range.start; v < range.end; ++v) {
@@ -65,20 +47,28 @@ void ViewpointWarp::compute_from_map(const ViewpointChange& change, const DepthM
           moved = r * (along * d) + t, distance = moved.norm();
         }
         Eigen::Vector2d q;
-        if (!target_.project(moved, &q)) continue;
+        if (!target.project(moved, &q)) continue;
         landing[i] = {float(q.x()), float(q.y()), float(distance), true};
       }
     }
   });
-  // 2. Two triangles per cell of four neighbouring source pixels, rasterised with a
-  // z-buffer; each output pixel keeps the source coordinates of the nearest surface.
-  const int tw = target_.width(), th = target_.height();
-  cv::Mat map_x(th, tw, CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  cv::Mat map_y(th, tw, CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  cv::Mat nearest(th, tw, CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
-  cv::Mat written(th, tw, CV_8UC1, cv::Scalar(0));
-  constexpr float kMaxExtent = 64;  // px: a one-pixel triangle stretched further spans a fold or wrap
-  const auto draw = [&](int a, int b, int c, const int(&su)[3], const int(&sv)[3]) {
+  return landing;
+}
+
+// 2. Triangles of landed source pixels rasterised into the target with a z-buffer: each
+// output pixel keeps the source coordinates of the nearest surface.
+struct LandingRaster {
+  static constexpr float kMaxExtent = 64;  // px: a one-pixel triangle stretched further spans a fold or wrap
+  const std::vector<Landing>& landing;
+  double edge_ratio;
+  int tw, th;
+  cv::Mat map_x = cv::Mat(th, tw, CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  cv::Mat map_y = cv::Mat(th, tw, CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  cv::Mat nearest = cv::Mat(th, tw, CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
+  cv::Mat written = cv::Mat(th, tw, CV_8UC1, cv::Scalar(0));
+
+  // The triangle of source pixels a, b, c (at source coordinates su, sv), unless it spans a depth edge.
+  void draw(int a, int b, int c, const int (&su)[3], const int (&sv)[3]) {
     const Landing* l[3] = {&landing[size_t(a)], &landing[size_t(b)], &landing[size_t(c)]};
     if (!l[0]->ok || !l[1]->ok || !l[2]->ok) return;
     const float near = std::min({l[0]->range, l[1]->range, l[2]->range});
@@ -107,15 +97,40 @@ void ViewpointWarp::compute_from_map(const ViewpointChange& change, const DepthM
         map_y.at<float>(y, x) = float(w0 * sv[0] + w1 * sv[1] + w2 * sv[2]);
       }
     }
-  };
+  }
+};
+
+}  // namespace
+
+void ViewpointWarp::compute_from_map(const ViewpointChange& change, const DepthMap& map, WarpMaps* maps,
+                                     MapKind kind) const {
+  check_change(change);
+  const cv::Mat& depth = map.depth;
+  if (depth.type() != CV_32FC1) throw Error("depth map: expected a float32 single-channel depth map");
+  const int sw = source_.width(), sh = source_.height();
+  if (depth.cols != sw || depth.rows != sh) {
+    throw Error("depth map: it is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+                " but the source camera is " + std::to_string(sw) + "x" + std::to_string(sh));
+  }
+  if (!(map.edge_ratio > 1)) throw Error("depth map: edge_ratio must be > 1");
+  if (change.translation.isZero(0)) {
+    // A rotation moves every point along with its direction, whatever its depth: the
+    // priors' maps are exact and complete, where the triangles below would drop a
+    // band at every depth edge.
+    compute(change, DepthPrior::infinity, maps, kind);
+    return;
+  }
+  const std::vector<Landing> landing = source_landings(source_, target_, change, depth, map.values);
+  LandingRaster raster{.landing = landing, .edge_ratio = map.edge_ratio, .tw = target_.width(), .th = target_.height()};
   for (int v = 0; v + 1 < sh; ++v) {
     for (int u = 0; u + 1 < sw; ++u) {
       const int i = v * sw + u;
-      draw(i, i + 1, i + sw, {u, u + 1, u}, {v, v, v + 1});
-      draw(i + 1, i + sw + 1, i + sw, {u + 1, u + 1, u}, {v, v + 1, v + 1});
+      raster.draw(i, i + 1, i + sw, {u, u + 1, u}, {v, v, v + 1});
+      raster.draw(i + 1, i + sw + 1, i + sw, {u + 1, u + 1, u}, {v, v + 1, v + 1});
     }
   }
   // 3. In the maps' form (augmentation.hpp: MapKind).
+  cv::Mat &map_x = raster.map_x, &map_y = raster.map_y, &written = raster.written;
   maps->kind = kind;
   maps->source_size = cv::Size(sw, sh);
   maps->invalid_count = long(written.total()) - cv::countNonZero(written);

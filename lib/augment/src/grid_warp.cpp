@@ -269,30 +269,105 @@ double rim_distance(const Camera& source) {
   return (axis - source.principal_point()).cwiseQuotient(source.pixel_scale()).norm() < nearest ? nearest : 0;
 }
 
+// The measurement's changes: the corners of the `large` preset's box (the widest changes
+// the presets draw), half with each depth prior that moves the view.
+std::vector<std::pair<ViewpointChange, DepthPrior>> measured_changes(double* max_angle, double* max_translation) {
+  std::vector<std::pair<ViewpointChange, DepthPrior>> changes;
+  *max_angle = 0, *max_translation = 0;
+  for (int k = 0; k < 8; ++k) {
+    const double sx = k & 1 ? 1 : -1, sy = k & 2 ? 1 : -1, sz = k & 4 ? 1 : -1;
+    const ViewpointChange change =
+        ViewpointChange::from_euler_deg({30 * sx, 30 * sy, 30 * sz}, {0.5 * sy, 0.5 * sz, 0.5 * sx});
+    changes.emplace_back(change, k % 2 ? DepthPrior::source_sphere : DepthPrior::target_sphere);
+    *max_angle = std::max(*max_angle, rotation_angle(change.rotation));
+    *max_translation = std::max(*max_translation, change.translation.norm());
+  }
+  return changes;
+}
+
+// The changes prepared on the plan's nodes, or none unless enough cells are interpolated:
+// of the cells with a corner inside the source image, over all the changes.
+std::vector<GridChange> prepared_if_mostly_interpolated(
+    const GridPlan& plan, const SourceParams& src, const std::vector<std::pair<ViewpointChange, DepthPrior>>& changes) {
+  std::vector<GridChange> prepared;
+  long cells_interpolated = 0, cells_with_source = 0;
+  const std::size_t nu = std::size_t(plan.nodes_u), cells_u = nu - 1;
+  for (const auto& [change, prior] : changes) {
+    const GridChange& p = prepared.emplace_back(prepare(plan, src, change, prior));
+    for (std::size_t j = 0; j + 1 < std::size_t(plan.nodes_v); ++j) {
+      for (std::size_t i = 0; i < cells_u; ++i) {
+        const std::size_t a = j * nu + i, b = a + nu;
+        const int inside = p.nodes.valid[a] + p.nodes.valid[a + 1] + p.nodes.valid[b] + p.nodes.valid[b + 1];
+        cells_with_source += inside > 0;
+        cells_interpolated += p.ok[j * cells_u + i] && inside == 4;
+      }
+    }
+  }
+  if (double(cells_interpolated) < kMinInterpolatedShare * double(cells_with_source)) prepared.clear();
+  return prepared;
+}
+
+constexpr int kRowStep = 3;  // the measurement's rows: v = r kRowStep
+constexpr double kTolerance2 = kGridTolerancePx * kGridTolerancePx;
+
+// The worst squared error of the interpolated pixels (NaN: one without a source) against
+// the per-pixel float map of the measured rows, which is computed where it is compared
+// (8 changes' maps would be 40 MB at 1280 x 966); none once it exceeds the tolerance.
+// Each row stripe keeps its own worst, merged under the lock; stripes stop once the
+// spacing has failed.
+std::optional<double> worst_error2(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, int w,
+                                   int h, const std::vector<GridChange>& prepared) {
+  const int s = plan.spacing, cells = (w + s - 1) / s, rows = (h + kRowStep - 1) / kRowStep;
+  const std::size_t row_length = std::size_t(w) + kRowPadding, cells_u = std::size_t(plan.nodes_u) - 1;
+  double worst2 = 0;
+  std::atomic<bool> failed{false};
+  std::mutex merge;
+  for (std::size_t c = 0; c < prepared.size() && !failed; ++c) {
+    const GridChange& change = prepared[c];
+    cv::parallel_for_(cv::Range(0, rows), [&](const cv::Range& range) {
+      std::vector<float> x(row_length), y(row_length), exact_x(row_length), exact_y(row_length);
+      std::vector<unsigned char> exact_in(row_length);
+      RowScratch scratch(plan);
+      float stripe_worst2 = 0;
+      for (int r = range.start; r < range.end && !failed.load(std::memory_order_relaxed); ++r) {
+        const int v = r * kRowStep;
+        const std::size_t ray = std::size_t(v) * std::size_t(w);
+        change.geometric(pixel_rays.ptr<float>(0) + ray, pixel_rays.ptr<float>(1) + ray, pixel_rays.ptr<float>(2) + ray,
+                         0, std::size_t(w), change.pose, src,
+                         KernelOutput{exact_x.data(), exact_y.data(), exact_in.data()});
+        interpolate_row(plan, change.nodes, v, w, x.data(), y.data(), &scratch);
+        const unsigned char* ok_row = change.ok.data() + std::size_t(v / s) * cells_u;
+        for (int i = 0; i < cells; ++i) {
+          if (!ok_row[i]) continue;  // computed per pixel
+          for (int u = i * s, end = std::min(w, (i + 1) * s); u < end; ++u) {
+            const float dx = x[std::size_t(u)] - exact_x[std::size_t(u)];
+            const float dy = y[std::size_t(u)] - exact_y[std::size_t(u)];
+            // NaN must fail: not max(), which drops it.
+            const float e2 = exact_in[std::size_t(u)] ? dx * dx + dy * dy : 0.0f;
+            stripe_worst2 = e2 <= stripe_worst2 ? stripe_worst2 : e2;
+          }
+        }
+        if (!(stripe_worst2 <= kTolerance2)) failed = true;
+      }
+      const std::lock_guard lock(merge);
+      worst2 = std::isnan(worst2) || std::isnan(stripe_worst2) ? std::numeric_limits<double>::quiet_NaN()
+                                                               : std::max(worst2, double(stripe_worst2));
+    });
+  }
+  if (failed || !(worst2 <= kTolerance2)) return std::nullopt;
+  return worst2;
+}
+
 }  // namespace
 
 std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camera& target, const SourceParams& src,
                                                const cv::Mat& pixel_rays) {
   const int w = target.width(), h = target.height();
   if (w < 2 || h < 2) return nullptr;
-  // The measurement: the corners of the `large` preset's box (the widest changes the
-  // presets draw), half with each depth prior that moves the view, on every third row.
-  std::vector<std::pair<ViewpointChange, DepthPrior>> changes;
   double max_angle = 0, max_translation = 0;
-  for (int k = 0; k < 8; ++k) {
-    const double sx = k & 1 ? 1 : -1, sy = k & 2 ? 1 : -1, sz = k & 4 ? 1 : -1;
-    const ViewpointChange change =
-        ViewpointChange::from_euler_deg({30 * sx, 30 * sy, 30 * sz}, {0.5 * sy, 0.5 * sz, 0.5 * sx});
-    changes.emplace_back(change, k % 2 ? DepthPrior::source_sphere : DepthPrior::target_sphere);
-    max_angle = std::max(max_angle, rotation_angle(change.rotation));
-    max_translation = std::max(max_translation, change.translation.norm());
-  }
-  constexpr int kRowStep = 3;
-  const int rows = (h + kRowStep - 1) / kRowStep;  // measured rows v = r kRowStep
+  const std::vector<std::pair<ViewpointChange, DepthPrior>> changes = measured_changes(&max_angle, &max_translation);
   float fold_guard = std::numeric_limits<float>::infinity();
   if (source.domain().closed) fold_guard = float(0.95 * rim_distance(source) * source.pixel_scale().maxCoeff());
-  const std::size_t row_length = std::size_t(w) + kRowPadding;
-  constexpr double kTolerance2 = kGridTolerancePx * kGridTolerancePx;
   for (const int s : {16, 8, 4, 2}) {
     auto plan = std::make_shared<GridPlan>();
     plan->spacing = s;
@@ -300,67 +375,11 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
     plan->max_rotation_rad = max_angle + 1e-9;
     plan->max_translation = max_translation + 1e-9;
     plan->fold_guard_radius = fold_guard;
-    // First the share of interpolated cells, from the nodes alone: of the cells with a
-    // corner inside the source image, over all the changes.
-    std::vector<GridChange> prepared;
-    long cells_interpolated = 0, cells_with_source = 0;
-    const std::size_t nu = std::size_t(plan->nodes_u), cells_u = nu - 1;
-    for (const auto& [change, prior] : changes) {
-      const GridChange& p = prepared.emplace_back(prepare(*plan, src, change, prior));
-      for (std::size_t j = 0; j + 1 < std::size_t(plan->nodes_v); ++j) {
-        for (std::size_t i = 0; i < cells_u; ++i) {
-          const std::size_t a = j * nu + i, b = a + nu;
-          const int inside = p.nodes.valid[a] + p.nodes.valid[a + 1] + p.nodes.valid[b] + p.nodes.valid[b + 1];
-          cells_with_source += inside > 0;
-          cells_interpolated += p.ok[j * cells_u + i] && inside == 4;
-        }
-      }
-    }
-    if (double(cells_interpolated) < kMinInterpolatedShare * double(cells_with_source)) continue;
-    // Then the error: the worst squared error of the interpolated pixels (NaN: one
-    // without a source) against the per-pixel float map of the measured rows, which
-    // is computed where it is compared (8 changes' maps would be 40 MB at 1280 x 966).
-    // Each row stripe keeps its own worst, merged under the lock; stripes stop once
-    // the spacing has failed.
-    const int cells = (w + s - 1) / s;
-    double worst2 = 0;
-    std::atomic<bool> failed{false};
-    std::mutex merge;
-    for (std::size_t c = 0; c < prepared.size() && !failed; ++c) {
-      const GridChange& change = prepared[c];
-      cv::parallel_for_(cv::Range(0, rows), [&](const cv::Range& range) {
-        std::vector<float> x(row_length), y(row_length), exact_x(row_length), exact_y(row_length);
-        std::vector<unsigned char> exact_in(row_length);
-        RowScratch scratch(*plan);
-        float stripe_worst2 = 0;
-        for (int r = range.start; r < range.end && !failed.load(std::memory_order_relaxed); ++r) {
-          const int v = r * kRowStep;
-          const std::size_t ray = std::size_t(v) * std::size_t(w);
-          change.geometric(pixel_rays.ptr<float>(0) + ray, pixel_rays.ptr<float>(1) + ray,
-                           pixel_rays.ptr<float>(2) + ray, 0, std::size_t(w), change.pose, src,
-                           KernelOutput{exact_x.data(), exact_y.data(), exact_in.data()});
-          interpolate_row(*plan, change.nodes, v, w, x.data(), y.data(), &scratch);
-          const unsigned char* ok_row = change.ok.data() + std::size_t(v / s) * cells_u;
-          for (int i = 0; i < cells; ++i) {
-            if (!ok_row[i]) continue;  // computed per pixel
-            for (int u = i * s, end = std::min(w, (i + 1) * s); u < end; ++u) {
-              const float dx = x[std::size_t(u)] - exact_x[std::size_t(u)];
-              const float dy = y[std::size_t(u)] - exact_y[std::size_t(u)];
-              // NaN must fail: not max(), which drops it.
-              const float e2 = exact_in[std::size_t(u)] ? dx * dx + dy * dy : 0.0f;
-              stripe_worst2 = e2 <= stripe_worst2 ? stripe_worst2 : e2;
-            }
-          }
-          if (!(stripe_worst2 <= kTolerance2)) failed = true;
-        }
-        const std::lock_guard lock(merge);
-        worst2 = std::isnan(worst2) || std::isnan(stripe_worst2) ? std::numeric_limits<double>::quiet_NaN()
-                                                                 : std::max(worst2, double(stripe_worst2));
-      });
-    }
+    const std::vector<GridChange> prepared = prepared_if_mostly_interpolated(*plan, src, changes);
+    if (prepared.empty()) continue;
     // The largest spacing that keeps the error and leaves most cells to the interpolation.
-    if (!failed && worst2 <= kTolerance2) {
-      plan->measured_error_px = std::sqrt(worst2);
+    if (const std::optional<double> worst2 = worst_error2(*plan, src, pixel_rays, w, h, prepared)) {
+      plan->measured_error_px = std::sqrt(*worst2);
       return plan;
     }
   }

@@ -201,10 +201,8 @@ struct Layout {
   }
 };
 
-StreetScene::Content generated_content(std::uint64_t seed) {
-  StreetScene::Content s;
-  Draw draw(seed);
-  Road& road = s.road;
+// The road's lanes, markings and surfaces.
+void draw_road(Draw& draw, Road& road) {
   road.lanes_per_side = draw.integer(1, 2);
   road.lane_width = draw.uniform(2.8, 3.7);
   road.parking_width = draw.chance(0.6) ? draw.uniform(2.0, 2.5) : 0.0;
@@ -219,7 +217,10 @@ StreetScene::Content generated_content(std::uint64_t seed) {
   road.line_half_width = draw.uniform(0.06, 0.1);
   road.road_grey = draw.uniform(50, 95), road.road_grain = draw.uniform(15, 40);
   road.tile_a = draw.colour(110, 190), road.tile_b = draw.colour(90, 160);
-  Light& light = s.light;
+}
+
+// The sky's colours and the sun.
+void draw_light(Draw& draw, Light& light) {
   light.sky_horizon = {uchar(draw.integer(200, 245)), uchar(draw.integer(180, 225)), uchar(draw.integer(150, 210))};
   light.sky_zenith = {uchar(draw.integer(150, 230)), uchar(draw.integer(100, 170)), uchar(draw.integer(40, 120))};
   light.brightness = draw.uniform(0.75, 1.15);
@@ -227,12 +228,19 @@ StreetScene::Content generated_content(std::uint64_t seed) {
   light.sun = {std::cos(sun_elevation) * std::cos(sun_azimuth), std::cos(sun_elevation) * std::sin(sun_azimuth),
                std::sin(sun_elevation)};
   light.sun_strength = draw.uniform(0.2, 0.6);
+}
 
-  Layout layout{&s, &draw, {}};
-  layout.taken.push_back({-3.0, -2.2, 6.0, 2.2});  // the ego vehicle and its cameras
-  const double lanes = road.lanes_per_side * road.lane_width, half = road.half_width();
-  const double kerb = half + road.curb_width;  // where the sidewalk begins
-  const double sidewalk = draw.uniform(2.0, 5.0);
+// The street across its length: where the lanes end (|d| = lanes), where the sidewalk
+// begins (kerb) and its width.
+struct Street {
+  double lanes, kerb, sidewalk;
+};
+
+// Parked vehicles along both curbs and moving ones in every lane.
+void place_vehicles(Layout& layout, const Street& street) {
+  Draw& draw = *layout.draw;
+  const Road& road = layout.scene->road;
+  const double lanes = street.lanes;
   const cv::Vec3b palette[] = {{40, 40, 170},   {160, 110, 30}, {60, 140, 60},   {200, 200, 210}, {30, 30, 30},
                                {230, 230, 230}, {20, 90, 200},  {120, 120, 120}, {60, 30, 110},   {0, 150, 220}};
   const auto vehicle_colour = [&] {
@@ -268,6 +276,12 @@ StreetScene::Content generated_content(std::uint64_t seed) {
       if (draw.chance(0.5)) vehicle(x, d, draw.uniform(-0.03, 0.03));
     }
   }
+}
+
+void place_riders(Layout& layout, const Street& street) {
+  Draw& draw = *layout.draw;
+  StreetScene::Content& s = *layout.scene;
+  const double lanes = street.lanes;
   // Riders on bicycles and motorcycles near the lanes' outer edges.
   const int riders = draw.integer(1, 4);
   for (int i = 0, tries = 0; i < riders && tries < 40; ++tries) {
@@ -284,6 +298,12 @@ StreetScene::Content generated_content(std::uint64_t seed) {
                            wc::rider, Material::person, draw.colour(20, 220), 1.2});
     ++i;
   }
+}
+
+void place_persons(Layout& layout, const Street& street) {
+  Draw& draw = *layout.draw;
+  StreetScene::Content& s = *layout.scene;
+  const double lanes = street.lanes, kerb = street.kerb, sidewalk = street.sidewalk;
   // Persons on the sidewalks (and one sometimes crossing).
   const int persons = draw.integer(3, 9);
   for (int i = 0, tries = 0; i < persons && tries < 60; ++tries) {
@@ -298,6 +318,12 @@ StreetScene::Content generated_content(std::uint64_t seed) {
         {p.x(), p.y(), radius, 0, height, wc::person, Material::person, draw.colour(20, 220), 0.52 * height});
     ++i;
   }
+}
+
+void place_signs(Layout& layout, const Street& street) {
+  Draw& draw = *layout.draw;
+  StreetScene::Content& s = *layout.scene;
+  const double kerb = street.kerb;
   // Traffic signs on poles near the curbs.
   const int signs = draw.integer(2, 5);
   for (int i = 0, tries = 0; i < signs && tries < 40; ++tries) {
@@ -320,6 +346,12 @@ StreetScene::Content generated_content(std::uint64_t seed) {
                        0.15});
     ++i;
   }
+}
+
+void place_buildings(Layout& layout, const Street& street) {
+  Draw& draw = *layout.draw;
+  StreetScene::Content& s = *layout.scene;
+  const double kerb = street.kerb, sidewalk = street.sidewalk;
   // Buildings beyond the sidewalks, and far away across the street's ends.
   for (const double side : {-1.0, 1.0}) {
     for (double x = -60 + draw.uniform(0, 5); x < 110;) {
@@ -337,6 +369,23 @@ StreetScene::Content generated_content(std::uint64_t seed) {
       x += length + (draw.chance(0.3) ? draw.uniform(1, 4) : 0.0);
     }
   }
+}
+
+StreetScene::Content generated_content(std::uint64_t seed) {
+  StreetScene::Content s;
+  Draw draw(seed);
+  draw_road(draw, s.road);
+  draw_light(draw, s.light);
+  Layout layout{&s, &draw, {}};
+  layout.taken.push_back({-3.0, -2.2, 6.0, 2.2});  // the ego vehicle and its cameras
+  const Road& road = s.road;
+  const double kerb = road.half_width() + road.curb_width;  // where the sidewalk begins
+  const Street street{road.lanes_per_side * road.lane_width, kerb, draw.uniform(2.0, 5.0)};
+  place_vehicles(layout, street);
+  place_riders(layout, street);
+  place_persons(layout, street);
+  place_signs(layout, street);
+  place_buildings(layout, street);
   return s;
 }
 

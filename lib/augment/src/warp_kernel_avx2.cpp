@@ -23,6 +23,45 @@ namespace fishcam::detail {
 namespace {
 
 #if defined(__AVX2__)
+// The second pass of bilinear_8u_row over n pixels: each pixel's taps (two rows of
+// 8 bytes) weighed across and down, rounded, and its channels stored.
+template <int kChannels>
+[[gnu::always_inline]] inline void weigh_taps(const unsigned char* const* tops, const unsigned char* const* bottoms,
+                                              const unsigned* across, const unsigned* down, int n,
+                                              unsigned char* row_out) {
+  // (c0 left, c0 right, c1 left, ...) for the top row in bytes 0-7, the bottom row in 8-15.
+  const __m128i pairs = kChannels == 1   ? _mm_setr_epi8(0, 1, -1, -1, -1, -1, -1, -1, 8, 9, -1, -1, -1, -1, -1, -1)
+                        : kChannels == 3 ? _mm_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1)
+                                         : _mm_setr_epi8(0, 4, 1, 5, 2, 6, 3, 7, 8, 12, 9, 13, 10, 14, 11, 15);
+  // Four pixels' channels packed to bytes (4 per pixel), then the first kChannels of each.
+  const __m128i keep = kChannels == 1   ? _mm_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1)
+                       : kChannels == 3 ? _mm_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1)
+                                        : _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const __m128i half = _mm_set1_epi32(512);
+  auto pixel = [&](int j) {  // the channels as 32-bit lanes
+    const __m128i rows = _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(tops[j])),
+                                            _mm_loadl_epi64(reinterpret_cast<const __m128i*>(bottoms[j])));
+    const __m128i across_sum = _mm_maddubs_epi16(_mm_shuffle_epi8(rows, pairs), _mm_set1_epi32(int(across[j])));
+    const __m128i columns = _mm_unpacklo_epi16(across_sum, _mm_srli_si128(across_sum, 8));  // (c0 top, c0 bottom, ...)
+    const __m128i sum = _mm_madd_epi16(columns, _mm_set1_epi32(int(down[j])));
+    return _mm_srli_epi32(_mm_add_epi32(sum, half), 10);
+  };
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    const __m128i bytes =
+        _mm_packus_epi16(_mm_packs_epi32(pixel(j), pixel(j + 1)), _mm_packs_epi32(pixel(j + 2), pixel(j + 3)));
+    alignas(16) unsigned char packed[16];
+    _mm_store_si128(reinterpret_cast<__m128i*>(packed), _mm_shuffle_epi8(bytes, keep));
+    std::memcpy(row_out + j * kChannels, packed, 4 * kChannels);
+  }
+  for (; j < n; ++j) {
+    const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(pixel(j), half), half);
+    alignas(16) unsigned char packed[16];
+    _mm_store_si128(reinterpret_cast<__m128i*>(packed), bytes);
+    std::memcpy(row_out + j * kChannels, packed, kChannels);
+  }
+}
+
 // cv::remap's bilinear interpolation of an 8-bit image, byte for byte. For 5
 // fraction bits OpenCV's weight table is exactly 32 (32 - fx)(32 - fy), 32 fx (32 - fy),
 // ... (scale 2^15, no rounding fix-up needed), so a channel is
@@ -58,15 +97,6 @@ void bilinear_8u_row(const BilinearSource& src, const short* fixed, const unsign
   const __m256i five_bits = _mm256_set1_epi32(31), steps = _mm256_set1_epi32(32);
   const __m256i base = _mm256_set1_epi64x(reinterpret_cast<long long>(src.data));
   const __m256i fill_pointer = _mm256_set1_epi64x(reinterpret_cast<long long>(fill));
-  // (c0 left, c0 right, c1 left, ...) for the top row in bytes 0-7, the bottom row in 8-15.
-  const __m128i pairs = kChannels == 1   ? _mm_setr_epi8(0, 1, -1, -1, -1, -1, -1, -1, 8, 9, -1, -1, -1, -1, -1, -1)
-                        : kChannels == 3 ? _mm_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1)
-                                         : _mm_setr_epi8(0, 4, 1, 5, 2, 6, 3, 7, 8, 12, 9, 13, 10, 14, 11, 15);
-  // Four pixels' channels packed to bytes (4 per pixel), then the first kChannels of each.
-  const __m128i keep = kChannels == 1   ? _mm_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1)
-                       : kChannels == 3 ? _mm_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1)
-                                        : _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const __m128i half = _mm_set1_epi32(512);
   for (int u0 = 0; u0 < w; u0 += kChunk) {
     const int n = w - u0 < kChunk ? w - u0 : kChunk;  // (no std::min: this object shares no templates)
     // Whole vectors: the maps have room for 7 pixels past the row (their values are not used).
@@ -116,30 +146,7 @@ void bilinear_8u_row(const BilinearSource& src, const short* fixed, const unsign
         bottoms[j] = edge[j] + 8;
       }
     }
-    auto pixel = [&](int j) {  // the channels as 32-bit lanes
-      const __m128i rows = _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(tops[j])),
-                                              _mm_loadl_epi64(reinterpret_cast<const __m128i*>(bottoms[j])));
-      const __m128i across_sum = _mm_maddubs_epi16(_mm_shuffle_epi8(rows, pairs), _mm_set1_epi32(int(across[j])));
-      const __m128i columns =
-          _mm_unpacklo_epi16(across_sum, _mm_srli_si128(across_sum, 8));  // (c0 top, c0 bottom, ...)
-      const __m128i sum = _mm_madd_epi16(columns, _mm_set1_epi32(int(down[j])));
-      return _mm_srli_epi32(_mm_add_epi32(sum, half), 10);
-    };
-    unsigned char* row_out = out + u0 * kChannels;
-    int j = 0;
-    for (; j + 4 <= n; j += 4) {
-      const __m128i bytes =
-          _mm_packus_epi16(_mm_packs_epi32(pixel(j), pixel(j + 1)), _mm_packs_epi32(pixel(j + 2), pixel(j + 3)));
-      alignas(16) unsigned char packed[16];
-      _mm_store_si128(reinterpret_cast<__m128i*>(packed), _mm_shuffle_epi8(bytes, keep));
-      std::memcpy(row_out + j * kChannels, packed, 4 * kChannels);
-    }
-    for (; j < n; ++j) {
-      const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(pixel(j), half), half);
-      alignas(16) unsigned char packed[16];
-      _mm_store_si128(reinterpret_cast<__m128i*>(packed), bytes);
-      std::memcpy(row_out + j * kChannels, packed, kChannels);
-    }
+    weigh_taps<kChannels>(tops, bottoms, across, down, n, out + u0 * kChannels);
   }
 }
 

@@ -115,6 +115,88 @@ void check_comparison_size(int width, int height, int samples) {
   }
 }
 
+namespace {
+
+// The reference's maps and augmented labels for every change, computed once for every alternative.
+struct ReferenceWarps {
+  std::vector<WarpMaps> maps;
+  std::vector<std::vector<cv::Mat>> labels;  // [change][label image]
+};
+
+// The largest distance between the two cameras' maps without a change (where both have a source).
+double identity_max_px(const ViewpointWarp& reference, const ViewpointWarp& alternative, DepthPrior prior) {
+  WarpMaps a, b;
+  reference.compute(ViewpointChange{}, prior, &a, MapKind::geometric);
+  alternative.compute(ViewpointChange{}, prior, &b, MapKind::geometric);
+  double largest = 0;
+  for (int v = 0; v < a.valid.rows; ++v) {
+    for (int u = 0; u < a.valid.cols; ++u) {
+      if (a.valid.at<uchar>(v, u) && b.valid.at<uchar>(v, u)) largest = std::max(largest, distance(a, b, v, u));
+    }
+  }
+  return largest;
+}
+
+// One alternative model against the reference over every change.
+ModelComparison compare_one(const AlternativeModel& alternative, const Comparison& out, const ReferenceWarps& reference,
+                            const std::vector<cv::Mat>& labels, const std::vector<signed char>& band,
+                            const ViewpointWarp& reference_warp) {
+  const int w = alternative.camera.width(), h = alternative.camera.height();
+  ModelComparison result{alternative, {}, {}, 0, std::vector<double>(labels.size(), 0), 0, {}};
+  const ViewpointWarp warp(alternative.camera);
+  result.identity_max_px = identity_max_px(reference_warp, warp, out.options.prior);
+  Accumulator all;
+  std::array<Accumulator, 4> by_angle;
+  cv::Mat sum(h, w, CV_64FC1, cv::Scalar(0)), count(h, w, CV_32SC1, cv::Scalar(0));
+  long either = 0, one_only = 0, both = 0;
+  std::vector<long> labels_differ(labels.size(), 0);
+  for (std::size_t i = 0; i < out.changes.size(); ++i) {
+    const WarpMaps& a = reference.maps[i];
+    WarpMaps b;
+    warp.compute(out.changes[i].change(), out.options.prior, &b, MapKind::geometric);
+    std::vector<cv::Mat> warped(labels.size());
+    for (std::size_t k = 0; k < labels.size(); ++k) warp_labels(labels[k], b, 0, &warped[k]);
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const bool in_a = a.valid.at<uchar>(v, u), in_b = b.valid.at<uchar>(v, u);
+        either += in_a || in_b;
+        one_only += in_a != in_b;
+        if (!(in_a && in_b)) continue;
+        ++both;
+        const double d = distance(a, b, v, u);
+        all.add(d);
+        const signed char bin = band[std::size_t(v) * std::size_t(w) + std::size_t(u)];
+        if (bin >= 0) by_angle[std::size_t(bin)].add(d);
+        sum.at<double>(v, u) += d;
+        ++count.at<int>(v, u);
+        for (std::size_t k = 0; k < labels.size(); ++k) {
+          const bool differ = labels[k].depth() == CV_8U
+                                  ? warped[k].at<uchar>(v, u) != reference.labels[i][k].at<uchar>(v, u)
+                                  : warped[k].at<ushort>(v, u) != reference.labels[i][k].at<ushort>(v, u);
+          labels_differ[k] += differ;
+        }
+      }
+    }
+  }
+  result.all = all.stats();
+  for (std::size_t b = 0; b < 4; ++b) result.by_angle[b] = by_angle[b].stats();
+  result.validity_differs_pct = either > 0 ? 100.0 * double(one_only) / double(either) : 0;
+  for (std::size_t k = 0; k < labels.size(); ++k) {
+    result.labels_differ_pct[k] = both > 0 ? 100.0 * double(labels_differ[k]) / double(both) : 0;
+  }
+  result.mean_displacement.create(h, w, CV_32FC1);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const int n = count.at<int>(v, u);
+      result.mean_displacement.at<float>(v, u) =
+          n > 0 ? float(sum.at<double>(v, u) / n) : std::numeric_limits<float>::quiet_NaN();
+    }
+  }
+  return result;
+}
+
+}  // namespace
+
 Comparison compare_models(const Camera& reference, const std::vector<AlternativeModel>& alternatives,
                           const ComparisonOptions& options, const NamedLabels& named_labels) {
   if (options.samples < 1 || options.samples > 1000) {
@@ -141,86 +223,22 @@ Comparison compare_models(const Camera& reference, const std::vector<Alternative
     labels.push_back(l);
     out.label_names.push_back(name);
   }
-
   for (int i = 0; i < options.samples; ++i) {
     out.changes.push_back(random_pose(options.preset, derive_seed(options.seed, "compare", std::uint64_t(i))));
   }
   const std::vector<signed char> band = incidence_angle_bands(reference);
   const ViewpointWarp reference_warp(reference);
-  // The reference's maps and augmented labels per change, computed once for every alternative.
-  std::vector<WarpMaps> reference_maps(out.changes.size());
-  std::vector<std::vector<cv::Mat>> reference_labels(out.changes.size());
+  ReferenceWarps reference_warps{std::vector<WarpMaps>(out.changes.size()),
+                                 std::vector<std::vector<cv::Mat>>(out.changes.size())};
   for (std::size_t i = 0; i < out.changes.size(); ++i) {
-    reference_warp.compute(out.changes[i].change(), options.prior, &reference_maps[i], MapKind::geometric);
+    reference_warp.compute(out.changes[i].change(), options.prior, &reference_warps.maps[i], MapKind::geometric);
     for (const cv::Mat& l : labels) {
-      reference_labels[i].emplace_back();
-      warp_labels(l, reference_maps[i], 0, &reference_labels[i].back());
+      reference_warps.labels[i].emplace_back();
+      warp_labels(l, reference_warps.maps[i], 0, &reference_warps.labels[i].back());
     }
   }
-
   for (const AlternativeModel& alternative : alternatives) {
-    ModelComparison result{alternative, {}, {}, 0, std::vector<double>(labels.size(), 0), 0, {}};
-    const ViewpointWarp warp(alternative.camera);
-    {
-      WarpMaps a, b;
-      reference_warp.compute(ViewpointChange{}, options.prior, &a, MapKind::geometric);
-      warp.compute(ViewpointChange{}, options.prior, &b, MapKind::geometric);
-      for (int v = 0; v < h; ++v) {
-        for (int u = 0; u < w; ++u) {
-          if (a.valid.at<uchar>(v, u) && b.valid.at<uchar>(v, u)) {
-            result.identity_max_px = std::max(result.identity_max_px, distance(a, b, v, u));
-          }
-        }
-      }
-    }
-    Accumulator all;
-    std::array<Accumulator, 4> by_angle;
-    cv::Mat sum(h, w, CV_64FC1, cv::Scalar(0)), count(h, w, CV_32SC1, cv::Scalar(0));
-    long either = 0, one_only = 0, both = 0;
-    std::vector<long> labels_differ(labels.size(), 0);
-    for (std::size_t i = 0; i < out.changes.size(); ++i) {
-      const WarpMaps& a = reference_maps[i];
-      WarpMaps b;
-      warp.compute(out.changes[i].change(), options.prior, &b, MapKind::geometric);
-      std::vector<cv::Mat> warped(labels.size());
-      for (std::size_t k = 0; k < labels.size(); ++k) warp_labels(labels[k], b, 0, &warped[k]);
-      for (int v = 0; v < h; ++v) {
-        for (int u = 0; u < w; ++u) {
-          const bool in_a = a.valid.at<uchar>(v, u), in_b = b.valid.at<uchar>(v, u);
-          either += in_a || in_b;
-          one_only += in_a != in_b;
-          if (!(in_a && in_b)) continue;
-          ++both;
-          const double d = distance(a, b, v, u);
-          all.add(d);
-          const signed char bin = band[std::size_t(v) * std::size_t(w) + std::size_t(u)];
-          if (bin >= 0) by_angle[std::size_t(bin)].add(d);
-          sum.at<double>(v, u) += d;
-          ++count.at<int>(v, u);
-          for (std::size_t k = 0; k < labels.size(); ++k) {
-            const bool differ = labels[k].depth() == CV_8U
-                                    ? warped[k].at<uchar>(v, u) != reference_labels[i][k].at<uchar>(v, u)
-                                    : warped[k].at<ushort>(v, u) != reference_labels[i][k].at<ushort>(v, u);
-            labels_differ[k] += differ;
-          }
-        }
-      }
-    }
-    result.all = all.stats();
-    for (std::size_t b = 0; b < 4; ++b) result.by_angle[b] = by_angle[b].stats();
-    result.validity_differs_pct = either > 0 ? 100.0 * double(one_only) / double(either) : 0;
-    for (std::size_t k = 0; k < labels.size(); ++k) {
-      result.labels_differ_pct[k] = both > 0 ? 100.0 * double(labels_differ[k]) / double(both) : 0;
-    }
-    result.mean_displacement.create(h, w, CV_32FC1);
-    for (int v = 0; v < h; ++v) {
-      for (int u = 0; u < w; ++u) {
-        const int n = count.at<int>(v, u);
-        result.mean_displacement.at<float>(v, u) =
-            n > 0 ? float(sum.at<double>(v, u) / n) : std::numeric_limits<float>::quiet_NaN();
-      }
-    }
-    out.models.push_back(std::move(result));
+    out.models.push_back(compare_one(alternative, out, reference_warps, labels, band, reference_warp));
   }
   return out;
 }

@@ -272,59 +272,108 @@ std::vector<std::string> check_fidelity_models(const std::vector<std::string>& m
   return models;
 }
 
+namespace {
+
+// Per calibration file: the camera's own warp, each model's, and the bands of its pixels.
+struct CameraModels {
+  std::vector<ViewpointWarp> warps;  // own first, then one per model
+  std::vector<std::string> how;
+  std::vector<signed char> band;
+};
+
+CameraModels camera_models(const fs::path& calibration, const std::vector<std::string>& models) {
+  const Camera camera = read_camera(calibration);
+  CameraModels c;
+  c.warps.emplace_back(camera);
+  c.band = incidence_angle_bands(camera);
+  for (const std::string& token : models) {
+    const FidelityModel m = parse_fidelity_model(token);
+    if (m.own) {
+      c.warps.emplace_back(camera);
+      c.how.emplace_back("the camera itself");
+      continue;
+    }
+    try {
+      AlternativeModel alternative = alternative_model(camera, m.spec, m.method);
+      c.warps.emplace_back(alternative.camera);
+      c.how.push_back(alternative.how);
+    } catch (const Error& e) {
+      throw Error(path_for_message(calibration) + ": model " + quoted_for_message(token) + ": " + e.what());
+    }
+  }
+  return c;
+}
+
+constexpr std::size_t kBands = Comparison::kAngleBandsDeg.size() - 1;
+// Endpoint distances of one model: sum and count per band (the last slot: all bands).
+struct EndpointSums {
+  std::array<double, kBands + 1> sum{}, count{};
+};
+
+// The distances between a model's geometric map and the camera's own, where both have a source.
+void add_endpoints(const WarpMaps& maps, const WarpMaps& own, const cv::Mat& own_valid,
+                   const std::vector<signed char>& band, EndpointSums* sums) {
+  const cv::Mat valid = maps.validity();
+  for (int v = 0; v < maps.map_x.rows; ++v) {
+    for (int u = 0; u < maps.map_x.cols; ++u) {
+      if (!valid.at<uchar>(v, u) || !own_valid.at<uchar>(v, u)) continue;
+      const double d = std::hypot(double(maps.map_x.at<float>(v, u)) - double(own.map_x.at<float>(v, u)),
+                                  double(maps.map_y.at<float>(v, u)) - double(own.map_y.at<float>(v, u)));
+      const signed char b = band[std::size_t(v) * std::size_t(maps.map_x.cols) + std::size_t(u)];
+      if (b >= 0) sums->sum[std::size_t(b)] += d, sums->count[std::size_t(b)] += 1;
+      sums->sum[kBands] += d, sums->count[kBands] += 1;
+    }
+  }
+}
+
+void check_sample_sizes(const fs::path& set, const std::string& name, const cv::Size& size, const SampleFiles& source,
+                        const SampleFiles& truth) {
+  for (const auto& [what, image] :
+       {std::pair{"rgb_images", &truth.image}, std::pair{"labels", &truth.labels},
+        std::pair{"rgb_images (source)", &source.image}, std::pair{"labels (source)", &source.labels}}) {
+    if (image->size() != size)
+      throw Error(path_for_message(set) + ": " + name + ": " + what + " is not its camera's size");
+  }
+}
+
+// A test set's rows, one per model: the sums of the samples' scores made means.
+void finish_rows(const fs::path& set, const std::vector<std::string>& models, const std::vector<std::string>& how,
+                 const std::vector<EndpointSums>& sums, std::vector<ModelFidelity>& set_rows,
+                 std::vector<ModelFidelity>* rows) {
+  const auto mean = [](double total, double n) { return n > 0 ? total / n : std::numeric_limits<double>::quiet_NaN(); };
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    ModelFidelity& row = set_rows[k];
+    if (row.samples == 0) continue;
+    row.test_set = set.filename().string();
+    row.model = models[k];
+    row.how = how[k];
+    row.valid_share /= row.samples, row.label_agreement /= row.samples, row.psnr_db /= row.samples;
+    row.endpoint_px = mean(sums[k].sum[kBands], sums[k].count[kBands]);
+    for (std::size_t b = 0; b < kBands; ++b) row.endpoint_by_angle_px[b] = mean(sums[k].sum[b], sums[k].count[b]);
+    rows->push_back(row);
+  }
+}
+
+}  // namespace
+
 std::vector<ModelFidelity> dataset_model_fidelity(const fs::path& root, const std::vector<std::string>& models,
                                                   DepthPrior prior) {
   check_fidelity_models(models);
   const std::vector<fs::path> sets = true_test_sets(root);
-  // Per calibration file: the camera's own warp, each model's, and the bands of its pixels.
-  struct CameraModels {
-    std::vector<ViewpointWarp> warps;  // own first, then one per model
-    std::vector<std::string> how;
-    std::vector<signed char> band;
-  };
-  std::map<std::string, CameraModels> cameras;
-  const auto models_of = [&](const fs::path& calibration) -> const CameraModels& {
-    auto found = cameras.find(calibration.string());
-    if (found != cameras.end()) return found->second;
-    const Camera camera = read_camera(calibration);
-    CameraModels c;
-    c.warps.emplace_back(camera);
-    c.band = incidence_angle_bands(camera);
-    for (const std::string& token : models) {
-      const FidelityModel m = parse_fidelity_model(token);
-      if (m.own) {
-        c.warps.emplace_back(camera);
-        c.how.emplace_back("the camera itself");
-        continue;
-      }
-      try {
-        AlternativeModel alternative = alternative_model(camera, m.spec, m.method);
-        c.warps.emplace_back(alternative.camera);
-        c.how.push_back(alternative.how);
-      } catch (const Error& e) {
-        throw Error(path_for_message(calibration) + ": model " + quoted_for_message(token) + ": " + e.what());
-      }
-    }
-    return cameras.emplace(calibration.string(), std::move(c)).first->second;
-  };
-  constexpr std::size_t kBands = Comparison::kAngleBandsDeg.size() - 1;
+  std::map<std::string, CameraModels> cameras;  // per calibration file
   std::vector<ModelFidelity> rows;
   for (const fs::path& set : sets) {
     std::vector<ModelFidelity> set_rows(models.size());
-    // Endpoint distances: sum and count per model and band (the last slot: all bands).
-    std::vector<std::array<double, kBands + 1>> sum(models.size()), count(models.size());
+    std::vector<EndpointSums> sums(models.size());
     for (const auto& [name, change] : true_changes(set)) {
-      const CameraModels& c = models_of(root / "test" / "calibration" / (name + ".json"));
+      const fs::path calibration = root / "test" / "calibration" / (name + ".json");
+      auto found = cameras.find(calibration.string());
+      if (found == cameras.end())
+        found = cameras.emplace(calibration.string(), camera_models(calibration, models)).first;
+      const CameraModels& c = found->second;
       const SampleFiles source = read_sample(root / "test", name, false);
       const SampleFiles truth = read_sample(set, name, false);
-      const cv::Size size(c.warps[0].target().width(), c.warps[0].target().height());
-      for (const auto& [what, image] :
-           {std::pair{"rgb_images", &truth.image}, std::pair{"labels", &truth.labels},
-            std::pair{"rgb_images (source)", &source.image}, std::pair{"labels (source)", &source.labels}}) {
-        if (image->size() != size) {
-          throw Error(path_for_message(set) + ": " + name + ": " + what + " is not its camera's size");
-        }
-      }
+      check_sample_sizes(set, name, cv::Size(c.warps[0].target().width(), c.warps[0].target().height()), source, truth);
       // The endpoint on geometric maps (the sampling maps clamp coordinates near the
       // source's border), as compare measures it; the images through the sampling maps.
       WarpMaps own;
@@ -339,33 +388,10 @@ std::vector<ModelFidelity> dataset_model_fidelity(const fs::path& root, const st
         ModelFidelity& row = set_rows[k];
         row.valid_share += f.valid_share, row.label_agreement += f.label_agreement, row.psnr_db += f.psnr_db;
         ++row.samples;
-        const cv::Mat valid = maps.validity();
-        for (int v = 0; v < maps.map_x.rows; ++v) {
-          for (int u = 0; u < maps.map_x.cols; ++u) {
-            if (!valid.at<uchar>(v, u) || !own_valid.at<uchar>(v, u)) continue;
-            const double d = std::hypot(double(maps.map_x.at<float>(v, u)) - double(own.map_x.at<float>(v, u)),
-                                        double(maps.map_y.at<float>(v, u)) - double(own.map_y.at<float>(v, u)));
-            const signed char b = c.band[std::size_t(v) * std::size_t(maps.map_x.cols) + std::size_t(u)];
-            if (b >= 0) sum[k][std::size_t(b)] += d, count[k][std::size_t(b)] += 1;
-            sum[k][kBands] += d, count[k][kBands] += 1;
-          }
-        }
+        add_endpoints(maps, own, own_valid, c.band, &sums[k]);
       }
     }
-    for (std::size_t k = 0; k < models.size(); ++k) {
-      ModelFidelity& row = set_rows[k];
-      if (row.samples == 0) continue;
-      row.test_set = set.filename().string();
-      row.model = models[k];
-      row.how = cameras.begin()->second.how[k];
-      row.valid_share /= row.samples, row.label_agreement /= row.samples, row.psnr_db /= row.samples;
-      const auto mean = [](double total, double n) {
-        return n > 0 ? total / n : std::numeric_limits<double>::quiet_NaN();
-      };
-      row.endpoint_px = mean(sum[k][kBands], count[k][kBands]);
-      for (std::size_t b = 0; b < kBands; ++b) row.endpoint_by_angle_px[b] = mean(sum[k][b], count[k][b]);
-      rows.push_back(row);
-    }
+    if (!cameras.empty()) finish_rows(set, models, cameras.begin()->second.how, sums, set_rows, &rows);
   }
   return rows;
 }

@@ -10,6 +10,54 @@
 namespace fishcam {
 namespace detail {
 
+namespace {
+
+// J^T J from the sparse rows (each corner touches the kept blocks, columns [0, a), and one
+// eliminated block, which start at `starts`).
+Eigen::MatrixXd normal_equations(const ceres::CRSMatrix& crs, Eigen::Index a, const std::vector<Eigen::Index>& starts) {
+  const Eigen::Index m = crs.num_cols;
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    const int begin = crs.rows[size_t(r)], end = crs.rows[size_t(r) + 1];
+    Eigen::Index lo = m, hi = -1;  // the eliminated columns this row touches
+    for (int i = begin; i < end; ++i) {
+      const Eigen::Index c = crs.cols[size_t(i)];
+      if (c >= a) lo = std::min(lo, c), hi = std::max(hi, c);
+      for (int j = begin; j < end; ++j) normal(c, crs.cols[size_t(j)]) += crs.values[size_t(i)] * crs.values[size_t(j)];
+    }
+    if (hi >= 0 &&
+        std::upper_bound(starts.begin(), starts.end(), lo) != std::upper_bound(starts.begin(), starts.end(), hi)) {
+      throw Error("calibrate: internal error: a residual depends on two eliminated parameter blocks");
+    }
+  }
+  return normal;
+}
+
+// The pseudo-inverse of a block from its eigen decomposition: a direction without
+// curvature (eigenvalue at most kUndetermined * reference) is reported in
+// `undetermined` (as a vector of all m parameters, the block at `at`), not inverted.
+// Adds the directions inverted to *rank.
+Eigen::MatrixXd pseudo_inverse(const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& eigen, double reference,
+                               Eigen::Index at, Eigen::Index m, std::vector<Eigen::VectorXd>* undetermined, int* rank) {
+  const Eigen::Index size = eigen.eigenvalues().size();
+  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(size, size);
+  for (Eigen::Index k = 0; k < size; ++k) {
+    const double lambda = eigen.eigenvalues()[k];
+    const Eigen::VectorXd v = eigen.eigenvectors().col(k);
+    if (lambda > kUndetermined * reference) {
+      inverse += v * v.transpose() / lambda;
+      ++*rank;
+    } else {
+      Eigen::VectorXd full = Eigen::VectorXd::Zero(m);
+      full.segment(at, size) = v;
+      undetermined->push_back(full);
+    }
+  }
+  return inverse;
+}
+
+}  // namespace
+
 ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<double*>& kept,
                                   const std::vector<double*>& eliminated) {
   std::vector<double*> blocks = kept;
@@ -26,21 +74,7 @@ ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<dou
   std::vector<Eigen::Index> starts;
   for (Eigen::Index at = a; double* b : eliminated) starts.push_back(at), at += problem->ParameterBlockSize(b);
   const Eigen::Index m = crs.num_cols;
-  // J^T J from the sparse rows (each corner touches the kept blocks and one board).
-  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
-  for (int r = 0; r < crs.num_rows; ++r) {
-    const int begin = crs.rows[size_t(r)], end = crs.rows[size_t(r) + 1];
-    Eigen::Index lo = m, hi = -1;  // the eliminated columns this row touches
-    for (int i = begin; i < end; ++i) {
-      const Eigen::Index c = crs.cols[size_t(i)];
-      if (c >= a) lo = std::min(lo, c), hi = std::max(hi, c);
-      for (int j = begin; j < end; ++j) normal(c, crs.cols[size_t(j)]) += crs.values[size_t(i)] * crs.values[size_t(j)];
-    }
-    if (hi >= 0 &&
-        std::upper_bound(starts.begin(), starts.end(), lo) != std::upper_bound(starts.begin(), starts.end(), hi)) {
-      throw Error("calibrate: internal error: a residual depends on two eliminated parameter blocks");
-    }
-  }
+  Eigen::MatrixXd normal = normal_equations(crs, a, starts);
   Eigen::VectorXd scale(m);  // to unit curvature: the threshold then has no units
   for (Eigen::Index i = 0; i < m; ++i) scale[i] = normal(i, i) > 0 ? 1 / std::sqrt(normal(i, i)) : 0.0;
   normal = scale.asDiagonal() * normal * scale.asDiagonal();
@@ -58,36 +92,17 @@ ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<dou
   // The Schur complement onto the kept parameters, S = A - B D^+ B^T.
   int rank = 0;
   ParameterCovariance out;
-  const auto inverse_of = [&](const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& eigen, double reference,
-                              Eigen::Index at, Eigen::Index size, Eigen::MatrixXd* inverse,
-                              std::vector<Eigen::VectorXd>* undetermined) {
-    inverse->setZero(size, size);
-    for (Eigen::Index k = 0; k < size; ++k) {
-      const double lambda = eigen.eigenvalues()[k];
-      const Eigen::VectorXd v = eigen.eigenvectors().col(k);
-      if (lambda > kUndetermined * reference) {
-        *inverse += v * v.transpose() / lambda;
-        ++rank;
-      } else {
-        Eigen::VectorXd full = Eigen::VectorXd::Zero(m);
-        full.segment(at, size) = v;
-        undetermined->push_back(full);
-      }
-    }
-  };
   for (size_t k = 0; k < starts.size(); ++k) {
     const Eigen::Index size = problem->ParameterBlockSize(eliminated[k]), at = starts[k] - a;
-    Eigen::MatrixXd inverse;
-    inverse_of(blocks_eigen[k], largest, starts[k], size, &inverse, &out.undetermined);
-    d_inverse.block(at, at, size, size) = inverse;
+    d_inverse.block(at, at, size, size) =
+        pseudo_inverse(blocks_eigen[k], largest, starts[k], m, &out.undetermined, &rank);
   }
   const Eigen::MatrixXd g = normal.topRightCorner(a, e) * d_inverse;  // B D^+
   const Eigen::MatrixXd schur = normal.topLeftCorner(a, a) - g * normal.topRightCorner(a, e).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(schur);
   largest = std::max(largest, eigen.eigenvalues().maxCoeff());
-  Eigen::MatrixXd s_inverse;
   std::vector<Eigen::VectorXd> kept_undetermined;
-  inverse_of(eigen, largest, 0, a, &s_inverse, &kept_undetermined);
+  const Eigen::MatrixXd s_inverse = pseudo_inverse(eigen, largest, 0, m, &kept_undetermined, &rank);
   for (Eigen::VectorXd& direction : kept_undetermined) {  // the eliminated blocks follow: (u, -D^+ B^T u)
     direction.tail(e) = -g.transpose() * direction.head(a);
     out.undetermined.push_back(direction.normalized());

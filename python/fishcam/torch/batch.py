@@ -56,6 +56,22 @@ def warp_batch(
         WarpedBatch(images, masks, valid): the images and masks in their dtypes and on
         their device; valid (B, H, W) bool, where the output has a source.
     """
+    image_fill, fill_mask = _checked_fills(images, fill, fill_mask)
+    batch, _, height, width = images.shape
+    camera_list, change_list = _per_sample(cameras, changes, batch)
+    _check_masks(masks, images)
+    grids, valid = _sampling_grids(camera_list, change_list, depth, height, width)
+    device = images.device
+    grids, valid = grids.to(device), valid.to(device)
+    sampled = _sample_images(images, grids, valid, image_fill)
+    out_masks = None if masks is None else _sample_masks(masks, grids, valid, fill_mask)
+    return WarpedBatch(sampled.to(images.dtype), out_masks, valid)
+
+
+def _checked_fills(images: torch.Tensor, fill: Fill, fill_mask: int) -> tuple[float, int]:
+    """(the images' fill, the masks' fill) of warp_batch's arguments, after checking
+    that ``images`` is a (B, C, H, W) integer or floating point tensor whose dtype
+    holds the images' fill; fishcam.Error otherwise."""
     if not isinstance(images, torch.Tensor) or images.ndim != 4:
         raise Error(f"images: expected a (B, C, H, W) tensor, got {getattr(images, 'shape', type(images).__name__)}")
     if images.dtype == torch.bool or images.is_complex():
@@ -77,15 +93,31 @@ def warp_batch(
                 f"images: the no-source fill {image_fill} is not a value of dtype {images.dtype} "
                 f"(integers {info.min}..{info.max})"
             )
-    batch, _, height, width = images.shape
-    cameras = (
+    return image_fill, fill_mask
+
+
+def _per_sample(
+    cameras: typing.Union[Camera, typing.Sequence[Camera]], changes: typing.Sequence[ViewpointChange], batch: int
+) -> tuple[list[typing.Any], list[typing.Any]]:
+    """warp_batch's cameras and changes as lists of one per sample (a single camera
+    repeated); fishcam.Error when either does not count ``batch``."""
+    camera_list = (
         [cameras] * batch
         if isinstance(cameras, Camera)
         else _transforms._sequence(cameras, "cameras", "a fishcam.Camera or a sequence of them")
     )
-    changes = _transforms._sequence(changes, "changes", "a sequence of fishcam.ViewpointChange")
-    if len(cameras) != batch or len(changes) != batch:
-        raise Error(f"cameras, changes: expected one per image ({batch}), got {len(cameras)} and {len(changes)}")
+    change_list = _transforms._sequence(changes, "changes", "a sequence of fishcam.ViewpointChange")
+    if len(camera_list) != batch or len(change_list) != batch:
+        raise Error(
+            f"cameras, changes: expected one per image ({batch}), got {len(camera_list)} and {len(change_list)}"
+        )
+    return camera_list, change_list
+
+
+def _check_masks(masks: typing.Optional[torch.Tensor], images: torch.Tensor) -> None:
+    """Refuses masks that are not (B, H, W) tensors on the images' device; their dtype
+    and values are checked by _sample_masks, after the cameras and changes."""
+    batch, _, height, width = images.shape
     if masks is not None and (not isinstance(masks, torch.Tensor) or tuple(masks.shape) != (batch, height, width)):
         raise Error(
             f"masks: expected a ({batch}, {height}, {width}) tensor, got "
@@ -93,6 +125,14 @@ def warp_batch(
         )
     if masks is not None and masks.device != images.device:
         raise Error(f"masks: on {masks.device} but the images are on {images.device}")
+
+
+def _sampling_grids(
+    cameras: typing.Sequence[typing.Any], changes: typing.Sequence[typing.Any], depth: str, height: int, width: int
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """(grids (B, H, W, 2) float32, valid (B, H, W) bool) on the CPU: each sample's
+    grid_sample grid and where it has a source, from fishcam's grid path."""
+    batch = len(cameras)
     grids = torch.empty((batch, height, width, 2), dtype=torch.float32)
     valid = torch.empty((batch, height, width), dtype=torch.bool)
     for i, (camera, change) in enumerate(zip(cameras, changes)):
@@ -105,37 +145,44 @@ def warp_batch(
         grid, ok = _batch_warps.get(camera).sampling_grid(change, depth)
         grids[i] = torch.from_numpy(grid)
         valid[i] = torch.from_numpy(ok)
+    return grids, valid
+
+
+def _sample_images(images: torch.Tensor, grids: torch.Tensor, valid: torch.Tensor, fill: float) -> torch.Tensor:
+    """The images sampled bilinearly at ``grids``, ``fill`` where not ``valid``: in
+    floating point (integer images' values rounded and clamped to their dtype's)."""
     device = images.device
-    grids, valid = grids.to(device), valid.to(device)
     floating = images if images.is_floating_point() else images.float()
     sampled = torch.nn.functional.grid_sample(
         floating, grids.to(floating.dtype), mode="bilinear", padding_mode="border", align_corners=True
     )
-    sampled = torch.where(
-        valid[:, None], sampled, torch.as_tensor(float(image_fill), dtype=sampled.dtype, device=device)
-    )
+    sampled = torch.where(valid[:, None], sampled, torch.as_tensor(float(fill), dtype=sampled.dtype, device=device))
     if not images.is_floating_point():
         info = torch.iinfo(images.dtype)
         sampled = sampled.round_().clamp_(info.min, info.max)
-    out_masks = None
-    if masks is not None:
-        if masks.is_floating_point() or masks.is_complex():
-            raise Error(f"masks: expected an integer or bool tensor, got {masks.dtype}")
-        # float32 holds integers exactly up to 2^24: labels and instance ids.
-        if masks.numel() and (int(masks.min()) < 0 or int(masks.max()) >= 2**24):
-            raise Error("masks: values outside 0..2^24 cannot be sampled exactly")
-        if masks.dtype == torch.bool:
-            fill_mask = 0  # a bool mask is an instance's: no source, not in it
-        else:
-            info = torch.iinfo(masks.dtype)
-            low, high = max(info.min, -(2**24)), min(info.max, 2**24)
-            if not low <= fill_mask <= high:
-                raise Error(f"fill_mask: {fill_mask} does not fit the masks' dtype {masks.dtype} ({low}..{high})")
-        picked = torch.nn.functional.grid_sample(
-            masks[:, None].float(), grids, mode="nearest", padding_mode="border", align_corners=True
-        )[:, 0]
-        out_masks = torch.where(valid, picked, torch.as_tensor(float(fill_mask), device=device)).to(masks.dtype)
-    return WarpedBatch(sampled.to(images.dtype), out_masks, valid)
+    return sampled
+
+
+def _sample_masks(masks: torch.Tensor, grids: torch.Tensor, valid: torch.Tensor, fill_mask: int) -> torch.Tensor:
+    """The masks sampled nearest at ``grids``, ``fill_mask`` where not ``valid`` (False
+    for bool masks), in their dtype; fishcam.Error for masks or a fill that float32
+    cannot carry exactly."""
+    if masks.is_floating_point() or masks.is_complex():
+        raise Error(f"masks: expected an integer or bool tensor, got {masks.dtype}")
+    # float32 holds integers exactly up to 2^24: labels and instance ids.
+    if masks.numel() and (int(masks.min()) < 0 or int(masks.max()) >= 2**24):
+        raise Error("masks: values outside 0..2^24 cannot be sampled exactly")
+    if masks.dtype == torch.bool:
+        fill_mask = 0  # a bool mask is an instance's: no source, not in it
+    else:
+        info = torch.iinfo(masks.dtype)
+        low, high = max(info.min, -(2**24)), min(info.max, 2**24)
+        if not low <= fill_mask <= high:
+            raise Error(f"fill_mask: {fill_mask} does not fit the masks' dtype {masks.dtype} ({low}..{high})")
+    picked = torch.nn.functional.grid_sample(
+        masks[:, None].float(), grids, mode="nearest", padding_mode="border", align_corners=True
+    )[:, 0]
+    return torch.where(valid, picked, torch.as_tensor(float(fill_mask), device=masks.device)).to(masks.dtype)
 
 
 def collate(batch: typing.Sequence[typing.Any]) -> typing.Any:

@@ -11,12 +11,14 @@ from torchvision.transforms import v2
 
 from .. import Camera, Error, derive_seed
 from .. import transforms as _transforms
+from ..transforms import options as _options
+from ..transforms.checks import _choice, _number
+from ..transforms.options import AffineOptions, Unpack, ViewpointOptions
 from . import functional
 from .seeding import _sample_records, _sample_seed, torch_seed
 from .targets import (
     _MASK_DTYPES,
     DepthMap,
-    Fill,
     Params,
     _cpu,
     _image_to_numpy,
@@ -38,10 +40,10 @@ class _FishcamTransform(v2.Transform):
 
     def __init__(self, min_visibility: float, boxes: str = "outline") -> None:
         super().__init__()
-        if not 0 <= _transforms._number(min_visibility, "min_visibility") <= 1:
+        if not 0 <= _number(min_visibility, "min_visibility") <= 1:
             raise Error(f"min_visibility: must be in [0, 1], got {min_visibility}")
         self.min_visibility = float(min_visibility)
-        self.boxes = _transforms._choice(boxes, BOX_MODES, "boxes")
+        self.boxes = _choice(boxes, BOX_MODES, "boxes")
 
     def _seed(self) -> int:
         """The sample's seed (sample_seed) for the first fishcam transform of the
@@ -168,90 +170,70 @@ class _FishcamTransform(v2.Transform):
 # the tight box of the instance mask of the same index.
 BOX_MODES = ("outline", "from_masks")
 
+# The extras of the torch transforms, beside the options they share with the numpy
+# and albumentations ones.
+_EXTRA_TEXTS = {
+    "min_visibility": "boxes seen less than this share of their area collapse to zero size, which "
+    "v2.SanitizeBoundingBoxes drops (the same share in both box modes: of the box's transformed outline).",
+    "boxes": '"outline" (the default: each box from its own densely transformed outline) or "from_masks": '
+    "box i becomes the tight box of instance mask i (the sample's one NxHxW instance Mask, N = the number "
+    "of boxes, else fishcam.Error), as torchvision pairs detection targets (or its fishcam.BoxMode).",
+}
+
+_Options = typing.TypeVar("_Options", ViewpointOptions, AffineOptions)
+
+
+def _numpy_fill(options: _Options) -> _Options:
+    """The options as the numpy transform takes them: a fill dict keyed by
+    tv_tensors.Image and tv_tensors.Mask becomes the two numbers (numbers go as
+    they are, checked by the numpy transform)."""
+    fill = options.get("fill")
+    if isinstance(fill, typing.Mapping):
+        options["fill"], options["fill_mask"] = _split_fill(fill, options.get("fill_mask", 0))
+    return options
+
 
 class RandomViewpoint(_FishcamTransform):
-    """The paper's viewpoint change as a torchvision v2 transform: one random change
-    per call for everything in the sample (any structure v2 takes; the same structure
-    back). The camera comes from the constructor or from a fishcam.Camera in the
-    sample (which comes back as the augmented camera: its pose moved by the change).
+    __doc__ = _options.docstring(
+        """The paper's viewpoint change as a torchvision v2 transform: one random change
+        per call for everything in the sample (any structure v2 takes; the same structure
+        back). The camera comes from the constructor or from a fishcam.Camera in the
+        sample (which comes back as the augmented camera: its pose moved by the change).
+        Without a seeded dataset, the seed comes from torch's generator.
 
-    Targets: ``tv_tensors.Image`` or plain image tensors (CxHxW or a batch BxCxHxW
-    sharing the camera; uint8, uint16, float32; bilinear), ``tv_tensors.Mask`` (HxW
-    class ids or NxHxW instance masks, any integer or bool dtype, kept; nearest;
-    no-source pixels as ``fill`` below),
-    ``tv_tensors.BoundingBoxes`` (each box from its own densely transformed outline,
-    so amodal and loose boxes keep their meaning; with ``boxes="from_masks"`` the
-    tight box of the transformed instance mask of the same index instead; clipped;
-    boxes seen less than ``min_visibility`` collapse to zero size, which
-    ``v2.SanitizeBoundingBoxes`` drops), ``tv_tensors.KeyPoints`` (mapped
-    exactly; points that leave the view keep their coordinates outside the canvas,
-    NaN where they have no image), ``fishcam.torch.DepthMap``, ``fishcam.torch.Polygon``.
-    Without a seeded dataset, the seed comes from torch's generator.
+        Targets: ``tv_tensors.Image`` or plain image tensors (CxHxW or a batch BxCxHxW
+        sharing the camera; uint8, uint16, float32; bilinear), ``tv_tensors.Mask`` (HxW
+        class ids or NxHxW instance masks, any integer or bool dtype, kept; nearest),
+        ``tv_tensors.BoundingBoxes`` (each box from its own densely transformed outline,
+        so amodal and loose boxes keep their meaning, or the tight box of its instance
+        mask: ``boxes``; clipped; boxes seen less than ``min_visibility`` collapse to
+        zero size), ``tv_tensors.KeyPoints`` (mapped exactly; points that leave the view
+        keep their coordinates outside the canvas, NaN where they have no image),
+        ``fishcam.torch.DepthMap``, ``fishcam.torch.Polygon``.
 
-    Fill, where the moved camera has no source, per target type as torchvision's
-    ``fill``: a number is the images' value; a dict, ``{tv_tensors.Image: 0,
-    tv_tensors.Mask: 255}``, gives the images' and the semantic masks' (either may
-    be left out; other keys, torchvision's "others" included, are refused).
-    Semantic masks (HxW or 1xHxW, integer dtype) get ``fill_mask`` (or
-    ``fill[tv_tensors.Mask]``; an integer in 0..65535 that fits the mask's dtype;
-    given both ways, they must agree), e.g. the loss's ``ignore_index``. Instance
-    masks get 0 (False) whatever either says, so no-source pixels join no instance
-    and the boxes taken from the masks stay tight: bool masks, NxHxW masks with
-    N >= 2, and the masks under the key "masks" of a dict (a detection target
-    ``{"boxes", "labels", "masks"}``; ``is_instance_mask``).
+        Where the moved camera has no source, semantic masks (HxW or 1xHxW, integer
+        dtype) get ``fill_mask``; instance masks get 0 (False), so no-source pixels join
+        no instance and the boxes taken from the masks stay tight: bool masks, NxHxW
+        masks with N >= 2, and the masks under the key "masks" of a dict (a detection
+        target ``{"boxes", "labels", "masks"}``; ``is_instance_mask``).
+        """,
+        {"camera": "the fishcam.Camera of the images, or None: then the sample must hold one."},
+        _options.VIEWPOINT_TEXTS,
+        _EXTRA_TEXTS,
+    )
 
-    Args:
-        camera: the fishcam.Camera of the images, or None: then the sample must hold one.
-        preset: "small", "medium", "large" or "train" (the paper's ranges); None, or
-            max_rotation_deg and max_translation given, draws uniformly per axis in
-            [-max, max] instead.
-        max_rotation_deg, max_translation: the ranges without a preset (degrees; units
-            of the depth prior: the unit sphere's, or the depth map's).
-        depth: where a pixel's scene point is assumed to be when the camera moves:
-            "source-sphere" (default), "target-sphere", "infinity" (rotation only
-            matters), or "map" (the sample's fishcam.torch.DepthMap; exact).
-        p: probability of applying a change (else the identity, still recorded).
-        fill, fill_mask: the no-source values per target type (above).
-        sampling: "grid" (maps interpolated from grid nodes, within 1/32 px of the
-            per-pixel map) or "exact".
-        depth_values: what a DepthMap holds, "range" (along the ray) or "z".
-        min_visibility: boxes seen less than this share of their area collapse to
-            zero size (the same share in both box modes: of the box's transformed outline).
-        boxes: "outline" (default) or "from_masks": box i becomes the tight box of
-            instance mask i (the sample's one NxHxW instance Mask, N = the number of
-            boxes, else fishcam.Error), as torchvision pairs detection targets.
-    """
-
+    @_options.takes_options(ViewpointOptions, _options.VIEWPOINT_DEFAULTS)
     def __init__(
         self,
         camera: typing.Optional[Camera] = None,
-        preset: typing.Optional[str] = "train",
-        max_rotation_deg: typing.Optional[float] = None,
-        max_translation: typing.Optional[float] = None,
-        depth: str = "source-sphere",
-        p: float = 1.0,
-        fill: Fill = 0,
-        fill_mask: int = 0,
-        sampling: str = "grid",
-        depth_values: str = "range",
+        *,
         min_visibility: float = 0.0,
         boxes: str = "outline",
+        **options: Unpack[ViewpointOptions],
     ) -> None:
+        _options.checked(options, _options.VIEWPOINT_DEFAULTS, "RandomViewpoint")
         super().__init__(min_visibility, boxes)
-        if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
-            fill, fill_mask = _split_fill(fill, fill_mask)
-        self.numpy_transform = _transforms.RandomViewpoint(
-            camera,
-            preset=preset,
-            max_rotation_deg=max_rotation_deg,
-            max_translation=max_translation,
-            depth=depth,
-            p=p,
-            fill=fill,
-            fill_mask=fill_mask,
-            sampling=sampling,
-            depth_values=depth_values,
-        )
+        self.numpy_transform = _transforms.RandomViewpoint(camera, **_numpy_fill(options))
 
     def _draw(self, flat_inputs: list[typing.Any]) -> _transforms.SampleChange:
         cameras = [x for x in flat_inputs if isinstance(x, Camera)]
@@ -278,36 +260,23 @@ class RandomViewpoint(_FishcamTransform):
 
 
 class RandomAffine(_FishcamTransform):
-    """The paper's affine baseline (fishcam.transforms.RandomAffine) as a torchvision
-    v2 transform, with the targets of RandomViewpoint (depth maps keep their values;
-    a camera in the sample is passed on unchanged: the baseline has no camera model)
-    and its ``fill`` and ``fill_mask`` (instance masks get 0 / False), ``min_visibility``
-    and ``boxes`` ("outline" or "from_masks", as RandomViewpoint's)."""
+    __doc__ = _options.docstring(
+        """The paper's affine baseline (fishcam.transforms.RandomAffine) as a torchvision
+        v2 transform, with the targets of RandomViewpoint (depth maps keep their values;
+        a camera in the sample is passed on unchanged: the baseline has no camera model)
+        and its fills (instance masks get 0 / False).
+        """,
+        _options.AFFINE_TEXTS,
+        _EXTRA_TEXTS,
+    )
 
+    @_options.takes_options(AffineOptions, _options.AFFINE_DEFAULTS)
     def __init__(
-        self,
-        preset: typing.Optional[str] = "train",
-        max_rotation_deg: typing.Optional[float] = None,
-        max_translation: typing.Optional[float] = None,
-        scale_range: typing.Optional[tuple[float, float]] = None,
-        p: float = 1.0,
-        fill: Fill = 0,
-        fill_mask: int = 0,
-        min_visibility: float = 0.0,
-        boxes: str = "outline",
+        self, *, min_visibility: float = 0.0, boxes: str = "outline", **options: Unpack[AffineOptions]
     ) -> None:
+        _options.checked(options, _options.AFFINE_DEFAULTS, "RandomAffine")
         super().__init__(min_visibility, boxes)
-        if isinstance(fill, typing.Mapping):  # numbers go as they are (checked by the numpy transform)
-            fill, fill_mask = _split_fill(fill, fill_mask)
-        self.numpy_transform = _transforms.RandomAffine(
-            preset=preset,
-            max_rotation_deg=max_rotation_deg,
-            max_translation=max_translation,
-            scale_range=scale_range,
-            p=p,
-            fill=fill,
-            fill_mask=fill_mask,
-        )
+        self.numpy_transform = _transforms.RandomAffine(**_numpy_fill(options))
 
     def _draw(self, flat_inputs: list[typing.Any]) -> _transforms.SampleChange:
         return self.numpy_transform.draw(_size_of(flat_inputs), self._seed())

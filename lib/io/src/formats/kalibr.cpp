@@ -53,6 +53,69 @@ void read_size_and_pose(const DocFields& f, CameraParameters* p) {
   }
 }
 
+// camera_model, intrinsics, distortion_model and distortion_coeffs.
+void read_kalibr_model(const DocFields& f, CameraParameters* camera) {
+  CameraParameters& p = *camera;
+  const std::string model = f.string("camera_model");
+  // Kalibr itself requires distortion_model: a missing one is never taken as none
+  // (coefficients would be dropped silently).
+  const std::string distortion = f.string("distortion_model");
+  const std::vector<double> d =
+      f.has("distortion_coeffs") ? f.numbers("distortion_coeffs", 0, 8) : std::vector<double>{};
+  auto fail_d = [&](std::string_view problem) { f.fail("distortion_coeffs", problem); };
+  if (distortion == "none" && std::any_of(d.begin(), d.end(), [](double x) { return x != 0; })) {
+    fail_d("non-zero coefficients with distortion_model none (which model are they for?)");
+  }
+  auto focal = [&](const std::vector<double>& k, size_t at) {
+    set_focal(&p, k[at], k[at + 1], [&](std::string_view problem) { f.fail("intrinsics", problem); });
+    p.principal_point = {k[at + 2], k[at + 3]};
+    return k[at];
+  };
+  auto no_distortion = [&] {
+    if (distortion != "none")
+      f.fail("distortion_model", "expected none for camera_model " + model + ", got " + quoted_for_message(distortion));
+  };
+  if (model == "pinhole") {
+    const auto k = f.numbers("intrinsics", 4, 4);
+    const double fx = focal(k, 0);
+    if (distortion == "equidistant") {
+      if (d.size() != 4) fail_d("equidistant (Kannala-Brandt) has 4 coefficients");
+      p.model = KannalaBrandt<double>(fx, d[0], d[1], d[2], d[3]);
+    } else if (distortion == "none") {
+      p.model = Pinhole<double>(fx);
+    } else if (distortion == "radtan") {
+      set_radial_tangential(&p, d, fx, fail_d);
+    } else {
+      f.fail("distortion_model",
+             "unsupported " + quoted_for_message(distortion) + " (expected equidistant, radtan or none)");
+    }
+  } else if (model == "omni") {
+    const auto k = f.numbers("intrinsics", 5, 5);  // xi, fu, fv, pu, pv
+    const double fx = focal(k, 1);
+    if (distortion == "none") {
+      p.model = Unified<double>(fx, k[0]);
+    } else if (distortion == "radtan") {
+      if (d.size() != 4) fail_d("radtan has 4 coefficients (k1, k2, p1, p2)");
+      p.model = Mei<double>(fx, k[0], d[0], d[1]);
+      p.distortion = TangentialDistortion{{d[2], d[3], {}}};
+    } else {
+      f.fail("distortion_model",
+             "omni with " + quoted_for_message(distortion) +
+                 " is radially symmetric but fishcam has no such model (it reads omni-none and omni-radtan)");
+    }
+  } else if (model == "ds") {
+    no_distortion();
+    const auto k = f.numbers("intrinsics", 6, 6);  // xi, alpha, fu, fv, pu, pv
+    p.model = DoubleSphere<double>(focal(k, 2), k[0], k[1]);
+  } else if (model == "eucm") {
+    no_distortion();
+    const auto k = f.numbers("intrinsics", 6, 6);  // alpha, beta, fu, fv, pu, pv
+    p.model = ExtendedUnified<double>(focal(k, 2), k[0], k[1]);
+  } else {
+    f.fail("camera_model", "unsupported " + quoted_for_message(model) + " (expected pinhole, omni, ds or eucm)");
+  }
+}
+
 std::vector<NamedCamera> read(const Content& c) {
   const DocNode& root = c.yaml_or_throw();
   std::vector<NamedCamera> out;
@@ -62,65 +125,7 @@ std::vector<NamedCamera> read(const Content& c) {
     const DocFields f(root.items[i], c.source(), root.keys[i] + ".");
     NamedCamera named{root.keys[i], {}, {}};
     CameraParameters& p = named.camera;
-    const std::string model = f.string("camera_model");
-    // Kalibr itself requires distortion_model: a missing one is never taken as none
-    // (coefficients would be dropped silently).
-    const std::string distortion = f.string("distortion_model");
-    const std::vector<double> d =
-        f.has("distortion_coeffs") ? f.numbers("distortion_coeffs", 0, 8) : std::vector<double>{};
-    auto fail_d = [&](std::string_view problem) { f.fail("distortion_coeffs", problem); };
-    if (distortion == "none" && std::any_of(d.begin(), d.end(), [](double x) { return x != 0; })) {
-      fail_d("non-zero coefficients with distortion_model none (which model are they for?)");
-    }
-    auto focal = [&](const std::vector<double>& k, size_t at) {
-      set_focal(&p, k[at], k[at + 1], [&](std::string_view problem) { f.fail("intrinsics", problem); });
-      p.principal_point = {k[at + 2], k[at + 3]};
-      return k[at];
-    };
-    auto no_distortion = [&] {
-      if (distortion != "none")
-        f.fail("distortion_model",
-               "expected none for camera_model " + model + ", got " + quoted_for_message(distortion));
-    };
-    if (model == "pinhole") {
-      const auto k = f.numbers("intrinsics", 4, 4);
-      const double fx = focal(k, 0);
-      if (distortion == "equidistant") {
-        if (d.size() != 4) fail_d("equidistant (Kannala-Brandt) has 4 coefficients");
-        p.model = KannalaBrandt<double>(fx, d[0], d[1], d[2], d[3]);
-      } else if (distortion == "none") {
-        p.model = Pinhole<double>(fx);
-      } else if (distortion == "radtan") {
-        set_radial_tangential(&p, d, fx, fail_d);
-      } else {
-        f.fail("distortion_model",
-               "unsupported " + quoted_for_message(distortion) + " (expected equidistant, radtan or none)");
-      }
-    } else if (model == "omni") {
-      const auto k = f.numbers("intrinsics", 5, 5);  // xi, fu, fv, pu, pv
-      const double fx = focal(k, 1);
-      if (distortion == "none") {
-        p.model = Unified<double>(fx, k[0]);
-      } else if (distortion == "radtan") {
-        if (d.size() != 4) fail_d("radtan has 4 coefficients (k1, k2, p1, p2)");
-        p.model = Mei<double>(fx, k[0], d[0], d[1]);
-        p.distortion = TangentialDistortion{{d[2], d[3], {}}};
-      } else {
-        f.fail("distortion_model",
-               "omni with " + quoted_for_message(distortion) +
-                   " is radially symmetric but fishcam has no such model (it reads omni-none and omni-radtan)");
-      }
-    } else if (model == "ds") {
-      no_distortion();
-      const auto k = f.numbers("intrinsics", 6, 6);  // xi, alpha, fu, fv, pu, pv
-      p.model = DoubleSphere<double>(focal(k, 2), k[0], k[1]);
-    } else if (model == "eucm") {
-      no_distortion();
-      const auto k = f.numbers("intrinsics", 6, 6);  // alpha, beta, fu, fv, pu, pv
-      p.model = ExtendedUnified<double>(focal(k, 2), k[0], k[1]);
-    } else {
-      f.fail("camera_model", "unsupported " + quoted_for_message(model) + " (expected pinhole, omni, ds or eucm)");
-    }
+    read_kalibr_model(f, &p);
     read_size_and_pose(f, &p);
     if (f.has("T_cn_cnm1")) {
       if (p.pose) {

@@ -56,28 +56,53 @@ double widest_theta(const Camera& camera) {
   return widest;
 }
 
-std::vector<NamedCamera> read(const Content& c) {
-  const std::string& source = c.source();
-  const auto fail = [&](const std::string& problem) -> void { throw Error(source + ": " + problem); };
+// The file's lines of numbers (comments and blank lines skipped); whether the comment
+// above the centre states its convention.
+std::vector<std::vector<double>> number_lines(const Content& c, bool* centre_convention_stated) {
   std::vector<std::vector<double>> lines;
-  bool centre_convention_stated = false;
+  *centre_convention_stated = false;
   std::istringstream in{std::string(c.text())};
   for (std::string line; std::getline(in, line);) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     if (line[line.find_first_not_of(" \t\r")] == '#') {
-      if (lines.size() == 2 && line.find(kCentreComment) != std::string::npos) centre_convention_stated = true;
+      if (lines.size() == 2 && line.find(kCentreComment) != std::string::npos) *centre_convention_stated = true;
       continue;
     }
     std::istringstream words(line);
     std::vector<double> numbers;
     for (std::string w; words >> w;) {
       numbers.push_back(DocFields::parse_number(w, [&](std::string_view problem) {
-        fail("data line " + std::to_string(lines.size() + 1) + ": " + quoted_for_message(w) + ": " +
-             std::string(problem));
+        throw Error(c.source() + ": data line " + std::to_string(lines.size() + 1) + ": " + quoted_for_message(w) +
+                    ": " + std::string(problem));
       }));
     }
     lines.push_back(std::move(numbers));
   }
+  return lines;
+}
+
+// invpol is world2cam's approximation of pol's inverse: it must agree over the image.
+void check_invpol(const CameraParameters& p, const std::vector<double>& invpol) {
+  const Camera camera(p);
+  const double widest = widest_theta(camera);
+  double worst = 0;
+  for (int i = 0; i <= 1000; ++i) {
+    const double theta = widest * i / 1000;
+    worst = std::max(worst, std::abs(invpol_rho(invpol, theta) - camera.rho(theta)));
+  }
+  if (!(worst <= kInvpolTolerancePx)) {
+    std::ostringstream msg;
+    msg << "invpol: misses pol's inverse by " << worst << " px within the image (more than " << kInvpolTolerancePx
+        << " px): the file's two polynomials describe different cameras";
+    throw Error(msg.str());
+  }
+}
+
+std::vector<NamedCamera> read(const Content& c) {
+  const std::string& source = c.source();
+  const auto fail = [&](const std::string& problem) -> void { throw Error(source + ": " + problem); };
+  bool centre_convention_stated = false;
+  const std::vector<std::vector<double>> lines = number_lines(c, &centre_convention_stated);
   if (lines.size() != 5) {
     fail("expected 5 blocks of numbers (pol, invpol, centre, affine c d e, image height width), got " +
          std::to_string(lines.size()));
@@ -125,20 +150,7 @@ std::vector<NamedCamera> read(const Content& c) {
   p.pixel_scale = {1, ac};
   p.skew = {ae, ad / ac};
   try {
-    const Camera camera(p);
-    // invpol is world2cam's approximation of pol's inverse: it must agree over the image.
-    const double widest = widest_theta(camera);
-    double worst = 0;
-    for (int i = 0; i <= 1000; ++i) {
-      const double theta = widest * i / 1000;
-      worst = std::max(worst, std::abs(invpol_rho(invpol, theta) - camera.rho(theta)));
-    }
-    if (!(worst <= kInvpolTolerancePx)) {
-      std::ostringstream msg;
-      msg << "invpol: misses pol's inverse by " << worst << " px within the image (more than " << kInvpolTolerancePx
-          << " px): the file's two polynomials describe different cameras";
-      fail(msg.str());
-    }
+    check_invpol(p, invpol);
   } catch (const Error& e) {
     if (std::string_view(e.what()).starts_with(source)) throw;
     fail(e.what());

@@ -1,0 +1,294 @@
+#include "fishcam/core/camera.hpp"
+#include "fishcam/core/error.hpp"
+#include "fail.hpp"
+#include "fishcam/core/parallel.hpp"
+#include "fishcam/core/stderr_capture.hpp"
+#include "point_projection.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <optional>
+
+// A camera's construction: its parameters checked, its domain found (the radial
+// model's, then where a plane distortion folds or libmrcal stops evaluating a lens).
+
+namespace fishcam {
+namespace {
+
+using detail::distorted;
+using detail::fail;
+using detail::kDeg;
+using detail::kNaN;
+
+// The largest theta* <= the radial domain's theta_max below which the distortion map
+// D is one-to-one on the disk |m| <= u(theta*): det(dD/dm) > 0 on every ring and each
+// ring's image star-shaped about D(0) (its angle increasing), which together make D
+// injective. (T(0) = 0 for tangential terms; an mrcal lens may move the centre.)
+// Rings are scanned, the first failing one bisected. nullopt: no ring fails.
+template <class Model, class Distortion>
+std::optional<double> distortion_fold(const Model& model, const Distortion& terms, const ValidDomain& radial) {
+  if constexpr (!HasUndistortedPlane<Model>) {
+    return std::nullopt;
+  } else {
+    constexpr int kRings = 1024, kAzimuths = 360;
+    std::array<Eigen::Vector2d, kAzimuths> directions;
+    for (int k = 0; k < kAzimuths; ++k) {
+      const double phi = 2 * std::numbers::pi * k / kAzimuths;
+      directions[size_t(k)] = {std::cos(phi), std::sin(phi)};
+    }
+    const Eigen::Vector2d centre = distorted(model, terms, Eigen::Vector2d::Zero());
+    const auto ring_ok = [&](double theta) {
+      double derivative;
+      const double u = model.plane_radius(theta, &derivative);
+      if (!std::isfinite(u)) return false;
+      Eigen::Vector2d first, previous;
+      for (int k = 0; k < kAzimuths; ++k) {
+        Eigen::Matrix2d jacobian;
+        const Eigen::Vector2d d = distorted(model, terms, u * directions[size_t(k)], &jacobian) - centre;
+        if (!(jacobian.determinant() > 0)) return false;
+        if (k == 0) {
+          first = d;
+        } else if (!(previous.x() * d.y() - previous.y() * d.x() > 0)) {
+          return false;
+        }
+        previous = d;
+      }
+      return previous.x() * first.y() - previous.y() * first.x() > 0;
+    };
+    const double end = radial.closed ? radial.theta_max : radial.theta_max * (1 - 1e-9);
+    // Rings in blocks, each block's rings in parallel (an mrcal lens costs libmrcal
+    // calls per point); the first failing ring is the same as in a serial scan.
+    constexpr int kBlock = 64;
+    std::array<unsigned char, kBlock> ok;
+    double good = 0;
+    for (int first = 1; first <= kRings; first += kBlock) {
+      const int count = std::min(kBlock, kRings + 1 - first);
+      parallel_for(count, [&](int begin, int stop) {
+        for (int i = begin; i < stop; ++i) ok[size_t(i)] = ring_ok(end * (first + i) / kRings);
+      });
+      for (int i = 0; i < count; ++i) {
+        const double theta = end * (first + i) / kRings;
+        if (ok[size_t(i)]) {
+          good = theta;
+          continue;
+        }
+        double bad = theta;
+        for (int bisection = 0; bisection < 60 && bad - good > 1e-15; ++bisection) {
+          const double mid = 0.5 * (good + bad);
+          (ring_ok(mid) ? good : bad) = mid;
+        }
+        return good;
+      }
+    }
+    return std::nullopt;
+  }
+}
+
+void check_calibration_record(const CalibrationRecord& r, size_t model_params) {
+  const auto angle = [](double a) { return a >= 0 && a <= std::numbers::pi; };
+  if (!angle(r.theta_max)) fail("calibration.theta_max: must be in [0, 180] degrees, got ", r.theta_max * kDeg);
+  for (double a : r.theta_max_by_azimuth) {
+    if (!std::isnan(a) && !(angle(a) && a <= r.theta_max)) {
+      fail("calibration.theta_max_by_azimuth: every sector's angle must be in [0, theta_max] (or unobserved)");
+    }
+  }
+  const Eigen::MatrixXd& c = r.covariance;
+  if (c.size() == 0) return;
+  const Eigen::Index n = Eigen::Index(model_params) + 9;
+  if (c.rows() != n || c.cols() != n) {
+    fail("calibration.covariance: expected ", n, "x", n, " (model parameters, cx, cy, a_y, board motion), got ",
+         c.rows(), "x", c.cols());
+  }
+  if (!c.allFinite()) fail("calibration.covariance: must be finite");
+  const double scale = c.cwiseAbs().maxCoeff();
+  if ((c - c.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail("calibration.covariance: must be symmetric");
+  if (c.diagonal().minCoeff() < 0) fail("calibration.covariance: variances (the diagonal) must be >= 0");
+  // A covariance is positive semi-definite: a negative eigenvalue (beyond rounding)
+  // would give negative variances along some direction, and uncertainties of any size.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(c, Eigen::EigenvaluesOnly);
+  if (eigen.info() != Eigen::Success || eigen.eigenvalues().minCoeff() < -1e-9 * scale) {
+    fail("calibration.covariance: must be positive semi-definite (smallest eigenvalue ", eigen.eigenvalues().minCoeff(),
+         ", largest ", eigen.eigenvalues().maxCoeff(), ")");
+  }
+}
+
+// Evaluates the lens at `azimuths` points of the ring of plane radius u (under the
+// caller's capture of what libmrcal says); false when one of them has no offset.
+bool lens_finite_on_ring(const MrcalLens& lens, double u, int azimuths) {
+  bool finite = true;
+  for (int k = 0; k < azimuths; ++k) {
+    const double phi = 2 * std::numbers::pi * k / azimuths;
+    finite = lens.offset(u * Eigen::Vector2d(std::cos(phi), std::sin(phi))).allFinite() && finite;
+  }
+  return finite;
+}
+
+// The domain's rays, 64 rings by 360 azimuths up to theta_max: libmrcal must evaluate
+// each without a complaint on standard error, or the lens is refused in one line (a
+// projection whose own iteration failed cannot be right).
+void check_lens_evaluates(const CameraParameters& p, const MrcalLens& lens, double theta_max) {
+  detail::StderrCapture libmrcal;
+  std::visit(
+      [&](const auto& m) {
+        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
+          double derivative;
+          for (int ring = 1; ring <= 64; ++ring) {
+            (void)lens_finite_on_ring(lens, m.plane_radius(theta_max * (1 - 1e-9) * ring / 64, &derivative), 360);
+          }
+        }
+      },
+      p.model);
+  if (const std::string said = libmrcal.summary(); !said.empty()) {
+    fail("mrcal_lens: libmrcal cannot evaluate ", lens.lensmodel().substr(0, 80),
+         " everywhere in its domain (it said: ", quoted_for_message(said, 200), ")");
+  }
+}
+
+// Where the domain of a lens that libmrcal could not evaluate everywhere during the
+// scans ends: the largest theta at most theta_max (by steps up to 1 % inside) on whose
+// ring, and on a ring just past it (Newton's steps and CAHVORE's central differences
+// reach there), libmrcal evaluates at 1440 azimuths without a word. CAHVORE's own
+// iteration fails at and past its fold, which the fold scan finds to a few ulps.
+// None: libmrcal fails even 1 % inside (the camera is refused).
+std::optional<double> lens_evaluation_end(const CameraParameters& p, const MrcalLens& lens, double theta_max) {
+  std::optional<double> end;
+  std::visit(
+      [&](const auto& m) {
+        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
+          for (double inside : {0.0, 1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2}) {
+            double derivative;
+            const double theta = theta_max * (1 - inside);
+            const double u = m.plane_radius(theta, &derivative);
+            detail::StderrCapture libmrcal;
+            const bool evaluates =
+                lens_finite_on_ring(lens, u, 1440) && lens_finite_on_ring(lens, u * (1 + 1e-9) + 2e-5 * (1 + u), 1440);
+            if (evaluates && libmrcal.summary().empty()) {
+              end = theta;
+              return;
+            }
+          }
+        }
+      },
+      p.model);
+  return end;
+}
+
+}  // namespace
+
+Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_(std::move(parameters)) {
+  if (params_.width <= 0 || params_.height <= 0 || params_.width > (1 << 16) || params_.height > (1 << 16)) {
+    fail("width/height: must be in [1, 65536], got ", params_.width, "x", params_.height);
+  }
+  if (!params_.principal_point.allFinite()) fail("principal_point: must be finite");
+  if (!params_.pixel_scale.allFinite() || !(params_.pixel_scale.minCoeff() > 0)) {
+    fail("pixel_scale: a_x and a_y must be finite and > 0, got ", params_.pixel_scale.x(), ", ",
+         params_.pixel_scale.y());
+  }
+  for (double p : model_params(params_.model)) {
+    if (!std::isfinite(p)) fail(model_name(params_.model), ": parameters must be finite");
+  }
+  if (const std::string problem = std::visit([](const auto& m) { return m.invalid(); }, params_.model);
+      !problem.empty()) {
+    fail(model_name(params_.model), ": ", problem);
+  }
+  if (params_.pose) {
+    Pose& pose = *params_.pose;
+    if (!pose.rotation.coeffs().allFinite() || !pose.translation.allFinite()) fail("pose: must be finite");
+    const double norm = pose.rotation.norm();
+    if (std::abs(norm - 1) > 1e-6) fail("pose: rotation quaternion must have unit norm, got ", norm);
+    pose.rotation.normalize();
+  }
+  if (params_.calibration) check_calibration_record(*params_.calibration, model_params(params_.model).size());
+  domain_ = std::visit([&](const auto& m) { return compute_domain(m, params_.theta_limit); }, params_.model);
+  const PixelSkew& skew = params_.skew;
+  if (!std::isfinite(skew.xy) || !std::isfinite(skew.yx)) fail("skew: xy and yx must be finite");
+  if (!(1 - skew.xy * skew.yx > 0)) {
+    fail("skew: the pixel grid must keep its orientation (1 - xy yx > 0), got xy ", skew.xy, ", yx ", skew.yx);
+  }
+  if (displaces(params_.distortion)) {
+    // libmrcal says on standard error where its own projection fails (CAHVORE's
+    // iteration: "too many iterations"), never to the terminal from here: the scans
+    // meet such rays at and past the fold, so what it said is checked over the domain.
+    std::string libmrcal_said;
+    {
+      detail::StderrCapture libmrcal;
+      limit_to_plane_fold();
+      libmrcal_said = libmrcal.summary();
+    }
+    const MrcalLens* lens = params_.mrcal_lens();
+    if (!libmrcal_said.empty() && lens) {
+      const std::optional<double> end = lens_evaluation_end(params_, *lens, domain_.theta_max);
+      if (!end) {
+        fail("mrcal_lens: libmrcal cannot evaluate ", lens->lensmodel().substr(0, 80),
+             " next to the end of its domain (it said: ", quoted_for_message(libmrcal_said, 200), ")");
+      }
+      if (*end < domain_.theta_max) {
+        domain_.theta_max = *end;
+        domain_.closed = true;
+        domain_.rho_max = rho(*end);
+      }
+    }
+    {
+      detail::StderrCapture libmrcal;
+      bound_plane_reach();
+      if (libmrcal_said.empty()) libmrcal_said = libmrcal.summary();
+    }
+    if (!libmrcal_said.empty() && lens) check_lens_evaluates(params_, *lens, domain_.theta_max);
+  }
+  table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
+}
+
+void Camera::limit_to_plane_fold() {
+  const std::string part(distortion_name(params_.distortion));
+  if (const std::string problem = std::visit([](const auto& d) { return d.invalid(); }, params_.distortion);
+      !problem.empty()) {
+    fail(part, ".", problem);
+  }
+  const std::vector<std::string> bases = std::visit([](const auto& d) { return d.base_models(); }, params_.distortion);
+  if (std::find(bases.begin(), bases.end(), model_name(params_.model)) == bases.end()) {
+    fail(part, ": only the ", choices_for_message(bases), " model's undistorted plane takes ",
+         std::visit([](const auto& d) { return d.description(); }, params_.distortion), " (the model is ",
+         model_name(params_.model), ")");
+  }
+  const std::optional<double> fold = std::visit(
+      [&](const auto& m) {
+        return std::visit([&](const auto& d) { return distortion_fold(m, d, domain_); }, params_.distortion);
+      },
+      params_.model);
+  if (fold && *fold < domain_.theta_max * (1 - 1e-12)) {  // else the radial limit comes first
+    if (!(*fold > 0)) {
+      fail(part, ": the distortion is not one-to-one even next to the principal point");
+    }
+    domain_.theta_max = *fold;
+    domain_.closed = true;
+    domain_.limited_by = ValidDomain::Limit::distortion_fold;
+    domain_.rho_max = rho(*fold);
+  }
+}
+
+void Camera::bound_plane_reach() {
+  if (!domain_.closed) return;
+  // |D| is largest on the image of the domain's rim (the image is star-shaped about
+  // D(0), |.| convex): sampled densely, with a 1 % margin for what lies between samples.
+  const auto reach = [&](const auto& model, const auto& terms) {
+    double derivative, largest = 0;
+    const double u = model.plane_radius(domain_.theta_max, &derivative);
+    for (int k = 0; k < 1440; ++k) {
+      const double phi = 2 * std::numbers::pi * k / 1440;
+      largest = std::max(largest, distorted(model, terms, u * Eigen::Vector2d(std::cos(phi), std::sin(phi))).norm());
+    }
+    return 1.01 * largest;
+  };
+  std::visit(
+      [&](const auto& m) {
+        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
+          domain_.plane_reach = std::visit([&](const auto& d) { return reach(m, d); }, params_.distortion);
+        }
+      },
+      params_.model);
+}
+
+}  // namespace fishcam

@@ -1,0 +1,102 @@
+#include "fishcam/core/camera.hpp"
+#include "fishcam/core/error.hpp"
+#include "fail.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+// Operations on a camera's parameters: resized and cropped images, poses, the
+// calibration record's observed angles.
+
+namespace fishcam {
+namespace {
+
+using detail::fail;
+
+}  // namespace
+
+TangentialTerms CameraParameters::tangential_terms() const {
+  const auto* part = std::get_if<TangentialDistortion>(&distortion);
+  return part ? part->terms : TangentialTerms{};
+}
+
+const MrcalLens* CameraParameters::mrcal_lens() const {
+  const auto* part = std::get_if<MrcalLensDistortion>(&distortion);
+  return part ? part->lens.get() : nullptr;
+}
+
+CameraParameters resized(const CameraParameters& camera, int width, int height) {
+  if (width < 1 || height < 1) fail("resized: width and height must be >= 1, got ", width, "x", height);
+  const Eigen::Vector2d s(double(width) / camera.width, double(height) / camera.height);
+  CameraParameters out = camera;
+  out.width = width, out.height = height;
+  out.principal_point = (camera.principal_point.array() + 0.5) * s.array() - 0.5;
+  out.pixel_scale = camera.pixel_scale.cwiseProduct(s);
+  if (out.calibration && out.calibration->covariance.size() > 0) {
+    // d cx' = s_x d cx, d cy' = s_y d cy, d a_y' = s_y d a_y; nothing else changes.
+    Eigen::MatrixXd& c = out.calibration->covariance;
+    const Eigen::Index n = c.rows() - 9;
+    const double scale[3] = {s.x(), s.y(), s.y()};
+    for (int k = 0; k < 3; ++k) c.row(n + k) *= scale[k], c.col(n + k) *= scale[k];
+  }
+  return out;
+}
+
+CameraParameters cropped(const CameraParameters& camera, int left, int top, int width, int height) {
+  if (width < 1 || height < 1) fail("cropped: width and height must be >= 1, got ", width, "x", height);
+  CameraParameters out = camera;
+  out.width = width, out.height = height;
+  out.principal_point -= Eigen::Vector2d(left, top);
+  return out;
+}
+
+Pose compose(const Pose& a, const Pose& b) {
+  return Pose{(a.rotation * b.rotation).normalized(), a.rotation * b.translation + a.translation};
+}
+
+Pose inverse(const Pose& pose) {
+  const Eigen::Quaterniond r = pose.rotation.conjugate();
+  return Pose{r, -(r * pose.translation)};
+}
+
+CameraParameters limited_to_observed(CameraParameters camera, double margin) {
+  if (!camera.calibration) {
+    fail(
+        "theta limit 'data': the camera carries no calibration record (fishcam calibrate writes one into fishcam "
+        "JSON)");
+  }
+  if (!(margin >= 0 && margin < std::numbers::pi))
+    fail("theta limit 'data+DEG': the margin must be in [0, 180) degrees");
+  const double limit = std::min(camera.calibration->theta_max + margin, std::numbers::pi);
+  camera.theta_limit = camera.theta_limit ? std::min(*camera.theta_limit, limit) : limit;
+  return camera;
+}
+
+CalibrationRecord CalibrationRecord::nothing_observed() {
+  CalibrationRecord r;
+  r.theta_max_by_azimuth.fill(std::numeric_limits<double>::quiet_NaN());
+  return r;
+}
+
+void CalibrationRecord::observe(const Eigen::Vector3d& point) {
+  const double theta = std::atan2(point.head<2>().norm(), point.z());
+  double& sector = theta_max_by_azimuth[size_t(sector_of(std::atan2(point.y(), point.x())))];
+  if (!(sector >= theta)) sector = theta;  // NaN: the sector's first corner
+  theta_max = std::max(theta_max, theta);
+}
+
+int CalibrationRecord::sector_of(double azimuth) {
+  const double turn = 2 * std::numbers::pi;
+  const int k = int(std::floor((azimuth + std::numbers::pi) / turn * kAzimuthSectors));
+  return std::clamp(k, 0, kAzimuthSectors - 1);
+}
+
+bool CalibrationRecord::observed(const Eigen::Vector3d& ray) const {
+  const double theta = std::atan2(ray.head<2>().norm(), ray.z());
+  const double limit = theta_max_by_azimuth[size_t(sector_of(std::atan2(ray.y(), ray.x())))];
+  return theta <= limit;  // false for NaN: no corner in that sector
+}
+
+}  // namespace fishcam
