@@ -43,7 +43,7 @@ import fishcam
 import fishcam.metrics
 import fishcam.torch as ft
 
-from . import Error
+from . import Error, experiment_budget
 
 CLASSES = 10
 NO_SOURCE = 255
@@ -92,6 +92,8 @@ CONFIGS = (
 # --quick's settings, and the defaults without it (an option given explicitly wins).
 QUICK: dict[str, typing.Any] = {"configs": "none,viewpoint", "seeds": 2, "epochs": 1, "width": 4}
 DEFAULTS: dict[str, typing.Any] = {"configs": ",".join(CONFIGS), "seeds": 3, "epochs": 10, "width": 16}
+# What --budget chooses when not given (fishcam.experiment_budget).
+BUDGET_CHOOSES = ("width", "epochs")
 
 
 class UNet(torch.nn.Module):
@@ -458,11 +460,34 @@ def prepare_flat_dataset(args: argparse.Namespace) -> str:
     done = os.path.join(out, "prepared")
     # Under torchrun the first process prepares; the others wait for its marker.
     if int(os.environ.get("RANK", "0")) != 0:
-        for _ in range(3600):
-            if os.path.exists(done):
-                return out
-            time.sleep(1)
-        raise Error(f"{done}: the first process did not prepare the dataset within an hour")
+        return _wait_for_preparation(out, done)
+    _record_split(out, root, test)
+    _link_split(root, out, test)
+    _make_paper_test_sets(binary, out, args.split_seed or 0)
+    with open(done, "w") as f:
+        f.write("prepared\n")
+    print(
+        f"{args.dataset}: {len(test)} test and the other images train; real data has no re-rendered truth, so the "
+        "test sets are the paper's protocol only (test-PRESET-paper/, fishcam augment-dataset) and there are no "
+        "fidelity tables",
+        flush=True,
+    )
+    return out
+
+
+def _wait_for_preparation(out: str, done: str) -> str:
+    """``out`` once the first process has written its marker ``done``; fishcam.Error
+    after an hour without it."""
+    for _ in range(3600):
+        if os.path.exists(done):
+            return out
+        time.sleep(1)
+    raise Error(f"{done}: the first process did not prepare the dataset within an hour")
+
+
+def _record_split(out: str, root: str, test: set[str]) -> None:
+    """Writes OUT/dataset/split.json (the dataset and its test images), or checks that
+    the one there records the same split."""
     # One split per OUT: links of another split would leave images in both halves.
     record = os.path.join(out, "split.json")
     split_record = {"dataset": root, "test": sorted(test)}
@@ -479,6 +504,12 @@ def prepare_flat_dataset(args: argparse.Namespace) -> str:
         with open(record + ".tmp", "w", encoding="utf-8") as f:
             json.dump(split_record, f, indent=1)
         os.replace(record + ".tmp", record)
+
+
+def _link_split(root: str, out: str, test: set[str]) -> None:
+    """Links each image of ``root``, its labels and its calibration into out/test/ or
+    out/train/ (``test``: the test images' names); fishcam.Error for a missing file or
+    a link to another file already there."""
     files = {
         part: {os.path.splitext(f)[0]: f for f in os.listdir(os.path.join(root, part))}
         for part in ("rgb_images", "semantic_annotations/gtLabels", "calibration")
@@ -505,6 +536,12 @@ def prepare_flat_dataset(args: argparse.Namespace) -> str:
                     raise Error(
                         f"{link}: exists and is not a link to {target} (another split? use another OUT)"
                     ) from None
+
+
+def _make_paper_test_sets(binary: str, out: str, seed: int) -> None:
+    """out/test-PRESET-paper/ per preset: out/test/ augmented by `fishcam
+    augment-dataset` with the paper's settings; fishcam.Error with the program's last
+    line when it fails."""
     for preset in TEST_SETS:
         made = subprocess.run(
             [
@@ -514,7 +551,7 @@ def prepare_flat_dataset(args: argparse.Namespace) -> str:
                 "--preset",
                 preset,
                 "--seed",
-                str(args.split_seed or 0),
+                str(seed),
                 "--label-fill",
                 "0",
                 "--depth",
@@ -528,15 +565,6 @@ def prepare_flat_dataset(args: argparse.Namespace) -> str:
         if made.returncode != 0:
             last = made.stderr.strip().splitlines()[-1] if made.stderr.strip() else "failed"
             raise Error(f"fishcam augment-dataset ({preset}): {last}")
-    with open(done, "w") as f:
-        f.write("prepared\n")
-    print(
-        f"{args.dataset}: {len(test)} test and the other images train; real data has no re-rendered truth, so the "
-        "test sets are the paper's protocol only (test-PRESET-paper/, fishcam augment-dataset) and there are no "
-        "fidelity tables",
-        flush=True,
-    )
-    return out
 
 
 def run_settings(args: argparse.Namespace, device: torch.device, processes: int) -> dict[str, typing.Any]:
@@ -610,6 +638,29 @@ def autocast(device: torch.device, amp: bool) -> typing.Any:
     return torch.autocast(device.type, dtype=torch.bfloat16 if device.type == "cpu" else torch.float16, enabled=amp)
 
 
+def training_loader(
+    dataset_root: str, config: str, seed: int, batch_size: int, workers: int
+) -> "torch.utils.data.DataLoader[typing.Any]":
+    """The DataLoader a run of ``config`` trains from: train/ under the configuration's
+    transform, seeded per sample and epoch, shuffled by ``seed`` (shared among the
+    processes under torchrun)."""
+    rank, world = distributed()
+    dataset = ft.WoodScapeDataset(os.path.join(dataset_root, "train"), transform=transform_for(config), seed=seed)
+    if world > 1:
+        inner: typing.Any = torch.utils.data.DistributedSampler(dataset, num_replicas=world, rank=rank, seed=seed)
+    else:
+        inner = torch.utils.data.RandomSampler(dataset, generator=torch.Generator().manual_seed(seed))
+    return torch.utils.data.DataLoader(
+        dataset,
+        batch_size=batch_size,
+        sampler=ft.EpochSampler(inner),
+        num_workers=workers,
+        persistent_workers=workers > 0,
+        worker_init_fn=ft.worker_init_fn,
+        collate_fn=ft.collate,
+    )
+
+
 def train(
     dataset_root: str,
     config: str,
@@ -623,21 +674,8 @@ def train(
     amp: bool = False,
     channels_last: bool = False,
 ) -> torch.nn.Module:
-    rank, world = distributed()
-    dataset = ft.WoodScapeDataset(os.path.join(dataset_root, "train"), transform=transform_for(config), seed=seed)
-    if world > 1:
-        inner: typing.Any = torch.utils.data.DistributedSampler(dataset, num_replicas=world, rank=rank, seed=seed)
-    else:
-        inner = torch.utils.data.RandomSampler(dataset, generator=torch.Generator().manual_seed(seed))
-    loader = torch.utils.data.DataLoader(
-        dataset,
-        batch_size=batch_size,
-        sampler=ft.EpochSampler(inner),
-        num_workers=workers,
-        persistent_workers=workers > 0,
-        worker_init_fn=ft.worker_init_fn,
-        collate_fn=ft.collate,
-    )
+    _, world = distributed()
+    loader = training_loader(dataset_root, config, seed, batch_size, workers)
     torch.manual_seed(seed)
     layout = torch.channels_last if channels_last else torch.contiguous_format
     net: torch.nn.Module = UNet(width).to(device).to(memory_format=layout)
@@ -985,7 +1023,21 @@ def figures(
 
     folder = os.path.join(args.out, "figures")
     os.makedirs(folder, exist_ok=True)
-    written = []
+    written = [
+        _miou_vs_change_figure(plt, results, configs, os.path.join(folder, "miou_vs_change.png")),
+        _predictions_figure(plt, args, configs, device, os.path.join(folder, "predictions.png")),
+    ]
+    if model_fidelity:
+        written.append(model_fidelity_figure(plt, model_fidelity, os.path.join(folder, "model_fidelity.png")))
+    return written
+
+
+def _miou_vs_change_figure(
+    plt: typing.Any, results: list[dict[str, typing.Any]], configs: typing.Sequence[str], path: str
+) -> str:
+    """mIoU (mean ± std over seeds) against the test set's change size, one line per
+    configuration, beside each other: the true test sets, their rotation-only twins
+    and the paper's protocol."""
     sizes = ["original"] + list(TEST_SETS)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2), sharey=True)
     for ax, suffix, title in (
@@ -1013,10 +1065,17 @@ def figures(
     axes[0].set_ylabel("mIoU (%), mean ± std over seeds")
     axes[2].legend(fontsize=7, loc="lower left")
     fig.tight_layout()
-    written.append(os.path.join(folder, "miou_vs_change.png"))
-    fig.savefig(written[-1], dpi=110)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
+    return path
 
+
+def _predictions_figure(
+    plt: typing.Any, args: argparse.Namespace, configs: typing.Sequence[str], device: torch.device, path: str
+) -> str:
+    """Up to three samples of the test set of the largest changes there is (the
+    original test split without one): image, truth and each configuration's
+    prediction by its seed-0 network."""
     test_set = next(
         (f"test-{name}" for name in reversed(TEST_SETS) if os.path.isdir(os.path.join(args.dataset, f"test-{name}"))),
         "test",
@@ -1051,12 +1110,9 @@ def figures(
                     ax.set_title(title, fontsize=7)
     fig.suptitle(f"{test_set}: predictions of each configuration (training seed 0)", fontsize=9)
     fig.tight_layout()
-    written.append(os.path.join(folder, "predictions.png"))
-    fig.savefig(written[-1], dpi=110)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
-    if model_fidelity:
-        written.append(model_fidelity_figure(plt, model_fidelity, os.path.join(folder, "model_fidelity.png")))
-    return written
+    return path
 
 
 def model_fidelity_figure(plt: typing.Any, rows: typing.Sequence[dict[str, typing.Any]], path: str) -> str:
@@ -1093,7 +1149,8 @@ def main(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
     line on stderr and exit status 2 for bad input; 1 for a failing file system or
     too little memory."""
     try:
-        return run(argv)
+        # The process's imports count against --budget.
+        return run(argv, experiment_budget.seconds_since_process_start())
     except Error as e:
         print(f"fishcam-experiment: error: {e}", file=sys.stderr)
         return 2
@@ -1102,7 +1159,46 @@ def main(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
         return 1
 
 
-def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
+def run(argv: typing.Optional[typing.Sequence[str]] = None, spent_before: float = 0.0) -> int:
+    """The experiment (main's, without its error handling); ``spent_before``: seconds
+    the caller spent before it, which count against --budget."""
+    started = time.perf_counter() - spent_before
+    args = _parser().parse_args(argv)
+    configs, device = _checked_options(args)
+    args.dataset = _split_dataset(args)
+    check_out(args.out, args.dataset)
+    if not args.no_figures:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise Error("the figures need matplotlib (pip install matplotlib), or give --no-figures") from None
+    info = scan_dataset(args.dataset)
+    processes = int(os.environ.get("WORLD_SIZE", "1"))
+    args.budget_plan = None if args.budget is None else _budget_plan(args, configs, device, info, started)
+    _check_memory(args, info, device, processes)
+    settings, dataset_record = run_settings(args, device, processes), info.record(args.dataset)
+    record = {"settings": settings, "dataset": dataset_record}
+    # Every stored run is checked before the first one trains.
+    stored = {
+        (config, seed): stored_run(run_path(args.out, config, seed) + ".json", settings, dataset_record, args.rerun)
+        for config in configs
+        for seed in range(args.seeds)
+    }
+    os.environ["FISHCAM_DEVICE"] = device.type
+    rank, _ = distributed()
+    start = time.perf_counter()
+    weights = class_weights(info.train_counts) if args.class_weights == "balanced" else None
+    results = _run_all(args, configs, device, weights, record, stored, rank)
+    if rank == 0:
+        _write_results(args, configs, device, results, record, weights, start)
+    if dist.is_initialized():
+        dist.destroy_process_group()
+    return 0
+
+
+def _parser() -> argparse.ArgumentParser:
+    """The command line's options (those left None take --quick's or the default
+    settings: _checked_options)."""
     parser = argparse.ArgumentParser(prog="fishcam-experiment", description=__doc__.split("\n")[0])
     parser.add_argument(
         "dataset",
@@ -1140,6 +1236,13 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
         "--no-fidelity", action="store_true", help="skip the fidelity tables (per depth prior, and Table 5 by geometry)"
     )
     parser.add_argument(
+        "--budget",
+        type=float,
+        metavar="MINUTES",
+        help="choose --width and --epochs (those not given) from costs measured on this machine so that the "
+        "whole experiment fits MINUTES (docs/experiment.md); not with --quick",
+    )
+    parser.add_argument(
         "--quick",
         action="store_true",
         help="tiny settings: configs none,viewpoint, 2 seeds, 1 epoch, width 4 (options given explicitly win)",
@@ -1159,9 +1262,22 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
         action="store_true",
         help="recompute the stored runs made with other settings or from another dataset (refused without it)",
     )
-    args = parser.parse_args(argv)
+    return parser
+
+
+def _checked_options(args: argparse.Namespace) -> tuple[list[str], torch.device]:
+    """(the configurations, the device) of the parsed options, after filling in
+    --quick's or the default settings and checking the numbers; fishcam.Error for
+    bad input."""
+    if args.budget is not None:
+        if args.quick:
+            raise Error("--budget and --quick: choose one (--quick fixes the settings --budget would choose)")
+        if not (math.isfinite(args.budget) and args.budget > 0):
+            raise Error(f"--budget {args.budget:g}: expected minutes > 0")
+        if int(os.environ.get("WORLD_SIZE", "1")) > 1:
+            raise Error("--budget: not under torchrun (each process would measure and choose its own)")
     for key, value in (QUICK if args.quick else DEFAULTS).items():
-        if getattr(args, key) is None:
+        if getattr(args, key) is None and not (args.budget is not None and key in BUDGET_CHOOSES):
             setattr(args, key, value)
     configs = parse_list("--configs", args.configs, CONFIGS)  # before anything runs or is written
     for option, value, low in (
@@ -1171,29 +1287,81 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
         ("--width", args.width, 1),
         ("--workers", args.workers, 0),
     ):
-        if value < low:
+        if value is not None and value < low:  # None: --budget chooses it
             raise Error(f"{option} {value}: must be >= {low}")
-    if args.width > MAX_WIDTH:
+    if args.width is not None and args.width > MAX_WIDTH:
         raise Error(f"--width {args.width}: at most {MAX_WIDTH} (16 times the default; docs/experiment.md)")
-    device = parse_device(args.device)
-    if is_flat_layout(args.dataset):
-        check_out(args.out, args.dataset)  # before OUT/dataset is written
+    return configs, parse_device(args.device)
+
+
+def _split_dataset(args: argparse.Namespace) -> str:
+    """The split dataset to train on: args.dataset, or a flat one prepared under
+    OUT/dataset; fishcam.Error for split options that do not fit it, or one without
+    train/ and test/ images."""
+    dataset: str = args.dataset
+    if is_flat_layout(dataset):
+        check_out(args.out, dataset)  # before OUT/dataset is written
         if (args.split is None) == (args.split_seed is None):
-            raise Error(f"{args.dataset}: a folder without splits needs one of --split FILE and --split-seed S")
-        args.dataset = prepare_flat_dataset(args)
+            raise Error(f"{dataset}: a folder without splits needs one of --split FILE and --split-seed S")
+        dataset = prepare_flat_dataset(args)
     elif args.split is not None or args.split_seed is not None:
-        raise Error(f"{args.dataset}: already split (train/, test/): --split and --split-seed are for a folder without")
+        raise Error(f"{dataset}: already split (train/, test/): --split and --split-seed are for a folder without")
     for sub in ("train", "test"):
-        if not os.path.isdir(os.path.join(args.dataset, sub, "rgb_images")):
-            raise Error(f"{args.dataset}: no {sub}/rgb_images (make it with fishcam sample-dataset --scenes N)")
-    check_out(args.out, args.dataset)
-    if not args.no_figures:
+        if not os.path.isdir(os.path.join(dataset, sub, "rgb_images")):
+            raise Error(f"{dataset}: no {sub}/rgb_images (make it with fishcam sample-dataset --scenes N)")
+    return dataset
+
+
+def _image_count(folder: str) -> int:
+    """The images of a WoodScape-layout folder (its rgb_images/)."""
+    images = os.path.join(folder, "rgb_images")
+    return sum(1 for f in os.listdir(images) if f.lower().endswith(IMAGE_EXTENSIONS))
+
+
+def _budget_plan(
+    args: argparse.Namespace, configs: typing.Sequence[str], device: torch.device, info: DatasetInfo, started: float
+) -> experiment_budget.Plan:
+    """--budget: the width and epochs (those not given) from the costs measured on
+    this dataset (fishcam.experiment_budget), printed and set in ``args``."""
+    batch = min(args.batch_size, info.train_images)
+    free = available_memory(device)
+    widths = [args.width] if args.width is not None else list(experiment_budget.WIDTHS)
+    widths = [w for w in widths if free is None or training_memory(w, batch, info.image_size) <= free] or widths[:1]
+    loaders = {config: training_loader(args.dataset, config, 0, args.batch_size, args.workers) for config in configs}
+    reading = torch.utils.data.DataLoader(
+        ft.WoodScapeDataset(os.path.join(args.dataset, "test"), transform=evaluation_transform()),
+        batch_size=args.batch_size,
+        collate_fn=ft.collate,
+    )
+    evaluated = sum(_image_count(folder) for _, folder in evaluation_folders(args.dataset))
+    batches = -(-info.train_images // args.batch_size)
+    spent = time.perf_counter() - started
+
+    def choose(costs: experiment_budget.Costs) -> experiment_budget.Plan:
+        return experiment_budget.choose(costs, args.budget, args.seeds, batches, evaluated, spent, args.epochs)
+
+    def enough(costs: experiment_budget.Costs) -> bool:  # the widest width measured no longer fits
         try:
-            import matplotlib  # noqa: F401
-        except ImportError:
-            raise Error("the figures need matplotlib (pip install matplotlib), or give --no-figures") from None
-    info = scan_dataset(args.dataset)
-    processes = int(os.environ.get("WORLD_SIZE", "1"))
+            return choose(costs).width < max(costs.step)
+        except Error:
+            return True
+
+    costs = experiment_budget.measure(
+        loaders, reading, UNet, (batch, *info.image_size), CLASSES, device, widths, enough
+    )
+    plan = choose(costs)
+    args.width, args.epochs = plan.width, plan.epochs
+    print(
+        f"--budget {args.budget:g} min: width {plan.width}, {plan.epochs} epochs (runs predicted "
+        f"{plan.predicted_seconds / 60:.1f} min; measured in {costs.measured_in:.0f} s)",
+        flush=True,
+    )
+    return plan
+
+
+def _check_memory(args: argparse.Namespace, info: DatasetInfo, device: torch.device, processes: int) -> None:
+    """Refuses a --width and --batch-size whose training would not fit the memory free
+    on the device (the processes of this machine together, on the CPU)."""
     local = int(os.environ.get("LOCAL_WORLD_SIZE", "1")) if device.type == "cpu" else 1
     batch = min(args.batch_size, -(-info.train_images // processes))
     need, free = local * training_memory(args.width, batch, info.image_size), available_memory(device)
@@ -1204,18 +1372,19 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
             f"{f' ({local} processes)' if local > 1 else ''}, more than the {free / 2**30:.1f} GiB free on "
             f"{device.type}: lower --width or --batch-size"
         )
-    settings, dataset_record = run_settings(args, device, processes), info.record(args.dataset)
-    record = {"settings": settings, "dataset": dataset_record}
-    # Every stored run is checked before the first one trains.
-    stored = {
-        (config, seed): stored_run(run_path(args.out, config, seed) + ".json", settings, dataset_record, args.rerun)
-        for config in configs
-        for seed in range(args.seeds)
-    }
-    os.environ["FISHCAM_DEVICE"] = device.type
-    rank, _ = distributed()
-    start = time.perf_counter()
-    weights = class_weights(info.train_counts) if args.class_weights == "balanced" else None
+
+
+def _run_all(
+    args: argparse.Namespace,
+    configs: typing.Sequence[str],
+    device: torch.device,
+    weights: typing.Optional[torch.Tensor],
+    record: dict[str, typing.Any],
+    stored: dict[tuple[str, int], typing.Optional[dict[str, typing.Any]]],
+    rank: int,
+) -> list[dict[str, typing.Any]]:
+    """Every configuration's runs, seed by seed (trained, or as stored); rank 0 prints
+    each one's mIoU on the original test split."""
     results = []
     for config in configs:
         for seed in range(args.seeds):
@@ -1227,48 +1396,59 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None) -> int:
                         f"{config} seed {seed}: mIoU original {100 * result['test']['original']['miou']:.1f}%",
                         flush=True,
                     )
-    if rank == 0:
-        os.makedirs(args.out, exist_ok=True)
-        has_test_sets = any(
-            os.path.exists(os.path.join(args.dataset, f"test-{name}", "changes.jsonl")) for name in TEST_SETS
-        )
-        fidelity = fishcam.dataset_fidelity(args.dataset) if has_test_sets and not args.no_fidelity else []
-        model_fidelity = (
-            fishcam.dataset_model_fidelity(args.dataset, list(FIDELITY_MODELS))
-            if has_test_sets and not args.no_fidelity
-            else []
-        )
-        written = [] if args.no_figures else figures(args, results, configs, device, model_fidelity)
-        summary = {
-            "dataset": os.path.abspath(args.dataset),
-            "dataset_identity": dataset_record,
-            "configs": configs,
-            "seeds": args.seeds,
-            "epochs": args.epochs,
-            "width": args.width,
-            "batch_size": args.batch_size,
-            "settings": settings,
-            "class_weights": None if weights is None else [float(w) for w in weights],
-            "fishcam": fishcam.__version__,
-            "torch": torch.__version__,
-            "seconds": time.perf_counter() - start,
-            "train_seconds_total": sum(r["train_seconds"] for r in results),
-            "runs": results,
-            "fidelity": fidelity,
-            "model_fidelity": model_fidelity,
-        }
-        with open(os.path.join(args.out, "results.json"), "w") as f:
-            json.dump(finite_or_none(summary), f, indent=1)  # NaN is not JSON: null, as the program writes
-        with open(os.path.join(args.out, "tables.md"), "w") as f:
-            f.write(tables(results, configs, fidelity, model_fidelity))
-        print(
-            f"wrote {os.path.join(args.out, 'results.json')}, tables.md"
-            + "".join(f", {os.path.relpath(w, args.out)}" for w in written)
-            + f" ({summary['seconds']:.0f} s)"
-        )
-    if dist.is_initialized():
-        dist.destroy_process_group()
-    return 0
+    return results
+
+
+def _write_results(
+    args: argparse.Namespace,
+    configs: typing.Sequence[str],
+    device: torch.device,
+    results: list[dict[str, typing.Any]],
+    record: dict[str, typing.Any],
+    weights: typing.Optional[torch.Tensor],
+    start: float,
+) -> None:
+    """OUT/results.json, tables.md and figures/ (with the fidelity against the
+    re-renders where the dataset has true viewpoint test sets); prints what it wrote."""
+    os.makedirs(args.out, exist_ok=True)
+    has_test_sets = any(
+        os.path.exists(os.path.join(args.dataset, f"test-{name}", "changes.jsonl")) for name in TEST_SETS
+    )
+    fidelity = fishcam.dataset_fidelity(args.dataset) if has_test_sets and not args.no_fidelity else []
+    model_fidelity = (
+        fishcam.dataset_model_fidelity(args.dataset, list(FIDELITY_MODELS))
+        if has_test_sets and not args.no_fidelity
+        else []
+    )
+    written = [] if args.no_figures else figures(args, results, configs, device, model_fidelity)
+    summary = {
+        "dataset": os.path.abspath(args.dataset),
+        "dataset_identity": record["dataset"],
+        "configs": configs,
+        "seeds": args.seeds,
+        "epochs": args.epochs,
+        "width": args.width,
+        "batch_size": args.batch_size,
+        "budget": None if args.budget_plan is None else args.budget_plan.record(),
+        "settings": record["settings"],
+        "class_weights": None if weights is None else [float(w) for w in weights],
+        "fishcam": fishcam.__version__,
+        "torch": torch.__version__,
+        "seconds": time.perf_counter() - start,
+        "train_seconds_total": sum(r["train_seconds"] for r in results),
+        "runs": results,
+        "fidelity": fidelity,
+        "model_fidelity": model_fidelity,
+    }
+    with open(os.path.join(args.out, "results.json"), "w") as f:
+        json.dump(finite_or_none(summary), f, indent=1)  # NaN is not JSON: null, as the program writes
+    with open(os.path.join(args.out, "tables.md"), "w") as f:
+        f.write(tables(results, configs, fidelity, model_fidelity))
+    print(
+        f"wrote {os.path.join(args.out, 'results.json')}, tables.md"
+        + "".join(f", {os.path.relpath(w, args.out)}" for w in written)
+        + f" ({summary['seconds']:.0f} s)"
+    )
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 
 import fishcam
 import pytest
@@ -180,6 +181,52 @@ def test_bad_input(dataset, tmp_path, capsys):
     assert "no train/rgb_images" in capsys.readouterr().err
     assert experiment.main([str(dataset), str(tmp_path / "out"), "--configs", "none,rotate"]) == 2
     assert "--configs: expected one of" in capsys.readouterr().err
+
+
+def test_budget_chooses_the_widest_width_that_trains_ten_epochs_then_the_most_epochs():
+    budget = experiment.experiment_budget
+    # Per run: epochs x 2 batches x (pipeline 0.5 + step) + 10 images x evaluation.
+    costs = budget.Costs({"none": 0.5, "viewpoint": 0.5}, {8: 1.0, 16: 2.0, 24: 4.0}, {8: 0.1, 16: 0.2, 24: 0.4}, 0.0)
+    # Two configs x one seed: width 16 costs 2 x (10 x 2 x 2.5 + 2) = 104 s for 10 epochs, width 24 184 s.
+    assert budget.predicted_seconds(costs, 16, 10, 1, 2, 10) == pytest.approx(104)
+    plan = budget.choose(costs, 150 / 60 / (1 - budget.MARGIN), 1, 2, 10)  # 150 s after the margin
+    assert (plan.width, plan.epochs) == (16, 14)  # 2 x (14 x 5 + 2) = 144 <= 150 < 2 x (15 x 5 + 2)
+    assert budget.choose(costs, 150 / 60 / (1 - budget.MARGIN), 1, 2, 10, epochs=4).width == 24
+    assert budget.choose(costs, 30 / 60 / (1 - budget.MARGIN), 1, 2, 10).width == 8  # not even 10 epochs fit
+    with pytest.raises(fishcam.Error, match="--budget 0.01: 1 epoch"):
+        budget.choose(costs, 0.01, 1, 2, 10)
+
+
+def test_budget_keeps_a_quick_run_inside_its_time(dataset, tmp_path, capsys):
+    """--budget 1: the whole process (imports, measurement, runs, tables) within 1.5
+    minutes, and the runs' predicted time within a factor of 1.5 of what they took."""
+    out = tmp_path / "budget"
+    started = time.perf_counter()
+    result = subprocess.run(
+        [sys.executable, "-m", "fishcam.experiment", str(dataset), str(out), "--budget", "1"]
+        + ["--configs", "none,viewpoint", "--seeds", "2", "--no-figures", "--no-fidelity"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    wall = time.perf_counter() - started
+    assert result.returncode == 0, result.stderr[-2000:]
+    with open(out / "results.json") as f:
+        results = json.load(f)
+    chosen = results["budget"]
+    assert chosen["width"] in experiment.experiment_budget.WIDTHS and chosen["epochs"] >= 1
+    assert (results["width"], results["epochs"]) == (chosen["width"], chosen["epochs"])
+    assert f"--budget 1 min: width {chosen['width']}, {chosen['epochs']} epochs" in result.stdout
+    assert wall <= 1.5 * 60
+    assert results["seconds"] <= 1.5 * chosen["predicted_run_seconds"]
+    assert chosen["predicted_run_seconds"] <= 1.5 * results["seconds"]
+    for bad, message in (
+        (["--budget", "0"], "--budget 0: expected minutes > 0"),
+        (["--budget", "nan"], "--budget nan: expected minutes > 0"),
+        (["--budget", "5", "--quick"], "--budget and --quick: choose one"),
+    ):
+        assert experiment.main([str(dataset), str(tmp_path / "bad"), *bad]) == 2
+        assert message in capsys.readouterr().err
 
 
 def test_two_ddp_processes(dataset, tmp_path):

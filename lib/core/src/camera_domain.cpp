@@ -1,6 +1,6 @@
+#include "fail.hpp"
 #include "fishcam/core/camera.hpp"
 #include "fishcam/core/error.hpp"
-#include "fail.hpp"
 #include "fishcam/core/parallel.hpp"
 #include "fishcam/core/stderr_capture.hpp"
 #include "point_projection.hpp"

@@ -1,6 +1,6 @@
+#include "fail.hpp"
 #include "fishcam/core/camera.hpp"
 #include "fishcam/core/error.hpp"
-#include "fail.hpp"
 
 #include <algorithm>
 #include <cmath>
