@@ -661,6 +661,52 @@ def training_loader(
     )
 
 
+class Training:
+    """One run's network, optimiser, loss scaling and schedule; ``step`` trains on one
+    batch (what ``train`` repeats, and ``--budget`` times)."""
+
+    def __init__(
+        self,
+        width: int,
+        device: torch.device,
+        weights: typing.Optional[torch.Tensor],
+        steps: int,
+        amp: bool = False,
+        channels_last: bool = False,
+        name: str = "",
+    ) -> None:
+        _, world = distributed()
+        self.layout = torch.channels_last if channels_last else torch.contiguous_format
+        net: torch.nn.Module = UNet(width).to(device).to(memory_format=self.layout)
+        # float16 gradients underflow without loss scaling; bfloat16 has float32's range.
+        self.scaler = torch.amp.GradScaler(device.type, enabled=amp and device.type == "cuda")
+        if world > 1:
+            net = torch.nn.parallel.DistributedDataParallel(net)
+        self.net = net
+        self.optimiser = torch.optim.AdamW(net.parameters(), lr=2e-3, weight_decay=1e-4)
+        self.schedule = torch.optim.lr_scheduler.OneCycleLR(self.optimiser, max_lr=2e-3, total_steps=max(steps, 1))
+        self.device, self.amp, self.name = device, amp, name
+        self.weights = None if weights is None else weights.to(device)
+        net.train()
+
+    def step(self, batch: dict[str, typing.Any]) -> None:
+        image, mask = batch["image"].to(self.device, memory_format=self.layout), batch["mask"].to(self.device)
+        with autocast(self.device, self.amp):
+            loss = torch.nn.functional.cross_entropy(self.net(image), mask, weight=self.weights, ignore_index=NO_SOURCE)
+        if not torch.isfinite(loss):
+            raise Error(f"{self.name}: the loss is not finite")
+        self.optimiser.zero_grad()
+        self.scaler.scale(loss).backward()  # type: ignore[no-untyped-call]
+        self.scaler.step(self.optimiser)
+        self.scaler.update()
+        self.schedule.step()
+
+    def trained(self) -> torch.nn.Module:
+        """The network (without DistributedDataParallel's wrapper)."""
+        net = self.net
+        return net.module if isinstance(net, torch.nn.parallel.DistributedDataParallel) else net
+
+
 def train(
     dataset_root: str,
     config: str,
@@ -674,34 +720,13 @@ def train(
     amp: bool = False,
     channels_last: bool = False,
 ) -> torch.nn.Module:
-    _, world = distributed()
     loader = training_loader(dataset_root, config, seed, batch_size, workers)
     torch.manual_seed(seed)
-    layout = torch.channels_last if channels_last else torch.contiguous_format
-    net: torch.nn.Module = UNet(width).to(device).to(memory_format=layout)
-    # float16 gradients underflow without loss scaling; bfloat16 has float32's range.
-    scaler = torch.amp.GradScaler(device.type, enabled=amp and device.type == "cuda")
-    if world > 1:
-        net = torch.nn.parallel.DistributedDataParallel(net)
-    optimiser = torch.optim.AdamW(net.parameters(), lr=2e-3, weight_decay=1e-4)
-    steps = epochs * len(loader)
-    schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, max_lr=2e-3, total_steps=max(steps, 1))
-    net.train()
+    training = Training(width, device, weights, epochs * len(loader), amp, channels_last, f"{config}, seed {seed}")
     for _ in range(epochs):
         for batch in loader:
-            image, mask = batch["image"].to(device, memory_format=layout), batch["mask"].to(device)
-            with autocast(device, amp):
-                loss = torch.nn.functional.cross_entropy(
-                    net(image), mask, weight=None if weights is None else weights.to(device), ignore_index=NO_SOURCE
-                )
-            if not torch.isfinite(loss):
-                raise Error(f"{config}, seed {seed}: the loss is not finite")
-            optimiser.zero_grad()
-            scaler.scale(loss).backward()  # type: ignore[no-untyped-call]
-            scaler.step(optimiser)
-            scaler.update()
-            schedule.step()
-    return net.module if isinstance(net, torch.nn.parallel.DistributedDataParallel) else net
+            training.step(batch)
+    return training.trained()
 
 
 @torch.no_grad()
@@ -1346,8 +1371,15 @@ def _budget_plan(
         except Error:
             return True
 
+    weights = class_weights(info.train_counts) if args.class_weights == "balanced" else None
+
+    def iteration(width: int, loader: typing.Iterable[typing.Any]) -> typing.Callable[[], object]:
+        training = Training(width, device, weights, 100, args.amp, args.channels_last, "--budget")
+        batches = experiment_budget.endless(loader)
+        return lambda: training.step(next(batches))
+
     costs = experiment_budget.measure(
-        loaders, reading, UNet, (batch, *info.image_size), CLASSES, device, widths, enough
+        loaders, reading, iteration, UNet, (batch, *info.image_size), device, widths, enough
     )
     plan = choose(costs)
     args.width, args.epochs = plan.width, plan.epochs

@@ -4,9 +4,9 @@ on this machine, on the dataset itself, before any run trains.
 
 Three costs are measured, each a median of a few repetitions after a warm-up: a
 batch of each configuration's training pipeline (reading, augmenting, collating:
-``DataLoader`` as the runs use it), a training step of the network (forward,
-backward, optimiser) per candidate width on a batch of the dataset's size, and the
-evaluation of one image per width (reading it, one pass over the test images, and
+``DataLoader`` as the runs use it), a training iteration per candidate width as the
+runs make it (the next batch, forward, the weighted loss, backward, optimiser,
+schedule: ``experiment.Training.step``), and the evaluation of one image per width (reading it, one pass over the test images, and
 the network's forward pass). Widths are measured from the narrowest and stop where
 one no longer fits; the time the process ran before (its imports, the dataset's
 scan) and the measurement itself count against the budget. A run of ``epochs`` costs ``epochs x batches x
@@ -83,50 +83,33 @@ def _median_seconds(action: typing.Callable[[], object], repeats: int = REPEATS)
     return statistics.median(times)
 
 
+def endless(loader: typing.Iterable[typing.Any]) -> typing.Iterator[typing.Any]:
+    """A loader's batches epoch after epoch (a small dataset has fewer batches than the
+    repetitions)."""
+    while True:
+        yield from loader
+
+
 def _pipeline_seconds(loader: typing.Iterable[typing.Any]) -> float:
-    """Seconds per batch of a DataLoader, iterated as a run does (a new epoch where
-    one ends: a small dataset has fewer batches than the repetitions)."""
-    batches = iter(loader)
-
-    def next_batch() -> object:
-        nonlocal batches
-        try:
-            return next(batches)
-        except StopIteration:
-            batches = iter(loader)
-            return next(batches)
-
-    return _median_seconds(next_batch)
+    """Seconds per batch of a DataLoader, iterated as a run does."""
+    batches = endless(loader)
+    return _median_seconds(lambda: next(batches))
 
 
-def _network_seconds(
+def _forward_seconds(
     net_for: typing.Callable[[int], torch.nn.Module],
     width: int,
     batch: int,
     image_size: tuple[int, int],
-    classes: int,
     device: torch.device,
-) -> tuple[float, float]:
-    """(seconds per training step on a batch, seconds per evaluated image) of the
-    network of ``width`` on random images of ``image_size`` (height, width)."""
-    generator = torch.Generator().manual_seed(0)
-    images = torch.rand((batch, 3, *image_size), generator=generator).to(device)
-    masks = torch.randint(0, classes, (batch, *image_size), generator=generator).to(device)
+) -> float:
+    """Seconds per image of the evaluating forward pass of the network of ``width`` on
+    random images of ``image_size`` (height, width)."""
+    images = torch.rand((batch, 3, *image_size), generator=torch.Generator().manual_seed(0)).to(device)
     net = net_for(width).to(device)
-    optimiser = torch.optim.AdamW(net.parameters(), lr=1e-3)
-
-    def step() -> None:
-        loss = torch.nn.functional.cross_entropy(net(images), masks)
-        optimiser.zero_grad()
-        loss.backward()  # type: ignore[no-untyped-call]
-        optimiser.step()
-
-    net.train()
-    train_seconds = _median_seconds(step)
     net.eval()
     with torch.no_grad():
-        evaluation_seconds = _median_seconds(lambda: net(images)) / batch
-    return train_seconds, evaluation_seconds
+        return _median_seconds(lambda: net(images)) / batch
 
 
 def _reading_seconds(loader: typing.Iterable[typing.Any]) -> float:
@@ -140,26 +123,31 @@ def _reading_seconds(loader: typing.Iterable[typing.Any]) -> float:
 def measure(
     loaders: typing.Mapping[str, typing.Iterable[typing.Any]],
     evaluation_loader: typing.Iterable[typing.Any],
+    iteration: typing.Callable[[int, typing.Iterable[typing.Any]], typing.Callable[[], object]],
     net_for: typing.Callable[[int], torch.nn.Module],
     shape: tuple[int, int, int],
-    classes: int,
     device: torch.device,
     widths: typing.Sequence[int] = WIDTHS,
     enough: typing.Callable[[Costs], bool] = lambda costs: False,
 ) -> Costs:
     """The costs of this machine: each configuration's loader (``loaders``: config ->
-    its training DataLoader), reading the test images (``evaluation_loader``), and the
-    network (``net_for(width)``) per width on batches of ``shape`` (batch, height,
-    width), from the narrowest; the wider ones are not measured once ``enough`` says
-    the costs so far already exceed what is needed."""
+    its training DataLoader); a training iteration as the runs make it
+    (``iteration(width, loader)``: an action taking the loader's next batch and
+    training on it) per width, on the cheapest configuration's loader; reading the
+    test images (``evaluation_loader``) and the network's forward pass
+    (``net_for(width)`` on batches of ``shape``: batch, height, width) per evaluated
+    image. Widths from the narrowest; the wider ones are not measured once ``enough``
+    says the costs so far already exceed what is needed."""
     start = time.perf_counter()
     pipeline = {config: _pipeline_seconds(loader) for config, loader in loaders.items()}
+    cheapest = min(pipeline, key=lambda config: pipeline[config])
     reading = _reading_seconds(evaluation_loader)
     step: dict[int, float] = {}
     evaluation: dict[int, float] = {}
     for width in sorted(widths):
-        step[width], forward = _network_seconds(net_for, width, shape[0], shape[1:], classes, device)
-        evaluation[width] = reading + forward
+        # The iteration includes the cheapest pipeline's batch: the step is the rest.
+        step[width] = max(_median_seconds(iteration(width, loaders[cheapest])) - pipeline[cheapest], 0.0)
+        evaluation[width] = reading + _forward_seconds(net_for, width, shape[0], shape[1:], device)
         if enough(Costs(pipeline, step, evaluation, time.perf_counter() - start)):
             break
     return Costs(pipeline, step, evaluation, time.perf_counter() - start)
