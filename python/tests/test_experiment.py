@@ -1,6 +1,9 @@
 """fishcam.experiment end to end on a tiny synthetic dataset: --quick, resuming, the
 same numbers from the same seeds, the fidelity table and the figures, bad input, and
-two DDP processes (gloo); fishcam.dataset_fidelity."""
+two DDP processes (gloo); fishcam.dataset_fidelity; --budget.
+
+CTest: RUN_SERIAL (--budget measures this machine and is held to its time: nothing
+else runs beside this file)."""
 
 import json
 import math
