@@ -267,8 +267,8 @@ CameraParameters apply_theta_limit(const CameraParameters& camera, const std::st
 void print_fit_report(const CameraParameters& fitted, const ErrorReport& report, const char* over_what) {
   std::printf("parameters      ");
   for (double p : model_params(fitted.model)) std::printf(" %.10g", p);
-  std::printf("\nprincipal point  (%.6f, %.6f), pixel scale (%.10g, %.10g)\n", fitted.principal_point.x(),
-              fitted.principal_point.y(), fitted.pixel_scale.x(), fitted.pixel_scale.y());
+  std::printf("\nprincipal point  (%.6f, %.6f), pixel scale (%.10g, %.10g)\n", fitted.grid.principal_point.x(),
+              fitted.grid.principal_point.y(), fitted.grid.pixel_scale.x(), fitted.grid.pixel_scale.y());
   std::printf("pixel error over %ld %s: rms %.4f, p99 %.4f, max %.4f px", report.samples, over_what, report.rms_px,
               report.p99_px, report.max_px);
   if (report.unprojectable) std::printf(" (%ld outside the new model's domain)", report.unprojectable);

@@ -42,8 +42,8 @@ void register_fit(CLI::App& app) {
     const CorrespondenceFile file = read_csv(o->data);
     CameraParameters start;
     std::tie(start.width, start.height) = parse_image_size(o->imagersize, "--imagersize");
-    start.principal_point = {o->center[0], o->center[1]};
-    start.pixel_scale = {1.0, o->aspect};
+    start.grid.principal_point = {o->center[0], o->center[1]};
+    start.grid.pixel_scale = {1.0, o->aspect};
     std::vector<Correspondence> samples;
     if (file.kind == CorrespondenceFile::Kind::theta_rho) {
       if (o->fit_center || o->fit_aspect) throw Error("--fit-center/--fit-aspect need x,y,z,u,v data");
@@ -53,7 +53,8 @@ void register_fit(CLI::App& app) {
           throw Error(o->data + ": theta must be in [0, pi] (or [0, 180] deg) and rho >= 0");
         }
         // Along +x: the pixel lies rho (a_x = 1) to the right of the centre.
-        samples.push_back({{std::sin(theta), 0, std::cos(theta)}, start.principal_point + Eigen::Vector2d(r[1], 0)});
+        samples.push_back(
+            {{std::sin(theta), 0, std::cos(theta)}, start.grid.principal_point + Eigen::Vector2d(r[1], 0)});
       }
     } else {
       for (const auto& r : file.rows) samples.push_back({{r[0], r[1], r[2]}, {r[3], r[4]}});

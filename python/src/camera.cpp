@@ -22,16 +22,16 @@ std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
 }
 
 // The camera's numbers as bytes: equal exactly when the cameras are (model, its
-// parameters, size, principal point, pixel scale, its plane distortion's numbers
-// (numbers_of), skew, theta limit and, with_pose, the pose). A cache key that costs microseconds, where to_json()
+// parameters, size, theta limit, its pixel grid's numbers (PixelGrid::values), its
+// plane distortion's (numbers_of) and, with_pose, the pose). A cache key that costs microseconds, where to_json()
 // formats and reads back a file (milliseconds).
 std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
   std::string key(model_name(p.model));
   key.push_back('\0');
   std::vector<double> numbers = model_params(p.model);
-  numbers.insert(numbers.end(), {double(p.width), double(p.height), p.principal_point.x(), p.principal_point.y(),
-                                 p.pixel_scale.x(), p.pixel_scale.y(), p.theta_limit.value_or(-1.0)});
-  numbers.insert(numbers.end(), {p.skew.xy, p.skew.yx});
+  numbers.insert(numbers.end(), {double(p.width), double(p.height), p.theta_limit.value_or(-1.0)});
+  const std::vector<double> grid = p.grid.values();
+  numbers.insert(numbers.end(), grid.begin(), grid.end());
   const PlaneDistortionNumbers part = numbers_of(p.distortion);  // its name and configuration, then its values
   key += part.name;
   key.push_back('\0');
@@ -68,10 +68,10 @@ py::object camera_pickle_state(const Camera& c) {
     pose = py::make_tuple(q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z());
   }
   return py::make_tuple(std::string(model_name(p.model)), model_params(p.model), p.width, p.height,
-                        p.principal_point.x(), p.principal_point.y(), p.pixel_scale.x(), p.pixel_scale.y(),
-                        p.theta_limit ? py::cast(*p.theta_limit) : py::none(), pose,
+                        p.grid.principal_point.x(), p.grid.principal_point.y(), p.grid.pixel_scale.x(),
+                        p.grid.pixel_scale.y(), p.theta_limit ? py::cast(*p.theta_limit) : py::none(), pose,
                         py::make_tuple(part.name, part.configuration, part.values),
-                        py::make_tuple(p.skew.xy, p.skew.yx));
+                        py::make_tuple(p.grid.skew.xy, p.grid.skew.yx));
 }
 
 Camera camera_from_pickle_state(const py::object& state) {
@@ -83,14 +83,14 @@ Camera camera_from_pickle_state(const py::object& state) {
   CameraParameters p;
   p.model = make_model(t[0].cast<std::string>(), t[1].cast<std::vector<double>>());
   p.width = t[2].cast<int>(), p.height = t[3].cast<int>();
-  p.principal_point = {t[4].cast<double>(), t[5].cast<double>()};
-  p.pixel_scale = {t[6].cast<double>(), t[7].cast<double>()};
+  p.grid.principal_point = {t[4].cast<double>(), t[5].cast<double>()};
+  p.grid.pixel_scale = {t[6].cast<double>(), t[7].cast<double>()};
   if (!t[8].is_none()) p.theta_limit = t[8].cast<double>();
   if (t.size() == 12) {  // the plane distortion's numbers (numbers_of), the skew
     const auto part = t[10].cast<std::tuple<std::string, std::string, std::vector<double>>>();
     p.distortion = make_plane_distortion(std::get<0>(part), std::get<1>(part), std::get<2>(part));
     const auto skew = t[11].cast<std::array<double, 2>>();
-    p.skew = {skew[0], skew[1]};
+    p.grid.skew = {skew[0], skew[1]};
   } else if (t.size() == 11) {  // earlier pickles: the tangential terms
     p.distortion = TangentialDistortion{TangentialTerms::from_values(t[10].cast<std::array<double, 6>>())};
   }

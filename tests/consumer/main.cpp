@@ -6,7 +6,7 @@
 int main() {
   fishcam::CameraParameters p;
   p.width = 1280, p.height = 966;
-  p.principal_point = {643.442, 479.407};
+  p.grid.principal_point = {643.442, 479.407};
   p.model = fishcam::Polynomial<double>({339.749, -31.988, 48.275, -7.201});
   const fishcam::Camera camera(p);
   Eigen::Vector3d ray;

@@ -10,7 +10,7 @@
 int main() {
   fishcam::CameraParameters p;
   p.width = 320, p.height = 240;
-  p.principal_point = {159.5, 119.5};
+  p.grid.principal_point = {159.5, 119.5};
   p.model = fishcam::KannalaBrandt<double>(120, 0.01, -0.002, 0, 0);
   const fishcam::Camera camera(p);
   std::vector<float> rays(3 * 320 * 240);

@@ -78,7 +78,7 @@ TEST(Augmentation, SourcePointSatisfiesItsDefiningEquation) {
 TEST(Augmentation, EveryValidMapEntrySatisfiesItsDefiningEquation) {
   CameraParameters p = test::woodscape_front();
   p.width = 320, p.height = 242;
-  p.principal_point = {159.5 + 3.942 / 4, 120.5 - 3.093 / 4};
+  p.grid.principal_point = {159.5 + 3.942 / 4, 120.5 - 3.093 / 4};
   p.model = Polynomial<double>({339.749 / 4, -31.988 / 4, 48.275 / 4, -7.201 / 4});
   const Camera camera(p);
   const ViewpointWarp warp(camera);
@@ -288,13 +288,13 @@ double worst_fast_vs_exact(const ViewpointWarp& warp, const ViewpointChange& cha
 TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
   CameraParameters small = test::woodscape_front();
   small.width = 160, small.height = 121;
-  small.principal_point = {79.5, 60.5};
+  small.grid.principal_point = {79.5, 60.5};
   small.model = Polynomial<double>({339.749 / 8, -31.988 / 8, 48.275 / 8, -7.201 / 8});
   std::vector<double> k17 = {339.749 / 8, -31.988 / 8, 48.275 / 8, -7.201 / 8};
   k17.resize(17, 0.0);
   k17.back() = 1e-12;  // degree 17: past what the kernel holds
   CameraParameters far_centre = small;
-  far_centre.principal_point = {1e6, 1e6};
+  far_centre.grid.principal_point = {1e6, 1e6};
   far_centre.model = Equidistant<double>(1e6);
   // LATLON whose image reaches next to its pole (76 deg at the sides), where the chart is
   // singular: no table of its offsets (kLensTableMaxCells) holds 1e-4 px.
@@ -408,7 +408,7 @@ TEST(Augmentation, DepthMapsAreReExpressedInTheMovedCamera) {
 
 TEST(Augmentation, NonFiniteOrNonRotationChangesAreRefused) {
   CameraParameters p = test::woodscape_front();
-  p.width = 64, p.height = 48, p.principal_point = {31.5, 23.5};
+  p.width = 64, p.height = 48, p.grid.principal_point = {31.5, 23.5};
   const ViewpointWarp warp{Camera(p)};
   WarpMaps maps;
   const double nan = std::nan("");
@@ -599,7 +599,7 @@ TEST(Augmentation, SamplingMapsResampleLikeGeometricMaps) {
 TEST(Augmentation, AgreesWithABruteForceForwardSplat) {
   CameraParameters p = test::woodscape_front();
   p.width = 160, p.height = 121;  // a small image of the same lens: 1/8 scale
-  p.principal_point = {79.5 + 3.942 / 8, 60 - 3.093 / 8};
+  p.grid.principal_point = {79.5 + 3.942 / 8, 60 - 3.093 / 8};
   p.model = Polynomial<double>({339.749 / 8, -31.988 / 8, 48.275 / 8, -7.201 / 8});
   const Camera camera(p);
   const ViewpointWarp warp(camera);
@@ -847,7 +847,7 @@ TEST(Augmentation, LensTablesEndOutsideTheImage) {
 TEST(Augmentation, ExtremeMrcalLensesTakeTheKernelOnlyWhereItAgrees) {
   CameraParameters small = test::woodscape_front();
   small.width = 160, small.height = 121;
-  small.principal_point = {79.5, 60.5};
+  small.grid.principal_point = {79.5, 60.5};
   const auto lens = [&](double f, bool pinhole, const char* lensmodel, std::vector<double> values) {
     CameraParameters p =
         pinhole ? test::with_model(small, Pinhole<double>(f)) : test::with_model(small, Stereographic<double>(f));
@@ -886,7 +886,7 @@ TEST(Augmentation, ExtremeMrcalLensesTakeTheKernelOnlyWhereItAgrees) {
 // before).
 TEST(Augmentation, FullCircleAndAnisotropicCamerasKeepTheirAccuracy) {
   CameraParameters full_circle = test::woodscape_front();
-  full_circle.width = 640, full_circle.height = 483, full_circle.principal_point = {319.5, 241};
+  full_circle.width = 640, full_circle.height = 483, full_circle.grid.principal_point = {319.5, 241};
   full_circle.model = Equidistant<double>(100);  // theta = pi at rho = 314 px: inside the image
   const std::pair<const char*, CameraParameters> cases[] = {
       {"full circle", full_circle},

@@ -40,7 +40,7 @@ template <std::size_t kStride>
 void unproject_pixels(const CameraParameters& params, const ValidDomain& domain, const InverseTable& table, float* x,
                       float* y, float* z, InversePath path) {
   const size_t w = static_cast<size_t>(params.width), h = static_cast<size_t>(params.height);
-  const Eigen::Vector2d c = params.principal_point, inv_scale = params.pixel_scale.cwiseInverse();
+  const Eigen::Vector2d c = params.grid.principal_point, inv_scale = params.grid.pixel_scale.cwiseInverse();
   visit_parts(params, [&](const auto& m, const auto& part) {
     parallel_for(static_cast<int>(h), [&](int first_row, int end_row) {
       for (int row = first_row; row < end_row; ++row) {
@@ -82,13 +82,12 @@ double Camera::theta_from_rho_table(double rho) const {
 }
 
 double Camera::rho_of_pixel(const Eigen::Vector2d& pixel) const {
-  return (pixel - params_.principal_point).cwiseQuotient(params_.pixel_scale).norm();
+  return (pixel - params_.grid.principal_point).cwiseQuotient(params_.grid.pixel_scale).norm();
 }
 
 bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                      Eigen::Matrix<double, 2, 3>* jacobian) const {
-  const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(), params_.pixel_scale.x(),
-                                      params_.pixel_scale.y()};
+  const std::array<double, 4> mapping = params_.grid.mapping();
   return visit_parts(params_, [&](const auto& m, const auto& part) {
     return jacobian ? project_point<true>(m, part, params_, mapping.data(), domain_, point, pixel, jacobian)
                     : project_point<false>(m, part, params_, mapping.data(), domain_, point, pixel, nullptr);
@@ -96,10 +95,9 @@ bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
 }
 
 bool Camera::unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const {
-  const double x = (pixel.x() - params_.principal_point.x()) / params_.pixel_scale.x();
-  const double y = (pixel.y() - params_.principal_point.y()) / params_.pixel_scale.y();
+  const Eigen::Vector2d s = params_.grid.skewed_offset(pixel);
   const bool ok = visit_parts(params_, [&](const auto& m, const auto& part) {
-    return ray_of_point(m, part, params_, domain_, table_, x, y, InversePath::robust, ray->data());
+    return ray_of_point(m, part, params_, domain_, table_, s.x(), s.y(), InversePath::robust, ray->data());
   });
   if (!ok) ray->setConstant(kNaN);
   return ok;
@@ -110,8 +108,7 @@ void Camera::project(std::span<const Eigen::Vector3d> points, std::span<Eigen::V
   if (pixels.size() != points.size() || (!valid.empty() && valid.size() != points.size())) {
     throw Error("project: output sizes must match the number of points");
   }
-  const std::array<double, 4> mapping{params_.principal_point.x(), params_.principal_point.y(), params_.pixel_scale.x(),
-                                      params_.pixel_scale.y()};
+  const std::array<double, 4> mapping = params_.grid.mapping();
   visit_parts(params_, [&](const auto& m, const auto& part) {
     parallel_chunks(points.size(), [&](size_t begin, size_t end) {
       for (size_t i = begin; i < end; ++i) {
@@ -127,7 +124,7 @@ void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen:
   if (rays.size() != pixels.size() || (!valid.empty() && valid.size() != pixels.size())) {
     throw Error("unproject: output sizes must match the number of pixels");
   }
-  const Eigen::Vector2d c = params_.principal_point, inv_scale = params_.pixel_scale.cwiseInverse();
+  const Eigen::Vector2d c = params_.grid.principal_point, inv_scale = params_.grid.pixel_scale.cwiseInverse();
   visit_parts(params_, [&](const auto& m, const auto& part) {
     parallel_chunks(pixels.size(), [&](size_t begin, size_t end) {
       for (size_t i = begin; i < end; ++i) {
@@ -155,8 +152,8 @@ void Camera::unproject_image(std::span<float> x, std::span<float> y, std::span<f
 }
 
 Camera::FieldOfView Camera::field_of_view_deg() const {
-  const double w = params_.width - 0.5, h = params_.height - 0.5, cx = params_.principal_point.x(),
-               cy = params_.principal_point.y();
+  const double w = params_.width - 0.5, h = params_.height - 0.5, cx = params_.grid.principal_point.x(),
+               cy = params_.grid.principal_point.y();
   const bool centred = cx >= -0.5 && cx <= w && cy >= -0.5 && cy <= h;
   // What the image sees between two points of its border, along the line between them
   // (through the principal point when it lies in the image): the angles of the

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 
@@ -115,65 +116,21 @@ void check_calibration_record(const CalibrationRecord& r, size_t model_params) {
   }
 }
 
-// Evaluates the lens at `azimuths` points of the ring of plane radius u (under the
-// caller's capture of what libmrcal says); false when one of them has no offset.
-bool lens_finite_on_ring(const MrcalLens& lens, double u, int azimuths) {
-  bool finite = true;
-  for (int k = 0; k < azimuths; ++k) {
-    const double phi = 2 * std::numbers::pi * k / azimuths;
-    finite = lens.offset(u * Eigen::Vector2d(std::cos(phi), std::sin(phi))).allFinite() && finite;
-  }
-  return finite;
-}
-
-// The domain's rays, 64 rings by 360 azimuths up to theta_max: libmrcal must evaluate
-// each without a complaint on standard error, or the lens is refused in one line (a
-// projection whose own iteration failed cannot be right).
-void check_lens_evaluates(const CameraParameters& p, const MrcalLens& lens, double theta_max) {
-  detail::StderrCapture libmrcal;
-  std::visit(
-      [&](const auto& m) {
-        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
-          double derivative;
-          for (int ring = 1; ring <= 64; ++ring) {
-            (void)lens_finite_on_ring(lens, m.plane_radius(theta_max * (1 - 1e-9) * ring / 64, &derivative), 360);
-          }
-        }
-      },
-      p.model);
-  if (const std::string said = libmrcal.summary(); !said.empty()) {
-    fail("mrcal_lens: libmrcal cannot evaluate ", lens.lensmodel().substr(0, 80),
-         " everywhere in its domain (it said: ", quoted_for_message(said, 200), ")");
-  }
-}
-
-// Where the domain of a lens that libmrcal could not evaluate everywhere during the
-// scans ends: the largest theta at most theta_max (by steps up to 1 % inside) on whose
-// ring, and on a ring just past it (Newton's steps and CAHVORE's central differences
-// reach there), libmrcal evaluates at 1440 azimuths without a word. CAHVORE's own
-// iteration fails at and past its fold, which the fold scan finds to a few ulps.
-// None: libmrcal fails even 1 % inside (the camera is refused).
-std::optional<double> lens_evaluation_end(const CameraParameters& p, const MrcalLens& lens, double theta_max) {
-  std::optional<double> end;
-  std::visit(
-      [&](const auto& m) {
-        if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
-          for (double inside : {0.0, 1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2}) {
+// The radius of the model's undistorted plane at theta (the models a plane
+// distortion sits on have one: their base_models()).
+PlaneRadius plane_radius_of(const RadialModel& model) {
+  return [&model](double theta) {
+    return std::visit(
+        [&](const auto& m) {
+          if constexpr (HasUndistortedPlane<std::decay_t<decltype(m)>>) {
             double derivative;
-            const double theta = theta_max * (1 - inside);
-            const double u = m.plane_radius(theta, &derivative);
-            detail::StderrCapture libmrcal;
-            const bool evaluates =
-                lens_finite_on_ring(lens, u, 1440) && lens_finite_on_ring(lens, u * (1 + 1e-9) + 2e-5 * (1 + u), 1440);
-            if (evaluates && libmrcal.summary().empty()) {
-              end = theta;
-              return;
-            }
+            return m.plane_radius(theta, &derivative);
+          } else {
+            return std::numeric_limits<double>::quiet_NaN();
           }
-        }
-      },
-      p.model);
-  return end;
+        },
+        model);
+  };
 }
 
 }  // namespace
@@ -182,11 +139,7 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   if (params_.width <= 0 || params_.height <= 0 || params_.width > (1 << 16) || params_.height > (1 << 16)) {
     fail("width/height: must be in [1, 65536], got ", params_.width, "x", params_.height);
   }
-  if (!params_.principal_point.allFinite()) fail("principal_point: must be finite");
-  if (!params_.pixel_scale.allFinite() || !(params_.pixel_scale.minCoeff() > 0)) {
-    fail("pixel_scale: a_x and a_y must be finite and > 0, got ", params_.pixel_scale.x(), ", ",
-         params_.pixel_scale.y());
-  }
+  if (const std::string problem = params_.grid.invalid(); !problem.empty()) fail(problem);
   for (double p : model_params(params_.model)) {
     if (!std::isfinite(p)) fail(model_name(params_.model), ": parameters must be finite");
   }
@@ -203,27 +156,26 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
   }
   if (params_.calibration) check_calibration_record(*params_.calibration, model_params(params_.model).size());
   domain_ = std::visit([&](const auto& m) { return compute_domain(m, params_.theta_limit); }, params_.model);
-  const PixelSkew& skew = params_.skew;
-  if (!std::isfinite(skew.xy) || !std::isfinite(skew.yx)) fail("skew: xy and yx must be finite");
-  if (!(1 - skew.xy * skew.yx > 0)) {
-    fail("skew: the pixel grid must keep its orientation (1 - xy yx > 0), got xy ", skew.xy, ", yx ", skew.yx);
-  }
   if (displaces(params_.distortion)) {
-    // libmrcal says on standard error where its own projection fails (CAHVORE's
-    // iteration: "too many iterations"), never to the terminal from here: the scans
-    // meet such rays at and past the fold, so what it said is checked over the domain.
-    std::string libmrcal_said;
+    // A part evaluated by another library may say on standard error where its own
+    // evaluation fails (libmrcal's CAHVORE iteration: "too many iterations"), never to
+    // the terminal from here: the scans meet such rays at and past the fold, so the
+    // part is asked where it evaluates, and checked over the domain.
+    std::string said;
     {
-      detail::StderrCapture libmrcal;
+      detail::StderrCapture capture;
       limit_to_plane_fold();
-      libmrcal_said = libmrcal.summary();
+      said = capture.summary();
     }
-    const MrcalLens* lens = params_.mrcal_lens();
-    if (!libmrcal_said.empty() && lens) {
-      const std::optional<double> end = lens_evaluation_end(params_, *lens, domain_.theta_max);
+    const PlaneRadius radius = plane_radius_of(params_.model);
+    const std::string part(distortion_name(params_.distortion));
+    const std::string what = std::visit([](const auto& d) { return d.description(); }, params_.distortion);
+    if (!said.empty()) {
+      const std::optional<double> end =
+          std::visit([&](const auto& d) { return d.evaluation_end(radius, domain_.theta_max); }, params_.distortion);
       if (!end) {
-        fail("mrcal_lens: libmrcal cannot evaluate ", lens->lensmodel().substr(0, 80),
-             " next to the end of its domain (it said: ", quoted_for_message(libmrcal_said, 200), ")");
+        fail(part, ": ", what.substr(0, 100),
+             " cannot be evaluated next to the end of its domain (it said: ", quoted_for_message(said, 200), ")");
       }
       if (*end < domain_.theta_max) {
         domain_.theta_max = *end;
@@ -232,11 +184,16 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
       }
     }
     {
-      detail::StderrCapture libmrcal;
+      detail::StderrCapture capture;
       bound_plane_reach();
-      if (libmrcal_said.empty()) libmrcal_said = libmrcal.summary();
+      if (said.empty()) said = capture.summary();
     }
-    if (!libmrcal_said.empty() && lens) check_lens_evaluates(params_, *lens, domain_.theta_max);
+    if (!said.empty()) {
+      const std::string problem = std::visit(
+          [&](const auto& d) { return d.evaluation_problem(radius, domain_.theta_max); }, params_.distortion);
+      if (!problem.empty())
+        fail(part, ": ", what.substr(0, 100), " cannot be evaluated everywhere in its domain (", problem, ")");
+    }
   }
   table_ = std::visit([&](const auto& m) { return InverseTable(m, domain_, table_tolerance_px); }, params_.model);
 }

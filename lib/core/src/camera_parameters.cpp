@@ -32,8 +32,7 @@ CameraParameters resized(const CameraParameters& camera, int width, int height) 
   const Eigen::Vector2d s(double(width) / camera.width, double(height) / camera.height);
   CameraParameters out = camera;
   out.width = width, out.height = height;
-  out.principal_point = (camera.principal_point.array() + 0.5) * s.array() - 0.5;
-  out.pixel_scale = camera.pixel_scale.cwiseProduct(s);
+  out.grid = camera.grid.resized(s);
   if (out.calibration && out.calibration->covariance.size() > 0) {
     // d cx' = s_x d cx, d cy' = s_y d cy, d a_y' = s_y d a_y; nothing else changes.
     Eigen::MatrixXd& c = out.calibration->covariance;
@@ -48,7 +47,7 @@ CameraParameters cropped(const CameraParameters& camera, int left, int top, int 
   if (width < 1 || height < 1) fail("cropped: width and height must be >= 1, got ", width, "x", height);
   CameraParameters out = camera;
   out.width = width, out.height = height;
-  out.principal_point -= Eigen::Vector2d(left, top);
+  out.grid = camera.grid.cropped(left, top);
   return out;
 }
 

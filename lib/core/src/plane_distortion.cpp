@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <optional>
 
 #include "fishcam/core/error.hpp"
 #include "fishcam/core/model_registry.hpp"
+#include "fishcam/core/stderr_capture.hpp"
 
 namespace fishcam {
 
@@ -71,6 +73,48 @@ std::vector<std::string> MrcalLensDistortion::parameter_names() const {
   std::vector<std::string> names;
   for (size_t i = 0; i < values().size(); ++i) names.push_back("values[" + std::to_string(i) + "]");
   return names;
+}
+
+namespace {
+
+// Evaluates the lens at `azimuths` points of the ring of plane radius u (under the
+// caller's capture of what libmrcal says); false when one of them has no offset.
+bool lens_finite_on_ring(const MrcalLens& lens, double u, int azimuths) {
+  bool finite = true;
+  for (int k = 0; k < azimuths; ++k) {
+    const double phi = 2 * std::numbers::pi * k / azimuths;
+    finite = lens.offset(u * Eigen::Vector2d(std::cos(phi), std::sin(phi))).allFinite() && finite;
+  }
+  return finite;
+}
+
+}  // namespace
+
+// The largest theta at most theta_max (by steps up to 1 % inside) on whose ring, and
+// on a ring just past it (Newton's steps and CAHVORE's central differences reach
+// there), libmrcal evaluates at 1440 azimuths without a word. CAHVORE's own iteration
+// fails at and past its fold, which the fold scan finds to a few ulps.
+std::optional<double> MrcalLensDistortion::evaluation_end(const PlaneRadius& radius, double theta_max) const {
+  for (double inside : {0.0, 1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2}) {
+    const double theta = theta_max * (1 - inside);
+    const double u = radius(theta);
+    detail::StderrCapture libmrcal;
+    const bool evaluates =
+        lens_finite_on_ring(*lens, u, 1440) && lens_finite_on_ring(*lens, u * (1 + 1e-9) + 2e-5 * (1 + u), 1440);
+    if (evaluates && libmrcal.summary().empty()) return theta;
+  }
+  return std::nullopt;
+}
+
+// The domain's rays, 64 rings by 360 azimuths up to theta_max: libmrcal must evaluate
+// each without a complaint on standard error (a projection whose own iteration failed
+// cannot be right).
+std::string MrcalLensDistortion::evaluation_problem(const PlaneRadius& radius, double theta_max) const {
+  detail::StderrCapture libmrcal;
+  for (int ring = 1; ring <= 64; ++ring)
+    (void)lens_finite_on_ring(*lens, radius(theta_max * (1 - 1e-9) * ring / 64), 360);
+  const std::string said = libmrcal.summary();
+  return said.empty() ? "" : "it said: " + quoted_for_message(said, 200);
 }
 
 std::vector<std::string> MrcalLensDistortion::base_models() const {

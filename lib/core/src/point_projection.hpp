@@ -290,8 +290,9 @@ template <bool kWithJacobian, class Model, class Part>
 bool project_point(const Model& model, const Part& part, const CameraParameters& params, const double* mapping,
                    const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
                    Eigen::Matrix<double, 2, 3>* jacobian) {
-  if (!params.skew.any()) return project_unskewed<kWithJacobian>(model, part, mapping, domain, point, pixel, jacobian);
-  // q with c = 0, a = 1, then pixel = c + a (.) (S q).
+  if (!params.grid.skew.any())
+    return project_unskewed<kWithJacobian>(model, part, mapping, domain, point, pixel, jacobian);
+  // q with c = 0, a = 1, then the grid's pixel c + a (.) (S q).
   const double unit[4] = {0, 0, 1, 1};
   Eigen::Vector2d q;
   Eigen::Matrix<double, 2, 3> dq;
@@ -300,9 +301,9 @@ bool project_point(const Model& model, const Part& part, const CameraParameters&
     if constexpr (kWithJacobian) jacobian->setConstant(kNaN);
     return false;
   }
-  const Eigen::Matrix2d as = Eigen::Vector2d(mapping[2], mapping[3]).asDiagonal() * params.skew.matrix();
-  *pixel = Eigen::Vector2d(mapping[0], mapping[1]) + as * q;
-  if constexpr (kWithJacobian) *jacobian = as * dq;
+  Eigen::Matrix2d dpixel;
+  *pixel = params.grid.pixel(q, &dpixel);
+  if constexpr (kWithJacobian) *jacobian = dpixel * dq;
   return true;
 }
 
@@ -312,15 +313,14 @@ template <class Model, class Part>
 bool ray_of_point(const Model& model, const Part& part, const CameraParameters& params, const ValidDomain& domain,
                   const InverseTable& table, double x, double y, InversePath path, double* ray,
                   Eigen::Vector2d* start = nullptr) {
-  if (params.skew.any()) {
-    const double xy = params.skew.xy, yx = params.skew.yx, det = 1 - xy * yx;
-    const double qx = (x - xy * y) / det, qy = (y - yx * x) / det;
-    x = qx, y = qy;
+  if (params.grid.skew.any()) {
+    const Eigen::Vector2d q = params.grid.unskewed({x, y});
+    x = q.x(), y = q.y();
   }
   if constexpr (std::is_same_v<Part, NoPlaneDistortion>) {
     return ray_of(model, domain, table, x, y, path, ray);
   } else {
-    return distorted_ray_of(model, domain, table, part, params.pixel_scale, x, y, ray, start);
+    return distorted_ray_of(model, domain, table, part, params.grid.pixel_scale, x, y, ray, start);
   }
 }
 

@@ -137,9 +137,9 @@ TEST(Inverse, BoundariesAndInvalidRadii) {
       EXPECT_TRUE(std::isnan(camera.theta_from_rho_table(bad))) << bad;
     }
     Eigen::Vector3d ray;
-    ASSERT_TRUE(camera.unproject(params.principal_point, &ray));
+    ASSERT_TRUE(camera.unproject(params.grid.principal_point, &ray));
     EXPECT_EQ(ray, Eigen::Vector3d(0, 0, 1));
-    ASSERT_TRUE(camera.unproject(params.principal_point + Eigen::Vector2d(d.rho_max, 0), &ray));
+    ASSERT_TRUE(camera.unproject(params.grid.principal_point + Eigen::Vector2d(d.rho_max, 0), &ray));
     EXPECT_NEAR(std::acos(ray.z()), d.theta_max, 1e-7);
   }
 }

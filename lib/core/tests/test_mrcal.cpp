@@ -101,8 +101,8 @@ TEST(Mrcal, PinholeAgreesWithLibmrcal) {
 // mrcal_cam0.opencv8.cameramodel's k1..k6 (../shared/data/external) with its tangential terms zero.
 CameraParameters opencv8_camera() {
   CameraParameters p;
-  p.width = 3840, p.height = 2160, p.principal_point = {1965.706996, 1087.518797};
-  p.pixel_scale = {1.0, 1761.250444 / 1761.181055};
+  p.width = 3840, p.height = 2160, p.grid.principal_point = {1965.706996, 1087.518797};
+  p.grid.pixel_scale = {1.0, 1761.250444 / 1761.181055};
   p.model = OpenCV<double>(1761.181055, -0.01266096516, 0.03590794372, 0.01968883397, 0.01482863541, -0.0562239888,
                            0.0500223357);
   return p;
@@ -277,7 +277,7 @@ TEST(Mrcal, ConvertingASplinedCameraReportsWhatLibmrcalAndThePolynomialFind) {
                                     source.principal_point().x(), source.principal_point().y()};
   intrinsics.insert(intrinsics.end(), spline.values().begin(), spline.values().end());
   const auto k = model_params(conversion.camera.model);
-  const Eigen::Vector2d c = conversion.camera.principal_point, a = conversion.camera.pixel_scale;
+  const Eigen::Vector2d c = conversion.camera.grid.principal_point, a = conversion.camera.grid.pixel_scale;
   double sum2 = 0, worst = 0;
   for (const auto& s : samples) {
     const mrcal_point3_t p = {{s.ray.x(), s.ray.y(), s.ray.z()}};
@@ -338,9 +338,9 @@ TEST(Mrcal, LibmrcalReadsOurCameramodelFiles) {
     mrcal_cameramodel_t* model = mrcal_read_cameramodel_string(text.c_str(), int(text.size()));
     ASSERT_NE(model, nullptr) << text;
     const double f = model_params(p.model)[0];
-    EXPECT_EQ(model->intrinsics[0], f * p.pixel_scale.x());
-    EXPECT_EQ(model->intrinsics[1], f * p.pixel_scale.y());
-    EXPECT_EQ(model->intrinsics[2], p.principal_point.x());
+    EXPECT_EQ(model->intrinsics[0], f * p.grid.pixel_scale.x());
+    EXPECT_EQ(model->intrinsics[1], f * p.grid.pixel_scale.y());
+    EXPECT_EQ(model->intrinsics[2], p.grid.principal_point.x());
     EXPECT_EQ(model->imagersize[0], unsigned(p.width));
     if (const auto* m = std::get_if<OpenCV<double>>(&p.model)) {
       EXPECT_EQ(model->lensmodel.type, MRCAL_LENSMODEL_OPENCV8);

@@ -13,10 +13,10 @@ TEST(OpenCVFisheye, ProjectionAgreesWithProjectPoints) {
   const auto params = model_params(p.model);
   // Make fx != fy to exercise the a_y mapping.
   CameraParameters q = p;
-  q.pixel_scale = {1.0, 1.0125};
+  q.grid.pixel_scale = {1.0, 1.0125};
   const Camera stretched(q);
   const double fx = params[0], fy = params[0] * 1.0125;
-  const cv::Matx33d K(fx, 0, p.principal_point.x(), 0, fy, p.principal_point.y(), 0, 0, 1);
+  const cv::Matx33d K(fx, 0, p.grid.principal_point.x(), 0, fy, p.grid.principal_point.y(), 0, 0, 1);
   const cv::Vec4d D(params[1], params[2], params[3], params[4]);
   const auto rays = test::random_rays(20000, 89.5 * M_PI / 180, 4);
   std::vector<cv::Vec3d> points;
@@ -41,7 +41,7 @@ TEST(OpenCVFisheye, UnprojectionAgreesWithUndistortPointsWhereOpenCVConverges) {
   const Camera camera = read_camera(test::data_path("kannala_brandt.yaml"));
   const auto& p = camera.parameters();
   const auto params = model_params(p.model);
-  const cv::Matx33d K(params[0], 0, p.principal_point.x(), 0, params[0], p.principal_point.y(), 0, 0, 1);
+  const cv::Matx33d K(params[0], 0, p.grid.principal_point.x(), 0, params[0], p.grid.principal_point.y(), 0, 0, 1);
   const cv::Vec4d D(params[1], params[2], params[3], params[4]);
   std::vector<cv::Vec2d> pixels, normalized;
   for (const auto& ray : test::random_rays(2000, 60 * M_PI / 180, 8)) {
@@ -75,11 +75,12 @@ TEST(OpenCVRational, ProjectionAgreesWithProjectPoints) {
   int checked = 0;
   for (const Case& c : cases) {
     CameraParameters p;
-    p.width = 3840, p.height = 2160, p.principal_point = {1965.7, 1087.5}, p.pixel_scale = {1.0, 1.00004};
+    p.width = 3840, p.height = 2160, p.grid.principal_point = {1965.7, 1087.5}, p.grid.pixel_scale = {1.0, 1.00004};
     p.model = c.model;
     const Camera camera(p);
     const auto q = c.model.params();
-    const cv::Matx33d K(q[0], 0, p.principal_point.x(), 0, q[0] * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1);
+    const cv::Matx33d K(q[0], 0, p.grid.principal_point.x(), 0, q[0] * p.grid.pixel_scale.y(),
+                        p.grid.principal_point.y(), 0, 0, 1);
     const std::vector<double> D = {q[1], q[2], 0, 0, q[3], q[4], q[5], q[6]};
     // Up to just inside the valid domain (a pole or a fold of rho ends it).
     const auto rays = test::random_rays(20000, std::min(camera.domain().theta_max, 89.0 * M_PI / 180) * 0.999, 5);

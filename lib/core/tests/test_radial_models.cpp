@@ -71,7 +71,8 @@ TEST(RadialModels, CeresJetInstantiationMatchesAnalyticJacobian) {
   const Camera camera(params);
   const auto k = std::get<Polynomial<double>>(params.model).params();
   const Polynomial<Jet> model({Jet(k[0]), Jet(k[1]), Jet(k[2]), Jet(k[3])});
-  const Jet mapping[4] = {Jet(params.principal_point.x()), Jet(params.principal_point.y()), Jet(1.0), Jet(1.0)};
+  const Jet mapping[4] = {Jet(params.grid.principal_point.x()), Jet(params.grid.principal_point.y()), Jet(1.0),
+                          Jet(1.0)};
   for (const Eigen::Vector3d& ray : test::random_rays(500, 3.0, 5)) {
     const Eigen::Vector3d p = 1.7 * ray;
     const Jet point[3] = {Jet(p.x(), 0), Jet(p.y(), 1), Jet(p.z(), 2)};

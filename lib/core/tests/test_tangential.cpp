@@ -16,8 +16,8 @@ namespace {
 // OpenCV's projection of points through the camera (fx = f a_x, fy = f a_y).
 std::vector<Eigen::Vector2d> opencv_projection(const CameraParameters& p, const std::vector<Eigen::Vector3d>& points) {
   const std::vector<double> q = model_params(p.model);
-  const cv::Matx33d K(q[0] * p.pixel_scale.x(), 0, p.principal_point.x(), 0, q[0] * p.pixel_scale.y(),
-                      p.principal_point.y(), 0, 0, 1);
+  const cv::Matx33d K(q[0] * p.grid.pixel_scale.x(), 0, p.grid.principal_point.x(), 0, q[0] * p.grid.pixel_scale.y(),
+                      p.grid.principal_point.y(), 0, 0, 1);
   std::vector<cv::Point3d> in;
   for (const auto& x : points) in.emplace_back(x.x(), x.y(), x.z());
   std::vector<cv::Point2d> out;
@@ -192,13 +192,13 @@ TEST(Tangential, SkewedGridsProjectThroughTheSkewAndUnprojectBack) {
   int cameras = 0;
   for (auto [name, params] : test::every_camera()) {
     CameraParameters unit = params;
-    unit.principal_point.setZero(), unit.pixel_scale.setOnes(), unit.skew = {};
-    params.skew = skew;
+    unit.grid.principal_point.setZero(), unit.grid.pixel_scale.setOnes(), unit.grid.skew = {};
+    params.grid.skew = skew;
     const Camera camera(params), plain(unit);
     ASSERT_FALSE(camera.radial()) << name;
     const ValidDomain& d = camera.domain();
     const double limit = std::min(d.closed ? d.theta_max : d.theta_max - 1e-3, 100 * M_PI / 180);
-    const Eigen::Matrix2d as = params.pixel_scale.asDiagonal() * skew.matrix();
+    const Eigen::Matrix2d as = params.grid.pixel_scale.asDiagonal() * skew.matrix();
     double worst = 0, worst_jacobian = 0, worst_back = 0;
     int n = 0;
     for (const auto& ray : test::random_rays(2000, limit, 11)) {
@@ -208,7 +208,7 @@ TEST(Tangential, SkewedGridsProjectThroughTheSkewAndUnprojectBack) {
       ASSERT_TRUE(camera.project(p, &pixel, &jacobian)) << name;
       ASSERT_TRUE(plain.project(p, &q)) << name;
       const double scale = 1 + 1e-3 * q.norm();
-      worst = std::max(worst, (pixel - (params.principal_point + as * q)).norm() / scale);
+      worst = std::max(worst, (pixel - (params.grid.principal_point + as * q)).norm() / scale);
       Eigen::Vector3d back;
       ASSERT_TRUE(camera.unproject(pixel, &back)) << name;
       Eigen::Vector2d again;
@@ -238,7 +238,7 @@ TEST(Tangential, SkewedGridsProjectThroughTheSkewAndUnprojectBack) {
 TEST(Tangential, SkewsThatCannotBeAGridAreRefused) {
   CameraParameters p = test::every_model()[0].second;
   for (const PixelSkew& bad : {PixelSkew{1, 1}, PixelSkew{2, 0.5}, PixelSkew{NAN, 0}, PixelSkew{0, INFINITY}}) {
-    p.skew = bad;
+    p.grid.skew = bad;
     try {
       Camera camera(p);
       ADD_FAILURE() << "accepted " << bad.xy << " " << bad.yx;
@@ -246,10 +246,10 @@ TEST(Tangential, SkewsThatCannotBeAGridAreRefused) {
       EXPECT_EQ(std::string(e.what()).rfind("skew: ", 0), 0u) << e.what();
     }
   }
-  p.skew = {0.5, 0.5};  // det 0.75: a valid (if odd) grid
+  p.grid.skew = {0.5, 0.5};  // det 0.75: a valid (if odd) grid
   EXPECT_NO_THROW(Camera{p});
   // Formats without a skew say so and name the ones with.
-  p.skew = {0.01, 0};
+  p.grid.skew = {0.01, 0};
   try {
     format_camera(p, CameraFormat::woodscape);
     ADD_FAILURE() << "woodscape wrote a skew";
@@ -371,10 +371,11 @@ TEST(Tangential, ConversionToARadialModelReportsWhatAnIndependentComparisonFinds
   const Conversion conversion = convert_camera(source, parse_model_spec("kannala-brandt"));
   EXPECT_TRUE(conversion.center_and_aspect_fitted);
   EXPECT_FALSE(displaces(conversion.camera.distortion));
-  EXPECT_NE(conversion.camera.principal_point, p.principal_point);
+  EXPECT_NE(conversion.camera.grid.principal_point, p.grid.principal_point);
   const auto k = model_params(conversion.camera.model);
-  const test::Intrinsics fitted{k[0] * conversion.camera.pixel_scale.x(), k[0] * conversion.camera.pixel_scale.y(),
-                                conversion.camera.principal_point.x(), conversion.camera.principal_point.y()};
+  const test::Intrinsics fitted{k[0] * conversion.camera.grid.pixel_scale.x(),
+                                k[0] * conversion.camera.grid.pixel_scale.y(),
+                                conversion.camera.grid.principal_point.x(), conversion.camera.grid.principal_point.y()};
   const auto samples = sample_image(source, 2, 0);  // the report's evaluation grid
   std::vector<Eigen::Vector3d> rays;
   for (const auto& s : samples) rays.push_back(s.ray);

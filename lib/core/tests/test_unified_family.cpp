@@ -44,7 +44,7 @@ std::vector<Case> cases() {
 CameraParameters camera_of(const RadialModel& model) {
   CameraParameters p = test::woodscape_front();
   p.model = model;
-  p.pixel_scale = {1.0, 1.003};
+  p.grid.pixel_scale = {1.0, 1.003};
   return p;
 }
 

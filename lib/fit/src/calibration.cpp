@@ -33,7 +33,7 @@ double principal_point_offset(const Eigen::Vector2d& p, int width, int height) {
 // A solve whose result cannot be right is an error, not a camera.
 void check_solution(const CalibrationResult& r, int width, int height, const std::string& model) {
   const std::string what = "calibrate (" + model + "): ";
-  const auto& p = r.camera.principal_point;
+  const auto& p = r.camera.grid.principal_point;
   if (!std::isfinite(r.rms_px) ||
       !std::all_of(r.parameters.begin(), r.parameters.end(), [](double v) { return std::isfinite(v); })) {
     throw Error(what +
@@ -54,7 +54,7 @@ void check_solution(const CalibrationResult& r, int width, int height, const std
                   p.x(), p.y(), 100 * off, width, height, 100 * kPrincipalPointRefused);
     throw Error(what + text + ": check --imagersize (the size the corners were detected in)");
   }
-  const double ay = r.camera.pixel_scale.y();
+  const double ay = r.camera.grid.pixel_scale.y();
   if (!(ay >= 0.5 && ay <= 2.0)) {
     std::snprintf(text, sizeof text, "the pixel aspect a_y = %.3g is outside [0.5, 2]", ay);
     throw Error(what + text + " (check --imagersize and --board; the data do not determine this model)");
@@ -369,7 +369,8 @@ struct Observations {
   }
   CameraParameters camera(const Solve& s, const RadialModel& model) const {
     CameraParameters p;
-    p.width = width, p.height = height, p.principal_point = s.center, p.pixel_scale = {1.0, s.ay}, p.model = model;
+    p.width = width, p.height = height, p.grid.principal_point = s.center, p.grid.pixel_scale = {1.0, s.ay},
+    p.model = model;
     return p;
   }
 };
@@ -618,7 +619,7 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
   });
   check_solution(result, width, height, spec.name);
   check_distinct_poses(result);
-  if (const double off = detail::principal_point_offset(result.camera.principal_point, width, height);
+  if (const double off = detail::principal_point_offset(result.camera.grid.principal_point, width, height);
       off > detail::kPrincipalPointWarned) {
     char text[200];
     std::snprintf(text, sizeof text,

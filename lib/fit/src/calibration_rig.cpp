@@ -267,8 +267,8 @@ Camera joint_camera(const JointParameters& p, const std::vector<RigCamera>& came
   CameraParameters c;
   c.width = cameras[k].width, c.height = cameras[k].height;
   c.model = make_model(cameras[k].model.name, p.intrinsics[k].model);
-  c.principal_point = p.intrinsics[k].center;
-  c.pixel_scale = {1.0, p.intrinsics[k].ay};
+  c.grid.principal_point = p.intrinsics[k].center;
+  c.grid.pixel_scale = {1.0, p.intrinsics[k].ay};
   return Camera(c);
 }
 
@@ -433,7 +433,7 @@ JointParameters joint_start(const std::vector<CalibrationResult>& singles, const
   JointParameters joint;
   for (size_t k = 0; k < singles.size(); ++k) {
     const auto& p = singles[k].camera;
-    joint.intrinsics.push_back(Solve{model_params(p.model), p.principal_point, p.pixel_scale.y(), {}});
+    joint.intrinsics.push_back(Solve{model_params(p.model), p.grid.principal_point, p.grid.pixel_scale.y(), {}});
     joint.cameras.push_back(pose_block(from_rig[k]));
   }
   joint.boards.resize(v.instant_index.size());
@@ -526,8 +526,8 @@ CalibrationResult joint_report(size_t k, const CalibrationResult& single, const 
   const Pose rig_to_camera = pose_of(joint.cameras[k]);
   CameraParameters p = r.camera;
   p.model = make_model(rig_camera.model.name, s.model);
-  p.principal_point = s.center;
-  p.pixel_scale = {1.0, s.ay};
+  p.grid.principal_point = s.center;
+  p.grid.pixel_scale = {1.0, s.ay};
   p.pose = inverse(rig_to_camera);  // camera -> camera 0
   const Camera camera(p);
   r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();

@@ -27,7 +27,7 @@ void drop_covariance(CameraParameters* p) {
 // A fitted radial model replaces the whole projection: the plane distortion and the skew go.
 void drop_non_radial(CameraParameters* p) {
   p->distortion = NoPlaneDistortion{};
-  p->skew = {};
+  p->grid.skew = {};
 }
 
 constexpr double kDeg = 180 / std::numbers::pi;
@@ -89,7 +89,7 @@ double refine(std::span<const Correspondence> samples, int params, double ax, st
 template <template <typename> class Model>
 std::vector<double> linear_fit(std::span<const Correspondence> samples, int k, const CameraParameters& start,
                                std::string_view name) {
-  const Eigen::Vector2d c = start.principal_point, a = start.pixel_scale;
+  const Eigen::Vector2d c = start.grid.principal_point, a = start.grid.pixel_scale;
   Eigen::MatrixXd design(samples.size(), k);
   Eigen::VectorXd target(samples.size());
   std::vector<double> g(k);
@@ -118,7 +118,7 @@ template <template <typename> class Model>
 std::vector<double> fit_params(std::span<const Correspondence> samples, const ModelSpec& spec,
                                const CameraParameters& start, const FitOptions& options, Eigen::Vector2d* center,
                                double* ay) {
-  const double ax = start.pixel_scale.x();
+  const double ax = start.grid.pixel_scale.x();
   if constexpr (LinearInParams<Model<double>>) {
     const int k = Model<double>::kParamNames.empty() ? spec.order : int(Model<double>::kParamNames.size());
     std::vector<double> params = linear_fit<Model>(samples, k, start, spec.name);
@@ -217,14 +217,14 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
       }
     }
   });
-  Eigen::Vector2d center = start.principal_point;
-  double ay = start.pixel_scale.y();
+  Eigen::Vector2d center = start.grid.principal_point;
+  double ay = start.grid.pixel_scale.y();
   std::vector<double> params = with_model_class(spec.name, [&]<template <typename> class Model>() {
     return fit_params<Model>(samples, spec, start, options, &center, &ay);
   });
   CameraParameters fitted = start;
-  fitted.principal_point = center;
-  fitted.pixel_scale.y() = ay;
+  fitted.grid.principal_point = center;
+  fitted.grid.pixel_scale.y() = ay;
   fitted.model = make_model(spec.name, params);
   drop_non_radial(&fitted);  // the fit is radial: what it cannot represent is its residual
   fitted.theta_limit.reset();
@@ -404,7 +404,7 @@ Conversion::NonRadial non_radial_floor(std::span<const Correspondence> samples, 
     const double chi = s.ray.head<2>().norm();
     if (!(chi > 0)) continue;
     const Eigen::Vector2d e = s.ray.head<2>() / chi;
-    const Eigen::Vector2d q = (s.pixel - fitted.principal_point).cwiseQuotient(fitted.pixel_scale);
+    const Eigen::Vector2d q = (s.pixel - fitted.grid.principal_point).cwiseQuotient(fitted.grid.pixel_scale);
     const double theta = std::atan2(chi, s.ray.z());
     kept.push_back({int(theta / kBand), theta, q.dot(e), e.x() * q.y() - e.y() * q.x(), e});
   }
@@ -422,7 +422,7 @@ Conversion::NonRadial non_radial_floor(std::span<const Correspondence> samples, 
     const double rho = (b[3] - slope * b[1]) / n + slope * s.theta;
     const Eigen::Vector2d normal(-s.direction.y(), s.direction.x());
     const Eigen::Vector2d error = (s.along - rho) * s.direction + s.across * normal;
-    const double d = error.cwiseProduct(fitted.pixel_scale).norm();
+    const double d = error.cwiseProduct(fitted.grid.pixel_scale).norm();
     sum2 += d * d;
     out.max_px = std::max(out.max_px, d);
     ++out.samples;
@@ -498,8 +498,8 @@ std::string fit_report_json(const CameraParameters& fitted, const ErrorReport& r
       {"by_angle", bins},
       {"model", model_name(fitted.model)},
       {"parameters", model_params(fitted.model)},
-      {"principal_point", {fitted.principal_point.x(), fitted.principal_point.y()}},
-      {"pixel_scale", {fitted.pixel_scale.x(), fitted.pixel_scale.y()}}}
+      {"principal_point", {fitted.grid.principal_point.x(), fitted.grid.principal_point.y()}},
+      {"pixel_scale", {fitted.grid.pixel_scale.x(), fitted.grid.pixel_scale.y()}}}
       .dump();
 }
 

@@ -23,7 +23,7 @@ ModelSpec spec_of(const RadialModel& m) {
 
 std::vector<double> truth_vector(const CameraParameters& p) {
   auto v = model_params(p.model);
-  v.insert(v.end(), {p.principal_point.x(), p.principal_point.y(), p.pixel_scale.y()});
+  v.insert(v.end(), {p.grid.principal_point.x(), p.grid.principal_point.y(), p.grid.pixel_scale.y()});
   return v;
 }
 
@@ -126,7 +126,7 @@ TEST(Calibration, DegenerateDataIsReported) {
   // Boards only near the centre: it solves, and says the rim is extrapolated.
   CameraParameters narrow = camera.parameters();
   narrow.width = 400, narrow.height = 300;
-  narrow.principal_point = {199.5, 149.5};
+  narrow.grid.principal_point = {199.5, 149.5};
   auto centre = testing::synthesize_boards(Camera(narrow), kBoard, 10, 0.0, 7).observations;
   for (auto& o : centre) {
     for (auto& c : o.corners) c += Eigen::Vector2d(640 - 199.5 + 3.942, 480 - 149.5 - 3.093);
@@ -342,7 +342,7 @@ TEST(Calibration, ProjectionDiffFitsTheRotationBetweenFrames) {
   // The same lens with its principal point moved: without a rotation, pixels
   // differ by the shift; with one, much of the shift is absorbed near the centre.
   CameraParameters moved = a.parameters();
-  moved.principal_point += Eigen::Vector2d(1.0, 0);
+  moved.grid.principal_point += Eigen::Vector2d(1.0, 0);
   const Camera b(moved);
   const ProjectionDiff plain = projection_diff(a, b, 8, false), rotated = projection_diff(a, b, 8, true);
   EXPECT_NEAR(plain.rms_px, 1.0, 1e-9);

@@ -136,7 +136,7 @@ TEST(ProjectionUncertainty, NeedsACovarianceAndIsNaNWithoutARay) {
 // the boards (independent calibrations) differ by no more than a few sigmas.
 TEST(Calibration, ParametersTheDataDoNotDetermineHaveNoSigma) {
   CameraParameters p;
-  p.width = 960, p.height = 600, p.principal_point = {478, 298};
+  p.width = 960, p.height = 600, p.grid.principal_point = {478, 298};
   p.model = make_model("double-sphere", std::vector<double>{230, 0.0, 0.6});
   const BoardSpec board{9, 6, 0.1};
   const auto boards = testing::synthesize_boards(Camera(p), board, 30, 0.2, 3).observations;
@@ -166,7 +166,7 @@ TEST(Calibration, ParametersTheDataDoNotDetermineHaveNoSigma) {
   std::printf("  double-sphere at xi = 0: the solve ended at xi = %.3g; %d of f, xi, alpha undetermined\n",
               r.parameters[1], undetermined);
   // A well-determined model reports every sigma, and nothing undetermined.
-  p.width = 1280, p.height = 966, p.principal_point = {643, 479};
+  p.width = 1280, p.height = 966, p.grid.principal_point = {643, 479};
   p.model = make_model("double-sphere", std::vector<double>{330, 0.3, 0.6});
   const auto determined = calibrate(testing::synthesize_boards(Camera(p), kBoard, 20, 0.2, 3).observations, kBoard,
                                     p.width, p.height, {"double-sphere"});

@@ -197,7 +197,7 @@ TEST(Rig, TheRecordsCovarianceIsTheJointSolves) {
   }
   const Camera right(r.cameras[1].camera);
   const Eigen::Vector2d centre = right.principal_point();
-  const double focal = right.parameters().pixel_scale.x() * model_params(right.parameters().model)[0];
+  const double focal = right.parameters().grid.pixel_scale.x() * model_params(right.parameters().model)[0];
   const double at_infinity = projection_uncertainty(right, centre, std::nullopt);
   EXPECT_GE(at_infinity, focal * r.rotation_sigma_rad[1]);
 }

@@ -17,8 +17,8 @@ TEST_P(EveryModelCornerCost, JacobiansMatchAutomaticDifferentiation) {
   const CameraParameters& p = GetParam().second;
   const Camera camera(p);
   std::vector<double> model = model_params(p.model);
-  Eigen::Vector2d center = p.principal_point;
-  double ay = p.pixel_scale.y();
+  Eigen::Vector2d center = p.grid.principal_point;
+  double ay = p.grid.pixel_scale.y();
   const int n = int(model.size());
   // Camera-frame points: random rays up to 100 deg (or the model's limit), and rays
   // near and on the axis (where the closed form hands over to automatic derivatives).

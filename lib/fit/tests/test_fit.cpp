@@ -37,11 +37,11 @@ TEST_P(EveryModel, NoiseFreeDataRecoversTheModelExactly) {
   for (size_t i = 0; i < got.size(); ++i) {
     EXPECT_NEAR(got[i], expected[i], 1e-6 * std::abs(expected[i]) + 1e-9) << "parameter " << i;
   }
-  start.principal_point += Eigen::Vector2d(2.5, -1.5);
-  start.pixel_scale.y() *= 1.01;
+  start.grid.principal_point += Eigen::Vector2d(2.5, -1.5);
+  start.grid.pixel_scale.y() *= 1.01;
   const CameraParameters freed = fit_camera(samples, spec_of(truth.model), start, {true, true});
-  EXPECT_LT((freed.principal_point - truth.principal_point).norm(), 1e-6);
-  EXPECT_NEAR(freed.pixel_scale.y(), truth.pixel_scale.y(), 1e-9);
+  EXPECT_LT((freed.grid.principal_point - truth.grid.principal_point).norm(), 1e-6);
+  EXPECT_NEAR(freed.grid.pixel_scale.y(), truth.grid.pixel_scale.y(), 1e-9);
   const auto refit = model_params(freed.model);
   for (size_t i = 0; i < refit.size(); ++i) {
     EXPECT_NEAR(refit[i], expected[i], 1e-6 * std::abs(expected[i]) + 1e-8) << "parameter " << i;
@@ -123,8 +123,8 @@ TEST(Fit, WoodScapeFishcamWoodScapeRoundTripIsExact) {
   write_camera(read_camera(dir / "cam.json").parameters(), dir / "woodscape.json", CameraFormat::woodscape);
   const CameraParameters back = read_camera(dir / "woodscape.json").parameters();
   EXPECT_EQ(model_params(back.model), model_params(original.model));
-  EXPECT_EQ(back.principal_point, original.principal_point);  // bit for bit
-  EXPECT_EQ(back.pixel_scale, original.pixel_scale);
+  EXPECT_EQ(back.grid.principal_point, original.grid.principal_point);  // bit for bit
+  EXPECT_EQ(back.grid.pixel_scale, original.grid.pixel_scale);
   EXPECT_EQ(back.width, original.width);
   EXPECT_EQ(back.pose->translation, original.pose->translation);
   EXPECT_EQ(back.pose->rotation.coeffs(), original.pose->rotation.coeffs());

@@ -43,25 +43,25 @@ constexpr double kPixelScaleRange = 1e6;  // a_x, a_y within [1e-6, 1e6]
 std::string magnitude_problem(const Camera& camera) {
   const CameraParameters& p = camera.parameters();
   const auto pixels = [](double v) { return std::abs(v) <= kMaxPixels; };
-  if (!pixels(p.principal_point.x()) || !pixels(p.principal_point.y())) {
+  if (!pixels(p.grid.principal_point.x()) || !pixels(p.grid.principal_point.y())) {
     return "principal_point: expected within +-" + number_for_message(kMaxPixels) + " px, got (" +
-           number_for_message(p.principal_point.x()) + ", " + number_for_message(p.principal_point.y()) + ")";
+           number_for_message(p.grid.principal_point.x()) + ", " + number_for_message(p.grid.principal_point.y()) + ")";
   }
-  for (double a : {p.pixel_scale.x(), p.pixel_scale.y()}) {
+  for (double a : {p.grid.pixel_scale.x(), p.grid.pixel_scale.y()}) {
     if (!(a >= 1 / kPixelScaleRange && a <= kPixelScaleRange)) {
       return "pixel_scale: expected within [" + number_for_message(1 / kPixelScaleRange) + ", " +
              number_for_message(kPixelScaleRange) + "], got " + number_for_message(a);
     }
   }
-  const double focal = camera.drho(0) * std::max(p.pixel_scale.x(), p.pixel_scale.y());
+  const double focal = camera.drho(0) * std::max(p.grid.pixel_scale.x(), p.grid.pixel_scale.y());
   if (!(focal <= kMaxPixels)) {
     return "the focal length (rho'(0) a) must be at most " + number_for_message(kMaxPixels) + " px, got " +
            number_for_message(focal);
   }
   // An image of which no pixel has a ray (a principal point far off the image, a
   // domain that ends before the image begins) describes no camera.
-  const bool centred = p.principal_point.x() >= -0.5 && p.principal_point.y() >= -0.5 &&
-                       p.principal_point.x() <= p.width - 0.5 && p.principal_point.y() <= p.height - 0.5;
+  const bool centred = p.grid.principal_point.x() >= -0.5 && p.grid.principal_point.y() >= -0.5 &&
+                       p.grid.principal_point.x() <= p.width - 0.5 && p.grid.principal_point.y() <= p.height - 0.5;
   if (!centred) {
     constexpr int kSamples = 32;
     Eigen::Vector3d ray;
@@ -320,9 +320,9 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
       {"parameters", model_params(p.model)},
       {"width", p.width},
       {"height", p.height},
-      {"cx", p.principal_point.x()},
-      {"cy", p.principal_point.y()},
-      {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
+      {"cx", p.grid.principal_point.x()},
+      {"cy", p.grid.principal_point.y()},
+      {"pixel_scale", {p.grid.pixel_scale.x(), p.grid.pixel_scale.y()}},
       {"theta_max_deg", d.theta_max * kToDeg},
       {"theta_max_closed", d.closed},
       {"theta_max_limited_by", to_string(d.limited_by)},
@@ -347,7 +347,7 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
       j["tangential"][std::string(TangentialTerms::kNames[i])] = terms.values()[i];
     }
   }
-  j["skew"] = p.skew.any() ? json{{"xy", p.skew.xy}, {"yx", p.skew.yx}} : json(nullptr);
+  j["skew"] = p.grid.skew.any() ? json{{"xy", p.grid.skew.xy}, {"yx", p.grid.skew.yx}} : json(nullptr);
   if (p.pose) {
     const auto& q = p.pose->rotation;
     const auto& t = p.pose->translation;
@@ -381,7 +381,7 @@ std::string formats_that(const Predicate& holds) {
 // "" when the format holds the camera's non-radial parts, else why not.
 std::string cannot_hold_non_radial(const detail::FormatSpec& spec, const CameraParameters& camera) {
   if (std::string why = spec.cannot_hold_distortion(camera.distortion); !why.empty()) return why;
-  if (camera.skew.any() && !spec.holds.skew) {
+  if (camera.grid.skew.any() && !spec.holds.skew) {
     return "skew: the " + std::string(spec.name) + " format cannot hold a skewed pixel grid (" +
            formats_that([](const detail::FormatSpec& s) { return s.holds.skew; }) + " can)";
   }
@@ -419,7 +419,7 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
     }
     // A format may hold the skew in another unit (BoofCV: skew = xy fx): a few ulps.
     const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-13 * std::abs(b); };
-    if (!near(back.skew.xy, camera.skew.xy) || !near(back.skew.yx, camera.skew.yx)) {
+    if (!near(back.grid.skew.xy, camera.grid.skew.xy) || !near(back.grid.skew.yx, camera.grid.skew.yx)) {
       throw Error(": its skew does not read back");
     }
   } catch (const Error& e) {

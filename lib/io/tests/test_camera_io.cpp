@@ -16,8 +16,8 @@ void expect_same_camera(const CameraParameters& a, const CameraParameters& b, do
   const auto pa = model_params(a.model), pb = model_params(b.model);
   ASSERT_EQ(pa.size(), pb.size());
   for (size_t i = 0; i < pa.size(); ++i) EXPECT_NEAR(pa[i], pb[i], tolerance * std::abs(pa[i])) << i;
-  EXPECT_NEAR((a.principal_point - b.principal_point).norm(), 0.0, tolerance * 1000);
-  EXPECT_NEAR((a.pixel_scale - b.pixel_scale).norm(), 0.0, tolerance);
+  EXPECT_NEAR((a.grid.principal_point - b.grid.principal_point).norm(), 0.0, tolerance * 1000);
+  EXPECT_NEAR((a.grid.pixel_scale - b.grid.pixel_scale).norm(), 0.0, tolerance);
   ASSERT_EQ(a.pose.has_value(), b.pose.has_value());
   if (a.pose) {
     // Formats that store a Rodrigues vector (mrcal) convert through it: a few ulps.
@@ -58,7 +58,7 @@ TEST(CameraIo, PoseAndAspectSurviveEveryFormat) {
   CameraParameters p = test::woodscape_front();
   p.pose = Pose{Eigen::Quaterniond(Eigen::AngleAxisd(2.5, Eigen::Vector3d(-1, 2, 0.5).normalized())),
                 Eigen::Vector3d(3.7, -0.2, 0.66)};
-  p.pixel_scale = {1.01, 1.03};  // a_x != 1: formats with one focal length rescale the model
+  p.grid.pixel_scale = {1.01, 1.03};  // a_x != 1: formats with one focal length rescale the model
   const std::pair<RadialModel, CameraFormat> cases[] = {
       {Polynomial<double>({339.749, -31.988, 48.275, -7.201}), CameraFormat::woodscape},
       {Stereographic<double>(330), CameraFormat::mrcal},
@@ -142,7 +142,7 @@ TEST(CameraIo, MrcalPythonReadsWhatWeWriteAndWeReadWhatItWrites) {
   EXPECT_EQ(lensmodel, "LENSMODEL_STEREOGRAPHIC");
   EXPECT_EQ(fx, 330.0);
   EXPECT_EQ(fy, 331.5);
-  EXPECT_EQ(cx, p.principal_point.x());
+  EXPECT_EQ(cx, p.grid.principal_point.x());
   Eigen::Vector2d pixel;
   ASSERT_TRUE(Camera(p).project({0.3, -0.2, -0.4}, &pixel));  // behind the camera
   EXPECT_NEAR(pixel.x(), u, 1e-9);
@@ -284,14 +284,14 @@ TEST(CameraIo, OpenCvXmlReadsAndItsPrefixesNeverCrash) {
      << "fisheye"
      << "image_width" << p.width << "image_height" << p.height;
   fs << "K"
-     << cv::Mat(
-            cv::Matx33d(kb[0], 0, p.principal_point.x(), 0, kb[0] * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1));
+     << cv::Mat(cv::Matx33d(kb[0], 0, p.grid.principal_point.x(), 0, kb[0] * p.grid.pixel_scale.y(),
+                            p.grid.principal_point.y(), 0, 0, 1));
   fs << "D" << cv::Mat(cv::Matx41d(kb[1], kb[2], kb[3], kb[4]));
   const std::string xml = fs.releaseAndGetString();
   ASSERT_EQ(xml.rfind("<?xml", 0), 0u);
   const CameraParameters back = parse_camera(xml, "k.xml");
   EXPECT_EQ(model_params(back.model), kb);
-  EXPECT_EQ(back.principal_point, p.principal_point);
+  EXPECT_EQ(back.grid.principal_point, p.grid.principal_point);
   long errors = 0;
   for (size_t cut = 0; cut < xml.size(); ++cut) {
     for (const std::string& variant : {xml.substr(0, cut), xml.substr(0, cut) + "<" + xml.substr(cut + 1)}) {
@@ -324,7 +324,7 @@ namespace {
 TEST(CameraIo, WritersRefuseWhatTheReadersWouldRefuse) {
   CameraParameters p = test::woodscape_front();
   p.model = Equidistant<double>(1e300);
-  p.pixel_scale = {1e10, 1e10};
+  p.grid.pixel_scale = {1e10, 1e10};
   ASSERT_NO_THROW(Camera{p});
   // Readers refuse magnitudes no camera has (a pixel scale past 1e6), so every
   // writer refuses to write them, fishcam JSON too.

@@ -492,10 +492,10 @@ TEST(Formats, OCamCalibFileIsCam2worldAndWorld2cam) {
 TEST(Formats, OCamCalibFilesThatCannotBeRightAreRefused) {
   CameraParameters p = test::every_model()[0].second;
   p.model = OCam<double>({-340.0, 0, 1 / 1020.0, 0, 0});
-  p.skew = {0.01, -0.02};
+  p.grid.skew = {0.01, -0.02};
   const std::string good = format_camera(p, CameraFormat::ocamcalib);
   const Camera camera(parse_camera(good, "good.txt"));
-  EXPECT_EQ(camera.skew(), p.skew);
+  EXPECT_EQ(camera.skew(), p.grid.skew);
   const auto replaced = [&](const std::string& from, const std::string& to) {
     std::string text = good;
     const size_t at = text.find(from);
@@ -628,7 +628,7 @@ TEST_P(EveryFormat, RoundTripsTheModelsOfItsListAndRefusesTheOthers) {
       EXPECT_LT(back.parameters().pose->rotation.angularDistance(p.pose->rotation), 1e-12);
       EXPECT_LT((back.parameters().pose->translation - p.pose->translation).norm(), 1e-12);
     }
-    if (model_name(back.model()) == model_name(original.model()) && p.pixel_scale.x() == 1 &&
+    if (model_name(back.model()) == model_name(original.model()) && p.grid.pixel_scale.x() == 1 &&
         (format == CameraFormat::fishcam || format == CameraFormat::kalibr || format == CameraFormat::basalt)) {
       // Stored as they are (basalt's unified model: the alpha form, exact to rounding).
       const auto a = model_params(original.model()), b = model_params(back.model());
@@ -668,7 +668,7 @@ TEST_P(EveryFormat, HoldsASkewedGridOrSaysItCannot) {
   int tried = 0;
   for (auto [label, p] : test::every_model()) {
     if (std::find(holds.begin(), holds.end(), model_name(p.model)) == holds.end()) continue;
-    p.skew = {0.0131, 0};  // BoofCV's skew is xy alone
+    p.grid.skew = {0.0131, 0};  // BoofCV's skew is xy alone
     ++tried;
     std::string text;
     try {
@@ -682,7 +682,7 @@ TEST_P(EveryFormat, HoldsASkewedGridOrSaysItCannot) {
     CameraReadOptions options;
     options.format = format;
     const Camera back(parse_camera(text, label, options)), original(p);
-    EXPECT_NEAR(back.skew().xy, p.skew.xy, 1e-15) << label;
+    EXPECT_NEAR(back.skew().xy, p.grid.skew.xy, 1e-15) << label;
     double worst = 0;
     for (const Eigen::Vector3d& ray : test::random_rays(500, std::min(1.5, original.domain().theta_max - 1e-3), 5)) {
       Eigen::Vector2d a, b;

@@ -28,7 +28,7 @@ std::vector<NamedCamera> read(const Content& c) {
     CameraParameters& p = named.camera;
     const double fx = k.number("fx"), fy = k.number("fy");
     set_focal(&p, fx, fy, [&](std::string_view problem) { k.fail("fx", problem); });
-    p.principal_point = {k.number("cx"), k.number("cy")};
+    p.grid.principal_point = {k.number("cx"), k.number("cy")};
     if (type == "kb4") {
       p.model = KannalaBrandt<double>(fx, k.number("k1"), k.number("k2"), k.number("k3"), k.number("k4"));
     } else if (type == "ds") {
@@ -40,7 +40,7 @@ std::vector<NamedCamera> read(const Content& c) {
       const double alpha = k.number("alpha");
       if (!(alpha >= 0 && alpha < 1)) k.fail("alpha", "must be in [0, 1) for the unified model");
       p.model = Unified<double>(fx / (1 - alpha), alpha / (1 - alpha));
-      p.pixel_scale = {1.0, fy / fx};
+      p.grid.pixel_scale = {1.0, fy / fx};
     } else if (type == "pinhole") {
       p.model = Pinhole<double>(fx);
     } else {
@@ -70,7 +70,7 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
-  const double cx = p.principal_point.x(), cy = p.principal_point.y(), ay = p.pixel_scale.y();
+  const double cx = p.grid.principal_point.x(), cy = p.grid.principal_point.y(), ay = p.grid.pixel_scale.y();
   nlohmann::json k;
   std::string type;
   const auto focal = [&](double f) { k["fx"] = f, k["fy"] = f * ay, k["cx"] = cx, k["cy"] = cy; };

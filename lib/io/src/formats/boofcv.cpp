@@ -28,8 +28,8 @@ std::vector<NamedCamera> read(const Content& c) {
   const double fx = k.number("fx");
   set_focal(&p, fx, k.number("fy"), [&](std::string_view problem) { k.fail("fx", problem); });
   // u = fx x + skew y + cx: the pixel skew xy = skew / fx (CameraParameters::skew).
-  p.skew.xy = k.number("skew") / fx;
-  p.principal_point = {k.number("cx"), k.number("cy")};
+  p.grid.skew.xy = k.number("skew") / fx;
+  p.grid.principal_point = {k.number("cx"), k.number("cy")};
   p.width = k.positive_integer("width");
   p.height = k.positive_integer("height");
   // radial k1, k2, ... on r^2 of the normalized point; t1, t2 tangential.
@@ -68,15 +68,15 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
-  if (p.skew.yx != 0) throw Error("skew: BoofCV's skew is one number (xy, K's [0, 1] entry / fx): yx must be 0");
+  if (p.grid.skew.yx != 0) throw Error("skew: BoofCV's skew is one number (xy, K's [0, 1] entry / fx): yx must be 0");
   std::string out = "# BoofCV intrinsic calibration (CalibrationIO), written by fishcam\n";
   const std::vector<double> q = model_params(p.model);
   const bool omni = std::holds_alternative<Mei<double>>(p.model) || std::holds_alternative<Unified<double>>(p.model);
   if (!omni && !std::holds_alternative<Pinhole<double>>(p.model)) cannot_hold(p, CameraFormat::boofcv);
   out += std::string("model: ") + (omni ? "omnidirectional_universal" : "pinhole") + "\nversion: 0\npinhole:\n";
   const auto line = [&](const char* key, double v) { out += std::string("  ") + key + ": " + yaml_number(v) + "\n"; };
-  line("fx", q[0]), line("fy", q[0] * p.pixel_scale.y()), line("cx", p.principal_point.x()),
-      line("cy", p.principal_point.y()), line("skew", p.skew.xy * q[0]);
+  line("fx", q[0]), line("fy", q[0] * p.grid.pixel_scale.y()), line("cx", p.grid.principal_point.x()),
+      line("cy", p.grid.principal_point.y()), line("skew", p.grid.skew.xy * q[0]);
   out += "  width: " + std::to_string(p.width) + "\n  height: " + std::to_string(p.height) + "\n";
   if (omni) {
     out += "mirror_offset: " + yaml_number(q[1]) + "\nradial_tangential:\n";

@@ -21,14 +21,14 @@ std::vector<NamedCamera> read(const Content& c) {
     const DocFields k = f.object("projection_parameters");
     const double mu = k.number("mu");
     set_focal(&p, mu, k.number("mv"), [&](std::string_view problem) { k.fail("mu", problem); });
-    p.principal_point = {k.number("u0"), k.number("v0")};
+    p.grid.principal_point = {k.number("u0"), k.number("v0")};
     p.model = KannalaBrandt<double>(mu, k.number("k2"), k.number("k3"), k.number("k4"), k.number("k5"));
   } else if (type == "MEI") {
     const DocFields k = f.object("projection_parameters");
     const DocFields d = f.object("distortion_parameters");
     const double gamma1 = k.number("gamma1");
     set_focal(&p, gamma1, k.number("gamma2"), [&](std::string_view problem) { k.fail("gamma1", problem); });
-    p.principal_point = {k.number("u0"), k.number("v0")};
+    p.grid.principal_point = {k.number("u0"), k.number("v0")};
     p.model = Mei<double>(gamma1, f.object("mirror_parameters").number("xi"), d.number("k1"), d.number("k2"));
     p.distortion = TangentialDistortion{{d.number("p1"), d.number("p2"), {}}};
   } else if (type == "PINHOLE") {
@@ -36,7 +36,7 @@ std::vector<NamedCamera> read(const Content& c) {
     const DocFields d = f.object("distortion_parameters");
     const double fx = k.number("fx");
     set_focal(&p, fx, k.number("fy"), [&](std::string_view problem) { k.fail("fx", problem); });
-    p.principal_point = {k.number("cx"), k.number("cy")};
+    p.grid.principal_point = {k.number("cx"), k.number("cy")};
     set_radial_tangential(&p, {d.number("k1"), d.number("k2"), d.number("p1"), d.number("p2")}, fx,
                           [&](std::string_view problem) { d.fail("k1", problem); });
   } else if (type == "SCARAMUZZA") {
@@ -54,7 +54,7 @@ std::vector<NamedCamera> read(const Content& c) {
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const double p1 = p.tangential_terms().p1, p2 = p.tangential_terms().p2;
-  const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
+  const double ay = p.grid.pixel_scale.y(), cx = p.grid.principal_point.x(), cy = p.grid.principal_point.y();
   std::string out = "%YAML:1.0\n---\n";
   const KannalaBrandtLike kb = kannala_brandt_of(p);
   auto header = [&](const char* type) {

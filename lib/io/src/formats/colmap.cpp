@@ -85,7 +85,7 @@ std::vector<NamedCamera> read(const Content& c) {
     const std::string name = t[1];
     auto focal = [&](double fx, double fy, double cx, double cy) {
       set_focal(&p, fx, fy, fail);
-      p.principal_point = {cx - 0.5, cy - 0.5};
+      p.grid.principal_point = {cx - 0.5, cy - 0.5};
     };
     if (name == "SIMPLE_PINHOLE") {
       focal(q[0], q[0], q[1], q[2]), p.model = Pinhole<double>(q[0]);
@@ -127,7 +127,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   if (r && (r->rational || p.tangential_terms().any())) {
     model = "FULL_OPENCV";
     r->d.resize(8, 0.0);
-    params = {r->f, r->f * p.pixel_scale.y(), p.principal_point.x() + 0.5, p.principal_point.y() + 0.5};
+    params = {r->f, r->f * p.grid.pixel_scale.y(), p.grid.principal_point.x() + 0.5, p.grid.principal_point.y() + 0.5};
     params.insert(params.end(), r->d.begin(), r->d.end());
   } else {
     const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::colmap);

@@ -334,15 +334,15 @@ void cannot_hold(const CameraParameters& camera, CameraFormat format) {
 }
 
 CameraParameters with_unit_ax(CameraParameters p) {
-  const double ax = p.pixel_scale.x();
+  const double ax = p.grid.pixel_scale.x();
   p.model = std::visit([&](const auto& m) { return RadialModel(m.scaled(ax)); }, p.model);
-  p.pixel_scale = {1.0, p.pixel_scale.y() / ax};
+  p.grid.pixel_scale = {1.0, p.grid.pixel_scale.y() / ax};
   return p;
 }
 
 void set_focal(CameraParameters* p, double fx, double fy, const std::function<void(std::string_view)>& fail) {
   if (!(fx > 0) || !(fy > 0)) fail("fx and fy must be > 0");
-  p->pixel_scale = {1.0, fy / fx};
+  p->grid.pixel_scale = {1.0, fy / fx};
 }
 
 KannalaBrandtLike kannala_brandt_of(const CameraParameters& p) {
@@ -365,8 +365,8 @@ KannalaBrandtOrPinhole kannala_brandt_or_pinhole(const CameraParameters& p, Came
     if (!kb.ok) cannot_hold(p, format);
     out.fx = kb.f, out.k = kb.k;
   }
-  out.fy = out.fx * p.pixel_scale.y();
-  out.cx = p.principal_point.x(), out.cy = p.principal_point.y();
+  out.fy = out.fx * p.grid.pixel_scale.y();
+  out.cx = p.grid.principal_point.x(), out.cy = p.grid.principal_point.y();
   return out;
 }
 

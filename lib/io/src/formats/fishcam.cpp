@@ -136,8 +136,8 @@ CameraParameters read_camera_fields(const DocFields& f) {
   p.height = f.positive_integer("height");
   const auto pp = f.numbers("principal_point", 2, 2);
   const auto scale = f.numbers("pixel_scale", 2, 2);
-  p.principal_point = {pp[0], pp[1]};
-  p.pixel_scale = {scale[0], scale[1]};
+  p.grid.principal_point = {pp[0], pp[1]};
+  p.grid.pixel_scale = {scale[0], scale[1]};
   const std::string name = f.string("model");
   const auto params = f.numbers("parameters", 1, 64);
   try {
@@ -152,7 +152,7 @@ CameraParameters read_camera_fields(const DocFields& f) {
     for (const std::string& key : s.node().keys) {
       if (key != "xy" && key != "yx") s.fail(key, "unknown skew term (expected xy, yx)");
     }
-    p.skew = {s.has("xy") ? s.number("xy") : 0.0, s.has("yx") ? s.number("yx") : 0.0};
+    p.grid.skew = {s.has("xy") ? s.number("xy") : 0.0, s.has("yx") ? s.number("yx") : 0.0};
   }
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
   if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
@@ -183,12 +183,12 @@ std::vector<NamedCamera> read(const Content& c) {
 nlohmann::json camera_json(const CameraParameters& p) {
   nlohmann::json root = {{"width", p.width},
                          {"height", p.height},
-                         {"principal_point", {p.principal_point.x(), p.principal_point.y()}},
-                         {"pixel_scale", {p.pixel_scale.x(), p.pixel_scale.y()}},
+                         {"principal_point", {p.grid.principal_point.x(), p.grid.principal_point.y()}},
+                         {"pixel_scale", {p.grid.pixel_scale.x(), p.grid.pixel_scale.y()}},
                          {"model", model_name(p.model)},
                          {"parameters", model_params(p.model)}};
   if (displaces(p.distortion)) root[std::string(distortion_name(p.distortion))] = part_json(p.distortion);
-  if (p.skew.any()) root["skew"] = {{"xy", p.skew.xy}, {"yx", p.skew.yx}};
+  if (p.grid.skew.any()) root["skew"] = {{"xy", p.grid.skew.xy}, {"yx", p.grid.skew.yx}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
   if (p.calibration) root["calibration"] = calibration_json(*p.calibration);

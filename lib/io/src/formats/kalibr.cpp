@@ -68,7 +68,7 @@ void read_kalibr_model(const DocFields& f, CameraParameters* camera) {
   }
   auto focal = [&](const std::vector<double>& k, size_t at) {
     set_focal(&p, k[at], k[at + 1], [&](std::string_view problem) { f.fail("intrinsics", problem); });
-    p.principal_point = {k[at + 2], k[at + 3]};
+    p.grid.principal_point = {k[at + 2], k[at + 3]};
     return k[at];
   };
   auto no_distortion = [&] {
@@ -150,7 +150,7 @@ std::vector<NamedCamera> read(const Content& c) {
 }
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
-  const double ay = p.pixel_scale.y(), cx = p.principal_point.x(), cy = p.principal_point.y();
+  const double ay = p.grid.pixel_scale.y(), cx = p.grid.principal_point.x(), cy = p.grid.principal_point.y();
   const auto focal = [&](double f) { return std::vector<double>{f, f * ay, cx, cy}; };
   std::string model, distortion = "none";
   std::vector<double> intrinsics, coeffs;

@@ -49,7 +49,7 @@ std::vector<NamedCamera> read(const Content& c) {
   set_focal(&p, k[0], k[1], [&](std::string_view problem) { f.fail("intrinsics", problem); });
   p.width = static_cast<int>(size[0]);
   p.height = static_cast<int>(size[1]);
-  p.principal_point = {k[2], k[3]};
+  p.grid.principal_point = {k[2], k[3]};
   std::vector<std::string> notes;
   if (opencv_coefficients > 0) {
     set_radial_tangential(&p, std::vector<double>(k.begin() + 4, k.end()), k[0], [&](std::string_view problem) {
@@ -100,7 +100,8 @@ std::string write(const CameraParameters& p) {
   out += std::string("    # intrinsics are fx,fy,cx,cy") + (distortion.empty() ? "" : ",distortion0,distortion1,....") +
          "\n";
   out += "    'intrinsics': [";
-  for (double x : {f * p.pixel_scale.x(), f * p.pixel_scale.y(), p.principal_point.x(), p.principal_point.y()}) {
+  for (double x : {f * p.grid.pixel_scale.x(), f * p.grid.pixel_scale.y(), p.grid.principal_point.x(),
+                   p.grid.principal_point.y()}) {
     out += ' ', out += number(x), out += ',';
   }
   for (double x : distortion) out += ' ', out += number(x), out += ',';

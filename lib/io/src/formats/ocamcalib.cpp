@@ -146,9 +146,9 @@ std::vector<NamedCamera> read(const Content& c) {
     fail(std::string("pol: ") + e.what());
   }
   if (!(ac > 0) || !std::isfinite(ac)) fail("affine: c must be > 0");
-  p.principal_point = {yc, xc};
-  p.pixel_scale = {1, ac};
-  p.skew = {ae, ad / ac};
+  p.grid.principal_point = {yc, xc};
+  p.grid.pixel_scale = {1, ac};
+  p.grid.skew = {ae, ad / ac};
   try {
     check_invpol(p, invpol);
   } catch (const Error& e) {
@@ -190,7 +190,7 @@ std::string numbers_line(const std::vector<double>& values, bool counted) {
 
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera), the ocam model (its list)
   const Camera camera(p);
-  const double c = p.pixel_scale.y(), e = p.skew.xy, d = p.skew.yx * c;
+  const double c = p.grid.pixel_scale.y(), e = p.grid.skew.xy, d = p.grid.skew.yx * c;
   std::string out = std::string(kDirectComment) + " (ocam_model.ss in MATLAB). These are used by cam2world\n\n";
   out += numbers_line(model_params(p.model), true);
   out +=
@@ -206,7 +206,7 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera), the 
   }
   out += numbers_line(invpol, true);
   out += "#center: \"row\" and \"column\", starting from 0 (C convention)\n\n";
-  out += numbers_line({p.principal_point.y(), p.principal_point.x()}, false);
+  out += numbers_line({p.grid.principal_point.y(), p.grid.principal_point.x()}, false);
   out += "#affine parameters \"c\", \"d\", \"e\"\n\n";
   out += numbers_line({c, d, e}, false);
   out += "#image size: \"height\" and \"width\"\n\n";

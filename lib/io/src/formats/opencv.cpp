@@ -45,7 +45,7 @@ std::vector<NamedCamera> read(const Content& c) {
   NamedCamera out{"0", {}, {}};
   CameraParameters& p = out.camera;
   set_focal(&p, k[0], k[4], [&](std::string_view problem) { f.fail(keys->matrix, problem); });
-  p.principal_point = {k[2], k[5]};
+  p.grid.principal_point = {k[2], k[5]};
   const std::optional<std::string> said = c.options() ? c.options()->distortion_model : std::nullopt;
   if (!f.has("distortion_model") && !said) {
     f.fail("distortion_model", "missing: " + std::to_string(d.size()) +
@@ -88,8 +88,8 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
     fs << "distortion_model" << (r->d.size() == 5 ? "plumb_bob" : "rational_polynomial");
     fs << "image_width" << p.width << "image_height" << p.height;
     fs << "K"
-       << cv::Mat(
-              cv::Matx33d(r->f, 0, p.principal_point.x(), 0, r->f * p.pixel_scale.y(), p.principal_point.y(), 0, 0, 1));
+       << cv::Mat(cv::Matx33d(r->f, 0, p.grid.principal_point.x(), 0, r->f * p.grid.pixel_scale.y(),
+                              p.grid.principal_point.y(), 0, 0, 1));
     fs << "D" << cv::Mat(r->d, true);
   } else {
     const KannalaBrandtOrPinhole kb = kannala_brandt_or_pinhole(p, CameraFormat::opencv);

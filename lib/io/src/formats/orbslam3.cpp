@@ -29,7 +29,7 @@ std::vector<NamedCamera> read(const Content& c) {
     CameraParameters& p = named.camera;
     const double fx = f.number(pre + "fx");
     set_focal(&p, fx, f.number(pre + "fy"), [&](std::string_view problem) { f.fail(pre + "fx", problem); });
-    p.principal_point = {f.number(pre + "cx"), f.number(pre + "cy")};
+    p.grid.principal_point = {f.number(pre + "cx"), f.number(pre + "cy")};
     if (type == "KannalaBrandt8") {
       p.model = KannalaBrandt<double>(fx, f.number(pre + "k1"), f.number(pre + "k2"), f.number(pre + "k3"),
                                       f.number(pre + "k4"));

@@ -20,7 +20,7 @@ std::vector<NamedCamera> read(const Content& c) {
   if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1)
     f.fail("camera_matrix", "expected [fx 0 cx; 0 fy cy; 0 0 1]");
   set_focal(&p, k[0], k[4], [&](std::string_view problem) { f.fail("camera_matrix", problem); });
-  p.principal_point = {k[2], k[5]};
+  p.grid.principal_point = {k[2], k[5]};
   const std::vector<double> d = f.numbers("distortion_coefficients", 0, 14);
   const std::string model = f.string("distortion_model");
   if (model == "equidistant" || model == "fisheye") {
@@ -39,8 +39,8 @@ std::vector<NamedCamera> read(const Content& c) {
 std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
   const std::optional<RadialTangential> radtan = radial_tangential_of(p);
   const KannalaBrandtOrPinhole kb = radtan ? KannalaBrandtOrPinhole{} : kannala_brandt_or_pinhole(p, CameraFormat::ros);
-  const double fx = radtan ? radtan->f : kb.fx, fy = radtan ? radtan->f * p.pixel_scale.y() : kb.fy;
-  const double cx = p.principal_point.x(), cy = p.principal_point.y();
+  const double fx = radtan ? radtan->f : kb.fx, fy = radtan ? radtan->f * p.grid.pixel_scale.y() : kb.fy;
+  const double cx = p.grid.principal_point.x(), cy = p.grid.principal_point.y();
   auto matrix = [](int rows, int cols, const std::vector<double>& data) {
     return "\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: " + yaml_list(data) +
            "\n";

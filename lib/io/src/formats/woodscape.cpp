@@ -43,10 +43,11 @@ std::vector<NamedCamera> read(const Content& c) {
   p.height = in.positive_integer("height");
   // WoodScape's offsets are from the image centre in a frame whose pixel centres
   // sit at half-integers; ours sit at integers, hence the -0.5.
-  p.principal_point = {p.width / 2.0 + in.number("cx_offset") - 0.5, p.height / 2.0 + in.number("cy_offset") - 0.5};
+  p.grid.principal_point = {p.width / 2.0 + in.number("cx_offset") - 0.5,
+                            p.height / 2.0 + in.number("cy_offset") - 0.5};
   const double aspect = in.number("aspect_ratio");
   if (!(aspect > 0)) in.fail("aspect_ratio", "must be > 0");
-  p.pixel_scale = {1.0, aspect};
+  p.grid.pixel_scale = {1.0, aspect};
   p.model = Polynomial<double>(k);
   if (top.has("extrinsic")) {
     const DocFields ex = top.object("extrinsic");
@@ -80,9 +81,9 @@ std::string write(const CameraParameters& p) {  // a_x = 1 (format_camera)
                        {"poly_order", k.size()},
                        {"width", p.width},
                        {"height", p.height},
-                       {"cx_offset", p.principal_point.x() - p.width / 2.0 + 0.5},
-                       {"cy_offset", p.principal_point.y() - p.height / 2.0 + 0.5},
-                       {"aspect_ratio", p.pixel_scale.y()}};
+                       {"cx_offset", p.grid.principal_point.x() - p.width / 2.0 + 0.5},
+                       {"cy_offset", p.grid.principal_point.y() - p.height / 2.0 + 0.5},
+                       {"aspect_ratio", p.grid.pixel_scale.y()}};
   for (size_t i = 0; i < k.size(); ++i) in[coefficient_key(int(i) + 1)] = k[i];
   nlohmann::json root = {{"intrinsic", in}};
   if (p.pose) root["extrinsic"] = pose_to_json(*p.pose, "quaternion");

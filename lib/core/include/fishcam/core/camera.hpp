@@ -19,6 +19,7 @@
 
 #include "fishcam/core/error.hpp"
 #include "fishcam/core/model_registry.hpp"
+#include "fishcam/core/pixel_grid.hpp"
 #include "fishcam/core/plane_distortion.hpp"
 #include "fishcam/core/radial_inverse.hpp"
 #include "fishcam/core/radial_models.hpp"
@@ -82,35 +83,22 @@ struct CalibrationRecord {
   bool observed(const Eigen::Vector3d& ray) const;
 };
 
-// A pixel grid whose axes are not perpendicular (OCamCalib's affine c, d, e; the skew of
-// BoofCV and of Bouguet's toolbox, alpha_c = xy): with q the model's image offset
-// (rho(theta) along the ray's azimuth, plus any plane distortion),
-//   pixel = c + a (.) (S q),   S = [1 xy; yx 1],   det S = 1 - xy yx > 0.
-// Both zero: the usual grid, pixel = c + a (.) q.
-struct PixelSkew {
-  double xy = 0, yx = 0;
-  bool any() const { return xy != 0 || yx != 0; }
-  Eigen::Matrix2d matrix() const { return (Eigen::Matrix2d() << 1, xy, yx, 1).finished(); }
-  bool operator==(const PixelSkew&) const = default;
-};
-
 struct CameraParameters {
   int width = 0;
   int height = 0;
-  Eigen::Vector2d principal_point = Eigen::Vector2d::Zero();  // (cx, cy), pixels
-  Eigen::Vector2d pixel_scale = Eigen::Vector2d::Ones();      // (a_x, a_y)
+  // The camera's parts, from the ray to the pixel: the radial model rho(theta), a
+  // displacement of its undistorted plane (fishcam/core/plane_distortion.hpp: none,
+  // OpenCV's tangential terms, an mrcal lens; NoPlaneDistortion for a radial camera),
+  // the pixel grid (principal point, pixel scale, skew: fishcam/core/pixel_grid.hpp).
   RadialModel model;
-  // A displacement of the model's undistorted plane (fishcam/core/plane_distortion.hpp:
-  // none, OpenCV's tangential terms, an mrcal lens); NoPlaneDistortion for a radial camera.
   PlaneDistortion distortion;
-  // A skewed pixel grid (any model, with or without the above); zero for none.
-  PixelSkew skew;
+  PixelGrid grid;
   std::optional<double> theta_limit;  // radians; a user cap on the valid domain
   std::optional<Pose> pose;
   std::optional<CalibrationRecord> calibration;
 
   // No plane distortion, no skew: rho(theta) is the whole projection.
-  bool radially_symmetric() const { return !displaces(distortion) && !skew.any(); }
+  bool radially_symmetric() const { return !displaces(distortion) && !grid.skew.any(); }
   // The tangential terms of a TangentialDistortion (all zero for any other part).
   TangentialTerms tangential_terms() const;
   // The lens of an MrcalLensDistortion (null for any other part).
@@ -158,11 +146,11 @@ class Camera {
   }
   int width() const { return params_.width; }
   int height() const { return params_.height; }
-  const Eigen::Vector2d& principal_point() const { return params_.principal_point; }
-  const Eigen::Vector2d& pixel_scale() const { return params_.pixel_scale; }
+  const Eigen::Vector2d& principal_point() const { return params_.grid.principal_point; }
+  const Eigen::Vector2d& pixel_scale() const { return params_.grid.pixel_scale; }
   const RadialModel& model() const { return params_.model; }
   const PlaneDistortion& distortion() const { return params_.distortion; }
-  const PixelSkew& skew() const { return params_.skew; }
+  const PixelSkew& skew() const { return params_.grid.skew; }
   // Whether the camera is radially symmetric (no plane distortion, no skew): only then do
   // rho, theta_from_rho and rho_of_pixel describe its whole projection.
   bool radial() const { return params_.radially_symmetric(); }

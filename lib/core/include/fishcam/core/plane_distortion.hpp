@@ -2,7 +2,7 @@
 // A camera is three parts applied in turn (docs/architecture.md):
 //   pixel = PixelGrid( f (m + delta(m)) ),   m on the radial model's plane,
 // the radial model (model_registry.hpp) giving m and f, a plane distortion (this list)
-// delta, and the pixel grid (principal point, pixel scale, skew: CameraParameters)
+// delta, and the pixel grid (principal point, pixel scale, skew: pixel_grid.hpp)
 // the pixel. Every plane distortion is one class here; everything that depends on
 // "which plane distortions exist" follows from PlaneDistortionRegistry below: the
 // PlaneDistortion variant, name lookup, the one serialisation of a part's numbers
@@ -21,6 +21,15 @@
 //   std::string invalid() const;               "" or what is wrong with its numbers
 //   Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const;
 //                                               delta(m), with d delta / dm on request; NaN where it has none
+//   std::optional<double> evaluation_end(const PlaneRadius& radius, double theta_max) const;
+//   std::string evaluation_problem(const PlaneRadius& radius, double theta_max) const;
+//                                               for a part evaluated by another library that reports
+//                                               its failures on standard error (libmrcal): called only
+//                                               when the camera's scans made it say something; the
+//                                               largest theta <= theta_max up to which it evaluates
+//                                               without a word (nullopt: not even just inside), and ""
+//                                               or the refusal when it still speaks inside the domain.
+//                                               Parts computed here: theta_max and "".
 //
 // How to add a plane distortion (3 steps):
 //   1. Write its class with the members above in its own header (as tangential.hpp)
@@ -36,7 +45,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -46,6 +57,9 @@
 #include "fishcam/core/tangential.hpp"
 
 namespace fishcam {
+
+// The radius of the radial model's undistorted plane at incidence angle theta.
+using PlaneRadius = std::function<double(double theta)>;
 
 // No displacement: rho(theta) is the whole projection.
 struct NoPlaneDistortion {
@@ -62,6 +76,8 @@ struct NoPlaneDistortion {
     if (jacobian) jacobian->setZero();
     return Eigen::Vector2d::Zero();
   }
+  std::optional<double> evaluation_end(const PlaneRadius&, double theta_max) const { return theta_max; }
+  std::string evaluation_problem(const PlaneRadius&, double) const { return ""; }
   bool operator==(const NoPlaneDistortion&) const = default;
 };
 
@@ -81,6 +97,8 @@ struct TangentialDistortion {
   Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const {
     return terms.offset(m, jacobian);
   }
+  std::optional<double> evaluation_end(const PlaneRadius&, double theta_max) const { return theta_max; }
+  std::string evaluation_problem(const PlaneRadius&, double) const { return ""; }
   bool operator==(const TangentialDistortion&) const = default;
 };
 
@@ -101,6 +119,10 @@ struct MrcalLensDistortion {
   Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const {
     return lens->offset(m, jacobian);
   }
+  // libmrcal's iteration (CAHVORE's) fails at and past a fold, and says so on
+  // standard error: the rings on which it evaluates without a word.
+  std::optional<double> evaluation_end(const PlaneRadius& radius, double theta_max) const;
+  std::string evaluation_problem(const PlaneRadius& radius, double theta_max) const;
   bool operator==(const MrcalLensDistortion& other) const {
     return lens && other.lens ? *lens == *other.lens : lens == other.lens;
   }

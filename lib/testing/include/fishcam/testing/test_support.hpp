@@ -92,14 +92,14 @@ inline std::map<std::string, std::string> files_below(const std::filesystem::pat
 inline CameraParameters woodscape_front() {
   CameraParameters p;
   p.width = 1280, p.height = 966;
-  p.principal_point = {1280 / 2.0 + 3.942 - 0.5, 966 / 2.0 - 3.093 - 0.5};
+  p.grid.principal_point = {1280 / 2.0 + 3.942 - 0.5, 966 / 2.0 - 3.093 - 0.5};
   p.model = Polynomial<double>({339.749, -31.988, 48.275, -7.201});
   return p;
 }
 
 inline CameraParameters with_model(CameraParameters p, RadialModel model, Eigen::Vector2d scale = {1, 1}) {
   p.model = std::move(model);
-  p.pixel_scale = scale;
+  p.grid.pixel_scale = scale;
   return p;
 }
 
@@ -261,8 +261,8 @@ inline bool float_kernel_form(const CameraParameters& p) {
 inline std::pair<std::string, CameraParameters> skewed_camera() {
   for (auto [label, p] : every_model()) {
     if (label != "ocam") continue;
-    p.pixel_scale.y() = 0.996974;
-    p.skew = {0.013102, -0.014257 / 0.996974};
+    p.grid.pixel_scale.y() = 0.996974;
+    p.grid.skew = {0.013102, -0.014257 / 0.996974};
     return {label + "_skew", p};
   }
   ADD_FAILURE() << "no ocam example for the skewed camera";
