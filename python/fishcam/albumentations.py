@@ -145,7 +145,7 @@ class _FishcamDualTransform(_DualTransform):
 
     def apply_to_masks(self, masks: Array, **params: typing.Any) -> Array:
         # albumentations' instance masks: 0 / False where there is no source, whatever fill_mask says.
-        return np.stack([self._mask(m, params, instance=True) for m in masks]) if len(masks) else masks
+        return self._sample_change(params).instance_masks(np.asarray(masks)) if len(masks) else masks
 
     def apply_to_images(self, images: Array, **params: typing.Any) -> Array:
         return np.stack([self.apply(x, **params) for x in images])

@@ -329,3 +329,29 @@ def test_image_fills_the_dtype_holds_are_exact(cam, dtype, fill):
         image=image, change=fishcam.random_change("large", SEEDS[0]), return_valid=True
     )["valid"]
     assert (~valid).sum() > 1000 and (out[~valid] == np.array(fill, dtype)).all() and (out[valid] != fill).any()
+
+
+@pytest.mark.parametrize("dtype", [np.bool_, np.uint8, np.int64])
+def test_instance_masks_travel_sixteen_to_a_pass(cam, dtype):
+    """SampleChange.instance_masks packs two-valued masks 16 to a uint16 pass and gives
+    each back as mask(..., instance=True) gives it alone; a mask of more values (ids)
+    still goes alone. Counted: 20 two-valued masks and one of ids take 3 passes."""
+    rng = np.random.default_rng(5)
+    top = {np.bool_: True, np.uint8: 255, np.int64: 7}[dtype]
+    masks = np.zeros((21, H, W), dtype)
+    for i in range(20):
+        y, x = rng.integers(0, H - 30), rng.integers(0, W - 30)
+        masks[i, y : y + rng.integers(5, 30), x : x + rng.integers(5, 30)] = top
+    masks[5] = 0  # an instance with no pixels
+    if dtype != np.bool_:
+        masks[20] = rng.integers(0, 4, (H, W)).astype(dtype)  # ids: alone
+    change = fishcam.transforms.RandomViewpoint(cam, preset="large").draw(cam, seed=3)
+    alone = np.stack([change.mask(m, instance=True) for m in masks])
+    passes = []
+    resample = change._resample
+    change._resample = lambda **kw: passes.append(1) or resample(**kw)
+    together = change.instance_masks(masks)
+    assert together.dtype == masks.dtype and together.shape == alone.shape
+    assert np.array_equal(together, alone)
+    assert len(passes) == (2 if dtype == np.bool_ else 3)
+    assert together[:20].sum() > 0 and not together[5].any()

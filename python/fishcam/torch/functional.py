@@ -163,7 +163,9 @@ def warped_masks(mask: torch.Tensor, change: _transforms.SampleChange, instance:
     tensor = _cpu(mask, "mask")
     if tensor.ndim == 2:
         return torch.from_numpy(change.mask(_numpy(tensor, "mask", _MASK_DTYPES), instance=instance))
-    if tensor.ndim == 3:  # instance masks (N, H, W), or a 1xHxW label map: each plane on its own
+    if tensor.ndim == 3 and instance and len(tensor):  # instance masks (N, H, W): 16 to a pass
+        return torch.from_numpy(change.instance_masks(_numpy(tensor, "mask", _MASK_DTYPES), "mask"))
+    if tensor.ndim == 3:  # a 1xHxW label map: each plane on its own
         planes = [
             change.mask(_numpy(plane, f"mask[{i}]", _MASK_DTYPES), f"mask[{i}]", instance)
             for i, plane in enumerate(tensor)
