@@ -117,10 +117,10 @@ PyObject* dispatch_with_fishcam_errors(PyObject* self, PyObject* args, PyObject*
   // object whose C++ object was never made reads garbage or crashes: refused.
   if (record->is_method && name != "__init__" && name != "__setstate__" && PyTuple_GET_SIZE(args) > 0 &&
       !initialised(PyTuple_GET_ITEM(args, 0))) {
-    PyErr_SetString(error_type, (call_name(*record) +
-                                 ": an object made without __init__ (cls.__new__ alone): make it with its "
-                                 "constructor, a reader or pickle")
-                                    .c_str());
+    PyErr_SetString(error_type,
+                    (call_name(*record) + ": an object made without __init__ (cls.__new__ alone): make it with its "
+                                          "constructor, a reader or pickle")
+                        .c_str());
     return nullptr;
   }
   PyObject* result = pybind11_dispatcher(self, args, kwargs);
@@ -131,8 +131,7 @@ PyObject* dispatch_with_fishcam_errors(PyObject* self, PyObject* args, PyObject*
 // Calling a class without a constructor: pybind11 says "No constructor defined!".
 int refuse_construction(PyObject* self, PyObject*, PyObject*) {
   const std::string name = type_name(py::handle(reinterpret_cast<PyObject*>(Py_TYPE(self))));
-  PyErr_SetString(error_type,
-                  (name + ": has no constructor; make one with " + made_by(name)).c_str());
+  PyErr_SetString(error_type, (name + ": has no constructor; make one with " + made_by(name)).c_str());
   return -1;
 }
 
