@@ -2,6 +2,7 @@
 // rear, left and right mirrors) recovered from boards seen at shared instants.
 #include <algorithm>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include "fishcam/fit/calibration.hpp"
@@ -133,14 +134,16 @@ TEST(Rig, ACameraSharingNoInstantIsRefused) {
 // 1 sees whole is observed by both at that instant.
 // wobble_rad: camera 1 turned about a random axis by a normal angle of that sigma at
 // each instant (a camera loose in its mount; pairs not taken at the same moment).
-SyntheticRig stereo_rig(double noise_px, std::uint64_t seed, double baseline = 0.12, double wobble_rad = 0) {
+// noise_seed: the corners' noise drawn apart from the boards (default: from seed too).
+SyntheticRig stereo_rig(double noise_px, std::uint64_t seed, double baseline = 0.12, double wobble_rad = 0,
+                        std::optional<std::uint64_t> noise_seed = std::nullopt) {
   const CameraParameters full = read_camera(test::data_path("kannala_brandt.yaml")).parameters();
   const Camera lens(resized(full, 640, 483));
   SyntheticRig rig;
   rig.truth = {pose(0, {0, 0, 0}),
                {Eigen::Quaterniond(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY())), {baseline, 0.003, 0}}};
   rig.cameras.resize(2, RigCamera{{}, lens.width(), lens.height(), {"kannala-brandt"}});
-  std::mt19937_64 random(seed);
+  std::mt19937_64 random(noise_seed.value_or(seed));
   std::normal_distribution<double> noise(0, noise_px);
   const auto points = board_points(kBoard);
   int instant = 0;
@@ -200,6 +203,41 @@ TEST(Rig, TheRecordsCovarianceIsTheJointSolves) {
   const double focal = right.parameters().grid.pixel_scale.x() * model_params(right.parameters().model)[0];
   const double at_infinity = projection_uncertainty(right, centre, std::nullopt);
   EXPECT_GE(at_infinity, focal * r.rotation_sigma_rad[1]);
+}
+
+// The rig's covariance predicts the spread of the relative pose: the same boards
+// calibrated 60 times with fresh 0.3 px noise, the spread of camera 1's pose
+// parameters (camera 0 -> camera 1: angle-axis and translation, the joint solve's
+// block) against the sigmas each calibration reports (its largest component).
+TEST(RigSweep, TheReportedSigmasPredictTheSpreadOfReNoisedCalibrations) {
+  constexpr int kRuns = 60;
+  std::vector<Eigen::Matrix<double, 6, 1>> errors;
+  double rotation_sigma = 0, translation_sigma = 0;
+  Pose truth;
+  for (int run = 0; run < kRuns; ++run) {
+    const SyntheticRig rig = stereo_rig(0.3, 21, 0.12, 0, 1000 + run);
+    truth = inverse(relative(rig.truth, 1));  // camera 0 -> camera 1
+    const RigCalibrationResult r = calibrate_rig(rig.cameras, kBoard);
+    const Pose got = inverse(*r.cameras[1].camera.pose);
+    const Eigen::AngleAxisd turned(got.rotation * truth.rotation.conjugate());
+    Eigen::Matrix<double, 6, 1> e;
+    e << turned.angle() * turned.axis(), got.translation - truth.translation;
+    errors.push_back(e);
+    rotation_sigma += r.rotation_sigma_rad[1] / kRuns, translation_sigma += r.translation_sigma[1] / kRuns;
+  }
+  ASSERT_EQ(int(errors.size()), kRuns);
+  Eigen::Matrix<double, 6, 1> mean = Eigen::Matrix<double, 6, 1>::Zero(), spread = mean;
+  for (const auto& e : errors) mean += e / kRuns;
+  for (const auto& e : errors) spread += (e - mean).cwiseAbs2() / (kRuns - 1);
+  spread = spread.cwiseSqrt();
+  const double rotation = spread.head<3>().maxCoeff(), translation = spread.tail<3>().maxCoeff();
+  std::printf("  spread / reported sigma: rotation %.3g / %.3g rad, translation %.3g / %.3g m\n", rotation,
+              rotation_sigma, translation, translation_sigma);
+  // 60 runs estimate a spread to ~9 %: within 0.7-1.4 of the prediction.
+  EXPECT_GT(rotation / rotation_sigma, 0.7);
+  EXPECT_LT(rotation / rotation_sigma, 1.4);
+  EXPECT_GT(translation / translation_sigma, 0.7);
+  EXPECT_LT(translation / translation_sigma, 1.4);
 }
 
 // One view of camera 1 not taken with camera 0's (its board 6 px away from where
