@@ -135,14 +135,16 @@ TEST(Rig, ACameraSharingNoInstantIsRefused) {
 // wobble_rad: camera 1 turned about a random axis by a normal angle of that sigma at
 // each instant (a camera loose in its mount; pairs not taken at the same moment).
 // noise_seed: the corners' noise drawn apart from the boards (default: from seed too).
+// Both cameras are `lens` (a Kannala-Brandt lens at 640 x 483 unless given), calibrated as `model`.
 SyntheticRig stereo_rig(double noise_px, std::uint64_t seed, double baseline = 0.12, double wobble_rad = 0,
-                        std::optional<std::uint64_t> noise_seed = std::nullopt) {
-  const CameraParameters full = read_camera(test::data_path("kannala_brandt.yaml")).parameters();
+                        std::optional<std::uint64_t> noise_seed = std::nullopt,
+                        const std::string& lens_file = "kannala_brandt.yaml", const std::string& model = "kannala-brandt") {
+  const CameraParameters full = read_camera(test::data_path(lens_file)).parameters();
   const Camera lens(resized(full, 640, 483));
   SyntheticRig rig;
   rig.truth = {pose(0, {0, 0, 0}),
                {Eigen::Quaterniond(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY())), {baseline, 0.003, 0}}};
-  rig.cameras.resize(2, RigCamera{{}, lens.width(), lens.height(), {"kannala-brandt"}});
+  rig.cameras.resize(2, RigCamera{{}, lens.width(), lens.height(), {model}});
   std::mt19937_64 random(noise_seed.value_or(seed));
   std::normal_distribution<double> noise(0, noise_px);
   const auto points = board_points(kBoard);
@@ -238,6 +240,37 @@ TEST(RigSweep, TheReportedSigmasPredictTheSpreadOfReNoisedCalibrations) {
   EXPECT_LT(rotation / rotation_sigma, 1.4);
   EXPECT_GT(translation / translation_sigma, 0.7);
   EXPECT_LT(translation / translation_sigma, 1.4);
+}
+
+// The same corners of a stereo pair through mrcal-calibrate-cameras' joint solve
+// (LENSMODEL_STEREOGRAPHIC, no board warp; images of one instant matched by the
+// glob's *): the relative poses agree within 0.5 mm and 0.1 deg, and both sit near
+// the truth.
+TEST(Rig, AgreesWithMrcalsJointSolve) {
+  const SyntheticRig rig = stereo_rig(0.3, 31, 0.12, 0, std::nullopt, "stereographic.cameramodel", "stereographic");
+  const auto dir = test::scratch_dir("rig_mrcal");
+  std::vector<BoardObservation> all;
+  for (const auto& camera : rig.cameras) all.insert(all.end(), camera.observations.begin(), camera.observations.end());
+  ASSERT_GE(rig.cameras[0].observations.size(), 10u);
+  write_corners(dir / "corners.vnl", all);
+  const std::string command =
+      "cd '" + dir.string() +
+      "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl --lensmodel LENSMODEL_STEREOGRAPHIC "
+      "--focal 165 --object-spacing 0.1 --object-width-n 9 --object-height-n 6 --imagersize 640 483 --outdir . "
+      "--skip-calobject-warp-solve 'cam0/*.png' 'cam1/*.png' > log.txt 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "log.txt");
+  const Camera theirs = read_camera(dir / "camera-1.cameramodel");  // camera 1 -> camera 0 (mrcal's reference)
+  ASSERT_TRUE(theirs.parameters().pose.has_value());
+  const Pose their_pose = *theirs.parameters().pose;
+  const RigCalibrationResult ours = calibrate_rig(rig.cameras, kBoard);
+  const Pose& our_pose = *ours.cameras[1].camera.pose;
+  const double baseline_mm = 1e3 * (our_pose.translation - their_pose.translation).norm();
+  const double rotation_deg = our_pose.rotation.angularDistance(their_pose.rotation) * 180 / std::numbers::pi;
+  std::printf("  fishcam vs mrcal's joint solve: translation %.3g mm apart, rotation %.3g deg apart\n", baseline_mm,
+              rotation_deg);
+  EXPECT_LT(baseline_mm, 0.5);
+  EXPECT_LT(rotation_deg, 0.1);
+  expect_rig_truth(ours, rig, 2e-3, 2e-3);
 }
 
 // One view of camera 1 not taken with camera 0's (its board 6 px away from where
