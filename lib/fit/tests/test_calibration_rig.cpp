@@ -138,7 +138,8 @@ TEST(Rig, ACameraSharingNoInstantIsRefused) {
 // Both cameras are `lens` (a Kannala-Brandt lens at 640 x 483 unless given), calibrated as `model`.
 SyntheticRig stereo_rig(double noise_px, std::uint64_t seed, double baseline = 0.12, double wobble_rad = 0,
                         std::optional<std::uint64_t> noise_seed = std::nullopt,
-                        const std::string& lens_file = "kannala_brandt.yaml", const std::string& model = "kannala-brandt") {
+                        const std::string& lens_file = "kannala_brandt.yaml",
+                        const std::string& model = "kannala-brandt") {
   const CameraParameters full = read_camera(test::data_path(lens_file)).parameters();
   const Camera lens(resized(full, 640, 483));
   SyntheticRig rig;
