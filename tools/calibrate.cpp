@@ -44,7 +44,7 @@ std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, c
 }
 
 struct CalibrateOptions {
-  std::vector<std::string> corners, imagersize;
+  std::vector<std::string> corners, imagersize, fix_intrinsics;
   std::string board, model, images, poses, theta_limit;
   double spacing = 0;
   int threads = int(std::max(1u, std::thread::hardware_concurrency()));
@@ -76,6 +76,13 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
     cameras[k].observations = read_corners(o.corners[k], board);
     if (!o.images.empty()) cameras[k].observations = select_images(std::move(cameras[k].observations), o.images);
   }
+  if (!o.fix_intrinsics.empty() && o.fix_intrinsics.size() != n) {
+    throw Error("--fix-intrinsics: give one camera file (or 'free') per --corners (" + std::to_string(n) + "), not " +
+                std::to_string(o.fix_intrinsics.size()));
+  }
+  for (size_t k = 0; k < o.fix_intrinsics.size(); ++k) {
+    if (o.fix_intrinsics[k] != "free") cameras[k].fixed_intrinsics = read_camera(o.fix_intrinsics[k]).parameters();
+  }
   const RigCalibrationResult rig = calibrate_rig(cameras, board, {o.threads});
   std::vector<CameraParameters> written;
   for (const auto& r : rig.cameras) written.push_back(apply_theta_limit(r.camera, o.theta_limit));
@@ -100,8 +107,8 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
   for (size_t k = 0; k < n; ++k) {
     const CalibrationResult& r = rig.cameras[k];
     const Pose& pose = *r.camera.pose;
-    std::printf("  camera %zu (%s, %zu images, rms %.4f px): ", k, std::string(model_name(r.camera.model)).c_str(),
-                r.used_images.size(), r.rms_px);
+    std::printf("  camera %zu (%s%s, %zu images, rms %.4f px): ", k, std::string(model_name(r.camera.model)).c_str(),
+                rig.fixed_intrinsics[k] ? ", intrinsics fixed" : "", r.used_images.size(), r.rms_px);
     if (k == 0) {
       std::printf("the rig's frame\n");
     } else {
@@ -115,11 +122,9 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
 
 }  // namespace
 
-void register_calibrate(CLI::App& app) {
-  auto* cmd = app.add_subcommand("calibrate",
-                                 "Calibrate a camera model from chessboard corners: joint Ceres solve "
-                                 "of intrinsics and board poses, robust, with uncertainties");
-  auto o = std::make_shared<CalibrateOptions>();
+namespace {
+
+void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
   cmd->add_option("--corners", o->corners,
                   "corners.vnl (mrcal's format); once per camera for a rig (images of one instant share their file "
                   "name)")
@@ -134,18 +139,34 @@ void register_calibrate(CLI::App& app) {
   cmd->add_option("--images", o->images,
                   "Use only the images whose file name matches one of these shell patterns (comma-separated)");
   cmd->add_option("--poses", o->poses, "Also write the board poses (JSON) to this file");
+  cmd->add_option("--fix-intrinsics", o->fix_intrinsics,
+                  "For a rig: one camera file per --corners whose intrinsics are held fixed (only where the camera "
+                  "sits is solved), or 'free' for a camera whose intrinsics are solved");
   cmd->add_option("--threads", o->threads, "Threads for the independent solves (the result is the same for any count)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
   add_theta_limit_option(cmd, &o->theta_limit);
   add_camera_output_options(cmd, &o->output);
+}
+
+}  // namespace
+
+void register_calibrate(CLI::App& app) {
+  auto* cmd = app.add_subcommand("calibrate",
+                                 "Calibrate a camera model from chessboard corners: joint Ceres solve "
+                                 "of intrinsics and board poses, robust, with uncertainties");
+  auto o = std::make_shared<CalibrateOptions>();
+  add_calibrate_options(cmd, o.get());
   cmd->callback([o] {
     std::vector<OutputFile> outputs = {{o->output.out}};
     if (!o->poses.empty()) outputs.push_back({o->poses});
-    check_outputs(outputs, o->corners, o->output.force);
+    std::vector<std::string> inputs = o->corners;
+    inputs.insert(inputs.end(), o->fix_intrinsics.begin(), o->fix_intrinsics.end());
+    check_outputs(outputs, inputs, o->output.force);
     const BoardSpec board = parse_board(o->board, o->spacing);
     if (o->corners.size() > 1) return calibrate_rig_command(*o, board);
     if (o->imagersize.size() > 1) throw Error("--imagersize: one camera takes one image size");
+    if (!o->fix_intrinsics.empty()) throw Error("--fix-intrinsics: for a rig (several --corners)");
     const ModelSpec spec = parse_model_spec(o->model);
     const CameraFormat format = o->output.resolved_format();
     const auto [width, height] = parse_image_size(o->imagersize[0], "--imagersize");

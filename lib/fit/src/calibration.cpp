@@ -647,4 +647,112 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
   return result;
 }
 
+namespace {
+
+// One board's pose through `camera` from `start`, over the corners not in `left_out`
+// (under `loss`; nullptr: plain least squares).
+ceres::Solver::Summary solve_board_pose(const Camera& camera, const std::vector<Eigen::Vector3d>& points,
+                                        const BoardObservation& view, const std::vector<bool>& left_out,
+                                        ceres::LossFunction* loss, std::array<double, 6>* pose) {
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (left_out[i]) continue;
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<detail::FixedCameraCornerResidual, 6>(
+        new detail::FixedCameraCornerResidual(&camera, points[i], view.corners[i], false));
+    cost->AddParameterBlock(6);
+    cost->SetNumResiduals(2);
+    problem.AddResidualBlock(cost, loss, pose->data());
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(detail::solver_options(ceres::DENSE_QR), &problem, &summary);
+  if (!summary.IsSolutionUsable()) throw Error("locate boards: image " + view.filename + ": " + summary.message);
+  return summary;
+}
+
+// Each corner's error at `pose` (infinite where the point does not project).
+std::vector<double> corner_errors(const Camera& camera, const std::vector<Eigen::Vector3d>& points,
+                                  const BoardObservation& view, const std::array<double, 6>& pose) {
+  std::vector<double> errors;
+  const BoardPose board_pose = pose_of(pose);
+  for (size_t i = 0; i < points.size(); ++i) {
+    Eigen::Vector2d q;
+    errors.push_back(camera.project(to_camera(board_pose, points[i]), &q) ? (q - view.corners[i]).norm()
+                                                                          : std::numeric_limits<double>::infinity());
+  }
+  return errors;
+}
+
+}  // namespace
+
+CalibrationResult locate_boards(const std::vector<BoardObservation>& observations, const BoardSpec& board,
+                                const Camera& camera) {
+  check_board(board);
+  check_corners_in_image(observations, camera.width(), camera.height());
+  const std::vector<Eigen::Vector3d> points = board_points(board);
+  std::vector<const BoardObservation*> views;
+  std::vector<std::array<double, 6>> poses;
+  ceres::CauchyLoss robust(1.0);
+  for (const auto& o : observations) {
+    if (o.corners.empty()) continue;
+    std::vector<Eigen::Vector3d> rays(o.corners.size());
+    for (size_t i = 0; i < rays.size(); ++i) {
+      if (!camera.unproject(o.corners[i], &rays[i])) {
+        throw Error("locate boards: image " + o.filename + ": corner " + std::to_string(i) +
+                    " has no ray through the given camera (outside its valid domain: is it this camera's?)");
+      }
+    }
+    const auto pose = pose_from_rays(rays, points, board);
+    if (!pose) throw Error("locate boards: image " + o.filename + ": no board pose fits its corners' rays");
+    views.push_back(&o), poses.push_back(pose_block(*pose));
+    solve_board_pose(camera, points, o, std::vector<bool>(points.size(), false), &robust, &poses.back());
+  }
+  if (views.empty()) throw Error("locate boards: no image with a board");
+  // Outliers as calibrate finds them: beyond 5 robust sigmas (median * 1.4826) and 0.1 px.
+  std::vector<std::vector<double>> errors;
+  std::vector<double> all;
+  for (size_t b = 0; b < views.size(); ++b) {
+    errors.push_back(corner_errors(camera, points, *views[b], poses[b]));
+    all.insert(all.end(), errors.back().begin(), errors.back().end());
+  }
+  std::nth_element(all.begin(), all.begin() + long(all.size() / 2), all.end());
+  const double sigma = std::max(1.4826 * all[all.size() / 2], 1e-9);
+  CalibrationResult result;
+  result.camera = camera.parameters();
+  double sum2 = 0;
+  for (size_t b = 0; b < views.size(); ++b) {
+    std::vector<bool> left_out(points.size(), false);
+    long kept = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      left_out[i] = !(errors[b][i] <= std::max(5 * sigma, 0.1));
+      if (left_out[i]) result.outliers.push_back({views[b]->filename, int(i), errors[b][i]});
+      kept += !left_out[i];
+    }
+    if (kept < 3) {
+      result.warnings.push_back("image " + views[b]->filename + ": " + std::to_string(points.size() - size_t(kept)) +
+                                " of its corners are outliers; the image is left out");
+      continue;
+    }
+    const double cost = solve_board_pose(camera, points, *views[b], left_out, nullptr, &poses[b]).final_cost;
+    sum2 += 2 * cost;
+    result.poses.push_back(pose_of(poses[b]));
+    result.used_images.push_back(views[b]->filename);
+    result.per_image_rms_px.push_back(std::sqrt(2 * cost / double(kept)));
+    result.observations += kept;
+  }
+  if (result.poses.empty()) throw Error("locate boards: every image lost its board to the outliers");
+  result.rms_px = std::sqrt(sum2 / double(result.observations));
+  result.noise_px = result.rms_px / std::sqrt(2.0);
+  const std::string model = std::string(model_name(result.camera.model));
+  result.parameters = model_params(result.camera.model);
+  result.parameter_names = model_param_names(model, int(result.parameters.size()));
+  result.parameter_names.insert(result.parameter_names.end(), {"cx", "cy", "a_y"});
+  const PixelGrid& grid = result.camera.grid;
+  result.parameters.insert(result.parameters.end(),
+                           {grid.principal_point.x(), grid.principal_point.y(), grid.pixel_scale.y()});
+  result.sigmas.assign(result.parameters.size(), 0.0);
+  return result;
+}
+
 }  // namespace fishcam

@@ -61,6 +61,58 @@ struct CornerResidual {
   }
 };
 
+// A corner seen through a camera whose intrinsics are held fixed (any camera: its
+// projection and Jacobian d pixel / d point are the camera's own), as a functor of the
+// poses for Ceres' automatic derivatives. Blocks: (moved: camera 0 -> this camera),
+// then the board -> camera 0 (unmoved: board -> this camera).
+class FixedCameraCornerResidual {
+  // pixel(point) - corner, the Jacobian from Camera::project.
+  class Projection final : public ceres::SizedCostFunction<2, 3> {
+   public:
+    Projection(const Camera* camera, const Eigen::Vector2d& corner) : camera_(camera), corner_(corner) {}
+    bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+      Eigen::Vector2d pixel;
+      Eigen::Matrix<double, 2, 3> d;
+      const bool want = jacobians && jacobians[0];
+      if (!camera_->project(Eigen::Vector3d(p[0][0], p[0][1], p[0][2]), &pixel, want ? &d : nullptr)) return false;
+      residuals[0] = pixel.x() - corner_.x();
+      residuals[1] = pixel.y() - corner_.y();
+      if (want) Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>>{jacobians[0]} = d;
+      return true;
+    }
+
+   private:
+    const Camera* camera_;
+    Eigen::Vector2d corner_;
+  };
+
+ public:
+  FixedCameraCornerResidual(const Camera* camera, const Eigen::Vector3d& point, const Eigen::Vector2d& corner,
+                            bool moved)
+      : project_(new Projection(camera, corner)), point_(point), moved_(moved) {}
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    const T* board_pose = moved_ ? p[1] : p[0];
+    const T board[3] = {T(point_.x()), T(point_.y()), T(point_.z())};
+    T in_rig[3], camera[3];
+    ceres::AngleAxisRotatePoint(board_pose, board, in_rig);
+    for (int k = 0; k < 3; ++k) in_rig[k] += board_pose[3 + k];
+    if (moved_) {
+      ceres::AngleAxisRotatePoint(p[0], in_rig, camera);
+      for (int k = 0; k < 3; ++k) camera[k] += p[0][3 + k];
+    } else {
+      for (int k = 0; k < 3; ++k) camera[k] = in_rig[k];
+    }
+    return project_(camera, residuals);
+  }
+
+ private:
+  ceres::CostFunctionToFunctor<2, 3> project_;
+  Eigen::Vector3d point_;
+  bool moved_;
+};
+
 // The same residual with its Jacobians written out; parameter blocks (model,
 // (cx, cy), a_y, board pose). A radial model enters only through rho(theta): one
 // forward-mode evaluation of rho with Jets over (model parameters, theta) gives

@@ -86,6 +86,7 @@ std::string rig_calibration_report_json(const RigCalibrationResult& rig, const s
     nlohmann::json camera = {
         {"corners_file", k < corners_files.size() ? corners_files[k] : ""},
         {"model", model_name(r.camera.model)},
+        {"intrinsics", k < rig.fixed_intrinsics.size() && rig.fixed_intrinsics[k] ? "fixed" : "solved"},
         {"rms_px", r.rms_px},
         {"corners", r.observations},
         {"images", r.used_images.size()},

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <numeric>
 #include <optional>
@@ -219,12 +220,37 @@ InstantConsensus instant_consensus(const std::map<int, Pose>& seen0, const std::
 // to camera 0 (camera 0 -> camera k; camera 0's block is the identity), and each
 // instant's board relative to camera 0.
 struct JointParameters {
-  std::vector<Solve> intrinsics;
+  std::vector<Solve> intrinsics;  // unused for a camera held fixed
   std::vector<std::array<double, 6>> cameras, boards;
+  std::vector<std::shared_ptr<const Camera>> fixed;  // per camera: its intrinsics held fixed, or null
 };
 
 // Corners left out of the joint solve, per camera: (image, corner).
 using CornerSet = std::set<std::pair<std::string, int>>;
+
+// Camera k's corners not in `excluded` as residuals of `problem`, its intrinsics held
+// fixed (p->fixed[k]): over its pose relative to camera 0 (k > 0) and the boards.
+long add_fixed_camera_residuals(ceres::Problem* problem, JointParameters* p, size_t k,
+                                const std::map<int, const BoardObservation*>& observed,
+                                const std::vector<Eigen::Vector3d>& points, const CornerSet& excluded,
+                                ceres::LossFunction* loss) {
+  long corners = 0;
+  for (const auto& [i, o] : observed) {
+    for (size_t c = 0; c < o->corners.size(); ++c) {
+      if (excluded.count({o->filename, int(c)})) continue;
+      auto* cost = new ceres::DynamicAutoDiffCostFunction<detail::FixedCameraCornerResidual, 6>(
+          new detail::FixedCameraCornerResidual(p->fixed[k].get(), points[c], o->corners[c], k > 0));
+      std::vector<double*> blocks;
+      if (k > 0) cost->AddParameterBlock(6), blocks.push_back(p->cameras[k].data());
+      cost->AddParameterBlock(6);
+      blocks.push_back(p->boards[size_t(i)].data());
+      cost->SetNumResiduals(2);
+      problem->AddResidualBlock(cost, loss, blocks);
+      ++corners;
+    }
+  }
+  return corners;
+}
 
 // Every corner of every camera not in `excluded`, as residuals of `problem` over
 // `p` (under `loss`; nullptr: plain least squares). Returns the corners used per
@@ -236,6 +262,10 @@ std::vector<long> add_joint_residuals(ceres::Problem* problem, JointParameters* 
                                       const std::vector<CornerSet>& excluded, ceres::LossFunction* loss) {
   std::vector<long> corners_of(cameras.size(), 0);
   for (size_t k = 0; k < cameras.size(); ++k) {
+    if (p->fixed[k]) {
+      corners_of[k] = add_fixed_camera_residuals(problem, p, k, observed[k], points, excluded[k], loss);
+      continue;
+    }
     const int params = int(p->intrinsics[k].model.size());
     with_model_class(cameras[k].model.name, [&]<template <typename> class Model>() {
       for (const auto& [i, o] : observed[k]) {
@@ -264,6 +294,7 @@ std::vector<long> add_joint_residuals(ceres::Problem* problem, JointParameters* 
 
 // Camera k's camera at the joint solution `p`.
 Camera joint_camera(const JointParameters& p, const std::vector<RigCamera>& cameras, size_t k) {
+  if (p.fixed[k]) return *p.fixed[k];
   CameraParameters c;
   c.width = cameras[k].width, c.height = cameras[k].height;
   c.model = make_model(cameras[k].model.name, p.intrinsics[k].model);
@@ -326,6 +357,15 @@ std::vector<CalibrationResult> calibrate_each(const std::vector<RigCamera>& came
   std::vector<CalibrationResult> singles;
   for (size_t k = 0; k < cameras.size(); ++k) {
     try {
+      if (const auto& fixed = cameras[k].fixed_intrinsics) {
+        if (fixed->width != cameras[k].width || fixed->height != cameras[k].height) {
+          throw Error("its fixed intrinsics are for " + std::to_string(fixed->width) + "x" +
+                      std::to_string(fixed->height) + " images, its corners for " + std::to_string(cameras[k].width) +
+                      "x" + std::to_string(cameras[k].height));
+        }
+        singles.push_back(locate_boards(cameras[k].observations, board, Camera(*fixed)));
+        continue;
+      }
       singles.push_back(
           calibrate(cameras[k].observations, board, cameras[k].width, cameras[k].height, cameras[k].model, options));
     } catch (const Error& e) {
@@ -429,9 +469,11 @@ std::vector<Pose> relative_poses(const RigViews& v) {
 // Step 3's start: the single calibrations' intrinsics, the relative poses, each
 // instant's board relative to camera 0 (placed from the first camera that saw it).
 JointParameters joint_start(const std::vector<CalibrationResult>& singles, const std::vector<Pose>& from_rig,
-                            const RigViews& v) {
+                            const RigViews& v, const std::vector<RigCamera>& cameras) {
   JointParameters joint;
   for (size_t k = 0; k < singles.size(); ++k) {
+    const auto& fixed = cameras[k].fixed_intrinsics;
+    joint.fixed.push_back(fixed ? std::make_shared<const Camera>(*fixed) : nullptr);
     const auto& p = singles[k].camera;
     joint.intrinsics.push_back(Solve{model_params(p.model), p.grid.principal_point, p.grid.pixel_scale.y(), {}});
     joint.cameras.push_back(pose_block(from_rig[k]));
@@ -496,6 +538,10 @@ JointCovariance joint_covariance(ceres::Problem* problem, JointParameters* joint
   Eigen::Index column = 0;
   for (size_t k = 0; k < n; ++k) {
     Solve& s = joint->intrinsics[k];
+    if (joint->fixed[k]) {
+      c.intrinsic_start[k] = -1;  // held fixed: not a parameter
+      continue;
+    }
     c.intrinsic_start[k] = column;
     blocks.insert(blocks.end(), {s.model.data(), s.center.data(), &s.ay});
     column += Eigen::Index(s.model.size()) + 3;
@@ -525,19 +571,24 @@ CalibrationResult joint_report(size_t k, const CalibrationResult& single, const 
   const Solve& s = joint.intrinsics[k];
   const Pose rig_to_camera = pose_of(joint.cameras[k]);
   CameraParameters p = r.camera;
-  p.model = make_model(rig_camera.model.name, s.model);
-  p.grid.principal_point = s.center;
-  p.grid.pixel_scale = {1.0, s.ay};
+  if (!joint.fixed[k]) {
+    p.model = make_model(rig_camera.model.name, s.model);
+    p.grid.principal_point = s.center;
+    p.grid.pixel_scale = {1.0, s.ay};
+  }
   p.pose = inverse(rig_to_camera);  // camera -> camera 0
   const Camera camera(p);
   r.poses.clear(), r.used_images.clear(), r.per_image_rms_px.clear();
   double sum2 = 0;
-  CalibrationRecord& record = *p.calibration;
-  record = CalibrationRecord::nothing_observed();
-  record.covariance = detail::projection_covariance_of(
-      c.full,
-      {c.intrinsic_start[k], Eigen::Index(s.model.size()) + 3, c.pose_start[k], c.boards_start, joint.cameras[k]},
-      c.used_boards);
+  // Intrinsics held fixed keep their own calibration's record (what determined them);
+  // solved ones get the joint solve's.
+  CalibrationRecord record = CalibrationRecord::nothing_observed();
+  if (!joint.fixed[k]) {
+    record.covariance = detail::projection_covariance_of(
+        c.full,
+        {c.intrinsic_start[k], Eigen::Index(s.model.size()) + 3, c.pose_start[k], c.boards_start, joint.cameras[k]},
+        c.used_boards);
+  }
   for (const auto& [i, o] : v.observed[k]) {
     const Pose board_pose = compose(rig_to_camera, pose_of(joint.boards[size_t(i)]));
     double board_sum2 = 0;
@@ -562,6 +613,12 @@ CalibrationResult joint_report(size_t k, const CalibrationResult& single, const 
     if (v.renumbered_images[k].count(o.filename)) o.corner = board.corners() - 1 - o.corner;
     r.outliers.push_back(o);
   }
+  r.noise_px = std::sqrt(c.full.variance);
+  if (joint.fixed[k]) {  // parameters as given, sigma 0
+    r.camera = p;
+    return r;
+  }
+  p.calibration = record;
   r.parameters = s.model;
   r.parameters.insert(r.parameters.end(), {s.center.x(), s.center.y(), s.ay});
   r.undetermined.clear();
@@ -579,7 +636,6 @@ CalibrationResult joint_report(size_t k, const CalibrationResult& single, const 
     }
     if (!names.empty()) r.undetermined.push_back(undetermined_text(names, false, rig_camera.model.name, r.parameters));
   }
-  r.noise_px = std::sqrt(c.full.variance);
   r.camera = p;
   check_solution(r, rig_camera.width, rig_camera.height, camera_name(k) + " " + rig_camera.model.name);
   return r;
@@ -595,7 +651,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   RigViews views;
   index_views(cameras, singles, &views);
   resolve_numbering(board, &views);
-  JointParameters joint = joint_start(singles, relative_poses(views), views);
+  JointParameters joint = joint_start(singles, relative_poses(views), views, cameras);
   // 3. The joint solve, the outliers of step 1 left out, then the joint outliers.
   const auto points = board_points(board);
   std::vector<CornerSet> excluded(n);  // (image, corner) per camera
@@ -628,6 +684,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
       rotation = std::max(rotation, std::sqrt(covariance.full.covariance(at, at)));
       translation = std::max(translation, std::sqrt(covariance.full.covariance(at + 3, at + 3)));
     }
+    out.fixed_intrinsics.push_back(cameras[k].fixed_intrinsics.has_value());
     out.rotation_sigma_rad.push_back(rotation);
     out.translation_sigma.push_back(translation);
     for (const auto& w : r.warnings) out.warnings.push_back(camera_name(k) + ": " + w);
@@ -637,6 +694,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   for (const Eigen::VectorXd& direction : covariance.full.undetermined) {
     bool intrinsic = false;
     for (size_t k = 0; k < n; ++k) {
+      if (covariance.intrinsic_start[k] < 0) continue;  // held fixed
       const Eigen::Index count = Eigen::Index(out.cameras[k].parameters.size());
       intrinsic = intrinsic || direction.segment(covariance.intrinsic_start[k], count).norm() >= 0.1;
     }

@@ -433,3 +433,86 @@ TEST(Rig, TheProgramWritesTheRigInEveryFormatThatHoldsOne) {
 
 }  // namespace
 }  // namespace fishcam
+
+namespace fishcam {
+namespace {
+
+// The truth's lens of stereo_rig, as a camera file would give it.
+CameraParameters stereo_lens() {
+  return resized(read_camera(test::data_path("kannala_brandt.yaml")).parameters(), 640, 483);
+}
+
+// Intrinsics held fixed (OpenCV's CALIB_FIX_INTRINSIC): only where each camera sits
+// is solved. With the true lenses the relative pose sits within 3 sigma of the
+// truth, its sigma below the free solve's (the intrinsics' uncertainty no longer
+// enters); the cameras keep their intrinsics exactly; one camera may stay free.
+TEST(Rig, IntrinsicsHeldFixedSolveOnlyWhereTheCamerasSit) {
+  SyntheticRig rig = stereo_rig(0.3, 11);
+  const RigCalibrationResult free = calibrate_rig(rig.cameras, kBoard);
+  for (auto& camera : rig.cameras) camera.fixed_intrinsics = stereo_lens();
+  const RigCalibrationResult fixed = calibrate_rig(rig.cameras, kBoard);
+  EXPECT_EQ(fixed.fixed_intrinsics, (std::vector<bool>{true, true}));
+  EXPECT_EQ(free.fixed_intrinsics, (std::vector<bool>{false, false}));
+  const Pose expected = relative(rig.truth, 1);
+  const Pose& got = *fixed.cameras[1].camera.pose;
+  EXPECT_LT(got.rotation.angularDistance(expected.rotation), 3 * std::sqrt(3.0) * fixed.rotation_sigma_rad[1]);
+  EXPECT_LT((got.translation - expected.translation).norm(), 3 * std::sqrt(3.0) * fixed.translation_sigma[1]);
+  EXPECT_LT(fixed.rotation_sigma_rad[1], free.rotation_sigma_rad[1]);
+  EXPECT_GT(fixed.rotation_sigma_rad[1], 0);
+  for (size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(model_params(fixed.cameras[k].camera.model), model_params(stereo_lens().model)) << k;
+    EXPECT_EQ(fixed.cameras[k].camera.grid, stereo_lens().grid) << k;
+    for (const double sigma : fixed.cameras[k].sigmas) EXPECT_EQ(sigma, 0) << k;
+  }
+  EXPECT_LT(fixed.rms_px, 0.3 * 1.2 * std::sqrt(2.0));
+  rig.cameras[0].fixed_intrinsics.reset();  // camera 0 solved, camera 1 held
+  const RigCalibrationResult mixed = calibrate_rig(rig.cameras, kBoard);
+  EXPECT_EQ(mixed.fixed_intrinsics, (std::vector<bool>{false, true}));
+  EXPECT_GT(mixed.cameras[0].sigmas[0], 0);
+  expect_rig_truth(mixed, rig, 3e-3, 3e-3);
+}
+
+TEST(Rig, IntrinsicsHeldFixedMustBeForTheCornersImageSize) {
+  SyntheticRig rig = stereo_rig(0.1, 12);
+  rig.cameras[1].fixed_intrinsics = resized(stereo_lens(), 1280, 966);
+  try {
+    calibrate_rig(rig.cameras, kBoard);
+    ADD_FAILURE() << "intrinsics of another image size were used";
+  } catch (const Error& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("camera 1: its fixed intrinsics are for 1280x966 images, its corners for 640x483"),
+        std::string::npos)
+        << e.what();
+  }
+}
+
+// Through the program: --fix-intrinsics FILE|free per --corners; the report says
+// which are fixed; a count that does not match is refused in one line.
+TEST(Rig, TheProgramHoldsIntrinsicsFixed) {
+  const SyntheticRig rig = stereo_rig(0.2, 13);
+  const auto dir = test::scratch_dir("rig_fixed_cli");
+  std::string corners;
+  for (size_t k = 0; k < 2; ++k) {
+    const auto path = dir / ("cam" + std::to_string(k) + ".vnl");
+    write_corners(path, rig.cameras[k].observations);
+    corners += " --corners " + test::quoted(path);
+  }
+  write_camera(stereo_lens(), dir / "lens.json", CameraFormat::fishcam);
+  const std::string base =
+      "calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model kannala-brandt --json ";
+  auto r = test::run_fishcam(base + "--fix-intrinsics free " + test::quoted(dir / "lens.json") + " --out " +
+                             test::quoted(dir / "rig.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"intrinsics\": \"solved\""), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"intrinsics\": \"fixed\""), std::string::npos) << r.out;
+  r = test::run_fishcam(base + "--fix-intrinsics " + test::quoted(dir / "lens.json") + " --out " +
+                        test::quoted(dir / "rig2.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--fix-intrinsics: give one camera file (or 'free') per --corners (2), not 1"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "rig2.json"));
+}
+
+}  // namespace
+}  // namespace fishcam

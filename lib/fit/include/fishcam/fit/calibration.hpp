@@ -53,6 +53,14 @@ struct CalibrationOptions {
 CalibrationResult calibrate(const std::vector<BoardObservation>& observations, const BoardSpec& board, int width,
                             int height, const ModelSpec& model, const CalibrationOptions& options = {});
 
+// The board poses of a camera whose intrinsics are known, as calibrate finds them
+// with the intrinsics held: each board placed from its corners' rays, a robust solve
+// (Cauchy, 1 px), the outliers (> 5 robust sigmas) left out, plain least squares.
+// The result's camera is `camera`, its parameters the model's, cx, cy and a_y with
+// sigma 0. Throws Error naming the image whose corners the camera cannot see.
+CalibrationResult locate_boards(const std::vector<BoardObservation>& observations, const BoardSpec& board,
+                                const Camera& camera);
+
 // A camera rig (a stereo pair, a car's surround-view cameras): every camera's
 // intrinsics, each camera's pose relative to camera 0 and the boards' poses, solved
 // jointly from images taken at the same instants. Images of one instant have the
@@ -61,6 +69,10 @@ struct RigCamera {
   std::vector<BoardObservation> observations;
   int width = 0, height = 0;
   ModelSpec model;
+  // Intrinsics held fixed (OpenCV's CALIB_FIX_INTRINSIC, mrcal's
+  // --skip-intrinsics-solve): only where the camera sits in the rig is solved. Any
+  // camera fishcam reads, for width x height images; `model` is then not used.
+  std::optional<CameraParameters> fixed_intrinsics = std::nullopt;
 };
 struct RigCalibrationResult {
   // Per camera: its report (intrinsics, sigmas and the record -- observed angles and
@@ -72,8 +84,9 @@ struct RigCalibrationResult {
   // rotation (rad, the angle-axis components' largest) and translation (board units,
   // the largest component); 0 for camera 0.
   std::vector<double> rotation_sigma_rad, translation_sigma;
-  double rms_px = 0;  // over every camera's corners (2-D)
-  long instants = 0;  // distinct instants with a board
+  std::vector<bool> fixed_intrinsics;  // per camera: held fixed (RigCamera::fixed_intrinsics)
+  double rms_px = 0;                   // over every camera's corners (2-D)
+  long instants = 0;                   // distinct instants with a board
   std::vector<std::string> warnings;
 };
 // Each camera must calibrate on its own (>= 3 boards, fishcam::calibrate's checks),
