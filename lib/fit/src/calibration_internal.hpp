@@ -61,6 +61,23 @@ struct CornerResidual {
   }
 };
 
+// A board point in a rig camera's frame: the board -> camera 0 pose, then (for
+// cameras other than 0: rig_to_camera non-null) camera 0 -> the camera; angle-axis
+// and translation blocks.
+template <typename T>
+void board_point_in_camera(const T* board_pose, const T* rig_to_camera, const Eigen::Vector3d& point, T* camera) {
+  const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
+  T in_rig[3];
+  ceres::AngleAxisRotatePoint(board_pose, board, in_rig);
+  for (int k = 0; k < 3; ++k) in_rig[k] += board_pose[3 + k];
+  if (!rig_to_camera) {
+    for (int k = 0; k < 3; ++k) camera[k] = in_rig[k];
+    return;
+  }
+  ceres::AngleAxisRotatePoint(rig_to_camera, in_rig, camera);
+  for (int k = 0; k < 3; ++k) camera[k] += rig_to_camera[3 + k];
+}
+
 // A corner seen through a camera whose intrinsics are held fixed (any camera: its
 // projection and Jacobian d pixel / d point are the camera's own), as a functor of the
 // poses for Ceres' automatic derivatives. Blocks: (moved: camera 0 -> this camera),
@@ -93,17 +110,8 @@ class FixedCameraCornerResidual {
 
   template <typename T>
   bool operator()(T const* const* p, T* residuals) const {
-    const T* board_pose = moved_ ? p[1] : p[0];
-    const T board[3] = {T(point_.x()), T(point_.y()), T(point_.z())};
-    T in_rig[3], camera[3];
-    ceres::AngleAxisRotatePoint(board_pose, board, in_rig);
-    for (int k = 0; k < 3; ++k) in_rig[k] += board_pose[3 + k];
-    if (moved_) {
-      ceres::AngleAxisRotatePoint(p[0], in_rig, camera);
-      for (int k = 0; k < 3; ++k) camera[k] += p[0][3 + k];
-    } else {
-      for (int k = 0; k < 3; ++k) camera[k] = in_rig[k];
-    }
+    T camera[3];
+    board_point_in_camera(moved_ ? p[1] : p[0], moved_ ? p[0] : static_cast<const T*>(nullptr), point_, camera);
     return project_(camera, residuals);
   }
 

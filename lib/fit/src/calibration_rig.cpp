@@ -78,17 +78,8 @@ struct RigCornerResidual {
   bool operator()(T const* const* p, T* residuals) const {
     const Model<T> model = detail::model_from_block<Model>(p[0], params);
     const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
-    const T* board_pose = moved ? p[4] : p[3];
-    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
-    T in_rig[3], camera[3];
-    ceres::AngleAxisRotatePoint(board_pose, board, in_rig);
-    for (int k = 0; k < 3; ++k) in_rig[k] += board_pose[3 + k];
-    if (moved) {
-      ceres::AngleAxisRotatePoint(p[3], in_rig, camera);
-      for (int k = 0; k < 3; ++k) camera[k] += p[3][3 + k];
-    } else {
-      for (int k = 0; k < 3; ++k) camera[k] = in_rig[k];
-    }
+    T camera[3];
+    detail::board_point_in_camera(moved ? p[4] : p[3], moved ? p[3] : static_cast<const T*>(nullptr), point, camera);
     T pixel[2];
     project_radial(model, mapping, camera, pixel);
     residuals[0] = pixel[0] - corner.x();

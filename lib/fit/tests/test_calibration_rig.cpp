@@ -67,6 +67,17 @@ SyntheticRig surround_rig(double noise_px, std::uint64_t seed) {
   return rig;
 }
 
+// Each camera's corners written to DIR/camK.vnl, as the program's --corners arguments.
+std::string corners_arguments(const SyntheticRig& rig, const std::filesystem::path& dir) {
+  std::string arguments;
+  for (size_t k = 0; k < rig.cameras.size(); ++k) {
+    const auto path = dir / ("cam" + std::to_string(k) + ".vnl");
+    write_corners(path, rig.cameras[k].observations);
+    arguments += " --corners " + test::quoted(path);
+  }
+  return arguments;
+}
+
 // Camera k's pose relative to camera 0 (camera -> camera 0).
 Pose relative(const std::vector<Pose>& truth, size_t k) {
   const Eigen::Quaterniond to_0 = truth[0].rotation.conjugate();
@@ -385,12 +396,7 @@ TEST(Rig, UnsynchronisedPairsAreRefusedSayingSo) {
 TEST(Rig, TheProgramWritesTheRigInEveryFormatThatHoldsOne) {
   const SyntheticRig rig = surround_rig(0.2, 4);
   const auto dir = test::scratch_dir("rig_cli");
-  std::string corners;
-  for (size_t k = 0; k < 4; ++k) {
-    const auto path = dir / ("cam" + std::to_string(k) + ".vnl");
-    write_corners(path, rig.cameras[k].observations);
-    corners += " --corners " + test::quoted(path);
-  }
+  const std::string corners = corners_arguments(rig, dir);
   const std::string base =
       "calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model kannala-brandt ";
   int formats = 0;
@@ -491,12 +497,7 @@ TEST(Rig, IntrinsicsHeldFixedMustBeForTheCornersImageSize) {
 TEST(Rig, TheProgramHoldsIntrinsicsFixed) {
   const SyntheticRig rig = stereo_rig(0.2, 13);
   const auto dir = test::scratch_dir("rig_fixed_cli");
-  std::string corners;
-  for (size_t k = 0; k < 2; ++k) {
-    const auto path = dir / ("cam" + std::to_string(k) + ".vnl");
-    write_corners(path, rig.cameras[k].observations);
-    corners += " --corners " + test::quoted(path);
-  }
+  const std::string corners = corners_arguments(rig, dir);
   write_camera(stereo_lens(), dir / "lens.json", CameraFormat::fishcam);
   const std::string base =
       "calibrate" + corners + " --board 9x6 --spacing 0.1 --imagersize 640x483 --model kannala-brandt --json ";
