@@ -5,7 +5,6 @@ conveniences. Every error is a ``fishcam.Error`` (a ``ValueError``) carrying the
 library's one-line message. See docs/python.md.
 """
 
-import functools as _functools
 import os as _os
 import typing as _typing
 
@@ -86,24 +85,6 @@ __all__ = [
 DEPTH_PRIORS = tuple(_fishcam.depth_priors())  # the library's names
 
 
-_F = _typing.TypeVar("_F", bound=_typing.Callable[..., _typing.Any])
-
-
-def _require_initialised(obj: _typing.Any, name: str) -> None:
-    """cls.__new__(cls) alone leaves the C++ object unmade: refused before a method or
-    property reads it (it read garbage or crashed)."""
-    if not _fishcam._initialised(obj):
-        raise Error(
-            f"{name}: an object made without __init__ (cls.__new__ alone): make it with its constructor, "
-            "a reader or pickle"
-        )
-
-
-# How to make the objects of classes without a constructor (pybind11's TypeError
-# "No constructor defined!" says nothing of it).
-_MADE_BY = {"Camera": "fishcam.Camera.read(path) or fishcam.Camera.from_json(text)"}
-
-
 def _shown(value: object, limit: int = 40) -> str:
     """repr(value) on one line, shortened for a message (a 400-digit integer, an array...)."""
     text = " ".join(repr(value).split())
@@ -133,99 +114,6 @@ def _read_regular_file(path: str, max_bytes: int, what: str) -> bytes:
     if len(data) > max_bytes:
         raise Error(f"{path}: larger than {max_bytes >> 20} MiB, not {what}")
     return data
-
-
-def _first_line(text: str) -> str:
-    lines = [line.strip() for line in text.splitlines() if line.strip()]
-    return lines[0] if lines else ""
-
-
-def _one_line_argument_errors(function: _F, name: str, bound: bool = False) -> _F:
-    """pybind11 reports arguments of the wrong type as a multi-line TypeError, and
-    the conversions of arguments raise TypeError or OverflowError (an integer past
-    64 bits, a float past float64); fishcam's errors are one-line fishcam.Error
-    naming the call."""
-    # A method (not a constructor, whose name has no ".", nor __setstate__, which makes the object).
-    initialised = bound and "." in name and not name.endswith(".__setstate__")
-
-    @_functools.wraps(function)
-    def call(*args: _typing.Any, **kwargs: _typing.Any) -> _typing.Any:
-        if initialised and args:
-            _require_initialised(args[0], name)
-        try:
-            return function(*args, **kwargs)
-        except Error as e:
-            if "\n" not in str(e):
-                raise
-            # The promise is one line: a name given with a line break is quoted raw in some messages.
-            raise Error(str(e).replace("\r", "\\r").replace("\n", "\\n")) from None
-        except (TypeError, OverflowError) as e:
-            text = str(e)
-            given = ", ".join(
-                [type(a).__name__ for a in args[1 if bound else 0 :]]
-                + [f"{k}={type(v).__name__}" for k, v in kwargs.items()]
-            )
-            if "incompatible function arguments" in text or "incompatible constructor arguments" in text:
-                lines = [line.strip() for line in text.splitlines() if line.strip()]
-                expected = next((line.split(". ", 1)[1] for line in lines if line[:1].isdigit() and ". " in line), "")
-                raise Error(f"{name}: arguments of the wrong type or range ({given}); expected {expected}") from None
-            if "No constructor defined" in text:
-                made_by = _MADE_BY.get(name, "its static methods")
-                raise Error(f"{name}: has no constructor; make one with {made_by}") from None
-            raise Error(f"{name}: arguments of the wrong type or range ({given}): {_first_line(text)}") from None
-
-    return _typing.cast(_F, call)
-
-
-def _wrap_public_callables(cls: type) -> None:
-    for attribute, value in list(vars(cls).items()):
-        if attribute.startswith("_") and attribute not in ("__init__", "__call__", "__setstate__"):
-            continue
-        if isinstance(value, property) and value.fget is not None:
-            getter = value.fget
-            name = f"{cls.__name__}.{attribute}"
-
-            def checked(self: _typing.Any, getter: _typing.Any = getter, name: str = name) -> _typing.Any:
-                _require_initialised(self, name)
-                return getter(self)
-
-            setattr(cls, attribute, property(checked, value.fset, value.fdel, value.__doc__))
-            continue
-        static = isinstance(value, staticmethod)
-        function = value.__func__ if static else value
-        if not callable(function) or isinstance(value, property):
-            continue
-        wrapped = _one_line_argument_errors(
-            function, f"{cls.__name__}.{attribute.replace('__init__', '')}".rstrip("."), bound=not static
-        )
-        setattr(cls, attribute, staticmethod(wrapped) if static else wrapped)
-
-
-for _cls in (Camera, ViewpointWarp, ViewpointChange, _fishcam.ConfusionMatrix, _fishcam.AffineChange):
-    _wrap_public_callables(_cls)
-for _name, _function in list(vars(_fishcam).items()):
-    if not _name.startswith("_") and type(_function).__name__ == "builtin_function_or_method":
-        setattr(_fishcam, _name, _one_line_argument_errors(_function, _name))
-
-
-def _restore(cls: type, state: _typing.Any) -> _typing.Any:
-    """Unpickles an extension object: its state through the class's __setstate__."""
-    restored = cls.__new__(cls)  # type: ignore[call-overload]
-    restored.__setstate__(state)
-    return restored
-
-
-def _reduce(self: _typing.Any) -> tuple[_typing.Any, ...]:
-    # One reduction for every protocol: pybind11's own needs protocol 2 (0 and 1
-    # abort the interpreter in copyreg with "no registered base types").
-    return (_restore, (type(self), self.__getstate__()))
-
-
-for _pickled in (Camera, ViewpointWarp, ViewpointChange, _fishcam.AffineChange):
-    _pickled.__reduce__ = _reduce  # type: ignore[method-assign]
-# The names imported above, rebound to the wrapped functions (one-line errors).
-derive_seed = _fishcam.derive_seed  # noqa: F811
-random_change_in = _fishcam.random_change_in  # noqa: F811
 
 
 def convert(

@@ -79,6 +79,10 @@ class Camera:
         """
         The hash of parameters_key(): equal cameras hash alike.
         """
+    def __reduce__(self) -> tuple[typing.Any, ...]:
+        """
+        Pickling at every protocol: (copyreg.__newobj__, (type,), __getstate__())
+        """
     def __repr__(self) -> str:
         ...
     def __setstate__(self, arg0: typing.Any) -> None:
@@ -337,6 +341,10 @@ class ViewpointChange:
         """
         rotation_deg: (3,) degrees about x, y, z; translation: (3,).
         """
+    def __reduce__(self) -> tuple[typing.Any, ...]:
+        """
+        Pickling at every protocol: (copyreg.__newobj__, (type,), __getstate__())
+        """
     def __repr__(self) -> str:
         ...
     def __setstate__(self, arg0: tuple[typing.Any, ...]) -> None:
@@ -369,6 +377,10 @@ class ViewpointWarp:
     def __init__(self, camera: Camera, target: Camera | None = None) -> None:
         """
         camera: the images' camera; target: the output camera (default: the same).
+        """
+    def __reduce__(self) -> tuple[typing.Any, ...]:
+        """
+        Pickling at every protocol: (copyreg.__newobj__, (type,), __getstate__())
         """
     def __setstate__(self, arg0: tuple[typing.Any, ...]) -> None:
         ...
@@ -422,6 +434,10 @@ class AffineChange:
         ...
     def __init__(self, rotation_deg: float = 0.0, translation: numpy.typing.ArrayLike = ..., scale: float = 1.0) -> None:
         ...
+    def __reduce__(self) -> tuple[typing.Any, ...]:
+        """
+        Pickling at every protocol: (copyreg.__newobj__, (type,), __getstate__())
+        """
     def __repr__(self) -> str:
         ...
     def __setstate__(self, arg0: tuple[typing.Any, ...]) -> None:

@@ -24,6 +24,14 @@ namespace fishcam::python {
 
 namespace py = pybind11;
 
+// Whether obj's C++ object was made: cls.__new__(cls) alone leaves it unmade (its
+// memory unset), and a method or property on it would read garbage or crash.
+bool initialised(py::handle obj);
+// After every binding (errors.cpp): every function of module `m` and its classes
+// raises `error` (fishcam.Error) in one line naming the call, for arguments of the
+// wrong type too, and refuses objects made without __init__.
+void route_errors_to_fishcam_error(py::module_& m, py::handle error);
+
 using PointArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
 // (N, k) float64, C-contiguous: the input itself when it already is one (no copy),

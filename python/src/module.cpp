@@ -7,6 +7,25 @@
 
 namespace py = pybind11;
 
+namespace {
+
+// One reduction for every pickle protocol: pybind11's own (py::pickle) needs
+// protocol 2, and 0 and 1 abort the interpreter in copyreg ("no registered base
+// types"). copyreg.__newobj__ makes the object by cls.__new__(cls), pickle then calls
+// its __setstate__ with the state.
+void reduce_through_getstate(py::handle cls) {
+  py::setattr(cls, "__reduce__",
+              py::cpp_function(
+                  [](py::handle self) {
+                    return py::make_tuple(py::module_::import("copyreg").attr("__newobj__"),
+                                          py::make_tuple(py::type::handle_of(self)), self.attr("__getstate__")());
+                  },
+                  py::name("__reduce__"), py::is_method(cls),
+                  py::doc("Pickling at every protocol: (copyreg.__newobj__, (type,), __getstate__())")));
+}
+
+}  // namespace
+
 PYBIND11_MODULE(_fishcam, m) {
   using fishcam::Error;
   m.doc() = "fishcam's C++ library (use the fishcam package, not this module)";
@@ -15,7 +34,7 @@ PYBIND11_MODULE(_fishcam, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const Error& e) {
-      PyErr_SetString(error.ptr(), e.what());
+      PyErr_SetString(error.ptr(), e.what());  // one line: errors.cpp
     } catch (const cv::Exception& e) {
       PyErr_SetString(error.ptr(), ("OpenCV: " + e.err).c_str());
     } catch (const py::reference_cast_error&) {
@@ -27,22 +46,15 @@ PYBIND11_MODULE(_fishcam, m) {
     }
   });
   m.attr("__version__") = FISHCAM_VERSION;
-  // Whether obj's C++ object was made: cls.__new__(cls) alone leaves it unmade (its
-  // memory unset), and a method or property on it would read garbage or crash. The
-  // package checks this before every public method and property (fishcam/__init__.py).
-  m.def("_initialised", [](py::handle obj) {
-    if (!py::detail::get_type_info(Py_TYPE(obj.ptr()))) return true;  // not an extension class
-    auto* inst = reinterpret_cast<py::detail::instance*>(obj.ptr());
-    // An instance that refers to an object another owns (returned by reference) has
-    // no holder of its own; one that owns its object has it once the object is made.
-    for (const auto& value_and_holder : py::detail::values_and_holders(inst)) {
-      if (!value_and_holder.value_ptr() || (inst->owned && !value_and_holder.holder_constructed())) return false;
-    }
-    return true;
-  });
+  // Whether obj's C++ object was made (cls.__new__(cls) alone leaves it unmade).
+  m.def("_initialised", [](py::handle obj) { return fishcam::python::initialised(obj); });
   fishcam::python::bind_camera(m);
   fishcam::python::bind_augmentation(m);
   fishcam::python::bind_metrics(m);
   fishcam::python::bind_calibration(m);
   fishcam::python::bind_scene(m);
+  for (const char* name : {"Camera", "ViewpointWarp", "ViewpointChange", "AffineChange"}) {
+    reduce_through_getstate(m.attr(name));
+  }
+  fishcam::python::route_errors_to_fishcam_error(m, error);
 }

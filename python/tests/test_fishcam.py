@@ -544,6 +544,22 @@ def test_arguments_of_the_wrong_type_are_one_line_fishcam_errors(cam):
         assert message in str(error.value) and "\n" not in str(error.value), str(error.value)
 
 
+def test_the_package_holds_the_extension_objects_themselves():
+    """Errors become fishcam.Error inside the extension (python/src/errors.cpp): the
+    package wraps nothing, so what it exports is what the stubs describe."""
+    assert fishcam.derive_seed is fishcam._fishcam.derive_seed
+    assert type(fishcam.derive_seed).__name__ == "builtin_function_or_method"
+    for cls in (fishcam.Camera, fishcam.ViewpointWarp, fishcam.ViewpointChange, fishcam._fishcam.AffineChange):
+        assert cls is getattr(fishcam._fishcam, cls.__name__)
+        for name, member in vars(cls).items():
+            function = member.__func__ if isinstance(member, staticmethod) else member
+            assert not hasattr(function, "__wrapped__"), f"{cls.__name__}.{name} is wrapped"
+    with pytest.raises(fishcam.Error, match=r"^Camera: has no constructor; make one with fishcam.Camera.read"):
+        fishcam.Camera()
+    with pytest.raises(fishcam.Error, match=r"^Camera.width: an object made without __init__"):
+        _ = fishcam.Camera.__new__(fishcam.Camera).width
+
+
 def test_parameters_key_is_exact_and_cheap(cam):
     """The warp cache's key: equal exactly when the cameras are; the pose counts only
     with with_pose (a warp depends on intrinsics and size)."""
