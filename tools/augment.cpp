@@ -24,15 +24,15 @@ struct AugmentOptions {
 // The change to apply: --preset with --seed (the viewpoint or affine ranges of that
 // name), else --rotate/--translate or --affine.
 struct AugmentChange {
-  RandomPose pose;
+  ViewpointChange pose;
   AffineChange affine;
 };
 
 AugmentChange change_of(const AugmentOptions& o, bool affine) {
   AugmentChange c;
-  c.pose = o.preset.empty() ? RandomPose{{o.pose.rotate[0], o.pose.rotate[1], o.pose.rotate[2]},
-                                         {o.pose.translate[0], o.pose.translate[1], o.pose.translate[2]}}
-                            : random_pose(pose_preset(o.preset, "--preset"), o.seed);
+  c.pose = o.preset.empty() ? ViewpointChange{{o.pose.rotate[0], o.pose.rotate[1], o.pose.rotate[2]},
+                                              {o.pose.translate[0], o.pose.translate[1], o.pose.translate[2]}}
+                            : random_change(pose_preset(o.preset, "--preset"), o.seed);
   if (const auto prior = parse_depth_prior(o.pose.depth); prior && !affine) c.pose = applied_under(c.pose, *prior);
   if (affine && !o.preset.empty()) {
     c.affine = random_affine(affine_preset(o.preset, "--preset"), o.seed);
@@ -73,7 +73,7 @@ void print_change(const AugmentOptions& o, const AugmentChange& c, bool affine) 
 }
 
 // --depth map: the maps from the source image's depth map (.npy, H x W float32).
-void augment_with_depth_file(const ViewpointWarp& warp, const ViewpointChange& change, const AugmentOptions& o,
+void augment_with_depth_file(const ViewpointWarp& warp, const RigidMotion& change, const AugmentOptions& o,
                              const AugmentIO& io) {
   const NpyArray array = read_npy(o.depth_file);
   const size_t h = size_t(warp.source().height()), w = size_t(warp.source().width());
@@ -119,9 +119,9 @@ void run_augment_command(const AugmentOptions& o, const CameraInputs& inputs, co
     if (affine) {
       affine_augment(change.affine, cv::Size(warp.source().width(), warp.source().height()), io);
     } else if (depth_map) {
-      augment_with_depth_file(warp, change.pose.change(), o, io);
+      augment_with_depth_file(warp, change.pose.motion(), o, io);
     } else {
-      warp.augment(change.pose.change(), o.pose.prior(), io, *parse_sampling(o.sampling));
+      warp.augment(change.pose.motion(), o.pose.prior(), io, *parse_sampling(o.sampling));
     }
   } catch (const Error& e) {
     // Which input was wrong: the library names the argument ("image: ...", "labels: ...").

@@ -485,7 +485,7 @@ class DatasetAugmentation {
       const std::vector<fs::path> files =
           copy_files(output.dir, copy_name(image_path, output.preset, copy), image_path);
       const std::uint64_t seed = derive_seed(o_.seed, stem + "/" + preset_name, copy);
-      const RandomPose pose = applied_under(random_pose(output.preset, seed), prior_);
+      const ViewpointChange pose = applied_under(random_change(output.preset, seed), prior_);
       const AffineChange affine_change = affine_ ? random_affine(affine_preset(preset_name), seed) : AffineChange{};
       const std::string listed = fs::relative(files[0], output.dir).string();
       // Its own manifest's, or another run's of the same settings (the unsharded run
@@ -513,7 +513,7 @@ class DatasetAugmentation {
     }
   }
 
-  std::vector<std::pair<fs::path, std::string>> render_copy(const DatasetImage& source, const RandomPose& pose,
+  std::vector<std::pair<fs::path, std::string>> render_copy(const DatasetImage& source, const ViewpointChange& pose,
                                                             const AffineChange& affine_change,
                                                             const std::vector<fs::path>& files) const {
     cv::Mat out_pixels, out_labels;
@@ -521,21 +521,21 @@ class DatasetAugmentation {
     if (affine_) {
       affine_augment(affine_change, cv::Size(source.camera->width(), source.camera->height()), io);
     } else {
-      source.warp->augment(pose.change(), prior_, io, sampling_);
+      source.warp->augment(pose.motion(), prior_, io, sampling_);
     }
     std::vector<std::pair<fs::path, std::string>> contents{{files[0], encode_image(files[0], out_pixels)},
                                                            {files[1], encode_image(files[1], out_labels)}};
     if (!affine_) {
       // The output camera: same intrinsics, the moved pose (translation in
       // unit-sphere units, written as metres).
-      contents.emplace_back(files[2], format_camera(augmented_camera(source.camera->parameters(), pose.change()),
+      contents.emplace_back(files[2], format_camera(augmented_camera(source.camera->parameters(), pose.motion()),
                                                     CameraFormat::woodscape));
     }
     return contents;
   }
 
   nlohmann::json manifest_line(const fs::path& image_path, const std::string& output, int copy,
-                               const PosePreset& preset, std::uint64_t seed, const RandomPose& pose,
+                               const PosePreset& preset, std::uint64_t seed, const ViewpointChange& pose,
                                const AffineChange& affine_change) const {
     nlohmann::json line{{"image", image_path.filename().string()},
                         {"output", output},

@@ -171,7 +171,7 @@ nlohmann::json measure_augment(const Camera& camera, const ViewpointWarp& warp, 
     cv::setNumThreads(threads);
     std::vector<double> total, map, fixed_floor, float_floor;
     for (int i = 0; i < samples; ++i) {
-      const ViewpointChange change = random_pose(train, std::uint64_t(1000 * threads + i)).change();
+      const RigidMotion change = random_change(train, std::uint64_t(1000 * threads + i)).motion();
       // The floor's maps, computed beforehand for this very pose.
       WarpMaps maps;
       warp.compute(change, DepthPrior::source_sphere, &maps);
@@ -257,7 +257,7 @@ void run_grid_accuracy(const std::string& path, bool json, std::optional<cv::Siz
   double worst = 0;
   long valid = 0, decisions = 0, labels_differ = 0;
   for (int seed = 0; seed < 20; ++seed) {
-    const ViewpointChange change = random_pose(*find_pose_preset("large"), std::uint64_t(seed)).change();
+    const RigidMotion change = random_change(*find_pose_preset("large"), std::uint64_t(seed)).motion();
     const DepthPrior prior = priors[seed % 3];
     WarpMaps grid, exact;
     warp.compute_grid(change, prior, &grid);

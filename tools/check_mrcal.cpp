@@ -66,11 +66,11 @@ void register_check_mrcal(CLI::App& app) {
   const auto inputs = std::make_shared<const CameraInputs>();  // as the files say
   cmd->callback([o, inputs] {
     const ViewpointWarp warp = make_warp(*inputs, o->source, o->target);
-    const ViewpointChange change = o->pose.change();
+    const RigidMotion change = o->pose.motion();
     // mrcal: the source frame is the reference; the target has rt_cam_ref = (R, t).
     CameraParameters source = warp.source().parameters(), target = warp.target().parameters();
     source.pose = Pose{};
-    const ViewpointChange inverse = change.inverse();
+    const RigidMotion inverse = change.inverse();
     target.pose = Pose{Eigen::Quaterniond(inverse.rotation), inverse.translation};
     char pattern[] = "/tmp/fishcam-check-mrcal-XXXXXX";
     if (!mkdtemp(pattern)) throw Error("cannot create a temporary folder");

@@ -16,8 +16,8 @@
 
 namespace fishcam::cli {
 
-ViewpointChange PoseOptions::change() const {
-  return ViewpointChange::from_euler_deg({rotate[0], rotate[1], rotate[2]}, {translate[0], translate[1], translate[2]});
+RigidMotion PoseOptions::motion() const {
+  return RigidMotion::from_euler_deg({rotate[0], rotate[1], rotate[2]}, {translate[0], translate[1], translate[2]});
 }
 
 DepthPrior PoseOptions::prior() const { return depth_prior(depth, "--depth"); }

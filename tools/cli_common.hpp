@@ -27,7 +27,7 @@ struct PoseOptions {
   std::vector<double> rotate{0, 0, 0};
   std::vector<double> translate{0, 0, 0};
   std::string depth = "source-sphere";
-  ViewpointChange change() const;
+  RigidMotion motion() const;
   DepthPrior prior() const;
 };
 // with_depth_map: --depth also takes "map" (the caller then reads a depth map).

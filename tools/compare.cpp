@@ -188,7 +188,7 @@ void write_figures(const CompareOptions& o, const Camera& camera, const std::vec
     spheres.push_back(sphere_picture(model, picture, sphere_size));
     title(spheres.back(), label);
     WarpMaps maps;
-    ViewpointWarp(model).compute(comparison.changes[0].change(), prior, &maps);
+    ViewpointWarp(model).compute(comparison.changes[0].motion(), prior, &maps);
     augmented.emplace_back();
     warp_image(picture, maps, &augmented.back());
     title(augmented.back(), label);

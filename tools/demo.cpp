@@ -67,7 +67,7 @@ void register_demo(CLI::App& app) {
     const ViewpointWarp warp(camera);
     WarpMaps maps;
     cv::Mat image, labels;
-    auto augment = [&](const ViewpointChange& change) {
+    auto augment = [&](const RigidMotion& change) {
       warp.compute(change, DepthPrior::source_sphere, &maps);
       warp_image(scene.image, maps, &image);
       warp_labels(scene.labels, maps, 0, &labels);
@@ -82,7 +82,7 @@ void register_demo(CLI::App& app) {
         for (double sign : {+1.0, -1.0}) {
           Eigen::Vector3d r = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
           (kind == 0 ? r : t)[axis] = sign * (kind == 0 ? 20 : 0.3);
-          augment(ViewpointChange::from_euler_deg(r, t));
+          augment(RigidMotion::from_euler_deg(r, t));
           char caption[64];
           std::snprintf(caption, sizeof caption, kind == 0 ? "rotate %+.0f deg about %c" : "translate %+.1f along %c",
                         kind == 0 ? r[axis] : t[axis], axes[axis]);
@@ -95,8 +95,8 @@ void register_demo(CLI::App& app) {
     cells.clear();
     for (const char* name : {"small", "medium", "large"}) {
       for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-        const RandomPose pose = random_pose(*find_pose_preset(name), seed);
-        augment(pose.change());
+        const ViewpointChange pose = random_change(*find_pose_preset(name), seed);
+        augment(pose.motion());
         char caption[96];
         std::snprintf(caption, sizeof caption, "%s #%llu r(%.0f,%.0f,%.0f) t(%.2f,%.2f,%.2f)", name,
                       static_cast<unsigned long long>(seed), pose.rotation_deg.x(), pose.rotation_deg.y(),

@@ -33,9 +33,9 @@ void register_map(CLI::App& app) {
     const ViewpointWarp warp = make_warp(*inputs, o->source, o->target);
     WarpMaps maps;
     if (o->exact) {
-      warp.compute_exact(o->pose.change(), o->pose.prior(), &maps);
+      warp.compute_exact(o->pose.motion(), o->pose.prior(), &maps);
     } else {
-      warp.compute(o->pose.change(), o->pose.prior(), &maps, MapKind::geometric);
+      warp.compute(o->pose.motion(), o->pose.prior(), &maps, MapKind::geometric);
     }
     const int h = maps.map_x.rows, w = maps.map_x.cols;
     NpyArray array{{size_t(h), size_t(w), 2}, std::vector<float>(2 * size_t(h) * size_t(w))};
@@ -51,7 +51,7 @@ void register_map(CLI::App& app) {
     write_npy(o->out, array, o->force);
     std::printf("wrote %s: %dx%dx2 float32, %ld pixels with a source (%ld inside the source image), %s, depth %s\n",
                 o->out.c_str(), h, w, finite, long(h) * w - maps.invalid_count,
-                describe(o->pose.change().euler_deg(), o->pose.change().translation).c_str(), o->pose.depth.c_str());
+                describe(o->pose.motion().euler_deg(), o->pose.motion().translation).c_str(), o->pose.depth.c_str());
   });
 }
 

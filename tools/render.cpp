@@ -52,7 +52,7 @@ void register_render(CLI::App& app) {
                   ": has no pose to place it in the scene (give one with --mount, e.g. "
                   "data/woodscape_front.json)");
     }
-    const Pose pose = moved_camera(*mount_pose, o->pose.change());
+    const Pose pose = moved_camera(*mount_pose, o->pose.motion());
     const StreetScene scene = o->scene_seed ? StreetScene::generate(*o->scene_seed) : StreetScene::bundled();
     const SceneRender render = scene.render(camera, pose, o->supersampling);
     std::vector<std::pair<std::filesystem::path, std::string>> files = {

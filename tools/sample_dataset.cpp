@@ -102,7 +102,7 @@ class SampleWriter {
 
 // One line of a test set's changes.jsonl.
 std::string change_line(const std::string& name, const PosePreset& preset, std::uint64_t seed,
-                        const RandomPose& change) {
+                        const ViewpointChange& change) {
   const auto& r = change.rotation_deg;
   const auto& t = change.translation;
   return nlohmann::json{{"name", name},
@@ -203,9 +203,10 @@ void bundled_street_dataset(const Options& o) {
     for (int i = 0; i < o.images; ++i) {
       char name[32];
       std::snprintf(name, sizeof name, "%05d_FV", i);
-      const RandomPose perturbation = random_pose(mount, derive_seed(o.seed, "sample-dataset", std::uint64_t(i)));
+      const ViewpointChange perturbation =
+          random_change(mount, derive_seed(o.seed, "sample-dataset", std::uint64_t(i)));
       CameraParameters p = camera.parameters();
-      p.pose = moved_camera(*p.pose, perturbation.change());
+      p.pose = moved_camera(*p.pose, perturbation.motion());
       writer.sample(out, name, p, [&] { return StreetScene::bundled().render(camera, *p.pose, o.supersampling); });
     }
   });
@@ -313,12 +314,12 @@ struct SurroundViewRun {
     for (const PosePreset& preset : test_sets) {
       const std::string set = "test-" + std::string(preset.name);
       const std::uint64_t seed = derive_seed(o.seed, set, std::uint64_t(samples));
-      const RandomPose full = random_pose(preset, seed);
-      RandomPose rotation = full;
+      const ViewpointChange full = random_change(preset, seed);
+      ViewpointChange rotation = full;
       rotation.translation.setZero();
       for (const auto& [folder, change] : {std::pair{set, full}, std::pair{set + "-rotation", rotation}}) {
         CameraParameters moved = p;
-        moved.pose = moved_camera(*p.pose, change.change());
+        moved.pose = moved_camera(*p.pose, change.motion());
         writer.sample(out / folder, name, moved,
                       [&] { return scene_of().render(camera, *moved.pose, o.supersampling); });
         changes[folder] += change_line(name, preset, seed, change);
@@ -332,7 +333,7 @@ struct SurroundViewRun {
   // (source-sphere prior, the translation in the sphere's units), as
   // augment-dataset --depth source-sphere --sampling grid --label-fill FILL writes it.
   void write_paper_sample(SampleWriter& writer, const std::string& folder, const std::string& name,
-                          const std::pair<std::string, Camera>& entry, const RandomPose& full,
+                          const std::pair<std::string, Camera>& entry, const ViewpointChange& full,
                           const std::function<const SceneRender&()>& original_of) {
     auto as_written = paper_cameras.find(entry.first);
     if (as_written == paper_cameras.end()) {
@@ -341,13 +342,13 @@ struct SurroundViewRun {
       as_written = paper_cameras.emplace(entry.first, std::pair{read_back, ViewpointWarp(Camera(read_back))}).first;
     }
     const ViewpointWarp& warp = as_written->second.second;
-    writer.sample(out / folder, name, augmented_camera(as_written->second.first, full.change()), [&] {
+    writer.sample(out / folder, name, augmented_camera(as_written->second.first, full.motion()), [&] {
       const SceneRender& source = original_of();
       SceneRender augmented;
       const AugmentIO io{&source.image, &augmented.image, 0, &source.labels, &augmented.labels, label_fill, nullptr};
-      warp.augment(full.change(), DepthPrior::source_sphere, io, Sampling::grid);
+      warp.augment(full.motion(), DepthPrior::source_sphere, io, Sampling::grid);
       if (o.depth) {
-        warp.warp_depth(full.change(), DepthPrior::source_sphere, source.range, DepthValues::range, &augmented.range);
+        warp.warp_depth(full.motion(), DepthPrior::source_sphere, source.range, DepthValues::range, &augmented.range);
       }
       return augmented;
     });

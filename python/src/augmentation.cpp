@@ -21,10 +21,10 @@ MapKind map_kind(const std::string& name) {
   return *kind;
 }
 
-RandomPose change_from(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3d& translation) {
+ViewpointChange change_from(const Eigen::Vector3d& rotation_deg, const Eigen::Vector3d& translation) {
   if (!rotation_deg.allFinite()) throw Error("rotation_deg: must be finite");
   if (!translation.allFinite()) throw Error("translation: must be finite");
-  return RandomPose{rotation_deg, translation};
+  return ViewpointChange{rotation_deg, translation};
 }
 
 // What `fishcam augment` writes, into new numpy arrays: the image and labels (and
@@ -114,7 +114,7 @@ DepthSource depth_choice(const std::string& depth, std::optional<py::array>& dep
 
 // One augmented sample, what `fishcam augment` writes (ViewpointWarp.warp and __call__).
 py::dict augment_sample(const ViewpointWarp& warp, std::optional<py::array> image, std::optional<py::array> labels,
-                        const RandomPose& change, const std::string& depth, double fill, int label_fill,
+                        const ViewpointChange& change, const std::string& depth, double fill, int label_fill,
                         bool return_valid, const std::string& sampling, std::optional<py::array> depth_map,
                         const std::string& depth_values) {
   const DepthSource depth_source = depth_choice(depth, depth_map, depth_values);
@@ -122,24 +122,24 @@ py::dict augment_sample(const ViewpointWarp& warp, std::optional<py::array> imag
   const cv::Size source(warp.source().width(), warp.source().height());
   const cv::Size target(warp.target().width(), warp.target().height());
   return resample(image, labels, source, target, fill, label_fill, return_valid,
-                  [&](const AugmentIO& io) { warp.augment(change.change(), depth_source, io, how); });
+                  [&](const AugmentIO& io) { warp.augment(change.motion(), depth_source, io, how); });
 }
 
-// RandomPose (C++ ViewpointChange with its pose draw), Camera.augmented, the presets and seeds.
+// ViewpointChange, Camera.augmented, the presets and seeds.
 void bind_viewpoint_changes(py::module_& m) {
-  py::class_<RandomPose>(
+  py::class_<ViewpointChange>(
       m, "ViewpointChange",
       "A viewpoint change (the paper's eq. 7): a point P of the camera frame is at R P + t in the "
       "moved camera's frame; R = Rz Ry Rx of rotation_deg (x applied first), t in unit-sphere units.")
       .def(py::init(&change_from), py::arg("rotation_deg") = Eigen::Vector3d::Zero(),
            py::arg("translation") = Eigen::Vector3d::Zero(),
            "rotation_deg: (3,) degrees about x, y, z; translation: (3,).")
-      .def_readonly("rotation_deg", &RandomPose::rotation_deg, "Degrees about x, y, z: float64 array (3,).")
-      .def_readonly("translation", &RandomPose::translation, "t of eq. 7: float64 array (3,).")
+      .def_readonly("rotation_deg", &ViewpointChange::rotation_deg, "Degrees about x, y, z: float64 array (3,).")
+      .def_readonly("translation", &ViewpointChange::translation, "t of eq. 7: float64 array (3,).")
       .def_property_readonly(
-          "rotation", [](const RandomPose& p) { return Eigen::Matrix3d(p.change().rotation); },
+          "rotation", [](const ViewpointChange& p) { return Eigen::Matrix3d(p.motion().rotation); },
           "R of eq. 7: float64 array (3, 3).")
-      .def(py::pickle([](const RandomPose& p) { return py::make_tuple(p.rotation_deg, p.translation); },
+      .def(py::pickle([](const ViewpointChange& p) { return py::make_tuple(p.rotation_deg, p.translation); },
                       [](const py::tuple& t) {
                         return from_pickle_state("pickled ViewpointChange", [&] {
                           if (t.size() != 2)
@@ -147,7 +147,7 @@ void bind_viewpoint_changes(py::module_& m) {
                           return change_from(t[0].cast<Eigen::Vector3d>(), t[1].cast<Eigen::Vector3d>());
                         });
                       }))
-      .def("__repr__", [](const RandomPose& p) {
+      .def("__repr__", [](const ViewpointChange& p) {
         char buffer[256];
         std::snprintf(buffer, sizeof buffer,
                       "ViewpointChange(rotation_deg=(%.17g, %.17g, %.17g), translation=(%.17g, %.17g, %.17g))",
@@ -160,14 +160,15 @@ void bind_viewpoint_changes(py::module_& m) {
   // its signature (and the stubs) name it.
   py::reinterpret_borrow<py::class_<Camera>>(m.attr("Camera"))
       .def(
-          "augmented", [](const Camera& c, const RandomPose& change) { return augmented_camera(c, change.change()); },
+          "augmented",
+          [](const Camera& c, const ViewpointChange& change) { return augmented_camera(c, change.motion()); },
           py::arg("change"),
           "The camera of an image augmented by `change`: same intrinsics, the pose moved by the change (a camera "
           "without a pose gets one relative to its own frame)");
 
   m.def(
       "random_change",
-      [](const std::string& preset, std::uint64_t seed) { return random_pose(pose_preset(preset), seed); },
+      [](const std::string& preset, std::uint64_t seed) { return random_change(pose_preset(preset), seed); },
       py::arg("preset"), py::arg("seed"));
   m.def(
       "random_change_in",
@@ -176,7 +177,7 @@ void bind_viewpoint_changes(py::module_& m) {
             !std::isfinite(max_translation)) {
           throw Error("max_rotation_deg must be in [0, 180] and max_translation finite and >= 0");
         }
-        return random_pose(PosePreset{"custom", max_rotation_deg, max_translation}, seed);
+        return random_change(PosePreset{"custom", max_rotation_deg, max_translation}, seed);
       },
       py::arg("max_rotation_deg"), py::arg("max_translation"), py::arg("seed"));
   m.def("presets", [] {
@@ -225,7 +226,7 @@ void def_warp_cameras(py::class_<ViewpointWarp>& cls) {
 
 // ViewpointWarp.maps: the maps of a change, written into new numpy arrays.
 std::tuple<py::array_t<float>, py::array_t<float>, py::array_t<bool>> warp_maps(const ViewpointWarp& warp,
-                                                                                const RandomPose& change,
+                                                                                const ViewpointChange& change,
                                                                                 const std::string& depth,
                                                                                 const std::string& kind, bool exact,
                                                                                 bool grid) {
@@ -244,11 +245,11 @@ std::tuple<py::array_t<float>, py::array_t<float>, py::array_t<bool>> warp_maps(
   {
     py::gil_scoped_release release;
     if (exact) {
-      warp.compute_exact(change.change(), prior, &maps);
+      warp.compute_exact(change.motion(), prior, &maps);
     } else if (grid) {
-      warp.compute_grid(change.change(), prior, &maps);
+      warp.compute_grid(change.motion(), prior, &maps);
     } else {
-      warp.compute(change.change(), prior, &maps, map);
+      warp.compute(change.motion(), prior, &maps, map);
     }
     if (maps.map_x.data != static_cast<void*>(map_x.mutable_data()) ||
         maps.map_y.data != static_cast<void*>(map_y.mutable_data())) {
@@ -263,7 +264,8 @@ std::tuple<py::array_t<float>, py::array_t<float>, py::array_t<bool>> warp_maps(
 }
 
 // ViewpointWarp.sampling_grid: the grid path's maps in grid_sample's coordinates.
-std::pair<py::array_t<float>, py::array_t<bool>> warp_sampling_grid(const ViewpointWarp& warp, const RandomPose& change,
+std::pair<py::array_t<float>, py::array_t<bool>> warp_sampling_grid(const ViewpointWarp& warp,
+                                                                    const ViewpointChange& change,
                                                                     const std::string& depth) {
   const DepthPrior prior = depth_prior(depth);
   const int h = warp.target().height(), w = warp.target().width();
@@ -273,7 +275,7 @@ std::pair<py::array_t<float>, py::array_t<bool>> warp_sampling_grid(const Viewpo
   {
     py::gil_scoped_release release;
     WarpMaps maps;
-    warp.compute_grid(change.change(), prior, &maps);
+    warp.compute_grid(change.motion(), prior, &maps);
     // torch.nn.functional.grid_sample's coordinates with align_corners=True:
     // -1 and 1 on the outer pixel centres; sources in the outer half pixel
     // clamped onto them (as fishcam's resampling does); 0 where there is none.
@@ -318,11 +320,11 @@ void def_warp_maps(py::class_<ViewpointWarp>& cls) {
 void def_warp_targets(py::class_<ViewpointWarp>& cls) {
   cls.def(
          "forward",
-         [](const ViewpointWarp& warp, const py::handle& points, const RandomPose& change, const std::string& depth,
-            std::optional<py::array> depth_map, const std::string& depth_values) {
+         [](const ViewpointWarp& warp, const py::handle& points, const ViewpointChange& change,
+            const std::string& depth, std::optional<py::array> depth_map, const std::string& depth_values) {
            const DepthSource source = depth_choice(depth, depth_map, depth_values);
            return batch<2, 2>(points, "points",
-                              [&](auto in, auto out, auto ok) { warp.forward(change.change(), source, in, out, ok); });
+                              [&](auto in, auto out, auto ok) { warp.forward(change.motion(), source, in, out, ok); });
          },
          py::arg("points"), py::arg("change"), py::arg("depth") = "source-sphere", py::arg("depth_map") = py::none(),
          py::arg("depth_values") = "range",
@@ -330,7 +332,7 @@ void def_warp_targets(py::class_<ViewpointWarp>& cls) {
          "visible (N,) bool: inside the output and not hidden)")
       .def(
           "warp_depth",
-          [](const ViewpointWarp& warp, py::array depth_map, const RandomPose& change, const std::string& depth,
+          [](const ViewpointWarp& warp, py::array depth_map, const ViewpointChange& change, const std::string& depth,
              const std::string& values, float fill) {
             const bool map = depth == kDepthMapName;  // the depth map is its own source
             const auto kind = parse_depth_values(values);
@@ -349,7 +351,7 @@ void def_warp_targets(py::class_<ViewpointWarp>& cls) {
             const uchar* before = out_header.data;
             {
               py::gil_scoped_release release;
-              warp.warp_depth(change.change(), source, in, *kind, &out_header, fill);
+              warp.warp_depth(change.motion(), source, in, *kind, &out_header, fill);
             }
             if (out_header.data != before) throw Error("internal: an output was reallocated");
             return out;

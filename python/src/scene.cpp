@@ -12,7 +12,7 @@ namespace {
 void bind_rendering(py::module_& m) {
   m.def(
       "render",
-      [](const Camera& camera, std::optional<std::uint64_t> scene_seed, std::optional<RandomPose> change,
+      [](const Camera& camera, std::optional<std::uint64_t> scene_seed, std::optional<ViewpointChange> change,
          int supersampling) {
         const auto& mount = camera.parameters().pose;
         if (!mount) {
@@ -20,7 +20,7 @@ void bind_rendering(py::module_& m) {
               "render: the camera has no pose to place it in the scene (give the camera file an extrinsic "
               "pose, as data/woodscape_front.json has)");
         }
-        const Pose pose = change ? moved_camera(*mount, change->change()) : *mount;
+        const Pose pose = change ? moved_camera(*mount, change->motion()) : *mount;
         const int h = camera.height(), w = camera.width();
         py::array_t<std::uint8_t> image({h, w, 3}), mask({h, w});
         py::array_t<float> depth({h, w});

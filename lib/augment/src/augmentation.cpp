@@ -50,7 +50,7 @@ void allocate(const Camera& source, const Camera& target, MapKind kind, WarpMaps
 
 }  // namespace
 
-std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const ViewpointChange& change, DepthPrior prior) {
+std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const RigidMotion& change, DepthPrior prior) {
   const Eigen::Vector3d& t = change.translation;
   Eigen::Vector3d q = d;
   if (prior == DepthPrior::target_sphere) {
@@ -128,7 +128,7 @@ ViewpointWarp::ViewpointWarp(Camera source, Camera target) : source_(std::move(s
   grid_ = detail::make_grid_plan(source_, target_, *kernel_source_, rays_);
 }
 
-void ViewpointWarp::compute_grid(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const {
+void ViewpointWarp::compute_grid(const RigidMotion& change, DepthPrior prior, WarpMaps* maps) const {
   check_change(change);
   if (grid_ && detail::grid_maps(*grid_, *kernel_source_, rays_, target_, change, prior, maps)) return;
   compute(change, prior, maps, MapKind::geometric);
@@ -137,7 +137,7 @@ void ViewpointWarp::compute_grid(const ViewpointChange& change, DepthPrior prior
 int ViewpointWarp::grid_spacing() const { return grid_ ? grid_->spacing : 0; }
 double ViewpointWarp::grid_error_px() const { return grid_ ? grid_->measured_error_px : 0; }
 
-void ViewpointWarp::forward(const ViewpointChange& change, const DepthSource& depth,
+void ViewpointWarp::forward(const RigidMotion& change, const DepthSource& depth,
                             std::span<const Eigen::Vector2d> source_pixels, std::span<Eigen::Vector2d> pixels,
                             std::span<std::uint8_t> visible) const {
   check_change(change);
@@ -178,7 +178,7 @@ void ViewpointWarp::forward(const ViewpointChange& change, const DepthSource& de
   }
 }
 
-void ViewpointWarp::warp_depth(const ViewpointChange& change, const DepthSource& source, const cv::Mat& depth,
+void ViewpointWarp::warp_depth(const RigidMotion& change, const DepthSource& source, const cv::Mat& depth,
                                DepthValues values, cv::Mat* out, float fill) const {
   if (depth.type() != CV_32FC1) throw Error("warp_depth: expected a float32 single-channel depth map");
   if (depth.cols != source_.width() || depth.rows != source_.height()) {
@@ -226,7 +226,7 @@ void ViewpointWarp::warp_depth(const ViewpointChange& change, const DepthSource&
   });
 }
 
-void ViewpointWarp::augment(const ViewpointChange& change, const DepthSource& depth, const AugmentIO& io,
+void ViewpointWarp::augment(const RigidMotion& change, const DepthSource& depth, const AugmentIO& io,
                             Sampling sampling) const {
   check_change(change);
   const DepthPrior* prior = std::get_if<DepthPrior>(&depth);
@@ -250,8 +250,7 @@ void ViewpointWarp::augment(const ViewpointChange& change, const DepthSource& de
   if (safe.valid) maps.validity().copyTo(*safe.valid);
 }
 
-void ViewpointWarp::compute(const ViewpointChange& change, const DepthSource& depth, WarpMaps* maps,
-                            MapKind kind) const {
+void ViewpointWarp::compute(const RigidMotion& change, const DepthSource& depth, WarpMaps* maps, MapKind kind) const {
   check_change(change);
   if (const auto* map = std::get_if<DepthMap>(&depth)) return compute_from_map(change, *map, maps, kind);
   const DepthPrior prior = std::get<DepthPrior>(depth);
@@ -275,13 +274,12 @@ void ViewpointWarp::compute(const ViewpointChange& change, const DepthSource& de
   maps->invalid_count = invalid;
 }
 
-void ViewpointWarp::compute_exact(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const {
+void ViewpointWarp::compute_exact(const RigidMotion& change, DepthPrior prior, WarpMaps* maps) const {
   check_change(change);
   compute_double(change, prior, maps, MapKind::geometric);
 }
 
-void ViewpointWarp::compute_double(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps,
-                                   MapKind kind) const {
+void ViewpointWarp::compute_double(const RigidMotion& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const {
   allocate(source_, target_, kind, maps);
   std::atomic<long> invalid{0};
   const double w = source_.width() - 0.5, h = source_.height() - 0.5;

@@ -22,7 +22,7 @@ struct Landing {
 
 // 1. Every source pixel's landing in the target camera: where its scene point (at its
 // depth value, moved by the change) projects, and its distance from the moved camera.
-std::vector<Landing> source_landings(const Camera& source, const Camera& target, const ViewpointChange& change,
+std::vector<Landing> source_landings(const Camera& source, const Camera& target, const RigidMotion& change,
                                      const cv::Mat& depth, DepthValues values) {
   const int sw = source.width(), sh = source.height();
   const Eigen::Matrix3d& r = change.rotation;
@@ -102,7 +102,7 @@ struct LandingRaster {
 
 }  // namespace
 
-void ViewpointWarp::compute_from_map(const ViewpointChange& change, const DepthMap& map, WarpMaps* maps,
+void ViewpointWarp::compute_from_map(const RigidMotion& change, const DepthMap& map, WarpMaps* maps,
                                      MapKind kind) const {
   check_change(change);
   const cv::Mat& depth = map.depth;
@@ -158,7 +158,7 @@ std::optional<Eigen::Vector3d> point_at(const Camera& source, const Eigen::Vecto
 
 }  // namespace
 
-void ViewpointWarp::forward_from_map(const ViewpointChange& change, const DepthMap& map,
+void ViewpointWarp::forward_from_map(const RigidMotion& change, const DepthMap& map,
                                      std::span<const Eigen::Vector2d> source_pixels, std::span<Eigen::Vector2d> pixels,
                                      std::span<std::uint8_t> visible) const {
   const cv::Mat& depth = map.depth;
@@ -193,7 +193,7 @@ void ViewpointWarp::forward_from_map(const ViewpointChange& change, const DepthM
   }
 }
 
-void ViewpointWarp::warp_depth_from_map(const ViewpointChange& change, const DepthMap& map, const cv::Mat& depth,
+void ViewpointWarp::warp_depth_from_map(const RigidMotion& change, const DepthMap& map, const cv::Mat& depth,
                                         DepthValues values, cv::Mat* out, float fill) const {
   WarpMaps maps;
   compute_from_map(change, map, &maps, MapKind::geometric);

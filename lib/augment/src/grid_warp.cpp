@@ -234,11 +234,11 @@ cv::Mat node_rays_for(const Camera& target, int s, int* nodes_u, int* nodes_v) {
 double rotation_angle(const Eigen::Matrix3d& r) { return std::acos(std::clamp((r.trace() - 1) / 2, -1.0, 1.0)); }
 
 // Whether the plan's measurement covers the change (else: the per-pixel path).
-bool measured(const GridPlan& plan, const ViewpointChange& change) {
+bool measured(const GridPlan& plan, const RigidMotion& change) {
   return rotation_angle(change.rotation) <= plan.max_rotation_rad && change.translation.norm() <= plan.max_translation;
 }
 
-GridChange prepare(const GridPlan& plan, const SourceParams& src, const ViewpointChange& change, DepthPrior prior) {
+GridChange prepare(const GridPlan& plan, const SourceParams& src, const RigidMotion& change, DepthPrior prior) {
   GridChange out;
   out.pose = pose_params(change);
   out.geometric = select_kernel_for_cpu(prior, change.translation.squaredNorm() < 1, src.radial.kind, false);
@@ -271,13 +271,12 @@ double rim_distance(const Camera& source) {
 
 // The measurement's changes: the corners of the `large` preset's box (the widest changes
 // the presets draw), half with each depth prior that moves the view.
-std::vector<std::pair<ViewpointChange, DepthPrior>> measured_changes(double* max_angle, double* max_translation) {
-  std::vector<std::pair<ViewpointChange, DepthPrior>> changes;
+std::vector<std::pair<RigidMotion, DepthPrior>> measured_changes(double* max_angle, double* max_translation) {
+  std::vector<std::pair<RigidMotion, DepthPrior>> changes;
   *max_angle = 0, *max_translation = 0;
   for (int k = 0; k < 8; ++k) {
     const double sx = k & 1 ? 1 : -1, sy = k & 2 ? 1 : -1, sz = k & 4 ? 1 : -1;
-    const ViewpointChange change =
-        ViewpointChange::from_euler_deg({30 * sx, 30 * sy, 30 * sz}, {0.5 * sy, 0.5 * sz, 0.5 * sx});
+    const RigidMotion change = RigidMotion::from_euler_deg({30 * sx, 30 * sy, 30 * sz}, {0.5 * sy, 0.5 * sz, 0.5 * sx});
     changes.emplace_back(change, k % 2 ? DepthPrior::source_sphere : DepthPrior::target_sphere);
     *max_angle = std::max(*max_angle, rotation_angle(change.rotation));
     *max_translation = std::max(*max_translation, change.translation.norm());
@@ -288,7 +287,7 @@ std::vector<std::pair<ViewpointChange, DepthPrior>> measured_changes(double* max
 // The changes prepared on the plan's nodes, or none unless enough cells are interpolated:
 // of the cells with a corner inside the source image, over all the changes.
 std::vector<GridChange> prepared_if_mostly_interpolated(
-    const GridPlan& plan, const SourceParams& src, const std::vector<std::pair<ViewpointChange, DepthPrior>>& changes) {
+    const GridPlan& plan, const SourceParams& src, const std::vector<std::pair<RigidMotion, DepthPrior>>& changes) {
   std::vector<GridChange> prepared;
   long cells_interpolated = 0, cells_with_source = 0;
   const std::size_t nu = std::size_t(plan.nodes_u), cells_u = nu - 1;
@@ -365,7 +364,7 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
   const int w = target.width(), h = target.height();
   if (w < 2 || h < 2) return nullptr;
   double max_angle = 0, max_translation = 0;
-  const std::vector<std::pair<ViewpointChange, DepthPrior>> changes = measured_changes(&max_angle, &max_translation);
+  const std::vector<std::pair<RigidMotion, DepthPrior>> changes = measured_changes(&max_angle, &max_translation);
   float fold_guard = std::numeric_limits<float>::infinity();
   if (source.domain().closed) fold_guard = float(0.95 * rim_distance(source) * source.pixel_scale().maxCoeff());
   for (const int s : {16, 8, 4, 2}) {
@@ -387,7 +386,7 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
 }
 
 bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
-                  const ViewpointChange& change, DepthPrior prior, const AugmentIO& io) {
+                  const RigidMotion& change, DepthPrior prior, const AugmentIO& io) {
   if (!measured(plan, change)) return false;
   const GridChange prepared = prepare(plan, src, change, prior);
   const int w = target.width(), h = target.height();
@@ -457,7 +456,7 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
 }
 
 bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
-               const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) {
+               const RigidMotion& change, DepthPrior prior, WarpMaps* maps) {
   if (!measured(plan, change)) return false;
   const GridChange prepared = prepare(plan, src, change, prior);
   const int w = target.width(), h = target.height();

@@ -15,7 +15,7 @@ namespace fishcam::detail {
 // The float kernel for this CPU (AVX2 + FMA where available; FISHCAM_NO_AVX2 forces the baseline).
 RangeKernel select_kernel_for_cpu(DepthPrior prior, bool inside_sphere, SourceParams::Kind kind, bool sampling);
 GridRowLoops grid_row_loops_for_cpu();
-PoseParams pose_params(const ViewpointChange& change);
+PoseParams pose_params(const RigidMotion& change);
 
 struct GridPlan {
   int spacing = 0;               // S (px)
@@ -38,10 +38,10 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
 // Augments one sample through the grid; false (nothing written) when the change
 // lies outside what the plan measured, so the caller takes the per-pixel path.
 bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
-                  const ViewpointChange& change, DepthPrior prior, const AugmentIO& io);
+                  const RigidMotion& change, DepthPrior prior, const AugmentIO& io);
 
 // The grid's float map (geometric, before fixed-point quantisation); false as grid_augment.
 bool grid_maps(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
-               const ViewpointChange& change, DepthPrior prior, WarpMaps* maps);
+               const RigidMotion& change, DepthPrior prior, WarpMaps* maps);
 
 }  // namespace fishcam::detail

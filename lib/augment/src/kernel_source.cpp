@@ -397,8 +397,8 @@ bool float_kernel_agrees(const Camera& camera, const SourceParams& src) {
   std::vector<unsigned char> valid(count);
   std::vector<Eigen::Vector3d> exact(count, Eigen::Vector3d::Constant(kNaNf));
   const double w = camera.width() - 0.5, h = camera.height() - 0.5;
-  for (const ViewpointChange& change : {ViewpointChange{}, ViewpointChange::from_euler_deg({40, -25, 10}),
-                                        ViewpointChange::from_euler_deg({-90, 0, 35})}) {
+  for (const RigidMotion& change :
+       {RigidMotion{}, RigidMotion::from_euler_deg({40, -25, 10}), RigidMotion::from_euler_deg({-90, 0, 35})}) {
     for (size_t a = 0; a < thetas.size(); ++a) {
       for (int k = 0; k < kAzimuths; ++k) {
         const double phi = 2 * std::numbers::pi * (k + 0.25 * double(a % 4)) / kAzimuths;

@@ -83,7 +83,7 @@ PosePreset pose_preset(std::string_view name, std::string_view what) {
               choices_for_message(pose_preset_names()) + ")");
 }
 
-ViewpointChange ViewpointChange::from_euler_deg(const Eigen::Vector3d& d, const Eigen::Vector3d& translation) {
+RigidMotion RigidMotion::from_euler_deg(const Eigen::Vector3d& d, const Eigen::Vector3d& translation) {
   const Eigen::Matrix3d r = (Eigen::AngleAxisd(d.z() * kRad, Eigen::Vector3d::UnitZ()) *
                              Eigen::AngleAxisd(d.y() * kRad, Eigen::Vector3d::UnitY()) *
                              Eigen::AngleAxisd(d.x() * kRad, Eigen::Vector3d::UnitX()))
@@ -91,17 +91,17 @@ ViewpointChange ViewpointChange::from_euler_deg(const Eigen::Vector3d& d, const 
   return {r, translation};
 }
 
-ViewpointChange ViewpointChange::from_rodrigues(const Eigen::Vector3d& r, const Eigen::Vector3d& translation) {
+RigidMotion RigidMotion::from_rodrigues(const Eigen::Vector3d& r, const Eigen::Vector3d& translation) {
   const double angle = r.norm();
   if (angle == 0) return {Eigen::Matrix3d::Identity(), translation};
   return {Eigen::AngleAxisd(angle, r / angle).toRotationMatrix(), translation};
 }
 
-ViewpointChange ViewpointChange::from_quaternion(const Eigen::Quaterniond& q, const Eigen::Vector3d& translation) {
+RigidMotion RigidMotion::from_quaternion(const Eigen::Quaterniond& q, const Eigen::Vector3d& translation) {
   return {q.normalized().toRotationMatrix(), translation};
 }
 
-Eigen::Vector3d ViewpointChange::euler_deg() const {
+Eigen::Vector3d RigidMotion::euler_deg() const {
   // R = Rz(c) Ry(b) Rx(a): R(2,0) = -sin b, R(2,1) = cos b sin a, R(1,0) = sin c cos b.
   const Eigen::Matrix3d& r = rotation;
   const double b = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
@@ -116,11 +116,9 @@ Eigen::Vector3d ViewpointChange::euler_deg() const {
   return Eigen::Vector3d(a, b, c) / kRad;
 }
 
-ViewpointChange ViewpointChange::inverse() const {
-  return {rotation.transpose(), -(rotation.transpose() * translation)};
-}
+RigidMotion RigidMotion::inverse() const { return {rotation.transpose(), -(rotation.transpose() * translation)}; }
 
-Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change) {
+Pose moved_camera(const Pose& camera_to_reference, const RigidMotion& change) {
   // p_new = R p_cam + t  =>  p_reference = R_vc R^T p_new + (t_vc - R_vc R^T t).
   const Eigen::Matrix3d r = camera_to_reference.rotation.toRotationMatrix() * change.rotation.transpose();
   Pose moved;
@@ -131,13 +129,13 @@ Pose moved_camera(const Pose& camera_to_reference, const ViewpointChange& change
 
 // The virtual camera sees other rays than the calibrated one did: the calibration
 // record (observed angles, covariance) does not carry over.
-CameraParameters augmented_camera(CameraParameters camera, const ViewpointChange& change) {
+CameraParameters augmented_camera(CameraParameters camera, const RigidMotion& change) {
   camera.pose = moved_camera(camera.pose.value_or(Pose{}), change);
   camera.calibration.reset();
   return camera;
 }
 
-Camera augmented_camera(const Camera& camera, const ViewpointChange& change) {
+Camera augmented_camera(const Camera& camera, const RigidMotion& change) {
   if (camera.parameters().calibration) return Camera(augmented_camera(camera.parameters(), change));
   return camera.with_pose(augmented_camera(camera.parameters(), change).pose);
 }
@@ -159,17 +157,17 @@ std::optional<PosePreset> find_pose_preset(std::string_view name) {
   return std::nullopt;
 }
 
-RandomPose applied_under(RandomPose pose, DepthPrior prior) {
-  if (prior == DepthPrior::infinity) pose.translation.setZero();
-  return pose;
+ViewpointChange applied_under(ViewpointChange change, DepthPrior prior) {
+  if (prior == DepthPrior::infinity) change.translation.setZero();
+  return change;
 }
 
-RandomPose random_pose(const PosePreset& preset, std::uint64_t seed) {
+ViewpointChange random_change(const PosePreset& preset, std::uint64_t seed) {
   SeededUniform uniform(seed);
-  RandomPose pose;
-  for (int i = 0; i < 3; ++i) pose.rotation_deg[i] = uniform.symmetric(preset.max_rotation_deg);
-  for (int i = 0; i < 3; ++i) pose.translation[i] = uniform.symmetric(preset.max_translation);
-  return pose;
+  ViewpointChange change;
+  for (int i = 0; i < 3; ++i) change.rotation_deg[i] = uniform.symmetric(preset.max_rotation_deg);
+  for (int i = 0; i < 3; ++i) change.translation[i] = uniform.symmetric(preset.max_translation);
+  return change;
 }
 
 std::uint64_t derive_seed(std::uint64_t seed, std::string_view key, std::uint64_t index) {
@@ -178,7 +176,7 @@ std::uint64_t derive_seed(std::uint64_t seed, std::string_view key, std::uint64_
   return splitmix64(splitmix64(seed ^ h) + index);
 }
 
-void check_change(const ViewpointChange& change) {
+void check_change(const RigidMotion& change) {
   if (!change.rotation.allFinite() || !change.translation.allFinite()) {
     throw Error("viewpoint change: rotation and translation must be finite");
   }

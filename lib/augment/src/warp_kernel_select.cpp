@@ -8,7 +8,7 @@
 
 namespace fishcam::detail {
 
-PoseParams pose_params(const ViewpointChange& change) {
+PoseParams pose_params(const RigidMotion& change) {
   PoseParams p;
   for (int r = 0; r < 3; ++r) {
     for (int k = 0; k < 3; ++k) p.rt[3 * r + k] = float(change.rotation(k, r));

@@ -48,8 +48,8 @@ TEST(Augmentation, SourcePointSatisfiesItsDefiningEquation) {
     const double scale = i % 2 ? 0.99 : 1.6;  // inside the unit sphere and outside
     const Eigen::Vector3d t =
         scale * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized() * std::abs(uniform(rng));
-    const ViewpointChange change =
-        ViewpointChange::from_euler_deg({30 * uniform(rng), 30 * uniform(rng), 30 * uniform(rng)}, t);
+    const RigidMotion change =
+        RigidMotion::from_euler_deg({30 * uniform(rng), 30 * uniform(rng), 30 * uniform(rng)}, t);
     const Eigen::Vector3d d = Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized();
     const auto p = source_point(d, change, DepthPrior::source_sphere);
     if (!p) {
@@ -82,8 +82,8 @@ TEST(Augmentation, EveryValidMapEntrySatisfiesItsDefiningEquation) {
   p.model = Polynomial<double>({339.749 / 4, -31.988 / 4, 48.275 / 4, -7.201 / 4});
   const Camera camera(p);
   const ViewpointWarp warp(camera);
-  for (const auto& change : {random_pose(*find_pose_preset("train"), 3).change(),
-                             ViewpointChange::from_euler_deg({5, 10, -20}, {0.6, -0.7, 0.5})}) {  // |t| > 1
+  for (const auto& change : {random_change(*find_pose_preset("train"), 3).motion(),
+                             RigidMotion::from_euler_deg({5, 10, -20}, {0.6, -0.7, 0.5})}) {  // |t| > 1
     WarpMaps maps;
     warp.compute(change, DepthPrior::source_sphere, &maps, MapKind::geometric);
     long checked = 0;
@@ -115,44 +115,44 @@ TEST(Augmentation, EveryValidMapEntrySatisfiesItsDefiningEquation) {
 
 TEST(Augmentation, PriorsAgreeWithoutTranslationAndDifferWithIt) {
   const Eigen::Vector3d d = Eigen::Vector3d(0.2, -0.1, 1).normalized();
-  const auto rotation_only = ViewpointChange::from_euler_deg({5, -7, 12});
+  const auto rotation_only = RigidMotion::from_euler_deg({5, -7, 12});
   const Eigen::Vector3d a = *source_point(d, rotation_only, DepthPrior::source_sphere);
   for (DepthPrior prior : kPriors) EXPECT_LT((*source_point(d, rotation_only, prior) - a).norm(), 1e-15);
-  const auto moved = ViewpointChange::from_euler_deg({5, -7, 12}, {0.3, 0, 0});
+  const auto moved = RigidMotion::from_euler_deg({5, -7, 12}, {0.3, 0, 0});
   EXPECT_GT((*source_point(d, moved, DepthPrior::source_sphere) - *source_point(d, moved, DepthPrior::infinity)).norm(),
             0.1);
 }
 
 TEST(Augmentation, EulerAnglesAreZYXAndRoundTrip) {
-  const auto change = ViewpointChange::from_euler_deg({90, 0, 0});
+  const auto change = RigidMotion::from_euler_deg({90, 0, 0});
   // A rotation of +90 deg about x takes the y axis to z.
   EXPECT_LT((change.rotation * Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitZ()).norm(), 1e-15);
   const Eigen::Vector3d angles(12, -25, 33);
-  EXPECT_LT((ViewpointChange::from_euler_deg(angles).euler_deg() - angles).norm(), 1e-12);
+  EXPECT_LT((RigidMotion::from_euler_deg(angles).euler_deg() - angles).norm(), 1e-12);
   const Eigen::Matrix3d rz = Eigen::AngleAxisd(33 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Matrix3d ry = Eigen::AngleAxisd(-25 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
   const Eigen::Matrix3d rx = Eigen::AngleAxisd(12 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
-  EXPECT_LT((ViewpointChange::from_euler_deg(angles).rotation - rz * ry * rx).norm(), 1e-15);
+  EXPECT_LT((RigidMotion::from_euler_deg(angles).rotation - rz * ry * rx).norm(), 1e-15);
   const Eigen::Vector3d r(0.1, -0.2, 0.3);
-  EXPECT_LT((ViewpointChange::from_rodrigues(r).rotation -
-             ViewpointChange::from_quaternion(Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized()))).rotation)
+  EXPECT_LT((RigidMotion::from_rodrigues(r).rotation -
+             RigidMotion::from_quaternion(Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized()))).rotation)
                 .norm(),
             1e-15);
 }
 
 TEST(Augmentation, RandomPosesAreReproducibleAndInRange) {
   const PosePreset train = *find_pose_preset("train");
-  const RandomPose a = random_pose(train, 42), b = random_pose(train, 42), c = random_pose(train, 43);
+  const ViewpointChange a = random_change(train, 42), b = random_change(train, 42), c = random_change(train, 43);
   EXPECT_EQ(a.rotation_deg, b.rotation_deg);
   EXPECT_EQ(a.translation, b.translation);
   EXPECT_NE(a.rotation_deg, c.rotation_deg);
   // Fixed by std::mt19937_64's specified output and our own mapping to [0, 1):
   // these digits must be the same on every platform.
-  EXPECT_NEAR(random_pose(*find_pose_preset("small"), 1).rotation_deg.x(),
+  EXPECT_NEAR(random_change(*find_pose_preset("small"), 1).rotation_deg.x(),
               10 * (2 * double(std::mt19937_64(1)() >> 11) * 0x1.0p-53 - 1), 0);
   double max_rotation = 0, max_translation = 0;
   for (std::uint64_t seed = 0; seed < 2000; ++seed) {
-    const RandomPose p = random_pose(*find_pose_preset("medium"), derive_seed(7, "frame", seed));
+    const ViewpointChange p = random_change(*find_pose_preset("medium"), derive_seed(7, "frame", seed));
     max_rotation = std::max(max_rotation, p.rotation_deg.cwiseAbs().maxCoeff());
     max_translation = std::max(max_translation, p.translation.cwiseAbs().maxCoeff());
   }
@@ -171,7 +171,7 @@ struct MapAgreement {
   double worst_px;
   long validity_differs, both_valid;
 };
-MapAgreement fast_against_exact(const ViewpointWarp& warp, const ViewpointChange& change, DepthPrior prior) {
+MapAgreement fast_against_exact(const ViewpointWarp& warp, const RigidMotion& change, DepthPrior prior) {
   WarpMaps fast, exact;
   warp.compute(change, prior, &fast, MapKind::geometric);
   warp.compute_exact(change, prior, &exact);
@@ -201,7 +201,7 @@ TEST(Augmentation, FastMapsAgreeWithTheExactReference) {
     for (const auto& [source, target] : {std::pair{ws, other}, std::pair{other, ws}}) {
       const ViewpointWarp warp(source, target);
       for (std::uint64_t seed = 0; seed < 3; ++seed) {
-        const ViewpointChange change = random_pose(*find_pose_preset("train"), seed).change();
+        const RigidMotion change = random_change(*find_pose_preset("train"), seed).motion();
         for (DepthPrior prior : kPriors) {
           const auto [worst, disagree, both] = fast_against_exact(warp, change, prior);
           EXPECT_LE(worst, 1e-3) << name << " " << to_string(prior);
@@ -221,7 +221,7 @@ TEST_P(EveryModelSource, FastMapsAgreeWithTheExactReference) {
   const ViewpointWarp warp(Camera(GetParam().second), woodscape());
   ASSERT_EQ(warp.float_kernel(), test::float_kernel_form(GetParam().second));
   if (!warp.float_kernel()) return;  // the exact path: nothing else to compare
-  const ViewpointChange change = random_pose(pose_preset("train"), 4).change();
+  const RigidMotion change = random_change(pose_preset("train"), 4).motion();
   int priors = 0;
   for (DepthPrior prior : kPriors) {
     const auto [worst, disagree, both] = fast_against_exact(warp, change, prior);
@@ -245,7 +245,7 @@ TEST(Augmentation, FastMapsOfEquivalentParameterisationsAreIdentical) {
       {Equidistant<double>(340.0), Polynomial<double>({340.0}), Polynomial<double>({340.0, 0.0, 0.0}),
        KannalaBrandt<double>(340.0, 0, 0, 0, 0)},
   };
-  const ViewpointChange change = random_pose(*find_pose_preset("large"), 3).change();
+  const RigidMotion change = random_change(*find_pose_preset("large"), 3).motion();
   for (const auto& group : groups) {
     WarpMaps first;
     for (size_t i = 0; i < group.size(); ++i) {
@@ -265,7 +265,7 @@ TEST(Augmentation, FastMapsOfEquivalentParameterisationsAreIdentical) {
 }
 
 // Maps from compute() against compute_exact, whichever path compute() chose.
-double worst_fast_vs_exact(const ViewpointWarp& warp, const ViewpointChange& change, long* validity_differs) {
+double worst_fast_vs_exact(const ViewpointWarp& warp, const RigidMotion& change, long* validity_differs) {
   WarpMaps fast, exact;
   warp.compute(change, DepthPrior::source_sphere, &fast, MapKind::geometric);
   warp.compute_exact(change, DepthPrior::source_sphere, &exact);
@@ -314,10 +314,10 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
     const ViewpointWarp warp{Camera(p)};
     EXPECT_FALSE(warp.float_kernel()) << name;
     long differs = 0;
-    EXPECT_LE(worst_fast_vs_exact(warp, random_pose(*find_pose_preset("large"), 1).change(), &differs), 1e-3) << name;
+    EXPECT_LE(worst_fast_vs_exact(warp, random_change(*find_pose_preset("large"), 1).motion(), &differs), 1e-3) << name;
     EXPECT_LE(differs, 2) << name;
     WarpMaps identity;
-    warp.compute(ViewpointChange{}, DepthPrior::source_sphere, &identity);
+    warp.compute(RigidMotion{}, DepthPrior::source_sphere, &identity);
     const cv::Mat image = test_image(p.width, p.height, CV_8UC1);
     cv::Mat out;
     warp_image(image, identity, &out);
@@ -327,7 +327,7 @@ TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
   // The principal point far outside but a normal lens: the identity has every pixel.
   const ViewpointWarp far{Camera(far_centre)};
   WarpMaps identity;
-  far.compute(ViewpointChange{}, DepthPrior::source_sphere, &identity);
+  far.compute(RigidMotion{}, DepthPrior::source_sphere, &identity);
   EXPECT_EQ(identity.invalid_count, 0);
   // Every bundled kind of camera keeps the fast path.
   int kernels = 0;
@@ -350,8 +350,8 @@ TEST(Augmentation, ForwardPointsInvertTheMapsUnderEveryPrior) {
   for (auto& p : points) p = Eigen::Vector2d(u(rng), v(rng));
   int checked = 0;
   for (const DepthPrior prior : kPriors) {
-    for (const ViewpointChange& change : {ViewpointChange::from_euler_deg({12, -25, 8}, {0.2, -0.1, 0.3}),
-                                          ViewpointChange::from_euler_deg({-5, 3, 30}, {0, 0, -0.4})}) {
+    for (const RigidMotion& change : {RigidMotion::from_euler_deg({12, -25, 8}, {0.2, -0.1, 0.3}),
+                                      RigidMotion::from_euler_deg({-5, 3, 30}, {0, 0, -0.4})}) {
       std::vector<Eigen::Vector2d> out(points.size());
       std::vector<std::uint8_t> visible(points.size());
       warp.forward(change, prior, points, out, visible);
@@ -381,7 +381,7 @@ TEST(Augmentation, ForwardPointsInvertTheMapsUnderEveryPrior) {
 TEST(Augmentation, DepthMapsAreReExpressedInTheMovedCamera) {
   const Camera camera(resized(woodscape().parameters(), 320, 242));
   const ViewpointWarp warp(camera);
-  const ViewpointChange rotation = ViewpointChange::from_euler_deg({10, -20, 5});
+  const RigidMotion rotation = RigidMotion::from_euler_deg({10, -20, 5});
   cv::Mat depth(242, 320, CV_32FC1, cv::Scalar(2.5f)), out;
   depth(cv::Rect(0, 0, 20, 20)).setTo(0.0f);  // a no-depth marker
   warp.warp_depth(rotation, DepthPrior::source_sphere, depth, DepthValues::range, &out, -1.0f);
@@ -396,7 +396,7 @@ TEST(Augmentation, DepthMapsAreReExpressedInTheMovedCamera) {
   }
   EXPECT_GT(ranges, 320 * 242 / 3);
   // z: a translation along the optical axis moves every point's z by -t_z exactly.
-  const ViewpointChange back = ViewpointChange::from_euler_deg({0, 0, 0}, {0, 0, -0.5});
+  const RigidMotion back = RigidMotion::from_euler_deg({0, 0, 0}, {0, 0, -0.5});
   cv::Mat z(242, 320, CV_32FC1, cv::Scalar(4.0f)), z_out;
   warp.warp_depth(back, DepthPrior::infinity, z, DepthValues::z, &z_out);
   EXPECT_NEAR(z_out.at<float>(121, 160), 3.5f, 1e-5f);
@@ -412,10 +412,10 @@ TEST(Augmentation, NonFiniteOrNonRotationChangesAreRefused) {
   const ViewpointWarp warp{Camera(p)};
   WarpMaps maps;
   const double nan = std::nan("");
-  for (const ViewpointChange& change :
-       {ViewpointChange::from_euler_deg({nan, 0, 0}), ViewpointChange::from_euler_deg({0, 0, 0}, {0, INFINITY, 0}),
-        ViewpointChange{Eigen::Matrix3d::Identity() * 2, Eigen::Vector3d::Zero()},
-        ViewpointChange{-Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()}}) {
+  for (const RigidMotion& change :
+       {RigidMotion::from_euler_deg({nan, 0, 0}), RigidMotion::from_euler_deg({0, 0, 0}, {0, INFINITY, 0}),
+        RigidMotion{Eigen::Matrix3d::Identity() * 2, Eigen::Vector3d::Zero()},
+        RigidMotion{-Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()}}) {
     EXPECT_THROW(warp.compute(change, DepthPrior::source_sphere, &maps), Error);
     EXPECT_THROW(warp.compute_exact(change, DepthPrior::source_sphere, &maps), Error);
   }
@@ -436,7 +436,7 @@ TEST(Augmentation, IdentityReproducesTheInputExactly) {
        {std::pair{DepthPrior::source_sphere, MapKind::sampling},
         std::pair{DepthPrior::target_sphere, MapKind::geometric}, std::pair{DepthPrior::infinity, MapKind::sampling}}) {
     WarpMaps maps;
-    warp.compute(ViewpointChange{}, prior, &maps, kind);
+    warp.compute(RigidMotion{}, prior, &maps, kind);
     EXPECT_EQ(maps.invalid_count, 0);
     for (int type : {CV_8UC1, CV_8UC3, CV_8UC4, CV_16UC1, CV_16UC3}) {
       const cv::Mat image = test_image(camera.width(), camera.height(), type);
@@ -454,7 +454,7 @@ TEST(Augmentation, IdentityReproducesTheInputExactly) {
 TEST(Augmentation, RotationThenInverseRecoversTheGeometry) {
   const Camera camera = woodscape();
   const ViewpointWarp warp(camera);
-  const ViewpointChange change = ViewpointChange::from_euler_deg({15, -20, 25});
+  const RigidMotion change = RigidMotion::from_euler_deg({15, -20, 25});
   WarpMaps forward, back;
   warp.compute(change, DepthPrior::infinity, &forward, MapKind::geometric);
   warp.compute(change.inverse(), DepthPrior::infinity, &back, MapKind::geometric);
@@ -503,7 +503,7 @@ TEST(Augmentation, LabelValuesArePreservedAndFillIsConfigurable) {
     for (int u = 0; u < labels.cols; ++u) labels.at<uchar>(v, u) = uchar(1 + ((u / 37 + v / 23) % 9));
   }
   WarpMaps maps;
-  warp.compute(random_pose(*find_pose_preset("large"), 5).change(), DepthPrior::source_sphere, &maps,
+  warp.compute(random_change(*find_pose_preset("large"), 5).motion(), DepthPrior::source_sphere, &maps,
                MapKind::geometric);
   ASSERT_GT(maps.invalid_count, 0);
   for (int fill : {0, 255}) {
@@ -536,7 +536,7 @@ TEST(Augmentation, ImageFillIsConfigurable) {
   const ViewpointWarp warp(camera);
   for (MapKind kind : {MapKind::sampling, MapKind::geometric}) {
     WarpMaps maps;
-    warp.compute(random_pose(*find_pose_preset("large"), 5).change(), DepthPrior::source_sphere, &maps, kind);
+    warp.compute(random_change(*find_pose_preset("large"), 5).motion(), DepthPrior::source_sphere, &maps, kind);
     const cv::Mat invalid = maps.validity() == 0;
     ASSERT_GT(cv::countNonZero(invalid), 0);
     for (int type : {CV_8UC3, CV_16UC1, CV_32FC3}) {
@@ -565,7 +565,7 @@ TEST(Augmentation, ImageFillIsConfigurable) {
 TEST(Augmentation, SamplingMapsResampleLikeGeometricMaps) {
   const Camera camera = woodscape();
   const ViewpointWarp warp(camera);
-  const ViewpointChange change = random_pose(*find_pose_preset("large"), 11).change();
+  const RigidMotion change = random_change(*find_pose_preset("large"), 11).motion();
   WarpMaps sampling, geometric;
   warp.compute(change, DepthPrior::source_sphere, &sampling, MapKind::sampling);
   warp.compute(change, DepthPrior::source_sphere, &geometric, MapKind::geometric);
@@ -603,8 +603,8 @@ TEST(Augmentation, AgreesWithABruteForceForwardSplat) {
   p.model = Polynomial<double>({339.749 / 8, -31.988 / 8, 48.275 / 8, -7.201 / 8});
   const Camera camera(p);
   const ViewpointWarp warp(camera);
-  for (const auto& change : {ViewpointChange::from_euler_deg({10, -5, 8}, {0.1, -0.05, 0.2}),
-                             ViewpointChange::from_euler_deg({-20, 10, 0}, {0.3, 0.3, -0.3})}) {
+  for (const auto& change : {RigidMotion::from_euler_deg({10, -5, 8}, {0.1, -0.05, 0.2}),
+                             RigidMotion::from_euler_deg({-20, 10, 0}, {0.3, 0.3, -0.3})}) {
     cv::Mat hits = cv::Mat::zeros(p.height, p.width, CV_32SC1);
     cv::Mat hit_x(p.height, p.width, CV_64FC1), hit_y(p.height, p.width, CV_64FC1);
     for (int v = 0; v < p.height; ++v) {
@@ -648,7 +648,7 @@ TEST(Augmentation, RealWoodScapeImageStaysInsideTheImageCircle) {
   const ViewpointWarp warp(camera);
   for (std::uint64_t seed = 0; seed < 8; ++seed) {
     WarpMaps maps;
-    warp.compute(random_pose(*find_pose_preset("large"), seed).change(), DepthPrior::source_sphere, &maps,
+    warp.compute(random_change(*find_pose_preset("large"), seed).motion(), DepthPrior::source_sphere, &maps,
                  MapKind::geometric);
     cv::Mat out;
     warp_image(image, maps, &out);
@@ -720,7 +720,7 @@ struct GridAgreement {
   long validity_differs, valid;
 };
 
-GridAgreement grid_against_exact(const ViewpointWarp& warp, const ViewpointChange& change, DepthPrior prior) {
+GridAgreement grid_against_exact(const ViewpointWarp& warp, const RigidMotion& change, DepthPrior prior) {
   WarpMaps grid, exact;
   warp.compute_grid(change, prior, &grid);
   warp.compute_exact(change, prior, &exact);
@@ -751,7 +751,7 @@ TEST_P(EveryModelSource, GridMapsAgreeWithTheExactReference) {
   EXPECT_GT(warp.grid_spacing(), 0);
   int checked = 0;
   for (std::uint64_t seed = 0; seed < 2; ++seed) {
-    const ViewpointChange change = random_pose(pose_preset("large"), seed).change();
+    const RigidMotion change = random_change(pose_preset("large"), seed).motion();
     for (DepthPrior prior : kPriors) {
       const auto [worst, differs, valid] = grid_against_exact(warp, change, prior);
       EXPECT_LE(worst, 1.0 / 32) << to_string(prior);
@@ -784,7 +784,7 @@ TEST(Augmentation, MrcalSplinedSourceTakesTheKernelAndTheGrid) {
   EXPECT_GT(warp.grid_spacing(), 0);
   int checked = 0;
   for (std::uint64_t seed = 0; seed < 2; ++seed) {
-    const ViewpointChange change = random_pose(pose_preset("train"), seed).change();
+    const RigidMotion change = random_change(pose_preset("train"), seed).motion();
     for (DepthPrior prior : kPriors) {
       const auto [worst, disagree, both] = fast_against_exact(warp, change, prior);
       EXPECT_LE(worst, 1e-3) << to_string(prior);
@@ -814,7 +814,7 @@ TEST(Augmentation, LensTablesEndOutsideTheImage) {
     ASSERT_TRUE(warp.float_kernel()) << name;
     ++tables;
     WarpMaps fast, exact;
-    const ViewpointChange change = ViewpointChange::from_euler_deg({25, -30, 10});
+    const RigidMotion change = RigidMotion::from_euler_deg({25, -30, 10});
     warp.compute(change, DepthPrior::infinity, &fast, MapKind::geometric);
     warp.compute_exact(change, DepthPrior::infinity, &exact);
     const auto outside_by = [&](double x, double y) {
@@ -871,7 +871,7 @@ TEST(Augmentation, ExtremeMrcalLensesTakeTheKernelOnlyWhereItAgrees) {
     const ViewpointWarp warp{Camera(p)};
     EXPECT_EQ(warp.float_kernel(), kernel) << name;
     long differs = 0;
-    EXPECT_LE(worst_fast_vs_exact(warp, random_pose(pose_preset("large"), 3).change(), &differs), 1e-3) << name;
+    EXPECT_LE(worst_fast_vs_exact(warp, random_change(pose_preset("large"), 3).motion(), &differs), 1e-3) << name;
     EXPECT_LE(differs, 20) << name;
     ++ran;
   }
@@ -898,7 +898,7 @@ TEST(Augmentation, FullCircleAndAnisotropicCamerasKeepTheirAccuracy) {
   for (const auto& [name, p] : cases) {
     const ViewpointWarp warp{Camera(p)};
     for (std::uint64_t seed = 0; seed < 3; ++seed) {
-      const ViewpointChange change = random_pose(*find_pose_preset("large"), seed).change();
+      const RigidMotion change = random_change(*find_pose_preset("large"), seed).motion();
       for (DepthPrior prior : kPriors) {
         const auto fast = fast_against_exact(warp, change, prior);
         EXPECT_LE(fast.worst_px, 1e-3) << name << " seed " << seed << " " << to_string(prior);
@@ -930,7 +930,7 @@ TEST(Augmentation, GridSamplingMatchesTheExactPath) {
   ASSERT_EQ(warp.grid_spacing(), 4);
   EXPECT_LE(warp.grid_error_px(), 1.0 / 32);
   for (std::uint64_t seed = 0; seed < 4; ++seed) {
-    const ViewpointChange change = random_pose(*find_pose_preset("train"), seed).change();
+    const RigidMotion change = random_change(*find_pose_preset("train"), seed).motion();
     cv::Mat grid_image, grid_labels, grid_valid, exact_image, exact_labels, exact_valid;
     warp.augment(change, DepthPrior::source_sphere,
                  {&scene.image, &grid_image, 7, &scene.labels, &grid_labels, 255, &grid_valid}, Sampling::grid);
@@ -950,30 +950,29 @@ TEST(Augmentation, GridSamplingMatchesTheExactPath) {
   if (no_grid.grid_spacing() == 0) {
     const cv::Mat pinhole_image(no_grid.source().height(), no_grid.source().width(), CV_8UC1, cv::Scalar(9));
     cv::Mat g, e;
-    const ViewpointChange small = ViewpointChange::from_euler_deg({5, 0, 0});
+    const RigidMotion small = RigidMotion::from_euler_deg({5, 0, 0});
     no_grid.augment(small, DepthPrior::infinity, {&pinhole_image, &g, 0, nullptr, nullptr, 0, nullptr}, Sampling::grid);
     no_grid.augment(small, DepthPrior::infinity, {&pinhole_image, &e, 0, nullptr, nullptr, 0, nullptr},
                     Sampling::exact);
     EXPECT_EQ(cv::norm(g, e, cv::NORM_INF), 0);
   }
   // Past the measured changes: the exact path, exactly.
-  const ViewpointChange wide = ViewpointChange::from_euler_deg({60, 0, 0});
+  const RigidMotion wide = RigidMotion::from_euler_deg({60, 0, 0});
   cv::Mat a, b;
   warp.augment(wide, DepthPrior::source_sphere, {&scene.image, &a, 0, nullptr, nullptr, 0, nullptr}, Sampling::grid);
   warp.augment(wide, DepthPrior::source_sphere, {&scene.image, &b, 0, nullptr, nullptr, 0, nullptr}, Sampling::exact);
   EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0);
   // The identity through the grid copies the image (every map point is a pixel centre to 1/32 px).
   cv::Mat same;
-  warp.augment(ViewpointChange{}, DepthPrior::source_sphere, {&scene.image, &same, 0, nullptr, nullptr, 0, nullptr});
+  warp.augment(RigidMotion{}, DepthPrior::source_sphere, {&scene.image, &same, 0, nullptr, nullptr, 0, nullptr});
   EXPECT_LT(cv::norm(same, scene.image, cv::NORM_L1) / double(scene.image.total() * 3), 0.05);
   // Bad inputs as warp_image / warp_labels.
   cv::Mat small(10, 10, CV_8UC3), out;
-  EXPECT_THROW(
-      warp.augment(ViewpointChange{}, DepthPrior::source_sphere, {&small, &out, 0, nullptr, nullptr, 0, nullptr}),
-      Error);
-  EXPECT_THROW(warp.augment(ViewpointChange{}, DepthPrior::source_sphere,
-                            {nullptr, nullptr, 0, &scene.labels, &out, 300, nullptr}),
+  EXPECT_THROW(warp.augment(RigidMotion{}, DepthPrior::source_sphere, {&small, &out, 0, nullptr, nullptr, 0, nullptr}),
                Error);
+  EXPECT_THROW(
+      warp.augment(RigidMotion{}, DepthPrior::source_sphere, {nullptr, nullptr, 0, &scene.labels, &out, 300, nullptr}),
+      Error);
 }
 
 // The grid path's image is cv::remap (INTER_LINEAR, BORDER_CONSTANT) of its own map
@@ -1001,8 +1000,7 @@ TEST(Augmentation, GridImagesAreCvRemapOfTheGridMapByteForByte) {
   // Three large changes, and the identity: it samples the image's last pixels, whose
   // taps bilinear_8u reads without passing the image's end.
   for (std::uint64_t seed = 0; seed < 4; ++seed) {
-    const ViewpointChange change =
-        seed < 3 ? random_pose(*find_pose_preset("large"), seed).change() : ViewpointChange{};
+    const RigidMotion change = seed < 3 ? random_change(*find_pose_preset("large"), seed).motion() : RigidMotion{};
     const DepthPrior prior = seed == 0 ? DepthPrior::infinity : DepthPrior::source_sphere;
     WarpMaps maps;
     warp.compute_grid(change, prior, &maps);
@@ -1036,7 +1034,7 @@ TEST(Augmentation, AnOutputInItsInputsMemoryGivesTheSameResult) {
   const Camera camera(resized(woodscape().parameters(), 640, 483));
   const SceneRender scene = render_street_scene(camera, *camera.parameters().pose);
   const ViewpointWarp warp(camera);
-  const ViewpointChange change = random_pose(*find_pose_preset("train"), 3).change();
+  const RigidMotion change = random_change(*find_pose_preset("train"), 3).motion();
   for (const Sampling sampling : {Sampling::grid, Sampling::exact}) {
     cv::Mat image, labels;
     warp.augment(change, DepthPrior::source_sphere, {&scene.image, &image, 0, &scene.labels, &labels, 0, nullptr},

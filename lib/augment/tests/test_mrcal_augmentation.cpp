@@ -11,8 +11,8 @@ namespace {
 
 // Source: the camera frame is mrcal's reference (identity extrinsics). Target:
 // rt_cam_ref = (R, t), i.e. p_target = R p_source + t, which is our P' = R P + t.
-CameraParameters with_change(CameraParameters p, const ViewpointChange& change) {
-  const ViewpointChange inverse = change.inverse();  // our Pose is camera -> reference
+CameraParameters with_change(CameraParameters p, const RigidMotion& change) {
+  const RigidMotion inverse = change.inverse();  // our Pose is camera -> reference
   p.pose = Pose{Eigen::Quaterniond(inverse.rotation), inverse.translation};
   return p;
 }
@@ -21,7 +21,7 @@ void compare_with_mrcal(const char* source_file, const char* target_file, std::u
   const auto dir =
       test::scratch_dir(std::string("mrcal_map_") + source_file + "_" + target_file + std::to_string(seed));
   const Camera source = read_camera(test::data_path(source_file)), target = read_camera(test::data_path(target_file));
-  const ViewpointChange change = random_pose(*find_pose_preset("large"), seed).change();
+  const RigidMotion change = random_change(*find_pose_preset("large"), seed).motion();
   CameraParameters src = source.parameters();
   src.pose = Pose{};
   write_camera(src, dir / "source.cameramodel", CameraFormat::mrcal);

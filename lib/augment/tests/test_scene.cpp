@@ -47,7 +47,7 @@ TEST(Scene, RenderIsDeterministicAndHasEveryWoodScapeClass) {
 
 TEST(Scene, MovedCameraSeesTheTransformedPoints) {
   const Pose mount = *front().parameters().pose;
-  const ViewpointChange change = ViewpointChange::from_euler_deg({5, -10, 20}, {0.2, -0.1, 0.3});
+  const RigidMotion change = RigidMotion::from_euler_deg({5, -10, 20}, {0.2, -0.1, 0.3});
   const Pose moved = moved_camera(mount, change);
   const Eigen::Vector3d p_cam(0.4, -0.3, 2.0);
   const Eigen::Vector3d p_vehicle = mount.rotation * p_cam + mount.translation;
@@ -61,9 +61,9 @@ TEST(Scene, RotationOnlyAugmentationEqualsTheRotatedCameraRender) {
   const SceneRender source = render_street_scene(camera, mount);
   const ViewpointWarp warp(camera);
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
-    RandomPose pose = random_pose(*find_pose_preset("large"), seed);
+    ViewpointChange pose = random_change(*find_pose_preset("large"), seed);
     pose.translation.setZero();
-    const ViewpointChange change = pose.change();
+    const RigidMotion change = pose.motion();
     const SceneRender truth = render_street_scene(camera, moved_camera(mount, change));
     for (DepthPrior prior : {DepthPrior::source_sphere, DepthPrior::infinity}) {
       WarpMaps maps;
@@ -99,7 +99,7 @@ TEST(Scene, TranslationShowsWhatEachDepthPriorCosts) {
     for (DepthPrior prior : {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity}) {
       double sum = 0;
       for (std::uint64_t seed = 1; seed <= 6; ++seed) {
-        const ViewpointChange change = random_pose(*find_pose_preset(preset), seed).change();
+        const RigidMotion change = random_change(*find_pose_preset(preset), seed).motion();
         const SceneRender truth = render_street_scene(camera, moved_camera(mount, change));
         WarpMaps maps;
         warp.compute(change, prior, &maps);
@@ -200,9 +200,9 @@ TEST_P(EveryModelSeededScene, RotationOnlyAugmentationEqualsTheRotatedRender) {
   const StreetScene scene = StreetScene::generate(21);
   const SceneRender source = scene.render(camera, mount);
   const ViewpointWarp warp(camera);
-  RandomPose pose = random_pose(*find_pose_preset("medium"), 3);
+  ViewpointChange pose = random_change(*find_pose_preset("medium"), 3);
   pose.translation.setZero();
-  const ViewpointChange change = pose.change();
+  const RigidMotion change = pose.motion();
   const SceneRender truth = scene.render(camera, moved_camera(mount, change));
   WarpMaps maps;
   warp.compute(change, DepthPrior::infinity, &maps);
@@ -232,7 +232,7 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
     for (std::uint64_t seed = 1; seed <= 2; ++seed) {
       const StreetScene scene = StreetScene::generate(30 + seed);
       const SceneRender source = scene.render(camera, mount);
-      const ViewpointChange change = random_pose(*find_pose_preset(preset), seed).change();  // t in metres
+      const RigidMotion change = random_change(*find_pose_preset(preset), seed).motion();  // t in metres
       const SceneRender truth = scene.render(camera, moved_camera(mount, change));
       WarpMaps maps;
       warp.compute(change, DepthMap{source.range, DepthValues::range}, &maps);
@@ -266,7 +266,7 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
   {
     const StreetScene scene = StreetScene::generate(31);
     const SceneRender source = scene.render(camera, mount);
-    const ViewpointChange rotation = ViewpointChange::from_euler_deg({4, -9, 3}, {0, 0, 0});
+    const RigidMotion rotation = RigidMotion::from_euler_deg({4, -9, 3}, {0, 0, 0});
     WarpMaps from_depth, prior;
     warp.compute(rotation, DepthMap{source.range, DepthValues::range}, &from_depth, MapKind::geometric);
     warp.compute(rotation, DepthPrior::source_sphere, &prior, MapKind::geometric);
@@ -276,8 +276,8 @@ TEST(SeededScene, DepthMapPriorAgreesWithTheTranslatedRender) {
   }
   // Bad input: a depth map of the wrong size or type.
   WarpMaps maps;
-  EXPECT_THROW(warp.compute(ViewpointChange{}, DepthMap{cv::Mat(10, 10, CV_32FC1)}, &maps), Error);
-  EXPECT_THROW(warp.compute(ViewpointChange{}, DepthMap{cv::Mat(483, 640, CV_64FC1)}, &maps), Error);
+  EXPECT_THROW(warp.compute(RigidMotion{}, DepthMap{cv::Mat(10, 10, CV_32FC1)}, &maps), Error);
+  EXPECT_THROW(warp.compute(RigidMotion{}, DepthMap{cv::Mat(483, 640, CV_64FC1)}, &maps), Error);
 }
 
 }  // namespace

@@ -126,8 +126,8 @@ struct ReferenceWarps {
 // The largest distance between the two cameras' maps without a change (where both have a source).
 double identity_max_px(const ViewpointWarp& reference, const ViewpointWarp& alternative, DepthPrior prior) {
   WarpMaps a, b;
-  reference.compute(ViewpointChange{}, prior, &a, MapKind::geometric);
-  alternative.compute(ViewpointChange{}, prior, &b, MapKind::geometric);
+  reference.compute(RigidMotion{}, prior, &a, MapKind::geometric);
+  alternative.compute(RigidMotion{}, prior, &b, MapKind::geometric);
   double largest = 0;
   for (int v = 0; v < a.valid.rows; ++v) {
     for (int u = 0; u < a.valid.cols; ++u) {
@@ -153,7 +153,7 @@ ModelComparison compare_one(const AlternativeModel& alternative, const Compariso
   for (std::size_t i = 0; i < out.changes.size(); ++i) {
     const WarpMaps& a = reference.maps[i];
     WarpMaps b;
-    warp.compute(out.changes[i].change(), out.options.prior, &b, MapKind::geometric);
+    warp.compute(out.changes[i].motion(), out.options.prior, &b, MapKind::geometric);
     std::vector<cv::Mat> warped(labels.size());
     for (std::size_t k = 0; k < labels.size(); ++k) warp_labels(labels[k], b, 0, &warped[k]);
     for (int v = 0; v < h; ++v) {
@@ -224,14 +224,14 @@ Comparison compare_models(const Camera& reference, const std::vector<Alternative
     out.label_names.push_back(name);
   }
   for (int i = 0; i < options.samples; ++i) {
-    out.changes.push_back(random_pose(options.preset, derive_seed(options.seed, "compare", std::uint64_t(i))));
+    out.changes.push_back(random_change(options.preset, derive_seed(options.seed, "compare", std::uint64_t(i))));
   }
   const std::vector<signed char> band = incidence_angle_bands(reference);
   const ViewpointWarp reference_warp(reference);
   ReferenceWarps reference_warps{std::vector<WarpMaps>(out.changes.size()),
                                  std::vector<std::vector<cv::Mat>>(out.changes.size())};
   for (std::size_t i = 0; i < out.changes.size(); ++i) {
-    reference_warp.compute(out.changes[i].change(), options.prior, &reference_warps.maps[i], MapKind::geometric);
+    reference_warp.compute(out.changes[i].motion(), options.prior, &reference_warps.maps[i], MapKind::geometric);
     for (const cv::Mat& l : labels) {
       reference_warps.labels[i].emplace_back();
       warp_labels(l, reference_warps.maps[i], 0, &reference_warps.labels[i].back());
@@ -261,7 +261,7 @@ std::string comparison_json(const Comparison& comparison) {
          {"angle_bands_deg", Comparison::kAngleBandsDeg},
          {"changes", json::array()},
          {"models", json::array()}};
-  for (const RandomPose& p : comparison.changes) {
+  for (const ViewpointChange& p : comparison.changes) {
     j["changes"].push_back({{"rotation_deg", {p.rotation_deg.x(), p.rotation_deg.y(), p.rotation_deg.z()}},
                             {"translation", {p.translation.x(), p.translation.y(), p.translation.z()}}});
   }

@@ -23,10 +23,9 @@ Fidelity fidelity_of_maps(const WarpMaps& maps, const cv::Mat& source_image, con
                           const cv::Mat& truth_image, const cv::Mat& truth_labels);
 }  // namespace
 
-Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange& change,
-                               std::optional<DepthPrior> prior, const cv::Mat& source_image,
-                               const cv::Mat& source_labels, const cv::Mat& source_depth, const cv::Mat& truth_image,
-                               const cv::Mat& truth_labels) {
+Fidelity augmentation_fidelity(const ViewpointWarp& warp, const RigidMotion& change, std::optional<DepthPrior> prior,
+                               const cv::Mat& source_image, const cv::Mat& source_labels, const cv::Mat& source_depth,
+                               const cv::Mat& truth_image, const cv::Mat& truth_labels) {
   const cv::Size out(warp.target().width(), warp.target().height());
   if (truth_image.size() != out || truth_labels.size() != out) {
     throw Error("fidelity: the truth is not the output camera's size");
@@ -109,7 +108,7 @@ SampleFiles read_sample(const fs::path& root, const std::string& name, bool dept
   return f;
 }
 
-ViewpointChange change_of(const nlohmann::json& entry, const fs::path& file, std::string* name) {
+RigidMotion change_of(const nlohmann::json& entry, const fs::path& file, std::string* name) {
   try {
     *name = entry.at("name").get<std::string>();
     const auto r = entry.at("rotation_deg").get<std::vector<double>>();
@@ -132,7 +131,7 @@ ViewpointChange change_of(const nlohmann::json& entry, const fs::path& file, std
                     number_for_message(v));
       }
     }
-    return ViewpointChange::from_euler_deg({r[0], r[1], r[2]}, {t[0], t[1], t[2]});
+    return RigidMotion::from_euler_deg({r[0], r[1], r[2]}, {t[0], t[1], t[2]});
   } catch (const nlohmann::json::exception&) {
     throw Error(path_for_message(file) + ": a line lacks name, rotation_deg or translation");
   }
@@ -164,10 +163,10 @@ std::vector<fs::path> true_test_sets(const fs::path& root) {
 }
 
 // SET/changes.jsonl: each sample's name and true change, in the file's order.
-std::vector<std::pair<std::string, ViewpointChange>> true_changes(const fs::path& set) {
+std::vector<std::pair<std::string, RigidMotion>> true_changes(const fs::path& set) {
   const fs::path changes = set / "changes.jsonl";
   std::istringstream lines(read_bounded_file(changes, std::size_t(64) << 20, "a changes.jsonl file"));
-  std::vector<std::pair<std::string, ViewpointChange>> out;
+  std::vector<std::pair<std::string, RigidMotion>> out;
   for (std::string line; std::getline(lines, line);) {
     if (line.empty()) continue;
     nlohmann::json entry;
@@ -177,7 +176,7 @@ std::vector<std::pair<std::string, ViewpointChange>> true_changes(const fs::path
       throw Error(path_for_message(changes) + ": a line is not JSON");
     }
     std::string name;
-    const ViewpointChange change = change_of(entry, changes, &name);
+    const RigidMotion change = change_of(entry, changes, &name);
     out.emplace_back(std::move(name), change);
   }
   return out;

@@ -28,7 +28,7 @@ TEST(Comparison, TheCameraAgainstItselfIsZeroAndTheIdentityIsACheck) {
   for (const auto& band : m.by_angle) banded += band.pixels;
   EXPECT_EQ(banded, m.all.pixels);
   // The seeded changes are the documented ones.
-  EXPECT_EQ(c.changes[1].rotation_deg, random_pose(options.preset, derive_seed(0, "compare", 1)).rotation_deg);
+  EXPECT_EQ(c.changes[1].rotation_deg, random_change(options.preset, derive_seed(0, "compare", 1)).rotation_deg);
 }
 
 // Kannala-Brandt fits the WoodScape camera to 0.145 px rms (0.55 px below 20 deg,

@@ -45,7 +45,7 @@ const std::array<AffinePreset, 4>& affine_presets();
 std::optional<AffinePreset> find_affine_preset(std::string_view name);
 // The preset called `name`, or Error "WHAT: unknown preset 'NAME' (expected ...)".
 AffinePreset affine_preset(std::string_view name, std::string_view what = "preset");
-// Seeded like random_pose (SeededUniform); draw order: rotation, tx, ty, scale.
+// Seeded like random_change (SeededUniform); draw order: rotation, tx, ty, scale.
 AffineChange random_affine(const AffinePreset& preset, std::uint64_t seed);
 
 // Where the source pixel x lands (the formula above), for points: keypoints,

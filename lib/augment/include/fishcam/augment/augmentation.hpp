@@ -110,7 +110,7 @@ struct AugmentIO {
 // The source point on the unit sphere (source camera frame) seen along the output
 // ray d (unit) after the viewpoint change, under the depth prior; nullopt where
 // there is none (|t| >= 1 and the ray misses or only grazes the sphere).
-std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const ViewpointChange& change, DepthPrior prior);
+std::optional<Eigen::Vector3d> source_point(const Eigen::Vector3d& d, const RigidMotion& change, DepthPrior prior);
 
 class ViewpointWarp {
  public:
@@ -140,11 +140,11 @@ class ViewpointWarp {
   // the triangles lose at depth edges).
   // Throws Error for a non-finite or non-rotation change, and for a depth map of the
   // wrong type or size.
-  void compute(const ViewpointChange& change, const DepthSource& depth, WarpMaps* maps,
+  void compute(const RigidMotion& change, const DepthSource& depth, WarpMaps* maps,
                MapKind kind = MapKind::sampling) const;
   // Geometric maps in double through Camera::project, pixel by pixel: the reference
   // (under a prior).
-  void compute_exact(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
+  void compute_exact(const RigidMotion& change, DepthPrior prior, WarpMaps* maps) const;
   // Whether compute() uses the float kernel (decided once, at construction).
   bool float_kernel() const { return kernel_source_ != nullptr; }
 
@@ -153,7 +153,7 @@ class ViewpointWarp {
   // map, compute()'s maps whatever the sampling. Outputs are written in place when
   // they already have the output size and the input's type. Throws Error for bad
   // inputs (as warp_image / warp_labels) and non-finite changes.
-  void augment(const ViewpointChange& change, const DepthSource& depth, const AugmentIO& io,
+  void augment(const RigidMotion& change, const DepthSource& depth, const AugmentIO& io,
                Sampling sampling = Sampling::grid) const;
   // The forward direction, for points (keypoints, polygon vertices, box outlines):
   // where the scene point of each source pixel appears in the output, exactly
@@ -165,7 +165,7 @@ class ViewpointWarp {
   // pixel there samples it (within 1.5 px), not a nearer surface. NaN where the
   // source pixel has no ray or the moved point no projection. Throws Error for a
   // non-finite change.
-  void forward(const ViewpointChange& change, const DepthSource& depth, std::span<const Eigen::Vector2d> source_pixels,
+  void forward(const RigidMotion& change, const DepthSource& depth, std::span<const Eigen::Vector2d> source_pixels,
                std::span<Eigen::Vector2d> pixels, std::span<std::uint8_t> visible) const;
   // A depth map (CV_32FC1, source size; `values`) seen from the moved camera: sampled
   // as the labels are (nearest neighbour, so never blended across depth edges), each
@@ -176,7 +176,7 @@ class ViewpointWarp {
   // Values that are not finite and positive (no-depth markers, the sky's infinity)
   // are copied as they are; pixels without a source become `fill`. *out may be
   // preallocated (output size, CV_32FC1).
-  void warp_depth(const ViewpointChange& change, const DepthSource& depth, const cv::Mat& depth_map, DepthValues values,
+  void warp_depth(const RigidMotion& change, const DepthSource& depth, const cv::Mat& depth_map, DepthValues values,
                   cv::Mat* out, float fill = std::numeric_limits<float>::quiet_NaN()) const;
 
   // The grid's node spacing (px) and its measured worst interpolation error (px)
@@ -189,17 +189,16 @@ class ViewpointWarp {
   // The grid path's source coordinates as geometric maps (float, before cv::remap's
   // fixed-point quantisation; for inspection and tests). Where augment() would not
   // use the grid, compute()'s geometric maps.
-  void compute_grid(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps) const;
+  void compute_grid(const RigidMotion& change, DepthPrior prior, WarpMaps* maps) const;
 
  private:
-  void compute_double(const ViewpointChange& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const;
+  void compute_double(const RigidMotion& change, DepthPrior prior, WarpMaps* maps, MapKind kind) const;
   // compute(), forward() and warp_depth() under a depth map (depth_map_warp.cpp).
-  void compute_from_map(const ViewpointChange& change, const DepthMap& map, WarpMaps* maps, MapKind kind) const;
-  void forward_from_map(const ViewpointChange& change, const DepthMap& map,
-                        std::span<const Eigen::Vector2d> source_pixels, std::span<Eigen::Vector2d> pixels,
-                        std::span<std::uint8_t> visible) const;
-  void warp_depth_from_map(const ViewpointChange& change, const DepthMap& map, const cv::Mat& depth_map,
-                           DepthValues values, cv::Mat* out, float fill) const;
+  void compute_from_map(const RigidMotion& change, const DepthMap& map, WarpMaps* maps, MapKind kind) const;
+  void forward_from_map(const RigidMotion& change, const DepthMap& map, std::span<const Eigen::Vector2d> source_pixels,
+                        std::span<Eigen::Vector2d> pixels, std::span<std::uint8_t> visible) const;
+  void warp_depth_from_map(const RigidMotion& change, const DepthMap& map, const cv::Mat& depth_map, DepthValues values,
+                           cv::Mat* out, float fill) const;
 
   Camera source_, target_;
   // The source camera in the float kernel's form, decided once at construction;

@@ -22,7 +22,7 @@ namespace fishcam {
 
 struct ComparisonOptions {
   PosePreset preset = *find_pose_preset("train");
-  int samples = 8;  // viewpoint changes; change i is random_pose(preset, derive_seed(seed, "compare", i))
+  int samples = 8;  // viewpoint changes; change i is random_change(preset, derive_seed(seed, "compare", i))
   std::uint64_t seed = 0;
   DepthPrior prior = DepthPrior::source_sphere;
 };
@@ -76,7 +76,7 @@ using NamedLabels = std::vector<std::pair<std::string, cv::Mat>>;
 struct Comparison {
   ComparisonOptions options;
   std::vector<std::string> label_names;
-  std::vector<RandomPose> changes;
+  std::vector<ViewpointChange> changes;
   std::vector<ModelComparison> models;
   static constexpr std::array<double, 5> kAngleBandsDeg = {0, 30, 60, 90, 360};
 };

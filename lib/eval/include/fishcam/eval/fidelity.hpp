@@ -31,10 +31,9 @@ struct Fidelity {
 // `change` under `prior` -- or, without one, under the source's depth map
 // (`source_depth`, range, a DepthMap) -- against the truth
 // (output size). Throws Error for mismatched inputs.
-Fidelity augmentation_fidelity(const ViewpointWarp& warp, const ViewpointChange& change,
-                               std::optional<DepthPrior> prior, const cv::Mat& source_image,
-                               const cv::Mat& source_labels, const cv::Mat& source_depth, const cv::Mat& truth_image,
-                               const cv::Mat& truth_labels);
+Fidelity augmentation_fidelity(const ViewpointWarp& warp, const RigidMotion& change, std::optional<DepthPrior> prior,
+                               const cv::Mat& source_image, const cv::Mat& source_labels, const cv::Mat& source_depth,
+                               const cv::Mat& truth_image, const cv::Mat& truth_labels);
 
 // One row of a dataset's fidelity: a true viewpoint test set under one prior ("map":
 // the sample's depth map), means over the set's samples.
