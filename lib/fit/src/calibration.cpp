@@ -84,6 +84,14 @@ std::string undetermined_text(const std::vector<std::string>& names, bool poses,
   return text;
 }
 
+double outlier_limit_px(std::vector<double> errors_px) {
+  if (errors_px.empty()) return std::numeric_limits<double>::infinity();
+  const auto middle = errors_px.begin() + long(errors_px.size() / 2);
+  std::nth_element(errors_px.begin(), middle, errors_px.end());
+  const double sigma = std::max(1.4826 * *middle, 1e-9);
+  return std::max(5 * sigma, 0.1);
+}
+
 }  // namespace detail
 
 namespace {
@@ -460,9 +468,7 @@ Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
   return best;
 }
 
-// Step 3, outliers: corners beyond 5 robust sigmas of the robust solve (median
-// absolute error * 1.4826, the 2-D error's scale) and beyond 0.1 px (however exact
-// the others, a corner that close is no outlier).
+// Step 3, outliers: corners beyond outlier_limit_px of the robust solve's errors.
 std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, const Camera& camera, const Solve& s) {
   std::vector<double> errors;
   std::vector<std::vector<double>> per_board(o.boards.size());
@@ -476,13 +482,11 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
       errors.push_back(e);
     }
   }
-  std::nth_element(errors.begin(), errors.begin() + long(errors.size() / 2), errors.end());
-  const double sigma = std::max(1.4826 * errors[errors.size() / 2], 1e-9);
+  const double limit = detail::outlier_limit_px(std::move(errors));
   std::vector<CalibrationResult::Outlier> outliers;
   for (size_t b = 0; b < o.boards.size(); ++b) {
     for (size_t i = 0; i < o.points.size(); ++i) {
-      if (per_board[b][i] > std::max(5 * sigma, 0.1))
-        outliers.push_back({o.boards[b]->filename, int(i), per_board[b][i]});
+      if (per_board[b][i] > limit) outliers.push_back({o.boards[b]->filename, int(i), per_board[b][i]});
     }
   }
   return outliers;
@@ -709,15 +713,14 @@ CalibrationResult locate_boards(const std::vector<BoardObservation>& observation
     solve_board_pose(camera, points, o, std::vector<bool>(points.size(), false), &robust, &poses.back());
   }
   if (views.empty()) throw Error("locate boards: no image with a board");
-  // Outliers as calibrate finds them: beyond 5 robust sigmas (median * 1.4826) and 0.1 px.
+  // Outliers as calibrate finds them (outlier_limit_px).
   std::vector<std::vector<double>> errors;
   std::vector<double> all;
   for (size_t b = 0; b < views.size(); ++b) {
     errors.push_back(corner_errors(camera, points, *views[b], poses[b]));
     all.insert(all.end(), errors.back().begin(), errors.back().end());
   }
-  std::nth_element(all.begin(), all.begin() + long(all.size() / 2), all.end());
-  const double sigma = std::max(1.4826 * all[all.size() / 2], 1e-9);
+  const double limit = detail::outlier_limit_px(std::move(all));
   CalibrationResult result;
   result.camera = camera.parameters();
   double sum2 = 0;
@@ -725,7 +728,7 @@ CalibrationResult locate_boards(const std::vector<BoardObservation>& observation
     std::vector<bool> left_out(points.size(), false);
     long kept = 0;
     for (size_t i = 0; i < points.size(); ++i) {
-      left_out[i] = !(errors[b][i] <= std::max(5 * sigma, 0.1));
+      left_out[i] = !(errors[b][i] <= limit);
       if (left_out[i]) result.outliers.push_back({views[b]->filename, int(i), errors[b][i]});
       kept += !left_out[i];
     }

@@ -241,4 +241,10 @@ double principal_point_offset(const Eigen::Vector2d& principal_point, int width,
 constexpr double kCornerMarginPx = 2;
 void check_solution(const CalibrationResult& r, int width, int height, const std::string& model);
 
+// The outlier rule of every solve (single camera, located boards, the rig's joint
+// solve): a corner whose error exceeds 5 robust sigmas of all the errors (median *
+// 1.4826, the 2-D error's scale) and 0.1 px (however exact the others, a corner that
+// close is no outlier). Returns that limit; an empty list has none (infinity).
+double outlier_limit_px(std::vector<double> errors_px);
+
 }  // namespace fishcam::detail

@@ -295,8 +295,8 @@ Camera joint_camera(const JointParameters& p, const std::vector<RigCamera>& came
 }
 
 // The joint solve's outliers, per camera: corners of the robust joint solution `p`
-// beyond 5 robust sigmas of that camera's errors (median * 1.4826) and beyond 0.1 px,
-// as one camera's calibration finds its own; a corner that agrees with its camera's
+// beyond outlier_limit_px of that camera's errors, as one camera's calibration finds
+// its own; a corner that agrees with its camera's
 // boards but not with the other cameras' at the same instant is one (mrcal's joint
 // solve drops them likewise).
 std::vector<std::vector<CalibrationResult::Outlier>> joint_outliers(
@@ -318,12 +318,11 @@ std::vector<std::vector<CalibrationResult::Outlier>> joint_outliers(
       }
     }
     if (errors.empty()) continue;
-    std::vector<double> sorted;
+    std::vector<double> sorted;  // outlier_limit_px sorts them
     for (const auto& e : errors) sorted.push_back(e.error_px);
-    std::nth_element(sorted.begin(), sorted.begin() + long(sorted.size() / 2), sorted.end());
-    const double sigma = std::max(1.4826 * sorted[sorted.size() / 2], 1e-9);
+    const double limit = detail::outlier_limit_px(std::move(sorted));
     for (const auto& e : errors) {
-      if (!(e.error_px <= std::max(5 * sigma, 0.1))) out[k].push_back(e);
+      if (!(e.error_px <= limit)) out[k].push_back(e);
     }
   }
   return out;
