@@ -103,6 +103,10 @@ class Camera:
         """
         The camera with its valid domain capped at the observed angles plus margin_deg (`--theta-limit data+DEG`).
         """
+    def mirrored(self, horizontal: bool = True, vertical: bool = False) -> Camera:
+        """
+        The same lens for the image flipped left-right (horizontal: u -> width - 1 - u) and/or upside down (vertical): the pixel grid mirrored (c'x = width - 1 - cx, a'x = -a_x), so the camera projects every point where the flipped image shows it. Only fishcam JSON holds a mirrored camera.
+        """
     def observed(self, rays: typing.Any) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]:
         """
         Whether camera-frame rays (N, 3) lie within the angles its calibration observed (per 15-degree azimuth sector): (N,) bool.
@@ -687,6 +691,11 @@ class RigCalibration:
         Per camera its Calibration; camera.pose is camera -> camera 0.
         """
     @property
+    def fixed_intrinsics(self) -> list[bool]:
+        """
+        Per camera, whether its intrinsics were held fixed (given as a Camera) or solved.
+        """
+    @property
     def instants(self) -> int:
         """
         Distinct instants with a board.
@@ -731,7 +740,7 @@ def calibrate(observations: list[typing.Any], board: tuple[int, int], spacing: f
     """
 def calibrate_rig(cameras: list[typing.Any], board: tuple[int, int], spacing: float, threads: int = 1) -> RigCalibration:
     """
-    Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per camera, observations as read_corners gives them; images of one instant share their file name (the last path component). Every camera's intrinsics, its pose relative to camera 0 and the boards' poses: a RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.
+    Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per camera, observations as read_corners gives them; images of one instant share their file name (the last path component). model: a model name (the camera's intrinsics solved) or a fishcam.Camera for those images (its intrinsics held fixed, as calibrate --fix-intrinsics FILE: only where it sits is solved). Every solved camera's intrinsics, each camera's pose relative to camera 0 and the boards' poses: a RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.
     """
 def check_depth_prior(arg0: str) -> None:
     """

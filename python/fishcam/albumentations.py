@@ -25,6 +25,12 @@ without blending, values re-expressed in the moved camera), ``polygons`` (a list
 ``camera`` (a fishcam.Camera: the camera of the images, returned augmented). The
 seed of the change is drawn from the transform's generator, which ``A.Compose(seed=)``
 seeds; ``A.ReplayCompose`` replays it.
+
+albumentations' own geometric transforms pass ``camera`` through unchanged: after
+them it no longer describes the images. ``HorizontalFlip``, ``VerticalFlip``,
+``Resize``, ``RandomCrop``, ``CenterCrop`` and ``Crop`` here are albumentations' own
+that also give ``camera`` the image it now describes (``Camera.mirrored``,
+``Camera.resized``, ``Camera.cropped``; a padded crop's padding included).
 """
 
 import json
@@ -44,9 +50,19 @@ except ImportError as error:  # pragma: no cover - the message is the point
 from . import Camera, Error
 from . import transforms as _transforms
 from .transforms import options as _options
+from .transforms.checks import _camera_matches
 from .transforms.options import AffineOptions, Unpack, ViewpointOptions
 
-__all__ = ["RandomViewpoint", "RandomAffine"]
+__all__ = [
+    "RandomViewpoint",
+    "RandomAffine",
+    "HorizontalFlip",
+    "VerticalFlip",
+    "Resize",
+    "RandomCrop",
+    "CenterCrop",
+    "Crop",
+]
 
 if int(_albumentations.__version__.split(".")[0]) < 2:  # pragma: no cover
     raise ImportError(f"fishcam.albumentations needs albumentations >= 2.0, found {_albumentations.__version__}")
@@ -278,3 +294,75 @@ class RandomAffine(_FishcamDualTransform):
     def _change(self, params: Params) -> _transforms.SampleChange:
         height, width = params["shape"][:2]
         return self._affine.draw((width, height), params["seed"])
+
+
+class _KeepsCamera:
+    """The ``camera`` target for one of albumentations' geometric transforms: the
+    camera, checked against the sample's size, made to describe the output images."""
+
+    @property
+    def targets(self) -> dict[str, typing.Callable[..., typing.Any]]:
+        return {**super().targets, "camera": self._camera_target}  # type: ignore[misc]
+
+    def _camera_target(self, camera: object, **params: typing.Any) -> Camera:
+        if not isinstance(camera, Camera):
+            raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
+        height, width = params["shape"][:2]
+        _camera_matches(camera, (int(width), int(height)))
+        return self.apply_to_camera(camera, **params)
+
+    def apply_to_camera(self, camera: Camera, **params: typing.Any) -> Camera:
+        """The camera of the transformed images (each transform's own)."""
+        raise NotImplementedError
+
+
+class HorizontalFlip(_KeepsCamera, _albumentations.HorizontalFlip):
+    """albumentations' ``HorizontalFlip``; ``camera`` mirrored with the images
+    (``Camera.mirrored(horizontal=True)``: c'x = width - 1 - cx, a'x = -a_x)."""
+
+    def apply_to_camera(self, camera: Camera, **params: typing.Any) -> Camera:
+        """The camera of the flipped images."""
+        return camera.mirrored(horizontal=True, vertical=False)
+
+
+class VerticalFlip(_KeepsCamera, _albumentations.VerticalFlip):
+    """albumentations' ``VerticalFlip``; ``camera`` mirrored upside down with the images."""
+
+    def apply_to_camera(self, camera: Camera, **params: typing.Any) -> Camera:
+        """The camera of the flipped images."""
+        return camera.mirrored(horizontal=False, vertical=True)
+
+
+class Resize(_KeepsCamera, _albumentations.Resize):
+    """albumentations' ``Resize``; ``camera`` resized with the images (``Camera.resized``:
+    c' = (c + 0.5) s - 0.5, a' = a s, as pixel centres map)."""
+
+    def apply_to_camera(self, camera: Camera, **params: typing.Any) -> Camera:
+        """The camera of the resized images."""
+        return camera.resized(int(self.width), int(self.height))
+
+
+class _CropsCamera(_KeepsCamera):
+    def apply_to_camera(self, camera: Camera, **params: typing.Any) -> Camera:
+        """The camera of the cropped images."""
+        # The crop's window in the (padded, when pad_if_needed pads) image.
+        x_min, y_min, x_max, y_max = (int(v) for v in params["crop_coords"])
+        pad = params.get("pad_params") or {}
+        return camera.cropped(
+            x_min - int(pad.get("pad_left", 0)), y_min - int(pad.get("pad_top", 0)), x_max - x_min, y_max - y_min
+        )
+
+
+class RandomCrop(_CropsCamera, _albumentations.RandomCrop):
+    """albumentations' ``RandomCrop`` (``pad_if_needed`` included); ``camera`` cropped to the
+    same window (``Camera.cropped``: c' = c - (left, top), the padding counted)."""
+
+
+class CenterCrop(_CropsCamera, _albumentations.CenterCrop):
+    """albumentations' ``CenterCrop`` (``pad_if_needed`` included); ``camera`` cropped to the
+    same window."""
+
+
+class Crop(_CropsCamera, _albumentations.Crop):
+    """albumentations' ``Crop`` (``pad_if_needed`` included); ``camera`` cropped to the same
+    window."""

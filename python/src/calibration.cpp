@@ -149,6 +149,8 @@ void bind_rig_calibration(py::module_& m) {
       .def_readonly("translation_sigma", &RigCalibrationResult::translation_sigma,
                     "Per camera, 1-sigma of its translation relative to camera 0 (board units; the largest "
                     "component).")
+      .def_readonly("fixed_intrinsics", &RigCalibrationResult::fixed_intrinsics,
+                    "Per camera, whether its intrinsics were held fixed (given as a Camera) or solved.")
       .def_readonly("rms_px", &RigCalibrationResult::rms_px, "RMS 2-D reprojection error over every camera (px).")
       .def_readonly("instants", &RigCalibrationResult::instants, "Distinct instants with a board.")
       .def_readonly("warnings", &RigCalibrationResult::warnings, "What the user should know (list of str).")
@@ -168,7 +170,16 @@ void bind_rig_calibration(py::module_& m) {
           RigCamera camera;
           camera.observations = observations_of(item[py::int_(0)].cast<py::list>());
           std::tie(camera.width, camera.height) = item[py::int_(1)].cast<std::pair<int, int>>();
-          camera.model = parse_model_spec(item[py::int_(2)].cast<std::string>());
+          // A model name solves the camera's intrinsics; a Camera holds them fixed.
+          if (const py::handle model = item[py::int_(2)]; py::isinstance<Camera>(model)) {
+            camera.fixed_intrinsics = model.cast<const Camera&>().parameters();
+          } else if (py::isinstance<py::str>(model)) {
+            camera.model = parse_model_spec(model.cast<std::string>());
+          } else {
+            throw Error("cameras[" + std::to_string(rig.size()) +
+                        "]: expected a model name or a fishcam.Camera (intrinsics held fixed), got " +
+                        std::string(py::str(model.get_type().attr("__name__"))));
+          }
           rig.push_back(std::move(camera));
         }
         py::gil_scoped_release release;
@@ -177,7 +188,9 @@ void bind_rig_calibration(py::module_& m) {
       py::arg("cameras"), py::arg("board"), py::arg("spacing"), py::arg("threads") = 1,
       "Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per "
       "camera, observations as read_corners gives them; images of one instant share their file name (the last "
-      "path component). Every camera's intrinsics, its pose relative to camera 0 and the boards' poses: a "
+      "path component). model: a model name (the camera's intrinsics solved) or a fishcam.Camera for those "
+      "images (its intrinsics held fixed, as calibrate --fix-intrinsics FILE: only where it sits is solved). "
+      "Every solved camera's intrinsics, each camera's pose relative to camera 0 and the boards' poses: a "
       "RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.");
 }
 

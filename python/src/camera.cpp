@@ -269,6 +269,15 @@ void def_camera_geometry(py::class_<Camera>& cls) {
           py::arg("left"), py::arg("top"), py::arg("width"), py::arg("height"),
           "The same lens for the image cropped to the width x height window whose top-left pixel is (left, top) "
           "(negative, or past the edges: a padded crop): c' = c - (left, top).")
+      .def(
+          "mirrored",
+          [](const Camera& c, bool horizontal, bool vertical) {
+            return Camera(mirrored(c.parameters(), horizontal, vertical));
+          },
+          py::arg("horizontal") = true, py::arg("vertical") = false,
+          "The same lens for the image flipped left-right (horizontal: u -> width - 1 - u) and/or upside down "
+          "(vertical): the pixel grid mirrored (c'x = width - 1 - cx, a'x = -a_x), so the camera projects every "
+          "point where the flipped image shows it. Only fishcam JSON holds a mirrored camera.")
       .def_property_readonly(
           "domain", [](const Camera& self) -> decltype(auto) { return self.domain(); },
           "The model's valid domain (ValidDomain).")

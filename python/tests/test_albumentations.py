@@ -180,3 +180,49 @@ def test_one_draw_per_call_and_the_image_and_mask_in_one_pass(cam, data, monkeyp
     first = replay(image=data["image"], mask=data["mask"])
     again = A.ReplayCompose.replay(first["replay"], image=data["image"], mask=data["mask"])
     assert np.array_equal(first["image"], again["image"]) and np.array_equal(first["mask"], again["mask"])
+
+
+def coordinates(cam):
+    """An HxWx2 float32 image whose pixels hold their own (row + 1, column + 1): 0 is padding."""
+    rows, cols = np.mgrid[1 : cam.height + 1, 1 : cam.width + 1].astype(np.float32)
+    return np.stack([rows, cols], axis=-1)
+
+
+@pytest.mark.parametrize(
+    "transform",
+    [
+        fa.HorizontalFlip(p=1),
+        fa.VerticalFlip(p=1),
+        fa.Resize(121, 160, interpolation=0),
+        fa.RandomCrop(100, 150),
+        fa.RandomCrop(300, 400, pad_if_needed=True, pad_position="random"),
+        fa.CenterCrop(101, 151),
+        fa.CenterCrop(300, 401, pad_if_needed=True),
+        fa.Crop(10, 20, 110, 220),
+    ],
+    ids=["hflip", "vflip", "resize", "crop", "crop-padded", "center", "center-padded", "crop-window"],
+)
+def test_geometric_transforms_keep_the_camera_true(cam, transform):
+    """Every output pixel that shows a source pixel: the returned camera sees there the ray
+    the input camera saw at that source pixel (to 1e-9 px; nearest resizing: the source
+    pixel is the one sampled)."""
+    for seed in range(3):
+        out = A.Compose([transform], seed=seed)(image=coordinates(cam), camera=cam)
+        image, after = out["image"], out["camera"]
+        assert (after.width, after.height) == (image.shape[1], image.shape[0])
+        ys, xs = np.nonzero(image[..., 0] > 0)
+        assert len(xs) > 100
+        source = np.stack([image[ys, xs, 1] - 1, image[ys, xs, 0] - 1], axis=1).astype(np.float64)
+        rays, ok = cam.unproject(source)
+        pixels, seen = after.project(rays[ok])
+        assert seen.all()
+        expected = np.stack([xs, ys], axis=1)[ok].astype(np.float64)
+        if isinstance(transform, fa.Resize):  # nearest: the output pixel's centre lies within its source pixel
+            assert (np.abs(pixels - expected) <= np.array([160 / 320, 121 / 242]) / 2 + 1e-9).all()
+        else:
+            np.testing.assert_allclose(pixels, expected, atol=1e-9)
+
+
+def test_a_geometric_transform_refuses_a_stale_camera(cam):
+    with pytest.raises(fishcam.Error, match="camera: 320x242 but the images are 160x121"):
+        A.Compose([A.Resize(121, 160), fa.HorizontalFlip(p=1)])(image=coordinates(cam), camera=cam)

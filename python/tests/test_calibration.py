@@ -103,3 +103,21 @@ def test_calibrate_rig_recovers_a_stereo_pair() -> None:
     assert rig.rotation_sigma_deg[0] == 0
     with pytest.raises(fishcam.Error, match="at least 2 cameras"):
         fishcam.calibrate_rig([(left, (640, 483), "kannala-brandt")], BOARD, SPACING)
+
+
+def test_calibrate_rig_holds_a_given_cameras_intrinsics() -> None:
+    """A Camera in place of a model name: its intrinsics held fixed (calibrate
+    --fix-intrinsics FILE), only where it sits solved."""
+    camera = lens()
+    left, right = stereo_boards(camera, 0.2, 60, 0.0, 3)
+    rig = fishcam.calibrate_rig([(left, (640, 483), "kannala-brandt"), (right, (640, 483), camera)], BOARD, SPACING)
+    assert rig.fixed_intrinsics == [False, True]
+    fixed = rig.cameras[1].camera
+    assert list(fixed.parameters) == list(camera.parameters) and list(fixed.principal_point) == list(
+        camera.principal_point
+    )
+    r, t = fixed.pose
+    assert np.allclose(t, [0.2, 0, 0], atol=1e-5)
+    assert np.allclose(r, rotation(np.radians(10), 0, 0), atol=1e-6)
+    with pytest.raises(fishcam.Error, match=r"cameras\[1\]: expected a model name or a fishcam.Camera"):
+        fishcam.calibrate_rig([(left, (640, 483), "kannala-brandt"), (right, (640, 483), 3)], BOARD, SPACING)

@@ -100,3 +100,52 @@ def test_a_crop_refuses_a_stale_camera(cam):
         v2.Compose([v2.Resize((121, 160)), ft.CenterCrop(100)])(image, cam)
     with pytest.raises(fishcam.Error, match="cropped: width and height must be >= 1"):
         cam.cropped(0, 0, 0, 10)
+
+
+@pytest.mark.parametrize(
+    "transform, horizontal, vertical",
+    [(ft.RandomHorizontalFlip(p=1), True, False), (ft.RandomVerticalFlip(p=1), False, True)],
+    ids=["horizontal", "vertical"],
+)
+def test_flips_keep_the_camera_true(cam, transform, horizontal, vertical):
+    image, flipped = transform(coordinates_image(cam), cam)
+    assert flipped == cam.mirrored(horizontal=horizontal, vertical=vertical)
+    assert_camera_describes(cam, flipped, image)
+    # Not drawn (p = 0): the sample, camera included, passes unchanged.
+    _, same = type(transform)(p=0)(coordinates_image(cam), cam)
+    assert same == cam
+    with pytest.raises(fishcam.Error, match="camera: 320x242 but the images are 160x121"):
+        transform(tv_tensors.Image(torch.zeros((3, 121, 160))), cam)
+
+
+@pytest.mark.parametrize("flip", [ft.RandomHorizontalFlip(p=1), ft.RandomVerticalFlip(p=1)], ids=["h", "v"])
+def test_a_flip_and_a_viewpoint_change_commute(cam, flip):
+    """Flipped first, the viewpoint change warps with the mirrored camera: the same image
+    and camera as the change followed by the flip (a flip before an ordinary
+    v2.RandomHorizontalFlip would warp with unmirrored intrinsics)."""
+    viewpoint = ft.RandomViewpoint(preset="medium", sampling="exact")
+    outputs = []
+    for chain in (v2.Compose([flip, viewpoint]), v2.Compose([viewpoint, flip])):
+        with ft.sample_seed(11):
+            outputs.append(chain(coordinates_image(cam), cam))
+    (first, first_camera), (second, second_camera) = outputs
+    # The same camera; its pose to the last bits (a quaternion normalised once more or less).
+    for a, b in zip(first_camera.pose, second_camera.pose):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-15)
+    assert first_camera.parameters_key(with_pose=False) == second_camera.parameters_key(with_pose=False)
+    both = (first[0] > 0) & (second[0] > 0)
+    assert both.sum() > 0.5 * cam.width * cam.height
+    assert (both == (first[0] > 0)).float().mean() > 0.99
+    # cv2.remap places bilinear samples on a 1/32 px grid: a mirrored position may round
+    # to the neighbouring step (the coordinates image has slope 1 per pixel).
+    torch.testing.assert_close(first[:, both], second[:, both], atol=1 / 32 + 1e-3, rtol=0)
+
+
+def test_a_mirrored_camera_lives_in_fishcam_json_only(cam, tmp_path):
+    mirrored = cam.mirrored()
+    assert list(mirrored.pixel_scale) == [-cam.pixel_scale[0], cam.pixel_scale[1]]
+    assert mirrored.mirrored() == cam
+    mirrored.write(str(tmp_path / "mirrored.json"))
+    assert fishcam.Camera.read(str(tmp_path / "mirrored.json")) == mirrored
+    with pytest.raises(fishcam.Error, match="cannot hold a mirrored pixel grid"):
+        mirrored.write(str(tmp_path / "mirrored.txt"), format="woodscape")

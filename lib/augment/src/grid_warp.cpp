@@ -366,7 +366,8 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
   double max_angle = 0, max_translation = 0;
   const std::vector<std::pair<RigidMotion, DepthPrior>> changes = measured_changes(&max_angle, &max_translation);
   float fold_guard = std::numeric_limits<float>::infinity();
-  if (source.domain().closed) fold_guard = float(0.95 * rim_distance(source) * source.pixel_scale().maxCoeff());
+  if (source.domain().closed)
+    fold_guard = float(0.95 * rim_distance(source) * source.pixel_scale().cwiseAbs().maxCoeff());
   for (const int s : {16, 8, 4, 2}) {
     auto plan = std::make_shared<GridPlan>();
     plan->spacing = s;

@@ -285,6 +285,50 @@ double worst_fast_vs_exact(const ViewpointWarp& warp, const RigidMotion& change,
 
 // Cameras the float kernel cannot evaluate to 1e-3 px take the exact path, and
 // their maps stay right (they were 723 px off, all-NaN, or 94 % wrong at identity).
+// A flipped image with its camera (a mirrored pixel grid, fishcam::mirrored) augmented
+// by a change is the flip of the augmented image: the maps agree pixel for pixel, on
+// the float kernel as on the exact path, for every prior and flip.
+TEST(Augmentation, MirroredCamerasWarpTheFlippedImage) {
+  int compared = 0;
+  for (const auto& [name, p] : {std::pair{std::string("woodscape"), resized(test::woodscape_front(), 320, 242)},
+                                test::every_tangential_camera().front(), test::skewed_camera()}) {
+    const CameraParameters small = resized(p, 320, 242);
+    const ViewpointWarp warp{Camera(small)};
+    const RigidMotion change = random_change(*find_pose_preset("large"), 9).motion();
+    for (const DepthPrior prior : {DepthPrior::source_sphere, DepthPrior::infinity}) {
+      WarpMaps maps;
+      warp.compute(change, prior, &maps, MapKind::geometric);
+      for (const auto& [horizontal, vertical] : {std::pair{true, false}, {false, true}, {true, true}}) {
+        SCOPED_TRACE(name + (horizontal ? " horizontal" : "") + (vertical ? " vertical" : ""));
+        const ViewpointWarp flipped{Camera(mirrored(small, horizontal, vertical))};
+        EXPECT_EQ(flipped.float_kernel(), warp.float_kernel());
+        WarpMaps flipped_maps;
+        flipped.compute(change, prior, &flipped_maps, MapKind::geometric);
+        const int w = small.width, h = small.height;
+        double worst = 0;
+        long valid_differs = 0;
+        for (int v = 0; v < h; ++v) {
+          for (int u = 0; u < w; ++u) {
+            const int fu = horizontal ? w - 1 - u : u, fv = vertical ? h - 1 - v : v;
+            valid_differs += maps.valid.at<uchar>(v, u) != flipped_maps.valid.at<uchar>(fv, fu);
+            if (!maps.valid.at<uchar>(v, u) || !flipped_maps.valid.at<uchar>(fv, fu)) continue;
+            const double x = maps.map_x.at<float>(v, u), y = maps.map_y.at<float>(v, u);
+            const Eigen::Vector2d expected(horizontal ? w - 1 - x : x, vertical ? h - 1 - y : y);
+            worst = std::max(
+                worst,
+                (Eigen::Vector2d(flipped_maps.map_x.at<float>(fv, fu), flipped_maps.map_y.at<float>(fv, fu)) - expected)
+                    .norm());
+          }
+        }
+        EXPECT_LE(worst, 2e-3);
+        EXPECT_LE(valid_differs, 2 * (w + h));  // only where a source lands on the image's edge
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 3 * 2 * 3);
+}
+
 TEST(Augmentation, FastMapsFallBackToTheExactPathWhereFloatFails) {
   CameraParameters small = test::woodscape_front();
   small.width = 160, small.height = 121;

@@ -51,6 +51,21 @@ CameraParameters cropped(const CameraParameters& camera, int left, int top, int 
   return out;
 }
 
+CameraParameters mirrored(const CameraParameters& camera, bool horizontal, bool vertical) {
+  CameraParameters out = camera;
+  out.grid = camera.grid.mirrored(camera.width, camera.height, horizontal, vertical);
+  if (out.calibration && out.calibration->covariance.size() > 0) {
+    // d cx' = -d cx (horizontal), d cy' = -d cy and d a_y' = -d a_y (vertical).
+    Eigen::MatrixXd& c = out.calibration->covariance;
+    const Eigen::Index n = c.rows() - 9;
+    const bool flips[3] = {horizontal, vertical, vertical};
+    for (int k = 0; k < 3; ++k) {
+      if (flips[k]) c.row(n + k) *= -1, c.col(n + k) *= -1;
+    }
+  }
+  return out;
+}
+
 Pose compose(const Pose& a, const Pose& b) {
   return Pose{(a.rotation * b.rotation).normalized(), a.rotation * b.translation + a.translation};
 }

@@ -28,8 +28,9 @@ std::string PixelGrid::invalid() const {
   std::ostringstream problem;
   if (!principal_point.allFinite()) {
     problem << "principal_point: must be finite";
-  } else if (!pixel_scale.allFinite() || !(pixel_scale.minCoeff() > 0)) {
-    problem << "pixel_scale: a_x and a_y must be finite and > 0, got " << pixel_scale.x() << ", " << pixel_scale.y();
+  } else if (!pixel_scale.allFinite() || !(pixel_scale.cwiseAbs().minCoeff() > 0)) {
+    problem << "pixel_scale: a_x and a_y must be finite and non-zero (negative: a mirrored grid), got "
+            << pixel_scale.x() << ", " << pixel_scale.y();
   } else if (!std::isfinite(skew.xy) || !std::isfinite(skew.yx)) {
     problem << "skew: xy and yx must be finite";
   } else if (!(1 - skew.xy * skew.yx > 0)) {
@@ -61,6 +62,12 @@ PixelGrid PixelGrid::resized(const Eigen::Vector2d& s) const {
 PixelGrid PixelGrid::cropped(int left, int top) const {
   PixelGrid out = *this;
   out.principal_point -= Eigen::Vector2d(left, top);
+  return out;
+}
+PixelGrid PixelGrid::mirrored(int width, int height, bool horizontal, bool vertical) const {
+  PixelGrid out = *this;
+  if (horizontal) out.principal_point.x() = (width - 1) - principal_point.x(), out.pixel_scale.x() *= -1;
+  if (vertical) out.principal_point.y() = (height - 1) - principal_point.y(), out.pixel_scale.y() *= -1;
   return out;
 }
 

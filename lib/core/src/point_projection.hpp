@@ -227,7 +227,8 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
     const auto newton = [&](Eigen::Vector2d* m, const Eigen::Vector2d& goal, int iterations) {
       residual = plane_newton(model, terms, goal, m_reach, iterations, m);
     };
-    const double tolerance_px = 1e-7 + 1e-15 * rho * pixel_scale.maxCoeff();  // what doubles resolve 1e8 px out
+    const double tolerance_px =
+        1e-7 + 1e-15 * rho * pixel_scale.cwiseAbs().maxCoeff();  // what doubles resolve 1e8 px out
     // A point projected at theta_max may come back a few ulps past it: it is valid.
     const auto theta_in_domain = [&](double theta) {
       if (domain.closed && theta > domain.theta_max && theta <= domain.theta_max * (1 + 1e-12))

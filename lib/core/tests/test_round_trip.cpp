@@ -26,6 +26,13 @@ std::vector<std::pair<std::string, CameraParameters>> cameras() {
   return all;
 }
 
+// How far off-axis random rays may go: off the open limits (where rho diverges) and
+// off a fold (where theta(rho) is ill-conditioned: there the pixel round trip is the
+// meaningful test).
+double random_ray_limit(const ValidDomain& d) {
+  return d.limited_by == ValidDomain::Limit::fold ? d.theta_max - 0.02 : d.closed ? d.theta_max : d.theta_max - 1e-3;
+}
+
 // Every model (and a polynomial whose fold lies inside the image), one test each.
 class EveryModel : public ::testing::TestWithParam<test::ModelCase> {};
 
@@ -68,12 +75,7 @@ TEST_P(EveryModel, ProjectUnprojectEveryPixel) {
 TEST_P(EveryModel, UnprojectProjectRandomRays) {
   const auto& [name, params] = GetParam();
   const Camera camera(params);
-  const ValidDomain& d = camera.domain();
-  // Stay off the open limits (where rho diverges) and off a fold (where theta(rho)
-  // is ill-conditioned: there the pixel round trip above is the meaningful test).
-  const double theta_max = d.limited_by == ValidDomain::Limit::fold ? d.theta_max - 0.02
-                           : d.closed                               ? d.theta_max
-                                                                    : d.theta_max - 1e-3;
+  const double theta_max = random_ray_limit(camera.domain());
   double worst = 0;
   for (const Eigen::Vector3d& ray : test::random_rays(100000, theta_max, 99)) {
     Eigen::Vector2d pixel;
@@ -84,6 +86,40 @@ TEST_P(EveryModel, UnprojectProjectRandomRays) {
     worst = std::max(worst, test::angle_between(ray, back));
   }
   EXPECT_LE(worst, 1e-12) << name;
+}
+
+// The camera of a flipped image (a mirrored pixel grid): every ray lands where the
+// flipped image shows it, every such pixel unprojects to the same ray, the domain is
+// the same, and flipping twice gives the camera back bit for bit.
+TEST_P(EveryModel, MirroredCameraSeesTheFlippedImage) {
+  const auto& [name, params] = GetParam();
+  const Camera camera(params);
+  const ValidDomain& d = camera.domain();
+  const std::vector<Eigen::Vector3d> rays = test::random_rays(2000, random_ray_limit(d), 5);
+  int flips = 0;
+  for (const auto& [horizontal, vertical] : {std::pair{true, false}, {false, true}, {true, true}}) {
+    SCOPED_TRACE(std::string(name) + (horizontal ? " horizontal" : "") + (vertical ? " vertical" : ""));
+    const Camera flipped(mirrored(params, horizontal, vertical));
+    EXPECT_TRUE(flipped.parameters().grid.is_mirrored());
+    EXPECT_EQ(mirrored(flipped.parameters(), horizontal, vertical).grid, params.grid);
+    EXPECT_EQ(flipped.domain().theta_max, d.theta_max);
+    double worst_pixel = 0, worst_ray = 0;
+    for (const Eigen::Vector3d& ray : rays) {
+      Eigen::Vector2d pixel, seen;
+      Eigen::Vector3d back;
+      ASSERT_TRUE(camera.project(ray, &pixel));
+      ASSERT_TRUE(flipped.project(ray, &seen));
+      const Eigen::Vector2d expected(horizontal ? camera.width() - 1 - pixel.x() : pixel.x(),
+                                     vertical ? camera.height() - 1 - pixel.y() : pixel.y());
+      worst_pixel = std::max(worst_pixel, (seen - expected).norm());
+      ASSERT_TRUE(flipped.unproject(seen, &back));
+      worst_ray = std::max(worst_ray, test::angle_between(ray, back));
+    }
+    EXPECT_LE(worst_pixel, 1e-9);
+    EXPECT_LE(worst_ray, name == "polynomial_fold" ? 1e-9 : 1e-11);
+    ++flips;
+  }
+  EXPECT_EQ(flips, 3);
 }
 
 INSTANTIATE_TEST_SUITE_P(RoundTrip, EveryModel, ::testing::ValuesIn(cameras()), test::model_case_name);

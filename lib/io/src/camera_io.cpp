@@ -47,13 +47,13 @@ std::string magnitude_problem(const Camera& camera) {
     return "principal_point: expected within +-" + number_for_message(kMaxPixels) + " px, got (" +
            number_for_message(p.grid.principal_point.x()) + ", " + number_for_message(p.grid.principal_point.y()) + ")";
   }
-  for (double a : {p.grid.pixel_scale.x(), p.grid.pixel_scale.y()}) {
-    if (!(a >= 1 / kPixelScaleRange && a <= kPixelScaleRange)) {
+  for (double a : {p.grid.pixel_scale.x(), p.grid.pixel_scale.y()}) {  // negative: a mirrored grid
+    if (!(std::abs(a) >= 1 / kPixelScaleRange && std::abs(a) <= kPixelScaleRange)) {
       return "pixel_scale: expected within [" + number_for_message(1 / kPixelScaleRange) + ", " +
-             number_for_message(kPixelScaleRange) + "], got " + number_for_message(a);
+             number_for_message(kPixelScaleRange) + "] (negated: a mirrored grid), got " + number_for_message(a);
     }
   }
-  const double focal = camera.drho(0) * std::max(p.grid.pixel_scale.x(), p.grid.pixel_scale.y());
+  const double focal = camera.drho(0) * p.grid.pixel_scale.cwiseAbs().maxCoeff();
   if (!(focal <= kMaxPixels)) {
     return "the focal length (rho'(0) a) must be at most " + number_for_message(kMaxPixels) + " px, got " +
            number_for_message(focal);
@@ -384,6 +384,12 @@ std::string cannot_hold_non_radial(const detail::FormatSpec& spec, const CameraP
   if (camera.grid.skew.any() && !spec.holds.skew) {
     return "skew: the " + std::string(spec.name) + " format cannot hold a skewed pixel grid (" +
            formats_that([](const detail::FormatSpec& s) { return s.holds.skew; }) + " can)";
+  }
+  // A format that stores a_x as it is holds its sign; the others store f = fx.
+  if (camera.grid.is_mirrored() && !spec.holds.pixel_scale) {
+    return "pixel_scale: the " + std::string(spec.name) +
+           " format cannot hold a mirrored pixel grid (a_x or a_y < 0: " + "the camera of a flipped image; " +
+           formats_that([](const detail::FormatSpec& s) { return s.holds.pixel_scale; }) + " can)";
   }
   return "";
 }

@@ -193,7 +193,7 @@ const Malformed kMalformed[] = {
     {"fc_model", replaced(kFishcam, "equidistant", "fisheye"), "model: unknown model 'fisheye'"},
     {"fc_params", replaced(kFishcam, "[340.0]", "[340.0, 1]"), "equidistant: expected 1 parameter(s) (f), got 2"},
     {"fc_version", replaced(kFishcam, "\"fishcam_camera\": 1", "\"fishcam_camera\": 9"), "fishcam_camera: unsupported"},
-    {"fc_scale", replaced(kFishcam, "[1.0, 1.0]", "[1.0, -1.0]"), "pixel_scale"},
+    {"fc_scale", replaced(kFishcam, "[1.0, 1.0]", "[1.0, 0.0]"), "pixel_scale"},
     {"fc_limit", replaced(kFishcam, "\"parameters\"", "\"theta_limit_deg\": 200, \"parameters\""),
      "theta_limit: must be in (0, 180]"},
     {"fc_pp_type", replaced(kFishcam, "[643.442, 479.407]", "\"centre\""), "principal_point: expected a list"},

@@ -41,7 +41,7 @@ if not hasattr(tv_tensors, "KeyPoints"):  # pragma: no cover
 from . import functional
 from .batch import WarpedBatch, collate, warp_batch
 from .data import EpochSampler, WoodScapeDataset
-from .geometry import CenterCrop, RandomCrop, Resize
+from .geometry import CenterCrop, RandomCrop, RandomHorizontalFlip, RandomVerticalFlip, Resize
 from .seeding import record_changes, sample_seed, torch_seed, worker_init_fn
 from .targets import DepthMap, Polygon, is_instance_mask
 from .transforms import RandomAffine, RandomViewpoint
@@ -53,6 +53,8 @@ __all__ = [
     "Resize",
     "RandomCrop",
     "CenterCrop",
+    "RandomHorizontalFlip",
+    "RandomVerticalFlip",
     "DepthMap",
     "Polygon",
     "WoodScapeDataset",

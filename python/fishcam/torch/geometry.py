@@ -1,8 +1,9 @@
 """torchvision's geometric transforms that keep the sample's camera true: Resize,
-RandomCrop and CenterCrop do to images, masks, boxes and keypoints what torchvision's
-do, and give a fishcam.Camera in the sample the image it now describes (Camera.resized,
-Camera.cropped), so the camera still projects scene points onto the transformed image.
-torchvision's own geometric transforms pass a camera through unchanged."""
+RandomCrop, CenterCrop, RandomHorizontalFlip and RandomVerticalFlip do to images,
+masks, boxes and keypoints what torchvision's do, and give a fishcam.Camera in the
+sample the image it now describes (Camera.resized, Camera.cropped, Camera.mirrored),
+so the camera still projects scene points onto the transformed image. torchvision's
+own geometric transforms pass a camera through unchanged."""
 
 import typing
 
@@ -10,15 +11,8 @@ import torch
 from torchvision.transforms import v2
 
 from .. import Camera, Error
+from ..transforms.checks import _camera_matches as _checked
 from .targets import Params
-
-
-def _checked(camera: Camera, size: tuple[int, int]) -> None:
-    if (camera.width, camera.height) != size:
-        raise Error(
-            f"camera: {camera.width}x{camera.height} but the images are {size[0]}x{size[1]} "
-            "(a transform before this one changed them without the camera)"
-        )
 
 
 class Resize(v2.Resize):
@@ -106,3 +100,38 @@ class CenterCrop(v2.CenterCrop):
             _checked(inpt, params["size"])
             return inpt.cropped(*params["window"])
         return super().transform(inpt, params)
+
+
+class _MirrorsCamera:
+    """A flip's camera: mirrored as the images are (Camera.mirrored), when they are."""
+
+    _mirrors = (False, False)  # (horizontal, vertical)
+
+    def make_params(self, flat_inputs: list[typing.Any]) -> Params:
+        height, width = v2.query_size(flat_inputs)
+        return {**super().make_params(flat_inputs), "size": (width, height)}  # type: ignore[misc]
+
+    def transform(self, inpt: typing.Any, params: Params) -> typing.Any:
+        if isinstance(inpt, Camera):
+            _checked(inpt, params["size"])
+            return inpt.mirrored(*self._mirrors)
+        return super().transform(inpt, params)  # type: ignore[misc]
+
+
+class RandomHorizontalFlip(_MirrorsCamera, v2.RandomHorizontalFlip):
+    """torchvision's ``v2.RandomHorizontalFlip`` that keeps the sample's camera true: when
+    the images are flipped left-right, a fishcam.Camera in the sample is mirrored with
+    them (``Camera.mirrored(horizontal=True)``: c'x = width - 1 - cx, a'x = -a_x, the
+    lens and pose unchanged), so it projects every scene point where the flipped image
+    shows it, and a RandomViewpoint after the flip warps with the flipped camera."""
+
+    _transformed_types = (*v2.RandomHorizontalFlip._transformed_types, Camera)
+    _mirrors = (True, False)
+
+
+class RandomVerticalFlip(_MirrorsCamera, v2.RandomVerticalFlip):
+    """torchvision's ``v2.RandomVerticalFlip`` that keeps the sample's camera true, as
+    RandomHorizontalFlip does (``Camera.mirrored(horizontal=False, vertical=True)``)."""
+
+    _transformed_types = (*v2.RandomVerticalFlip._transformed_types, Camera)
+    _mirrors = (False, True)

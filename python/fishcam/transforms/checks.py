@@ -107,3 +107,13 @@ def _points_array(points: object, what: str, k: int = 2) -> Array:
     if array.ndim != 2 or array.shape[1] != k:
         raise Error(f"{what}: expected shape (N, {k}), got {array.shape}")
     return array
+
+
+def _camera_matches(camera: typing.Any, size: tuple[int, int]) -> None:
+    """fishcam.Error unless the camera's image is ``size`` (width, height): a transform
+    before this one changed the images without the camera."""
+    if (camera.width, camera.height) != size:
+        raise Error(
+            f"camera: {camera.width}x{camera.height} but the images are {size[0]}x{size[1]} "
+            "(a transform before this one changed them without the camera)"
+        )

@@ -118,6 +118,13 @@ CameraParameters resized(const CameraParameters& camera, int width, int height);
 // Error for sizes < 1.
 CameraParameters cropped(const CameraParameters& camera, int left, int top, int width, int height);
 
+// The same lens for the image flipped left-right (horizontal) and/or upside down
+// (vertical): the pixel grid mirrored (PixelGrid::mirrored: the camera projects every
+// point where the flipped image shows it); model, user limit, pose and the observed
+// angles unchanged (they are of the camera frame), the calibration record's
+// covariance re-expressed for the mirrored cx, cy, a_y.
+CameraParameters mirrored(const CameraParameters& camera, bool horizontal, bool vertical);
+
 // The camera with its valid domain capped (theta_limit) at the largest incidence
 // angle its calibration observed plus margin (radians, >= 0), so unprojection and
 // augmentation stop where the calibration stops knowing. Throws Error when the

@@ -4,7 +4,8 @@
 //   pixel = c + a (.) (S q),   S = [1 xy; yx 1],   det S = 1 - xy yx > 0,
 // with c the principal point, a the pixel scale (a_x, a_y; the paper's eq. 5) and S
 // the skew (OCamCalib's affine c, d, e; the skew of BoofCV and of Bouguet's toolbox,
-// alpha_c = xy). S = 1 for the usual grid.
+// alpha_c = xy). S = 1 for the usual grid. A negative a_x (a_y) mirrors the grid: the
+// camera of a horizontally (vertically) flipped image (mirrored()).
 #pragma once
 
 #include <Eigen/Core>
@@ -36,7 +37,7 @@ struct PixelGrid {
   // The grid of values(); throws Error unless there are 6 numbers.
   static PixelGrid from_numbers(std::span<const double> values);
   // "" for a grid a camera can have; otherwise what is wrong, naming the field
-  // (non-finite numbers, a_x or a_y <= 0, a skew that turns the grid over).
+  // (non-finite numbers, a_x or a_y zero, a skew that turns the grid over).
   std::string invalid() const;
 
   // (cx, cy, a_x, a_y), what the projection kernels take (project_radial's pixel_mapping).
@@ -57,6 +58,12 @@ struct PixelGrid {
   PixelGrid resized(const Eigen::Vector2d& s) const;
   // The grid for the image cropped at (left, top): c' = c - (left, top).
   PixelGrid cropped(int left, int top) const;
+  // The grid for the image flipped left-right (horizontal: pixel u -> width - 1 - u)
+  // and/or upside down (vertical: v -> height - 1 - v): c'x = width - 1 - cx and
+  // a'x = -a_x (likewise y), exactly; S unchanged. Flipping twice gives the grid back.
+  PixelGrid mirrored(int width, int height, bool horizontal, bool vertical) const;
+  // Whether the grid is mirrored (a_x or a_y < 0).
+  bool is_mirrored() const { return pixel_scale.x() < 0 || pixel_scale.y() < 0; }
 
   bool operator==(const PixelGrid&) const = default;
 };
