@@ -11,10 +11,14 @@
    and the first epoch (warps built) apart;
 3. the augmentation's share of a CPU training step of a small segmentation network;
 4. fishcam beside albumentations' and kornia's fisheye augmentations and kornia's
-   batched remap, per sample, in one process.
+   batched remap, per sample, in one process;
+5. the v2 path (`--only v2-path`): per sample, one thread, fishcam.torch.RandomViewpoint
+   on an HWC-backed and on a contiguous CHW tv_tensors.Image against the numpy
+   transform on the HWC array, interleaved in one process, 640x483 and 1280x966
+   (target <= 1.10x).
 
 Usage: PYTHONPATH=build/python build/venv/bin/python tools/bench_python.py [--fishcam build/tools/fishcam]
-       [--only per-sample|dataloader|training] [--json]   (build/venv: scripts/python-env.sh)
+       [--only per-sample|dataloader|training|peers|v2-path] [--json]   (build/venv: scripts/python-env.sh)
 """
 
 import argparse
@@ -243,6 +247,50 @@ def peers(fishcam, data, samples, rounds, batch=8):
     return rows
 
 
+def v2_path(fishcam, data, samples, rounds):
+    """Per-sample ms of the numpy transform (HWC array) and of fishcam.torch.RandomViewpoint
+    on the same pixels as an HWC-backed and as a contiguous CHW image, same seeds,
+    interleaved sample by sample; one thread each."""
+    import torch
+
+    fishcam.set_num_threads(1)
+    torch.set_num_threads(1)
+    return [_v2_path_at(fishcam, data, width, height, samples, rounds) for width, height in [(640, 483), (1280, 966)]]
+
+
+def _v2_path_at(fishcam, data, width, height, samples, rounds):
+    import fishcam.torch as ft
+    import torch
+    from torchvision import tv_tensors
+
+    camera = fishcam.Camera.read(data).resized(width, height)
+    hwc = np.random.default_rng(0).integers(0, 256, (height, width, 3), dtype=np.uint8)
+    numpy_transform = fishcam.transforms.RandomViewpoint(camera, preset="train")
+    torch_transform = ft.RandomViewpoint(preset="train")
+    backed = tv_tensors.Image(torch.from_numpy(hwc).permute(2, 0, 1))
+    planar = tv_tensors.Image(backed.contiguous())
+    cases = {
+        "numpy": lambda seed: numpy_transform(hwc, seed=seed)["image"],
+        "hwc_backed": lambda seed: torch_transform(backed, camera),
+        "chw": lambda seed: torch_transform(planar, camera),
+    }
+    times = {name: [] for name in cases}
+    for seed in range(rounds * samples + 3):
+        for name, run in cases.items():
+            with ft.sample_seed(seed):
+                start = time.perf_counter()
+                run(seed)
+                if seed >= 3:  # after the warm-up (warps built)
+                    times[name].append(time.perf_counter() - start)
+    ms = {name: 1e3 * statistics.median(t) for name, t in times.items()}
+    return {
+        "size": f"{width}x{height}",
+        **{f"{k}_ms": v for k, v in ms.items()},
+        "hwc_backed_over_numpy": ms["hwc_backed"] / ms["numpy"],
+        "chw_over_numpy": ms["chw"] / ms["numpy"],
+    }
+
+
 def training_share(fishcam, data, steps):
     """A small encoder-decoder (about 0.1 M parameters) on 640x483 batches of 4."""
     import fishcam.transforms
@@ -295,39 +343,22 @@ def training_share(fishcam, data, steps):
     }
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    here = os.path.dirname(os.path.abspath(__file__))
-    parser.add_argument("--fishcam", default=os.path.join(here, "..", "build", "tools", "fishcam"))
-    parser.add_argument("--camera", default=os.path.join(here, "..", "data", "woodscape_front.json"))
-    parser.add_argument("--samples", type=int, default=41)
-    parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--loader-samples", type=int, default=16)
-    shared_photo = os.path.join(here, "..", "..", "shared", "data", "woodscape", "front.jpg")
-    parser.add_argument(
-        "--photo",
-        default=shared_photo if os.path.exists(shared_photo) else None,
-        help="a real photo for the loader's RGB images (default: ../shared's WoodScape image when "
-        "present; 'none' for the rendered scenes)",
-    )
-    parser.add_argument("--epochs", type=int, default=4, help="steady-state epochs per loader (after the first)")
-    parser.add_argument("--only", choices=["per-sample", "dataloader", "training", "peers"], help="run one part")
-    parser.add_argument("--json", action="store_true")
-    args = parser.parse_args()
-    if args.photo == "none":
-        args.photo = None
-    import fishcam
-
-    parts = {
-        "per_sample": lambda: per_sample(fishcam, args.fishcam, args.camera, args.samples, args.rounds),
-        "dataloader": lambda: loader_cost(fishcam, args.fishcam, args.loader_samples, args.epochs, args.photo),
-        "training": lambda: training_share(fishcam, args.camera, 12),
-        "peers": lambda: peers(fishcam, args.camera, args.samples, args.rounds),
-    }
-    result = {name: run() for name, run in parts.items() if args.only in (None, name.replace("_", "-"))}
-    if args.json:
-        print(json.dumps(result, indent=2))
-        return
+def print_results(result, args):
+    """The results as text."""
+    if "v2_path" in result:
+        print("the v2 path, per sample, 1 thread (median; ratios to the numpy transform in the same run)")
+        for r in result["v2_path"]:
+            print(
+                "  %s: numpy %.2f ms, v2 HWC-backed %.2f ms (%.2fx), v2 contiguous CHW %.2f ms (%.2fx)"
+                % (
+                    r["size"],
+                    r["numpy_ms"],
+                    r["hwc_backed_ms"],
+                    r["hwc_backed_over_numpy"],
+                    r["chw_ms"],
+                    r["chw_over_numpy"],
+                )
+            )
     if "per_sample" in result:
         print(
             "per-sample augmentation 1280x966 (median of %d, median over %d interleaved rounds)"
@@ -364,6 +395,45 @@ def main():
             "CPU training step, batch 4 at 640x483 (%d torch threads): augmentation %.1f ms, step %.1f ms, "
             "share %.1f %%" % (t["torch_threads"], t["augment_ms"], t["train_step_ms"], 100 * t["augment_share"])
         )
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    here = os.path.dirname(os.path.abspath(__file__))
+    parser.add_argument("--fishcam", default=os.path.join(here, "..", "build", "tools", "fishcam"))
+    parser.add_argument("--camera", default=os.path.join(here, "..", "data", "woodscape_front.json"))
+    parser.add_argument("--samples", type=int, default=41)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--loader-samples", type=int, default=16)
+    shared_photo = os.path.join(here, "..", "..", "shared", "data", "woodscape", "front.jpg")
+    parser.add_argument(
+        "--photo",
+        default=shared_photo if os.path.exists(shared_photo) else None,
+        help="a real photo for the loader's RGB images (default: ../shared's WoodScape image when "
+        "present; 'none' for the rendered scenes)",
+    )
+    parser.add_argument("--epochs", type=int, default=4, help="steady-state epochs per loader (after the first)")
+    parser.add_argument(
+        "--only", choices=["per-sample", "dataloader", "training", "peers", "v2-path"], help="run one part"
+    )
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    if args.photo == "none":
+        args.photo = None
+    import fishcam
+
+    parts = {
+        "per_sample": lambda: per_sample(fishcam, args.fishcam, args.camera, args.samples, args.rounds),
+        "dataloader": lambda: loader_cost(fishcam, args.fishcam, args.loader_samples, args.epochs, args.photo),
+        "training": lambda: training_share(fishcam, args.camera, 12),
+        "peers": lambda: peers(fishcam, args.camera, args.samples, args.rounds),
+        "v2_path": lambda: v2_path(fishcam, args.camera, args.samples, args.rounds),
+    }
+    result = {name: run() for name, run in parts.items() if args.only in (None, name.replace("_", "-"))}
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return
+    print_results(result, args)
 
 
 if __name__ == "__main__":

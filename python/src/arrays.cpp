@@ -51,6 +51,36 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels) {
                  const_cast<void*>(array.data()));
 }
 
+bool is_planar_view(const py::array& array) {
+  if (array.ndim() != 3 || array.shape(2) < 2) return false;
+  const py::ssize_t item = array.itemsize(), h = array.shape(0), w = array.shape(1);
+  return array.strides(1) == item && array.strides(0) == w * item && array.strides(2) == h * w * item;
+}
+
+void merge_planes(py::array& array, const char* what, cv::Mat* merged) {
+  const auto channels = array.shape(2);
+  if (channels > 4) throw Error(std::string(what) + ": expected 1 to 4 channels, got " + std::to_string(channels));
+  std::vector<cv::Mat> planes;
+  for (py::ssize_t c = 0; c < channels; ++c) {
+    // A plane is an HxW C-contiguous view: read where it lies, checked as any image.
+    py::array plane = array[py::make_tuple(py::ellipsis(), c)];
+    planes.push_back(as_mat(plane, what, false));
+  }
+  cv::merge(planes, *merged);
+}
+
+py::array new_planar_image(const py::array& like, int height, int width, std::vector<cv::Mat>* planes) {
+  const auto channels = like.shape(2);
+  py::array out(like.dtype(), std::vector<py::ssize_t>{channels, height, width});
+  const int depth = like.itemsize() == 1 ? CV_8U : like.itemsize() == 2 ? CV_16U : CV_32F;
+  auto* data = static_cast<unsigned char*>(out.mutable_data());
+  planes->clear();
+  for (py::ssize_t c = 0; c < channels; ++c) {
+    planes->emplace_back(height, width, CV_MAKETYPE(depth, 1), data + c * height * width * like.itemsize());
+  }
+  return out.attr("transpose")(1, 2, 0);
+}
+
 // A new numpy array of height x width (x the channels of `like`), dtype of `like`,
 // and a cv::Mat header on its memory.
 py::array new_image(const py::array& like, int height, int width, cv::Mat* header) {

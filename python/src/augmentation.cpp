@@ -35,7 +35,17 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
                   double fill, int label_fill, bool return_valid, const Apply& apply) {
   py::dict out;
   cv::Mat image_in, labels_in, image_out, labels_out, valid_out;
-  if (image) {
+  std::vector<cv::Mat> out_planes;  // a channels-first image's: the output's planes
+  const bool planar = image && is_planar_view(*image);
+  if (planar) {
+    // Interleaved copies in and out, in buffers this thread keeps: a fresh image-sized
+    // buffer per call costs its page faults, as much as the copy itself.
+    thread_local cv::Mat merged, warped;
+    merge_planes(*image, "image", &merged);
+    out["image"] = new_planar_image(*image, target.height, target.width, &out_planes);
+    warped.create(target.height, target.width, merged.type());
+    image_in = merged, image_out = warped;
+  } else if (image) {
     image_in = as_mat(*image, "image", false);
     out["image"] = new_image(*image, target.height, target.width, &image_out);
   }
@@ -80,6 +90,7 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
   if (before != std::array<const uchar*, 3>{image_out.data, labels_out.data, valid_out.data}) {
     throw Error("internal: an output was reallocated");
   }
+  if (planar) cv::split(image_out, out_planes.data());  // into the output's planes, where they lie
   return out;
 }
 

@@ -65,6 +65,15 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels);
 // A new numpy array of height x width (x the channels of `like`), dtype of `like`,
 // and a cv::Mat header on its memory.
 py::array new_image(const py::array& like, int height, int width, cv::Mat* header);
+// Channels-first images (what torch's CxHxW images are as numpy: np.moveaxis of C
+// contiguous HxW planes) are read and written plane by plane, never through a
+// transposing copy: whether `array` is such an HxWxC view; its planes interleaved
+// into one HxWxC image (cv::merge into `merged`, reallocated only for another size or
+// type); a new (C, H, W) array like it, returned as its HxWxC view, with a header per
+// plane to write (cv::split) the result into.
+bool is_planar_view(const py::array& array);
+void merge_planes(py::array& array, const char* what, cv::Mat* merged);
+py::array new_planar_image(const py::array& like, int height, int width, std::vector<cv::Mat>* planes);
 
 // Integer labels of any shape as a LabelSpan over the array's own memory (a
 // C-contiguous copy only when it is strided); `keep` holds that memory.

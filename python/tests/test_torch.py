@@ -495,3 +495,26 @@ def test_a_dataset_refuses_files_it_cannot_read_without_blocking(tmp_path, small
     small_camera.write(str(tmp_path / "calibration" / "c.json"), format="woodscape")
     with pytest.raises(fishcam.Error, match=r"c\.png: not a regular file \(expected an image\)"):
         ds[2]
+
+
+@pytest.mark.parametrize("channels, dtype", [(3, torch.uint8), (2, torch.uint16), (4, torch.float32)])
+def test_channels_first_images_keep_their_layout(small_camera, channels, dtype):
+    """A contiguous CxHxW image (what v2.ToImage, Resize and ColorJitter give) is read
+    plane by plane and comes back contiguous CxHxW, equal to the same image given
+    channels-last; an HWC-backed one comes back as it did."""
+    rng = np.random.default_rng(channels)
+    hwc = rng.integers(0, 200, (121, 160, channels)).astype(torch.empty(0, dtype=dtype).numpy().dtype)
+    transform = ft.RandomViewpoint(preset="medium")
+    outputs = []
+    for image in (torch.from_numpy(hwc).permute(2, 0, 1), torch.from_numpy(hwc).permute(2, 0, 1).contiguous()):
+        with ft.sample_seed(4):
+            outputs.append(transform(tv_tensors.Image(image), small_camera)[0])
+    backed, planar = outputs
+    assert planar.is_contiguous() and planar.shape == (channels, 121, 160) and planar.dtype == dtype
+    assert torch.equal(backed, planar)
+    # The numpy transform given the same channels-first buffer as an HxWxC view.
+    numpy_transform = fishcam.transforms.RandomViewpoint(small_camera, preset="medium")
+    view = np.moveaxis(np.ascontiguousarray(np.moveaxis(hwc, -1, 0)), 0, -1)
+    out = numpy_transform(view, seed=5)["image"]
+    assert np.array_equal(out, numpy_transform(hwc, seed=5)["image"])
+    assert out.strides[-1] == out.shape[0] * out.shape[1] * out.itemsize  # written plane by plane
