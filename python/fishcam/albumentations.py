@@ -72,6 +72,13 @@ Array = npt.NDArray[typing.Any]
 Params = dict[str, typing.Any]
 
 
+def _check_camera(camera: object) -> Camera:
+    """The ``camera`` target, or fishcam.Error unless it is a fishcam.Camera."""
+    if not isinstance(camera, Camera):
+        raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
+    return camera
+
+
 class _Call:
     """What one call of a transform computed before albumentations applies it target by
     target: its SampleChange, and the image and mask warped together (one pass, the
@@ -108,8 +115,8 @@ class _FishcamDualTransform(_DualTransform):
 
     def get_params_dependent_on_data(self, params: Params, data: Params) -> Params:
         camera = data.get("camera")
-        if camera is not None and not isinstance(camera, Camera):
-            raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
+        if camera is not None:
+            _check_camera(camera)
         # The depth target, for depth="map" (the scene points of the whole sample).
         dependent = {"source_camera": camera, "source_depth": data.get("depth")}
         self._call = None
@@ -304,9 +311,8 @@ class _KeepsCamera:
     def targets(self) -> dict[str, typing.Callable[..., typing.Any]]:
         return {**super().targets, "camera": self._camera_target}  # type: ignore[misc]
 
-    def _camera_target(self, camera: object, **params: typing.Any) -> Camera:
-        if not isinstance(camera, Camera):
-            raise Error(f"camera: expected a fishcam.Camera, got {type(camera).__name__}")
+    def _camera_target(self, value: object, **params: typing.Any) -> Camera:
+        camera = _check_camera(value)
         height, width = params["shape"][:2]
         _camera_matches(camera, (int(width), int(height)))
         return self.apply_to_camera(camera, **params)

@@ -51,6 +51,11 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels) {
                  const_cast<void*>(array.data()));
 }
 
+namespace {
+// The OpenCV depth of an image array as_mat took (uint8, uint16 or float32).
+int image_depth(const py::array& like) { return like.itemsize() == 1 ? CV_8U : like.itemsize() == 2 ? CV_16U : CV_32F; }
+}  // namespace
+
 bool is_planar_view(const py::array& array) {
   if (array.ndim() != 3 || array.shape(2) < 2) return false;
   const py::ssize_t item = array.itemsize(), h = array.shape(0), w = array.shape(1);
@@ -72,7 +77,7 @@ void merge_planes(py::array& array, const char* what, cv::Mat* merged) {
 py::array new_planar_image(const py::array& like, int height, int width, std::vector<cv::Mat>* planes) {
   const auto channels = like.shape(2);
   py::array out(like.dtype(), std::vector<py::ssize_t>{channels, height, width});
-  const int depth = like.itemsize() == 1 ? CV_8U : like.itemsize() == 2 ? CV_16U : CV_32F;
+  const int depth = image_depth(like);
   auto* data = static_cast<unsigned char*>(out.mutable_data());
   planes->clear();
   for (py::ssize_t c = 0; c < channels; ++c) {
@@ -88,7 +93,7 @@ py::array new_image(const py::array& like, int height, int width, cv::Mat* heade
   if (like.ndim() == 3) shape.push_back(like.shape(2));
   py::array out(like.dtype(), shape);
   const int channels = like.ndim() == 3 ? static_cast<int>(like.shape(2)) : 1;
-  const int depth = like.itemsize() == 1 ? CV_8U : like.itemsize() == 2 ? CV_16U : CV_32F;
+  const int depth = image_depth(like);
   *header = cv::Mat(height, width, CV_MAKETYPE(depth, channels), out.mutable_data());
   return out;
 }
