@@ -291,28 +291,20 @@ TEST(CliAugmentation, CheckMrcal) {
 
 TEST(CliAugmentation, DatasetIsMirroredResumableAndReportsBadFiles) {
   const auto root = test::scratch_dir("dataset_root"), out = test::scratch_dir("dataset_out") / "sets";
-  for (const char* sub : {"rgb_images", "semantic_annotations/gtLabels", "calibration"}) {
-    std::filesystem::create_directories(root / sub);
-  }
-  for (int i = 0; i < 2; ++i) {
-    const std::string stem = "frame" + std::to_string(i);
-    const auto r = run_fishcam("render " + data("woodscape_front.json") + " --rotate 0," + std::to_string(5 * i) +
-                               ",0 --out-image " + quoted(root / "rgb_images" / (stem + ".png")) + " --out-label " +
-                               quoted(root / "semantic_annotations/gtLabels" / (stem + ".png")));
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    std::filesystem::copy_file(test::data_path("woodscape_front.json"), root / "calibration" / (stem + ".json"));
-  }
+  // Small images: the test is about the files, not the pixels (those are the library tests').
+  auto r = run_fishcam("sample-dataset " + quoted(root) + " --images 2 --seed 3 --size 160x121");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   // A third image whose calibration is broken, a fourth without labels.
-  std::filesystem::copy_file(root / "rgb_images/frame0.png", root / "rgb_images/broken.png");
+  std::filesystem::copy_file(root / "rgb_images/00000_FV.png", root / "rgb_images/broken.png");
   test::write_file(root / "calibration/broken.json", "{\"intrinsic\": {");
-  std::filesystem::copy_file(root / "rgb_images/frame0.png", root / "rgb_images/unlabelled.png");
-  std::filesystem::copy_file(test::data_path("woodscape_front.json"), root / "calibration/unlabelled.json");
+  std::filesystem::copy_file(root / "rgb_images/00000_FV.png", root / "rgb_images/unlabelled.png");
+  std::filesystem::copy_file(root / "calibration/00000_FV.json", root / "calibration/unlabelled.json");
 
   const std::string command = "augment-dataset " + quoted(root) +
                               " --preset small,medium,large --seed 5 --copies 2 "
                               "-j 2 --out " +
                               quoted(out);
-  auto r = run_fishcam(command);
+  r = run_fishcam(command);
   EXPECT_NE(r.exit_code, 0) << "failures make the exit code non-zero";
   EXPECT_NE(r.err.find("broken"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("unlabelled"), std::string::npos) << r.err;
@@ -321,7 +313,7 @@ TEST(CliAugmentation, DatasetIsMirroredResumableAndReportsBadFiles) {
     const auto dir = out / preset;
     for (int i = 0; i < 2; ++i) {
       for (int copy = 0; copy < 2; ++copy) {
-        const std::string name = "frame" + std::to_string(i) + "_" + preset + std::to_string(copy);
+        const std::string name = "0000" + std::to_string(i) + "_FV_" + preset + std::to_string(copy);
         EXPECT_TRUE(std::filesystem::exists(dir / "rgb_images" / (name + ".png"))) << name;
         EXPECT_TRUE(std::filesystem::exists(dir / "semantic_annotations/gtLabels" / (name + ".png"))) << name;
         EXPECT_NO_THROW(read_camera(dir / "calibration" / (name + ".json"))) << name;
@@ -341,10 +333,10 @@ TEST(CliAugmentation, DatasetIsMirroredResumableAndReportsBadFiles) {
   // The dataset is untouched.
   EXPECT_FALSE(std::filesystem::exists(root / "manifest.jsonl"));
   // Resuming: nothing new is written, the manifest does not grow.
-  const auto before = std::filesystem::last_write_time(out / "small/rgb_images/frame0_small0.png");
+  const auto before = std::filesystem::last_write_time(out / "small/rgb_images/00000_FV_small0.png");
   r = run_fishcam(command);
   EXPECT_NE(r.out.find("0 written, 12 already there"), std::string::npos) << r.out;
-  EXPECT_EQ(std::filesystem::last_write_time(out / "small/rgb_images/frame0_small0.png"), before);
+  EXPECT_EQ(std::filesystem::last_write_time(out / "small/rgb_images/00000_FV_small0.png"), before);
   const std::string manifest = test::read_file(out / "small/manifest.jsonl");
   EXPECT_EQ(std::count(manifest.begin(), manifest.end(), '\n'), 5);
   // Never inside ROOT.
