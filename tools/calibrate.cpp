@@ -1,6 +1,7 @@
 // fishcam calibrate: intrinsics and board poses from chessboard corners.
 #include <fnmatch.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -204,7 +205,12 @@ void register_calibrate(CLI::App& app) {
       }
     }
     std::printf("  observed angles of incidence up to %.1f deg", record.theta_max * kDeg);
-    if (camera.theta_limit) std::printf(" (valid domain capped at %.1f deg)", *camera.theta_limit * kDeg);
+    if (const auto& by_azimuth = camera.theta_limit_by_azimuth) {
+      const auto [low, high] = std::minmax_element(by_azimuth->begin(), by_azimuth->end());
+      std::printf(" (valid domain capped per azimuth at %.1f to %.1f deg)", *low * kDeg, *high * kDeg);
+    } else if (camera.theta_limit) {
+      std::printf(" (valid domain capped at %.1f deg)", *camera.theta_limit * kDeg);
+    }
     std::printf("\n  per-image rms (px):");
     for (size_t i = 0; i < result.used_images.size(); ++i) {
       std::printf("%s %s %.3f", i % 4 ? "," : "\n   ", result.used_images[i].c_str(), result.per_image_rms_px[i]);

@@ -1,4 +1,5 @@
 // fishcam info CAMERA [--json]: what a calibration says and where it is valid.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -37,6 +38,12 @@ void print_text(const nlohmann::json& j) {
   std::printf("theta_max         %.6f deg%s (limited by %s)\n", j["theta_max_deg"].get<double>(),
               j["theta_max_closed"].get<bool>() ? "" : ", exclusive",
               j["theta_max_limited_by"].get<std::string>().c_str());
+  if (const auto& limits = j["theta_limit_by_azimuth_deg"]; !limits.is_null()) {
+    const auto [low, high] = std::minmax_element(limits.begin(), limits.end());
+    std::printf(
+        "theta limit       per azimuth, %.3f to %.3f deg (24 sectors of 15 deg: unprojection refuses past it)\n",
+        low->get<double>(), high->get<double>());
+  }
   const char* radial_part =
       j["tangential"].is_null() && j["mrcal_lens"].is_null() && j["skew"].is_null() ? "" : " (radial part)";
   if (j["rho_max_px"].is_null()) {

@@ -101,7 +101,7 @@ class Camera:
         """
     def limited_to_observed(self, margin_deg: float = 0.0) -> Camera:
         """
-        The camera with its valid domain capped at the observed angles plus margin_deg (`--theta-limit data+DEG`).
+        The camera with its valid domain capped at the observed angles plus margin_deg, per azimuth (`--theta-limit data+DEG`): with margin_deg = 0 it unprojects exactly the pixels whose rays observed() accepts.
         """
     def mirrored(self, horizontal: bool = True, vertical: bool = False) -> Camera:
         """
@@ -109,7 +109,7 @@ class Camera:
         """
     def observed(self, rays: typing.Any) -> numpy.ndarray[typing.Any, numpy.dtype[numpy.bool_]]:
         """
-        Whether camera-frame rays (N, 3) lie within the angles its calibration observed (per 15-degree azimuth sector): (N,) bool.
+        Whether camera-frame rays (N, 3) lie within the angles its calibration observed (per 15-degree azimuth sector, each sector's angle holding up to the middle of its neighbours): (N,) bool.
         """
     def parameters_key(self, with_pose: bool = True) -> bytes:
         """
@@ -212,6 +212,11 @@ class Camera:
     def tangential(self) -> dict[str, float]:
         """
         The tangential and thin-prism terms {'p1', 'p2', 's1', 's2', 's3', 's4'} (dict of float) on the model's undistorted plane (docs/conventions.md); all 0 unless distortion is 'tangential'.
+        """
+    @property
+    def theta_limit_by_azimuth_deg(self) -> list[float] | None:
+        """
+        The per-azimuth cap on the angle of incidence (degrees; 24 sectors of 15 degrees, sector k covering azimuths atan2(y, x) in [-180 + 15 k, -165 + 15 k)), or None: limited_to_observed sets it.
         """
     @property
     def width(self) -> int:

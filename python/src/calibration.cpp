@@ -224,15 +224,27 @@ void bind_calibration_record(py::class_<Camera>& camera) {
           },
           py::arg("rays"),
           "Whether camera-frame rays (N, 3) lie within the angles its calibration observed (per 15-degree azimuth "
-          "sector): (N,) bool.")
+          "sector, each sector's angle holding up to the middle of its neighbours): (N,) bool.")
       .def(
           "limited_to_observed",
           [](const Camera& c, double margin_deg) {
             return Camera(limited_to_observed(c.parameters(), margin_deg / kDeg));
           },
           py::arg("margin_deg") = 0.0,
-          "The camera with its valid domain capped at the observed angles plus margin_deg (`--theta-limit "
-          "data+DEG`).")
+          "The camera with its valid domain capped at the observed angles plus margin_deg, per azimuth "
+          "(`--theta-limit data+DEG`): with margin_deg = 0 it unprojects exactly the pixels whose rays "
+          "observed() accepts.")
+      .def_property_readonly(
+          "theta_limit_by_azimuth_deg",
+          [](const Camera& c) -> std::optional<std::vector<double>> {
+            const auto& limit = c.parameters().theta_limit_by_azimuth;
+            if (!limit) return std::nullopt;
+            std::vector<double> degrees;
+            for (double a : *limit) degrees.push_back(a * kDeg);
+            return degrees;
+          },
+          "The per-azimuth cap on the angle of incidence (degrees; 24 sectors of 15 degrees, sector k covering "
+          "azimuths atan2(y, x) in [-180 + 15 k, -165 + 15 k)), or None: limited_to_observed sets it.")
       .def(
           "projection_uncertainty",
           [](const Camera& c, const py::handle& pixels, std::optional<double> distance) {

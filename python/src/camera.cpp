@@ -22,7 +22,7 @@ std::optional<CameraFormat> format_of(const std::optional<std::string>& name) {
 }
 
 // The camera's numbers as bytes: equal exactly when the cameras are (model, its
-// parameters, size, theta limit, its pixel grid's numbers (PixelGrid::values), its
+// parameters, size, theta limits, its pixel grid's numbers (PixelGrid::values), its
 // plane distortion's (numbers_of) and, with_pose, the pose). A cache key that costs microseconds, where to_json()
 // formats and reads back a file (milliseconds).
 std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
@@ -30,6 +30,11 @@ std::string parameters_key_of(const CameraParameters& p, bool with_pose) {
   key.push_back('\0');
   std::vector<double> numbers = model_params(p.model);
   numbers.insert(numbers.end(), {double(p.width), double(p.height), p.theta_limit.value_or(-1.0)});
+  if (p.theta_limit_by_azimuth) {
+    numbers.insert(numbers.end(), p.theta_limit_by_azimuth->begin(), p.theta_limit_by_azimuth->end());
+  } else {
+    numbers.push_back(-1.0);
+  }
   const std::vector<double> grid = p.grid.values();
   numbers.insert(numbers.end(), grid.begin(), grid.end());
   const PlaneDistortionNumbers part = numbers_of(p.distortion);  // its name and configuration, then its values
@@ -59,8 +64,8 @@ py::bytes parameters_key(const Camera& camera, bool with_pose) {
 py::object camera_pickle_state(const Camera& c) {
   const CameraParameters& p = c.parameters();
   const PlaneDistortionNumbers part = numbers_of(p.distortion);
-  // The record travels as fishcam JSON.
-  if (p.calibration) return py::str(format_camera(p, CameraFormat::fishcam));
+  // The record and a per-azimuth limit travel as fishcam JSON.
+  if (p.calibration || p.theta_limit_by_azimuth) return py::str(format_camera(p, CameraFormat::fishcam));
   py::object pose = py::none();
   if (p.pose) {
     const auto& q = p.pose->rotation;

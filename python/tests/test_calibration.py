@@ -1,6 +1,7 @@
 """fishcam.calibrate / calibrate_rig on synthetic boards, and what a calibrated Camera
 knows about its data (projection uncertainty, observed angles) -- through Python."""
 
+import json
 import os
 import pickle
 from pathlib import Path
@@ -74,6 +75,37 @@ def test_calibrate_recovers_the_lens_and_carries_its_record() -> None:
     assert fishcam.Camera.from_json(calibrated.to_json()).observed_theta_max_deg == calibrated.observed_theta_max_deg
     with pytest.raises(fishcam.Error, match="no calibration"):
         camera.projection_uncertainty(np.array([[320.0, 241.0]]))
+
+
+def test_limited_to_observed_unprojects_exactly_what_was_observed() -> None:
+    camera = lens()
+    left, _ = stereo_boards(camera, 0.2, 40, 0.2, 1)
+    calibrated = fishcam.calibrate(left, BOARD, SPACING, (640, 483), "kannala-brandt", threads=2).camera
+    assert calibrated.theta_limit_by_azimuth_deg is None
+    limited = calibrated.limited_to_observed()
+    limits = limited.theta_limit_by_azimuth_deg
+    assert limits is not None and len(limits) == 24
+    assert max(limits) == pytest.approx(limited.domain.theta_max_deg, abs=1e-12)
+    u, v = np.meshgrid(np.arange(0, 640, 7.0), np.arange(0, 483, 7.0))
+    pixels = np.stack([u.ravel(), v.ravel()], axis=1)
+    rays, ok = calibrated.unproject(pixels)
+    observed = np.zeros_like(ok)
+    observed[ok] = calibrated.observed(rays[ok])
+    limited_rays, limited_ok = limited.unproject(pixels)
+    np.testing.assert_array_equal(limited_ok, observed)
+    assert 0 < observed.sum() < ok.sum()
+    assert np.isnan(limited_rays[~limited_ok]).all()
+    # The limit travels with the camera: pickling, fishcam JSON, the cache key.
+    for back in (pickle.loads(pickle.dumps(limited)), fishcam.Camera.from_json(limited.to_json())):
+        assert back.theta_limit_by_azimuth_deg == pytest.approx(limits, abs=1e-12)
+        np.testing.assert_array_equal(back.unproject(pixels)[1], limited_ok)
+    text = json.loads(limited.to_json())
+    smallest = int(np.argmin(limits))
+    text["theta_limit_by_azimuth_deg"][smallest] += 1  # theta_limit_deg (the largest) unchanged
+    other = fishcam.Camera.from_json(json.dumps(text))
+    assert other.parameters_key() != limited.parameters_key() and other != limited
+    wider = calibrated.limited_to_observed(margin_deg=5)
+    assert wider.theta_limit_by_azimuth_deg == pytest.approx([min(a + 5, 180) for a in limits])
 
 
 def test_calibrate_refuses_what_cannot_be_a_camera() -> None:

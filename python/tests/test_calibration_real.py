@@ -117,3 +117,12 @@ def test_theta_limit_data_stops_unprojection_where_the_data_stop(observations: l
     # A pixel at 85 degrees: the calibrated model unprojects it (extrapolating), the capped one does not.
     pixel, _ = camera.project(np.array([[np.sin(np.radians(85)), 0.0, np.cos(np.radians(85))]]))
     assert camera.unproject(pixel)[1][0] and not capped.unproject(pixel)[1][0]
+    # Per azimuth: the boards reach about 68 degrees at the sides but only 31-36 at the
+    # bottom, where pixel (478, 548) looks 62 degrees off-axis: past the data, refused.
+    at_data = camera.limited_to_observed()
+    bottom = np.array([[478.0, 548.0]])
+    ray, ok = camera.unproject(bottom)
+    assert ok[0] and not camera.observed(ray)[0] and np.degrees(np.arccos(ray[0, 2])) > 55
+    assert not at_data.unproject(bottom)[1][0]
+    limits = at_data.theta_limit_by_azimuth_deg
+    assert limits is not None and min(limits) < 40 and max(limits) == pytest.approx(observed)

@@ -336,6 +336,8 @@ bool kernel_plane_form(const Camera& camera, const MrcalLensDistortion& part, So
 // The source camera for the float kernel, or null where float arithmetic
 // cannot be trusted to kFloatTolerancePx: the one place that decides.
 std::shared_ptr<KernelSource> float_source_params(const Camera& camera) {
+  // The kernel's domain is a disk (one cos theta_max): a limit per azimuth takes the exact path.
+  if (camera.parameters().theta_limit_by_azimuth) return nullptr;
   auto source = std::make_shared<KernelSource>();
   std::optional<SourceParams> p = std::visit([](const auto& m) { return kernel_model(m); }, camera.model());
   if (!p) return nullptr;

@@ -17,6 +17,7 @@ namespace fishcam {
 namespace {
 
 constexpr DepthPrior kPriors[] = {DepthPrior::source_sphere, DepthPrior::target_sphere, DepthPrior::infinity};
+constexpr double kDeg = 180 / M_PI;
 
 Camera woodscape() { return read_camera(test::data_path("woodscape_front.json")); }
 
@@ -928,6 +929,59 @@ TEST(Augmentation, ExtremeMrcalLensesTakeTheKernelOnlyWhereItAgrees) {
 // anisotropic pixel scales. The float maps stay within 1e-3 px and the grid within
 // 1/32 px, or the warp steps aside to the exact path there (0.12 px and 0.11 px
 // before).
+// A camera limited per azimuth (what --theta-limit data writes) takes the exact path,
+// and its maps are the unlimited camera's exact maps wherever both the output pixel's
+// ray and its source's lie within the limit, and without a source elsewhere.
+TEST(Augmentation, PerAzimuthLimitedCamerasWarpOnlyWithinTheLimit) {
+  const CameraParameters whole = resized(test::woodscape_front(), 320, 242);
+  CameraParameters p = whole;
+  AzimuthSectors& limits = p.theta_limit_by_azimuth.emplace();
+  limits.fill(80 / kDeg);
+  for (int k : {5, 6, 7}) limits[size_t(k)] = 30 / kDeg;  // the image's top
+  const ViewpointWarp warp{Camera(p)}, unlimited{Camera(whole)};
+  EXPECT_FALSE(warp.float_kernel());
+  const Camera& camera = unlimited.source();
+  const auto within = [&](const Eigen::Vector3d& ray) {
+    return std::atan2(ray.head<2>().norm(), ray.z()) <= angle_near_azimuth(limits, std::atan2(ray.y(), ray.x()));
+  };
+  int checked = 0;
+  for (DepthPrior prior : kPriors) {
+    const RigidMotion change = random_change(*find_pose_preset("medium"), 4).motion();
+    WarpMaps limited_maps, maps;
+    warp.compute(change, prior, &limited_maps, MapKind::geometric);
+    unlimited.compute_exact(change, prior, &maps);
+    long inside = 0, outside = 0;
+    for (int v = 0; v < 242; ++v) {
+      for (int u = 0; u < 320; ++u) {
+        const bool valid = maps.valid.at<std::uint8_t>(v, u);
+        Eigen::Vector3d ray, source_ray;
+        const Eigen::Vector2d source(maps.map_x.at<float>(v, u), maps.map_y.at<float>(v, u));
+        const bool expected = valid && camera.unproject(Eigen::Vector2d(u, v), &ray) && within(ray) &&
+                              camera.unproject(source, &source_ray) && within(source_ray);
+        // A source within float rounding of the limit may go either way.
+        if (valid && !expected && camera.unproject(source, &source_ray) &&
+            std::abs(std::acos(source_ray.z()) -
+                     angle_near_azimuth(limits, std::atan2(source_ray.y(), source_ray.x()))) < 1e-5) {
+          continue;
+        }
+        ASSERT_EQ(bool(limited_maps.valid.at<std::uint8_t>(v, u)), expected)
+            << u << "," << v << " " << to_string(prior);
+        if (!expected) {
+          ++outside;
+          continue;
+        }
+        ++inside;
+        EXPECT_EQ(limited_maps.map_x.at<float>(v, u), maps.map_x.at<float>(v, u));
+        EXPECT_EQ(limited_maps.map_y.at<float>(v, u), maps.map_y.at<float>(v, u));
+      }
+    }
+    EXPECT_GT(inside, 20000) << to_string(prior);
+    EXPECT_GT(outside, 5000) << to_string(prior);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 3);
+}
+
 TEST(Augmentation, FullCircleAndAnisotropicCamerasKeepTheirAccuracy) {
   CameraParameters full_circle = test::woodscape_front();
   full_circle.width = 640, full_circle.height = 483, full_circle.grid.principal_point = {319.5, 241};

@@ -160,7 +160,8 @@ Camera::FieldOfView Camera::field_of_view_deg() const {
   // rays of the pixels that have one, never the model's domain where no pixel reaches.
   constexpr int kSamples = 512;
   const auto across = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    if (centred && radial()) {  // exact: the domain is a disk about the principal point
+    if (centred && radial() &&
+        !params_.theta_limit_by_azimuth) {  // exact: the domain is a disk about the principal point
       const auto theta_at = [&](const Eigen::Vector2d& q) {
         const double rho = rho_of_pixel(q);
         return domain_.contains_rho(rho) ? theta_from_rho(rho) : domain_.theta_max;

@@ -155,6 +155,13 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
     pose.rotation.normalize();
   }
   if (params_.calibration) check_calibration_record(*params_.calibration, model_params(params_.model).size());
+  if (params_.theta_limit_by_azimuth) {
+    for (double a : *params_.theta_limit_by_azimuth) {
+      if (!(a >= 0 && a <= std::numbers::pi)) {
+        fail("theta_limit_by_azimuth: every sector's limit must be in [0, 180] degrees, got ", a * kDeg);
+      }
+    }
+  }
   domain_ = std::visit([&](const auto& m) { return compute_domain(m, params_.theta_limit); }, params_.model);
   if (displaces(params_.distortion)) {
     // A part evaluated by another library may say on standard error where its own

@@ -75,6 +75,22 @@ Pose inverse(const Pose& pose) {
   return Pose{r, -(r * pose.translation)};
 }
 
+int azimuth_sector(double azimuth) {
+  const double turn = 2 * std::numbers::pi;
+  const int k = int(std::floor((azimuth + std::numbers::pi) / turn * kAzimuthSectors));
+  return std::clamp(k, 0, kAzimuthSectors - 1);
+}
+
+double angle_near_azimuth(const AzimuthSectors& sectors, double azimuth) {
+  constexpr double kStep = 2 * std::numbers::pi / kAzimuthSectors;
+  const int k = azimuth_sector(azimuth);
+  // The nearer neighbour: the one before in the sector's first half, else the one after.
+  const double start = -std::numbers::pi + k * kStep;
+  const int neighbour = (azimuth - start < kStep / 2 ? k + kAzimuthSectors - 1 : k + 1) % kAzimuthSectors;
+  const double a = sectors[size_t(k)], b = sectors[size_t(neighbour)];
+  return std::isnan(a) ? b : std::isnan(b) ? a : std::max(a, b);
+}
+
 CameraParameters limited_to_observed(CameraParameters camera, double margin) {
   if (!camera.calibration) {
     fail(
@@ -83,8 +99,15 @@ CameraParameters limited_to_observed(CameraParameters camera, double margin) {
   }
   if (!(margin >= 0 && margin < std::numbers::pi))
     fail("theta limit 'data+DEG': the margin must be in [0, 180) degrees");
-  const double limit = std::min(camera.calibration->theta_max + margin, std::numbers::pi);
-  camera.theta_limit = camera.theta_limit ? std::min(*camera.theta_limit, limit) : limit;
+  AzimuthSectors limit{};
+  for (size_t k = 0; k < limit.size(); ++k) {
+    const double observed = camera.calibration->theta_max_by_azimuth[k];
+    limit[k] = std::min((std::isnan(observed) ? 0.0 : observed) + margin, std::numbers::pi);
+    if (camera.theta_limit) limit[k] = std::min(limit[k], *camera.theta_limit);
+    if (camera.theta_limit_by_azimuth) limit[k] = std::min(limit[k], (*camera.theta_limit_by_azimuth)[k]);
+  }
+  camera.theta_limit = *std::max_element(limit.begin(), limit.end());
+  camera.theta_limit_by_azimuth = limit;
   return camera;
 }
 
@@ -96,21 +119,14 @@ CalibrationRecord CalibrationRecord::nothing_observed() {
 
 void CalibrationRecord::observe(const Eigen::Vector3d& point) {
   const double theta = std::atan2(point.head<2>().norm(), point.z());
-  double& sector = theta_max_by_azimuth[size_t(sector_of(std::atan2(point.y(), point.x())))];
+  double& sector = theta_max_by_azimuth[size_t(azimuth_sector(std::atan2(point.y(), point.x())))];
   if (!(sector >= theta)) sector = theta;  // NaN: the sector's first corner
   theta_max = std::max(theta_max, theta);
 }
 
-int CalibrationRecord::sector_of(double azimuth) {
-  const double turn = 2 * std::numbers::pi;
-  const int k = int(std::floor((azimuth + std::numbers::pi) / turn * kAzimuthSectors));
-  return std::clamp(k, 0, kAzimuthSectors - 1);
-}
-
 bool CalibrationRecord::observed(const Eigen::Vector3d& ray) const {
   const double theta = std::atan2(ray.head<2>().norm(), ray.z());
-  const double limit = theta_max_by_azimuth[size_t(sector_of(std::atan2(ray.y(), ray.x())))];
-  return theta <= limit;  // false for NaN: no corner in that sector
+  return theta <= angle_near_azimuth(theta_max_by_azimuth, std::atan2(ray.y(), ray.x()));  // false for NaN
 }
 
 }  // namespace fishcam

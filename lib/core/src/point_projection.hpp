@@ -287,10 +287,18 @@ bool project_unskewed(const Model& model, const Part& part, const double* mappin
   }
 }
 
+// Whether a camera-frame direction lies within the camera's per-azimuth limit (true
+// without one). A direction built at the limit may measure a few ulps past it: valid.
+inline bool within_azimuth_limit(const CameraParameters& params, const double* v) {
+  if (!params.theta_limit_by_azimuth) return true;
+  const double theta = std::atan2(std::hypot(v[0], v[1]), v[2]);
+  return theta <= angle_near_azimuth(*params.theta_limit_by_azimuth, std::atan2(v[1], v[0])) * (1 + 1e-12);
+}
+
 template <bool kWithJacobian, class Model, class Part>
-bool project_point(const Model& model, const Part& part, const CameraParameters& params, const double* mapping,
-                   const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
-                   Eigen::Matrix<double, 2, 3>* jacobian) {
+bool project_in_domain(const Model& model, const Part& part, const CameraParameters& params, const double* mapping,
+                       const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                       Eigen::Matrix<double, 2, 3>* jacobian) {
   if (!params.grid.skew.any())
     return project_unskewed<kWithJacobian>(model, part, mapping, domain, point, pixel, jacobian);
   // q with c = 0, a = 1, then the grid's pixel c + a (.) (S q).
@@ -308,12 +316,23 @@ bool project_point(const Model& model, const Part& part, const CameraParameters&
   return true;
 }
 
+template <bool kWithJacobian, class Model, class Part>
+bool project_point(const Model& model, const Part& part, const CameraParameters& params, const double* mapping,
+                   const ValidDomain& domain, const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
+                   Eigen::Matrix<double, 2, 3>* jacobian) {
+  if (within_azimuth_limit(params, point.data()))
+    return project_in_domain<kWithJacobian>(model, part, params, mapping, domain, point, pixel, jacobian);
+  pixel->setConstant(kNaN);
+  if constexpr (kWithJacobian) jacobian->setConstant(kNaN);
+  return false;
+}
+
 // (x, y) = ((u - cx) / a_x, (v - cy) / a_y), which is S q for a skewed grid.
 // start: distorted_ray_of's guess, for a camera with a plane distortion.
 template <class Model, class Part>
-bool ray_of_point(const Model& model, const Part& part, const CameraParameters& params, const ValidDomain& domain,
-                  const InverseTable& table, double x, double y, InversePath path, double* ray,
-                  Eigen::Vector2d* start = nullptr) {
+bool ray_in_domain(const Model& model, const Part& part, const CameraParameters& params, const ValidDomain& domain,
+                   const InverseTable& table, double x, double y, InversePath path, double* ray,
+                   Eigen::Vector2d* start = nullptr) {
   if (params.grid.skew.any()) {
     const Eigen::Vector2d q = params.grid.unskewed({x, y});
     x = q.x(), y = q.y();
@@ -323,6 +342,17 @@ bool ray_of_point(const Model& model, const Part& part, const CameraParameters& 
   } else {
     return distorted_ray_of(model, domain, table, part, params.grid.pixel_scale, x, y, ray, start);
   }
+}
+
+// ray_in_domain, and false (ray NaN) where the ray lies past the per-azimuth limit.
+template <class Model, class Part>
+bool ray_of_point(const Model& model, const Part& part, const CameraParameters& params, const ValidDomain& domain,
+                  const InverseTable& table, double x, double y, InversePath path, double* ray,
+                  Eigen::Vector2d* start = nullptr) {
+  if (!ray_in_domain(model, part, params, domain, table, x, y, path, ray, start)) return false;
+  if (within_azimuth_limit(params, ray)) return true;
+  ray[0] = ray[1] = ray[2] = kNaN;
+  return false;
 }
 
 }  // namespace fishcam::detail

@@ -10,6 +10,7 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kDeg = 180 / M_PI;
 
 CameraParameters polynomial_camera(std::vector<double> k) {
   return test::with_model(test::woodscape_front(), Polynomial<double>(std::move(k)));
@@ -102,6 +103,58 @@ TEST(Domain, UserLimit) {
   p.theta_limit = 1.0;
   EXPECT_EQ(Camera(p).domain().theta_max, 1.0);
   EXPECT_TRUE(Camera(p).domain().closed);
+}
+
+// A limit per azimuth sector: whole images unproject to NaN past it, the field of
+// view follows it, resizing, cropping and flipping keep it (it is of the camera
+// frame), and a sector's limit outside [0, 180] degrees is refused by name.
+TEST(Domain, PerAzimuthLimit) {
+  CameraParameters p = resized(test::woodscape_front(), 320, 242);
+  AzimuthSectors& limits = p.theta_limit_by_azimuth.emplace();
+  limits.fill(80 / kDeg);
+  for (int k : {5, 6, 7}) limits[size_t(k)] = 30 / kDeg;  // azimuths -105 .. -60 deg: the image's top
+  const Camera camera(p);
+  std::vector<float> rays(3 * 320 * 242);
+  camera.unproject_image(rays);
+  int refused = 0, kept = 0;
+  for (size_t i = 0; i < rays.size() / 3; ++i) {
+    const Eigen::Vector2d pixel(double(i % 320), double(i / 320));
+    Eigen::Vector3d ray;
+    const bool valid = camera.unproject(pixel, &ray);
+    ASSERT_EQ(valid, !std::isnan(rays[3 * i])) << pixel.transpose();
+    if (!valid) {
+      ++refused;
+      continue;
+    }
+    ++kept;
+    const double theta = std::acos(std::clamp(ray.z(), -1.0, 1.0)) * kDeg;
+    EXPECT_LE(theta, angle_near_azimuth(limits, std::atan2(ray.y(), ray.x())) * kDeg + 1e-9);
+  }
+  EXPECT_GT(refused, 1000);
+  EXPECT_GT(kept, 20000);
+  // Vertically the field of view is 30 deg up (the top sectors' limit) and down what
+  // the bottom border sees (within the 80 deg limit there). Sampled along the column: 0.5 deg.
+  const Camera whole(resized(test::woodscape_front(), 320, 242));
+  Eigen::Vector3d bottom;
+  ASSERT_TRUE(whole.unproject({whole.principal_point().x(), 241.5}, &bottom));
+  ASSERT_LT(std::acos(bottom.z()) * kDeg, 80);
+  EXPECT_NEAR(camera.field_of_view_deg().vertical, 30 + std::acos(bottom.z()) * kDeg, 0.5);
+  for (const CameraParameters& kept_limit :
+       {resized(p, 640, 484), cropped(p, 10, 5, 200, 200), mirrored(p, true, true)}) {
+    EXPECT_EQ(kept_limit.theta_limit_by_azimuth, p.theta_limit_by_azimuth);
+  }
+  for (double bad : {-0.1, 3.2, kNaN}) {
+    CameraParameters broken = p;
+    (*broken.theta_limit_by_azimuth)[3] = bad;
+    try {
+      Camera{broken};
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("theta_limit_by_azimuth: every sector's limit must be in [0, 180]"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST(Domain, HugeCoefficients) {

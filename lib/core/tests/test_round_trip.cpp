@@ -122,6 +122,58 @@ TEST_P(EveryModel, MirroredCameraSeesTheFlippedImage) {
   EXPECT_EQ(flips, 3);
 }
 
+// The per-azimuth limit by its definition, written apart from the library's: sector
+// j's angle holds within one sector's width of its centre, -180 + 15 (j + 0.5) deg;
+// the largest of those that hold.
+double independent_cap(const AzimuthSectors& limits, double azimuth) {
+  const double step = 2 * M_PI / kAzimuthSectors;
+  double cap = -1;
+  for (int j = 0; j < kAzimuthSectors; ++j) {
+    if (std::abs(std::remainder(azimuth - (-M_PI + (j + 0.5) * step), 2 * M_PI)) < step) {
+      cap = std::max(cap, limits[size_t(j)]);
+    }
+  }
+  return cap;
+}
+
+// A cap per azimuth sector (what --theta-limit data writes): project and unproject
+// refuse exactly the directions past it, and agree with the unlimited camera elsewhere.
+TEST_P(EveryModel, PerAzimuthLimitStopsProjectionAndUnprojection) {
+  const auto& [name, params] = GetParam();
+  const Camera camera(params);
+  const double reach = random_ray_limit(camera.domain());
+  CameraParameters p = params;
+  AzimuthSectors& limits = p.theta_limit_by_azimuth.emplace();
+  for (size_t k = 0; k < limits.size(); ++k) limits[k] = reach * (0.3 + 0.6 * double(k * 7 % 24) / 23);
+  const Camera limited(p);
+  int inside = 0, outside = 0;
+  for (const Eigen::Vector3d& ray : test::random_rays(3000, reach, 11)) {
+    const double theta = std::atan2(ray.head<2>().norm(), ray.z()),
+                 cap = independent_cap(limits, std::atan2(ray.y(), ray.x()));
+    if (std::abs(theta - cap) < 1e-9) continue;
+    Eigen::Vector2d pixel, limited_pixel;
+    Eigen::Vector3d back;
+    ASSERT_TRUE(camera.project(ray, &pixel));
+    const bool expected = theta < cap;
+    ASSERT_EQ(limited.project(ray, &limited_pixel), expected) << name << " theta " << theta << " cap " << cap;
+    if (!expected) {
+      EXPECT_TRUE(limited_pixel.array().isNaN().all());
+      EXPECT_FALSE(limited.unproject(pixel, &back)) << name;
+      EXPECT_TRUE(back.array().isNaN().all());
+      ++outside;
+      continue;
+    }
+    EXPECT_EQ(limited_pixel, pixel);
+    Eigen::Vector3d unlimited_back;
+    if (!camera.unproject(pixel, &unlimited_back)) continue;  // a pixel past what doubles resolve (CAHVOR's rim)
+    ASSERT_TRUE(limited.unproject(pixel, &back)) << name;
+    EXPECT_EQ(back, unlimited_back);
+    ++inside;
+  }
+  EXPECT_GE(inside, 500) << name;
+  EXPECT_GE(outside, 500) << name;
+}
+
 INSTANTIATE_TEST_SUITE_P(RoundTrip, EveryModel, ::testing::ValuesIn(cameras()), test::model_case_name);
 
 TEST(RoundTrip, BatchesEqualSinglePointsAndThreadCountDoesNotMatter) {

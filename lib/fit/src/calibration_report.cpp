@@ -55,10 +55,14 @@ std::string calibration_report_json(const CalibrationResult& result, const Camer
       {"undetermined", result.undetermined},
       {"observed_theta_max_deg", record.theta_max * kDegreesPerRadian},
       {"theta_limit_deg", written.theta_limit ? nlohmann::json(*written.theta_limit * kDegreesPerRadian) : nullptr},
+      {"theta_limit_by_azimuth_deg", nullptr},
       {"poses", poses_of(result)},
       {"pose_convention", kPoseConvention},
       {"warnings", result.warnings},
       {"out", out}};
+  if (written.theta_limit_by_azimuth) {
+    for (double a : *written.theta_limit_by_azimuth) j["theta_limit_by_azimuth_deg"].push_back(a * kDegreesPerRadian);
+  }
   for (size_t i = 0; i < result.parameters.size(); ++i) {
     const double sigma = result.sigmas[i];
     j["parameters"][result.parameter_names[i]] = {

@@ -248,16 +248,6 @@ Camera read_camera(const std::filesystem::path& path, const CameraReadOptions& o
 
 namespace {
 
-// The largest observed theta next to an azimuth (the two sectors that meet there;
-// NaN when neither holds a corner).
-double observed_next_to(const CalibrationRecord& r, double azimuth) {
-  const double step = 2 * std::numbers::pi / CalibrationRecord::kAzimuthSectors;
-  const double a = r.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(azimuth - step / 2))];
-  const double b = r.theta_max_by_azimuth[size_t(CalibrationRecord::sector_of(
-      azimuth + step / 2 - 2 * std::numbers::pi * (azimuth + step / 2 >= std::numbers::pi)))];
-  return std::isnan(a) ? b : std::isnan(b) ? a : std::max(a, b);
-}
-
 // What the calibration's data support, beside the model's own domain: the observed
 // angles, the field of view they span along the image axes, and what of the
 // model's domain and field of view exists only in extrapolation.
@@ -269,8 +259,11 @@ json observed_json(const Camera& camera) {
   json sectors = json::array();
   for (double a : r.theta_max_by_azimuth) sectors.push_back(number(a * kToDeg));
   const double pi = std::numbers::pi;
-  const double horizontal = (observed_next_to(r, 0) + observed_next_to(r, pi)) * kToDeg;
-  const double vertical = (observed_next_to(r, pi / 2) + observed_next_to(r, -pi / 2)) * kToDeg;
+  const double horizontal =
+      (angle_near_azimuth(r.theta_max_by_azimuth, 0) + angle_near_azimuth(r.theta_max_by_azimuth, pi)) * kToDeg;
+  const double vertical =
+      (angle_near_azimuth(r.theta_max_by_azimuth, pi / 2) + angle_near_azimuth(r.theta_max_by_azimuth, -pi / 2)) *
+      kToDeg;
   json extrapolated = json::array();
   const auto fov = camera.field_of_view_deg();
   char text[240];
@@ -288,6 +281,7 @@ json observed_json(const Camera& camera) {
   // the fit's extrapolation, not the lens.
   CameraParameters unlimited = p;
   unlimited.theta_limit.reset();
+  unlimited.theta_limit_by_azimuth.reset();
   const ValidDomain model_domain = Camera(unlimited).domain();
   if (model_domain.limited_by == ValidDomain::Limit::fold && model_domain.theta_max > r.theta_max) {
     std::snprintf(text, sizeof text,
@@ -326,6 +320,7 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
       {"theta_max_deg", d.theta_max * kToDeg},
       {"theta_max_closed", d.closed},
       {"theta_max_limited_by", to_string(d.limited_by)},
+      {"theta_limit_by_azimuth_deg", nullptr},
       {"rho_max_px", d.closed ? json(d.rho_max) : json(nullptr)},
       {"fov_deg", {{"horizontal", fov.horizontal}, {"vertical", fov.vertical}, {"diagonal", fov.diagonal}}},
       {"inverse_table",
@@ -346,6 +341,9 @@ std::string camera_info_json(const Camera& camera, std::optional<CameraFormat> f
     for (size_t i = 0; i < TangentialTerms::kNames.size(); ++i) {
       j["tangential"][std::string(TangentialTerms::kNames[i])] = terms.values()[i];
     }
+  }
+  if (p.theta_limit_by_azimuth) {
+    for (double a : *p.theta_limit_by_azimuth) j["theta_limit_by_azimuth_deg"].push_back(a * kToDeg);
   }
   j["skew"] = p.grid.skew.any() ? json{{"xy", p.grid.skew.xy}, {"yx", p.grid.skew.yx}} : json(nullptr);
   if (p.pose) {
@@ -378,6 +376,16 @@ std::string formats_that(const Predicate& holds) {
   }
   return names;
 }
+// "" when the format holds the camera's user limit on the valid domain, else why not.
+std::string cannot_hold_limit(const detail::FormatSpec& spec, const CameraParameters& camera) {
+  if (spec.holds.theta_limit || !(camera.theta_limit || camera.theta_limit_by_azimuth)) return "";
+  const auto holders = formats_that([](const detail::FormatSpec& s) { return s.holds.theta_limit; });
+  return camera.theta_limit_by_azimuth
+             ? "theta_limit_by_azimuth: the " + std::string(spec.name) +
+                   " format cannot store a per-azimuth field-of-view limit (" + holders + " can)"
+             : "theta_limit: the " + std::string(spec.name) + " format cannot store a user field-of-view limit (" +
+                   holders + " can)";
+}
 // "" when the format holds the camera's non-radial parts, else why not.
 std::string cannot_hold_non_radial(const detail::FormatSpec& spec, const CameraParameters& camera) {
   if (std::string why = spec.cannot_hold_distortion(camera.distortion); !why.empty()) return why;
@@ -404,10 +412,7 @@ std::string format_camera(const CameraParameters& camera, CameraFormat format) {
   const detail::FormatSpec& spec = format_spec(format);
   // What a format holds is checked here, once, from its list: writers see only
   // cameras of their models.
-  if (camera.theta_limit && !spec.holds.theta_limit) {
-    throw Error("theta_limit: the " + std::string(spec.name) +
-                " format cannot store a user field-of-view limit (fishcam JSON can)");
-  }
+  if (const std::string why = cannot_hold_limit(spec, camera); !why.empty()) throw Error(why);
   if (!spec.holds_model(model_name(camera.model))) detail::cannot_hold(camera, format);
   if (const std::string why = cannot_hold_non_radial(spec, camera); !why.empty()) throw Error(why);
   CameraParameters written = spec.holds.pixel_scale ? camera : detail::with_unit_ax(camera);
@@ -454,10 +459,7 @@ std::string format_rig(const std::vector<CameraParameters>& cameras, CameraForma
     Camera check(camera);
     const std::string which = "camera " + std::to_string(i) + ": ";
     if (!camera.pose) throw Error(which + "a rig camera needs its pose relative to camera 0");
-    if (camera.theta_limit && !spec.holds.theta_limit) {
-      throw Error(which + "theta_limit: the " + std::string(spec.name) +
-                  " format cannot store a user field-of-view limit (fishcam JSON can)");
-    }
+    if (const std::string why = cannot_hold_limit(spec, camera); !why.empty()) throw Error(which + why);
     if (const std::string why = cannot_hold_non_radial(spec, camera); !why.empty()) throw Error(which + why);
     if (!spec.holds_model(model_name(camera.model))) {
       try {

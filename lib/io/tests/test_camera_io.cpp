@@ -196,6 +196,14 @@ const Malformed kMalformed[] = {
     {"fc_scale", replaced(kFishcam, "[1.0, 1.0]", "[1.0, 0.0]"), "pixel_scale"},
     {"fc_limit", replaced(kFishcam, "\"parameters\"", "\"theta_limit_deg\": 200, \"parameters\""),
      "theta_limit: must be in (0, 180]"},
+    {"fc_limit_by_azimuth_short",
+     replaced(kFishcam, "\"parameters\"", "\"theta_limit_by_azimuth_deg\": [10, 20], \"parameters\""),
+     "theta_limit_by_azimuth_deg: expected 24"},
+    {"fc_limit_by_azimuth_range",
+     replaced(kFishcam, "\"parameters\"",
+              "\"theta_limit_by_azimuth_deg\": [10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,10,"
+              "190], \"parameters\""),
+     "theta_limit_by_azimuth: every sector's limit must be in [0, 180] degrees, got 190"},
     {"fc_pp_type", replaced(kFishcam, "[643.442, 479.407]", "\"centre\""), "principal_point: expected a list"},
     // mrcal
     {"mr_lensmodel", replaced(kMrcal, "'LENSMODEL_STEREOGRAPHIC'", "'LENSMODEL_CAHVOR7'"),

@@ -642,21 +642,39 @@ TEST_P(EveryFormat, RoundTripsTheModelsOfItsListAndRefusesTheOthers) {
       << to_string(format);
 }
 
-// A user limit on the valid domain: fishcam JSON only; every other format refuses it.
+// A user limit on the valid domain, one angle or one per azimuth sector: fishcam JSON
+// only (to 1e-15 rad: stored in degrees); every other format refuses it by name.
 TEST_P(EveryFormat, HoldsAThetaLimitOnlyIfFishcam) {
   CameraParameters p = test::woodscape_front();
   p.model = Equidistant<double>(340);
   p.theta_limit = 1.2;
-  if (GetParam() == CameraFormat::fishcam) {
-    EXPECT_EQ(*parse_camera(format_camera(p, GetParam()), "x", GetParam()).theta_limit, 1.2);
-  } else {
+  CameraParameters by_azimuth = p;
+  AzimuthSectors& limits = by_azimuth.theta_limit_by_azimuth.emplace();
+  for (size_t k = 0; k < limits.size(); ++k) limits[k] = 0.4 + 0.03 * double(k);
+  const std::string name(to_string(GetParam()));
+  int cases = 0;
+  for (const auto& [camera, refusal] :
+       {std::pair{p, "theta_limit: the " + name + " format cannot store a user field-of-view limit"},
+        std::pair{by_azimuth,
+                  "theta_limit_by_azimuth: the " + name + " format cannot store a per-azimuth field-of-view limit"}}) {
+    ++cases;
+    if (GetParam() == CameraFormat::fishcam) {
+      const CameraParameters back = parse_camera(format_camera(camera, GetParam()), "x", GetParam());
+      EXPECT_EQ(*back.theta_limit, 1.2);
+      ASSERT_EQ(back.theta_limit_by_azimuth.has_value(), camera.theta_limit_by_azimuth.has_value());
+      for (size_t k = 0; camera.theta_limit_by_azimuth && k < limits.size(); ++k) {
+        EXPECT_NEAR((*back.theta_limit_by_azimuth)[k], limits[k], 1e-15);
+      }
+      continue;
+    }
     try {
-      format_camera(p, GetParam());
+      format_camera(camera, GetParam());
       ADD_FAILURE() << "a theta limit was written";
     } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find("cannot store a user field-of-view limit"), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find(refusal), 0u) << e.what();
     }
   }
+  EXPECT_EQ(cases, 2);
 }
 
 // A skewed pixel grid: written and read back by the formats that hold one (the

@@ -155,6 +155,11 @@ CameraParameters read_camera_fields(const DocFields& f) {
     p.grid.skew = {s.has("xy") ? s.number("xy") : 0.0, s.has("yx") ? s.number("yx") : 0.0};
   }
   if (f.has("theta_limit_deg")) p.theta_limit = f.number("theta_limit_deg") / kDeg;
+  if (f.has("theta_limit_by_azimuth_deg")) {
+    const auto limits = f.numbers("theta_limit_by_azimuth_deg", kAzimuthSectors, kAzimuthSectors);
+    AzimuthSectors& by_azimuth = p.theta_limit_by_azimuth.emplace();
+    for (size_t k = 0; k < by_azimuth.size(); ++k) by_azimuth[k] = limits[k] / kDeg;
+  }
   if (f.has("pose")) p.pose = pose_from_json(f.object("pose"), "quaternion_xyzw");
   if (f.has("calibration")) p.calibration = read_calibration(f.object("calibration"));
   return p;
@@ -190,6 +195,10 @@ nlohmann::json camera_json(const CameraParameters& p) {
   if (displaces(p.distortion)) root[std::string(distortion_name(p.distortion))] = part_json(p.distortion);
   if (p.grid.skew.any()) root["skew"] = {{"xy", p.grid.skew.xy}, {"yx", p.grid.skew.yx}};
   if (p.theta_limit) root["theta_limit_deg"] = *p.theta_limit * kDeg;
+  if (p.theta_limit_by_azimuth) {
+    nlohmann::json& limits = root["theta_limit_by_azimuth_deg"] = nlohmann::json::array();
+    for (double a : *p.theta_limit_by_azimuth) limits.push_back(a * kDeg);
+  }
   if (p.pose) root["pose"] = pose_to_json(*p.pose, "quaternion_xyzw");
   if (p.calibration) root["calibration"] = calibration_json(*p.calibration);
   return root;

@@ -62,13 +62,25 @@ Pose inverse(const Pose& pose);
 // fishcam JSON holds it, other formats cannot (writing to them drops it, and the
 // tools say so). fishcam/fit/calibration.hpp computes it and the projection
 // uncertainty from it.
+// Incidence angles by azimuth: 24 sectors of 15 degrees, azimuth atan2(y, x) in the
+// camera frame, sector k covering [-180 + 15 k, -165 + 15 k) degrees.
+inline constexpr int kAzimuthSectors = 24;
+using AzimuthSectors = std::array<double, kAzimuthSectors>;
+int azimuth_sector(double azimuth);
+// The angle next to an azimuth: the larger of the two sectors that meet nearest it
+// (the sector holding it and its nearer neighbour), NaN ones skipped (NaN when both
+// are). A step function that changes at sector centres, so an angle seen anywhere
+// in a sector holds up to the middle of each neighbour: the smoothing `info`'s
+// field of view, CalibrationRecord::observed and the per-azimuth limit share.
+double angle_near_azimuth(const AzimuthSectors& sectors, double azimuth);
+
 struct CalibrationRecord {
-  static constexpr int kAzimuthSectors = 24;  // 15 degrees each
+  static constexpr int kAzimuthSectors = fishcam::kAzimuthSectors;
   // Incidence angle theta (radians) of the corners the solve used: the largest, and
   // the largest per azimuth sector -- azimuth atan2(y, x) in the camera frame,
   // sector k covering [-180 + 15 k, -165 + 15 k) degrees; NaN where no corner fell.
   double theta_max = 0;
-  std::array<double, kAzimuthSectors> theta_max_by_azimuth{};
+  AzimuthSectors theta_max_by_azimuth{};
   // Covariance of (model parameters, cx, cy, a_y, then the mean motion of the board
   // frames relative to the camera: rotation vector (3, radians) and translation (3,
   // board units)), scaled by the solve's residual variance; empty when not known.
@@ -77,9 +89,8 @@ struct CalibrationRecord {
   // No corner yet (every sector NaN); observe() each corner's camera-frame point.
   static CalibrationRecord nothing_observed();
   void observe(const Eigen::Vector3d& point);
-  static int sector_of(double azimuth);
   // Whether a camera-frame direction is inside the observed range: theta at most
-  // the largest observed in its azimuth sector.
+  // the observed angle next to its azimuth (angle_near_azimuth).
   bool observed(const Eigen::Vector3d& ray) const;
 };
 
@@ -94,6 +105,11 @@ struct CameraParameters {
   PlaneDistortion distortion;
   PixelGrid grid;
   std::optional<double> theta_limit;  // radians; a user cap on the valid domain
+  // A user cap that varies with azimuth (radians per sector, each in [0, pi], read
+  // with angle_near_azimuth): what limited_to_observed sets from the angles a
+  // calibration observed. project/unproject refuse directions past it; the valid
+  // domain (a disk) ends at theta_limit, which limited_to_observed sets to its largest.
+  std::optional<AzimuthSectors> theta_limit_by_azimuth;
   std::optional<Pose> pose;
   std::optional<CalibrationRecord> calibration;
 
@@ -125,10 +141,12 @@ CameraParameters cropped(const CameraParameters& camera, int left, int top, int 
 // covariance re-expressed for the mirrored cx, cy, a_y.
 CameraParameters mirrored(const CameraParameters& camera, bool horizontal, bool vertical);
 
-// The camera with its valid domain capped (theta_limit) at the largest incidence
-// angle its calibration observed plus margin (radians, >= 0), so unprojection and
-// augmentation stop where the calibration stops knowing. Throws Error when the
-// camera carries no calibration record.
+// The camera with its valid domain capped at the incidence angles its calibration
+// observed plus margin (radians, >= 0), per azimuth (theta_limit_by_azimuth: the
+// observed angle next to each azimuth; margin alone where no corner fell) and overall
+// (theta_limit: the largest), so unprojection and augmentation stop where the
+// calibration stops knowing. An earlier limit is kept where it is smaller. Throws
+// Error when the camera carries no calibration record.
 CameraParameters limited_to_observed(CameraParameters camera, double margin);
 
 // Which theta(rho) a batch unprojection uses.

@@ -99,7 +99,8 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
 // (fit_report_json). One camera: model, rms_px (the corners' 2-D reprojection error;
 // mrcal and OpenCV print it per coordinate, rms_per_coordinate_px = rms_px / sqrt 2),
 // noise_px, corners, images, outliers, undetermined, observed_theta_max_deg,
-// theta_limit_deg (of `written`, the camera as written), poses, pose_convention,
+// theta_limit_deg and theta_limit_by_azimuth_deg (24 sectors of 15 degrees from -180,
+// or null; of `written`, the camera as written), poses, pose_convention,
 // warnings, out, parameters {name: {value, sigma, determined}}, per_image_rms_px.
 std::string calibration_report_json(const CalibrationResult& result, const CameraParameters& written,
                                     const std::string& out);
