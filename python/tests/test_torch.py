@@ -188,27 +188,92 @@ def test_a_seeded_dataset_without_the_epoch_in_workers_is_refused(dataset_root):
         ft.EpochSampler(range(3), start_epoch=-1)
 
 
-def test_what_reproduces_an_unseeded_run(dataset_root):
-    """docs/python.md, "Seeding and workers": without a dataset seed, DataLoader(generator=)
-    reproduces a run with workers; with num_workers=0 torch.manual_seed does (the
-    DataLoader seeds no worker then); unseeded epochs differ."""
+SEEDING_MATRIX = [
+    (workers, persistent, seeded, epoch_sampler)
+    for workers, persistent in [(0, False), (1, False), (1, True), (2, False), (2, True)]
+    for seeded in (False, True)
+    for epoch_sampler in (False, True)
+]
+
+
+@pytest.mark.parametrize("workers,persistent,seeded,epoch_sampler", SEEDING_MATRIX)
+def test_every_seeding_configuration_reproduces_or_is_refused(dataset_root, workers, persistent, seeded, epoch_sampler):
+    """docs/python.md, "Seeding and workers", with fishcam.torch.DataLoader: a seeded
+    dataset without EpochSampler is refused at any worker count; every other
+    configuration is reproduced by its generator seed (the model's draws between
+    batches change nothing), differs across epochs and, unseeded, across generator
+    seeds; seeded, sample i of epoch e has derive_seed(S, "epoch{e}", i)."""
+    ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"), seed=9 if seeded else None)
+
+    def run(generator_seed, model_draws):
+        sampler = torch.utils.data.RandomSampler(ds, generator=torch.Generator().manual_seed(1))
+        loader = ft.DataLoader(
+            ds,
+            batch_size=2,
+            num_workers=workers,
+            persistent_workers=persistent,
+            sampler=ft.EpochSampler(sampler) if epoch_sampler else sampler,
+            generator=torch.Generator().manual_seed(generator_seed),
+        )
+        epochs = []
+        for _ in range(2):
+            seeds = {}
+            for batch in loader:
+                if model_draws:
+                    torch.rand(5), np.random.rand(5)  # what a training step draws between batches
+                for name, changes in zip(batch["name"], batch["changes"]):
+                    seeds[ds.names.index(name)] = seed_of(changes)
+            epochs.append(seeds)
+        return epochs
+
+    if seeded and not epoch_sampler:
+        with pytest.raises(fishcam.Error, match="EpochSampler"):
+            run(5, False)
+        return
+    first = run(5, False)
+    assert [len(seeds) for seeds in first] == [len(ds), len(ds)]
+    assert run(5, True) == first
+    assert not set(first[0].values()) & set(first[1].values()), "a change repeated across epochs"
+    if seeded:
+        for e, seeds in enumerate(first):
+            assert seeds == {i: fishcam.derive_seed(9, f"epoch{e}", i) for i in range(len(ds))}
+    else:
+        assert not set(run(6, False)[0].values()) & set(first[0].values())
+
+
+def test_a_plain_dataloader_in_the_main_process_follows_torch_manual_seed(dataset_root):
+    """torch's own DataLoader at num_workers=0 seeds nothing: its generator does not
+    reproduce an unseeded run, torch.manual_seed does (docs/python.md says so)."""
     ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"))
 
-    def run(workers, generator_seed=None, manual_seed=None):
-        if manual_seed is not None:
-            torch.manual_seed(manual_seed)
-        generator = None if generator_seed is None else torch.Generator().manual_seed(generator_seed)
+    def run(manual_seed):
+        torch.manual_seed(manual_seed)
         loader = torch.utils.data.DataLoader(
-            ds, batch_size=2, num_workers=workers, generator=generator, collate_fn=ft.collate
+            ds, batch_size=2, generator=torch.Generator().manual_seed(0), collate_fn=ft.collate
         )
         return [seed_of(c) for _ in range(2) for batch in loader for c in batch["changes"]]
 
-    with_workers = run(1, generator_seed=5)
-    assert run(1, generator_seed=5) == with_workers
-    assert run(1, generator_seed=6) != with_workers
-    in_main = run(0, manual_seed=5)
-    assert run(0, manual_seed=5) == in_main
+    in_main = run(5)
+    assert run(5) == in_main and run(6) != in_main
     assert len(set(in_main)) == len(in_main) == 2 * len(ds), "an unseeded change repeated across epochs"
+
+
+def test_the_dataloader_keeps_the_main_process_generators(dataset_root):
+    """With a generator, a pass at num_workers=0 neither reads nor moves the caller's
+    torch, Python and numpy generators; torch's arguments pass through; collate is
+    fishcam's."""
+    import random
+
+    ds = ft.WoodScapeDataset(dataset_root, transform=ft.RandomViewpoint(preset="small"))
+    torch.manual_seed(3), random.seed(3), np.random.seed(3)
+    expected = (torch.rand(2), random.random(), np.random.rand())
+    torch.manual_seed(3), random.seed(3), np.random.seed(3)
+    loader = ft.DataLoader(ds, batch_size=4, drop_last=True, generator=torch.Generator().manual_seed(1))
+    batches = list(loader)
+    assert len(loader) == len(batches) == 1 and isinstance(batches[0]["camera"], list)
+    assert len(iter(loader)) == 1
+    after = (torch.rand(2), random.random(), np.random.rand())
+    assert torch.equal(after[0], expected[0]) and after[1:] == expected[1:]
 
 
 def test_dataset_items(dataset_root, small_camera):

@@ -6,17 +6,18 @@ to its transform, an epoch-carrying sampler, and the DataLoader worker set-up.
     transform = v2.Compose([fishcam.torch.RandomViewpoint(preset="train"),   # camera from the sample
                             v2.ColorJitter(0.2, 0.2), v2.ToDtype(torch.float32, scale=True)])
     dataset = fishcam.torch.WoodScapeDataset(root, transform=transform, seed=5)
-    loader = torch.utils.data.DataLoader(dataset, batch_size=8, num_workers=2,
-                                         sampler=fishcam.torch.EpochSampler(torch.utils.data.RandomSampler(dataset)),
-                                         worker_init_fn=fishcam.torch.worker_init_fn,
-                                         persistent_workers=True,  # workers keep their warps
-                                         collate_fn=fishcam.torch.collate,
-                                         generator=torch.Generator().manual_seed(0))
+    loader = fishcam.torch.DataLoader(dataset, batch_size=8, num_workers=2,   # fishcam's collate and worker set-up
+                                      sampler=fishcam.torch.EpochSampler(torch.utils.data.RandomSampler(dataset)),
+                                      persistent_workers=True,  # workers keep their warps
+                                      generator=torch.Generator().manual_seed(0))
 
 Seeding: without a dataset seed, each sample's change comes from torch's generator
 (two 32-bit draws, since torch.randint cannot draw 64 bits), which the DataLoader
 seeds per worker from its own generator: workers differ, and the same generator
-seed reproduces a run. With ``WoodScapeDataset(seed=S)``, sample ``i`` of epoch
+seed reproduces a run. At ``num_workers=0`` torch's DataLoader seeds nothing (the
+draws come from the main process's generator, shared with the model);
+``fishcam.torch.DataLoader`` loads under generators seeded from its ``generator``
+there too. With ``WoodScapeDataset(seed=S)``, sample ``i`` of epoch
 ``e`` gets ``derive_seed(S, f"epoch{e}", i)`` whatever the workers and processes:
 the epoch travels with the index from ``EpochSampler``, which runs in the main
 process and counts the epochs itself; torch's generator is seeded with that seed
@@ -42,6 +43,7 @@ from . import functional
 from .batch import WarpedBatch, collate, warp_batch
 from .data import EpochSampler, WoodScapeDataset
 from .geometry import CenterCrop, RandomCrop, RandomHorizontalFlip, RandomVerticalFlip, Resize
+from .loader import DataLoader
 from .seeding import record_changes, sample_seed, torch_seed, worker_init_fn
 from .targets import DepthMap, Polygon, is_instance_mask
 from .transforms import RandomAffine, RandomViewpoint
@@ -59,6 +61,7 @@ __all__ = [
     "Polygon",
     "WoodScapeDataset",
     "EpochSampler",
+    "DataLoader",
     "WarpedBatch",
     "warp_batch",
     "collate",
