@@ -9,7 +9,7 @@ packages=(
   libmrcal-dev mrcal python3-mrcal python3-numpy python3-opencv
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   pybind11-dev python3-pybind11 python3-pytest python3-torch
-  libyaml-cpp-dev libpugixml-dev
+  libyaml-cpp-dev libpugixml-dev libpng-dev
   clang libclang-rt-14-dev  # the sanitizer and fuzzing builds
   clang-format-14  # the style check (scripts/style.sh)
 )

@@ -6,6 +6,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fishcam/io/npy.hpp"
+#include "image_files.hpp"
 
 namespace fishcam::cli {
 

@@ -22,6 +22,7 @@
 #include "fishcam/io/camera_io.hpp"
 #include "fishcam/io/file_input.hpp"
 #include "fishcam/io/output_settings.hpp"
+#include "image_files.hpp"
 
 namespace fishcam::cli {
 namespace {

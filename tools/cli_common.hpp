@@ -18,7 +18,6 @@
 #include "fishcam/fit/fit.hpp"
 #include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/camera_io.hpp"
-#include "fishcam/io/image_io.hpp"
 
 namespace fishcam::cli {
 

@@ -12,6 +12,7 @@
 #include "fishcam/augment/scene.hpp"
 #include "fishcam/eval/comparison.hpp"
 #include "fishcam/io/atomic_file.hpp"
+#include "image_files.hpp"
 
 namespace fishcam::cli {
 namespace {

@@ -14,6 +14,7 @@
 #include "fishcam/augment/chessboard.hpp"
 #include "fishcam/core/parallel.hpp"
 #include "fishcam/io/corners.hpp"
+#include "image_files.hpp"
 
 namespace fishcam::cli {
 

@@ -9,6 +9,7 @@
 #include "commands.hpp"
 #include "fishcam/augment/scene.hpp"
 #include "fishcam/eval/metrics.hpp"
+#include "image_files.hpp"
 
 namespace fishcam::cli {
 namespace {

@@ -1,7 +1,6 @@
 #include "fishcam/eval/fidelity.hpp"
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -14,8 +13,8 @@
 #include "fishcam/fit/fit.hpp"
 #include "fishcam/io/camera_io.hpp"
 #include "fishcam/io/file_input.hpp"
-#include "fishcam/io/image_io.hpp"
 #include "fishcam/io/npy.hpp"
+#include "fishcam/io/png_image.hpp"
 
 namespace fishcam {
 namespace {
@@ -93,10 +92,8 @@ struct SampleFiles {
 
 SampleFiles read_sample(const fs::path& root, const std::string& name, bool depth) {
   const fs::path label_path = root / "semantic_annotations" / "gtLabels" / (name + ".png");
-  SampleFiles f{read_image(root / "rgb_images" / (name + ".png"), cv::IMREAD_COLOR),
-                read_image(label_path, cv::IMREAD_UNCHANGED),
-                {}};
-  if (f.labels.type() != CV_8UC1) throw Error(path_for_message(label_path) + ": expected 8-bit single-channel labels");
+  SampleFiles f{
+      read_png(root / "rgb_images" / (name + ".png"), PngPixels::bgr8), read_png(label_path, PngPixels::gray8), {}};
   if (depth) {
     const fs::path depth_path = root / "depth" / (name + ".npy");
     const NpyArray range = read_npy(depth_path);

@@ -1,4 +1,5 @@
-// Reading images for the library's own dataset walks (fidelity) and the tools.
+// Reading the images the program is given, in any format OpenCV's codecs read (the
+// library reads only the PNG files of dataset folders: fishcam/io/png_image.hpp).
 #pragma once
 
 #include <opencv2/core.hpp>

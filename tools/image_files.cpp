@@ -1,4 +1,4 @@
-#include "fishcam/io/image_io.hpp"
+#include "image_files.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
