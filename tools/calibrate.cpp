@@ -135,7 +135,9 @@ void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
   cmd->add_option("--imagersize", o->imagersize, "Image size WxH (or W,H); for a rig once, or once per camera")
       ->required();
   cmd->add_option("--model", o->model,
-                  "Model: " + fishcam::model_names_text() + "; for a rig one, or one per camera (comma-separated)")
+                  "Model: " + fishcam::model_names_text() +
+                      "; MODEL+tangential adds OpenCV's p1, p2 and MODEL+thin-prism also s1..s4 (pinhole, opencv, "
+                      "mei: opencv+tangential is mrcal's OPENCV8); for a rig one, or one per camera (comma-separated)")
       ->required();
   cmd->add_option("--images", o->images,
                   "Use only the images whose file name matches one of these shell patterns (comma-separated)");
@@ -191,10 +193,12 @@ void register_calibrate(CLI::App& app) {
       return;
     }
     std::printf(
-        "calibrated %s from %zu images, %ld corners: rms %.4f px (2-D; %.4f per coordinate), %zu outliers; "
+        "calibrated %s%s from %zu images, %ld corners: rms %.4f px (2-D; %.4f per coordinate), %zu outliers; "
         "wrote %s\n",
-        std::string(model_name(result.camera.model)).c_str(), result.used_images.size(), result.observations,
-        result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(), o->output.out.c_str());
+        std::string(model_name(result.camera.model)).c_str(),
+        displaces(result.camera.distortion) ? " with tangential terms" : "", result.used_images.size(),
+        result.observations, result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(),
+        o->output.out.c_str());
     for (size_t i = 0; i < result.parameters.size(); ++i) {
       if (std::isnan(result.sigmas[i])) {
         std::printf("  %-4s %16.10g    not determined by the data\n", result.parameter_names[i].c_str(),

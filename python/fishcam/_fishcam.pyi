@@ -647,7 +647,7 @@ class Calibration:
     @property
     def parameters(self) -> dict[str, typing.Any]:
         """
-        Model parameters, cx, cy, a_y by name (dict of float).
+        Model parameters, the tangential terms solved (MODEL+tangential: p1, p2), cx, cy, a_y by name (dict of float).
         """
     @property
     def per_image_rms_px(self) -> list[float]:
@@ -741,7 +741,7 @@ def affine_warp_depth(depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.An
     ...
 def calibrate(observations: list[typing.Any], board: tuple[int, int], spacing: float, image_size: tuple[int, int], model: str, threads: int = 1) -> Calibration:
     """
-    Calibrates `model` from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot determine a camera (a transposed board, one pose, a principal point off the image, ...).
+    Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot determine a camera (a transposed board, one pose, a principal point off the image, ...).
     """
 def calibrate_rig(cameras: list[typing.Any], board: tuple[int, int], spacing: float, threads: int = 1) -> RigCalibration:
     """

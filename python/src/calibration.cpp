@@ -56,7 +56,8 @@ void bind_calibration_result(py::module_& m) {
             for (size_t i = 0; i < r.parameters.size(); ++i) d[py::str(r.parameter_names[i])] = r.parameters[i];
             return d;
           },
-          "Model parameters, cx, cy, a_y by name (dict of float).")
+          "Model parameters, the tangential terms solved (MODEL+tangential: p1, p2), cx, cy, a_y by name (dict of "
+          "float).")
       .def_property_readonly(
           "sigmas",
           [](const CalibrationResult& r) {
@@ -125,7 +126,9 @@ void bind_camera_calibration(py::module_& m) {
       },
       py::arg("observations"), py::arg("board"), py::arg("spacing"), py::arg("image_size"), py::arg("model"),
       py::arg("threads") = 1,
-      "Calibrates `model` from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; "
+      "Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' "
+      "p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: "
+      "(filename, corners (N, 2)) pairs; "
       "board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for "
       "the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot "
       "determine a camera (a transposed board, one pose, a principal point off the image, ...).");

@@ -88,7 +88,7 @@ std::optional<double> distortion_fold(const Model& model, const Distortion& term
   }
 }
 
-void check_calibration_record(const CalibrationRecord& r, size_t model_params) {
+void check_calibration_record(const CalibrationRecord& r, size_t intrinsics) {
   const auto angle = [](double a) { return a >= 0 && a <= std::numbers::pi; };
   if (!angle(r.theta_max)) fail("calibration.theta_max: must be in [0, 180] degrees, got ", r.theta_max * kDeg);
   for (double a : r.theta_max_by_azimuth) {
@@ -98,10 +98,10 @@ void check_calibration_record(const CalibrationRecord& r, size_t model_params) {
   }
   const Eigen::MatrixXd& c = r.covariance;
   if (c.size() == 0) return;
-  const Eigen::Index n = Eigen::Index(model_params) + 9;
+  const Eigen::Index n = Eigen::Index(intrinsics) + 9;
   if (c.rows() != n || c.cols() != n) {
-    fail("calibration.covariance: expected ", n, "x", n, " (model parameters, cx, cy, a_y, board motion), got ",
-         c.rows(), "x", c.cols());
+    fail("calibration.covariance: expected ", n, "x", n,
+         " (model parameters, plane distortion terms, cx, cy, a_y, board motion), got ", c.rows(), "x", c.cols());
   }
   if (!c.allFinite()) fail("calibration.covariance: must be finite");
   const double scale = c.cwiseAbs().maxCoeff();
@@ -154,7 +154,10 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
     if (std::abs(norm - 1) > 1e-6) fail("pose: rotation quaternion must have unit norm, got ", norm);
     pose.rotation.normalize();
   }
-  if (params_.calibration) check_calibration_record(*params_.calibration, model_params(params_.model).size());
+  if (params_.calibration) {
+    check_calibration_record(*params_.calibration,
+                             model_params(params_.model).size() + numbers_of(params_.distortion).values.size());
+  }
   if (params_.theta_limit_by_azimuth) {
     for (double a : *params_.theta_limit_by_azimuth) {
       if (!(a >= 0 && a <= std::numbers::pi)) {

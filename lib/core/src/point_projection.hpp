@@ -221,8 +221,11 @@ bool distorted_ray_of(const Model& model, const ValidDomain& domain, const Inver
     // A step far past the domain's plane radius is halved (plane_newton): no ray of the
     // camera lies there, and a lens evaluated there may fail and say so (libmrcal's
     // CAHVORE; the constructor checked libmrcal up to this far past, lens_evaluation_end).
+    // At an open limit the plane radius grows without bound and evaluates to anything
+    // (mei with xi < 1: sin / (xi + cos) past the pole by rounding, -2.6e16): no bound.
     const double u_end = model.plane_radius(domain.theta_max, &derivative);
-    const double m_reach = u_end * (1 + 1e-9) + 1e-5 * (1 + u_end);
+    const double m_reach = std::isfinite(u_end) && u_end >= 0 ? u_end * (1 + 1e-9) + 1e-5 * (1 + u_end)
+                                                              : std::numeric_limits<double>::infinity();
     Eigen::Vector2d residual;
     const auto newton = [&](Eigen::Vector2d* m, const Eigen::Vector2d& goal, int iterations) {
       residual = plane_newton(model, terms, goal, m_reach, iterations, m);

@@ -103,6 +103,7 @@ using detail::pose_block;
 using detail::pose_of;
 using detail::projection_covariance_of;
 using detail::Solve;
+using detail::TangentialCornerResidual;
 using detail::undetermined_text;
 
 Eigen::Vector3d to_camera(const BoardPose& pose, const Eigen::Vector3d& p) {
@@ -165,13 +166,29 @@ std::optional<BoardPose> pose_from_rays(const std::vector<Eigen::Vector3d>& rays
 template <template <typename> class Model>
 void add_corner_residuals(ceres::Problem* problem, Solve* s, const std::vector<std::vector<Eigen::Vector3d>>& points,
                           const std::vector<std::vector<Eigen::Vector2d>>& corners, ceres::LossFunction* loss) {
-  const int n = static_cast<int>(s->model.size());
+  const int n = static_cast<int>(s->model.size()), terms = static_cast<int>(s->tangential.size());
   for (size_t b = 0; b < corners.size(); ++b) {
     for (size_t i = 0; i < corners[b].size(); ++i) {
-      auto* cost = new CornerCost<Model>(points[b][i], corners[b][i], n);
-      problem->AddResidualBlock(cost, loss, s->model.data(), s->center.data(), &s->ay, s->poses[b].data());
+      if (terms == 0) {
+        auto* cost = new CornerCost<Model>(points[b][i], corners[b][i], n);
+        problem->AddResidualBlock(cost, loss, s->model.data(), s->center.data(), &s->ay, s->poses[b].data());
+        continue;
+      }
+      auto* cost = new ceres::DynamicAutoDiffCostFunction<TangentialCornerResidual<Model>, 8>(
+          new TangentialCornerResidual<Model>{points[b][i], corners[b][i], n, terms});
+      for (const int size : {n, terms, 2, 1, 6}) cost->AddParameterBlock(size);
+      cost->SetNumResiduals(2);
+      problem->AddResidualBlock(cost, loss,
+                                {s->model.data(), s->tangential.data(), s->center.data(), &s->ay, s->poses[b].data()});
     }
   }
+}
+
+// The intrinsics' blocks of a solve, in the order of its parameters and covariance.
+std::vector<double*> intrinsic_blocks(Solve* s) {
+  std::vector<double*> blocks = {s->model.data(), s->center.data(), &s->ay};
+  if (!s->tangential.empty()) blocks.insert(blocks.begin() + 1, s->tangential.data());
+  return blocks;
 }
 
 // The joint (or, with intrinsics_fixed, pose-only) solve over all boards; each
@@ -187,9 +204,7 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
   add_corner_residuals<Model>(&problem, s, points, corners, loss);
   detail::bound_model_block<Model>(&problem, s->model.data(), int(s->model.size()));
   if (intrinsics_fixed) {
-    problem.SetParameterBlockConstant(s->model.data());
-    problem.SetParameterBlockConstant(s->center.data());
-    problem.SetParameterBlockConstant(&s->ay);
+    for (double* block : intrinsic_blocks(s)) problem.SetParameterBlockConstant(block);
   }
   ceres::Solver::Summary summary;
   ceres::Solver::Options options = detail::solver_options(ceres::DENSE_SCHUR);
@@ -207,7 +222,7 @@ ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<
   add_corner_residuals<Model>(&problem, &s, points, corners, nullptr);
   std::vector<double*> poses;
   for (auto& pose : s.poses) poses.push_back(pose.data());
-  return detail::covariance_of(&problem, {s.model.data(), s.center.data(), &s.ay}, poses);
+  return detail::covariance_of(&problem, intrinsic_blocks(&s), poses);
 }
 
 // How far corners, read as a cols x rows grid in board order, are from a grid: the
@@ -379,6 +394,11 @@ struct Observations {
     CameraParameters p;
     p.width = width, p.height = height, p.grid.principal_point = s.center, p.grid.pixel_scale = {1.0, s.ay},
     p.model = model;
+    if (!s.tangential.empty()) {
+      std::array<double, 6> terms{};
+      std::copy(s.tangential.begin(), s.tangential.end(), terms.begin());
+      p.distortion = TangentialDistortion{TangentialTerms::from_values(terms)};
+    }
     return p;
   }
 };
@@ -546,8 +566,10 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
   }
   result->rms_px = std::sqrt(sum2 / double(std::max(1L, result->observations)));
   result->parameter_names = model_param_names(spec.name, int(s.model.size()));
+  for (size_t i = 0; i < s.tangential.size(); ++i) result->parameter_names.emplace_back(TangentialTerms::kNames[i]);
   result->parameter_names.insert(result->parameter_names.end(), {"cx", "cy", "a_y"});
   result->parameters = s.model;
+  result->parameters.insert(result->parameters.end(), s.tangential.begin(), s.tangential.end());
   result->parameters.insert(result->parameters.end(), {s.center.x(), s.center.y(), s.ay});
 
   const ParameterCovariance full = parameter_covariance<Model>(s, kept_points, kept_corners);
@@ -576,6 +598,11 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
                                  int height, const ModelSpec& spec, const CalibrationOptions& options) {
   const Observations o(boards, board, width, height, options.threads);
   Solve robust = robust_solve<Model>(o, initial_solve(o, board), spec);
+  if (spec.tangential_terms > 0) {  // from the radial solution, under the same robust loss
+    robust.tangential.assign(size_t(spec.tangential_terms), 0.0);
+    ceres::CauchyLoss loss(1.0);
+    solve<Model>(&robust, o.all_points, o.corners, false, &loss, 200, 1e-9);
+  }
   CalibrationResult result;
   result.outliers = find_outliers(o, Camera(o.camera(robust, make_model(spec.name, robust.model))), robust);
   if (!result.outliers.empty()) {

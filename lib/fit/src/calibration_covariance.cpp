@@ -169,25 +169,39 @@ Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const 
 }
 
 Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s) {
-  const Eigen::Index intrinsics = Eigen::Index(s.model.size()) + 3;
-  return projection_covariance_of(full, {0, intrinsics, -1, intrinsics, {}}, s.poses);
+  const Eigen::Index n = Eigen::Index(s.model.size()), solved = Eigen::Index(s.tangential.size());
+  const Eigen::Index intrinsics = n + solved + 3;
+  const Eigen::MatrixXd c = projection_covariance_of(full, {0, intrinsics, -1, intrinsics, {}}, s.poses);
+  if (solved == 0) return c;
+  // The record holds every tangential term (the camera's part has six), those the
+  // solve held at zero with zero variance.
+  const Eigen::Index held = Eigen::Index(TangentialTerms::kNames.size()) - solved;
+  std::vector<Eigen::Index> place(size_t(c.rows()));
+  for (Eigen::Index i = 0; i < c.rows(); ++i) place[size_t(i)] = i < n + solved ? i : i + held;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(c.rows() + held, c.cols() + held);
+  for (Eigen::Index i = 0; i < c.rows(); ++i) {
+    for (Eigen::Index j = 0; j < c.cols(); ++j) out(place[size_t(i)], place[size_t(j)]) = c(i, j);
+  }
+  return out;
 }
 
 }  // namespace detail
 
 namespace {
 
-// A camera-frame point's pixel, for the Jacobians of projection uncertainty.
+// A camera-frame point's pixel, for the Jacobians of projection uncertainty. Blocks:
+// model, the tangential terms (six; a radial camera: one unused), (cx, cy), a_y, point.
 template <template <typename> class Model>
 struct PointProjection {
   int params;
+  int terms;  // 6 or 0
   double ax;
 
   template <typename T>
   bool operator()(T const* const* p, T* pixel) const {
     const Model<T> model = detail::model_from_block<Model>(p[0], params);
-    const T mapping[4] = {p[1][0], p[1][1], T(ax), p[2][0]};
-    project_radial(model, mapping, p[3], pixel);
+    const T mapping[4] = {p[2][0], p[2][1], T(ax), p[3][0]};
+    detail::project_with_terms(model, p[1], terms, mapping, p[4], pixel);
     return true;
   }
 };
@@ -209,30 +223,37 @@ Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2
   if (!camera.unproject(pixel, &ray)) return Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Vector3d point = distance ? Eigen::Vector3d(*distance * ray) : ray;
   std::vector<double> model = model_params(camera.model());
+  const PlaneDistortionNumbers plane = numbers_of(camera.parameters().distortion);
+  if (plane.name != "none" && plane.name != TangentialDistortion::kName) {
+    throw Error("projection uncertainty: not for a camera with " + std::string(plane.name) +
+                " (fishcam calibrates radial models and OpenCV's tangential terms)");
+  }
+  std::vector<double> terms = plane.values;
+  const int k = int(terms.size());
+  if (terms.empty()) terms.push_back(0.0);  // an unused block
   Eigen::Vector2d center = camera.principal_point();
   double ay = camera.pixel_scale().y();
   const int n = int(model.size());
-  Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> d_model(2, n);
+  Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> d_model(2, n), d_terms(2, terms.size());
   Eigen::Matrix<double, 2, 2, Eigen::RowMajor> d_center;
   Eigen::Matrix<double, 2, 1> d_ay;
   Eigen::Matrix<double, 2, 3, Eigen::RowMajor> d_point;
   const std::string name(model_name(camera.model()));
   with_model_class(name, [&]<template <typename> class Model>() {
     ceres::DynamicAutoDiffCostFunction<PointProjection<Model>, 8> f(
-        new PointProjection<Model>{n, camera.pixel_scale().x()});
-    f.AddParameterBlock(n);
-    f.AddParameterBlock(2);
-    f.AddParameterBlock(1);
-    f.AddParameterBlock(3);
+        new PointProjection<Model>{n, k, camera.pixel_scale().x()});
+    for (const int size : {n, int(terms.size()), 2, 1, 3}) f.AddParameterBlock(size);
     f.SetNumResiduals(2);
-    const double* blocks[4] = {model.data(), center.data(), &ay, point.data()};
-    double* jacobians[4] = {d_model.data(), d_center.data(), d_ay.data(), d_point.data()};
+    const double* blocks[5] = {model.data(), terms.data(), center.data(), &ay, point.data()};
+    double* jacobians[5] = {d_model.data(), d_terms.data(), d_center.data(), d_ay.data(), d_point.data()};
     double q[2];
     f.Evaluate(blocks, q, jacobians);
   });
-  // d pixel / d (model, cx, cy, a_y, w, t): a board-fixed point moves to p + w x p + t.
-  Eigen::MatrixXd jacobian(2, n + 9);
-  jacobian << d_model, d_center, d_ay, -d_point * detail::cross_matrix(point),
+  // d pixel / d (model, terms, cx, cy, a_y, w, t): a board-fixed point moves to p + w x p + t.
+  Eigen::MatrixXd jacobian(2, n + k + 9);
+  jacobian.leftCols(n) = d_model;
+  jacobian.middleCols(n, k) = d_terms.leftCols(k);
+  jacobian.rightCols(9) << d_center, d_ay, -d_point * detail::cross_matrix(point),
       (distance ? d_point : Eigen::Matrix<double, 2, 3, Eigen::RowMajor>::Zero());
   return jacobian * record->covariance * jacobian.transpose();
 }

@@ -19,12 +19,14 @@
 namespace fishcam::detail {
 
 // The parameters of one camera's solve: the model's, the principal point, a_y, and
-// each board's pose as a block (angle-axis, translation; board -> camera).
+// each board's pose as a block (angle-axis, translation; board -> camera); with
+// ModelSpec::tangential_terms, those terms (p1, p2[, s1..s4]) as one more block.
 struct Solve {
   std::vector<double> model;
   Eigen::Vector2d center;
   double ay = 1;
   std::vector<std::array<double, 6>> poses;
+  std::vector<double> tangential = {};
 };
 
 std::array<double, 6> pose_block(const BoardPose& pose);
@@ -55,6 +57,52 @@ struct CornerResidual {
     for (int k = 0; k < 3; ++k) camera[k] += pose[3 + k];
     T pixel[2];
     project_radial(model, mapping, camera, pixel);
+    residuals[0] = pixel[0] - corner.x();
+    residuals[1] = pixel[1] - corner.y();
+    return true;
+  }
+};
+
+// A camera-frame point's pixel through a model and OpenCV's tangential terms on its
+// undistorted plane m (fishcam/core/tangential.hpp), generic in the scalar type:
+// pixel = c + a (.) (rho (X, Y) / chi + f T(m)), mapping = (cx, cy, a_x, a_y), the
+// first `count` of (p1, p2, s1..s4) given (0: the radial projection alone).
+template <class ModelT, typename T>
+void project_with_terms(const ModelT& model, const T* terms, int count, const T* mapping, const T* point, T* pixel) {
+  if constexpr (requires(T * m) { model.plane_point(point, m); }) {
+    if (count > 0) {
+      const T unit[4] = {T(0.0), T(0.0), T(1.0), T(1.0)};
+      T radial[2], m[2], offset[2];
+      project_radial(model, unit, point, radial);
+      const T f = model.plane_point(point, m);
+      TangentialTerms::offset_of(terms, count, m[0], m[1], offset);
+      pixel[0] = mapping[0] + mapping[2] * (radial[0] + f * offset[0]);
+      pixel[1] = mapping[1] + mapping[3] * (radial[1] + f * offset[1]);
+      return;
+    }
+  }
+  project_radial(model, mapping, point, pixel);
+}
+
+// A corner's residual with the tangential terms solved, for Ceres' automatic
+// derivatives. Blocks: model, the terms, (cx, cy), a_y, board pose.
+template <template <typename> class Model>
+struct TangentialCornerResidual {
+  Eigen::Vector3d point;
+  Eigen::Vector2d corner;
+  int params, terms;
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    const Model<T> model = detail::model_from_block<Model>(p[0], params);
+    const T* pose = p[4];
+    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
+    T camera[3];
+    ceres::AngleAxisRotatePoint(pose, board, camera);
+    for (int k = 0; k < 3; ++k) camera[k] += pose[3 + k];
+    const T mapping[4] = {p[2][0], p[2][1], T(1.0), p[3][0]};
+    T pixel[2];
+    project_with_terms(model, p[1], terms, mapping, camera, pixel);
     residuals[0] = pixel[0] - corner.x();
     residuals[1] = pixel[1] - corner.y();
     return true;

@@ -46,6 +46,7 @@ std::string calibration_report_json(const CalibrationResult& result, const Camer
   const CalibrationRecord& record = *result.camera.calibration;
   nlohmann::json j = {
       {"model", model_name(result.camera.model)},
+      {"plane_distortion", distortion_name(result.camera.distortion)},
       {"rms_px", result.rms_px},
       {"rms_per_coordinate_px", result.rms_px / std::sqrt(2.0)},
       {"noise_px", result.noise_px},

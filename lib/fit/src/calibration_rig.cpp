@@ -637,6 +637,14 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
                                    const CalibrationOptions& options) {
   const size_t n = cameras.size();
   if (n < 2) throw Error("calibrate rig: needs at least 2 cameras, got " + std::to_string(n));
+  for (size_t k = 0; k < n; ++k) {
+    if (!cameras[k].fixed_intrinsics && cameras[k].model.tangential_terms > 0) {
+      throw Error("calibrate rig: camera " + std::to_string(k) + ": a rig's joint solve takes radial models only (" +
+                  cameras[k].model.name +
+                  " without +tangential/+thin-prism; or calibrate it alone and pass "
+                  "--fix-intrinsics)");
+    }
+  }
   const std::vector<CalibrationResult> singles = calibrate_each(cameras, board, options);
   RigViews views;
   index_views(cameras, singles, &views);

@@ -147,8 +147,21 @@ std::vector<double> fit_params(std::span<const Correspondence> samples, const Mo
 
 }  // namespace
 
-ModelSpec parse_model_spec(std::string_view text) {
+ModelSpec parse_model_spec(std::string_view full_text) {
   ModelSpec spec;
+  const auto plus = full_text.find('+');
+  const std::string_view text = full_text.substr(0, plus);
+  if (plus != std::string_view::npos) {
+    const std::string_view terms = full_text.substr(plus + 1);
+    if (terms == "tangential") {
+      spec.tangential_terms = 2;
+    } else if (terms == "thin-prism") {
+      spec.tangential_terms = 6;
+    } else {
+      throw Error("model " + quoted_for_message(std::string(full_text)) +
+                  ": after '+' expected tangential (p1, p2) or thin-prism (p1, p2, s1..s4)");
+    }
+  }
   const auto colon = text.find(':');
   spec.name = std::string(text.substr(0, colon));
   if (colon != std::string_view::npos) {
@@ -170,8 +183,25 @@ ModelSpec parse_model_spec(std::string_view text) {
     spec.order = n;
   }
   check_model_name(spec.name);
+  const bool takes_terms = with_model_class(
+      spec.name, []<template <typename> class Model>() { return TakesTangentialTerms<Model<double>>; });
+  if (spec.tangential_terms > 0 && !takes_terms) {
+    throw Error("model " + quoted_for_message(std::string(full_text)) + ": " + spec.name +
+                " has no undistorted plane for tangential terms (pinhole, opencv and mei have)");
+  }
   return spec;
 }
+
+namespace {
+
+void check_radial_spec(const ModelSpec& spec, std::string_view what) {
+  if (spec.tangential_terms > 0) {
+    throw Error(std::string(what) + ": " + spec.name +
+                "'s tangential terms are solved by calibrate only (fit and convert give radial models)");
+  }
+}
+
+}  // namespace
 
 std::vector<Correspondence> sample_image(const Camera& camera, int step, int offset, std::optional<double> max_theta) {
   if (step < 1 || offset < 0) throw Error("sample_image: step must be >= 1 and offset >= 0");
@@ -194,6 +224,7 @@ std::vector<Correspondence> sample_image(const Camera& camera, int step, int off
 
 CameraParameters fit_camera(std::span<const Correspondence> samples, const ModelSpec& spec,
                             const CameraParameters& start, const FitOptions& options) {
+  check_radial_spec(spec, "fit");
   const int k = with_model_class(spec.name, [&]<template <typename> class Model>() {
     return Model<double>::kParamNames.empty() ? spec.order : int(Model<double>::kParamNames.size());
   });
@@ -238,6 +269,7 @@ CameraParameters fit_camera(std::span<const Correspondence> samples, const Model
 }
 
 CameraParameters paper_camera(const Camera& source, const ModelSpec& spec) {
+  check_radial_spec(spec, "the paper's method");
   if (!model_has_paper_form(spec.name)) {
     throw Error("the paper's method (eqs. 13-14) defines equidistant and stereographic models only, not " + spec.name);
   }

@@ -56,6 +56,107 @@ TEST_P(EveryModel, NoiseFreeBoardsRecoverTheParameters) {
 
 INSTANTIATE_TEST_SUITE_P(Calibration, EveryModel, ::testing::ValuesIn(test::every_model()), test::model_case_name);
 
+// Noise-free boards through every camera with tangential (and, on opencv, thin-prism)
+// terms recover the model, the terms and the pixel grid (MODEL+tangential,
+// MODEL+thin-prism), one test per camera of the library's list.
+class EveryTangentialCamera : public ::testing::TestWithParam<test::ModelCase> {};
+
+TEST_P(EveryTangentialCamera, NoiseFreeBoardsRecoverTheTerms) {
+  CameraParameters truth = GetParam().second;
+  if (model_name(truth.model) == "pinhole") {  // mrcal's narrower pinhole, as above
+    const PlaneDistortion terms = truth.distortion;
+    truth = read_camera(test::data_path("pinhole.cameramodel")).parameters();
+    truth.distortion = terms;
+  }
+  const TangentialTerms terms = truth.tangential_terms();
+  ModelSpec spec = spec_of(truth.model);
+  spec.tangential_terms = terms.any_thin_prism() ? 6 : 2;
+  const auto boards = testing::synthesize_boards(Camera(truth), kBoard, 25, 0.0, 11);
+  const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, spec);
+  std::vector<double> expected = model_params(truth.model);
+  const auto values = terms.values();
+  expected.insert(expected.end(), values.begin(), values.begin() + spec.tangential_terms);
+  expected.insert(expected.end(),
+                  {truth.grid.principal_point.x(), truth.grid.principal_point.y(), truth.grid.pixel_scale.y()});
+  ASSERT_EQ(result.parameters.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_NEAR(result.parameters[i], expected[i], 1e-6 * std::abs(expected[i]) + 1e-9) << result.parameter_names[i];
+  }
+  EXPECT_EQ(result.parameter_names[model_params(truth.model).size()], "p1");
+  EXPECT_LT(result.rms_px, 1e-6);
+  EXPECT_TRUE(result.outliers.empty());
+  // The camera carries the terms, and its covariance holds all six (those not solved: 0).
+  const TangentialTerms solved = result.camera.tangential_terms();
+  for (size_t i = 0; i < values.size(); ++i) EXPECT_NEAR(solved.values()[i], values[i], 1e-7);
+  const Eigen::MatrixXd& c = result.camera.calibration->covariance;
+  EXPECT_EQ(c.rows(), Eigen::Index(model_params(truth.model).size() + 6 + 9));
+}
+
+INSTANTIATE_TEST_SUITE_P(Calibration, EveryTangentialCamera, ::testing::ValuesIn(test::every_tangential_camera()),
+                         test::model_case_name);
+
+// With noise: the terms within 4 sigma of the truth, the record through fishcam JSON
+// unchanged (projection uncertainty included), and a radial model of the same boards
+// visibly worse.
+TEST(Calibration, TangentialTermsCarryTheirUncertaintyIntoTheFile) {
+  CameraParameters truth;
+  for (const auto& [label, camera] : test::every_tangential_camera()) {
+    if (model_name(camera.model) == "mei") truth = camera;
+  }
+  ASSERT_EQ(model_name(truth.model), "mei");
+  const auto boards = testing::synthesize_boards(Camera(truth), kBoard, 30, 0.3, 5);
+  const CalibrationResult result = calibrate(boards.observations, kBoard, truth.width, truth.height, {"mei", 4, 2});
+  const size_t n = model_params(truth.model).size();
+  const auto truth_terms = truth.tangential_terms().values();
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_GT(result.sigmas[n + i], 0) << result.parameter_names[n + i];
+    EXPECT_LT(std::abs(result.parameters[n + i] - truth_terms[i]), 4 * result.sigmas[n + i])
+        << result.parameter_names[n + i];
+  }
+  const auto dir = test::scratch_dir("tangential_record");
+  write_camera(result.camera, dir / "cal.json", CameraFormat::fishcam, /*overwrite=*/true);
+  const Camera read = read_camera(dir / "cal.json");
+  EXPECT_EQ(read.parameters().tangential_terms(), result.camera.tangential_terms());
+  const Camera calibrated(result.camera);
+  // The centre and corners the boards covered.
+  for (const Eigen::Vector2d& pixel :
+       {calibrated.principal_point(), boards.observations[0].corners[0], boards.observations[7].corners[40]}) {
+    const double sigma = projection_uncertainty(calibrated, pixel, std::nullopt);
+    EXPECT_TRUE(sigma > 0 && sigma < 1) << sigma << " at " << pixel.transpose();
+    EXPECT_NEAR(projection_uncertainty(read, pixel, std::nullopt), sigma, 1e-9 * sigma);
+  }
+  const CalibrationResult radial = calibrate(boards.observations, kBoard, truth.width, truth.height, {"mei"});
+  EXPECT_GT(radial.rms_px, 1.5 * result.rms_px) << "the terms displace pixels by several noise sigmas";
+}
+
+// The terms where a model's plane takes them, and in calibrations only.
+TEST(Calibration, TangentialTermsOnlyWhereAPlaneTakesThem) {
+  EXPECT_EQ(parse_model_spec("opencv+tangential").tangential_terms, 2);
+  EXPECT_EQ(parse_model_spec("mei+thin-prism").tangential_terms, 6);
+  EXPECT_EQ(parse_model_spec("opencv").tangential_terms, 0);
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"kannala-brandt+tangential", "kannala-brandt has no undistorted plane"},
+      {"opencv+radial", "after '+' expected tangential"},
+      {"opencv+", "after '+' expected tangential"},
+      {"polynomial:4+tangential", "polynomial has no undistorted plane"},
+  };
+  for (const auto& [text, expected] : refused) {
+    try {
+      parse_model_spec(text);
+      ADD_FAILURE() << text << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  }
+  const Camera camera = read_camera(test::data_path("kannala_brandt.yaml"));
+  try {
+    convert_camera(camera, parse_model_spec("opencv+tangential"));
+    ADD_FAILURE() << "convert fitted tangential terms";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("solved by calibrate only"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Calibration, WithNoiseTheErrorsSitWithinThreeSigma) {
   const CameraParameters truth = read_camera(test::data_path("woodscape_front.json")).parameters();
   const auto expected = truth_vector(truth);

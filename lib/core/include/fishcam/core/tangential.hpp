@@ -27,6 +27,16 @@ struct TangentialTerms {
   static TangentialTerms from_values(const std::array<double, 6>& v) { return {v[0], v[1], {v[2], v[3], v[4], v[5]}}; }
   bool operator==(const TangentialTerms&) const = default;
 
+  // T(m) for the terms v = (p1, p2, s1..s4) (the first `count`, the rest zero), generic
+  // in the scalar type: what a calibration solving the terms differentiates.
+  template <typename T>
+  static void offset_of(const T* v, int count, const T& x, const T& y, T* out) {
+    const auto term = [&](int i) { return i < count ? v[i] : T(0); };
+    const T r2 = x * x + y * y;
+    out[0] = T(2) * term(0) * x * y + term(1) * (r2 + T(2) * x * x) + (term(2) + term(3) * r2) * r2;
+    out[1] = term(0) * (r2 + T(2) * y * y) + T(2) * term(1) * x * y + (term(4) + term(5) * r2) * r2;
+  }
+
   // T(m), with dT/dm on request.
   Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const {
     const double x = m.x(), y = m.y(), r2 = x * x + y * y;
@@ -35,8 +45,10 @@ struct TangentialTerms {
       *jacobian << 2 * p1 * y + 6 * p2 * x + prism_x * x, 2 * p1 * x + 2 * p2 * y + prism_x * y,
           2 * p1 * x + 2 * p2 * y + prism_y * x, 6 * p1 * y + 2 * p2 * x + prism_y * y;
     }
-    return {2 * p1 * x * y + p2 * (r2 + 2 * x * x) + (s[0] + s[1] * r2) * r2,
-            p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + (s[2] + s[3] * r2) * r2};
+    const std::array<double, 6> v = values();
+    Eigen::Vector2d out;
+    offset_of(v.data(), 6, x, y, out.data());
+    return out;
   }
 };
 

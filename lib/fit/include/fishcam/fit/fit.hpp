@@ -14,10 +14,14 @@
 namespace fishcam {
 
 // A model to fit: a registry name (model_names_text()); "polynomial:N" gives the
-// polynomial's order (default 4).
+// polynomial's order (default 4); "MODEL+tangential" adds OpenCV's tangential terms
+// p1, p2 and "MODEL+thin-prism" those and the thin prism s1..s4 (the models with an
+// undistorted plane: pinhole, opencv, mei), which only a calibration solves
+// (mrcal's LENSMODEL_OPENCV8 is opencv+tangential, OPENCV12 opencv+thin-prism).
 struct ModelSpec {
   std::string name;
-  int order = 4;  // polynomial only
+  int order = 4;             // polynomial only
+  int tangential_terms = 0;  // 0, 2 (p1, p2) or 6 (p1, p2, s1..s4)
 };
 // The highest polynomial order fitted: past it the normal equations in theta^k
 // lose most of double's digits (a Polynomial itself holds up to

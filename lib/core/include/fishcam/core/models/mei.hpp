@@ -63,6 +63,14 @@ class Mei {
 
   // The undistorted plane m = (X, Y) / (Z + xi |P|) (fishcam/core/tangential.hpp): R = 1 + k1 s + k2 s^2.
   static constexpr bool kTakesTangentialTerms = true;
+  // m and the focal length for a camera-frame point, generic in the scalar type (a
+  // calibration solving tangential terms differentiates them).
+  Scalar plane_point(const Scalar* point, Scalar* m) const {
+    using std::sqrt;
+    const Scalar d = point[2] + xi_ * sqrt(point[0] * point[0] + point[1] * point[1] + point[2] * point[2]);
+    m[0] = point[0] / d, m[1] = point[1] / d;
+    return f_;
+  }
   double focal() const { return double(f_); }
   double plane_radius(double theta, double* derivative) const {
     const Unified<double> ucm(1.0, double(xi_));

@@ -142,8 +142,9 @@ concept HasUndistortedPlane = requires(const Model& m, double x, double* d) {
 // The models whose plane takes OpenCV's tangential terms (pinhole, opencv, mei; the
 // stereographic plane takes mrcal's spline instead).
 template <class Model>
-concept TakesTangentialTerms = HasUndistortedPlane<Model> && requires {
+concept TakesTangentialTerms = HasUndistortedPlane<Model> && requires(const Model& m, const double* p, double* q) {
   Model::kTakesTangentialTerms;
+  m.plane_point(p, q);  // m and f for a point, generic in the scalar type
 };
 
 }  // namespace fishcam

@@ -69,6 +69,12 @@ class OpenCV {
 
   // The undistorted plane m = (X, Y) / Z (fishcam/core/tangential.hpp): R = N / D.
   static constexpr bool kTakesTangentialTerms = true;
+  // m and the focal length for a camera-frame point, generic in the scalar type (a
+  // calibration solving tangential terms differentiates them).
+  Scalar plane_point(const Scalar* point, Scalar* m) const {
+    m[0] = point[0] / point[2], m[1] = point[1] / point[2];
+    return p_[0];
+  }
   double focal() const { return double(p_[0]); }
   static double plane_radius(double theta, double* derivative) {
     return Pinhole<double>::plane_radius(theta, derivative);

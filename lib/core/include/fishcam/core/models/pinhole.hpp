@@ -37,6 +37,12 @@ class Pinhole {
   UnifiedForm unified_form() const { return {double(f_), 0, 0, 1, 0, 0}; }
   // The undistorted plane m = (X, Y) / Z (fishcam/core/tangential.hpp).
   static constexpr bool kTakesTangentialTerms = true;
+  // m and the focal length for a camera-frame point, generic in the scalar type (a
+  // calibration solving tangential terms differentiates them).
+  Scalar plane_point(const Scalar* point, Scalar* m) const {
+    m[0] = point[0] / point[2], m[1] = point[1] / point[2];
+    return f_;
+  }
   double focal() const { return double(f_); }
   static double plane_radius(double theta, double* derivative) {
     const double c = std::cos(theta);
