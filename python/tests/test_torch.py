@@ -258,6 +258,27 @@ def test_a_plain_dataloader_in_the_main_process_follows_torch_manual_seed(datase
     assert len(set(in_main)) == len(in_main) == 2 * len(ds), "an unseeded change repeated across epochs"
 
 
+def test_the_dataloader_takes_torch_arguments_by_position_too(dataset_root):
+    """collate_fn and worker_init_fn given by position are the caller's (fishcam's
+    defaults only fill what was not given), at the positions torch's signature has."""
+    import inspect
+
+    names = list(inspect.signature(torch.utils.data.DataLoader.__init__).parameters)[2:]
+    assert names.index("collate_fn") == 5 and names.index("worker_init_fn") == 9
+    ds = ft.WoodScapeDataset(dataset_root)
+    calls = []
+
+    def mine(samples):
+        calls.append(len(samples))
+        return samples
+
+    loader = ft.DataLoader(ds, 2, False, None, None, 0, mine)
+    assert loader.collate_fn is mine and loader.worker_init_fn is ft.worker_init_fn
+    next(iter(loader))
+    assert calls == [2]
+    assert ft.DataLoader(ds, 2).collate_fn is ft.collate
+
+
 def test_the_dataloader_keeps_the_main_process_generators(dataset_root):
     """With a generator, a pass at num_workers=0 neither reads nor moves the caller's
     torch, Python and numpy generators; torch's arguments pass through; collate is

@@ -14,6 +14,9 @@ from .seeding import worker_init_fn
 # The states of the generators a DataLoader worker seeds: torch's CPU generator,
 # Python's random and numpy's global one.
 _States = tuple[torch.Tensor, typing.Any, typing.Any]
+# Where torch's DataLoader takes collate_fn and worker_init_fn among the positional
+# arguments after the dataset.
+_COLLATE_FN_POSITION, _WORKER_INIT_FN_POSITION = 5, 9
 
 
 def _states() -> _States:
@@ -81,8 +84,13 @@ class DataLoader(torch.utils.data.DataLoader[typing.Any]):
     """
 
     def __init__(self, dataset: torch.utils.data.Dataset[typing.Any], *args: typing.Any, **kwargs: typing.Any) -> None:
-        kwargs.setdefault("collate_fn", collate)
-        kwargs.setdefault("worker_init_fn", worker_init_fn)
+        # Defaults only where the caller gave neither keyword nor position (torch's
+        # order: batch_size, shuffle, sampler, batch_sampler, num_workers, collate_fn,
+        # pin_memory, drop_last, timeout, worker_init_fn).
+        if len(args) <= _COLLATE_FN_POSITION:
+            kwargs.setdefault("collate_fn", collate)
+        if len(args) <= _WORKER_INIT_FN_POSITION:
+            kwargs.setdefault("worker_init_fn", worker_init_fn)
         super().__init__(dataset, *args, **kwargs)
 
     def __iter__(self) -> typing.Iterator[typing.Any]:  # type: ignore[override]
