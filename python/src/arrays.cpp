@@ -71,6 +71,16 @@ void merge_planes(py::array& array, const char* what, cv::Mat* merged) {
     py::array plane = array[py::make_tuple(py::ellipsis(), c)];
     planes.push_back(as_mat(plane, what, false));
   }
+  // cv::merge writes a vector-aligned destination with non-temporal stores, which
+  // leave the merged image out of the cache the warp then reads it from (0.4 ms of
+  // 1.5 at 640 x 483): the image starts one element past an aligned address, so the
+  // stores are ordinary ones (docs/performance.md, "The v2 path").
+  thread_local cv::Mat storage;
+  const int type = CV_MAKETYPE(planes[0].depth(), int(channels));
+  const size_t element = planes[0].elemSize();
+  const int bytes = planes[0].rows * planes[0].cols * int(channels * element);
+  if (storage.empty() || storage.cols < bytes + 64) storage.create(1, bytes + 64, CV_8UC1);
+  *merged = cv::Mat(planes[0].rows, planes[0].cols, type, storage.data + element);
   cv::merge(planes, *merged);
 }
 

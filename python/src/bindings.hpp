@@ -68,8 +68,8 @@ py::array new_image(const py::array& like, int height, int width, cv::Mat* heade
 // Channels-first images (what torch's CxHxW images are as numpy: np.moveaxis of C
 // contiguous HxW planes) are read and written plane by plane, never through a
 // transposing copy: whether `array` is such an HxWxC view; its planes interleaved
-// into one HxWxC image (cv::merge into `merged`, reallocated only for another size or
-// type); a new (C, H, W) array like it, returned as its HxWxC view, with a header per
+// into one HxWxC image (cv::merge into a buffer the thread keeps, `merged` its header);
+// a new (C, H, W) array like it, returned as its HxWxC view, with a header per
 // plane to write (cv::split) the result into.
 bool is_planar_view(const py::array& array);
 void merge_planes(py::array& array, const char* what, cv::Mat* merged);
