@@ -1,6 +1,9 @@
 // Numpy <-> library plumbing shared by the binding files (bindings.hpp).
 #include <algorithm>
+#include <cstddef>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "bindings.hpp"
 
@@ -75,12 +78,14 @@ void merge_planes(py::array& array, const char* what, cv::Mat* merged) {
   // leave the merged image out of the cache the warp then reads it from (0.4 ms of
   // 1.5 at 640 x 483): the image starts one element past an aligned address, so the
   // stores are ordinary ones (docs/performance.md, "The v2 path").
-  thread_local cv::Mat storage;
+  thread_local std::vector<unsigned char> storage;  // a 64-byte-aligned start is found in it
   const int type = CV_MAKETYPE(planes[0].depth(), int(channels));
-  const size_t element = planes[0].elemSize();
-  const int bytes = planes[0].rows * planes[0].cols * int(channels * element);
-  if (storage.empty() || storage.cols < bytes + 64) storage.create(1, bytes + 64, CV_8UC1);
-  *merged = cv::Mat(planes[0].rows, planes[0].cols, type, storage.data + element);
+  const std::size_t element = planes[0].elemSize();
+  const std::size_t bytes = std::size_t(planes[0].rows) * std::size_t(planes[0].cols) * std::size_t(channels) * element;
+  if (storage.size() < bytes + 128) storage.resize(bytes + 128);
+  const auto address = reinterpret_cast<std::uintptr_t>(storage.data());
+  unsigned char* aligned = storage.data() + ((64 - address % 64) % 64);
+  *merged = cv::Mat(planes[0].rows, planes[0].cols, type, aligned + element);
   cv::merge(planes, *merged);
 }
 

@@ -256,6 +256,9 @@ std::vector<std::string> check_fidelity_models(const std::vector<std::string>& m
   std::map<std::string, std::string> seen;  // by meaning: "equidistant" is "equidistant:lsq"
   for (const std::string& token : models) {
     const FidelityModel m = parse_fidelity_model(token);
+    if (!m.own && parse_model_spec(m.spec).tangential_terms > 0) {
+      throw Error("models: " + quoted_for_message(token) + ": fidelity fits radial models (no +tangential)");
+    }
     const std::string key = m.own ? "own"
                                   : std::string(parse_model_spec(m.spec).name) + "/" +
                                         std::to_string(parse_model_spec(m.spec).order) + "/" + m.method;

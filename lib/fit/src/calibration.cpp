@@ -463,7 +463,10 @@ Solve robust_solve(const Observations& o, Solve start, const ModelSpec& spec) {
       const Camera polynomial(p);
       starts = Model<double>::fit_starts(poly.model[0]);
       // A start needs no dense fit: about 40 samples across the image.
-      starts.push_back(model_params(fit_camera(sample_image(polynomial, std::max(8, o.width / 40), 4), spec, p).model));
+      ModelSpec radial = spec;  // the start is the radial model's; tangential terms join later
+      radial.tangential_terms = 0;
+      starts.push_back(
+          model_params(fit_camera(sample_image(polynomial, std::max(8, o.width / 40), 4), radial, p).model));
       start = poly;
     } catch (const Error&) {  // no valid polynomial camera: the model's own starts
       starts = Model<double>::fit_starts(start.model[0]);

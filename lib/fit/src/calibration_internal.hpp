@@ -257,7 +257,8 @@ ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<dou
                                   const std::vector<double*>& eliminated);
 
 // What projection uncertainty needs of a single camera's full covariance (the
-// record's (n + 9)^2 matrix; calibration_covariance.cpp says how).
+// record's (n + k + 9)^2 matrix, k the camera's plane distortion numbers;
+// calibration_covariance.cpp says how).
 Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s);
 
 // Where one camera's parameters lie in a covariance: its intrinsics (n + 3 from

@@ -81,7 +81,8 @@ struct CalibrationRecord {
   // sector k covering [-180 + 15 k, -165 + 15 k) degrees; NaN where no corner fell.
   double theta_max = 0;
   AzimuthSectors theta_max_by_azimuth{};
-  // Covariance of (model parameters, cx, cy, a_y, then the mean motion of the board
+  // Covariance of (model parameters, the plane distortion's numbers (a tangential
+  // camera's six terms), cx, cy, a_y, then the mean motion of the board
   // frames relative to the camera: rotation vector (3, radians) and translation (3,
   // board units)), scaled by the solve's residual variance; empty when not known.
   Eigen::MatrixXd covariance;

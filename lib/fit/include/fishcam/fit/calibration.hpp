@@ -27,7 +27,7 @@ struct CalibrationResult {
     double error_px;
   };
   std::vector<Outlier> outliers;             // corners the robust loss discounted (> 5 sigma)
-  std::vector<std::string> parameter_names;  // model parameters, then cx, cy, a_y
+  std::vector<std::string> parameter_names;  // model parameters, terms solved (p1, ...), cx, cy, a_y
   // Values and 1-sigma uncertainties (the solve's covariance); sigma NaN for a
   // parameter the data do not determine (see undetermined).
   std::vector<double> parameters, sigmas;
