@@ -12,6 +12,7 @@ packages=(
   libyaml-cpp-dev libpugixml-dev libpng-dev
   clang libclang-rt-14-dev  # the sanitizer and fuzzing builds
   clang-format-14  # the style check (scripts/style.sh)
+  chromium  # the calibration report page opened in a real browser (tests/test_report_page.sh)
 )
 
 missing=()

@@ -174,5 +174,62 @@ TEST(CliFit, SynthCornersCalibrateDiff) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x.json"));
 }
 
+// calibrate --report and report write the page and its figures into a folder they
+// create, refuse a folder that holds other files (or an input) without --force, and
+// write nothing at all when they refuse.
+TEST(CliFit, ReportsGoIntoTheirOwnFolder) {
+  const auto dir = test::scratch_dir("cli_report");
+  auto r = run_fishcam("synth-corners " + quoted(test::data_path("woodscape_front.json")) +
+                       " --boards 8 --noise 0.2 --seed 4 --board 8x6 --spacing 0.05 --out " + quoted(dir / "c.vnl") +
+                       " --truth " + quoted(dir / "truth.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string calibrate = "calibrate --corners " + quoted(dir / "c.vnl") +
+                                " --board 8x6 --spacing 0.05 --imagersize 1280x966 --model kannala-brandt --out ";
+  r = run_fishcam(calibrate + quoted(dir / "kb.json") + " --report " + quoted(dir / "report"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto count = [](const std::filesystem::path& folder) {
+    return std::distance(std::filesystem::directory_iterator(folder), std::filesystem::directory_iterator());
+  };
+  EXPECT_EQ(count(dir / "report"), 1 + 6 + 8);  // the page, six figures, one per image
+  EXPECT_TRUE(std::filesystem::exists(dir / "report" / "uncertainty.png"));
+  // A second run into the same folder: refused before anything is written.
+  r = run_fishcam(calibrate + quoted(dir / "kb2.json") + " --report " + quoted(dir / "report"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("report: exists and is not empty"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "kb2.json"));
+  r = run_fishcam(calibrate + quoted(dir / "kb.json") + " --report " + quoted(dir / "report") + " --force");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+
+  // From a camera file and its corners; a camera without a covariance has no map.
+  const std::string report = " --corners " + quoted(dir / "c.vnl") + " --board 8x6 --spacing 0.05 --out ";
+  r = run_fishcam("report " + quoted(dir / "kb.json") + report + quoted(dir / "again"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("8 images"), std::string::npos) << r.out;
+  EXPECT_EQ(count(dir / "again"), 1 + 6 + 8);
+  r = run_fishcam("report " + quoted(dir / "truth.json") + report + quoted(dir / "truth"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "truth" / "uncertainty.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "truth" / "index.html"));
+
+  const struct {
+    std::string args, expected;
+  } bad[] = {
+      {"report " + quoted(dir / "kb.json") + report + quoted(dir), "contains"},  // holds the inputs
+      {"report " + quoted(dir / "kb.json") + report + quoted(dir / "c.vnl"), "c.vnl"},
+      {"report " + quoted(dir / "kb.json") + report + quoted(dir / "no" / "such"), "its folder does not exist"},
+      {"report " + quoted(dir / "kb.json") + " --corners " + quoted(dir / "c.vnl") +
+           " --board 9x6 --spacing 0.05 --out " + quoted(dir / "wrong"),
+       "expected 54 corners (9x6), got 48"},
+  };
+  for (const auto& c : bad) {
+    r = run_fishcam(c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << " -> " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "wrong"));
+}
+
 }  // namespace
 }  // namespace fishcam

@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/io/corners.hpp"
+#include "report_folder.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -46,7 +47,7 @@ std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, c
 
 struct CalibrateOptions {
   std::vector<std::string> corners, imagersize, fix_intrinsics;
-  std::string board, model, images, poses, theta_limit;
+  std::string board, model, images, poses, theta_limit, report;
   double spacing = 0;
   int threads = int(std::max(1u, std::thread::hardware_concurrency()));
   CameraOutputOptions output;
@@ -89,7 +90,18 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
   for (const auto& r : rig.cameras) written.push_back(apply_theta_limit(r.camera, o.theta_limit));
   std::vector<std::pair<std::filesystem::path, std::string>> files = {{o.output.out, format_rig(written, format)}};
   if (!o.poses.empty()) files.emplace_back(o.poses, rig_calibration_poses_json(rig) + "\n");
-  write_files_atomically(files, o.output.force);
+  if (!o.report.empty()) {
+    std::vector<std::vector<BoardObservation>> observations;
+    std::vector<std::string> titles;
+    for (size_t k = 0; k < n; ++k) {
+      observations.push_back(cameras[k].observations);
+      titles.push_back(std::filesystem::path(o.corners[k]).filename().string());
+    }
+    for (auto& file : report_files(o.report, rig_calibration_report(rig, written, observations, board, titles))) {
+      files.push_back(std::move(file));
+    }
+  }
+  write_outputs(files, o.output.force);
   for (const auto& warning : rig.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
   for (size_t k = 0; k < n; ++k) {
     for (const auto& text : rig.cameras[k].undetermined) {
@@ -142,6 +154,9 @@ void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
   cmd->add_option("--images", o->images,
                   "Use only the images whose file name matches one of these shell patterns (comma-separated)");
   cmd->add_option("--poses", o->poses, "Also write the board poses (JSON) to this file");
+  cmd->add_option("--report", o->report,
+                  "Also write a report to look at into this folder: an HTML page with PNG figures (residuals, "
+                  "coverage, observed domain, projection uncertainty; a rig's per-instant poses)");
   cmd->add_option("--fix-intrinsics", o->fix_intrinsics,
                   "For a rig: one camera file per --corners whose intrinsics are held fixed (only where the camera "
                   "sits is solved), or 'free' for a camera whose intrinsics are solved");
@@ -166,6 +181,7 @@ void register_calibrate(CLI::App& app) {
     std::vector<std::string> inputs = o->corners;
     inputs.insert(inputs.end(), o->fix_intrinsics.begin(), o->fix_intrinsics.end());
     check_outputs(outputs, inputs, o->output.force);
+    if (!o->report.empty()) check_report_folder(o->report, inputs, o->output.force);
     const BoardSpec board = parse_board(o->board, o->spacing);
     if (o->corners.size() > 1) return calibrate_rig_command(*o, board);
     if (o->imagersize.size() > 1) throw Error("--imagersize: one camera takes one image size");
@@ -180,7 +196,14 @@ void register_calibrate(CLI::App& app) {
     // Everything is computed (and every output checked) before the first file is written.
     std::vector<std::pair<std::filesystem::path, std::string>> files = {{o->output.out, format_camera(camera, format)}};
     if (!o->poses.empty()) files.emplace_back(o->poses, calibration_poses_json(result) + "\n");
-    write_files_atomically(files, o->output.force);
+    if (!o->report.empty()) {
+      for (auto& file :
+           report_files(o->report, calibration_report(result, camera, observations, board,
+                                                      std::filesystem::path(o->corners[0]).filename().string()))) {
+        files.push_back(std::move(file));
+      }
+    }
+    write_outputs(files, o->output.force);
     note_dropped_record(camera, format, o->output.out);
     for (const auto& warning : result.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
     for (const auto& text : result.undetermined) {

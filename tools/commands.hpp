@@ -27,5 +27,6 @@ void register_evaluate(CLI::App& app);
 void register_compare(CLI::App& app);
 void register_uncertainty(CLI::App& app);
 void register_fidelity(CLI::App& app);
+void register_report(CLI::App& app);
 
 }  // namespace fishcam::cli

@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
   fishcam::cli::register_diff(app);
   fishcam::cli::register_uncertainty(app);
   fishcam::cli::register_fidelity(app);
+  fishcam::cli::register_report(app);
   fishcam::cli::register_sample_dataset(app);
   fishcam::cli::register_evaluate(app);
   fishcam::cli::register_compare(app);

@@ -9,6 +9,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fishcam/eval/calibration_report.hpp"
 
 namespace fishcam::cli {
 namespace {
@@ -31,56 +32,6 @@ Summary summarise(std::vector<double> values) {
 nlohmann::json summary_json(const Summary& s) {
   const auto number = [](double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); };
   return {{"pixels", s.pixels}, {"median_px", number(s.median)}, {"p95_px", number(s.p95)}, {"max_px", number(s.max)}};
-}
-
-// The uncertainty every STEP-th pixel (NaN: no ray), and which of those pixels lie in the observed angles.
-struct UncertaintyMap {
-  cv::Mat sigma, observed;
-  std::vector<double> everywhere, in_data;
-};
-
-UncertaintyMap uncertainty_map(const Camera& camera, int step, std::optional<double> distance) {
-  const CalibrationRecord* record = camera.parameters().calibration ? &*camera.parameters().calibration : nullptr;
-  const int cols = (camera.width() + step - 1) / step, rows = (camera.height() + step - 1) / step;
-  UncertaintyMap map{
-      cv::Mat(rows, cols, CV_64F, cv::Scalar(std::nan(""))), cv::Mat(rows, cols, CV_8U, cv::Scalar(0)), {}, {}};
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
-      const Eigen::Vector2d pixel(c * step, r * step);
-      Eigen::Vector3d ray;
-      if (!camera.unproject(pixel, &ray)) continue;
-      const double s = projection_uncertainty(camera, pixel, distance);
-      map.sigma.at<double>(r, c) = s;
-      map.everywhere.push_back(s);
-      if (record->observed(ray)) map.observed.at<std::uint8_t>(r, c) = 1, map.in_data.push_back(s);
-    }
-  }
-  return map;
-}
-
-// The heatmap at the camera's size: viridis up to `top` px, black = no ray, dimmed = outside the observed angles.
-void write_heatmap(const UncertaintyMap& map, double top, const Camera& camera, const std::string& out, bool force) {
-  const int rows = map.sigma.rows, cols = map.sigma.cols;
-  cv::Mat scaled(rows, cols, CV_8U), colour;
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
-      const double s = map.sigma.at<double>(r, c);
-      scaled.at<std::uint8_t>(r, c) = std::isnan(s) ? 0 : cv::saturate_cast<std::uint8_t>(255 * s / top);
-    }
-  }
-  cv::applyColorMap(scaled, colour, cv::COLORMAP_VIRIDIS);
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
-      auto& px = colour.at<cv::Vec3b>(r, c);
-      if (std::isnan(map.sigma.at<double>(r, c)))
-        px = {0, 0, 0};
-      else if (!map.observed.at<std::uint8_t>(r, c))
-        px /= 2;
-    }
-  }
-  cv::Mat full;
-  cv::resize(colour, full, {camera.width(), camera.height()}, 0, 0, cv::INTER_NEAREST);
-  write_image(out, full, force);
 }
 
 }  // namespace
@@ -120,8 +71,8 @@ void register_uncertainty(CLI::App& app) {
     const UncertaintyMap map = uncertainty_map(camera, o->step, d);
     const Summary all = summarise(map.everywhere), data = summarise(map.in_data);
     if (!o->out.empty()) {
-      write_heatmap(map, o->max_px > 0 ? o->max_px : (std::isnan(data.max) ? all.max : data.max), camera, o->out,
-                    o->force);
+      const double top = o->max_px > 0 ? o->max_px : (std::isnan(data.max) ? all.max : data.max);
+      write_image(o->out, uncertainty_heatmap(map, top, camera.width(), camera.height()), o->force);
     }
     if (o->json) {
       const nlohmann::json j = {{"point", d ? nlohmann::json({{"distance", *d}}) : nlohmann::json("infinity")},

@@ -112,4 +112,26 @@ cv::Mat read_png(const std::filesystem::path& path, PngPixels pixels) {
   return image;
 }
 
+std::string encode_png(const cv::Mat& image) {
+  if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3) || image.empty()) {
+    throw Error("encode_png: expected a non-empty 8-bit image with 1 or 3 channels");
+  }
+  png_image header{};
+  header.version = PNG_IMAGE_VERSION;
+  header.width = png_uint_32(image.cols);
+  header.height = png_uint_32(image.rows);
+  header.format = image.channels() == 1 ? PNG_FORMAT_GRAY : PNG_FORMAT_BGR;
+  const auto stride = png_int_32(image.step[0]);
+  png_alloc_size_t size = 0;  // first the size, then the bytes (libpng's two-call form)
+  if (!png_image_write_to_memory(&header, nullptr, &size, 0, image.data, stride, nullptr)) {
+    throw Error(std::string("encode_png: ") + header.message);
+  }
+  std::string bytes(size, '\0');
+  if (!png_image_write_to_memory(&header, bytes.data(), &size, 0, image.data, stride, nullptr)) {
+    throw Error(std::string("encode_png: ") + header.message);
+  }
+  bytes.resize(size);
+  return bytes;
+}
+
 }  // namespace fishcam

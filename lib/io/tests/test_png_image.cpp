@@ -131,5 +131,30 @@ TEST(PngImage, BadFilesAreOneLineErrorsNamingTheFile) {
   }
 }
 
+// encode_png writes what OpenCV's decoder and read_png read back byte for byte, a
+// view with padded rows included; other kinds of image are refused.
+TEST(PngImage, EncodedImagesDecodeToTheSamePixels) {
+  const fs::path dir = test::scratch_dir("png_image_encode");
+  const cv::Mat colour = random_image(37, 53, CV_8UC3, 11), grey = random_image(20, 31, CV_8UC1, 12);
+  const cv::Mat view = random_image(50, 70, CV_8UC3, 13)(cv::Rect(3, 5, 41, 29));  // rows padded
+  int cases = 0;
+  for (const cv::Mat& image : {colour, grey, view}) {
+    const std::string bytes = encode_png(image);
+    const cv::Mat decoded = cv::imdecode(std::vector<uchar>(bytes.begin(), bytes.end()), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(decoded.type(), image.type());
+    EXPECT_EQ(cv::norm(decoded, image, cv::NORM_INF), 0);
+    const fs::path path = dir / ("image" + std::to_string(cases) + ".png");
+    std::ofstream(path, std::ios::binary) << bytes;
+    const cv::Mat read = read_png(path, image.channels() == 1 ? PngPixels::gray8 : PngPixels::bgr8);
+    EXPECT_EQ(cv::norm(read, image, cv::NORM_INF), 0);
+    ++cases;
+  }
+  EXPECT_EQ(cases, 3);
+  for (const cv::Mat& bad :
+       {cv::Mat(4, 4, CV_16UC1, cv::Scalar(1)), cv::Mat(4, 4, CV_8UC2, cv::Scalar(1)), cv::Mat()}) {
+    EXPECT_THROW(encode_png(bad), Error);
+  }
+}
+
 }  // namespace
 }  // namespace fishcam

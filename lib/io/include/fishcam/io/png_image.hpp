@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include <filesystem>
+#include <string>
 
 namespace fishcam {
 
@@ -21,5 +22,10 @@ enum class PngPixels {
 // The PNG file at path, or Error "PATH: ..." naming the problem (no such file, not a
 // PNG file, corrupt, larger than 32768 pixels a side, not 8-bit grey for gray8).
 cv::Mat read_png(const std::filesystem::path& path, PngPixels pixels);
+
+// The bytes of a PNG file holding an 8-bit image (1 channel: grey; 3: B G R, as
+// cv::imwrite takes them), for reports and figures written by the library. Throws
+// Error for any other kind of image.
+std::string encode_png(const cv::Mat& image);
 
 }  // namespace fishcam
