@@ -127,14 +127,20 @@ TEST(CliFit, SynthCornersCalibrateDiff) {
                   quoted(dir / "calibrated.json") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  EXPECT_NEAR(j["rms_px"].get<double>(), 0.2 * std::sqrt(2.0), 0.05);  // the 2-D norm of noise 0.2 per coordinate
-  EXPECT_NEAR(j["rms_per_coordinate_px"].get<double>(), 0.2, 0.035);   // what mrcal and OpenCV print
+  EXPECT_NEAR(j["rms_px"].get<double>(), 0.2 * std::sqrt(2.0), 0.05);        // the 2-D norm of noise 0.2 per coordinate
+  EXPECT_NEAR(j["rms_per_coordinate_px"].get<double>(), 0.2, 0.035);         // what mrcal and OpenCV print
+  EXPECT_LT(std::abs(j["board_warp"]["x2"]["value"].get<double>()), 0.005);  // flat boards: solved by default
   EXPECT_DOUBLE_EQ(j["rms_per_coordinate_px"].get<double>(), j["rms_px"].get<double>() / std::sqrt(2.0));
   for (const char* p : {"k1", "k2", "k3", "k4", "cx", "cy", "a_y"}) {
     EXPECT_TRUE(j["parameters"].contains(p)) << p;
     EXPECT_GT(j["parameters"][p]["sigma"].get<double>(), 0) << p;
   }
   EXPECT_EQ(j["per_image_rms_px"].size(), 20u);
+  r = run_fishcam("calibrate --corners " + quoted(dir / "c.vnl") +
+                  " --board 8x6 --spacing 0.05 --imagersize 1280x966 --model polynomial --board-warp off --out " +
+                  quoted(dir / "flat.json") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["board_warp"].is_null());
   EXPECT_TRUE(j["outliers"].is_array() && j["outliers"].empty()) << j["outliers"];
   // Against the truth across the whole image: only the noise's effect remains.
   // (A Kannala-Brandt model calibrated from the same corners fits them as well but

@@ -47,7 +47,7 @@ std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, c
 
 struct CalibrateOptions {
   std::vector<std::string> corners, imagersize, fix_intrinsics;
-  std::string board, model, images, poses, theta_limit, report;
+  std::string board, model, images, poses, theta_limit, report, board_warp = "on";
   double spacing = 0;
   int threads = int(std::max(1u, std::thread::hardware_concurrency()));
   CameraOutputOptions output;
@@ -137,6 +137,46 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
 
 namespace {
 
+// What calibrate prints for one camera without --json.
+void print_calibration(const CalibrationResult& result, const CameraParameters& camera, const std::string& out) {
+  constexpr double kDeg = 180 / std::numbers::pi;
+  const CalibrationRecord& record = *result.camera.calibration;
+  std::printf(
+      "calibrated %s%s from %zu images, %ld corners: rms %.4f px (2-D; %.4f per coordinate), %zu outliers; "
+      "wrote %s\n",
+      std::string(model_name(result.camera.model)).c_str(),
+      displaces(result.camera.distortion) ? " with tangential terms" : "", result.used_images.size(),
+      result.observations, result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(), out.c_str());
+  for (size_t i = 0; i < result.parameters.size(); ++i) {
+    if (std::isnan(result.sigmas[i])) {
+      std::printf("  %-4s %16.10g    not determined by the data\n", result.parameter_names[i].c_str(),
+                  result.parameters[i]);
+    } else {
+      std::printf("  %-4s %16.10g +- %.3g\n", result.parameter_names[i].c_str(), result.parameters[i],
+                  result.sigmas[i]);
+    }
+  }
+  if (const auto& warp = result.board_warp) {
+    std::printf("  board warp (x2, y2) %.4g +- %.2g, %.4g +- %.2g (board units; --board-warp off: flat)\n", warp->x2,
+                result.board_warp_sigma.x2, warp->y2, result.board_warp_sigma.y2);
+  }
+  std::printf("  observed angles of incidence up to %.1f deg", record.theta_max * kDeg);
+  if (const auto& by_azimuth = camera.theta_limit_by_azimuth) {
+    const auto [low, high] = std::minmax_element(by_azimuth->begin(), by_azimuth->end());
+    std::printf(" (valid domain capped per azimuth at %.1f to %.1f deg)", *low * kDeg, *high * kDeg);
+  } else if (camera.theta_limit) {
+    std::printf(" (valid domain capped at %.1f deg)", *camera.theta_limit * kDeg);
+  }
+  std::printf("\n  per-image rms (px):");
+  for (size_t i = 0; i < result.used_images.size(); ++i) {
+    std::printf("%s %s %.3f", i % 4 ? "," : "\n   ", result.used_images[i].c_str(), result.per_image_rms_px[i]);
+  }
+  std::printf("\n");
+  for (const auto& outlier : result.outliers) {
+    std::printf("  outlier: %s corner %d, %.2f px\n", outlier.filename.c_str(), outlier.corner, outlier.error_px);
+  }
+}
+
 void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
   cmd->add_option("--corners", o->corners,
                   "corners.vnl (mrcal's format); once per camera for a rig (images of one instant share their file "
@@ -160,6 +200,11 @@ void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
   cmd->add_option("--fix-intrinsics", o->fix_intrinsics,
                   "For a rig: one camera file per --corners whose intrinsics are held fixed (only where the camera "
                   "sits is solved), or 'free' for a camera whose intrinsics are solved");
+  cmd->add_option("--board-warp", o->board_warp,
+                  "Solve the boards' warp (mrcal's calobject_warp: two parabolic bows, one for every board) with the "
+                  "intrinsics, as mrcal does (on); off: flat boards, as OpenCV. A rig's joint solve holds them flat")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
   cmd->add_option("--threads", o->threads, "Threads for the independent solves (the result is the same for any count)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
@@ -175,7 +220,7 @@ void register_calibrate(CLI::App& app) {
                                  "of intrinsics and board poses, robust, with uncertainties");
   auto o = std::make_shared<CalibrateOptions>();
   add_calibrate_options(cmd, o.get());
-  cmd->callback([o] {
+  cmd->callback([o, cmd] {
     std::vector<OutputFile> outputs = {{o->output.out}};
     if (!o->poses.empty()) outputs.push_back({o->poses});
     std::vector<std::string> inputs = o->corners;
@@ -183,6 +228,9 @@ void register_calibrate(CLI::App& app) {
     check_outputs(outputs, inputs, o->output.force);
     if (!o->report.empty()) check_report_folder(o->report, inputs, o->output.force);
     const BoardSpec board = parse_board(o->board, o->spacing);
+    if (o->corners.size() > 1 && o->board_warp == "on" && cmd->get_option("--board-warp")->count() > 0) {
+      throw Error("--board-warp on: for one camera (a rig's joint solve holds its boards flat)");
+    }
     if (o->corners.size() > 1) return calibrate_rig_command(*o, board);
     if (o->imagersize.size() > 1) throw Error("--imagersize: one camera takes one image size");
     if (!o->fix_intrinsics.empty()) throw Error("--fix-intrinsics: for a rig (several --corners)");
@@ -191,7 +239,8 @@ void register_calibrate(CLI::App& app) {
     const auto [width, height] = parse_image_size(o->imagersize[0], "--imagersize");
     auto observations = read_corners(o->corners[0], board);
     if (!o->images.empty()) observations = select_images(std::move(observations), o->images);
-    const CalibrationResult result = calibrate(observations, board, width, height, spec, {o->threads});
+    const CalibrationResult result =
+        calibrate(observations, board, width, height, spec, {o->threads, o->board_warp == "on"});
     const CameraParameters camera = apply_theta_limit(result.camera, o->theta_limit);
     // Everything is computed (and every output checked) before the first file is written.
     std::vector<std::pair<std::filesystem::path, std::string>> files = {{o->output.out, format_camera(camera, format)}};
@@ -209,43 +258,11 @@ void register_calibrate(CLI::App& app) {
     for (const auto& text : result.undetermined) {
       std::fprintf(stderr, "fishcam: warning: not determined by the data: %s\n", text.c_str());
     }
-    constexpr double kDeg = 180 / std::numbers::pi;
-    const CalibrationRecord& record = *result.camera.calibration;
     if (o->output.json) {
       std::printf("%s\n", calibration_report_json(result, camera, o->output.out).c_str());
       return;
     }
-    std::printf(
-        "calibrated %s%s from %zu images, %ld corners: rms %.4f px (2-D; %.4f per coordinate), %zu outliers; "
-        "wrote %s\n",
-        std::string(model_name(result.camera.model)).c_str(),
-        displaces(result.camera.distortion) ? " with tangential terms" : "", result.used_images.size(),
-        result.observations, result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(),
-        o->output.out.c_str());
-    for (size_t i = 0; i < result.parameters.size(); ++i) {
-      if (std::isnan(result.sigmas[i])) {
-        std::printf("  %-4s %16.10g    not determined by the data\n", result.parameter_names[i].c_str(),
-                    result.parameters[i]);
-      } else {
-        std::printf("  %-4s %16.10g +- %.3g\n", result.parameter_names[i].c_str(), result.parameters[i],
-                    result.sigmas[i]);
-      }
-    }
-    std::printf("  observed angles of incidence up to %.1f deg", record.theta_max * kDeg);
-    if (const auto& by_azimuth = camera.theta_limit_by_azimuth) {
-      const auto [low, high] = std::minmax_element(by_azimuth->begin(), by_azimuth->end());
-      std::printf(" (valid domain capped per azimuth at %.1f to %.1f deg)", *low * kDeg, *high * kDeg);
-    } else if (camera.theta_limit) {
-      std::printf(" (valid domain capped at %.1f deg)", *camera.theta_limit * kDeg);
-    }
-    std::printf("\n  per-image rms (px):");
-    for (size_t i = 0; i < result.used_images.size(); ++i) {
-      std::printf("%s %s %.3f", i % 4 ? "," : "\n   ", result.used_images[i].c_str(), result.per_image_rms_px[i]);
-    }
-    std::printf("\n");
-    for (const auto& outlier : result.outliers) {
-      std::printf("  outlier: %s corner %d, %.2f px\n", outlier.filename.c_str(), outlier.corner, outlier.error_px);
-    }
+    print_calibration(result, camera, o->output.out);
   });
 }
 

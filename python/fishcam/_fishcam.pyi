@@ -620,6 +620,16 @@ class Calibration:
     def __repr__(self) -> str:
         ...
     @property
+    def board_warp(self) -> tuple[float, float] | None:
+        """
+        The boards' warp (x2, y2), board units: mrcal's calobject_warp, the deflections at the middle of the board's width and height; None where the boards were held flat (board_warp=False).
+        """
+    @property
+    def board_warp_sigmas(self) -> tuple[float, float] | None:
+        """
+        Their 1-sigma (x2, y2); None where the boards were held flat.
+        """
+    @property
     def camera(self) -> Camera:
         """
         The calibrated camera, with its calibration record (observed angles, covariance).
@@ -739,9 +749,9 @@ def affine_warp(*, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | N
     ...
 def affine_warp_depth(depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: AffineChange, fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
     ...
-def calibrate(observations: list[typing.Any], board: tuple[int, int], spacing: float, image_size: tuple[int, int], model: str, threads: int = 1) -> Calibration:
+def calibrate(observations: list[typing.Any], board: tuple[int, int], spacing: float, image_size: tuple[int, int], model: str, threads: int = 1, board_warp: bool = True) -> Calibration:
     """
-    Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot determine a camera (a transposed board, one pose, a principal point off the image, ...).
+    Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for the independent solves; the result is the same for every count. board_warp: solve the boards' warp (mrcal's calobject_warp, as mrcal does; Calibration.board_warp), False: flat boards (OpenCV's model). Raises fishcam.Error on data that cannot determine a camera (a transposed board, one pose, a principal point off the image, ...).
     """
 def calibrate_rig(cameras: list[typing.Any], board: tuple[int, int], spacing: float, threads: int = 1) -> RigCalibration:
     """

@@ -87,6 +87,21 @@ void bind_calibration_result(py::module_& m) {
             return out;
           },
           "Board poses, as `images`: (R, t) with p_camera = R p_board + t.")
+      .def_property_readonly(
+          "board_warp",
+          [](const CalibrationResult& r) -> std::optional<std::pair<double, double>> {
+            if (!r.board_warp) return std::nullopt;
+            return std::pair(r.board_warp->x2, r.board_warp->y2);
+          },
+          "The boards' warp (x2, y2), board units: mrcal's calobject_warp, the deflections at the middle of the "
+          "board's width and height; None where the boards were held flat (board_warp=False).")
+      .def_property_readonly(
+          "board_warp_sigmas",
+          [](const CalibrationResult& r) -> std::optional<std::pair<double, double>> {
+            if (!r.board_warp) return std::nullopt;
+            return std::pair(r.board_warp_sigma.x2, r.board_warp_sigma.y2);
+          },
+          "Their 1-sigma (x2, y2); None where the boards were held flat.")
       .def_readonly("warnings", &CalibrationResult::warnings, "What the user should know (list of str).")
       .def("__repr__", [](const CalibrationResult& r) {
         char buffer[160];
@@ -117,20 +132,22 @@ void bind_camera_calibration(py::module_& m) {
   m.def(
       "calibrate",
       [](const py::list& observations, std::pair<int, int> board, double spacing, std::pair<int, int> image_size,
-         const std::string& model, int threads) {
+         const std::string& model, int threads, bool board_warp) {
         const BoardSpec spec = board_of(board, spacing);
         const std::vector<BoardObservation> boards = observations_of(observations);
         const ModelSpec model_spec = parse_model_spec(model);
         py::gil_scoped_release release;
-        return calibrate(boards, spec, image_size.first, image_size.second, model_spec, {threads});
+        return calibrate(boards, spec, image_size.first, image_size.second, model_spec, {threads, board_warp});
       },
       py::arg("observations"), py::arg("board"), py::arg("spacing"), py::arg("image_size"), py::arg("model"),
-      py::arg("threads") = 1,
+      py::arg("threads") = 1, py::arg("board_warp") = true,
       "Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' "
       "p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: "
       "(filename, corners (N, 2)) pairs; "
       "board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for "
-      "the independent solves; the result is the same for every count. Raises fishcam.Error on data that cannot "
+      "the independent solves; the result is the same for every count. board_warp: solve the boards' warp "
+      "(mrcal's calobject_warp, as mrcal does; Calibration.board_warp), False: flat boards (OpenCV's model). Raises "
+      "fishcam.Error on data that cannot "
       "determine a camera (a transposed board, one pose, a principal point off the image, ...).");
 }
 

@@ -27,4 +27,15 @@ std::vector<Eigen::Vector3d> board_points(const BoardSpec& board) {
   return points;
 }
 
+Eigen::Vector2d warp_factors(const BoardSpec& board, const Eigen::Vector3d& point) {
+  const double u = point.x() / ((board.cols - 1) * board.spacing), v = point.y() / ((board.rows - 1) * board.spacing);
+  return {4 * u * (1 - u), 4 * v * (1 - v)};
+}
+
+std::vector<Eigen::Vector3d> board_points(const BoardSpec& board, const BoardWarp& warp) {
+  std::vector<Eigen::Vector3d> points = board_points(board);
+  for (auto& p : points) p.z() += Eigen::Vector2d(warp.x2, warp.y2).dot(warp_factors(board, p));
+  return points;
+}
+
 }  // namespace fishcam

@@ -31,7 +31,7 @@ std::vector<CornerFit> corner_fits(const CalibrationResult& result, const std::v
   for (const auto& o : observations) by_name.emplace(o.filename, &o);
   std::set<std::pair<std::string, int>> outliers;
   for (const auto& o : result.outliers) outliers.emplace(o.filename, o.corner);
-  const std::vector<Eigen::Vector3d> points = board_points(board);
+  const std::vector<Eigen::Vector3d> points = board_points(board, result.board_warp.value_or(BoardWarp{}));
   const Camera camera(result.camera);
   std::vector<CornerFit> fits;
   for (size_t i = 0; i < result.used_images.size(); ++i) {
@@ -468,6 +468,14 @@ std::string summary_html(const CalibrationResult& result, const CameraParameters
                          " per coordinate, as mrcal and OpenCV print it)");
   html += row("noise estimate", number_text(result.noise_px) + " px per coordinate");
   html += row("outliers", std::to_string(result.outliers.size()) + " corners (left out of the solve)");
+  if (const auto& warp = result.board_warp) {
+    html +=
+        row("board warp", "x2 " + number_text(warp->x2) + " &plusmn; " + number_text(result.board_warp_sigma.x2) +
+                              ", y2 " + number_text(warp->y2) + " &plusmn; " + number_text(result.board_warp_sigma.y2) +
+                              " board units (the deflection at the board's middle; mrcal's calobject_warp)");
+  } else {
+    html += row("board warp", "none: the boards held flat");
+  }
   if (c.calibration) {
     html += row("observed angles", "up to " + number_text(c.calibration->theta_max * kDeg, "%.1f") + " deg");
   }

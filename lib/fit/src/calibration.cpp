@@ -167,21 +167,34 @@ template <template <typename> class Model>
 void add_corner_residuals(ceres::Problem* problem, Solve* s, const std::vector<std::vector<Eigen::Vector3d>>& points,
                           const std::vector<std::vector<Eigen::Vector2d>>& corners, ceres::LossFunction* loss) {
   const int n = static_cast<int>(s->model.size()), terms = static_cast<int>(s->tangential.size());
+  const bool warped = !s->warp.empty();
   for (size_t b = 0; b < corners.size(); ++b) {
     for (size_t i = 0; i < corners[b].size(); ++i) {
+      const std::optional<Eigen::Vector2d> factors =
+          warped ? std::optional(warp_factors(s->board, points[b][i])) : std::nullopt;
       if (terms == 0) {
-        auto* cost = new CornerCost<Model>(points[b][i], corners[b][i], n);
-        problem->AddResidualBlock(cost, loss, s->model.data(), s->center.data(), &s->ay, s->poses[b].data());
+        auto* cost = new CornerCost<Model>(points[b][i], corners[b][i], n, factors);
+        std::vector<double*> blocks = {s->model.data(), s->center.data(), &s->ay, s->poses[b].data()};
+        if (warped) blocks.push_back(s->warp.data());
+        problem->AddResidualBlock(cost, loss, blocks);
         continue;
       }
       auto* cost = new ceres::DynamicAutoDiffCostFunction<TangentialCornerResidual<Model>, 8>(
-          new TangentialCornerResidual<Model>{points[b][i], corners[b][i], n, terms});
+          new TangentialCornerResidual<Model>{points[b][i], corners[b][i], n, terms, factors});
       for (const int size : {n, terms, 2, 1, 6}) cost->AddParameterBlock(size);
+      std::vector<double*> blocks = {s->model.data(), s->tangential.data(), s->center.data(), &s->ay,
+                                     s->poses[b].data()};
+      if (warped) cost->AddParameterBlock(2), blocks.push_back(s->warp.data());
       cost->SetNumResiduals(2);
-      problem->AddResidualBlock(cost, loss,
-                                {s->model.data(), s->tangential.data(), s->center.data(), &s->ay, s->poses[b].data()});
+      problem->AddResidualBlock(cost, loss, blocks);
     }
   }
+}
+
+// A board point where the solve's warp puts it (flat: as it is).
+Eigen::Vector3d warped(const Solve& s, const Eigen::Vector3d& point) {
+  if (s.warp.empty()) return point;
+  return point + Eigen::Vector3d(0, 0, Eigen::Vector2d(s.warp[0], s.warp[1]).dot(warp_factors(s.board, point)));
 }
 
 // The intrinsics' blocks of a solve, in the order of its parameters and covariance.
@@ -205,6 +218,7 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
   detail::bound_model_block<Model>(&problem, s->model.data(), int(s->model.size()));
   if (intrinsics_fixed) {
     for (double* block : intrinsic_blocks(s)) problem.SetParameterBlockConstant(block);
+    if (!s->warp.empty()) problem.SetParameterBlockConstant(s->warp.data());
   }
   ceres::Solver::Summary summary;
   ceres::Solver::Options options = detail::solver_options(ceres::DENSE_SCHUR);
@@ -220,9 +234,10 @@ ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<
                                          const std::vector<std::vector<Eigen::Vector2d>>& corners) {
   ceres::Problem problem;
   add_corner_residuals<Model>(&problem, &s, points, corners, nullptr);
-  std::vector<double*> poses;
+  std::vector<double*> poses, kept = intrinsic_blocks(&s);
   for (auto& pose : s.poses) poses.push_back(pose.data());
-  return detail::covariance_of(&problem, intrinsic_blocks(&s), poses);
+  if (!s.warp.empty()) kept.push_back(s.warp.data());  // after the intrinsics (projection_covariance_of)
+  return detail::covariance_of(&problem, kept, poses);
 }
 
 // How far corners, read as a cols x rows grid in board order, are from a grid: the
@@ -515,10 +530,45 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
   return outliers;
 }
 
-// Step 4, the final plain least squares without the outliers, its covariance, and
-// the report: per-image and overall RMS (2-D norm), parameters and their sigmas.
+// The parameters' sigmas, the warp's, and what the data do not determine, from the
+// final solve's covariance (parameters, the warp, then the poses).
+void report_uncertainty(const ParameterCovariance& full, const Solve& s, const ModelSpec& spec,
+                        CalibrationResult* result) {
+  const size_t intrinsics = result->parameters.size();
+  result->noise_px = std::sqrt(full.variance);
+  result->sigmas.assign(intrinsics, 0);
+  for (size_t i = 0; i < intrinsics; ++i)
+    result->sigmas[i] = std::sqrt(full.covariance(Eigen::Index(i), Eigen::Index(i)));
+  const size_t warps = s.warp.size();
+  if (!s.warp.empty()) {
+    const auto sigma = [&](size_t i) { return std::sqrt(full.covariance(Eigen::Index(i), Eigen::Index(i))); };
+    result->board_warp = BoardWarp{s.warp[0], s.warp[1]};
+    result->board_warp_sigma = BoardWarp{sigma(intrinsics), sigma(intrinsics + 1)};
+  }
+  for (const Eigen::VectorXd& direction : full.undetermined) {
+    std::vector<std::string> names;
+    for (size_t i = 0; i < intrinsics; ++i) {
+      if (std::abs(direction[Eigen::Index(i)]) >= 0.1) {
+        names.push_back(result->parameter_names[i]);
+        result->sigmas[i] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+    for (size_t i = 0; i < warps; ++i) {
+      if (std::abs(direction[Eigen::Index(intrinsics + i)]) >= 0.1) {
+        names.push_back(i == 0 ? "the board warp x2" : "the board warp y2");
+        (i == 0 ? result->board_warp_sigma.x2 : result->board_warp_sigma.y2) = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+    const bool poses = direction.tail(direction.size() - Eigen::Index(intrinsics + warps)).norm() >= 0.1;
+    result->undetermined.push_back(undetermined_text(names, poses, spec.name, result->parameters));
+  }
+}
+
+// Step 4, the final plain least squares without the outliers (with the boards' warp
+// when asked: it starts flat), its covariance, and the report: per-image and overall
+// RMS (2-D norm), parameters and their sigmas.
 template <template <typename> class Model>
-void final_solve(const Observations& o, Solve s, const ModelSpec& spec, CalibrationResult* result) {
+void final_solve(const Observations& o, Solve s, const ModelSpec& spec, bool warp, CalibrationResult* result) {
   // The corners that are not outliers, per board; a board left with fewer than 3
   // has no determined pose and is left out (and said so).
   std::vector<std::vector<Eigen::Vector3d>> kept_points;
@@ -547,6 +597,7 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
   }
   if (used.size() < 3) throw Error("calibrate: fewer than 3 images keep enough corners after the outliers are removed");
   s.poses = std::move(poses);
+  if (warp) s.warp = {0.0, 0.0};
   result->observations = solve<Model>(&s, kept_points, kept_corners, false, nullptr).num_residuals / 2;
   result->camera = o.camera(s, make_model(spec.name, s.model));
   const Camera final_camera(result->camera);
@@ -558,7 +609,7 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
     result->used_images.push_back(o.boards[used[b]]->filename);
     double board_sum2 = 0;
     for (size_t i = 0; i < kept_points[b].size(); ++i) {
-      const Eigen::Vector3d point = to_camera(pose, kept_points[b][i]);
+      const Eigen::Vector3d point = to_camera(pose, warped(s, kept_points[b][i]));
       Eigen::Vector2d q;
       final_camera.project(point, &q);
       board_sum2 += (q - kept_corners[b][i]).squaredNorm();
@@ -576,22 +627,7 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, Calibrat
   result->parameters.insert(result->parameters.end(), {s.center.x(), s.center.y(), s.ay});
 
   const ParameterCovariance full = parameter_covariance<Model>(s, kept_points, kept_corners);
-  const size_t intrinsics = result->parameters.size();
-  result->noise_px = std::sqrt(full.variance);
-  result->sigmas.assign(intrinsics, 0);
-  for (size_t i = 0; i < intrinsics; ++i)
-    result->sigmas[i] = std::sqrt(full.covariance(Eigen::Index(i), Eigen::Index(i)));
-  for (const Eigen::VectorXd& direction : full.undetermined) {
-    std::vector<std::string> names;
-    for (size_t i = 0; i < intrinsics; ++i) {
-      if (std::abs(direction[Eigen::Index(i)]) >= 0.1) {
-        names.push_back(result->parameter_names[i]);
-        result->sigmas[i] = std::numeric_limits<double>::quiet_NaN();
-      }
-    }
-    const bool poses = direction.tail(direction.size() - Eigen::Index(intrinsics)).norm() >= 0.1;
-    result->undetermined.push_back(undetermined_text(names, poses, spec.name, result->parameters));
-  }
+  report_uncertainty(full, s, spec, result);
   record.covariance = projection_covariance_of(full, s);
   result->camera.calibration = record;
 }
@@ -620,7 +656,8 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
     } catch (const Error&) {  // the plain solve left the model's valid parameters: keep the robust one
     }
   }
-  final_solve<Model>(o, robust, spec, &result);
+  robust.board = board;
+  final_solve<Model>(o, robust, spec, options.board_warp, &result);
   return result;
 }
 

@@ -171,7 +171,9 @@ Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const 
 Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s) {
   const Eigen::Index n = Eigen::Index(s.model.size()), solved = Eigen::Index(s.tangential.size());
   const Eigen::Index intrinsics = n + solved + 3;
-  const Eigen::MatrixXd c = projection_covariance_of(full, {0, intrinsics, -1, intrinsics, {}}, s.poses);
+  // The boards follow the intrinsics and the warp (parameter_covariance's order).
+  const Eigen::Index boards = intrinsics + Eigen::Index(s.warp.size());
+  const Eigen::MatrixXd c = projection_covariance_of(full, {0, intrinsics, -1, boards, {}}, s.poses);
   if (solved == 0) return c;
   // The record holds every tangential term (the camera's part has six), those the
   // solve held at zero with zero variance.

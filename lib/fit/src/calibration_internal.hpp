@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,7 +28,17 @@ struct Solve {
   double ay = 1;
   std::vector<std::array<double, 6>> poses;
   std::vector<double> tangential = {};
+  // With the boards' warp: (x2, y2) and the board they bend (BoardWarp); empty: flat.
+  std::vector<double> warp = {};
+  BoardSpec board = {};
 };
+
+// A board point moved along z by its warp (factors: warp_factors; none: flat).
+template <typename T>
+void warped_point(const Eigen::Vector3d& point, const std::optional<Eigen::Vector2d>& factors, const T* warp, T* out) {
+  out[0] = T(point.x()), out[1] = T(point.y()), out[2] = T(point.z());
+  if (factors) out[2] += T(factors->x()) * warp[0] + T(factors->y()) * warp[1];
+}
 
 std::array<double, 6> pose_block(const BoardPose& pose);
 BoardPose pose_of(const std::array<double, 6>& block);
@@ -45,13 +56,15 @@ struct CornerResidual {
   Eigen::Vector3d point;
   Eigen::Vector2d corner;
   int params;
+  std::optional<Eigen::Vector2d> warp = std::nullopt;  // the point's warp factors: a fifth block (x2, y2)
 
   template <typename T>
   bool operator()(T const* const* p, T* residuals) const {
     const Model<T> model = detail::model_from_block<Model>(p[0], params);
     const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
     const T* pose = p[3];  // angle-axis, translation
-    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
+    T board[3];
+    warped_point(point, warp, warp ? p[4] : static_cast<const T*>(nullptr), board);
     T camera[3];
     ceres::AngleAxisRotatePoint(pose, board, camera);
     for (int k = 0; k < 3; ++k) camera[k] += pose[3 + k];
@@ -91,12 +104,14 @@ struct TangentialCornerResidual {
   Eigen::Vector3d point;
   Eigen::Vector2d corner;
   int params, terms;
+  std::optional<Eigen::Vector2d> warp = std::nullopt;  // the point's warp factors: a sixth block (x2, y2)
 
   template <typename T>
   bool operator()(T const* const* p, T* residuals) const {
     const Model<T> model = detail::model_from_block<Model>(p[0], params);
     const T* pose = p[4];
-    const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
+    T board[3];
+    warped_point(point, warp, warp ? p[5] : static_cast<const T*>(nullptr), board);
     T camera[3];
     ceres::AngleAxisRotatePoint(pose, board, camera);
     for (int k = 0; k < 3; ++k) camera[k] += pose[3 + k];
@@ -170,7 +185,8 @@ class FixedCameraCornerResidual {
 };
 
 // The same residual with its Jacobians written out; parameter blocks (model,
-// (cx, cy), a_y, board pose). A radial model enters only through rho(theta): one
+// (cx, cy), a_y, board pose[, the boards' warp (x2, y2) when the point has factors]).
+// A radial model enters only through rho(theta): one
 // forward-mode evaluation of rho with Jets over (model parameters, theta) gives
 // d rho / d params and rho'(theta); the rest is the chain rule through the
 // projection and the pose. Automatic derivatives of the whole residual carry every
@@ -184,17 +200,25 @@ class CornerCost final : public ceres::CostFunction {
   using Jet = ceres::Jet<double, kJetSize>;
 
  public:
-  CornerCost(const Eigen::Vector3d& point, const Eigen::Vector2d& corner, int params)
-      : point_(point), corner_(corner), params_(params), reference_(new CornerResidual<Model>{point, corner, params}) {
-    for (const int size : {params, 2, 1, 6}) reference_.AddParameterBlock(size);
+  CornerCost(const Eigen::Vector3d& point, const Eigen::Vector2d& corner, int params,
+             std::optional<Eigen::Vector2d> warp = std::nullopt)
+      : point_(point),
+        corner_(corner),
+        params_(params),
+        warp_(warp),
+        reference_(new CornerResidual<Model>{point, corner, params, warp}) {
+    std::vector<int> sizes = {params, 2, 1, 6};
+    if (warp) sizes.push_back(2);
+    for (const int size : sizes) reference_.AddParameterBlock(size);
     reference_.SetNumResiduals(2);
     set_num_residuals(2);
-    *mutable_parameter_block_sizes() = {params, 2, 1, 6};
+    *mutable_parameter_block_sizes() = sizes;
   }
 
   bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
-    Eigen::Vector3d rotated;
-    ceres::AngleAxisRotatePoint(p[3], point_.data(), rotated.data());
+    Eigen::Vector3d point, rotated;
+    warped_point(point_, warp_, warp_ ? p[4] : nullptr, point.data());
+    ceres::AngleAxisRotatePoint(p[3], point.data(), rotated.data());
     const Eigen::Vector3d q = rotated + Eigen::Vector3d(p[3][3], p[3][4], p[3][5]);
     const double chi2 = q.x() * q.x() + q.y() * q.y();
     // Near the axis the closed form loses digits (its terms grow as 1/chi^2 and cancel).
@@ -215,7 +239,8 @@ class CornerCost final : public ceres::CostFunction {
     }
     if (jacobians[1]) jacobians[1][0] = 1, jacobians[1][1] = 0, jacobians[1][2] = 0, jacobians[1][3] = 1;
     if (jacobians[2]) jacobians[2][0] = 0, jacobians[2][1] = s * q.y();
-    if (jacobians[3]) {
+    const bool warp_wanted = warp_ && jacobians[4];
+    if (jacobians[3] || warp_wanted) {
       // d s / d q from d theta / d q = (z x / chi, z y / chi, -chi) / |q|^2 and d chi / d q = (x, y, 0) / chi.
       const double r2 = chi2 + q.z() * q.z(), drho = rho.v[kJetSize - 1];
       const Eigen::Vector3d dtheta(q.z() * q.x() / (chi * r2), q.z() * q.y() / (chi * r2), -chi / r2);
@@ -223,9 +248,18 @@ class CornerCost final : public ceres::CostFunction {
       Eigen::Matrix<double, 2, 3> dpixel;
       dpixel.row(0) = q.x() * ds.transpose(), dpixel(0, 0) += s;
       dpixel.row(1) = ay * q.y() * ds.transpose(), dpixel(1, 1) += ay * s;
-      Eigen::Map<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> d_pose(jacobians[3]);
-      d_pose.leftCols<3>() = -dpixel * cross_matrix(rotated) * left_jacobian({p[3][0], p[3][1], p[3][2]});
-      d_pose.rightCols<3>() = dpixel;
+      if (jacobians[3]) {
+        Eigen::Map<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> d_pose(jacobians[3]);
+        d_pose.leftCols<3>() = -dpixel * cross_matrix(rotated) * left_jacobian({p[3][0], p[3][1], p[3][2]});
+        d_pose.rightCols<3>() = dpixel;
+      }
+      if (warp_wanted) {  // the point moves along the board's z, R e_z per unit of warp
+        const double unit_z[3] = {0, 0, 1};
+        Eigen::Vector3d normal;
+        ceres::AngleAxisRotatePoint(p[3], unit_z, normal.data());
+        Eigen::Map<Eigen::Matrix<double, 2, 2, Eigen::RowMajor>> d_warp(jacobians[4]);
+        d_warp = (dpixel * normal) * warp_->transpose();
+      }
     }
     return true;
   }
@@ -234,6 +268,7 @@ class CornerCost final : public ceres::CostFunction {
   Eigen::Vector3d point_;
   Eigen::Vector2d corner_;
   int params_;
+  std::optional<Eigen::Vector2d> warp_;
   ceres::DynamicAutoDiffCostFunction<CornerResidual<Model>, 8> reference_;
 };
 

@@ -13,8 +13,9 @@ namespace {
 constexpr double kDegreesPerRadian = 180 / std::numbers::pi;
 
 constexpr const char* kPoseConvention =
-    "p_camera = R(quaternion) p_board + translation; board corner (i, j) at (i * spacing, j * spacing, 0), in board "
-    "order (rows of W corners)";
+    "p_camera = R(quaternion) p_board + translation; board corner (i, j) at (i * spacing, j * spacing, z), z = 0 "
+    "or the board_warp's (x2 * 4u(1 - u) + y2 * 4v(1 - v), u = i / (W - 1), v = j / (H - 1)), in board order (rows "
+    "of W corners)";
 
 nlohmann::json poses_of(const CalibrationResult& result) {
   nlohmann::json poses = nlohmann::json::array();
@@ -63,6 +64,11 @@ std::string calibration_report_json(const CalibrationResult& result, const Camer
       {"out", out}};
   if (written.theta_limit_by_azimuth) {
     for (double a : *written.theta_limit_by_azimuth) j["theta_limit_by_azimuth_deg"].push_back(a * kDegreesPerRadian);
+  }
+  j["board_warp"] = nullptr;
+  if (const auto& warp = result.board_warp) {
+    j["board_warp"] = {{"x2", {{"value", warp->x2}, {"sigma", sigma_of(result.board_warp_sigma.x2)}}},
+                       {"y2", {{"value", warp->y2}, {"sigma", sigma_of(result.board_warp_sigma.y2)}}}};
   }
   for (size_t i = 0; i < result.parameters.size(); ++i) {
     const double sigma = result.sigmas[i];

@@ -341,9 +341,12 @@ struct RigViews {
   std::vector<std::string> warnings;
 };
 
-// Step 1: each camera alone (intrinsics, its boards' poses, its outliers).
+// Step 1: each camera alone (intrinsics, its boards' poses, its outliers), its boards
+// flat as the joint solve holds them (its numbers are the joint solve's start and
+// what its warnings compare it with).
 std::vector<CalibrationResult> calibrate_each(const std::vector<RigCamera>& cameras, const BoardSpec& board,
-                                              const CalibrationOptions& options) {
+                                              CalibrationOptions options) {
+  options.board_warp = false;
   std::vector<CalibrationResult> singles;
   for (size_t k = 0; k < cameras.size(); ++k) {
     try {

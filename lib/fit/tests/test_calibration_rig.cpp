@@ -435,6 +435,10 @@ TEST(Rig, TheProgramWritesTheRigInEveryFormatThatHoldsOne) {
                         test::quoted(dir / "bad.json"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("one per camera (4)"), std::string::npos) << r.err;
+  r = test::run_fishcam(base + "--board-warp on --out " + test::quoted(dir / "warped.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("a rig's joint solve holds its boards flat"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "warped.json"));
 }
 
 }  // namespace

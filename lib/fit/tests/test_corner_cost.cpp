@@ -67,6 +67,24 @@ TEST_P(EveryModelCornerCost, JacobiansMatchAutomaticDifferentiation) {
       same(j_pose, k_pose, "d/d pose (pose only)");
       ASSERT_TRUE(analytic.Evaluate(blocks, residual, nullptr));
       EXPECT_NEAR(residual[0], expected[0], 1e-9);
+      // With the boards' warp (a fifth block): the point moved along the board's z.
+      const Eigen::Vector2d factors(0.5 + 0.5 * uniform(rng), 0.5 + 0.5 * uniform(rng));
+      double warp[2] = {0.02 * uniform(rng), 0.02 * uniform(rng)};
+      detail::CornerCost<Model> warped(point, corner, n, factors);
+      ceres::DynamicAutoDiffCostFunction<detail::CornerResidual<Model>, 8> warped_reference(
+          new detail::CornerResidual<Model>{point, corner, n, factors});
+      for (const int size : {n, 2, 1, 6, 2}) warped_reference.AddParameterBlock(size);
+      warped_reference.SetNumResiduals(2);
+      const double* warped_blocks[5] = {model.data(), center.data(), &ay, pose.data(), warp};
+      std::vector<double> j_warp(4), k_warp(4);
+      double* warped_jacobians[5] = {j_model.data(), j_center.data(), j_ay.data(), j_pose.data(), j_warp.data()};
+      double* warped_references[5] = {k_model.data(), k_center.data(), k_ay.data(), k_pose.data(), k_warp.data()};
+      ASSERT_TRUE(warped.Evaluate(warped_blocks, residual, warped_jacobians));
+      ASSERT_TRUE(warped_reference.Evaluate(warped_blocks, expected, warped_references));
+      EXPECT_NEAR(residual[0], expected[0], 1e-9);
+      EXPECT_NEAR(residual[1], expected[1], 1e-9);
+      same(j_model, k_model, "warped: d/d model"), same(j_pose, k_pose, "warped: d/d pose");
+      same(j_warp, k_warp, "d/d warp");
       ++compared;
     }
   });

@@ -24,6 +24,18 @@ struct BoardSpec {
 void check_board(const BoardSpec& board);
 std::vector<Eigen::Vector3d> board_points(const BoardSpec& board);
 
+// A board that is not flat, as mrcal models it (calobject_warp): corner (i, j) moves
+// along the board's z by x2 * 4u(1 - u) + y2 * 4v(1 - v), u = i / (cols - 1) and
+// v = j / (rows - 1), two parabolas whose deflections at the middle of the board's
+// width and height are x2 and y2 (board units; z as board_points', so a board bowed
+// towards a camera looking at its front has x2, y2 < 0).
+struct BoardWarp {
+  double x2 = 0, y2 = 0;
+};
+// The factors (4u(1 - u), 4v(1 - v)) of a point of board_points(board).
+Eigen::Vector2d warp_factors(const BoardSpec& board, const Eigen::Vector3d& point);
+std::vector<Eigen::Vector3d> board_points(const BoardSpec& board, const BoardWarp& warp);
+
 // One image's corners, in board order; empty when the image shows no board.
 struct BoardObservation {
   std::string filename;

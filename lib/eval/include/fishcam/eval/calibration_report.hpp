@@ -21,7 +21,8 @@
 namespace fishcam {
 
 // One corner of a calibration's images: where it was detected and its residual
-// (projected minus detected, px) through the result's camera and its board's pose.
+// (projected minus detected, px) through the result's camera and its board's pose
+// (the board warped as the result's board_warp says).
 struct CornerFit {
   int image = 0;   // index into CalibrationResult::used_images
   int corner = 0;  // in board order

@@ -34,7 +34,11 @@ struct CalibrationResult {
   // One text per combination of parameters the data do not determine (a direction
   // of the solve's covariance with no curvature), naming the parameters.
   std::vector<std::string> undetermined;
-  double noise_px = 0;                // residual standard deviation per coordinate
+  double noise_px = 0;  // residual standard deviation per coordinate
+  // The boards' warp (CalibrationOptions::board_warp; poses are of the warped board)
+  // and its 1-sigma; none where the boards were held flat.
+  std::optional<BoardWarp> board_warp;
+  BoardWarp board_warp_sigma;
   std::vector<std::string> warnings;  // e.g. boards that leave most of the image uncovered
 };
 
@@ -43,6 +47,11 @@ struct CalibrationOptions {
   // scan). Each solve runs on one thread and results are combined in a fixed order,
   // so the result is the same, bit for bit, for every count.
   int threads = 1;
+  // Solve the boards' warp (BoardWarp, mrcal's two-parameter calobject_warp, one for
+  // every board) with the intrinsics, as mrcal does by default: real boards are
+  // rarely flat to the corners' precision. Off: the boards are flat (OpenCV's model).
+  // The rig's joint solve holds its boards flat.
+  bool board_warp = true;
 };
 
 // Joint solve. Initialisation works for lenses past 180 deg: an equidistant model
@@ -101,7 +110,8 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
 // mrcal and OpenCV print it per coordinate, rms_per_coordinate_px = rms_px / sqrt 2),
 // noise_px, corners, images, outliers, undetermined, observed_theta_max_deg,
 // theta_limit_deg and theta_limit_by_azimuth_deg (24 sectors of 15 degrees from -180,
-// or null; of `written`, the camera as written), poses, pose_convention,
+// or null; of `written`, the camera as written), board_warp ({x2, y2: {value, sigma}}
+// in board units, or null: flat boards), poses, pose_convention,
 // warnings, out, parameters {name: {value, sigma, determined}}, per_image_rms_px.
 std::string calibration_report_json(const CalibrationResult& result, const CameraParameters& written,
                                     const std::string& out);
