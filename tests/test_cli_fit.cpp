@@ -213,8 +213,9 @@ TEST(CliFit, ReportsGoIntoTheirOwnFolder) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("8 images"), std::string::npos) << r.out;
   EXPECT_EQ(count(dir / "again"), 1 + 6 + 8);
-  r = run_fishcam("report " + quoted(dir / "truth.json") + report + quoted(dir / "truth"));
+  r = run_fishcam("report " + quoted(dir / "truth.json") + report + quoted(dir / "truth") + "/");  // "truth/"
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(test::read_file(dir / "truth" / "index.html").find("no sigma is estimated here"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir / "truth" / "uncertainty.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "truth" / "index.html"));
 
@@ -224,6 +225,7 @@ TEST(CliFit, ReportsGoIntoTheirOwnFolder) {
       {"report " + quoted(dir / "kb.json") + report + quoted(dir), "contains"},  // holds the inputs
       {"report " + quoted(dir / "kb.json") + report + quoted(dir / "c.vnl"), "c.vnl"},
       {"report " + quoted(dir / "kb.json") + report + quoted(dir / "no" / "such"), "its folder does not exist"},
+      {calibrate + quoted(dir / "same") + " --report " + quoted(dir / "same"), "given as more than one output"},
       {"report " + quoted(dir / "kb.json") + " --corners " + quoted(dir / "c.vnl") +
            " --board 9x6 --spacing 0.05 --out " + quoted(dir / "wrong"),
        "expected 54 corners (9x6), got 48"},
@@ -235,6 +237,7 @@ TEST(CliFit, ReportsGoIntoTheirOwnFolder) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "wrong"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "same"));
 }
 
 }  // namespace

@@ -90,6 +90,7 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
   for (const auto& r : rig.cameras) written.push_back(apply_theta_limit(r.camera, o.theta_limit));
   std::vector<std::pair<std::filesystem::path, std::string>> files = {{o.output.out, format_rig(written, format)}};
   if (!o.poses.empty()) files.emplace_back(o.poses, rig_calibration_poses_json(rig) + "\n");
+  std::string report_error;  // a report that cannot be drawn costs the report, not the calibration
   if (!o.report.empty()) {
     std::vector<std::vector<BoardObservation>> observations;
     std::vector<std::string> titles;
@@ -97,11 +98,16 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
       observations.push_back(cameras[k].observations);
       titles.push_back(std::filesystem::path(o.corners[k]).filename().string());
     }
-    for (auto& file : report_files(o.report, rig_calibration_report(rig, written, observations, board, titles))) {
-      files.push_back(std::move(file));
+    try {
+      for (auto& file : report_files(o.report, rig_calibration_report(rig, written, observations, board, titles))) {
+        files.push_back(std::move(file));
+      }
+    } catch (const Error& e) {
+      report_error = e.what();
     }
   }
-  write_outputs(files, o.output.force);
+  write_outputs_with_report(files, report_error.empty() ? o.report : "", o.output.force);
+  if (!report_error.empty()) throw Error("--report: not written (the rig was): " + report_error);
   for (const auto& warning : rig.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
   for (size_t k = 0; k < n; ++k) {
     for (const auto& text : rig.cameras[k].undetermined) {
@@ -226,7 +232,7 @@ void register_calibrate(CLI::App& app) {
     std::vector<std::string> inputs = o->corners;
     inputs.insert(inputs.end(), o->fix_intrinsics.begin(), o->fix_intrinsics.end());
     check_outputs(outputs, inputs, o->output.force);
-    if (!o->report.empty()) check_report_folder(o->report, inputs, o->output.force);
+    if (!o->report.empty()) check_report_folder(o->report, inputs, o->output.force, {o->output.out, o->poses});
     const BoardSpec board = parse_board(o->board, o->spacing);
     if (o->corners.size() > 1 && o->board_warp == "on" && cmd->get_option("--board-warp")->count() > 0) {
       throw Error("--board-warp on: for one camera (a rig's joint solve holds its boards flat)");
@@ -245,14 +251,20 @@ void register_calibrate(CLI::App& app) {
     // Everything is computed (and every output checked) before the first file is written.
     std::vector<std::pair<std::filesystem::path, std::string>> files = {{o->output.out, format_camera(camera, format)}};
     if (!o->poses.empty()) files.emplace_back(o->poses, calibration_poses_json(result) + "\n");
+    std::string report_error;  // a report that cannot be drawn costs the report, not the calibration
     if (!o->report.empty()) {
-      for (auto& file :
-           report_files(o->report, calibration_report(result, camera, observations, board,
-                                                      std::filesystem::path(o->corners[0]).filename().string()))) {
-        files.push_back(std::move(file));
+      try {
+        for (auto& file :
+             report_files(o->report, calibration_report(result, camera, observations, board,
+                                                        std::filesystem::path(o->corners[0]).filename().string()))) {
+          files.push_back(std::move(file));
+        }
+      } catch (const Error& e) {
+        report_error = e.what();
       }
     }
-    write_outputs(files, o->output.force);
+    write_outputs_with_report(files, report_error.empty() ? o->report : "", o->output.force);
+    if (!report_error.empty()) throw Error("--report: not written (the camera was): " + report_error);
     note_dropped_record(camera, format, o->output.out);
     for (const auto& warning : result.warnings) std::fprintf(stderr, "fishcam: warning: %s\n", warning.c_str());
     for (const auto& text : result.undetermined) {

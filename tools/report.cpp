@@ -13,13 +13,26 @@
 
 namespace fishcam::cli {
 
-void check_report_folder(const std::filesystem::path& folder, const std::vector<std::string>& inputs, bool overwrite) {
+namespace {
+// "rep/" is the folder "rep".
+std::filesystem::path without_trailing_separator(const std::filesystem::path& folder) {
+  return folder.has_filename() ? folder : folder.parent_path();
+}
+}  // namespace
+
+void check_report_folder(const std::filesystem::path& given, const std::vector<std::string>& inputs, bool overwrite,
+                         const std::vector<std::string>& outputs) {
+  const std::filesystem::path folder = without_trailing_separator(given);
+  const std::string name = path_for_message(given);
+  if (folder.empty()) throw Error("--report: no folder given");
   check_output_not_input(folder, std::vector<std::filesystem::path>(inputs.begin(), inputs.end()), true);
-  const std::string name = path_for_message(folder);
+  for (const std::string& output : outputs) {
+    if (!output.empty() && is_same_file(folder, output)) throw Error(name + ": given as more than one output");
+  }
   std::error_code ec;
   const std::filesystem::path parent = folder.parent_path().empty() ? "." : folder.parent_path();
   if (!std::filesystem::is_directory(parent, ec)) throw Error(name + ": its folder does not exist");
-  const auto status = std::filesystem::symlink_status(folder, ec);
+  const auto status = std::filesystem::status(folder, ec);  // a link to a folder is that folder
   if (!std::filesystem::exists(status)) return;
   if (!std::filesystem::is_directory(status)) throw Error(name + ": exists and is not a folder");
   if (!overwrite && !std::filesystem::is_empty(folder, ec)) {
@@ -27,14 +40,26 @@ void check_report_folder(const std::filesystem::path& folder, const std::vector<
   }
 }
 
-std::vector<std::pair<std::filesystem::path, std::string>> report_files(const std::filesystem::path& folder,
+std::vector<std::pair<std::filesystem::path, std::string>> report_files(const std::filesystem::path& given,
                                                                         std::vector<ReportFile> files) {
-  std::error_code ec;
-  std::filesystem::create_directory(folder, ec);
-  if (ec) throw Error(path_for_message(folder) + ": cannot create the folder (" + ec.message() + ")");
+  const std::filesystem::path folder = without_trailing_separator(given);
   std::vector<std::pair<std::filesystem::path, std::string>> out;
   for (auto& file : files) out.emplace_back(folder / file.name, std::move(file.bytes));
   return out;
+}
+
+void write_outputs_with_report(const std::vector<std::pair<std::filesystem::path, std::string>>& files,
+                               const std::filesystem::path& given, bool overwrite) {
+  const std::filesystem::path folder = without_trailing_separator(given);
+  std::error_code ec;
+  const bool created = !folder.empty() && std::filesystem::create_directory(folder, ec);
+  if (ec) throw Error(path_for_message(given) + ": cannot create the folder (" + ec.message() + ")");
+  try {
+    write_outputs(files, overwrite);
+  } catch (const Error&) {
+    if (created) std::filesystem::remove(folder, ec);  // empty: nothing was renamed into it
+    throw;
+  }
 }
 
 void register_report(CLI::App& app) {
@@ -57,7 +82,7 @@ void register_report(CLI::App& app) {
   cmd->add_flag("--force", o->force, "Write into a folder that is not empty, replacing the report's files");
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([o, inputs] {
-    check_report_folder(o->out, {o->camera, o->corners}, o->force);
+    check_report_folder(o->out, {o->camera, o->corners}, o->force, {});
     const BoardSpec board = parse_board(o->board, o->spacing);
     const Camera camera = inputs->read(o->camera);
     // The boards are located without the valid domain's cap: a corner just past a
@@ -69,7 +94,7 @@ void register_report(CLI::App& app) {
     auto files = report_files(o->out, calibration_report(located, camera.parameters(), observations, board,
                                                          std::filesystem::path(o->corners).filename().string()));
     const size_t count = files.size();
-    write_outputs(files, o->force);
+    write_outputs_with_report(files, o->out, o->force);
     std::printf("wrote %s (%zu figures): %zu images, rms %.4f px, %zu outliers\n",
                 (std::filesystem::path(o->out) / "index.html").c_str(), count - 1, located.used_images.size(),
                 located.rms_px, located.outliers.size());

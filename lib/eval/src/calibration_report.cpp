@@ -25,10 +25,25 @@ using detail::kBlue;
 using detail::kInk;
 using detail::kRed;
 
+namespace {
+// The observations as the solve numbered them: a rig's renumbered images reversed.
+std::vector<BoardObservation> as_solved(const CalibrationResult& result,
+                                        const std::vector<BoardObservation>& observations) {
+  std::vector<BoardObservation> out = observations;
+  const std::set<std::string> renumbered(result.renumbered_images.begin(), result.renumbered_images.end());
+  for (auto& o : out) {
+    if (renumbered.count(o.filename)) std::reverse(o.corners.begin(), o.corners.end());
+  }
+  return out;
+}
+}  // namespace
+
 std::vector<CornerFit> corner_fits(const CalibrationResult& result, const std::vector<BoardObservation>& observations,
                                    const BoardSpec& board) {
+  const std::vector<BoardObservation> solved = as_solved(result, observations);
+  const std::set<std::string> renumbered(result.renumbered_images.begin(), result.renumbered_images.end());
   std::map<std::string, const BoardObservation*> by_name;
-  for (const auto& o : observations) by_name.emplace(o.filename, &o);
+  for (const auto& o : solved) by_name.emplace(o.filename, &o);
   std::set<std::pair<std::string, int>> outliers;
   for (const auto& o : result.outliers) outliers.emplace(o.filename, o.corner);
   const std::vector<Eigen::Vector3d> points = board_points(board, result.board_warp.value_or(BoardWarp{}));
@@ -47,7 +62,8 @@ std::vector<CornerFit> corner_fits(const CalibrationResult& result, const std::v
         throw Error("report: corner " + std::to_string(c) + " of image " + name + " does not project");
       }
       const Eigen::Vector2d& detected = found->second->corners[c];
-      fits.push_back({int(i), int(c), detected, projected - detected, outliers.count({name, int(c)}) > 0});
+      const int in_file = renumbered.count(name) ? int(points.size() - 1 - c) : int(c);  // the file's numbering
+      fits.push_back({int(i), in_file, detected, projected - detected, outliers.count({name, in_file}) > 0});
     }
   }
   return fits;
@@ -155,6 +171,11 @@ cv::Mat titled(const cv::Mat& content, const std::string& title) {
 // Image pixels (centres at integers) on a canvas `scale` times the image's size.
 struct ImageFrame {
   double scale = 1;
+  // The image fitted into a box of `box` x `box` (any aspect ratio keeps figures bounded).
+  static ImageFrame fitted(int width, int height, int box) {
+    return {std::min(double(box) / width, double(box) / height)};
+  }
+  int width(int image_width) const { return std::max(1, int(std::lround(image_width * scale))); }
   cv::Point2d at(const Eigen::Vector2d& pixel) const { return {(pixel.x() + 0.5) * scale, (pixel.y() + 0.5) * scale}; }
 };
 
@@ -187,8 +208,8 @@ ArrowScale arrow_scale(const std::vector<CornerFit>& fits, double canvas_width) 
   return {0.03 * canvas_width / legend, legend};
 }
 
-// Corners as dots with their residual arrows; outliers circled in red, their arrows
-// cut at five legend lengths.
+// Corners as dots with their residual arrows, cut at five legend lengths; outliers
+// circled in red.
 void draw_fits(cv::Mat& canvas, const ImageFrame& frame, const std::vector<const CornerFit*>& fits,
                const ArrowScale& arrows) {
   for (const CornerFit* f : fits) {
@@ -204,14 +225,16 @@ void draw_fits(cv::Mat& canvas, const ImageFrame& frame, const std::vector<const
 
 cv::Mat residual_figure(const std::vector<const CornerFit*>& fits, int width, int height, int canvas_width,
                         const ArrowScale& arrows, const std::string& title) {
-  const ImageFrame frame{double(canvas_width) / width};
-  cv::Mat canvas = white(canvas_width, int(std::lround(height * frame.scale)) + 30);
-  cv::rectangle(canvas, cv::Rect(0, 0, canvas_width, canvas.rows - 30), cv::Scalar::all(180), 1);
+  const ImageFrame frame = ImageFrame::fitted(width, height, canvas_width);
+  cv::Mat canvas = white(canvas_width, frame.width(height) + 30);
+  cv::rectangle(canvas, cv::Rect(0, 0, frame.width(width), canvas.rows - 30), cv::Scalar::all(180), 1);
   draw_fits(canvas, frame, fits, arrows);
   const cv::Point2d legend(12, canvas.rows - 12);
   draw_arrow(canvas, legend, legend + cv::Point2d(arrows.legend_px * arrows.gain, 0), kBlue);
   draw_text(canvas,
-            fixed_text(arrows.legend_px, 3) + " px residual (projected - detected; outliers in red, arrows cut)",
+            fixed_text(arrows.legend_px, 3) + (canvas_width < 700 ? " px residual"
+                                                                  : " px residual (projected - detected; outliers in "
+                                                                    "red; arrows past 5 of these cut)"),
             cv::Point(int(legend.x + arrows.legend_px * arrows.gain) + 10, int(legend.y) + 4), -1, 0.4);
   return titled(canvas, title);
 }
@@ -229,7 +252,8 @@ cv::Mat histogram_figure(const std::vector<CornerFit>& fits, double noise_px) {
   std::vector<int> counts(kBins, 0);
   int beyond = 0;
   for (const double v : values) {
-    const int b = int(std::floor((v - low) / bin));
+    const double at = std::floor((v - low) / bin);  // compared as a double: v may be huge
+    const int b = at >= 0 && at < kBins ? int(at) : -1;
     if (b >= 0 && b < kBins) {
       ++counts[size_t(b)];
     } else {
@@ -262,9 +286,9 @@ cv::Mat histogram_figure(const std::vector<CornerFit>& fits, double noise_px) {
 
 // How many boards covered each part of the image (each board as its corners' hull).
 cv::Mat coverage_figure(const std::vector<CornerFit>& fits, int images, int width, int height) {
-  const ImageFrame frame{double(kFigureWidth) / width};
-  const int rows = int(std::lround(height * frame.scale));
-  cv::Mat count(rows, kFigureWidth, CV_16U, cv::Scalar(0)), mask(rows, kFigureWidth, CV_8U);
+  const ImageFrame frame = ImageFrame::fitted(width, height, kFigureWidth);
+  const int rows = frame.width(height), cols = frame.width(width);
+  cv::Mat count(rows, cols, CV_16U, cv::Scalar(0)), mask(rows, cols, CV_8U);
   std::vector<std::vector<cv::Point>> hulls(static_cast<size_t>(images));
   for (int i = 0; i < images; ++i) {
     std::vector<cv::Point> points;
@@ -286,10 +310,10 @@ cv::Mat coverage_figure(const std::vector<CornerFit>& fits, int images, int widt
   for (const auto& hull : hulls) {
     if (!hull.empty()) cv::polylines(colour, hull, true, cv::Scalar::all(255), 1, cv::LINE_AA);
   }
-  cv::Mat canvas = white(kFigureWidth + 110, rows);
-  colour.copyTo(canvas(cv::Rect(0, 0, kFigureWidth, rows)));
-  cv::rectangle(canvas, cv::Rect(0, 0, kFigureWidth, rows), cv::Scalar::all(180), 1);
-  detail::draw_colour_bar(canvas, cv::Rect(kFigureWidth + 20, 30, 22, std::max(40, rows - 60)), 0, std::max(1.0, most),
+  cv::Mat canvas = white(cols + 110, std::max(rows, 100));
+  colour.copyTo(canvas(cv::Rect(0, 0, cols, rows)));
+  cv::rectangle(canvas, cv::Rect(0, 0, cols, rows), cv::Scalar::all(180), 1);
+  detail::draw_colour_bar(canvas, cv::Rect(cols + 20, 30, 22, std::max(40, canvas.rows - 60)), 0, std::max(1.0, most),
                           "boards");
   return titled(canvas, "Board coverage: how many of the " + std::to_string(images) + " boards cover each place");
 }
@@ -305,7 +329,7 @@ int sector_of(double azimuth) {
 AzimuthSectors image_reach(const Camera& camera) {
   AzimuthSectors reach;
   reach.fill(std::nan(""));
-  const int w = camera.width(), h = camera.height(), step = std::max(1, w / 240);
+  const int w = camera.width(), h = camera.height(), step = std::max(1, std::max(w, h) / 240);
   for (int y = 0; y < h; y += step) {
     for (int x = 0; x < w; x += step) {
       Eigen::Vector3d ray;
@@ -399,14 +423,16 @@ cv::Mat domain_figure(const Camera& camera, const CalibrationRecord& record, con
 
 // mrcal's projection uncertainty (a point at infinity) over the image.
 cv::Mat uncertainty_figure(const Camera& camera, std::string* numbers) {
-  const UncertaintyMap map = uncertainty_map(camera, std::max(1, camera.width() / 120), std::nullopt);
+  const int w = camera.width(), h = camera.height();
+  const UncertaintyMap map = uncertainty_map(camera, std::max(1, std::max(w, h) / 120), std::nullopt);
   const std::vector<double>& shown = map.in_data.empty() ? map.everywhere : map.in_data;
   const double top = shown.empty() ? 1 : *std::max_element(shown.begin(), shown.end());
-  const int rows = int(std::lround(camera.height() * double(kFigureWidth) / camera.width()));
-  const cv::Mat heat = uncertainty_heatmap(map, top, kFigureWidth, rows);
-  cv::Mat canvas = white(kFigureWidth + 110, rows);
-  heat.copyTo(canvas(cv::Rect(0, 0, kFigureWidth, rows)));
-  detail::draw_colour_bar(canvas, cv::Rect(kFigureWidth + 20, 30, 22, std::max(40, rows - 60)), 0, top, "px");
+  const ImageFrame frame = ImageFrame::fitted(w, h, kFigureWidth);
+  const int rows = frame.width(h), cols = frame.width(w);
+  const cv::Mat heat = uncertainty_heatmap(map, top, cols, rows);
+  cv::Mat canvas = white(cols + 150, std::max(rows, 100));
+  heat.copyTo(canvas(cv::Rect(0, 0, cols, rows)));
+  detail::draw_colour_bar(canvas, cv::Rect(cols + 20, 30, 22, std::max(40, canvas.rows - 60)), 0, top, "px");
   *numbers = "inside the observed angles: median " + number_text(quantile(map.in_data, 0.5), "%.3g") +
              " px, 95th percentile " + number_text(quantile(map.in_data, 0.95), "%.3g") +
              " px; over the image: " + number_text(quantile(map.everywhere, 0.95), "%.3g") + " px (95th percentile)";
@@ -488,16 +514,27 @@ std::string summary_html(const CalibrationResult& result, const CameraParameters
 }
 
 std::string parameters_html(const CalibrationResult& result) {
+  // locate_boards (fishcam report) holds the camera: its sigmas are 0, not estimates.
+  const bool estimated = std::any_of(result.sigmas.begin(), result.sigmas.end(), [](double v) { return v != 0; });
   std::string html =
       "<h3>Parameters</h3>\n<table class=\"parameters\">\n<tr><th>name</th><th>value</th>"
       "<th>1-sigma</th></tr>\n";
   for (size_t i = 0; i < result.parameters.size(); ++i) {
     html += "<tr><td>" + html_text(result.parameter_names[i]) + "</td><td class=\"n\">" +
             number_text(result.parameters[i], "%.10g") + "</td><td class=\"n\">" +
-            (std::isnan(result.sigmas[i]) ? std::string("not determined") : number_text(result.sigmas[i], "%.3g")) +
+            (!estimated                     ? std::string("&ndash;")
+             : std::isnan(result.sigmas[i]) ? std::string("not determined")
+                                            : number_text(result.sigmas[i], "%.3g")) +
             "</td></tr>\n";
   }
-  return html + "</table>\n";
+  html += "</table>\n";
+  if (!estimated) {
+    html +=
+        "<p>The camera as given, its boards located with its intrinsics held (and the boards flat): no sigma is "
+        "estimated here (the calibration's own are in its file: <code>fishcam info</code>), and the residuals are "
+        "those of the located boards, not necessarily the calibration's.</p>\n";
+  }
+  return html;
 }
 
 std::string images_html(const CalibrationResult& result, const std::vector<int>& outliers) {
@@ -544,12 +581,15 @@ void camera_section(const CalibrationResult& result, const CameraParameters& wri
   if (result.camera.calibration) {
     out->figure(prefix + "domain.png", domain_figure(camera, *result.camera.calibration, written),
                 "The angles the corners reached per azimuth, beside the image's reach and the valid domain written.");
+  } else {
+    out->html += "<p>No observed-domain figure: the camera carries no calibration record.</p>\n";
   }
   if (result.camera.calibration && result.camera.calibration->covariance.size() > 0) {
     std::string numbers;
     const cv::Mat figure = uncertainty_figure(camera, &numbers);
     out->figure(prefix + "uncertainty.png", figure,
-                "Projection uncertainty (mrcal's definition); dimmed outside the observed angles, black: no ray. " +
+                "Projection uncertainty (mrcal's definition); dimmed outside the observed angles, black: no ray; the "
+                "colours end at the largest value inside the observed angles (larger ones beyond them are clipped). " +
                     numbers + ".");
   } else {
     out->html +=
@@ -608,7 +648,8 @@ InstantDifferences instant_differences(const RigCalibrationResult& rig, size_t k
   std::array<std::map<std::string, Pose>, 2> seen;  // camera 0's and camera k's boards by instant
   try {
     for (const size_t camera : {size_t(0), k}) {
-      const CalibrationResult located = locate_boards(observations[camera], board, Camera(rig.cameras[camera].camera));
+      const CalibrationResult located = locate_boards(as_solved(rig.cameras[camera], observations[camera]), board,
+                                                      Camera(rig.cameras[camera].camera));
       for (size_t b = 0; b < located.used_images.size(); ++b) {
         seen[camera ? 1 : 0][std::filesystem::path(located.used_images[b]).filename().string()] = located.poses[b];
       }

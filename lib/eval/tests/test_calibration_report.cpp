@@ -4,6 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <regex>
@@ -146,9 +147,22 @@ std::pair<double, double> instant_row(const std::string& html, const std::string
 
 TEST(CalibrationReport, ARigsInstantsAgreeWithTheJointSolveUnlessTheCameraMoved) {
   const Camera camera = lens();
-  const auto rig = stereo(camera, {3});
+  auto rig = stereo(camera, {3});
   ASSERT_GE(rig[0].observations.size(), 8u);
+  // One of camera 1's boards numbered from the other end: the joint solve renumbers it,
+  // and the report must pair its corners as the solve did.
+  BoardObservation& turned = rig[1].observations[5];
+  std::reverse(turned.corners.begin(), turned.corners.end());
   const RigCalibrationResult solved = calibrate_rig(rig, kBoard);
+  ASSERT_EQ(solved.cameras[1].renumbered_images, std::vector<std::string>{turned.filename});
+  for (size_t k = 0; k < 2; ++k) {
+    double sum2 = 0;
+    long used = 0;
+    for (const CornerFit& f : corner_fits(solved.cameras[k], rig[k].observations, kBoard)) {
+      if (!f.outlier) sum2 += f.residual.squaredNorm(), ++used;
+    }
+    EXPECT_NEAR(std::sqrt(sum2 / double(used)), solved.cameras[k].rms_px, 1e-9) << "camera " << k;
+  }
   std::vector<CameraParameters> written;
   std::vector<std::vector<BoardObservation>> observations;
   for (size_t k = 0; k < 2; ++k) {

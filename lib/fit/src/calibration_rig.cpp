@@ -602,6 +602,7 @@ CalibrationResult joint_report(size_t k, const CalibrationResult& single, const 
   }
   r.rms_px = std::sqrt(sum2 / double(std::max(1L, corners)));
   r.observations = corners;
+  r.renumbered_images.assign(v.renumbered_images[k].begin(), v.renumbered_images[k].end());
   for (CalibrationResult::Outlier o : outliers) {  // numbered as in the corners file
     if (v.renumbered_images[k].count(o.filename)) o.corner = board.corners() - 1 - o.corner;
     r.outliers.push_back(o);

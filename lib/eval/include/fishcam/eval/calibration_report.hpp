@@ -25,7 +25,7 @@ namespace fishcam {
 // (the board warped as the result's board_warp says).
 struct CornerFit {
   int image = 0;   // index into CalibrationResult::used_images
-  int corner = 0;  // in board order
+  int corner = 0;  // as the corners file numbers it (a rig's renumbered images: reversed)
   Eigen::Vector2d detected, residual;
   bool outlier = false;  // among CalibrationResult::outliers (left out of the solve)
 };

@@ -40,6 +40,10 @@ struct CalibrationResult {
   std::optional<BoardWarp> board_warp;
   BoardWarp board_warp_sigma;
   std::vector<std::string> warnings;  // e.g. boards that leave most of the image uncovered
+  // A rig's images whose corners the joint solve read numbered from the other end (a
+  // chessboard's 180-degree ambiguity): their poses are of that numbering, their
+  // outliers numbered as in the corners file.
+  std::vector<std::string> renumbered_images;
 };
 
 struct CalibrationOptions {
