@@ -115,6 +115,46 @@ TEST(CliFit, FitFromCsv) {
   }
 }
 
+// ChArUco photos of a 190-degree lens, boards cut by the image's edges among them:
+// rendered by synth-corners, found by detect-corners with their ids, calibrated to
+// the truth with corners past 90 degrees, and --theta-limit data follows them there.
+TEST(CliFit, ChArUcoPhotosCalibrateToTheRim) {
+  const auto dir = test::scratch_dir("cli_charuco");
+  std::filesystem::create_directories(dir / "photos");
+  const std::string target = " --target charuco:8x6:0.1:0.06";
+  auto r = run_fishcam("synth-corners " + quoted(test::data_path("kannala_brandt.yaml")) + target +
+                       " --boards 24 --noise 0 --seed 5 --out " + quoted(dir / "truth.vnl") + " --images " +
+                       quoted(dir / "photos"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "photos" / "synth-023.png"));
+  std::string photos;
+  for (int b = 0; b < 24; ++b)
+    photos += " " + quoted(dir / "photos" / ("synth-0" + std::to_string(100 + b).substr(1) + ".png"));
+  r = run_fishcam("detect-corners" + photos + target + " --out " + quoted(dir / "found.vnl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("of them partly"), std::string::npos) << r.out;
+  // A partial board's missing corners are mrcal's "- - -" rows, every image W*H rows.
+  EXPECT_NE(test::read_file(dir / "found.vnl").find(" - - -\n"), std::string::npos);
+  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
+                  " --board 7x5 --spacing 0.1 --imagersize 1280x966 --model kannala-brandt --theta-limit data --json "
+                  "--out " +
+                  quoted(dir / "calibrated.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_LT(j["rms_px"].get<double>(), 0.15);
+  EXPECT_NEAR(j["parameters"]["f"]["value"].get<double>(), 331.5526, 1.0);
+  EXPECT_NEAR(j["parameters"]["cx"]["value"].get<double>(), 643.442, 0.5);
+  EXPECT_NEAR(j["parameters"]["cy"]["value"].get<double>(), 479.407, 0.5);
+  r = run_fishcam("info " + quoted(dir / "calibrated.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto at = r.out.find("observed angles   theta up to ");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  EXPECT_GT(std::stod(r.out.substr(at + 30)), 95.0) << r.out;
+  // A chessboard and a ChArUco target at once are refused.
+  r = run_fishcam("detect-corners" + photos + target + " --board 7x5 --out " + quoted(dir / "both.vnl"));
+  EXPECT_NE(r.exit_code, 0);
+}
+
 TEST(CliFit, SynthCornersCalibrateDiff) {
   const auto dir = test::scratch_dir("cli_calibrate");
   auto r = run_fishcam("synth-corners " + quoted(test::data_path("woodscape_front.json")) +

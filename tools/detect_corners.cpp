@@ -1,16 +1,19 @@
-// fishcam detect-corners IMAGES...: chessboard corners found by OpenCV (fishcam/augment/chessboard.hpp), in
-// mrcal's corners format.
+// fishcam detect-corners IMAGES...: chessboard or ChArUco corners found by OpenCV
+// (fishcam/augment/chessboard.hpp, charuco.hpp), in mrcal's corners format.
 #include <unistd.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include <atomic>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fishcam/augment/charuco.hpp"
 #include "fishcam/augment/chessboard.hpp"
 #include "fishcam/core/parallel.hpp"
 #include "fishcam/io/corners.hpp"
@@ -35,9 +38,12 @@ void check_distinct_images(const std::vector<std::string>& images) {
   }
 }
 
+// One image's corners (a partial board with ids), or nullopt where none were found.
+using Detector = std::function<std::optional<BoardObservation>(const cv::Mat& gray)>;
+
 // Every image's board corners (none where no board was found), on `threads` threads;
 // failures[k] says why image k could not be read ("" if it could).
-std::vector<BoardObservation> detect_boards(const std::vector<std::string>& images, const BoardSpec& board, int threads,
+std::vector<BoardObservation> detect_boards(const std::vector<std::string>& images, const Detector& detect, int threads,
                                             std::vector<std::string>* failures) {
   const size_t count = images.size();
   std::vector<BoardObservation> observations(count);
@@ -50,7 +56,10 @@ std::vector<BoardObservation> detect_boards(const std::vector<std::string>& imag
     observations[size_t(k)].filename = path;
     try {
       const cv::Mat gray = read_image(path, cv::IMREAD_GRAYSCALE);
-      if (auto corners = detect_chessboard(gray, board)) observations[size_t(k)].corners = std::move(*corners);
+      if (auto found = detect(gray)) {
+        observations[size_t(k)].corners = std::move(found->corners);
+        observations[size_t(k)].ids = std::move(found->ids);
+      }
     } catch (const Error& e) {
       (*failures)[size_t(k)] = e.what();
     }
@@ -68,17 +77,22 @@ std::vector<BoardObservation> detect_boards(const std::vector<std::string>& imag
 
 void register_detect_corners(CLI::App& app) {
   auto* cmd = app.add_subcommand("detect-corners",
-                                 "Find chessboard corners (OpenCV) and write them in mrcal's "
+                                 "Find chessboard or ChArUco corners (OpenCV) and write them in mrcal's "
                                  "corners format");
   struct Options {
     std::vector<std::string> images;
-    std::string board, out;
+    std::string board, target, out;
     int threads = int(std::max(1u, std::thread::hardware_concurrency()));
     bool force = false;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("IMAGES", o->images, "Images")->required();
-  cmd->add_option("--board", o->board, "Inner corners WxH, e.g. 10x10")->required();
+  auto* board_option = cmd->add_option("--board", o->board, "A chessboard's inner corners WxH, e.g. 10x10");
+  cmd->add_option("--target", o->target,
+                  "A ChArUco board instead, charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (squares, their side, the "
+                  "markers' side; dictionary 4X4_50 unless given): boards partly outside the image are kept, each "
+                  "corner with its id (calibrate them as --board (COLS-1)x(ROWS-1) --spacing SQUARE)")
+      ->excludes(board_option);
   cmd->add_option("--out", o->out, "Output corners.vnl")->required();
   cmd->add_option("--threads", o->threads, "Images detected in parallel")
       ->check(CLI::Range(1, 256))
@@ -90,17 +104,28 @@ void register_detect_corners(CLI::App& app) {
       check_outputs(outputs, o->images, o->force);
     }
     check_distinct_images(o->images);
-    const BoardSpec board = parse_board(o->board, 1.0);
-    // OpenCV's detector needs more than 2 corners per side.
-    if (board.cols < 3 || board.rows < 3) throw Error("--board: detection needs at least 3x3 inner corners");
+    if (o->board.empty() == o->target.empty()) throw Error("give --board WxH (a chessboard) or --target charuco:...");
+    const std::optional<CharucoSpec> charuco =
+        o->target.empty() ? std::nullopt : std::optional(parse_charuco(o->target));
+    const BoardSpec board = charuco ? charuco->board() : parse_board(o->board, 1.0);
+    // OpenCV's chessboard detector needs more than 2 corners per side.
+    if (!charuco && (board.cols < 3 || board.rows < 3)) {
+      throw Error("--board: detection needs at least 3x3 inner corners");
+    }
+    const Detector detect = [&](const cv::Mat& gray) -> std::optional<BoardObservation> {
+      if (charuco) return detect_charuco(gray, *charuco);
+      auto corners = detect_chessboard(gray, board);
+      if (!corners) return std::nullopt;
+      return BoardObservation{"", std::move(*corners), {}};
+    };
     const size_t count = o->images.size();
     std::vector<std::string> failures;
-    std::vector<BoardObservation> observations = detect_boards(o->images, board, o->threads, &failures);
+    std::vector<BoardObservation> observations = detect_boards(o->images, detect, o->threads, &failures);
     // Images that could not be read are left out of the file (and reported); the
     // others keep the order they were given in.
     std::vector<BoardObservation> readable;
     std::vector<std::string> unreadable;
-    long found = 0;
+    long found = 0, partial = 0;
     for (size_t k = 0; k < count; ++k) {
       if (!failures[k].empty()) {
         unreadable.push_back(failures[k]);
@@ -108,12 +133,13 @@ void register_detect_corners(CLI::App& app) {
         continue;
       }
       found += observations[k].corners.empty() ? 0 : 1;
+      partial += observations[k].ids.empty() ? 0 : 1;
       readable.push_back(std::move(observations[k]));
     }
     if (readable.empty()) throw Error("no image could be read; nothing written (first: " + unreadable[0] + ")");
-    write_corners(o->out, readable, o->force);
-    std::printf("%ld of %zu images show a %dx%d board; wrote %s\n", found, count, board.cols, board.rows,
-                o->out.c_str());
+    write_corners(o->out, readable, board, o->force);
+    std::printf("%ld of %zu images show a %dx%d board%s; wrote %s\n", found, count, board.cols, board.rows,
+                charuco ? (" (" + std::to_string(partial) + " of them partly)").c_str() : "", o->out.c_str());
     if (!unreadable.empty()) {
       throw Error(std::to_string(unreadable.size()) + " image(s) unreadable, first: " + unreadable[0]);
     }

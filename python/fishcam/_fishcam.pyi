@@ -811,7 +811,7 @@ def random_change_in(max_rotation_deg: float, max_translation: float, seed: int)
     ...
 def read_corners(path: str, board: tuple[int, int]) -> list[tuple[str, numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]]]:
     """
-    A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners: a list of (filename, corners (N, 2) float64), N = 0 for an image without a board.
+    A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners: a list of (filename, corners (N, 2) float64), N = 0 for an image without a board; a partial board (rows whose level is '-') has all W*H rows in board order, NaN for the corners not observed.
     """
 def render(camera: Camera, scene_seed: int | None = None, change: ViewpointChange | None = None, supersampling: int = 2) -> dict[str, typing.Any]:
     """

@@ -4,6 +4,9 @@
 #include "bindings.hpp"
 #include "fishcam/io/corners.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace fishcam::python {
@@ -17,7 +20,9 @@ BoardSpec board_of(const std::pair<int, int>& board, double spacing) {
   return spec;
 }
 
-std::vector<BoardObservation> observations_of(const py::list& items) {
+// (filename, corners (N, 2)) pairs; a partial board: the board's W*H rows in board
+// order, NaN rows for the corners not observed (what read_corners gives).
+std::vector<BoardObservation> observations_of(const py::list& items, const BoardSpec& board) {
   std::vector<BoardObservation> out;
   for (const py::handle& item : items) {
     if (!py::isinstance<py::tuple>(item) || py::len(item) != 2) {
@@ -27,7 +32,17 @@ std::vector<BoardObservation> observations_of(const py::list& items) {
     o.filename = py::str(item[py::int_(0)]);
     const PointArray corners = rows_of(item[py::int_(1)], 2, "observations: corners");
     const auto* rows = reinterpret_cast<const Eigen::Vector2d*>(corners.data());
-    o.corners.assign(rows, rows + corners.shape(0));
+    const auto missing = [](const Eigen::Vector2d& c) { return std::isnan(c.x()) && std::isnan(c.y()); };
+    const bool partial = std::any_of(rows, rows + corners.shape(0), missing);
+    if (partial && corners.shape(0) != board.corners()) {
+      throw Error("observations: image " + o.filename + ": a partial board (NaN rows) lists all " +
+                  std::to_string(board.corners()) + " corners of the board, got " + std::to_string(corners.shape(0)));
+    }
+    for (py::ssize_t k = 0; k < corners.shape(0); ++k) {
+      if (partial && missing(rows[k])) continue;
+      o.corners.push_back(rows[k]);
+      if (partial) o.ids.push_back(int(k));
+    }
     out.push_back(std::move(o));
   }
   return out;
@@ -119,22 +134,27 @@ void bind_camera_calibration(py::module_& m) {
       [](const std::string& path, std::pair<int, int> board) {
         const auto observations = read_corners(path, board_of(board, 1.0));
         std::vector<std::pair<std::string, py::array_t<double>>> out;
+        const int whole = board.first * board.second;
         for (const auto& o : observations) {
-          py::array_t<double> corners({py::ssize_t(o.corners.size()), py::ssize_t(2)});
-          std::memcpy(corners.mutable_data(), o.corners.data(), o.corners.size() * sizeof(Eigen::Vector2d));
+          const py::ssize_t rows = o.ids.empty() ? py::ssize_t(o.corners.size()) : py::ssize_t(whole);
+          py::array_t<double> corners({rows, py::ssize_t(2)});
+          auto* to = reinterpret_cast<Eigen::Vector2d*>(corners.mutable_data());
+          std::fill(to, to + rows, Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+          for (size_t k = 0; k < o.corners.size(); ++k) to[o.id(k)] = o.corners[k];
           out.emplace_back(o.filename, corners);
         }
         return out;
       },
       py::arg("path"), py::arg("board"),
       "A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners: a list of "
-      "(filename, corners (N, 2) float64), N = 0 for an image without a board.");
+      "(filename, corners (N, 2) float64), N = 0 for an image without a board; a partial board (rows whose "
+      "level is '-') has all W*H rows in board order, NaN for the corners not observed.");
   m.def(
       "calibrate",
       [](const py::list& observations, std::pair<int, int> board, double spacing, std::pair<int, int> image_size,
          const std::string& model, int threads, bool board_warp) {
         const BoardSpec spec = board_of(board, spacing);
-        const std::vector<BoardObservation> boards = observations_of(observations);
+        const std::vector<BoardObservation> boards = observations_of(observations, spec);
         const ModelSpec model_spec = parse_model_spec(model);
         py::gil_scoped_release release;
         return calibrate(boards, spec, image_size.first, image_size.second, model_spec, {threads, board_warp});
@@ -188,7 +208,7 @@ void bind_rig_calibration(py::module_& m) {
             throw Error("cameras: expected (observations, (width, height), model) per camera");
           }
           RigCamera camera;
-          camera.observations = observations_of(item[py::int_(0)].cast<py::list>());
+          camera.observations = observations_of(item[py::int_(0)].cast<py::list>(), spec);
           std::tie(camera.width, camera.height) = item[py::int_(1)].cast<std::pair<int, int>>();
           // A model name solves the camera's intrinsics; a Camera holds them fixed.
           if (const py::handle model = item[py::int_(2)]; py::isinstance<Camera>(model)) {

@@ -142,6 +142,39 @@ def test_calibrate_rig_recovers_a_stereo_pair() -> None:
         fishcam.calibrate_rig([(left, (640, 483), "kannala-brandt")], BOARD, SPACING)
 
 
+def test_partial_boards_are_nan_rows_in_files_calibrations_and_rigs(tmp_path: Path) -> None:
+    """A partial board (a ChArUco view cut by the image's edge, or mrcal-cull-corners'
+    level '-') is its W*H rows with NaN for the corners not observed, read and given
+    back alike; the rig's joint solve takes them too."""
+    camera = lens()
+    left, right = stereo_boards(camera, 0.2, 60, 0.0, 3)
+    cut = []
+    for k, (name, corners) in enumerate(right):
+        corners = corners.copy()
+        if k % 2 == 0:
+            corners[: 9 * (1 + k % 3)] = np.nan  # the first one to three rows missing
+        cut.append((name, corners))
+    rig = fishcam.calibrate_rig(
+        [(left, (640, 483), "kannala-brandt"), (cut, (640, 483), "kannala-brandt")], BOARD, SPACING, threads=2
+    )
+    assert rig.rms_px < 1e-6
+    assert np.allclose(rig.cameras[1].camera.pose[1], [0.2, 0, 0], atol=1e-5)
+    assert rig.cameras[1].corners == sum(int(np.isfinite(c[:, 0]).sum()) for _, c in cut)
+    # The corners file: mrcal's "- - -" rows; a culled corner keeps x y with level '-'.
+    rows = ["# filename x y level"]
+    for name, corners in cut[:2]:
+        rows += [f"{name} - - -" if np.isnan(x) else f"{name} {x!r} {y!r} 0" for x, y in corners]
+    rows[1 + 20] = rows[1 + 20][: rows[1 + 20].rfind(" ")] + " -"  # corner 20 of the first image culled
+    (tmp_path / "c.vnl").write_text("\n".join(rows) + "\n")
+    back = fishcam.read_corners(str(tmp_path / "c.vnl"), BOARD)
+    assert [b[1].shape for b in back] == [(54, 2), (54, 2)]
+    assert np.isnan(back[0][1][:9]).all() and np.isnan(back[0][1][20]).all()
+    assert np.isfinite(back[0][1][9:20]).all()
+    assert np.array_equal(back[1][1], cut[1][1])
+    with pytest.raises(fishcam.Error, match="a partial board \\(NaN rows\\) lists all 54 corners"):
+        fishcam.calibrate([(n, c[:50]) for n, c in cut], BOARD, SPACING, (640, 483), "kannala-brandt")
+
+
 def test_calibrate_rig_holds_a_given_cameras_intrinsics() -> None:
     """A Camera in place of a model name: its intrinsics held fixed (calibrate
     --fix-intrinsics FILE), only where it sits solved."""

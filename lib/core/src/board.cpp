@@ -1,5 +1,6 @@
 #include "fishcam/core/board.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "fishcam/core/error.hpp"
@@ -25,6 +26,42 @@ std::vector<Eigen::Vector3d> board_points(const BoardSpec& board) {
     for (int i = 0; i < board.cols; ++i) points.emplace_back(i * board.spacing, j * board.spacing, 0.0);
   }
   return points;
+}
+
+void check_observation(const BoardSpec& board, const BoardObservation& o) {
+  const std::string where = "image " + text_for_message(o.filename) + ": ";
+  if (o.ids.empty()) {
+    if (!o.corners.empty() && int(o.corners.size()) != board.corners()) {
+      throw Error(where + std::to_string(o.corners.size()) + " corners without ids; a whole " +
+                  std::to_string(board.cols) + "x" + std::to_string(board.rows) + " board has " +
+                  std::to_string(board.corners()));
+    }
+    return;
+  }
+  if (o.ids.size() != o.corners.size()) {
+    throw Error(where + std::to_string(o.ids.size()) + " corner ids for " + std::to_string(o.corners.size()) +
+                " corners");
+  }
+  for (size_t k = 0; k < o.ids.size(); ++k) {
+    if (o.ids[k] < 0 || o.ids[k] >= board.corners() || (k > 0 && o.ids[k] <= o.ids[k - 1])) {
+      throw Error(where + "corner id " + std::to_string(o.ids[k]) + " at position " + std::to_string(k) +
+                  " is not within 0.." + std::to_string(board.corners() - 1) + " in increasing order");
+    }
+  }
+}
+
+std::vector<Eigen::Vector3d> observed_points(const std::vector<Eigen::Vector3d>& points, const BoardObservation& o) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(o.corners.size());
+  for (size_t k = 0; k < o.corners.size(); ++k) out.push_back(points.at(size_t(o.id(k))));
+  return out;
+}
+
+BoardObservation renumbered_from_other_end(const BoardSpec& board, BoardObservation o) {
+  std::reverse(o.corners.begin(), o.corners.end());
+  std::reverse(o.ids.begin(), o.ids.end());
+  for (int& id : o.ids) id = board.corners() - 1 - id;
+  return o;
 }
 
 Eigen::Vector2d warp_factors(const BoardSpec& board, const Eigen::Vector3d& point) {

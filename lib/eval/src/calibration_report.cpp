@@ -28,11 +28,11 @@ using detail::kRed;
 namespace {
 // The observations as the solve numbered them: a rig's renumbered images reversed.
 std::vector<BoardObservation> as_solved(const CalibrationResult& result,
-                                        const std::vector<BoardObservation>& observations) {
+                                        const std::vector<BoardObservation>& observations, const BoardSpec& board) {
   std::vector<BoardObservation> out = observations;
   const std::set<std::string> renumbered(result.renumbered_images.begin(), result.renumbered_images.end());
   for (auto& o : out) {
-    if (renumbered.count(o.filename)) std::reverse(o.corners.begin(), o.corners.end());
+    if (renumbered.count(o.filename)) o = renumbered_from_other_end(board, std::move(o));
   }
   return out;
 }
@@ -40,7 +40,7 @@ std::vector<BoardObservation> as_solved(const CalibrationResult& result,
 
 std::vector<CornerFit> corner_fits(const CalibrationResult& result, const std::vector<BoardObservation>& observations,
                                    const BoardSpec& board) {
-  const std::vector<BoardObservation> solved = as_solved(result, observations);
+  const std::vector<BoardObservation> solved = as_solved(result, observations, board);
   const std::set<std::string> renumbered(result.renumbered_images.begin(), result.renumbered_images.end());
   std::map<std::string, const BoardObservation*> by_name;
   for (const auto& o : solved) by_name.emplace(o.filename, &o);
@@ -52,17 +52,20 @@ std::vector<CornerFit> corner_fits(const CalibrationResult& result, const std::v
   for (size_t i = 0; i < result.used_images.size(); ++i) {
     const std::string& name = result.used_images[i];
     const auto found = by_name.find(name);
-    if (found == by_name.end() || found->second->corners.size() != points.size()) {
+    if (found == by_name.end() || found->second->corners.empty()) {
       throw Error("report: image " + name + " of the calibration has no corners among those given");
     }
+    const BoardObservation& view = *found->second;
+    check_observation(board, view);
     const BoardPose& pose = result.poses[i];
-    for (size_t c = 0; c < points.size(); ++c) {
+    for (size_t c = 0; c < view.corners.size(); ++c) {
+      const int id = view.id(c);
       Eigen::Vector2d projected;
-      if (!camera.project(pose.rotation * points[c] + pose.translation, &projected)) {
-        throw Error("report: corner " + std::to_string(c) + " of image " + name + " does not project");
+      if (!camera.project(pose.rotation * points[size_t(id)] + pose.translation, &projected)) {
+        throw Error("report: corner " + std::to_string(id) + " of image " + name + " does not project");
       }
-      const Eigen::Vector2d& detected = found->second->corners[c];
-      const int in_file = renumbered.count(name) ? int(points.size() - 1 - c) : int(c);  // the file's numbering
+      const Eigen::Vector2d& detected = view.corners[c];
+      const int in_file = renumbered.count(name) ? board.corners() - 1 - id : id;  // the file's numbering
       fits.push_back({int(i), in_file, detected, projected - detected, outliers.count({name, in_file}) > 0});
     }
   }
@@ -648,8 +651,8 @@ InstantDifferences instant_differences(const RigCalibrationResult& rig, size_t k
   std::array<std::map<std::string, Pose>, 2> seen;  // camera 0's and camera k's boards by instant
   try {
     for (const size_t camera : {size_t(0), k}) {
-      const CalibrationResult located = locate_boards(as_solved(rig.cameras[camera], observations[camera]), board,
-                                                      Camera(rig.cameras[camera].camera));
+      const CalibrationResult located = locate_boards(as_solved(rig.cameras[camera], observations[camera], board),
+                                                      board, Camera(rig.cameras[camera].camera));
       for (size_t b = 0; b < located.used_images.size(); ++b) {
         seen[camera ? 1 : 0][std::filesystem::path(located.used_images[b]).filename().string()] = located.poses[b];
       }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <set>
 
 #include "calibration_internal.hpp"
 #include "fishcam/core/parallel.hpp"
@@ -92,6 +93,26 @@ double outlier_limit_px(std::vector<double> errors_px) {
   return std::max(5 * sigma, 0.1);
 }
 
+// A view whose corners cannot place a board: ids that do not fit it, or a partial
+// board with fewer than 4 corners or all in one row or one column (its pose turns
+// freely about that line).
+void check_placeable(const BoardSpec& board, const BoardObservation& o, const std::string& what) {
+  try {
+    check_observation(board, o);
+  } catch (const Error& e) {
+    throw Error(what + ": " + e.what());
+  }
+  if (o.ids.empty() || o.corners.empty()) return;
+  std::set<int> columns, rows;
+  for (int id : o.ids) columns.insert(id % board.cols), rows.insert(id / board.cols);
+  if (o.corners.size() < 4 || columns.size() < 2 || rows.size() < 2) {
+    throw Error(what + ": image " + text_for_message(o.filename) + ": its " + std::to_string(o.corners.size()) +
+                " corners (of a partial board) span " + std::to_string(columns.size()) + " column(s) and " +
+                std::to_string(rows.size()) +
+                " row(s); a board pose needs at least 4 corners in 2 of each (leave the image out)");
+  }
+}
+
 }  // namespace detail
 
 namespace {
@@ -132,18 +153,22 @@ BoardPose rigid_fit(const std::vector<Eigen::Vector3d>& from, const std::vector<
 // intersect the rays with its plane, fit again".
 std::optional<BoardPose> pose_from_rays(const std::vector<Eigen::Vector3d>& rays,
                                         const std::vector<Eigen::Vector3d>& points, const BoardSpec& board) {
-  double angle = 0;
-  int pairs = 0;
-  for (int j = 0; j < board.rows; ++j) {
-    for (int i = 0; i + 1 < board.cols; ++i) {
-      const auto& a = rays[size_t(j * board.cols + i)];
-      const auto& b = rays[size_t(j * board.cols + i + 1)];
-      angle += std::atan2(a.cross(b).norm(), a.dot(b));
-      ++pairs;
-    }
+  // The distance from the angle between neighbours along a row (consecutive points one
+  // spacing apart); a partial board without such neighbours: between any
+  // consecutive points.
+  const auto angle_between = [&](size_t k) {
+    return std::atan2(rays[k].cross(rays[k + 1]).norm(), rays[k].dot(rays[k + 1]));
+  };
+  double angle = 0, length = 0;
+  for (size_t k = 0; k + 1 < rays.size(); ++k) {
+    const double step = (points[k + 1] - points[k]).norm();
+    if (std::abs(step - board.spacing) <= 1e-9 * board.spacing) angle += angle_between(k), length += board.spacing;
+  }
+  for (size_t k = 0; length == 0 && k + 1 < rays.size(); ++k) {
+    angle += angle_between(k), length += (points[k + 1] - points[k]).norm();
   }
   if (!(angle > 0)) return std::nullopt;
-  const double distance = board.spacing / (angle / pairs);
+  const double distance = length / angle;
   std::vector<Eigen::Vector3d> in_camera(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) in_camera[i] = distance * rays[i];
   BoardPose pose = rigid_fit(points, in_camera);
@@ -246,8 +271,13 @@ ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<
 // neighbouring steps along a row or a column stay alike (well under 0.25 even at a
 // fisheye's rim); corners read with the wrong row length jump back and forth
 // between rows along the columns and give 1 or more.
-std::vector<double> grid_bends(const std::vector<Eigen::Vector2d>& corners, int cols, int rows) {
-  const auto at = [&](int i, int j) { return corners[size_t(j * cols + i)]; };
+std::vector<double> grid_bends(const BoardObservation& view, int cols, int rows) {
+  // Each board corner's detection, if the view has it (a partial board: the triples it
+  // has whole).
+  std::vector<const Eigen::Vector2d*> by_id(size_t(cols * rows), nullptr);
+  for (size_t k = 0; k < view.corners.size(); ++k) by_id[size_t(view.id(k))] = &view.corners[k];
+  const auto has = [&](int i, int j) { return by_id[size_t(j * cols + i)] != nullptr; };
+  const auto at = [&](int i, int j) { return *by_id[size_t(j * cols + i)]; };
   const auto bend = [](const Eigen::Vector2d& before, const Eigen::Vector2d& here, const Eigen::Vector2d& after) {
     const double step = ((here - before).norm() + (after - here).norm()) / 2;
     return step > 0 ? (after - 2 * here + before).norm() / step : std::numeric_limits<double>::infinity();
@@ -256,8 +286,13 @@ std::vector<double> grid_bends(const std::vector<Eigen::Vector2d>& corners, int 
   for (int j = 0; j < rows; ++j) {
     for (int i = 0; i < cols; ++i) {
       double worst = -1;
-      if (i > 0 && i + 1 < cols) worst = std::max(worst, bend(at(i - 1, j), at(i, j), at(i + 1, j)));
-      if (j > 0 && j + 1 < rows) worst = std::max(worst, bend(at(i, j - 1), at(i, j), at(i, j + 1)));
+      if (!has(i, j)) continue;
+      if (i > 0 && i + 1 < cols && has(i - 1, j) && has(i + 1, j)) {
+        worst = std::max(worst, bend(at(i - 1, j), at(i, j), at(i + 1, j)));
+      }
+      if (j > 0 && j + 1 < rows && has(i, j - 1) && has(i, j + 1)) {
+        worst = std::max(worst, bend(at(i, j - 1), at(i, j), at(i, j + 1)));
+      }
       if (worst >= 0) points.push_back(worst);
     }
   }
@@ -273,7 +308,7 @@ double median_of(std::vector<double> values) {
 // The median over boards of their median bend (a 2 x 2 board: nothing to tell, 0).
 double median_grid_disorder(const std::vector<const BoardObservation*>& boards, int cols, int rows) {
   std::vector<double> disorder;
-  for (const auto* b : boards) disorder.push_back(median_of(grid_bends(b->corners, cols, rows)));
+  for (const auto* b : boards) disorder.push_back(median_of(grid_bends(*b, cols, rows)));
   return median_of(disorder);
 }
 
@@ -284,7 +319,7 @@ double median_grid_disorder(const std::vector<const BoardObservation*>& boards, 
 double median_disordered_share(const std::vector<const BoardObservation*>& boards, int cols, int rows) {
   std::vector<double> shares;
   for (const auto* b : boards) {
-    const std::vector<double> bends = grid_bends(b->corners, cols, rows);
+    const std::vector<double> bends = grid_bends(*b, cols, rows);
     const auto bent = std::count_if(bends.begin(), bends.end(), [](double v) { return !(v <= 0.5); });
     shares.push_back(bends.empty() ? 0 : double(bent) / double(bends.size()));
   }
@@ -357,7 +392,7 @@ void check_no_duplicate_views(const std::vector<const BoardObservation*>& boards
             [](const auto* a, const auto* b) { return a->corners[0].x() < b->corners[0].x(); });
   for (size_t a = 0; a < order.size(); ++a) {
     for (size_t b = a + 1; b < order.size() && order[b]->corners[0].x() - order[a]->corners[0].x() <= 0.01; ++b) {
-      bool same = order[a]->corners.size() == order[b]->corners.size();
+      bool same = order[a]->corners.size() == order[b]->corners.size() && order[a]->ids == order[b]->ids;
       for (size_t c = 0; same && c < order[a]->corners.size(); ++c) {
         same = (order[a]->corners[c] - order[b]->corners[c]).cwiseAbs().maxCoeff() <= 0.01;
       }
@@ -396,14 +431,14 @@ void check_distinct_poses(const CalibrationResult& r) {
 struct Observations {
   const std::vector<const BoardObservation*>& boards;
   std::vector<Eigen::Vector3d> points;
-  std::vector<std::vector<Eigen::Vector3d>> all_points;  // points, once per board
+  std::vector<std::vector<Eigen::Vector3d>> all_points;  // the points each board's corners are
   std::vector<std::vector<Eigen::Vector2d>> corners;
   int width, height;
   int threads;  // for independent solves (starts); each solve runs on one thread
 
   Observations(const std::vector<const BoardObservation*>& b, const BoardSpec& board, int w, int h, int t)
-      : boards(b), points(board_points(board)), all_points(b.size(), points), width(w), height(h), threads(t) {
-    for (const auto* o : boards) corners.push_back(o->corners);
+      : boards(b), points(board_points(board)), width(w), height(h), threads(t) {
+    for (const auto* o : boards) corners.push_back(o->corners), all_points.push_back(observed_points(points, *o));
   }
   CameraParameters camera(const Solve& s, const RadialModel& model) const {
     CameraParameters p;
@@ -435,7 +470,7 @@ Solve initial_solve(const Observations& o, const BoardSpec& board) {
       for (size_t i = 0; i < rays.size(); ++i) {
         if (!guess.unproject(o.corners[b][i], &rays[i])) return;
       }
-      const auto pose = pose_from_rays(rays, o.points, board);
+      const auto pose = pose_from_rays(rays, o.all_points[b], board);
       if (!pose) return;
       s.poses.push_back(pose_block(*pose));
     }
@@ -443,9 +478,9 @@ Solve initial_solve(const Observations& o, const BoardSpec& board) {
     double cost = 0;
     for (size_t b = 0; b < o.boards.size(); ++b) {
       const BoardPose pose = pose_of(s.poses[b]);
-      for (size_t i = 0; i < o.points.size(); ++i) {
+      for (size_t i = 0; i < o.all_points[b].size(); ++i) {
         Eigen::Vector2d q;
-        const double e = guess.project(to_camera(pose, o.points[i]), &q) ? (q - o.corners[b][i]).norm() : 20.0;
+        const double e = guess.project(to_camera(pose, o.all_points[b][i]), &q) ? (q - o.corners[b][i]).norm() : 20.0;
         cost += std::min(e, 20.0);
       }
     }
@@ -512,10 +547,11 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
   std::vector<std::vector<double>> per_board(o.boards.size());
   for (size_t b = 0; b < o.boards.size(); ++b) {
     const BoardPose pose = pose_of(s.poses[b]);
-    for (size_t i = 0; i < o.points.size(); ++i) {
+    for (size_t i = 0; i < o.all_points[b].size(); ++i) {
       Eigen::Vector2d q;
-      const double e = camera.project(to_camera(pose, o.points[i]), &q) ? (q - o.corners[b][i]).norm()
-                                                                        : std::numeric_limits<double>::infinity();
+      const double e = camera.project(to_camera(pose, o.all_points[b][i]), &q)
+                           ? (q - o.corners[b][i]).norm()
+                           : std::numeric_limits<double>::infinity();
       per_board[b].push_back(e);
       errors.push_back(e);
     }
@@ -523,8 +559,8 @@ std::vector<CalibrationResult::Outlier> find_outliers(const Observations& o, con
   const double limit = detail::outlier_limit_px(std::move(errors));
   std::vector<CalibrationResult::Outlier> outliers;
   for (size_t b = 0; b < o.boards.size(); ++b) {
-    for (size_t i = 0; i < o.points.size(); ++i) {
-      if (per_board[b][i] > limit) outliers.push_back({o.boards[b]->filename, int(i), per_board[b][i]});
+    for (size_t i = 0; i < per_board[b].size(); ++i) {
+      if (per_board[b][i] > limit) outliers.push_back({o.boards[b]->filename, o.boards[b]->id(i), per_board[b][i]});
     }
   }
   return outliers;
@@ -578,17 +614,17 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, bool war
   for (size_t b = 0; b < o.boards.size(); ++b) {
     std::vector<Eigen::Vector3d> points;
     std::vector<Eigen::Vector2d> corners;
-    for (size_t i = 0; i < o.points.size(); ++i) {
+    for (size_t i = 0; i < o.all_points[b].size(); ++i) {
       const bool outlier = std::any_of(result->outliers.begin(), result->outliers.end(), [&](const auto& x) {
-        return x.filename == o.boards[b]->filename && size_t(x.corner) == i;
+        return x.filename == o.boards[b]->filename && x.corner == o.boards[b]->id(i);
       });
       if (outlier) continue;
-      points.push_back(o.points[i]);
+      points.push_back(o.all_points[b][i]);
       corners.push_back(o.corners[b][i]);
     }
     if (points.size() < 3) {
       result->warnings.push_back("image " + o.boards[b]->filename + ": " +
-                                 std::to_string(o.points.size() - points.size()) +
+                                 std::to_string(o.all_points[b].size() - points.size()) +
                                  " of its corners are outliers; the image is left out");
       continue;
     }
@@ -667,6 +703,7 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
                             int height, const ModelSpec& spec, const CalibrationOptions& options) {
   check_board(board);
   if (options.threads < 1) throw Error("calibrate: threads must be >= 1, got " + std::to_string(options.threads));
+  for (const auto& o : observations) detail::check_placeable(board, o, "calibrate");
   check_corners_in_image(observations, width, height);
   std::vector<const BoardObservation*> boards;
   for (const auto& o : observations) {
@@ -760,9 +797,11 @@ std::vector<double> corner_errors(const Camera& camera, const std::vector<Eigen:
 CalibrationResult locate_boards(const std::vector<BoardObservation>& observations, const BoardSpec& board,
                                 const Camera& camera) {
   check_board(board);
+  for (const auto& o : observations) detail::check_placeable(board, o, "locate boards");
   check_corners_in_image(observations, camera.width(), camera.height());
-  const std::vector<Eigen::Vector3d> points = board_points(board);
+  const std::vector<Eigen::Vector3d> all_points = board_points(board);
   std::vector<const BoardObservation*> views;
+  std::vector<std::vector<Eigen::Vector3d>> view_points;  // the points each view's corners are
   std::vector<std::array<double, 6>> poses;
   ceres::CauchyLoss robust(1.0);
   for (const auto& o : observations) {
@@ -774,9 +813,10 @@ CalibrationResult locate_boards(const std::vector<BoardObservation>& observation
                     " has no ray through the given camera (outside its valid domain: is it this camera's?)");
       }
     }
+    const std::vector<Eigen::Vector3d> points = observed_points(all_points, o);
     const auto pose = pose_from_rays(rays, points, board);
     if (!pose) throw Error("locate boards: image " + o.filename + ": no board pose fits its corners' rays");
-    views.push_back(&o), poses.push_back(pose_block(*pose));
+    views.push_back(&o), poses.push_back(pose_block(*pose)), view_points.push_back(points);
     solve_board_pose(camera, points, o, std::vector<bool>(points.size(), false), &robust, &poses.back());
   }
   if (views.empty()) throw Error("locate boards: no image with a board");
@@ -784,7 +824,7 @@ CalibrationResult locate_boards(const std::vector<BoardObservation>& observation
   std::vector<std::vector<double>> errors;
   std::vector<double> all;
   for (size_t b = 0; b < views.size(); ++b) {
-    errors.push_back(corner_errors(camera, points, *views[b], poses[b]));
+    errors.push_back(corner_errors(camera, view_points[b], *views[b], poses[b]));
     all.insert(all.end(), errors.back().begin(), errors.back().end());
   }
   const double limit = detail::outlier_limit_px(std::move(all));
@@ -792,11 +832,12 @@ CalibrationResult locate_boards(const std::vector<BoardObservation>& observation
   result.camera = camera.parameters();
   double sum2 = 0;
   for (size_t b = 0; b < views.size(); ++b) {
+    const std::vector<Eigen::Vector3d>& points = view_points[b];
     std::vector<bool> left_out(points.size(), false);
     long kept = 0;
     for (size_t i = 0; i < points.size(); ++i) {
       left_out[i] = !(errors[b][i] <= limit);
-      if (left_out[i]) result.outliers.push_back({views[b]->filename, int(i), errors[b][i]});
+      if (left_out[i]) result.outliers.push_back({views[b]->filename, views[b]->id(i), errors[b][i]});
       kept += !left_out[i];
     }
     if (kept < 3) {

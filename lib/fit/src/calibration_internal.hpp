@@ -331,4 +331,9 @@ void check_solution(const CalibrationResult& r, int width, int height, const std
 // close is no outlier). Returns that limit; an empty list has none (infinity).
 double outlier_limit_px(std::vector<double> errors_px);
 
+// Throws Error (prefixed with `what`) unless the view's ids fit the board
+// (check_observation) and a partial view has at least 4 corners spanning 2 rows and
+// 2 columns (fewer leave its pose free to turn).
+void check_placeable(const BoardSpec& board, const BoardObservation& observation, const std::string& what);
+
 }  // namespace fishcam::detail

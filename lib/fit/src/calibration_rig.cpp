@@ -105,7 +105,7 @@ std::string instant_of(const std::string& filename) { return std::filesystem::pa
 
 // Two views of one board with the same corners (within 0.5 px everywhere).
 bool same_corners(const BoardObservation& a, const BoardObservation& b) {
-  if (a.corners.size() != b.corners.size()) return false;
+  if (a.corners.size() != b.corners.size() || a.ids != b.ids) return false;
   for (size_t c = 0; c < a.corners.size(); ++c) {
     if (!((a.corners[c] - b.corners[c]).cwiseAbs().maxCoeff() < 0.5)) return false;
   }
@@ -228,9 +228,9 @@ long add_fixed_camera_residuals(ceres::Problem* problem, JointParameters* p, siz
   long corners = 0;
   for (const auto& [i, o] : observed) {
     for (size_t c = 0; c < o->corners.size(); ++c) {
-      if (excluded.count({o->filename, int(c)})) continue;
+      if (excluded.count({o->filename, o->id(c)})) continue;
       auto* cost = new ceres::DynamicAutoDiffCostFunction<detail::FixedCameraCornerResidual, 6>(
-          new detail::FixedCameraCornerResidual(p->fixed[k].get(), points[c], o->corners[c], k > 0));
+          new detail::FixedCameraCornerResidual(p->fixed[k].get(), points[size_t(o->id(c))], o->corners[c], k > 0));
       std::vector<double*> blocks;
       if (k > 0) cost->AddParameterBlock(6), blocks.push_back(p->cameras[k].data());
       cost->AddParameterBlock(6);
@@ -261,9 +261,9 @@ std::vector<long> add_joint_residuals(ceres::Problem* problem, JointParameters* 
     with_model_class(cameras[k].model.name, [&]<template <typename> class Model>() {
       for (const auto& [i, o] : observed[k]) {
         for (size_t c = 0; c < o->corners.size(); ++c) {
-          if (excluded[k].count({o->filename, int(c)})) continue;
+          if (excluded[k].count({o->filename, o->id(c)})) continue;
           auto* cost = new ceres::DynamicAutoDiffCostFunction<RigCornerResidual<Model>, 8>(
-              new RigCornerResidual<Model>{points[c], o->corners[c], params, k > 0});
+              new RigCornerResidual<Model>{points[size_t(o->id(c))], o->corners[c], params, k > 0});
           cost->AddParameterBlock(params);
           cost->AddParameterBlock(2);
           cost->AddParameterBlock(1);
@@ -311,10 +311,10 @@ std::vector<std::vector<CalibrationResult::Outlier>> joint_outliers(
     for (const auto& [i, o] : observed[k]) {
       const Pose board_pose = compose(rig_to_camera, pose_of(p.boards[size_t(i)]));
       for (size_t c = 0; c < o->corners.size(); ++c) {
-        if (excluded[k].count({o->filename, int(c)})) continue;
+        if (excluded[k].count({o->filename, o->id(c)})) continue;
         Eigen::Vector2d q;
-        const bool seen = camera.project(board_pose.rotation * points[c] + board_pose.translation, &q);
-        errors.push_back({o->filename, int(c), seen ? (q - o->corners[c]).norm() : kUnprojectedError});
+        const bool seen = camera.project(board_pose.rotation * points[size_t(o->id(c))] + board_pose.translation, &q);
+        errors.push_back({o->filename, o->id(c), seen ? (q - o->corners[c]).norm() : kUnprojectedError});
       }
     }
     if (errors.empty()) continue;
@@ -412,9 +412,7 @@ void resolve_numbering(const BoardSpec& board, RigViews* v) {
                             (consensus.disagreeing.size() > 5 ? ", ..." : "") + "): not synchronised?");
     }
     for (const int i : consensus.renumbered) {
-      BoardObservation view = *v->observed[k][i];
-      std::reverse(view.corners.begin(), view.corners.end());
-      v->renumbered_views.push_back(std::move(view));
+      v->renumbered_views.push_back(renumbered_from_other_end(board, *v->observed[k][i]));
       v->observed[k][i] = &v->renumbered_views.back();
       v->seen[k][i] = compose(v->seen[k][i], half_turn);
       v->renumbered_images[k].insert(v->renumbered_views.back().filename);
@@ -488,8 +486,7 @@ JointParameters joint_start(const std::vector<CalibrationResult>& singles, const
 // to `excluded` and said, per camera, naming the images that lost most of their board.
 std::vector<std::vector<CalibrationResult::Outlier>> reject_joint_outliers(
     JointParameters* joint, const std::vector<RigCamera>& cameras, const RigViews& v,
-    const std::vector<Eigen::Vector3d>& points, const BoardSpec& board, std::vector<CornerSet>* excluded,
-    std::vector<std::string>* warnings) {
+    const std::vector<Eigen::Vector3d>& points, std::vector<CornerSet>* excluded, std::vector<std::string>* warnings) {
   ceres::Problem::Options robust_options;
   robust_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem robust(robust_options);
@@ -503,9 +500,11 @@ std::vector<std::vector<CalibrationResult::Outlier>> reject_joint_outliers(
     std::map<std::string, int> per_image;
     for (const auto& o : outliers[k]) (*excluded)[k].insert({o.filename, o.corner}), ++per_image[o.filename];
     if (outliers[k].empty()) continue;
+    std::map<std::string, size_t> corners_in;  // each image's corners (a partial board has fewer)
+    for (const auto& [i, view] : v.observed[k]) corners_in[view->filename] = view->corners.size();
     std::string worst;
     for (const auto& [image, count] : per_image) {
-      if (2 * count > board.corners()) worst += (worst.empty() ? "" : ", ") + image;
+      if (2 * size_t(count) > corners_in[image]) worst += (worst.empty() ? "" : ", ") + image;
     }
     warnings->push_back(camera_name(k) + ": the joint solve leaves out " + std::to_string(outliers[k].size()) +
                         " corner(s) that disagree with the other cameras' boards at the same instants" +
@@ -587,8 +586,8 @@ CalibrationResult joint_report(size_t k, const CalibrationResult& single, const 
     double board_sum2 = 0;
     long used = 0;
     for (size_t corner = 0; corner < o->corners.size(); ++corner) {
-      if (excluded.count({o->filename, int(corner)})) continue;
-      const Eigen::Vector3d point = board_pose.rotation * points[corner] + board_pose.translation;
+      if (excluded.count({o->filename, o->id(corner)})) continue;
+      const Eigen::Vector3d point = board_pose.rotation * points[size_t(o->id(corner))] + board_pose.translation;
       Eigen::Vector2d q;
       camera.project(point, &q);
       board_sum2 += (q - o->corners[corner]).squaredNorm(), ++used;
@@ -663,7 +662,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
       excluded[k].insert({o.filename, renumbered ? board.corners() - 1 - o.corner : o.corner});
     }
   }
-  const auto outliers = reject_joint_outliers(&joint, cameras, views, points, board, &excluded, &views.warnings);
+  const auto outliers = reject_joint_outliers(&joint, cameras, views, points, &excluded, &views.warnings);
   ceres::Problem problem;  // plain least squares without them: the solution, its covariance
   const std::vector<long> corners_of =
       add_joint_residuals(&problem, &joint, cameras, views.observed, points, excluded, nullptr);

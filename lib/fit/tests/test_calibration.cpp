@@ -244,22 +244,44 @@ TEST(Calibration, CornersFileRoundTripAndErrors) {
   const auto dir = test::scratch_dir("corners");
   auto boards =
       testing::synthesize_boards(read_camera(test::data_path("woodscape_front.json")), kBoard, 3, 0.2, 5).observations;
-  boards.push_back({"empty.png", {}});
-  write_corners(dir / "c.vnl", boards);
+  boards.push_back({"empty.png", {}, {}});
+  // A partial board: corners 0, 5 and 99 missing (written as mrcal's "- - -" rows).
+  BoardObservation partial = boards[0];
+  partial.filename = "partial.png";
+  for (int id = 0; id < kBoard.corners(); ++id) {
+    if (id != 0 && id != 5 && id != 99) partial.ids.push_back(id);
+  }
+  partial.corners = {partial.corners.begin() + 1, partial.corners.begin() + 99};
+  partial.corners.erase(partial.corners.begin() + 4);
+  boards.push_back(partial);
+  write_corners(dir / "c.vnl", boards, kBoard);
   const auto back = read_corners(dir / "c.vnl", kBoard);
   ASSERT_EQ(back.size(), boards.size());
   for (size_t b = 0; b < boards.size(); ++b) {
     EXPECT_EQ(back[b].filename, boards[b].filename);
     EXPECT_EQ(back[b].corners, boards[b].corners);  // %.17g: exact
+    EXPECT_EQ(back[b].ids, boards[b].ids);
   }
-  EXPECT_THROW(write_corners(dir / "c.vnl", boards), Error);  // no overwrite
+  EXPECT_EQ(back.back().id(4), 6);
+  // mrcal-cull-corners keeps a culled corner's x and y and sets its level to '-'.
+  std::string culled = test::read_file(dir / "c.vnl");
+  const size_t row = culled.find("synth-001.png");
+  culled.replace(culled.find(" 0\n", row), 3, " -\n");
+  test::write_file(dir / "culled.vnl", culled);
+  const auto culled_back = read_corners(dir / "culled.vnl", kBoard);
+  EXPECT_EQ(culled_back[1].corners.size(), 99u);
+  EXPECT_EQ(culled_back[1].id(0), 1);
+  // Ids that do not fit the board are refused when written.
+  partial.ids[1] = partial.ids[0];
+  EXPECT_THROW(format_corners({partial}, kBoard), Error);
+  EXPECT_THROW(write_corners(dir / "c.vnl", boards, kBoard), Error);  // no overwrite
   const std::string good = test::read_file(dir / "c.vnl");
   const struct {
     std::string content, expected;
   } bad[] = {
       {good.substr(0, good.rfind("synth-002.png")), "image synth-002.png: expected 100 corners (10x10), got 99"},
       {"# filename x y level\na.png 1 2\n", "expected 'filename x y level'"},
-      {"b.png - - -\nb.png 1 2 0\n", "only row"},
+      {"b.png - - -\nb.png 1 2 0\n", "image b.png: expected 100 corners (10x10), got 2"},
       {"a.png x 2 0\n", "finite numbers"},
       {"# nothing\n", "no corners"},
   };
@@ -367,7 +389,7 @@ TEST(Calibration, BoardsInOnePoseAreRefused) {
     }
   }
   const auto dir = test::scratch_dir("one_pose_cli");
-  write_corners(dir / "c.vnl", same);
+  write_corners(dir / "c.vnl", same, kBoard);
   const auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
                                    " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model polynomial --out " +
                                    test::quoted(dir / "cal.json"));
@@ -472,7 +494,7 @@ TEST(Calibration, AgreesWithMrcalCalibrateCameras) {
   const auto dir = test::scratch_dir("mrcal_calibrate");
   const Camera truth = read_camera(test::data_path("stereographic.cameramodel"));
   const auto boards = testing::synthesize_boards(truth, kBoard, 30, 0.3, 9);
-  write_corners(dir / "corners.vnl", boards.observations);
+  write_corners(dir / "corners.vnl", boards.observations, kBoard);
   const std::string command =
       "cd '" + dir.string() +
       "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl "

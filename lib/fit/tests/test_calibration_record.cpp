@@ -330,7 +330,7 @@ TEST(Calibration, ThreadCountDoesNotChangeTheResult) {
   EXPECT_EQ(one.camera.calibration->covariance, two.camera.calibration->covariance);
 
   const auto dir = test::scratch_dir("calibrate_threads");
-  write_corners(dir / "c.vnl", boards.observations);
+  write_corners(dir / "c.vnl", boards.observations, kBoard);
   for (const char* threads : {"1", "2"}) {
     const auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
                                      " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model double-sphere "
@@ -348,7 +348,7 @@ TEST(Calibration, ThreadCountDoesNotChangeTheResult) {
 TEST(Calibration, TheProgramSelectsImagesAndCapsAtTheData) {
   const auto dir = test::scratch_dir("calibrate_options");
   const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
-  write_corners(dir / "c.vnl", testing::synthesize_boards(truth, kBoard, 12, 0.3, 8).observations);
+  write_corners(dir / "c.vnl", testing::synthesize_boards(truth, kBoard, 12, 0.3, 8).observations, kBoard);
   const std::string base = "calibrate --corners " + test::quoted(dir / "c.vnl") +
                            " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model kannala-brandt ";
   auto r = test::run_fishcam(base + "--images 'synth-00[0-5].png,synth-011.png' --theta-limit data+3 --json --out " +
@@ -404,7 +404,7 @@ TEST(Calibration, InfoAndUncertaintyShowWhatTheDataSupport) {
   const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
   const std::vector<BoardObservation> inner = boards_within(truth, 55, 80, 9);
   ASSERT_GE(inner.size(), 6u);
-  write_corners(dir / "c.vnl", inner);
+  write_corners(dir / "c.vnl", inner, kBoard);
   auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
                              " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model polynomial --out " +
                              test::quoted(dir / "cal.json"));
@@ -446,7 +446,7 @@ TEST(Calibration, DiffComparesWhereTheBoardsWere) {
   const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
   const std::vector<BoardObservation> inner = boards_within(truth, 60, 80, 10);
   ASSERT_GE(inner.size(), 8u);
-  write_corners(dir / "c.vnl", inner);
+  write_corners(dir / "c.vnl", inner, kBoard);
   for (const char* model : {"kannala-brandt", "polynomial"}) {
     const auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
                                      " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model " + model + " --out " +
@@ -486,7 +486,7 @@ TEST(Calibration, DiffComparesWhereTheBoardsWere) {
 TEST(Calibration, ConvertCapsAtTheObservedAngles) {
   const auto dir = test::scratch_dir("convert_theta_limit");
   const Camera truth = read_camera(test::data_path("kannala_brandt.yaml"));
-  write_corners(dir / "c.vnl", testing::synthesize_boards(truth, kBoard, 12, 0.3, 11).observations);
+  write_corners(dir / "c.vnl", testing::synthesize_boards(truth, kBoard, 12, 0.3, 11).observations, kBoard);
   auto r = test::run_fishcam("calibrate --corners " + test::quoted(dir / "c.vnl") +
                              " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model kannala-brandt --out " +
                              test::quoted(dir / "cal.json"));

@@ -72,7 +72,7 @@ std::string corners_arguments(const SyntheticRig& rig, const std::filesystem::pa
   std::string arguments;
   for (size_t k = 0; k < rig.cameras.size(); ++k) {
     const auto path = dir / ("cam" + std::to_string(k) + ".vnl");
-    write_corners(path, rig.cameras[k].observations);
+    write_corners(path, rig.cameras[k].observations, kBoard);
     arguments += " --corners " + test::quoted(path);
   }
   return arguments;
@@ -264,7 +264,7 @@ TEST(Rig, AgreesWithMrcalsJointSolve) {
   std::vector<BoardObservation> all;
   for (const auto& camera : rig.cameras) all.insert(all.end(), camera.observations.begin(), camera.observations.end());
   ASSERT_GE(rig.cameras[0].observations.size(), 10u);
-  write_corners(dir / "corners.vnl", all);
+  write_corners(dir / "corners.vnl", all, kBoard);
   const std::string command =
       "cd '" + dir.string() +
       "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl --lensmodel LENSMODEL_STEREOGRAPHIC "

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
@@ -24,7 +25,7 @@ struct Random {
 }  // namespace
 
 SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, int count, double noise_px,
-                                  std::uint64_t seed) {
+                                  std::uint64_t seed, bool partial) {
   check_board(board);
   if (count < 1 || !(noise_px >= 0 && noise_px <= 100)) {
     throw Error("synthesize_boards: needs >= 1 board and a noise sigma in [0, 100] px");
@@ -51,15 +52,24 @@ SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, 
       Eigen::Matrix3d r;
       r << x, z.cross(x), z;
       const BoardPose pose{Eigen::Quaterniond(r), distance * m - r * middle};
-      BoardObservation o{std::string("synth-") + std::to_string(1000 + b).substr(1) + ".png", {}};
+      BoardObservation o{std::string("synth-") + std::to_string(1000 + b).substr(1) + ".png", {}, {}};
       bool inside = true;
-      for (const auto& p : points) {
+      for (size_t id = 0; id < points.size(); ++id) {
         Eigen::Vector2d q;
-        inside = inside && camera.project(pose.rotation * p + pose.translation, &q) && q.x() > 2 && q.y() > 2 &&
-                 q.x() < camera.width() - 3 && q.y() < camera.height() - 3;
-        o.corners.push_back(q);
+        const bool seen = camera.project(pose.rotation * points[id] + pose.translation, &q) && q.x() > 2 && q.y() > 2 &&
+                          q.x() < camera.width() - 3 && q.y() < camera.height() - 3;
+        inside = inside && seen;
+        if (seen || !partial) o.corners.push_back(q), o.ids.push_back(int(id));
+      }
+      if (partial && !inside) {
+        // At least 40 % of the board, over 2 rows and 2 columns of it.
+        std::vector<bool> column(size_t(board.cols)), row(size_t(board.rows));
+        for (int id : o.ids) column[size_t(id % board.cols)] = true, row[size_t(id / board.cols)] = true;
+        inside = 10 * o.ids.size() >= 4 * points.size() && std::count(column.begin(), column.end(), true) >= 2 &&
+                 std::count(row.begin(), row.end(), true) >= 2;
       }
       if (!inside) continue;
+      if (int(o.ids.size()) == board.corners()) o.ids.clear();
       for (auto& q : o.corners) q += noise_px * Eigen::Vector2d(random.normal(), random.normal());
       out.observations.push_back(std::move(o));
       out.poses.push_back(pose);
@@ -77,8 +87,22 @@ namespace fishcam::testing {
 std::vector<std::uint8_t> render_board_image(const Camera& camera, const BoardSpec& board, const BoardPose& pose,
                                              int supersample, double blur_px, double noise_dn, std::uint64_t seed) {
   check_board(board);
+  const double s = board.spacing;
+  const auto chessboard = [&](double x_m, double y_m) {
+    const double x = x_m / s, y = y_m / s;  // inner corners at integers 0..cols-1, 0..rows-1
+    if (x >= -1 && y >= -1 && x < board.cols && y < board.rows) {
+      return (int(std::floor(x)) + int(std::floor(y))) % 2 == 0 ? 20.0 : 235.0;
+    }
+    if (x >= -2 && y >= -2 && x < board.cols + 1 && y < board.rows + 1) return 235.0;  // the white margin
+    return std::numeric_limits<double>::quiet_NaN();
+  };
+  return render_target_image(camera, chessboard, pose, supersample, blur_px, noise_dn, seed);
+}
+
+std::vector<std::uint8_t> render_target_image(const Camera& camera, const TargetPattern& pattern, const BoardPose& pose,
+                                              int supersample, double blur_px, double noise_dn, std::uint64_t seed) {
   if (supersample < 1 || supersample > 8 || !(blur_px >= 0) || !(noise_dn >= 0)) {
-    throw Error("render_board_image: supersample in [1, 8], blur and noise >= 0");
+    throw Error("render_target_image: supersample in [1, 8], blur and noise >= 0");
   }
   const int w = camera.width(), h = camera.height(), n = supersample;
   std::vector<Eigen::Vector2d> pixels;
@@ -95,7 +119,7 @@ std::vector<std::uint8_t> render_board_image(const Camera& camera, const BoardSp
   camera.unproject(pixels, rays, valid);
   const Eigen::Matrix3d r = pose.rotation.toRotationMatrix();
   const Eigen::Vector3d normal = r.col(2);
-  const double offset = normal.dot(pose.translation), s = board.spacing;
+  const double offset = normal.dot(pose.translation);
   std::vector<double> grey(size_t(w) * size_t(h), 0.0);
   for (size_t k = 0; k < rays.size(); ++k) {
     double value = 128;  // background
@@ -103,12 +127,8 @@ std::vector<std::uint8_t> render_board_image(const Camera& camera, const BoardSp
     const double distance = along != 0 ? offset / along : -1;
     if (distance > 0) {
       const Eigen::Vector3d p = r.transpose() * (distance * rays[k] - pose.translation);
-      const double x = p.x() / s, y = p.y() / s;  // inner corners at integers 0..cols-1, 0..rows-1
-      if (x >= -1 && y >= -1 && x < board.cols && y < board.rows) {
-        value = (int(std::floor(x)) + int(std::floor(y))) % 2 == 0 ? 20 : 235;
-      } else if (x >= -2 && y >= -2 && x < board.cols + 1 && y < board.rows + 1) {
-        value = 235;  // the white margin detectors need
-      }
+      const double look = pattern(p.x(), p.y());
+      if (!std::isnan(look)) value = look;
     }
     grey[k / size_t(n * n)] += value / (n * n);
   }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -36,11 +37,27 @@ struct BoardWarp {
 Eigen::Vector2d warp_factors(const BoardSpec& board, const Eigen::Vector3d& point);
 std::vector<Eigen::Vector3d> board_points(const BoardSpec& board, const BoardWarp& warp);
 
-// One image's corners, in board order; empty when the image shows no board.
+// One image's corners; empty when the image shows no board. A board seen whole lists
+// every corner in board order (ids empty); a partial board (a target that may leave
+// the image, such as ChArUco, or corners a detector or mrcal-cull-corners dropped)
+// lists the corners it has, ids[k] being corners[k]'s index in board order (strictly
+// increasing).
 struct BoardObservation {
   std::string filename;
   std::vector<Eigen::Vector2d> corners;
+  std::vector<int> ids{};
+  // corners[k]'s index in board order.
+  int id(size_t k) const { return ids.empty() ? int(k) : ids[k]; }
 };
+// Throws Error naming the image unless `ids` is empty with every corner, or one id per
+// corner, strictly increasing, within the board.
+void check_observation(const BoardSpec& board, const BoardObservation& observation);
+// The board points the observation's corners are, in its order.
+std::vector<Eigen::Vector3d> observed_points(const std::vector<Eigen::Vector3d>& points,
+                                             const BoardObservation& observation);
+// The same view with its corners numbered from the board's other end (corner id m
+// becomes corners() - 1 - m: a symmetric chessboard seen turned by 180 degrees).
+BoardObservation renumbered_from_other_end(const BoardSpec& board, BoardObservation observation);
 
 // Board poses: p_camera = rotation * p_board + translation.
 using BoardPose = Pose;
