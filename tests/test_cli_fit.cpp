@@ -128,8 +128,11 @@ TEST(CliFit, ChArUcoPhotosCalibrateToTheRim) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "photos" / "synth-023.png"));
   std::string photos;
-  for (int b = 0; b < 24; ++b)
-    photos += " " + quoted(dir / "photos" / ("synth-0" + std::to_string(100 + b).substr(1) + ".png"));
+  for (int b = 0; b < 24; ++b) {
+    char name[32];
+    std::snprintf(name, sizeof name, "synth-%03d.png", b);
+    photos.append(" ").append(quoted(dir / "photos" / name));
+  }
   r = run_fishcam("detect-corners" + photos + target + " --out " + quoted(dir / "found.vnl"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("of them partly"), std::string::npos) << r.out;
