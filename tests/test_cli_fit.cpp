@@ -138,8 +138,8 @@ TEST(CliFit, ChArUcoPhotosCalibrateToTheRim) {
   EXPECT_NE(r.out.find("of them partly"), std::string::npos) << r.out;
   // A partial board's missing corners are mrcal's "- - -" rows, every image W*H rows.
   EXPECT_NE(test::read_file(dir / "found.vnl").find(" - - -\n"), std::string::npos);
-  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
-                  " --board 7x5 --spacing 0.1 --imagersize 1280x966 --model kannala-brandt --theta-limit data --json "
+  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") + target +
+                  " --imagersize 1280x966 --model kannala-brandt --theta-limit data --json "
                   "--out " +
                   quoted(dir / "calibrated.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -153,9 +153,19 @@ TEST(CliFit, ChArUcoPhotosCalibrateToTheRim) {
   const auto at = r.out.find("observed angles   theta up to ");
   ASSERT_NE(at, std::string::npos) << r.out;
   EXPECT_GT(std::stod(r.out.substr(at + 30)), 95.0) << r.out;
-  // A chessboard and a ChArUco target at once are refused.
+  // As the chessboard of its inner corners, the same camera.
+  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
+                  " --board 7x5 --spacing 0.1 --imagersize 1280x966 --model kannala-brandt --json --out " +
+                  quoted(dir / "as-chessboard.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["rms_px"], j["rms_px"]);
+  // A chessboard and a ChArUco target at once are refused; so is neither.
   r = run_fishcam("detect-corners" + photos + target + " --board 7x5 --out " + quoted(dir / "both.vnl"));
   EXPECT_NE(r.exit_code, 0);
+  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
+                  " --imagersize 1280x966 --model kannala-brandt --out " + quoted(dir / "neither.json"));
+  EXPECT_NE(r.err.find("give --board WxH and --spacing S (a chessboard), or --target charuco:"), std::string::npos)
+      << r.err;
 }
 
 TEST(CliFit, SynthCornersCalibrateDiff) {

@@ -12,6 +12,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fishcam/augment/charuco.hpp"
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/io/corners.hpp"
 #include "report_folder.hpp"
@@ -47,7 +48,7 @@ std::vector<BoardObservation> select_images(std::vector<BoardObservation> all, c
 
 struct CalibrateOptions {
   std::vector<std::string> corners, imagersize, fix_intrinsics;
-  std::string board, model, images, poses, theta_limit, report, board_warp = "on";
+  std::string board, target, model, images, poses, theta_limit, report, board_warp = "on";
   double spacing = 0;
   int threads = int(std::max(1u, std::thread::hardware_concurrency()));
   CameraOutputOptions output;
@@ -188,8 +189,13 @@ void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
                   "corners.vnl (mrcal's format); once per camera for a rig (images of one instant share their file "
                   "name)")
       ->required();
-  cmd->add_option("--board", o->board, "Inner corners WxH")->required();
-  cmd->add_option("--spacing", o->spacing, "Corner spacing (m)")->required()->check(CLI::PositiveNumber);
+  auto* board = cmd->add_option("--board", o->board, "Inner corners WxH (with --spacing)");
+  auto* spacing = cmd->add_option("--spacing", o->spacing, "Corner spacing (m)")->check(CLI::PositiveNumber);
+  cmd->add_option("--target", o->target,
+                  "A ChArUco board instead of --board and --spacing, charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] "
+                  "(as detect-corners --target; its corners are a (COLS-1)x(ROWS-1) board of spacing SQUARE)")
+      ->excludes(board)
+      ->excludes(spacing);
   cmd->add_option("--imagersize", o->imagersize, "Image size WxH (or W,H); for a rig once, or once per camera")
       ->required();
   cmd->add_option("--model", o->model,
@@ -233,7 +239,10 @@ void register_calibrate(CLI::App& app) {
     inputs.insert(inputs.end(), o->fix_intrinsics.begin(), o->fix_intrinsics.end());
     check_outputs(outputs, inputs, o->output.force);
     if (!o->report.empty()) check_report_folder(o->report, inputs, o->output.force, {o->output.out, o->poses});
-    const BoardSpec board = parse_board(o->board, o->spacing);
+    if (o->target.empty() && (o->board.empty() || !(o->spacing > 0))) {
+      throw Error("give --board WxH and --spacing S (a chessboard), or --target charuco:...");
+    }
+    const BoardSpec board = o->target.empty() ? parse_board(o->board, o->spacing) : parse_charuco(o->target).board();
     if (o->corners.size() > 1 && o->board_warp == "on" && cmd->get_option("--board-warp")->count() > 0) {
       throw Error("--board-warp on: for one camera (a rig's joint solve holds its boards flat)");
     }
