@@ -65,28 +65,17 @@ bool is_planar_view(const py::array& array) {
   return array.strides(1) == item && array.strides(0) == w * item && array.strides(2) == h * w * item;
 }
 
-void merge_planes(py::array& array, const char* what, cv::Mat* merged) {
+std::vector<cv::Mat> image_planes(py::array& array, const char* what) {
   const auto channels = array.shape(2);
   if (channels > 4) throw Error(std::string(what) + ": expected 1 to 4 channels, got " + std::to_string(channels));
   std::vector<cv::Mat> planes;
   for (py::ssize_t c = 0; c < channels; ++c) {
-    // A plane is an HxW C-contiguous view: read where it lies, checked as any image.
+    // A plane is an HxW C-contiguous view: read where it lies, checked as any image
+    // (the views share the array's memory, which the caller keeps alive).
     py::array plane = array[py::make_tuple(py::ellipsis(), c)];
     planes.push_back(as_mat(plane, what, false));
   }
-  // cv::merge writes a vector-aligned destination with non-temporal stores, which
-  // leave the merged image out of the cache the warp then reads it from (0.4 ms of
-  // 1.5 at 640 x 483): the image starts one element past an aligned address, so the
-  // stores are ordinary ones (docs/performance.md, "The v2 path").
-  thread_local std::vector<unsigned char> storage;  // a 64-byte-aligned start is found in it
-  const int type = CV_MAKETYPE(planes[0].depth(), int(channels));
-  const std::size_t element = planes[0].elemSize();
-  const std::size_t bytes = std::size_t(planes[0].rows) * std::size_t(planes[0].cols) * std::size_t(channels) * element;
-  if (storage.size() < bytes + 128) storage.resize(bytes + 128);
-  const auto address = reinterpret_cast<std::uintptr_t>(storage.data());
-  unsigned char* aligned = storage.data() + ((64 - address % 64) % 64);
-  *merged = cv::Mat(planes[0].rows, planes[0].cols, type, aligned + element);
-  cv::merge(planes, *merged);
+  return planes;
 }
 
 py::array new_planar_image(const py::array& like, int height, int width, std::vector<cv::Mat>* planes) {

@@ -35,16 +35,13 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
                   double fill, int label_fill, bool return_valid, const Apply& apply) {
   py::dict out;
   cv::Mat image_in, labels_in, image_out, labels_out, valid_out;
-  std::vector<cv::Mat> out_planes;  // a channels-first image's: the output's planes
+  // A channels-first image: its planes and the output's, sampled where they lie.
+  std::vector<cv::Mat> in_planes, out_planes;
   const bool planar = image && is_planar_view(*image);
   if (planar) {
-    // Interleaved copies in and out, in buffers this thread keeps: a fresh image-sized
-    // buffer per call costs its page faults, as much as the copy itself.
-    thread_local cv::Mat merged, warped;
-    merge_planes(*image, "image", &merged);
+    in_planes = image_planes(*image, "image");
     out["image"] = new_planar_image(*image, target.height, target.width, &out_planes);
-    warped.create(target.height, target.width, merged.type());
-    image_in = merged, image_out = warped;
+    image_in = in_planes[0];  // for the checks below: its size and depth
   } else if (image) {
     image_in = as_mat(*image, "image", false);
     out["image"] = new_image(*image, target.height, target.width, &image_out);
@@ -84,13 +81,17 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
     }
   }
   const std::array<const uchar*, 3> before{image_out.data, labels_out.data, valid_out.data};
-  apply(AugmentIO{image ? &image_in : nullptr, &image_out, fill, labels ? &labels_in : nullptr, &labels_out, label_fill,
-                  return_valid ? &valid_out : nullptr});
+  const uchar* first_plane = planar ? out_planes[0].data : nullptr;
+  AugmentIO io{image && !planar ? &image_in : nullptr, &image_out,  fill,
+               labels ? &labels_in : nullptr,          &labels_out, label_fill,
+               return_valid ? &valid_out : nullptr};
+  if (planar) io.image_planes = in_planes, io.out_image_planes = out_planes;
+  apply(io);
   // The library wrote into the numpy buffers (same size and type).
-  if (before != std::array<const uchar*, 3>{image_out.data, labels_out.data, valid_out.data}) {
+  if (before != std::array<const uchar*, 3>{image_out.data, labels_out.data, valid_out.data} ||
+      (planar && out_planes[0].data != first_plane)) {
     throw Error("internal: an output was reallocated");
   }
-  if (planar) cv::split(image_out, out_planes.data());  // into the output's planes, where they lie
   return out;
 }
 

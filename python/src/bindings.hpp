@@ -67,12 +67,11 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels);
 py::array new_image(const py::array& like, int height, int width, cv::Mat* header);
 // Channels-first images (what torch's CxHxW images are as numpy: np.moveaxis of C
 // contiguous HxW planes) are read and written plane by plane, never through a
-// transposing copy: whether `array` is such an HxWxC view; its planes interleaved
-// into one HxWxC image (cv::merge into a buffer the thread keeps, `merged` its header);
-// a new (C, H, W) array like it, returned as its HxWxC view, with a header per
-// plane to write (cv::split) the result into.
+// transposing copy: whether `array` is such an HxWxC view; a header per plane of it
+// (AugmentIO::image_planes); a new (C, H, W) array like it, returned as its HxWxC
+// view, with a header per plane for the library to write the result into.
 bool is_planar_view(const py::array& array);
-void merge_planes(py::array& array, const char* what, cv::Mat* merged);
+std::vector<cv::Mat> image_planes(py::array& array, const char* what);
 py::array new_planar_image(const py::array& like, int height, int width, std::vector<cv::Mat>* planes);
 
 // Integer labels of any shape as a LabelSpan over the array's own memory (a

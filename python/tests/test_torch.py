@@ -583,11 +583,15 @@ def test_a_dataset_refuses_files_it_cannot_read_without_blocking(tmp_path, small
         ds[2]
 
 
-@pytest.mark.parametrize("channels, dtype", [(3, torch.uint8), (2, torch.uint16), (4, torch.float32)])
+@pytest.mark.parametrize(
+    "channels, dtype",
+    [(3, torch.uint8), (2, torch.uint8), (4, torch.uint8), (2, torch.uint16), (4, torch.float32)],
+)
 def test_channels_first_images_keep_their_layout(small_camera, channels, dtype):
     """A contiguous CxHxW image (what v2.ToImage, Resize and ColorJitter give) is read
     plane by plane and comes back contiguous CxHxW, equal to the same image given
-    channels-last; an HWC-backed one comes back as it did."""
+    channels-last (8-bit planes are sampled where they lie, others through an
+    interleaved copy); an HWC-backed one comes back as it did."""
     rng = np.random.default_rng(channels)
     hwc = rng.integers(0, 200, (121, 160, channels)).astype(torch.empty(0, dtype=dtype).numpy().dtype)
     transform = ft.RandomViewpoint(preset="medium")

@@ -100,6 +100,10 @@ void affine_maps(const AffineChange& change, cv::Size size, WarpMaps* maps) {
 }
 
 void affine_augment(const AffineChange& change, cv::Size size, const AugmentIO& io) {
+  if (!io.image_planes.empty()) {
+    return detail::augment_through_interleaved(
+        io, [&](const AugmentIO& interleaved) { affine_augment(change, size, interleaved); });
+  }
   WarpMaps maps;
   affine_maps(change, size, &maps);
   if (io.image) warp_image(*io.image, maps, io.out_image, io.fill);

@@ -11,6 +11,8 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "grid_warp.hpp"
 #include "kernel_source.hpp"
@@ -226,6 +228,52 @@ void ViewpointWarp::warp_depth(const RigidMotion& change, const DepthSource& sou
   });
 }
 
+namespace detail {
+
+void check_image_planes(const AugmentIO& io) {
+  const auto count = io.image_planes.size();
+  if (io.image) throw Error("augment: an image and image planes given together");
+  if (count > 4) throw Error("image: expected 1 to 4 planes, got " + std::to_string(count));
+  if (io.out_image_planes.size() != count) {
+    throw Error("augment: " + std::to_string(count) + " image planes but " +
+                std::to_string(io.out_image_planes.size()) + " output planes");
+  }
+  for (std::size_t c = 0; c < count; ++c) {
+    const cv::Mat &plane = io.image_planes[c], &out = io.out_image_planes[c];
+    if (plane.channels() != 1 || plane.type() != io.image_planes[0].type() ||
+        plane.size() != io.image_planes[0].size()) {
+      throw Error("image: plane " + std::to_string(c) + " is not a single channel of the first plane's size and type");
+    }
+    if (out.type() != plane.type() || out.size() != io.out_image_planes[0].size()) {
+      throw Error("augment: output plane " + std::to_string(c) + " is not of the first output plane's size and type");
+    }
+  }
+}
+
+void augment_through_interleaved(const AugmentIO& io, const std::function<void(const AugmentIO&)>& apply) {
+  if (io.image_planes.empty()) return apply(io);
+  check_image_planes(io);
+  const auto count = io.image_planes.size();
+  cv::Mat interleaved, out;
+  cv::merge(io.image_planes.data(), count, interleaved);
+  AugmentIO copy = io;
+  copy.image_planes = {}, copy.out_image_planes = {};
+  copy.image = &interleaved, copy.out_image = &out;
+  apply(copy);
+  std::vector<cv::Mat> planes(count);
+  cv::split(out, planes.data());
+  for (std::size_t c = 0; c < count; ++c) {
+    if (io.out_image_planes[c].size() != out.size()) {
+      throw Error("augment: the output planes are " + std::to_string(io.out_image_planes[c].cols) + "x" +
+                  std::to_string(io.out_image_planes[c].rows) + ", the output " + std::to_string(out.cols) + "x" +
+                  std::to_string(out.rows));
+    }
+    planes[c].copyTo(io.out_image_planes[c]);
+  }
+}
+
+}  // namespace detail
+
 void ViewpointWarp::augment(const RigidMotion& change, const DepthSource& depth, const AugmentIO& io,
                             Sampling sampling) const {
   check_change(change);
@@ -234,14 +282,31 @@ void ViewpointWarp::augment(const RigidMotion& change, const DepthSource& depth,
   if (io.image) check_image_input(*io.image, source, io.fill, "image");
   if (io.labels) check_label_input(*io.labels, source, io.label_fill, "labels");
   if ((io.image && !io.out_image) || (io.labels && !io.out_labels)) throw Error("augment: an input without its output");
+  bool planes_share_memory = false;
+  if (!io.image_planes.empty()) {
+    detail::check_image_planes(io);
+    check_image_input(io.image_planes[0], source, io.fill, "image");
+    if (io.out_image_planes[0].size() != cv::Size(target_.width(), target_.height())) {
+      throw Error("augment: the output planes are " + std::to_string(io.out_image_planes[0].cols) + "x" +
+                  std::to_string(io.out_image_planes[0].rows) + " but the target camera is " +
+                  std::to_string(target_.width()) + "x" + std::to_string(target_.height()));
+    }
+    for (const cv::Mat& in : io.image_planes) {
+      for (const cv::Mat& out : io.out_image_planes) planes_share_memory |= shares_memory(in, out);
+    }
+  }
   // An output in the memory of its input would be read while it is written: sample a copy.
   AugmentIO safe = io;
   cv::Mat image_copy, labels_copy;
   if (io.image && shares_memory(*io.image, *io.out_image)) safe.image = &(image_copy = io.image->clone());
   if (io.labels && shares_memory(*io.labels, *io.out_labels)) safe.labels = &(labels_copy = io.labels->clone());
-  if (prior && sampling == Sampling::grid && grid_ &&
+  if (!planes_share_memory && prior && sampling == Sampling::grid && grid_ &&
       detail::grid_augment(*grid_, *kernel_source_, rays_, target_, change, *prior, safe)) {
     return;
+  }
+  if (!safe.image_planes.empty()) {  // planes the grid path did not sample: an interleaved copy (merged: no overlap)
+    return detail::augment_through_interleaved(
+        safe, [&](const AugmentIO& interleaved) { augment(change, depth, interleaved, sampling); });
   }
   WarpMaps maps;
   compute(change, depth, &maps);

@@ -386,8 +386,32 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
   return nullptr;
 }
 
+namespace {
+// A channels-first image's planes as bilinear_8u_planar samples them, or nullopt
+// where it cannot (not 8-bit, rows of different steps, offsets past 31 bits).
+std::optional<BilinearPlanes> planar_source(const AugmentIO& io, const GridRowLoops& loops) {
+  const std::span<const cv::Mat> planes = io.image_planes;
+  if (planes.empty() || !loops.bilinear_8u_planar || planes[0].depth() != CV_8U || planes[0].cols < 4) {
+    return std::nullopt;
+  }
+  BilinearPlanes source{{}, int(planes.size()), planes[0].step[0], planes[0].cols, planes[0].rows, {}};
+  const unsigned char fill = cv::saturate_cast<unsigned char>(io.fill);
+  for (std::size_t c = 0; c < planes.size(); ++c) {
+    if (planes[c].step[0] != source.step || planes[c].dataend - planes[c].data >= kMaxFusedImageBytes) {
+      return std::nullopt;
+    }
+    source.planes[c] = planes[c].data;
+    source.fill[c] = fill;
+  }
+  return source;
+}
+}  // namespace
+
 bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
                   const RigidMotion& change, DepthPrior prior, const AugmentIO& io) {
+  const GridRowLoops loops = grid_row_loops_for_cpu();
+  const std::optional<BilinearPlanes> planar = planar_source(io, loops);
+  if (!io.image_planes.empty() && !planar) return false;  // the caller samples an interleaved copy
   if (!measured(plan, change)) return false;
   const GridChange prepared = prepare(plan, src, change, prior);
   const int w = target.width(), h = target.height();
@@ -396,7 +420,6 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
   if (io.valid) io.valid->create(h, w, CV_8UC1);
   const float limit_x = src.grid.width - 0.5f, limit_y = src.grid.height - 0.5f;
   const float max_x = src.grid.width - 1, max_y = src.grid.height - 1;
-  const GridRowLoops loops = grid_row_loops_for_cpu();
   // 8-bit images with 1, 3 or 4 channels are interpolated row by row while the row's
   // maps are in L1 (byte for byte what cv::remap gives); others by cv::remap per tile.
   std::optional<BilinearSource> fused;
@@ -431,6 +454,12 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
         if (fused) {
           loops.bilinear_8u(*fused, fixed.ptr<short>(v - r0), fractions.ptr<unsigned short>(v - r0), w,
                             io.out_image->ptr<unsigned char>(v));
+        } else if (planar) {
+          unsigned char* out_rows[4] = {};
+          for (int c = 0; c < planar->count; ++c)
+            out_rows[c] = io.out_image_planes[std::size_t(c)].ptr<unsigned char>(v);
+          loops.bilinear_8u_planar(*planar, fixed.ptr<short>(v - r0), fractions.ptr<unsigned short>(v - r0), w,
+                                   out_rows);
         }
       }
       const int rows = r1 - r0;

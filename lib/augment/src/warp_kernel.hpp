@@ -118,6 +118,15 @@ struct BilinearSource {
   int width, height, channels;
   unsigned char fill[4];  // the border value per channel
 };
+// An 8-bit channels-first source for GridRowLoops::bilinear_8u_planar: 1 to 4 planes
+// of one size sharing a row step, each where it lies.
+struct BilinearPlanes {
+  const unsigned char* planes[4];  // each plane's first row
+  int count;
+  std::size_t step;       // bytes per row
+  int width, height;      // width >= 4
+  unsigned char fill[4];  // the border value per plane
+};
 struct GridRowLoops {
   // Spacing 4: pixels 4i .. 4i+3 from the node columns interpolated to the row,
   // column[i] + a (column[i+1] - column[i]) / 4 for a = 0..3, cells [0, cells)
@@ -133,6 +142,11 @@ struct GridRowLoops {
   // than 2 GiB; the maps can be read 7 pixels past the row (those values are unused).
   void (*bilinear_8u)(const BilinearSource& source, const short* fixed, const unsigned short* fractions, int w,
                       unsigned char* out);
+  // The same for each plane of a channels-first image, written to out[c] (the
+  // output row of plane c), byte for byte what cv::remap gives for that plane;
+  // null where the instruction set has no fast form. The planes' offsets fit 31 bits.
+  void (*bilinear_8u_planar)(const BilinearPlanes& source, const short* fixed, const unsigned short* fractions, int w,
+                             unsigned char* const* out);
 };
 GridRowLoops grid_row_loops_baseline();
 GridRowLoops grid_row_loops_avx2();

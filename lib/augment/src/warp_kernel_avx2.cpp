@@ -161,8 +161,77 @@ void bilinear_8u(const BilinearSource& src, const short* fixed, const unsigned s
       return bilinear_8u_row<4>(src, fixed, fractions, w, out);
   }
 }
+// bilinear_8u's arithmetic for channels-first images, 8 pixels at a time: the pixel
+// offsets and weights are found once, then each plane's taps gathered (vpgatherdd,
+// four bytes at each pixel's top and bottom offset, of which the first two are the
+// pixel and its right neighbour), weighed across by pmaddubsw and down by pmaddwd,
+// and 8 output bytes stored into the plane. A pair at the last column is read one
+// byte to the left with its weights swapped (the fraction there is 0: the right
+// tap's weight is 0 anyway); a read that would pass the last row's end starts
+// earlier and is shifted back; pixels without a source read offset 0 and are
+// replaced by the fill. So the planes are sampled where they lie, with no merge
+// before and no split after.
+void bilinear_8u_planar(const BilinearPlanes& src, const short* fixed, const unsigned short* fractions, int w,
+                        unsigned char* const* out) {
+  const __m256i outside = _mm256_set1_epi32(kOutsideFixed), five_bits = _mm256_set1_epi32(31);
+  const __m256i steps = _mm256_set1_epi32(32), half = _mm256_set1_epi32(512), pair = _mm256_set1_epi32(0xffff);
+  const __m256i last_column = _mm256_set1_epi32(src.width - 1), last_row = _mm256_set1_epi32(src.height - 1);
+  const __m256i step = _mm256_set1_epi32(int(src.step)), edge_across = _mm256_set1_epi32(32 << 8);
+  // The last offset a 4-byte read may start at (width >= 4).
+  const __m256i last_read = _mm256_set1_epi32(int(std::size_t(src.height - 1) * src.step) + src.width - 4);
+  const __m256i lane_index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i low_dwords = _mm256_setr_epi32(0, 4, 0, 4, 0, 4, 0, 4);
+  // The 8 bytes (one per pixel) of 8 32-bit lanes holding bytes.
+  auto bytes_of = [&](__m256i lanes32) {
+    const __m256i words = _mm256_packus_epi32(lanes32, lanes32);
+    return _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_packus_epi16(words, words), low_dwords));
+  };
+  for (int u = 0; u < w; u += 8) {
+    const int lanes = w - u < 8 ? w - u : 8;
+    // The maps have room for 7 pixels past the row: their values are not used.
+    const __m256i xy = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(fixed + 2 * u));
+    __m256i x = _mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16), y = _mm256_srai_epi32(xy, 16);
+    const __m256i unused = _mm256_cmpgt_epi32(lane_index, _mm256_set1_epi32(lanes - 1));
+    const __m256i no_source = _mm256_or_si256(_mm256_cmpeq_epi32(x, outside), unused);
+    x = _mm256_andnot_si256(no_source, x), y = _mm256_andnot_si256(no_source, y);
+    const __m256i fraction = _mm256_andnot_si256(
+        no_source, _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(fractions + u))));
+    const __m256i fx = _mm256_and_si256(fraction, five_bits), fy = _mm256_srli_epi32(fraction, 5);
+    const __m256i at_edge = _mm256_cmpeq_epi32(x, last_column);
+    x = _mm256_add_epi32(x, at_edge);  // one to the left (at_edge is -1)
+    const __m256i across = _mm256_blendv_epi8(_mm256_or_si256(_mm256_sub_epi32(steps, fx), _mm256_slli_epi32(fx, 8)),
+                                              edge_across, at_edge);  // bytes (32 - fx, fx, 0, 0)
+    const __m256i down = _mm256_or_si256(_mm256_sub_epi32(steps, fy), _mm256_slli_epi32(fy, 16));
+    const __m256i top = _mm256_add_epi32(_mm256_mullo_epi32(y, step), x);
+    const __m256i bottom = _mm256_add_epi32(top, _mm256_and_si256(_mm256_cmpgt_epi32(last_row, y), step));
+    const __m256i top_read = _mm256_min_epi32(top, last_read), bottom_read = _mm256_min_epi32(bottom, last_read);
+    const __m256i top_shift = _mm256_slli_epi32(_mm256_sub_epi32(top, top_read), 3);
+    const __m256i bottom_shift = _mm256_slli_epi32(_mm256_sub_epi32(bottom, bottom_read), 3);
+    const __m128i fill_lanes = bytes_of(_mm256_and_si256(no_source, _mm256_set1_epi32(255)));
+    for (int c = 0; c < src.count; ++c) {
+      const int* plane = reinterpret_cast<const int*>(src.planes[c]);
+      const __m256i top_taps =
+          _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, top_read, 1), top_shift), pair);
+      const __m256i bottom_taps =
+          _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, bottom_read, 1), bottom_shift), pair);
+      // (top across, bottom across) per pixel, weighed down.
+      const __m256i rows = _mm256_or_si256(_mm256_maddubs_epi16(top_taps, across),
+                                           _mm256_slli_epi32(_mm256_maddubs_epi16(bottom_taps, across), 16));
+      const __m256i value = _mm256_srli_epi32(_mm256_add_epi32(_mm256_madd_epi16(rows, down), half), 10);
+      const __m128i bytes = _mm_blendv_epi8(bytes_of(value), _mm_set1_epi8(char(src.fill[c])), fill_lanes);
+      if (lanes == 8) {
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(out[c] + u), bytes);
+      } else {
+        alignas(16) unsigned char last[16];
+        _mm_store_si128(reinterpret_cast<__m128i*>(last), bytes);
+        std::memcpy(out[c] + u, last, std::size_t(lanes));
+      }
+    }
+  }
+}
 #else
 constexpr auto bilinear_8u = nullptr;  // not an x86-64 build: cv::remap
+constexpr auto bilinear_8u_planar = nullptr;
 #endif
 
 }  // namespace
@@ -171,6 +240,8 @@ RangeKernel select_kernel_avx2(DepthPrior prior, bool inside_sphere, SourceParam
   return avx2::select_kernel(prior, inside_sphere, kind, sampling);
 }
 
-GridRowLoops grid_row_loops_avx2() { return {avx2::interpolate4, avx2::to_fixed_point, bilinear_8u}; }
+GridRowLoops grid_row_loops_avx2() {
+  return {avx2::interpolate4, avx2::to_fixed_point, bilinear_8u, bilinear_8u_planar};
+}
 
 }  // namespace fishcam::detail

@@ -9,6 +9,6 @@ RangeKernel select_kernel_baseline(DepthPrior prior, bool inside_sphere, SourceP
 }
 
 // No fused bilinear: SSE2 has no pshufb / pmaddubsw (cv::remap then samples the image).
-GridRowLoops grid_row_loops_baseline() { return {baseline::interpolate4, baseline::to_fixed_point, nullptr}; }
+GridRowLoops grid_row_loops_baseline() { return {baseline::interpolate4, baseline::to_fixed_point, nullptr, nullptr}; }
 
 }  // namespace fishcam::detail

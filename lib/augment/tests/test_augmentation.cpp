@@ -1073,6 +1073,30 @@ TEST(Augmentation, GridSamplingMatchesTheExactPath) {
       Error);
 }
 
+// `image` given channels-first (AugmentIO::image_planes: its planes one after another
+// in one buffer, as torch's CxHxW images are, each row `pad` elements longer than the
+// image's), the output planes merged back.
+cv::Mat augment_channels_first(const ViewpointWarp& warp, const RigidMotion& change, DepthPrior prior,
+                               const cv::Mat& image, double fill, Sampling sampling, int pad = 0) {
+  const int c = image.channels(), h = image.rows, w = image.cols;
+  const int out_h = warp.target().height(), out_w = warp.target().width();
+  const int plane_type = CV_MAKETYPE(image.depth(), 1);
+  cv::Mat planes_in(c * h, w + pad, plane_type, cv::Scalar::all(7)), planes_out(c * out_h, out_w + pad, plane_type);
+  std::vector<cv::Mat> in, out;
+  for (int k = 0; k < c; ++k) {
+    in.push_back(planes_in(cv::Rect(0, k * h, w, h)));
+    out.push_back(planes_out(cv::Rect(0, k * out_h, out_w, out_h)));
+  }
+  cv::split(image, in.data());  // into the planes, where they lie
+  AugmentIO io{nullptr, nullptr, fill, nullptr, nullptr, 0, nullptr};
+  io.image_planes = in, io.out_image_planes = out;
+  warp.augment(change, prior, io, sampling);
+  EXPECT_EQ(out[0].data, planes_out.data) << "the output planes were reallocated";
+  cv::Mat merged;
+  cv::merge(out, merged);
+  return merged;
+}
+
 // The grid path's image is cv::remap (INTER_LINEAR, BORDER_CONSTANT) of its own map
 // in fixed point, byte for byte, whichever samples it: the fused 8-bit bilinear
 // (AVX2) or cv::remap per tile (other types, and the SSE2 run of this test).
@@ -1123,8 +1147,54 @@ TEST(Augmentation, GridImagesAreCvRemapOfTheGridMapByteForByte) {
       cv::remap(image, expected, fixed, fractions, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(fill));
       warp.augment(change, prior, {&image, &actual, fill, nullptr, nullptr, 0, nullptr}, Sampling::grid);
       EXPECT_EQ(cv::norm(actual, expected, cv::NORM_INF), 0) << seed << " type " << image.type();
+      // Channels-first: 8-bit planes sampled where they lie (bilinear_8u_planar on
+      // AVX2), others through an interleaved copy; contiguous planes and strided ones.
+      for (const int pad : {0, 5}) {
+        const cv::Mat planar = augment_channels_first(warp, change, prior, image, fill, Sampling::grid, pad);
+        EXPECT_EQ(cv::norm(planar, expected, cv::NORM_INF), 0) << seed << " type " << image.type() << " pad " << pad;
+      }
     }
   }
+}
+
+// Channels-first images on every path: two planes (the planar kernel's other
+// count), an odd width (a partial last vector), the exact path and a depth map
+// (through an interleaved copy), byte for byte the interleaved image's result; and the
+// planes' errors.
+TEST(Augmentation, ChannelsFirstImagesEqualInterleavedOnEveryPath) {
+  const Camera camera(resized(woodscape().parameters(), 157, 119));
+  const ViewpointWarp warp(camera);
+  cv::Mat image(camera.height(), camera.width(), CV_8UC2);
+  cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(256));
+  const RigidMotion change = random_change(*find_pose_preset("large"), 2).motion();
+  for (const Sampling sampling : {Sampling::grid, Sampling::exact}) {
+    cv::Mat expected;
+    warp.augment(change, DepthPrior::source_sphere, {&image, &expected, 9, nullptr, nullptr, 0, nullptr}, sampling);
+    const cv::Mat planar = augment_channels_first(warp, change, DepthPrior::source_sphere, image, 9, sampling);
+    EXPECT_EQ(cv::norm(planar, expected, cv::NORM_INF), 0) << int(sampling);
+  }
+  const DepthMap depth{cv::Mat(camera.height(), camera.width(), CV_32FC1, cv::Scalar(4.0f))};
+  cv::Mat expected;
+  warp.augment(change, depth, {&image, &expected, 9, nullptr, nullptr, 0, nullptr});
+  cv::Mat out0(camera.height(), camera.width(), CV_8UC1), out1 = out0.clone();
+  std::vector<cv::Mat> in(2), out{out0, out1};
+  cv::split(image, in.data());
+  AugmentIO io{nullptr, nullptr, 9, nullptr, nullptr, 0, nullptr};
+  io.image_planes = in, io.out_image_planes = out;
+  warp.augment(change, depth, io);
+  cv::Mat merged;
+  cv::merge(out, merged);
+  EXPECT_EQ(cv::norm(merged, expected, cv::NORM_INF), 0);
+
+  std::vector<cv::Mat> one_out{out0};
+  io.out_image_planes = one_out;
+  EXPECT_THROW(warp.augment(change, DepthPrior::source_sphere, io), Error);  // 2 planes in, 1 out
+  std::vector<cv::Mat> mixed{in[0], cv::Mat(camera.height(), camera.width(), CV_16UC1)};
+  io.image_planes = mixed, io.out_image_planes = out;
+  EXPECT_THROW(warp.augment(change, DepthPrior::source_sphere, io), Error);  // planes of two types
+  std::vector<cv::Mat> small_out{cv::Mat(10, 10, CV_8UC1), cv::Mat(10, 10, CV_8UC1)};
+  io.image_planes = in, io.out_image_planes = small_out;
+  EXPECT_THROW(warp.augment(change, DepthPrior::source_sphere, io), Error);  // outputs of another size
 }
 
 // An output given in its own input's memory gives what a separate output gives.

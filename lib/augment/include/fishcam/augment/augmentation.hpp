@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -105,7 +106,22 @@ struct AugmentIO {
   cv::Mat* out_labels = nullptr;
   int label_fill = 0;
   cv::Mat* valid = nullptr;  // CV_8UC1, 1 where the output pixel has a source inside the source image
+  // A channels-first image in place of `image` / `out_image`: its planes (1 to 4,
+  // one channel each, the source's size, one type) and the output's planes (the
+  // target's size and that type, allocated by the caller: written where they lie).
+  // 8-bit planes sharing a row step are sampled where they lie on the grid path;
+  // other paths take them through an interleaved copy.
+  std::span<const cv::Mat> image_planes = {};
+  std::span<cv::Mat> out_image_planes = {};
 };
+
+namespace detail {
+// `apply` run on an interleaved copy of io's channels-first image (image_planes),
+// its output split back into out_image_planes: how a path without a planar form
+// takes one. Checks the planes (Error naming what is wrong).
+void check_image_planes(const AugmentIO& io);
+void augment_through_interleaved(const AugmentIO& io, const std::function<void(const AugmentIO&)>& apply);
+}  // namespace detail
 
 // The source point on the unit sphere (source camera frame) seen along the output
 // ray d (unit) after the viewpoint change, under the depth prior; nullopt where
