@@ -10,6 +10,7 @@ packages=(
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   pybind11-dev python3-pybind11 python3-pytest python3-torch
   libyaml-cpp-dev libpugixml-dev libpng-dev
+  libapriltag-dev  # AprilGrid targets (fishcam/augment/aprilgrid.hpp)
   clang libclang-rt-14-dev  # the sanitizer and fuzzing builds
   clang-format-14  # the style check (scripts/style.sh)
   chromium  # the calibration report page opened in a real browser (tests/test_report_page.sh)

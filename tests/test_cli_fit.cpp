@@ -168,6 +168,53 @@ TEST(CliFit, ChArUcoPhotosCalibrateToTheRim) {
       << r.err;
 }
 
+// Kalibr's AprilGrid the same way: rendered through the 190 degree lens, detected
+// by libapriltag, calibrated to the rim, and its report drawn from the same target.
+TEST(CliFit, AprilGridPhotosCalibrateToTheRim) {
+  const auto dir = test::scratch_dir("cli_aprilgrid");
+  std::filesystem::create_directories(dir / "photos");
+  const std::string target = " --target aprilgrid:6x5:0.1:0.3";
+  auto r = run_fishcam("synth-corners " + quoted(test::data_path("kannala_brandt.yaml")) + target +
+                       " --boards 20 --noise 0 --seed 5 --out " + quoted(dir / "truth.vnl") + " --images " +
+                       quoted(dir / "photos"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("AprilGrid boards of 12x10 corners"), std::string::npos) << r.out;
+  std::string photos;
+  for (int b = 0; b < 20; ++b) {
+    char name[32];
+    std::snprintf(name, sizeof name, "synth-%03d.png", b);
+    photos.append(" ").append(quoted(dir / "photos" / name));
+  }
+  r = run_fishcam("detect-corners" + photos + target + " --out " + quoted(dir / "found.vnl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("of them partly"), std::string::npos) << r.out;
+  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") + target +
+                  " --imagersize 1280x966 --model kannala-brandt --theta-limit data --json --out " +
+                  quoted(dir / "calibrated.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_LT(j["rms_px"].get<double>(), 0.15);
+  EXPECT_NEAR(j["parameters"]["f"]["value"].get<double>(), 331.5526, 1.0);
+  EXPECT_NEAR(j["parameters"]["cx"]["value"].get<double>(), 643.442, 0.5);
+  EXPECT_NEAR(j["parameters"]["cy"]["value"].get<double>(), 479.407, 0.5);
+  r = run_fishcam("info " + quoted(dir / "calibrated.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto at = r.out.find("observed angles   theta up to ");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  EXPECT_GT(std::stod(r.out.substr(at + 30)), 95.0) << r.out;
+  r = run_fishcam("report " + quoted(dir / "calibrated.json") + " --corners " + quoted(dir / "found.vnl") + target +
+                  " --out " + quoted(dir / "report"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "report" / "index.html"));
+  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
+                  " --target grid:6x5:0.1:0.3 --imagersize 1280x966 --model kannala-brandt --out " +
+                  quoted(dir / "bad.json"));
+  EXPECT_NE(r.err.find("expected charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (OpenCV's ChArUco) or "
+                       "aprilgrid:COLSxROWS:SIZE:SPACING"),
+            std::string::npos)
+      << r.err;
+}
+
 TEST(CliFit, SynthCornersCalibrateDiff) {
   const auto dir = test::scratch_dir("cli_calibrate");
   auto r = run_fishcam("synth-corners " + quoted(test::data_path("woodscape_front.json")) +

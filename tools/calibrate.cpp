@@ -12,7 +12,6 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/augment/charuco.hpp"
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/io/corners.hpp"
 #include "report_folder.hpp"
@@ -192,8 +191,9 @@ void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
   auto* board = cmd->add_option("--board", o->board, "Inner corners WxH (with --spacing)");
   auto* spacing = cmd->add_option("--spacing", o->spacing, "Corner spacing (m)")->check(CLI::PositiveNumber);
   cmd->add_option("--target", o->target,
-                  "A ChArUco board instead of --board and --spacing, charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] "
-                  "(as detect-corners --target; its corners are a (COLS-1)x(ROWS-1) board of spacing SQUARE)")
+                  "A target instead of --board and --spacing, charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (its "
+                  "corners are a (COLS-1)x(ROWS-1) board of spacing SQUARE) or aprilgrid:COLSxROWS:SIZE:SPACING (each "
+                  "tag's four corners), as detect-corners --target")
       ->excludes(board)
       ->excludes(spacing);
   cmd->add_option("--imagersize", o->imagersize, "Image size WxH (or W,H); for a rig once, or once per camera")
@@ -239,10 +239,7 @@ void register_calibrate(CLI::App& app) {
     inputs.insert(inputs.end(), o->fix_intrinsics.begin(), o->fix_intrinsics.end());
     check_outputs(outputs, inputs, o->output.force);
     if (!o->report.empty()) check_report_folder(o->report, inputs, o->output.force, {o->output.out, o->poses});
-    if (o->target.empty() && (o->board.empty() || !(o->spacing > 0))) {
-      throw Error("give --board WxH and --spacing S (a chessboard), or --target charuco:...");
-    }
-    const BoardSpec board = o->target.empty() ? parse_board(o->board, o->spacing) : parse_charuco(o->target).board();
+    const BoardSpec board = board_or_target(o->board, o->spacing, o->target);
     if (o->corners.size() > 1 && o->board_warp == "on" && cmd->get_option("--board-warp")->count() > 0) {
       throw Error("--board-warp on: for one camera (a rig's joint solve holds its boards flat)");
     }

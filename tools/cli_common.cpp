@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "fishcam/augment/scene.hpp"
+#include "fishcam/augment/target.hpp"
 #include "fishcam/core/error.hpp"
 #include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/camera_io.hpp"
@@ -291,6 +292,14 @@ BoardSpec parse_board(const std::string& text, double spacing) {
     throw Error(std::string("--board/--spacing: ") + e.what());
   }
   return board;
+}
+
+BoardSpec board_or_target(const std::string& board, double spacing, const std::string& target) {
+  if (!target.empty()) return target_board(parse_target(target));
+  if (board.empty() || !(spacing > 0)) {
+    throw Error("give --board WxH and --spacing S (a chessboard), or --target charuco:... or aprilgrid:...");
+  }
+  return parse_board(board, spacing);
 }
 
 cv::Mat colourise_labels(const cv::Mat& labels) {

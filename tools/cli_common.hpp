@@ -112,6 +112,10 @@ void print_fit_report(const CameraParameters& fitted, const ErrorReport& report,
 
 // --board WxH (inner corners) with the corner spacing.
 BoardSpec parse_board(const std::string& text, double spacing);
+// The board of --board WxH and --spacing S (a chessboard) or of --target (charuco:...
+// or aprilgrid:...: fishcam/augment/target.hpp), refused in one line unless one of
+// them is given.
+BoardSpec board_or_target(const std::string& board, double spacing, const std::string& target);
 
 // Labels as colours (WoodScape classes), for looking at.
 cv::Mat colourise_labels(const cv::Mat& labels);

@@ -1,5 +1,5 @@
-// fishcam detect-corners IMAGES...: chessboard or ChArUco corners found by OpenCV
-// (fishcam/augment/chessboard.hpp, charuco.hpp), in mrcal's corners format.
+// fishcam detect-corners IMAGES...: chessboard, ChArUco or AprilGrid corners (OpenCV, libapriltag)
+// (fishcam/augment/chessboard.hpp, target.hpp), in mrcal's corners format.
 #include <unistd.h>
 #include <opencv2/imgcodecs.hpp>
 
@@ -13,8 +13,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/augment/charuco.hpp"
 #include "fishcam/augment/chessboard.hpp"
+#include "fishcam/augment/target.hpp"
 #include "fishcam/core/parallel.hpp"
 #include "fishcam/io/corners.hpp"
 #include "image_files.hpp"
@@ -89,9 +89,10 @@ void register_detect_corners(CLI::App& app) {
   cmd->add_option("IMAGES", o->images, "Images")->required();
   auto* board_option = cmd->add_option("--board", o->board, "A chessboard's inner corners WxH, e.g. 10x10");
   cmd->add_option("--target", o->target,
-                  "A ChArUco board instead, charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (squares, their side, the "
-                  "markers' side; dictionary 4X4_50 unless given): boards partly outside the image are kept, each "
-                  "corner with its id (calibrate them as --board (COLS-1)x(ROWS-1) --spacing SQUARE)")
+                  "A target whose boards may leave the image instead (each corner kept with its id; calibrate with "
+                  "the same --target): OpenCV's ChArUco, charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (squares, "
+                  "their side, the markers' side; dictionary 4X4_50 unless given), or Kalibr's AprilGrid, "
+                  "aprilgrid:COLSxROWS:SIZE:SPACING (tags, their side, the gap between them over the side)")
       ->excludes(board_option);
   cmd->add_option("--out", o->out, "Output corners.vnl")->required();
   cmd->add_option("--threads", o->threads, "Images detected in parallel")
@@ -104,16 +105,17 @@ void register_detect_corners(CLI::App& app) {
       check_outputs(outputs, o->images, o->force);
     }
     check_distinct_images(o->images);
-    if (o->board.empty() == o->target.empty()) throw Error("give --board WxH (a chessboard) or --target charuco:...");
-    const std::optional<CharucoSpec> charuco =
-        o->target.empty() ? std::nullopt : std::optional(parse_charuco(o->target));
-    const BoardSpec board = charuco ? charuco->board() : parse_board(o->board, 1.0);
+    if (o->board.empty() == o->target.empty()) {
+      throw Error("give --board WxH (a chessboard) or --target charuco:... or aprilgrid:...");
+    }
+    const std::optional<TargetSpec> target = o->target.empty() ? std::nullopt : std::optional(parse_target(o->target));
+    const BoardSpec board = target ? target_board(*target) : parse_board(o->board, 1.0);
     // OpenCV's chessboard detector needs more than 2 corners per side.
-    if (!charuco && (board.cols < 3 || board.rows < 3)) {
+    if (!target && (board.cols < 3 || board.rows < 3)) {
       throw Error("--board: detection needs at least 3x3 inner corners");
     }
     const Detector detect = [&](const cv::Mat& gray) -> std::optional<BoardObservation> {
-      if (charuco) return detect_charuco(gray, *charuco);
+      if (target) return detect_target(gray, *target);
       auto corners = detect_chessboard(gray, board);
       if (!corners) return std::nullopt;
       return BoardObservation{"", std::move(*corners), {}};
@@ -139,7 +141,7 @@ void register_detect_corners(CLI::App& app) {
     if (readable.empty()) throw Error("no image could be read; nothing written (first: " + unreadable[0] + ")");
     write_corners(o->out, readable, board, o->force);
     std::printf("%ld of %zu images show a %dx%d board%s; wrote %s\n", found, count, board.cols, board.rows,
-                charuco ? (" (" + std::to_string(partial) + " of them partly)").c_str() : "", o->out.c_str());
+                target ? (" (" + std::to_string(partial) + " of them partly)").c_str() : "", o->out.c_str());
     if (!unreadable.empty()) {
       throw Error(std::to_string(unreadable.size()) + " image(s) unreadable, first: " + unreadable[0]);
     }

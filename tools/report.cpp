@@ -68,7 +68,7 @@ void register_report(CLI::App& app) {
                                  "the image and per image, their histogram, board coverage, the observed domain, the "
                                  "projection uncertainty, per-image rms) from a camera and its corners");
   struct Options {
-    std::string camera, corners, board, out;
+    std::string camera, corners, board, target, out;
     double spacing = 0;
     bool force = false;
   };
@@ -76,14 +76,18 @@ void register_report(CLI::App& app) {
   cmd->add_option("CAMERA", o->camera, "The calibrated camera (fishcam JSON from calibrate: with its uncertainty)")
       ->required();
   cmd->add_option("--corners", o->corners, "The corners it was calibrated from (corners.vnl)")->required();
-  cmd->add_option("--board", o->board, "Inner corners WxH")->required();
-  cmd->add_option("--spacing", o->spacing, "Corner spacing (m)")->required()->check(CLI::PositiveNumber);
+  auto* board = cmd->add_option("--board", o->board, "Inner corners WxH (with --spacing)");
+  auto* spacing = cmd->add_option("--spacing", o->spacing, "Corner spacing (m)")->check(CLI::PositiveNumber);
+  cmd->add_option("--target", o->target,
+                  "The target instead of --board and --spacing (charuco:... or aprilgrid:..., as calibrate --target)")
+      ->excludes(board)
+      ->excludes(spacing);
   cmd->add_option("--out", o->out, "The report's folder (created; index.html and the figures)")->required();
   cmd->add_flag("--force", o->force, "Write into a folder that is not empty, replacing the report's files");
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([o, inputs] {
     check_report_folder(o->out, {o->camera, o->corners}, o->force, {});
-    const BoardSpec board = parse_board(o->board, o->spacing);
+    const BoardSpec board = board_or_target(o->board, o->spacing, o->target);
     const Camera camera = inputs->read(o->camera);
     // The boards are located without the valid domain's cap: a corner just past a
     // per-azimuth limit is still a corner of the calibration.

@@ -5,7 +5,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fishcam/augment/charuco.hpp"
+#include "fishcam/augment/target.hpp"
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/io/atomic_file.hpp"
 #include "fishcam/io/corners.hpp"
@@ -34,8 +34,9 @@ void register_synth_corners(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--target", o->target,
-                  "A ChArUco board instead, charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (squares; its boards may "
-                  "leave the image: the corners inside it are written with their ids)")
+                  "A target whose boards may leave the image instead (the corners inside it are written with their "
+                  "ids): charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] or aprilgrid:COLSxROWS:SIZE:SPACING (as "
+                  "detect-corners --target)")
       ->excludes(board);
   cmd->add_option("--out", o->out, "Output corners.vnl")->required();
   cmd->add_option("--truth", o->truth, "Also write the true camera here (fishcam JSON)");
@@ -46,12 +47,11 @@ void register_synth_corners(CLI::App& app) {
   cmd->add_flag("--force", o->force, "Replace existing output files");
   const auto inputs = add_camera_input_options(cmd);
   cmd->callback([o, inputs] {
-    const std::optional<CharucoSpec> charuco =
-        o->target.empty() ? std::nullopt : std::optional(parse_charuco(o->target));
-    const BoardSpec board = charuco ? charuco->board() : parse_board(o->board, o->spacing);
+    const std::optional<TargetSpec> target = o->target.empty() ? std::nullopt : std::optional(parse_target(o->target));
+    const BoardSpec board = target ? target_board(*target) : parse_board(o->board, o->spacing);
     const Camera camera = inputs->read(o->camera);
     const testing::SyntheticBoards synthetic =
-        testing::synthesize_boards(camera, board, o->boards, o->noise, o->seed, /*partial=*/charuco.has_value());
+        testing::synthesize_boards(camera, board, o->boards, o->noise, o->seed, /*partial=*/target.has_value());
     std::vector<OutputFile> outputs{{o->out}, {o->truth}};
     if (!o->images.empty()) {
       for (const auto& view : synthetic.observations)
@@ -63,12 +63,11 @@ void register_synth_corners(CLI::App& app) {
         {o->out, format_corners(synthetic.observations, board)}};
     if (!o->truth.empty()) files.emplace_back(o->truth, format_camera(camera.parameters(), CameraFormat::fishcam));
     if (!o->images.empty()) {
-      const std::optional<CharucoTexture> texture =
-          charuco ? std::optional<CharucoTexture>(CharucoTexture(*charuco)) : std::nullopt;
+      const std::function<double(double, double)> texture = target ? target_texture(*target) : nullptr;
       for (size_t b = 0; b < synthetic.observations.size(); ++b) {
         const BoardPose& pose = synthetic.poses[b];
         std::vector<std::uint8_t> pixels =
-            texture ? testing::render_target_image(camera, *texture, pose, 3, 0.8, 2.0, o->seed + b)
+            texture ? testing::render_target_image(camera, texture, pose, 3, 0.8, 2.0, o->seed + b)
                     : testing::render_board_image(camera, board, pose, 3, 0.8, 2.0, o->seed + b);
         const cv::Mat image(camera.height(), camera.width(), CV_8UC1, pixels.data());
         const auto path = std::filesystem::path(o->images) / synthetic.observations[b].filename;
@@ -77,7 +76,7 @@ void register_synth_corners(CLI::App& app) {
     }
     write_outputs(files, o->force);
     std::printf("wrote %d %s boards of %dx%d corners (noise %.3g px) to %s%s%s\n", o->boards,
-                charuco ? "ChArUco" : "chess", board.cols, board.rows, o->noise, o->out.c_str(),
+                target ? target_name(*target).c_str() : "chess", board.cols, board.rows, o->noise, o->out.c_str(),
                 o->images.empty() ? "" : ", their photos to ", o->images.c_str());
   });
 }

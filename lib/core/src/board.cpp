@@ -18,12 +18,20 @@ void check_board(const BoardSpec& board) {
     throw Error("board: the corner spacing must lie within [1e-06, 10000] (any unit), got " +
                 number_for_message(board.spacing));
   }
+  if (!(board.gap == 0 || (board.gap >= 1e-6 && board.gap <= 1e4))) {
+    throw Error("board: the gap between tags must be 0 or lie within [1e-06, 10000] (any unit), got " +
+                number_for_message(board.gap));
+  }
+  if (board.gap > 0 && (board.cols % 2 || board.rows % 2)) {
+    throw Error("board: a grid of tags has an even number of corners per side, got " + std::to_string(board.cols) +
+                "x" + std::to_string(board.rows));
+  }
 }
 
 std::vector<Eigen::Vector3d> board_points(const BoardSpec& board) {
   std::vector<Eigen::Vector3d> points;
   for (int j = 0; j < board.rows; ++j) {
-    for (int i = 0; i < board.cols; ++i) points.emplace_back(i * board.spacing, j * board.spacing, 0.0);
+    for (int i = 0; i < board.cols; ++i) points.emplace_back(board.coordinate(i), board.coordinate(j), 0.0);
   }
   return points;
 }
@@ -65,7 +73,7 @@ BoardObservation renumbered_from_other_end(const BoardSpec& board, BoardObservat
 }
 
 Eigen::Vector2d warp_factors(const BoardSpec& board, const Eigen::Vector3d& point) {
-  const double u = point.x() / ((board.cols - 1) * board.spacing), v = point.y() / ((board.rows - 1) * board.spacing);
+  const double u = point.x() / board.width(), v = point.y() / board.height();
   return {4 * u * (1 - u), 4 * v * (1 - v)};
 }
 

@@ -270,17 +270,26 @@ ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<
 // and along the column, over the mean step. A lens bends a board smoothly, so
 // neighbouring steps along a row or a column stay alike (well under 0.25 even at a
 // fisheye's rim); corners read with the wrong row length jump back and forth
-// between rows along the columns and give 1 or more.
-std::vector<double> grid_bends(const BoardObservation& view, int cols, int rows) {
+// between rows along the columns and give 1 or more. On a grid whose steps alternate
+// (an AprilGrid's tag sides and gaps: BoardSpec::gap) the middle corner is compared
+// with where it divides its neighbours' segment on the board.
+std::vector<double> grid_bends(const BoardObservation& view, const BoardSpec& board) {
+  const int cols = board.cols, rows = board.rows;
   // Each board corner's detection, if the view has it (a partial board: the triples it
   // has whole).
   std::vector<const Eigen::Vector2d*> by_id(size_t(cols * rows), nullptr);
   for (size_t k = 0; k < view.corners.size(); ++k) by_id[size_t(view.id(k))] = &view.corners[k];
   const auto has = [&](int i, int j) { return by_id[size_t(j * cols + i)] != nullptr; };
   const auto at = [&](int i, int j) { return *by_id[size_t(j * cols + i)]; };
-  const auto bend = [](const Eigen::Vector2d& before, const Eigen::Vector2d& here, const Eigen::Vector2d& after) {
+  // `share`: where `here` lies between `before` and `after` on the board (1/2 on a chessboard).
+  const auto bend = [](const Eigen::Vector2d& before, const Eigen::Vector2d& here, const Eigen::Vector2d& after,
+                       double share) {
     const double step = ((here - before).norm() + (after - here).norm()) / 2;
-    return step > 0 ? (after - 2 * here + before).norm() / step : std::numeric_limits<double>::infinity();
+    return step > 0 ? 2 * (here - before - share * (after - before)).norm() / step
+                    : std::numeric_limits<double>::infinity();
+  };
+  const auto share_at = [&](int i) {
+    return (board.coordinate(i) - board.coordinate(i - 1)) / (board.coordinate(i + 1) - board.coordinate(i - 1));
   };
   std::vector<double> points;
   for (int j = 0; j < rows; ++j) {
@@ -288,10 +297,10 @@ std::vector<double> grid_bends(const BoardObservation& view, int cols, int rows)
       double worst = -1;
       if (!has(i, j)) continue;
       if (i > 0 && i + 1 < cols && has(i - 1, j) && has(i + 1, j)) {
-        worst = std::max(worst, bend(at(i - 1, j), at(i, j), at(i + 1, j)));
+        worst = std::max(worst, bend(at(i - 1, j), at(i, j), at(i + 1, j), share_at(i)));
       }
       if (j > 0 && j + 1 < rows && has(i, j - 1) && has(i, j + 1)) {
-        worst = std::max(worst, bend(at(i, j - 1), at(i, j), at(i, j + 1)));
+        worst = std::max(worst, bend(at(i, j - 1), at(i, j), at(i, j + 1), share_at(j)));
       }
       if (worst >= 0) points.push_back(worst);
     }
@@ -306,9 +315,9 @@ double median_of(std::vector<double> values) {
 }
 
 // The median over boards of their median bend (a 2 x 2 board: nothing to tell, 0).
-double median_grid_disorder(const std::vector<const BoardObservation*>& boards, int cols, int rows) {
+double median_grid_disorder(const std::vector<const BoardObservation*>& boards, const BoardSpec& board) {
   std::vector<double> disorder;
-  for (const auto* b : boards) disorder.push_back(median_of(grid_bends(*b, cols, rows)));
+  for (const auto* b : boards) disorder.push_back(median_of(grid_bends(*b, board)));
   return median_of(disorder);
 }
 
@@ -316,10 +325,10 @@ double median_grid_disorder(const std::vector<const BoardObservation*>& boards, 
 // A board read with a row length that divides neither its rows nor its corner count
 // evenly (2 x 27 for a 9 x 6 board) keeps a low median bend -- most triples lie in one
 // row -- but every wrap from one row to the next bends by a step or more.
-double median_disordered_share(const std::vector<const BoardObservation*>& boards, int cols, int rows) {
+double median_disordered_share(const std::vector<const BoardObservation*>& boards, const BoardSpec& board) {
   std::vector<double> shares;
   for (const auto* b : boards) {
-    const std::vector<double> bends = grid_bends(*b, cols, rows);
+    const std::vector<double> bends = grid_bends(*b, board);
     const auto bent = std::count_if(bends.begin(), bends.end(), [](double v) { return !(v <= 0.5); });
     shares.push_back(bends.empty() ? 0 : double(bent) / double(bends.size()));
   }
@@ -334,15 +343,15 @@ void check_board_order(const std::vector<const BoardObservation*>& boards, const
   // keeps most triples in a row, so its median bend may pass; the wraps between rows
   // (the share of corners bent by more than half a step) do not.
   constexpr double kWrapped = 0.1, kClean = 0.02;
-  const double given = median_grid_disorder(boards, board.cols, board.rows);
-  const double share = given > kDisordered ? 1.0 : median_disordered_share(boards, board.cols, board.rows);
+  const double given = median_grid_disorder(boards, board);
+  const double share = given > kDisordered ? 1.0 : median_disordered_share(boards, board);
   if (share <= kWrapped) return;
   const std::string as_given = std::to_string(board.cols) + "x" + std::to_string(board.rows);
   const int n = board.cols * board.rows;
   for (int cols = 2; cols <= n / 2; ++cols) {  // the row length that explains the corners
     if (n % cols != 0 || cols == board.cols || n / cols < 2) continue;
-    if (median_grid_disorder(boards, cols, n / cols) <= kOrdered &&
-        median_disordered_share(boards, cols, n / cols) <= kClean) {
+    const BoardSpec other{cols, n / cols, 1.0};  // a chessboard of that row length
+    if (median_grid_disorder(boards, other) <= kOrdered && median_disordered_share(boards, other) <= kClean) {
       const std::string fits = std::to_string(cols) + "x" + std::to_string(n / cols);
       throw Error("calibrate: the corners are ordered as a " + fits + " board, not " + as_given + " (rows of " +
                   std::to_string(cols) + "): pass --board " + fits);

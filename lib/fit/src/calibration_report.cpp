@@ -13,9 +13,10 @@ namespace {
 constexpr double kDegreesPerRadian = 180 / std::numbers::pi;
 
 constexpr const char* kPoseConvention =
-    "p_camera = R(quaternion) p_board + translation; board corner (i, j) at (i * spacing, j * spacing, z), z = 0 "
-    "or the board_warp's (x2 * 4u(1 - u) + y2 * 4v(1 - v), u = i / (W - 1), v = j / (H - 1)), in board order (rows "
-    "of W corners)";
+    "p_camera = R(quaternion) p_board + translation; board corner (i, j) at (i * spacing, j * spacing, z) on a "
+    "chessboard, (c(i), c(j), z) with c(i) = floor(i / 2) (size + gap) + (i % 2) size on an AprilGrid, z = 0 or the "
+    "board_warp's (x2 * 4u(1 - u) + y2 * 4v(1 - v), u = x / x(W - 1), v = y / y(H - 1)), in board order (rows of W "
+    "corners)";
 
 nlohmann::json poses_of(const CalibrationResult& result) {
   nlohmann::json poses = nlohmann::json::array();

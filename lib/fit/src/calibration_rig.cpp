@@ -138,7 +138,7 @@ void check_distinct_cameras(const std::vector<std::map<int, const BoardObservati
 // board's points moved by this half turn about the board's centre.
 Pose board_half_turn(const BoardSpec& board) {
   return {Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitZ())),
-          Eigen::Vector3d((board.cols - 1) * board.spacing, (board.rows - 1) * board.spacing, 0)};
+          Eigen::Vector3d(board.width(), board.height(), 0)};
 }
 
 // Relative poses of one camera pair that describe the same mounting, each estimated

@@ -1,4 +1,4 @@
-// Boards seen in part: ChArUco targets (detected with their corner ids, rendered
+// Boards seen in part: ChArUco and AprilGrid targets (detected with their corner ids, rendered
 // through a fisheye) and partial observations in calibration, which let the corners
 // reach the rim of a lens that sees more than 180 degrees.
 #include <opencv2/core.hpp>
@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "fishcam/augment/aprilgrid.hpp"
 #include "fishcam/augment/charuco.hpp"
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/testing/test_support.hpp"
@@ -95,6 +96,83 @@ TEST(Charuco, DetectsPartialBoardsWithTheirIds) {
   EXPECT_FALSE(detect_charuco(cv::Mat(200, 300, CV_8UC1, cv::Scalar(128)), kTarget));
   EXPECT_THROW(detect_charuco(cv::Mat(200, 300, CV_8UC3), kTarget), Error);
   EXPECT_THROW(CharucoTexture(kTarget, 4), Error);
+}
+
+TEST(AprilGrid, TargetsParseAndBadOnesAreRefused) {
+  const AprilGridSpec spec = parse_aprilgrid("aprilgrid:6x5:0.088:0.3");
+  EXPECT_EQ(spec.cols, 6);
+  EXPECT_EQ(spec.rows, 5);
+  EXPECT_EQ(spec.size, 0.088);
+  EXPECT_EQ(spec.spacing, 0.3);
+  const BoardSpec board = spec.board();
+  EXPECT_EQ(board.cols, 12);
+  EXPECT_EQ(board.rows, 10);
+  // A tag's two edges `size` apart, the next tag's edge the gap further.
+  EXPECT_NEAR(board.coordinate(1) - board.coordinate(0), 0.088, 1e-15);
+  EXPECT_NEAR(board.coordinate(2) - board.coordinate(1), 0.3 * 0.088, 1e-15);
+  EXPECT_NEAR(board.width(), 5 * 1.3 * 0.088 + 0.088, 1e-15);
+  const struct {
+    const char* text;
+    const char* expected;
+  } bad[] = {
+      {"aprilgrid:6x6:0.088", "expected aprilgrid:COLSxROWS:SIZE:SPACING"},
+      {"charuco:6x6:0.088:0.3", "expected aprilgrid:COLSxROWS:SIZE:SPACING"},
+      {"aprilgrid:6by6:0.088:0.3", "expected aprilgrid:COLSxROWS:SIZE:SPACING"},
+      {"aprilgrid:0x6:0.088:0.3", "1 to 100 tags per side"},
+      {"aprilgrid:30x30:0.088:0.3", "900 tags; the 36h11 family has 587"},
+      {"aprilgrid:6x6:0.088:0", "spacing (the gap between tags over their side) must lie within (0, 1]"},
+      {"aprilgrid:6x6:0.088:1.5", "must lie within (0, 1]"},
+      {"aprilgrid:6x6:inf:0.3", "the tags' side must be a finite number > 0"},
+  };
+  for (const auto& c : bad) {
+    const std::string said = message_of([&] { parse_aprilgrid(c.text); });
+    EXPECT_NE(said.find(c.expected), std::string::npos) << c.text << ": " << said;
+  }
+  EXPECT_NE(message_of([] {
+              check_board({3, 4, 0.1, 0.03});
+            }).find("even number of corners per side"),
+            std::string::npos);
+}
+
+// Rendered as Kalibr prints it through the fisheye (boards partly outside the image
+// among them), the detector finds corners where the camera projects them, each under
+// its own id.
+TEST(AprilGrid, DetectsPartialBoardsWithTheirIds) {
+  const Camera camera = read_camera(test::data_path("kannala_brandt.yaml"));
+  const AprilGridSpec target{6, 5, 0.1, 0.3};
+  const BoardSpec board = target.board();
+  const auto synthetic = testing::synthesize_boards(camera, board, 6, 0.0, 5, /*partial=*/true);
+  const AprilGridTexture texture(target);
+  const auto points = board_points(board);
+  int found = 0, partial = 0;
+  size_t visible = 0;
+  std::vector<double> errors;
+  for (size_t b = 0; b < synthetic.poses.size(); ++b) {
+    auto pixels = testing::render_target_image(camera, texture, synthetic.poses[b], 3, 0.8, 2.0, b);
+    const cv::Mat image(camera.height(), camera.width(), CV_8UC1, pixels.data());
+    visible += synthetic.observations[b].corners.size();
+    const auto view = detect_aprilgrid(image, target);
+    if (!view) continue;
+    ++found;
+    partial += view->ids.empty() ? 0 : 1;
+    for (size_t k = 0; k < view->corners.size(); ++k) {
+      Eigen::Vector2d truth;
+      const BoardPose& pose = synthetic.poses[b];
+      ASSERT_TRUE(camera.project(pose.rotation * points[size_t(view->id(k))] + pose.translation, &truth));
+      errors.push_back((view->corners[k] - truth).norm());
+    }
+  }
+  EXPECT_EQ(found, 6);
+  EXPECT_GE(partial, 2);
+  // Tags cut by the image's edge are not found: most of the corners in view are.
+  EXPECT_GE(errors.size(), visible * 85 / 100) << errors.size() << " of " << visible;
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.06);
+  EXPECT_LT(errors.back(), 0.35);
+  EXPECT_FALSE(detect_aprilgrid(cv::Mat(200, 300, CV_8UC1, cv::Scalar(128)), target));
+  EXPECT_THROW(detect_aprilgrid(cv::Mat(200, 300, CV_8UC3), target), Error);
+  // The chessboard renderer refuses a grid of tags rather than drawing squares.
+  EXPECT_THROW(testing::render_board_image(camera, board, synthetic.poses[0], 1, 0, 0, 0), Error);
 }
 
 // Partial boards let the corners reach the rim: the calibration recovers the lens

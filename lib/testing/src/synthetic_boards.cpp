@@ -32,8 +32,8 @@ SyntheticBoards synthesize_boards(const Camera& camera, const BoardSpec& board, 
   }
   Random random{std::mt19937_64(seed)};
   const auto points = board_points(board);
-  const Eigen::Vector3d middle((board.cols - 1) * board.spacing / 2, (board.rows - 1) * board.spacing / 2, 0);
-  const double extent = std::max(board.cols - 1, board.rows - 1) * board.spacing;
+  const Eigen::Vector3d middle(board.width() / 2, board.height() / 2, 0);
+  const double extent = std::max(board.width(), board.height());
   SyntheticBoards out;
   for (int b = 0; b < count; ++b) {
     bool placed = false;
@@ -87,6 +87,7 @@ namespace fishcam::testing {
 std::vector<std::uint8_t> render_board_image(const Camera& camera, const BoardSpec& board, const BoardPose& pose,
                                              int supersample, double blur_px, double noise_dn, std::uint64_t seed) {
   check_board(board);
+  if (board.gap > 0) throw Error("render_board_image draws chessboards; a grid of tags: render_target_image");
   const double s = board.spacing;
   const auto chessboard = [&](double x_m, double y_m) {
     const double x = x_m / s, y = y_m / s;  // inner corners at integers 0..cols-1, 0..rows-1

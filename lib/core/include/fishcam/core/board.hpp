@@ -16,20 +16,31 @@ namespace fishcam {
 // A chessboard of cols x rows inner corners, `spacing` metres apart. Its points, in
 // board order (row-major: x = i * spacing for i < cols, y = j * spacing, z = 0), are
 // the order corner files list them in.
+//
+// A grid of tags (an AprilGrid: fishcam/augment/aprilgrid.hpp) has `gap` > 0: its
+// corners come in pairs, a tag's two edges `spacing` apart, and the pairs `gap`
+// apart (the space between tags), so coordinate(i) = (i / 2) (spacing + gap) +
+// (i % 2) spacing along x and y; cols and rows are even.
 struct BoardSpec {
   int cols = 0, rows = 0;
   double spacing = 0;
+  double gap = 0;
   int corners() const { return cols * rows; }
+  // The coordinate of corner column (or row) i along x (or y).
+  double coordinate(int i) const { return gap > 0 ? (i / 2) * (spacing + gap) + (i % 2) * spacing : i * spacing; }
+  double width() const { return coordinate(cols - 1); }
+  double height() const { return coordinate(rows - 1); }
 };
-// Throws Error unless the board has 2..1000 corners per side and a finite spacing > 0.
+// Throws Error unless the board has 2..1000 corners per side and a finite spacing > 0
+// (and a gap >= 0 within the same range, with an even number of corners per side).
 void check_board(const BoardSpec& board);
 std::vector<Eigen::Vector3d> board_points(const BoardSpec& board);
 
 // A board that is not flat, as mrcal models it (calobject_warp): corner (i, j) moves
-// along the board's z by x2 * 4u(1 - u) + y2 * 4v(1 - v), u = i / (cols - 1) and
-// v = j / (rows - 1), two parabolas whose deflections at the middle of the board's
-// width and height are x2 and y2 (board units; z as board_points', so a board bowed
-// towards a camera looking at its front has x2, y2 < 0).
+// along the board's z by x2 * 4u(1 - u) + y2 * 4v(1 - v), u = x / width() and
+// v = y / height() (i / (cols - 1) and j / (rows - 1) on a chessboard), two parabolas whose deflections at the middle
+// of the board's width and height are x2 and y2 (board units; z as board_points', so a board bowed towards a camera
+// looking at its front has x2, y2 < 0).
 struct BoardWarp {
   double x2 = 0, y2 = 0;
 };
