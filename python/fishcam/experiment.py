@@ -14,6 +14,7 @@ size; example predictions; needs matplotlib).
 
     build/tools/fishcam sample-dataset sv --scenes 48 --size 192x145 --seed 1 --depth
     python -m fishcam.experiment sv results/ [--seeds 3] [--epochs 12] [--quick]
+    python -m fishcam.experiment sv results/ --budget 60   # --scale, --train-images, --width, --epochs chosen
 
 Under ``torchrun --nproc_per_node=N`` each process trains on its share of every
 batch (``DistributedSampler`` inside ``fishcam.torch.EpochSampler``, gloo on the CPU,
@@ -61,6 +62,8 @@ MAX_WIDTH = 256
 # difference is reported (the dataset's identity is compared first); the option that
 # sets each.
 SETTINGS = (
+    ("scale", "--scale"),
+    ("train_images", "--train-images"),
     ("epochs", "--epochs"),
     ("batch_size", "--batch-size"),
     ("width", "--width"),
@@ -70,8 +73,9 @@ SETTINGS = (
     ("channels_last", "--channels-last"),
     ("processes", "--nproc_per_node (torchrun's processes)"),
 )
-# The value a setting had before the harness recorded it (runs stored by then).
-SETTING_DEFAULTS = {"amp": False, "channels_last": False}
+# The value a setting had before the harness recorded it (runs stored by then; they
+# trained on every image of train/, which stored_run is told).
+SETTING_DEFAULTS: dict[str, typing.Any] = {"amp": False, "channels_last": False, "scale": 1.0}
 
 # Augmentation configurations: Table 3 (none, base, viewpoint, base + viewpoint),
 # Table 4 (affine vs viewpoint), Table 5 (viewpoint computed with a model fitted to
@@ -89,11 +93,12 @@ CONFIGS = (
     "viewpoint:stereographic:lsq",
     "viewpoint:kannala-brandt:lsq",
 )
-# --quick's settings, and the defaults without it (an option given explicitly wins).
+# --quick's settings, and the defaults without it (an option given explicitly wins;
+# with either, --scale 1 and --train-images all of train/ unless --budget chooses them).
 QUICK: dict[str, typing.Any] = {"configs": "none,viewpoint", "seeds": 2, "epochs": 1, "width": 4}
 DEFAULTS: dict[str, typing.Any] = {"configs": ",".join(CONFIGS), "seeds": 3, "epochs": 10, "width": 16}
 # What --budget chooses when not given (fishcam.experiment_budget).
-BUDGET_CHOOSES = ("width", "epochs")
+BUDGET_CHOOSES = ("scale", "train_images", "width", "epochs")
 
 
 class UNet(torch.nn.Module):
@@ -145,8 +150,35 @@ class ReplaceCamera:
         return {**sample, "camera": self._fits[camera]}
 
 
-def transform_for(config: str) -> typing.Optional[typing.Callable[[typing.Any], typing.Any]]:
-    """The training transform of a configuration (None: no augmentation)."""
+def scaled_size(image_size: tuple[int, int], scale: float) -> tuple[int, int]:
+    """(height, width) of an image of ``image_size`` downscaled by ``scale`` (halves
+    rounded up, at least one pixel)."""
+    height, width = image_size
+    return max(1, math.floor(height * scale + 0.5)), max(1, math.floor(width * scale + 0.5))
+
+
+class Downscale:
+    """Resizes a sample by ``scale`` (--scale) through ``fishcam.torch.Resize``: the
+    image with antialiasing, the labels nearest-neighbour (torchvision resizes masks
+    so), and the camera resized with them (``Camera.resized``), so that the viewpoint
+    augmentation after it stays exact at the new resolution."""
+
+    def __init__(self, scale: float) -> None:
+        self.scale = scale
+        self._resizes: dict[tuple[int, int], typing.Any] = {}
+
+    def __call__(self, sample: dict[str, typing.Any]) -> dict[str, typing.Any]:
+        height, width = sample["image"].shape[-2:]
+        size = scaled_size((int(height), int(width)), self.scale)
+        if size not in self._resizes:
+            self._resizes[size] = ft.Resize(size)
+        resized: dict[str, typing.Any] = self._resizes[size](sample)
+        return resized
+
+
+def transform_for(config: str, scale: float = 1.0) -> typing.Optional[typing.Callable[[typing.Any], typing.Any]]:
+    """The training transform of a configuration at ``scale`` (None: no augmentation):
+    the downscaling first, so the augmentations see the training resolution's camera."""
     if config not in CONFIGS:
         raise Error(f"config: expected one of {', '.join(CONFIGS)}, got {config!r}")
     to_float = v2.ToDtype({tv_tensors.Image: torch.float32, "others": None}, scale=True)
@@ -155,7 +187,7 @@ def transform_for(config: str) -> typing.Optional[typing.Callable[[typing.Any], 
         v2.GaussianBlur(5, sigma=(0.1, 1.5)),
         v2.RandomHorizontalFlip(),
     ]
-    steps: list[typing.Any] = []
+    steps: list[typing.Any] = [] if scale == 1 else [Downscale(scale)]
     if config.startswith("viewpoint:"):
         _, model, method = config.split(":")
         steps += [ReplaceCamera(model, method), ft.RandomViewpoint(preset="train", fill_mask=NO_SOURCE)]
@@ -169,11 +201,14 @@ def transform_for(config: str) -> typing.Optional[typing.Callable[[typing.Any], 
     return compose
 
 
-def evaluation_transform() -> typing.Callable[[typing.Any], typing.Any]:
-    to_float: typing.Callable[[typing.Any], typing.Any] = v2.ToDtype(
-        {tv_tensors.Image: torch.float32, "others": None}, scale=True
+def evaluation_transform(scale: float = 1.0) -> typing.Callable[[typing.Any], typing.Any]:
+    """What the test images go through: downscaled as the training images (``scale``),
+    labels nearest-neighbour, so a run is scored at the resolution it trained at."""
+    to_float = v2.ToDtype({tv_tensors.Image: torch.float32, "others": None}, scale=True)
+    transform: typing.Callable[[typing.Any], typing.Any] = (
+        to_float if scale == 1 else v2.Compose([Downscale(scale), to_float])
     )
-    return to_float
+    return transform
 
 
 def distributed() -> tuple[int, int]:
@@ -212,13 +247,20 @@ def evaluation_folders(dataset_root: str) -> list[tuple[str, str]]:
 
 class DatasetInfo(typing.NamedTuple):
     """What scan_dataset found: the identity of the files the runs read, the training
-    images' size and count, and the training labels' pixel count per class."""
+    images' size and count, and the training labels' pixel count per class, per
+    training image in the sorted order of their names (the order --train-images takes
+    the first of)."""
 
     sha256: str
     files: int
     image_size: tuple[int, int]  # (height, width)
     train_images: int
-    train_counts: npt.NDArray[np.int64]
+    train_image_counts: npt.NDArray[np.int64]  # train_images x CLASSES
+
+    def train_counts(self, images: int) -> npt.NDArray[np.int64]:
+        """The pixel count per class of the first ``images`` training images."""
+        counts: npt.NDArray[np.int64] = self.train_image_counts[:images].sum(axis=0)
+        return counts
 
     def record(self, root: str) -> dict[str, typing.Any]:
         """As stored with each run (the path only informs: a moved dataset is the same)."""
@@ -262,7 +304,7 @@ def scan_dataset(root: str) -> DatasetInfo:
     files = 0
     cameras: set[bytes] = set()
     train_size, train_images = (0, 0), 0
-    train_counts = np.zeros(CLASSES, np.int64)
+    train_counts: list[npt.NDArray[np.int64]] = []
     for split, folder in [("train", os.path.join(root, "train"))] + evaluation_folders(root):
         images = os.path.join(folder, "rgb_images")
         if not os.path.isdir(images):
@@ -308,7 +350,7 @@ def scan_dataset(root: str) -> DatasetInfo:
                     f"{NO_SOURCE} marks no label)"
                 )
             if split == "train":
-                train_counts += np.bincount(mask[mask < CLASSES].ravel(), minlength=CLASSES)[:CLASSES]
+                train_counts.append(np.bincount(mask[mask < CLASSES].ravel(), minlength=CLASSES)[:CLASSES])
             if contents[calibration] not in cameras:
                 try:
                     fishcam.Camera.read(calibration)
@@ -318,7 +360,9 @@ def scan_dataset(root: str) -> DatasetInfo:
         if split == "train":
             assert size is not None
             train_size, train_images = size, len(found)
-    return DatasetInfo(digest.hexdigest(), files, train_size, train_images, train_counts)
+    return DatasetInfo(
+        digest.hexdigest(), files, train_size, train_images, np.array(train_counts, np.int64).reshape(-1, CLASSES)
+    )
 
 
 def available_memory(device: torch.device) -> typing.Optional[int]:
@@ -570,6 +614,8 @@ def _make_paper_test_sets(binary: str, out: str, seed: int) -> None:
 def run_settings(args: argparse.Namespace, device: torch.device, processes: int) -> dict[str, typing.Any]:
     """The settings a run's result depends on (SETTINGS), as stored with it."""
     return {
+        "scale": args.scale,
+        "train_images": args.train_images,
         "epochs": args.epochs,
         "batch_size": args.batch_size,
         "width": args.width,
@@ -582,12 +628,17 @@ def run_settings(args: argparse.Namespace, device: torch.device, processes: int)
 
 
 def stored_run(
-    path: str, settings: dict[str, typing.Any], dataset: dict[str, typing.Any], rerun: bool
+    path: str,
+    settings: dict[str, typing.Any],
+    dataset: dict[str, typing.Any],
+    rerun: bool,
+    defaults: typing.Mapping[str, typing.Any] = SETTING_DEFAULTS,
 ) -> typing.Optional[dict[str, typing.Any]]:
     """The result stored at ``path`` when it was made from this dataset with these
     settings; None when there is none, or when it differs and ``rerun`` (it is
     recomputed). Refuses one that differs otherwise, naming the dataset or the first
-    setting that differs."""
+    setting that differs (``defaults``: the value of a setting a run stored before the
+    harness recorded it had)."""
     if not os.path.exists(path):
         return None
     hint = "give --rerun to recompute such runs, or another OUT"
@@ -613,7 +664,7 @@ def stored_run(
         )
     for key, option in SETTINGS:
         # Settings added since a run was stored had their default then.
-        stored_value = stored_settings.get(key, SETTING_DEFAULTS.get(key))
+        stored_value = stored_settings.get(key, defaults.get(key))
         if stored_value != settings[key]:
             if rerun:
                 return None
@@ -638,14 +689,43 @@ def autocast(device: torch.device, amp: bool) -> typing.Any:
     return torch.autocast(device.type, dtype=torch.bfloat16 if device.type == "cpu" else torch.float16, enabled=amp)
 
 
+class FirstImages(torch.utils.data.Dataset[typing.Any]):
+    """The first ``count`` samples of a WoodScapeDataset (its names sorted: for
+    ``sample-dataset`` output, scene by scene), indexed as it is (``(epoch, index)``
+    keys pass through, so each sample's seeded change is the one it has in the whole
+    dataset)."""
+
+    def __init__(self, dataset: ft.WoodScapeDataset, count: int) -> None:
+        self.dataset, self.count = dataset, count
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __getitem__(self, key: typing.Union[int, tuple[int, int]]) -> typing.Any:
+        index = key[1] if isinstance(key, tuple) else key
+        if not 0 <= index < self.count:
+            raise IndexError(f"FirstImages: index {index} out of range for {self.count} samples")
+        return self.dataset[key]
+
+
 def training_loader(
-    dataset_root: str, config: str, seed: int, batch_size: int, workers: int
+    dataset_root: str,
+    config: str,
+    seed: int,
+    batch_size: int,
+    workers: int,
+    scale: float = 1.0,
+    images: typing.Optional[int] = None,
 ) -> "torch.utils.data.DataLoader[typing.Any]":
-    """The DataLoader a run of ``config`` trains from: train/ under the configuration's
-    transform, seeded per sample and epoch, shuffled by ``seed`` (shared among the
-    processes under torchrun)."""
+    """The DataLoader a run of ``config`` trains from: the first ``images`` of train/
+    (None: all) downscaled by ``scale``, under the configuration's transform, seeded
+    per sample and epoch, shuffled by ``seed`` (shared among the processes under
+    torchrun)."""
     rank, world = distributed()
-    dataset = ft.WoodScapeDataset(os.path.join(dataset_root, "train"), transform=transform_for(config), seed=seed)
+    whole = ft.WoodScapeDataset(os.path.join(dataset_root, "train"), transform=transform_for(config, scale), seed=seed)
+    dataset: typing.Union[ft.WoodScapeDataset, FirstImages] = (
+        whole if images is None or images >= len(whole) else FirstImages(whole, images)
+    )
     if world > 1:
         inner: typing.Any = torch.utils.data.DistributedSampler(dataset, num_replicas=world, rank=rank, seed=seed)
     else:
@@ -719,8 +799,10 @@ def train(
     weights: typing.Optional[torch.Tensor],
     amp: bool = False,
     channels_last: bool = False,
+    scale: float = 1.0,
+    images: typing.Optional[int] = None,
 ) -> torch.nn.Module:
-    loader = training_loader(dataset_root, config, seed, batch_size, workers)
+    loader = training_loader(dataset_root, config, seed, batch_size, workers, scale, images)
     torch.manual_seed(seed)
     training = Training(width, device, weights, epochs * len(loader), amp, channels_last, f"{config}, seed {seed}")
     for _ in range(epochs):
@@ -731,10 +813,11 @@ def train(
 
 @torch.no_grad()
 def evaluate(
-    net: torch.nn.Module, root: str, device: torch.device, batch_size: int, amp: bool = False
+    net: torch.nn.Module, root: str, device: torch.device, batch_size: int, amp: bool = False, scale: float = 1.0
 ) -> dict[str, typing.Any]:
-    """mIoU and per-class IoU over a WoodScape-layout folder (under --amp's precision)."""
-    dataset = ft.WoodScapeDataset(root, transform=evaluation_transform())
+    """mIoU and per-class IoU over a WoodScape-layout folder (under --amp's precision),
+    its images and labels downscaled by ``scale``."""
+    dataset = ft.WoodScapeDataset(root, transform=evaluation_transform(scale))
     loader = torch.utils.data.DataLoader(dataset, batch_size=batch_size, collate_fn=ft.collate)
     confusion = fishcam.metrics.ConfusionMatrix(CLASSES, NO_SOURCE)
     net.eval()
@@ -783,6 +866,8 @@ def run_one(
         weights,
         args.amp,
         args.channels_last,
+        args.scale,
+        args.train_images,
     )
     if rank != 0:
         return None
@@ -794,7 +879,7 @@ def run_one(
         "test": {},
     }
     for test_set, folder in evaluation_folders(args.dataset):
-        result["test"][test_set] = evaluate(net, folder, device, args.batch_size, args.amp)
+        result["test"][test_set] = evaluate(net, folder, device, args.batch_size, args.amp, args.scale)
     os.makedirs(os.path.dirname(path), exist_ok=True)
     weights_path = run_path(args.out, config, seed) + ".pt"
     torch.save(net.state_dict(), weights_path + ".tmp")
@@ -954,21 +1039,34 @@ def difference_table(
     return lines + [""]
 
 
+def setup(args: argparse.Namespace) -> str:
+    """What the runs trained on and were scored at, as tables.md says it."""
+    height, width = scaled_size(args.image_size, args.scale)
+    return (
+        f"Trained and scored at {width} × {height} (--scale {args.scale:g} of the dataset's {args.image_size[1]} × "
+        f"{args.image_size[0]}) on the first {args.train_images} training images; width {args.width}, "
+        f"{args.epochs} epochs."
+    )
+
+
 def tables(
     results: list[dict[str, typing.Any]],
     configs: typing.Sequence[str],
     fidelity: typing.Sequence[dict[str, typing.Any]] = (),
     model_fidelity: typing.Sequence[dict[str, typing.Any]] = (),
+    setup: str = "",
 ) -> str:
-    """The paper's tables as markdown: mIoU (%) per test set, mean ± std over seeds;
-    Table 5 by geometry beside Table 5; then the fidelity rows."""
+    """The paper's tables as markdown: ``setup`` (what the runs trained on), mIoU (%)
+    per test set, mean ± std over seeds; Table 5 by geometry beside Table 5; then the
+    fidelity rows."""
     sets = ["original"] + [s for name in TEST_SETS for s in (name, f"{name}-rotation", f"{name}-paper")]
     present = [s for s in sets if any(s in r["test"] for r in results)]
 
     def miou(config: str, test_set: str) -> list[float]:
         return [r["test"][test_set]["miou"] for r in results if r["config"] == config and test_set in r["test"]]
 
-    lines = [
+    lines = [setup, ""] if setup else []
+    lines += [
         "mIoU (%) on the original test split and the true viewpoint test sets (`small` = the re-rendered "
         "test scenes from cameras moved by the preset's changes; `-rotation`: the same changes without "
         "translation; `-paper`: the paper's protocol, the original test images augmented by the same changes "
@@ -1105,7 +1203,7 @@ def _predictions_figure(
         (f"test-{name}" for name in reversed(TEST_SETS) if os.path.isdir(os.path.join(args.dataset, f"test-{name}"))),
         "test",
     )
-    dataset = ft.WoodScapeDataset(os.path.join(args.dataset, test_set), transform=evaluation_transform())
+    dataset = ft.WoodScapeDataset(os.path.join(args.dataset, test_set), transform=evaluation_transform(args.scale))
     picks = sorted({0, len(dataset) // 3, 2 * len(dataset) // 3})
     shown = [c for c in configs if os.path.exists(run_path(args.out, c, 0) + ".pt")]
     fig, axes = plt.subplots(
@@ -1198,21 +1296,32 @@ def run(argv: typing.Optional[typing.Sequence[str]] = None, spent_before: float 
         except ImportError:
             raise Error("the figures need matplotlib (pip install matplotlib), or give --no-figures") from None
     info = scan_dataset(args.dataset)
+    if args.train_images is not None and args.train_images > info.train_images:
+        raise Error(f"--train-images {args.train_images}: {args.dataset}/train has {info.train_images} images")
+    if args.train_images is None and args.budget is None:
+        args.train_images = info.train_images
+    args.image_size = info.image_size
     processes = int(os.environ.get("WORLD_SIZE", "1"))
     args.budget_plan = None if args.budget is None else _budget_plan(args, configs, device, info, started)
     _check_memory(args, info, device, processes)
     settings, dataset_record = run_settings(args, device, processes), info.record(args.dataset)
     record = {"settings": settings, "dataset": dataset_record}
+    # Runs stored before the harness recorded --train-images trained on all of train/.
+    defaults = {**SETTING_DEFAULTS, "train_images": info.train_images}
     # Every stored run is checked before the first one trains.
     stored = {
-        (config, seed): stored_run(run_path(args.out, config, seed) + ".json", settings, dataset_record, args.rerun)
+        (config, seed): stored_run(
+            run_path(args.out, config, seed) + ".json", settings, dataset_record, args.rerun, defaults
+        )
         for config in configs
         for seed in range(args.seeds)
     }
     os.environ["FISHCAM_DEVICE"] = device.type
     rank, _ = distributed()
     start = time.perf_counter()
-    weights = class_weights(info.train_counts) if args.class_weights == "balanced" else None
+    # The class weights of the images trained on.
+    counts = info.train_counts(args.train_images)
+    weights = class_weights(counts) if args.class_weights == "balanced" else None
     results = _run_all(args, configs, device, weights, record, stored, rank)
     if rank == 0:
         _write_results(args, configs, device, results, record, weights, start)
@@ -1237,6 +1346,19 @@ def _parser() -> argparse.ArgumentParser:
         "--configs", help=f"comma-separated configurations, each once (default: all of {', '.join(CONFIGS)})"
     )
     parser.add_argument("--seeds", type=int, help="training seeds per configuration (default: 3)")
+    parser.add_argument(
+        "--train-images",
+        type=int,
+        metavar="N",
+        help="train on the first N images of train/ in the order of their names (sample-dataset's: scene by "
+        "scene; default: all)",
+    )
+    parser.add_argument(
+        "--scale",
+        help="train and score at the dataset's resolution times this, one of "
+        f"{', '.join(f'{s:g}' for s in experiment_budget.SCALES)} (images antialiased, labels nearest-neighbour, "
+        "the cameras resized with them; default: 1)",
+    )
     parser.add_argument("--epochs", type=int, help="training epochs per run (default: 10)")
     parser.add_argument("--batch-size", type=int, default=8)
     parser.add_argument(
@@ -1264,8 +1386,8 @@ def _parser() -> argparse.ArgumentParser:
         "--budget",
         type=float,
         metavar="MINUTES",
-        help="choose --width and --epochs (those not given) from costs measured on this machine so that the "
-        "whole experiment fits MINUTES (docs/experiment.md); not with --quick",
+        help="choose --scale, --train-images, --width and --epochs (those not given) from costs measured on this "
+        "machine so that the whole experiment fits MINUTES (docs/experiment.md); not with --quick",
     )
     parser.add_argument(
         "--quick",
@@ -1301,6 +1423,10 @@ def _checked_options(args: argparse.Namespace) -> tuple[list[str], torch.device]
             raise Error(f"--budget {args.budget:g}: expected minutes > 0")
         if int(os.environ.get("WORLD_SIZE", "1")) > 1:
             raise Error("--budget: not under torchrun (each process would measure and choose its own)")
+    if args.scale is not None:
+        args.scale = parse_scale(args.scale)
+    elif args.budget is None:
+        args.scale = 1.0
     for key, value in (QUICK if args.quick else DEFAULTS).items():
         if getattr(args, key) is None and not (args.budget is not None and key in BUDGET_CHOOSES):
             setattr(args, key, value)
@@ -1310,6 +1436,7 @@ def _checked_options(args: argparse.Namespace) -> tuple[list[str], torch.device]
         ("--epochs", args.epochs, 1),
         ("--batch-size", args.batch_size, 1),
         ("--width", args.width, 1),
+        ("--train-images", args.train_images, 1),
         ("--workers", args.workers, 0),
     ):
         if value is not None and value < low:  # None: --budget chooses it
@@ -1317,6 +1444,19 @@ def _checked_options(args: argparse.Namespace) -> tuple[list[str], torch.device]
     if args.width is not None and args.width > MAX_WIDTH:
         raise Error(f"--width {args.width}: at most {MAX_WIDTH} (16 times the default; docs/experiment.md)")
     return configs, parse_device(args.device)
+
+
+def parse_scale(text: str) -> float:
+    """--scale: one of experiment_budget.SCALES (as written, or any spelling of the
+    same number)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if value not in experiment_budget.SCALES:
+        choices = ", ".join(f"{s:g}" for s in experiment_budget.SCALES)
+        raise Error(f"--scale {text}: expected one of {choices}")
+    return value
 
 
 def _split_dataset(args: argparse.Namespace) -> str:
@@ -1346,45 +1486,59 @@ def _image_count(folder: str) -> int:
 def _budget_plan(
     args: argparse.Namespace, configs: typing.Sequence[str], device: torch.device, info: DatasetInfo, started: float
 ) -> experiment_budget.Plan:
-    """--budget: the width and epochs (those not given) from the costs measured on
-    this dataset (fishcam.experiment_budget), printed and set in ``args``."""
-    batch = min(args.batch_size, info.train_images)
+    """--budget: the scale, training images, width and epochs (those not given) from
+    the costs measured on this dataset (fishcam.experiment_budget), printed and set in
+    ``args``."""
+    batch = min(args.batch_size, args.train_images or info.train_images)
     free = available_memory(device)
-    widths = [args.width] if args.width is not None else list(experiment_budget.WIDTHS)
-    widths = [w for w in widths if free is None or training_memory(w, batch, info.image_size) <= free] or widths[:1]
-    loaders = {config: training_loader(args.dataset, config, 0, args.batch_size, args.workers) for config in configs}
-    reading = torch.utils.data.DataLoader(
-        ft.WoodScapeDataset(os.path.join(args.dataset, "test"), transform=evaluation_transform()),
-        batch_size=args.batch_size,
-        collate_fn=ft.collate,
-    )
+    widths: dict[float, list[int]] = {}
+    for scale in [args.scale] if args.scale is not None else experiment_budget.SCALES:
+        candidates = [args.width] if args.width is not None else list(experiment_budget.WIDTHS)
+        size = scaled_size(info.image_size, scale)
+        widths[scale] = [
+            w for w in candidates if free is None or training_memory(w, batch, size) <= free
+        ] or candidates[:1]
+
+    def loaders(scale: float) -> dict[str, typing.Iterable[typing.Any]]:
+        return {
+            config: training_loader(args.dataset, config, 0, args.batch_size, args.workers, scale, args.train_images)
+            for config in configs
+        }
+
+    def reading(scale: float) -> typing.Iterable[typing.Any]:
+        return torch.utils.data.DataLoader(
+            ft.WoodScapeDataset(os.path.join(args.dataset, "test"), transform=evaluation_transform(scale)),
+            batch_size=args.batch_size,
+            collate_fn=ft.collate,
+        )
+
     evaluated = sum(_image_count(folder) for _, folder in evaluation_folders(args.dataset))
-    batches = -(-info.train_images // args.batch_size)
+    work = experiment_budget.Work(args.seeds, info.train_images, args.batch_size, evaluated)
+    fixed = experiment_budget.Fixed(args.scale, args.train_images, args.width, args.epochs)
     spent = time.perf_counter() - started
 
     def choose(costs: experiment_budget.Costs) -> experiment_budget.Plan:
-        return experiment_budget.choose(costs, args.budget, args.seeds, batches, evaluated, spent, args.epochs)
+        return experiment_budget.choose(costs, args.budget, work, spent, fixed)
 
-    def enough(costs: experiment_budget.Costs) -> bool:  # the widest width measured no longer fits
-        try:
-            return choose(costs).width < max(costs.step)
-        except Error:
-            return True
-
-    weights = class_weights(info.train_counts) if args.class_weights == "balanced" else None
+    counts = info.train_counts(args.train_images or info.train_images)
+    weights = class_weights(counts) if args.class_weights == "balanced" else None
 
     def iteration(width: int, loader: typing.Iterable[typing.Any]) -> typing.Callable[[], object]:
         training = Training(width, device, weights, 100, args.amp, args.channels_last, "--budget")
         batches = experiment_budget.endless(loader)
         return lambda: training.step(next(batches))
 
-    costs = experiment_budget.measure(
-        loaders, reading, iteration, UNet, (batch, *info.image_size), device, widths, enough
-    )
+    def shape(scale: float) -> tuple[int, int, int]:
+        return (batch, *scaled_size(info.image_size, scale))
+
+    costs = experiment_budget.measure(loaders, reading, iteration, UNet, shape, device, widths, choose)
     plan = choose(costs)
-    args.width, args.epochs = plan.width, plan.epochs
+    args.scale, args.train_images, args.width, args.epochs = plan.scale, plan.train_images, plan.width, plan.epochs
+    height, width = scaled_size(info.image_size, plan.scale)
+    reduced = f"reduced to fit: {', '.join(plan.reduced)}; " if plan.reduced else ""
     print(
-        f"--budget {args.budget:g} min: width {plan.width}, {plan.epochs} epochs (runs predicted "
+        f"--budget {args.budget:g} min: scale {plan.scale:g} ({width}x{height}), {plan.train_images} of "
+        f"{info.train_images} training images, width {plan.width}, {plan.epochs} epochs ({reduced}runs predicted "
         f"{plan.predicted_seconds / 60:.1f} min; measured in {costs.measured_in:.0f} s)",
         flush=True,
     )
@@ -1395,12 +1549,12 @@ def _check_memory(args: argparse.Namespace, info: DatasetInfo, device: torch.dev
     """Refuses a --width and --batch-size whose training would not fit the memory free
     on the device (the processes of this machine together, on the CPU)."""
     local = int(os.environ.get("LOCAL_WORLD_SIZE", "1")) if device.type == "cpu" else 1
-    batch = min(args.batch_size, -(-info.train_images // processes))
-    need, free = local * training_memory(args.width, batch, info.image_size), available_memory(device)
+    batch = min(args.batch_size, -(-args.train_images // processes))
+    size = scaled_size(info.image_size, args.scale)
+    need, free = local * training_memory(args.width, batch, size), available_memory(device)
     if free is not None and need > free:
         raise Error(
-            f"--width {args.width} with --batch-size {args.batch_size} at {info.image_size[1]}x"
-            f"{info.image_size[0]} needs about {need / 2**30:.1f} GiB to train"
+            f"--width {args.width} with --batch-size {args.batch_size} at {size[1]}x{size[0]} needs about {need / 2**30:.1f} GiB to train"
             f"{f' ({local} processes)' if local > 1 else ''}, more than the {free / 2**30:.1f} GiB free on "
             f"{device.type}: lower --width or --batch-size"
         )
@@ -1458,6 +1612,9 @@ def _write_results(
         "dataset_identity": record["dataset"],
         "configs": configs,
         "seeds": args.seeds,
+        "scale": args.scale,
+        "image_size": [*reversed(scaled_size(args.image_size, args.scale))],  # width, height: trained and scored at
+        "train_images": args.train_images,
         "epochs": args.epochs,
         "width": args.width,
         "batch_size": args.batch_size,
@@ -1475,7 +1632,7 @@ def _write_results(
     with open(os.path.join(args.out, "results.json"), "w") as f:
         json.dump(finite_or_none(summary), f, indent=1)  # NaN is not JSON: null, as the program writes
     with open(os.path.join(args.out, "tables.md"), "w") as f:
-        f.write(tables(results, configs, fidelity, model_fidelity))
+        f.write(tables(results, configs, fidelity, model_fidelity, setup(args)))
     print(
         f"wrote {os.path.join(args.out, 'results.json')}, tables.md"
         + "".join(f", {os.path.relpath(w, args.out)}" for w in written)

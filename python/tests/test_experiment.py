@@ -19,6 +19,7 @@ from conftest import BINARY
 
 torch = pytest.importorskip("torch")
 experiment = pytest.importorskip("fishcam.experiment")
+ft = pytest.importorskip("fishcam.torch")
 
 
 @pytest.fixture(scope="module")
@@ -188,16 +189,166 @@ def test_bad_input(dataset, tmp_path, capsys):
 
 def test_budget_chooses_the_widest_width_that_trains_ten_epochs_then_the_most_epochs():
     budget = experiment.experiment_budget
-    # Per run: epochs x 2 batches x (pipeline 0.5 + step) + 10 images x evaluation.
-    costs = budget.Costs({"none": 0.5, "viewpoint": 0.5}, {8: 1.0, 16: 2.0, 24: 4.0}, {8: 0.1, 16: 0.2, 24: 0.4}, 0.0)
-    # Two configs x one seed: width 16 costs 2 x (10 x 2 x 2.5 + 2) = 104 s for 10 epochs, width 24 184 s.
-    assert budget.predicted_seconds(costs, 16, 10, 1, 2, 10) == pytest.approx(104)
-    plan = budget.choose(costs, 150 / 60 / (1 - budget.MARGIN), 1, 2, 10)  # 150 s after the margin
-    assert (plan.width, plan.epochs) == (16, 14)  # 2 x (14 x 5 + 2) = 144 <= 150 < 2 x (15 x 5 + 2)
-    assert budget.choose(costs, 150 / 60 / (1 - budget.MARGIN), 1, 2, 10, epochs=4).width == 24
-    assert budget.choose(costs, 30 / 60 / (1 - budget.MARGIN), 1, 2, 10).width == 8  # not even 10 epochs fit
-    with pytest.raises(fishcam.Error, match="--budget 0.01: 1 epoch"):
-        budget.choose(costs, 0.01, 1, 2, 10)
+    # Two configurations, one seed, 8 training images in batches of 2, 10 evaluated images: a run of E
+    # epochs on n images costs 2 x (E x ceil(n / 2) x (pipeline + step) + 10 x evaluation).
+    work = budget.Work(seeds=1, train_images=8, batch_size=2, evaluated_images=10)
+    costs = budget.Costs(
+        {1.0: {"none": 0.5, "viewpoint": 0.5}, 0.5: {"none": 0.1, "viewpoint": 0.1}},
+        {1.0: {16: 2.0, 24: 4.0}, 0.5: {8: 0.2, 12: 0.3, 16: 0.4, 24: 0.9}},
+        {1.0: {16: 0.2, 24: 0.4}, 0.5: {8: 0.05, 12: 0.05, 16: 0.1, 24: 0.2}},
+        0.0,
+    )
+    assert budget.predicted_seconds(costs, work, 1.0, 8, 16, 10) == pytest.approx(204)  # 2 x (10 x 4 x 2.5 + 2)
+
+    def chosen(seconds, **fixed):  # what fits `seconds` after the margin
+        plan = budget.choose(costs, seconds / 60 / (1 - budget.MARGIN), work, fixed=budget.Fixed(**fixed))
+        return plan.scale, plan.train_images, plan.width, plan.epochs, plan.reduced
+
+    # Full resolution, every image: width 16 (204 s; 24: 368 s), then 14 epochs: 2 x (14 x 10 + 2) = 284 <= 300.
+    assert chosen(300) == (1.0, 8, 16, 14, ())
+    # The resolution first: at 0.5 width 24 trains 10 epochs (84 s), 18 fit: 2 x (18 x 4 + 2) = 148 <= 150.
+    assert chosen(150) == (0.5, 8, 24, 18, ("resolution",))
+    # Then the images, at width 16: 8 (42 s) do not fit 33 s, 6 (3 batches: 32 s) do; 10 epochs (11: 35 s).
+    assert chosen(33) == (0.5, 6, 16, 10, ("resolution", "training images"))
+    # Then the width on half the images: 16 takes 22 s, 12 2 x (10 x 2 x 0.4 + 0.5) = 17 s; 11 epochs (18.6 s).
+    assert chosen(20) == (0.5, 4, 12, 11, ("resolution", "training images", "width"))
+    # Then the epochs at width 8: 10 take 13 s, 7 take 2 x (7 x 2 x 0.3 + 0.5) = 9.4 s.
+    assert chosen(10) == (0.5, 4, 8, 7, ("resolution", "training images", "width", "epochs"))
+    with pytest.raises(fishcam.Error, match="1 epoch.* at scale 0.5 on 4 training image.* at width 8"):
+        chosen(1)
+    # Settings given are kept: at scale 1, 4 images (2 batches: 104 s; 6 take 154 s), 14 epochs (144 s).
+    assert chosen(150, scale=1.0) == (1.0, 4, 16, 14, ("training images",))
+    # Width 24 for 5 epochs on all 8 images: 188 s at scale 1, 44 s at 0.5.
+    assert chosen(150, train_images=8, width=24, epochs=5) == (0.5, 8, 24, 5, ("resolution",))
+    with pytest.raises(fishcam.Error, match="5 epoch.* at scale 1 on 8 training image.* at width 24"):
+        chosen(150, scale=1.0, train_images=8, width=24, epochs=5)
+
+
+def test_budget_measures_coarser_scales_and_narrower_widths_only_when_needed(monkeypatch):
+    """measure() stops at the first scale holding every image at width >= 16 for 10
+    epochs, measures only those widths there, and the narrower ones at the last scale;
+    each measurement here is the action's value (the step seconds below), nothing else
+    costs."""
+    budget = experiment.experiment_budget
+    monkeypatch.setattr(budget, "_median_seconds", lambda action, repeats=3: action())
+    steps = {
+        1.0: {8: 0.3, 12: 0.6, 16: 1.0, 24: 2.0, 32: 4.0, 48: 8.0},
+        0.75: {8: 0.1, 12: 0.3, 16: 0.5, 24: 0.7, 32: 1.0, 48: 2.0},
+        0.5: {8: 0.05, 12: 0.08, 16: 0.2, 24: 0.3, 32: 0.5, 48: 1.0},
+    }
+
+    class Loader(list):  # one batch, "read" in 0 s; the iteration knows its scale
+        def __init__(self, scale):
+            super().__init__([0.0])
+            self.scale = scale
+
+    class Free(torch.nn.Module):  # an evaluation that costs 0 s
+        def forward(self, images):
+            return 0.0
+
+    # One configuration, one seed, 8 images in one batch, nothing evaluated: 10 epochs cost 10 x step.
+    work = budget.Work(seeds=1, train_images=8, batch_size=8, evaluated_images=0)
+
+    def measured(seconds):
+        def choose(costs):
+            return budget.choose(costs, seconds / 60 / (1 - budget.MARGIN), work)
+
+        costs = budget.measure(
+            lambda scale: {"none": Loader(scale)},
+            lambda scale: [],
+            lambda width, loader: lambda: steps[loader.scale][width],
+            lambda width: Free(),
+            lambda scale: (8, 4, 4),
+            torch.device("cpu"),
+            {scale: list(budget.WIDTHS) for scale in budget.SCALES},
+            choose,
+        )
+        plan = choose(costs)
+        return {s: sorted(w) for s, w in costs.step.items()}, (plan.scale, plan.width)
+
+    # 25 s: full resolution holds width 24 (20 s; 32: 40 s); nothing narrower or coarser is measured.
+    assert measured(25) == ({1.0: [16, 24, 32]}, (1.0, 24))
+    # 8 s: width 16 at full resolution takes 10 s; at 0.75 width 24 takes 7 s (32: 10 s).
+    assert measured(8) == ({1.0: [16], 0.75: [16, 24, 32]}, (0.75, 24))
+    # 1 s: only the last scale, from the narrowest: 12 takes 0.8 s, 16 2 s.
+    assert measured(1) == ({1.0: [16], 0.75: [16], 0.5: [8, 12, 16]}, (0.5, 12))
+
+
+def test_scale_downscales_images_labels_and_cameras_together(dataset):
+    """--scale resizes through fishcam.torch.Resize before the augmentation: the camera
+    describes the downscaled image (the viewpoint change would refuse one that does
+    not), labels nearest-neighbour (no value that was not there), the test images as
+    the training images."""
+    assert experiment.scaled_size((73, 96), 0.5) == (37, 48)
+    assert experiment.scaled_size((73, 96), 0.75) == (55, 72)
+    for config in ("none", "viewpoint", "viewpoint:equidistant:paper"):
+        train = ft.WoodScapeDataset(dataset / "train", transform=experiment.transform_for(config, 0.5), seed=0)
+        sample = train[(0, 0)]
+        assert sample["image"].shape == (3, 37, 48) and sample["mask"].shape == (37, 48), config
+        assert (sample["camera"].width, sample["camera"].height) == (48, 37), config
+    test = ft.WoodScapeDataset(dataset / "test", transform=experiment.evaluation_transform(0.5))
+    sample, original = test[0], ft.WoodScapeDataset(dataset / "test")[0]
+    assert sample["image"].shape == (3, 37, 48) and sample["image"].dtype == torch.float32
+    assert set(sample["mask"].unique().tolist()) <= set(original["mask"].unique().tolist())
+    assert (sample["camera"].width, sample["camera"].height) == (48, 37)
+    assert sample["camera"] == original["camera"].resized(48, 37)
+
+
+def test_budget_chooses_the_resolution_and_the_training_images(dataset, tmp_path, capsys, monkeypatch):
+    """What --budget chooses reaches the runs: trained and scored at the chosen scale on
+    the chosen images, recorded in results.json, tables.md and each run's settings, so
+    that a run with other settings is refused. The costs are given (the choice itself is
+    tested above); the runs are real."""
+    budget = experiment.experiment_budget
+    # Two configs x 1 seed; 8 training images in batches of 2. At scale 0.5, width 16 costs 2 x E x batches
+    # x 1.0 s: 10 epochs on 8 images (4 batches) 80 s, on 6 (3) 60 s, on 4 (2) 40 s <= the ~51 s of a minute
+    # after the margin; then 12 epochs (48 s; 13: 52 s). Scale 1 fits nothing.
+    costs = budget.Costs(
+        {1.0: {"none": 1.0, "viewpoint": 1.0}, 0.5: {"none": 0.1, "viewpoint": 0.1}},
+        {1.0: {16: 10.0}, 0.5: {16: 0.9, 24: 5.0}},
+        {1.0: {16: 0.0}, 0.5: {16: 0.0, 24: 0.0}},
+        0.0,
+    )
+    monkeypatch.setattr(budget, "measure", lambda *args, **kwargs: costs)
+    out = tmp_path / "chosen"
+    common = ["--configs", "none,viewpoint", "--seeds", "1", "--batch-size", "2", "--no-figures", "--no-fidelity"]
+    # run, not main: main counts the age of this (pytest's) process against the budget.
+    assert experiment.run([str(dataset), str(out), "--budget", "1"] + common) == 0
+    assert (
+        "--budget 1 min: scale 0.5 (48x37), 4 of 8 training images, width 16, 12 epochs (reduced to fit: "
+        "resolution, training images; runs predicted 0.8 min" in capsys.readouterr().out
+    )
+    results = json.loads((out / "results.json").read_text())
+    assert (results["scale"], results["image_size"], results["train_images"]) == (0.5, [48, 37], 4)
+    assert (results["budget"]["scale"], results["budget"]["train_images"]) == (0.5, 4)
+    assert results["budget"]["reduced"] == ["resolution", "training images"]
+    assert results["budget"]["step_seconds"] == {"1": {"16": 10.0}, "0.5": {"16": 0.9, "24": 5.0}}
+    # The class weights of the 4 images trained on (the first scene's 4 cameras), not of all 8.
+    first = experiment.class_weights(experiment.scan_dataset(str(dataset)).train_counts(4))
+    assert results["class_weights"] == pytest.approx(first.tolist())
+    assert results["class_weights"] != pytest.approx(
+        experiment.class_weights(experiment.scan_dataset(str(dataset)).train_counts(8)).tolist()
+    )
+    assert (
+        "Trained and scored at 48 × 37 (--scale 0.5 of the dataset's 96 × 73) on the first 4"
+        in (out / "tables.md").read_text()
+    )
+    run = out / "runs" / "none-seed0.json"
+    settings = json.loads(run.read_text())["settings"]
+    assert (settings["scale"], settings["train_images"], settings["width"], settings["epochs"]) == (0.5, 4, 16, 12)
+    stored = run.read_bytes()
+    # The same settings by hand reuse the runs; another scale or number of images is refused.
+    by_hand = ["--scale", "0.5", "--train-images", "4", "--width", "16", "--epochs", "12"] + common
+    assert experiment.main([str(dataset), str(out)] + by_hand) == 0
+    assert run.read_bytes() == stored
+    for option, value, message in (
+        ("--scale", "1", "--scale 0.5, now 1.0"),
+        ("--train-images", "8", "--train-images 4, now 8"),
+    ):
+        changed = by_hand + [option, value]
+        assert experiment.main([str(dataset), str(out)] + changed) == 2
+        assert message in capsys.readouterr().err
+    assert run.read_bytes() == stored
 
 
 def test_budget_keeps_a_quick_run_inside_its_time(dataset, tmp_path, capsys):
@@ -218,8 +369,14 @@ def test_budget_keeps_a_quick_run_inside_its_time(dataset, tmp_path, capsys):
         results = json.load(f)
     chosen = results["budget"]
     assert chosen["width"] in experiment.experiment_budget.WIDTHS and chosen["epochs"] >= 1
-    assert (results["width"], results["epochs"]) == (chosen["width"], chosen["epochs"])
-    assert f"--budget 1 min: width {chosen['width']}, {chosen['epochs']} epochs" in result.stdout
+    assert chosen["scale"] in experiment.experiment_budget.SCALES and 4 <= chosen["train_images"] <= 8
+    for key in ("scale", "train_images", "width", "epochs"):
+        assert results[key] == chosen[key], key
+    height, width = experiment.scaled_size((73, 96), chosen["scale"])
+    assert (
+        f"--budget 1 min: scale {chosen['scale']:g} ({width}x{height}), {chosen['train_images']} of 8 training "
+        f"images, width {chosen['width']}, {chosen['epochs']} epochs" in result.stdout
+    )
     assert wall <= 1.5 * 60
     assert results["seconds"] <= 1.5 * chosen["predicted_run_seconds"]
     assert chosen["predicted_run_seconds"] <= 1.5 * results["seconds"]
@@ -227,6 +384,10 @@ def test_budget_keeps_a_quick_run_inside_its_time(dataset, tmp_path, capsys):
         (["--budget", "0"], "--budget 0: expected minutes > 0"),
         (["--budget", "nan"], "--budget nan: expected minutes > 0"),
         (["--budget", "5", "--quick"], "--budget and --quick: choose one"),
+        (["--quick", "--train-images", "0"], "--train-images 0: must be >= 1"),
+        (["--quick", "--train-images", "9"], "--train-images 9: " + str(dataset / "train") + " has 8 images"),
+        (["--budget", "5", "--scale", "0.3"], "--scale 0.3: expected one of 1, 0.75, 0.5"),
+        (["--quick", "--scale", "half"], "--scale half: expected one of 1, 0.75, 0.5"),
     ):
         assert experiment.main([str(dataset), str(tmp_path / "bad"), *bad]) == 2
         assert message in capsys.readouterr().err

@@ -80,6 +80,8 @@ def test_a_run_made_with_other_settings_is_refused_or_rerun(dataset, tmp_path, c
     assert experiment.main([str(dataset), str(out)] + TINY) == 0
     run = json.loads((out / RUN).read_text())
     assert run["settings"] == {
+        "scale": 1.0,
+        "train_images": 4,
         "epochs": 1,
         "batch_size": 8,
         "width": 4,
