@@ -70,10 +70,13 @@ std::vector<cv::Mat> image_planes(py::array& array, const char* what) {
   if (channels > 4) throw Error(std::string(what) + ": expected 1 to 4 channels, got " + std::to_string(channels));
   std::vector<cv::Mat> planes;
   for (py::ssize_t c = 0; c < channels; ++c) {
-    // A plane is an HxW C-contiguous view: read where it lies, checked as any image
-    // (the views share the array's memory, which the caller keeps alive).
+    // A plane is an HxW C-contiguous view (is_planar_view), checked as any image; the
+    // header is taken on the array's own memory, which the caller keeps alive.
     py::array plane = array[py::make_tuple(py::ellipsis(), c)];
-    planes.push_back(as_mat(plane, what, false));
+    const cv::Mat checked = as_mat(plane, what, false);
+    const auto* lies = static_cast<const unsigned char*>(array.data()) + c * array.strides(2);
+    if (checked.data != lies) throw Error(std::string(what) + ": internal: a plane was copied");
+    planes.emplace_back(checked.rows, checked.cols, checked.type(), const_cast<unsigned char*>(lies));
   }
   return planes;
 }

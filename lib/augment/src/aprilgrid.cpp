@@ -41,14 +41,18 @@ class KalibrDetector {
     family_.width_at_border = kTagBits, family_.total_width = kTagBits + 2;
     family_.impl = nullptr;
     detector_ = apriltag_detector_create();
-    if (!detector_) throw Error("aprilgrid: libapriltag could not create a detector");
+    if (!detector_) {
+      tag36h11_destroy(standard_);
+      throw Error("aprilgrid: libapriltag could not create a detector");
+    }
     detector_->nthreads = 1;
     detector_->quad_decimate = 1;  // full resolution: small tags near a fisheye's rim
     detector_->refine_edges = true;
     // Closing and opening the thresholded image (deglitch) keeps small tags' borders
     // whole: it found 93 % of the visible corners of fisheye renders, 52 % without.
     detector_->qtp.deglitch = true;
-    apriltag_detector_add_family_bits(detector_, &family_, 2);
+    // One corrected bit, as detect() keeps: two would build a 36 MB decoding table.
+    apriltag_detector_add_family_bits(detector_, &family_, 1);
   }
   KalibrDetector(const KalibrDetector&) = delete;
   KalibrDetector& operator=(const KalibrDetector&) = delete;
@@ -121,9 +125,9 @@ AprilGridSpec parse_aprilgrid(std::string_view text) {
 }
 
 void check_aprilgrid(const AprilGridSpec& spec) {
-  if (spec.cols < 1 || spec.rows < 1 || spec.cols > 100 || spec.rows > 100) {
-    throw Error("aprilgrid: needs 1 to 100 tags per side, got " + std::to_string(spec.cols) + "x" +
-                std::to_string(spec.rows));
+  if (spec.cols < 1 || spec.rows < 1 || spec.cols > 100 || spec.rows > 100 || spec.cols * spec.rows < 2) {
+    throw Error("aprilgrid: needs 1 to 100 tags per side and 2 tags or more (a view needs corners of 2), got " +
+                std::to_string(spec.cols) + "x" + std::to_string(spec.rows));
   }
   constexpr int kCodes = 587;  // tag36h11's
   if (spec.cols * spec.rows > kCodes) {
@@ -154,14 +158,17 @@ std::optional<BoardObservation> detect_aprilgrid(const cv::Mat& gray, const Apri
   const KalibrDetector detector;
   std::vector<std::pair<int, Eigen::Vector2d>> found;
   for (auto [id, corners] : detector.detect(brightened)) {
-    for (auto& p : corners) p = (p.array() + 0.5) / 2 - 0.5;  // pixel centres at integers
-    if (id < 0 || id >= spec.cols * spec.rows) continue;      // another tag in view
+    // libapriltag's pixel centres lie at +0.5, OpenCV's at integers; the doubled
+    // image's pixel j covers the original's (j + 0.5) / 2 - 0.5.
+    for (auto& p : corners) p = p / 2 - Eigen::Vector2d::Constant(0.5);
+    if (id < 0 || id >= spec.cols * spec.rows) continue;  // another tag in view
     // Each corner refined on the image itself, with a window inside the X junction:
-    // 15 % of the tag's side (its border is 20 %), 2 to 8 px.
+    // 15 % of the tag's side (its border is 20 %) and half the gap (the next tag's
+    // corner lies a gap away), 2 to 8 px.
     const double side = ((corners[0] - corners[1]).norm() + (corners[1] - corners[2]).norm() +
                          (corners[2] - corners[3]).norm() + (corners[3] - corners[0]).norm()) /
                         4;
-    const int half = std::clamp(int(0.15 * side), 2, 8);
+    const int half = std::clamp(int(std::min(0.15, 0.5 * spec.spacing) * side), 2, 8);
     std::vector<cv::Point2f> refined;
     for (const auto& p : corners) refined.emplace_back(float(p.x()), float(p.y()));
     cv::cornerSubPix(gray, refined, {half, half}, {-1, -1},
@@ -178,7 +185,7 @@ std::optional<BoardObservation> detect_aprilgrid(const cv::Mat& gray, const Apri
       found.emplace_back(row * board.cols + column, p);
     }
   }
-  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   BoardObservation out;
   std::set<int> columns, rows;
   for (const auto& [id, corner] : found) {

@@ -245,7 +245,8 @@ void check_image_planes(const AugmentIO& io) {
       throw Error("image: plane " + std::to_string(c) + " is not a single channel of the first plane's size and type");
     }
     if (out.type() != plane.type() || out.size() != io.out_image_planes[0].size()) {
-      throw Error("augment: output plane " + std::to_string(c) + " is not of the first output plane's size and type");
+      throw Error("augment: output plane " + std::to_string(c) +
+                  " is not of the input planes' type and the first output plane's size");
     }
   }
 }
@@ -260,16 +261,12 @@ void augment_through_interleaved(const AugmentIO& io, const std::function<void(c
   copy.image_planes = {}, copy.out_image_planes = {};
   copy.image = &interleaved, copy.out_image = &out;
   apply(copy);
-  std::vector<cv::Mat> planes(count);
-  cv::split(out, planes.data());
-  for (std::size_t c = 0; c < count; ++c) {
-    if (io.out_image_planes[c].size() != out.size()) {
-      throw Error("augment: the output planes are " + std::to_string(io.out_image_planes[c].cols) + "x" +
-                  std::to_string(io.out_image_planes[c].rows) + ", the output " + std::to_string(out.cols) + "x" +
-                  std::to_string(out.rows));
-    }
-    planes[c].copyTo(io.out_image_planes[c]);
+  if (io.out_image_planes[0].size() != out.size()) {
+    throw Error("augment: the output planes are " + std::to_string(io.out_image_planes[0].cols) + "x" +
+                std::to_string(io.out_image_planes[0].rows) + ", the output " + std::to_string(out.cols) + "x" +
+                std::to_string(out.rows));
   }
+  cv::split(out, io.out_image_planes.data());  // into the planes where they lie (their size and type)
 }
 
 }  // namespace detail

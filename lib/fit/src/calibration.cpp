@@ -363,8 +363,9 @@ void check_board_order(const std::vector<const BoardObservation*>& boards, const
   } else {
     std::snprintf(measure, sizeof measure, "%.0f %% of corners off the grid", 100 * share);
   }
-  throw Error("calibrate: the corners are not in the board order of a " + as_given + " board (" + measure +
-              ", a grid gives < 0.25 and none): check --board and that each image lists its corners row by row");
+  throw Error(
+      "calibrate: the corners are not in the board order of a " + as_given + " board (" + measure +
+      ", a grid gives < 0.25 and none): check --board (or --target) and that each image lists its corners row by row");
 }
 
 // Corners outside the image cannot have been detected in it: the image size given

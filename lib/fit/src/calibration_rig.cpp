@@ -390,7 +390,9 @@ void index_views(const std::vector<RigCamera>& cameras, const std::vector<Calibr
 // reversed, pose turned, outliers' corner numbers mirrored later), and said; pairs
 // whose relative poses mostly disagree refused as unsynchronised.
 void resolve_numbering(const BoardSpec& board, RigViews* v) {
-  const Pose half_turn = board_half_turn(board);
+  // A grid of tags (an AprilGrid) names its corners by their tags: it cannot be read
+  // turned, so a view that only agrees turned disagrees.
+  const Pose half_turn = board.gap > 0 ? Pose{} : board_half_turn(board);
   std::map<int, std::string> instant_names;
   for (const auto& [name, i] : v->instant_index) instant_names[i] = name;
   for (size_t k = 1; k < v->seen.size(); ++k) {

@@ -120,6 +120,7 @@ TEST(AprilGrid, TargetsParseAndBadOnesAreRefused) {
       {"aprilgrid:6by6:0.088:0.3", "expected aprilgrid:COLSxROWS:SIZE:SPACING"},
       {"aprilgrid:0x6:0.088:0.3", "1 to 100 tags per side"},
       {"aprilgrid:30x30:0.088:0.3", "900 tags; the 36h11 family has 587"},
+      {"aprilgrid:1x1:0.088:0.3", "2 tags or more"},
       {"aprilgrid:6x6:0.088:0", "spacing (the gap between tags over their side) must lie within (0, 1]"},
       {"aprilgrid:6x6:0.088:1.5", "must lie within (0, 1]"},
       {"aprilgrid:6x6:inf:0.3", "the tags' side must be a finite number > 0"},

@@ -33,7 +33,7 @@ struct AprilGridSpec {
 // "aprilgrid:COLSxROWS:SIZE:SPACING" (what --target takes), e.g.
 // "aprilgrid:6x6:0.088:0.3"; throws Error naming the problem.
 AprilGridSpec parse_aprilgrid(std::string_view text);
-// Throws Error unless the grid has 1..100 tags per side (at most 587, the family's
+// Throws Error unless the grid has 1..100 tags per side, 2 to 587 tags (the family's
 // codes), a finite size > 0 and a spacing within (0, 1].
 void check_aprilgrid(const AprilGridSpec& spec);
 
