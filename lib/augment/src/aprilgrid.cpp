@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -16,6 +15,7 @@
 #include <utility>
 
 #include "fishcam/core/error.hpp"
+#include "target_text.hpp"
 
 namespace fishcam {
 namespace {
@@ -87,12 +87,6 @@ class KalibrDetector {
   apriltag_detector_t* detector_ = nullptr;
 };
 
-template <typename T>
-bool parse_number(std::string_view text, T* value) {
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), *value);
-  return error == std::errc() && end == text.data() + text.size();
-}
-
 // The board corner (column, row) of corner `c` (kCornerOfDetection) of tag `id`.
 std::pair<int, int> corner_of(const AprilGridSpec& spec, int id, int c) {
   const int column = id % spec.cols, row_from_top = spec.rows - 1 - id / spec.cols;
@@ -106,18 +100,10 @@ AprilGridSpec parse_aprilgrid(std::string_view text) {
   const std::string form =
       "expected aprilgrid:COLSxROWS:SIZE:SPACING (tags, their side and the gap between them as a fraction of the "
       "side, as Kalibr's tagCols, tagRows, tagSize, tagSpacing; e.g. aprilgrid:6x6:0.088:0.3)";
-  std::vector<std::string_view> fields;
-  for (size_t start = 0;;) {
-    const size_t colon = text.find(':', start);
-    fields.push_back(text.substr(start, colon == std::string_view::npos ? std::string_view::npos : colon - start));
-    if (colon == std::string_view::npos) break;
-    start = colon + 1;
-  }
+  const std::vector<std::string_view> fields = detail::target_fields(text);
   AprilGridSpec spec;
-  const size_t x = fields.size() == 4 ? fields[1].find('x') : std::string_view::npos;
-  if (fields.size() != 4 || fields[0] != "aprilgrid" || x == std::string_view::npos ||
-      !parse_number(fields[1].substr(0, x), &spec.cols) || !parse_number(fields[1].substr(x + 1), &spec.rows) ||
-      !parse_number(fields[2], &spec.size) || !parse_number(fields[3], &spec.spacing)) {
+  if (fields.size() != 4 || fields[0] != "aprilgrid" || !detail::parse_size(fields[1], &spec.cols, &spec.rows) ||
+      !detail::parse_number(fields[2], &spec.size) || !detail::parse_number(fields[3], &spec.spacing)) {
     throw Error("--target '" + text_for_message(text) + "': " + form);
   }
   check_aprilgrid(spec);

@@ -6,13 +6,13 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <limits>
 #include <set>
 #include <utility>
 
 #include "fishcam/core/error.hpp"
+#include "target_text.hpp"
 
 namespace fishcam {
 namespace {
@@ -56,12 +56,6 @@ cv::Ptr<cv::aruco::CharucoBoard> board_of(const CharucoSpec& spec) {
                                          dictionary_of(spec.dictionary));
 }
 
-template <typename T>
-bool parse_number(std::string_view text, T* value) {
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), *value);
-  return error == std::errc() && end == text.data() + text.size();
-}
-
 }  // namespace
 
 std::vector<std::string> charuco_dictionaries() {
@@ -74,21 +68,13 @@ CharucoSpec parse_charuco(std::string_view text) {
   const std::string form =
       "expected charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (squares, their side and the "
       "markers' side, e.g. charuco:8x6:0.04:0.03)";
-  std::vector<std::string_view> fields;
-  for (size_t start = 0;;) {
-    const size_t colon = text.find(':', start);
-    fields.push_back(text.substr(start, colon == std::string_view::npos ? std::string_view::npos : colon - start));
-    if (colon == std::string_view::npos) break;
-    start = colon + 1;
-  }
+  const std::vector<std::string_view> fields = detail::target_fields(text);
   if (fields.size() < 4 || fields.size() > 5 || fields[0] != "charuco") {
     throw Error("--target '" + text_for_message(text) + "': " + form);
   }
   CharucoSpec spec;
-  const size_t x = fields[1].find('x');
-  if (x == std::string_view::npos || !parse_number(fields[1].substr(0, x), &spec.cols) ||
-      !parse_number(fields[1].substr(x + 1), &spec.rows) || !parse_number(fields[2], &spec.square) ||
-      !parse_number(fields[3], &spec.marker)) {
+  if (!detail::parse_size(fields[1], &spec.cols, &spec.rows) || !detail::parse_number(fields[2], &spec.square) ||
+      !detail::parse_number(fields[3], &spec.marker)) {
     throw Error("--target '" + text_for_message(text) + "': " + form);
   }
   if (fields.size() == 5) spec.dictionary = std::string(fields[4]);
