@@ -115,79 +115,34 @@ TEST(CliFit, FitFromCsv) {
   }
 }
 
-// ChArUco photos of a 190-degree lens, boards cut by the image's edges among them:
-// rendered by synth-corners, found by detect-corners with their ids, calibrated to
-// the truth with corners past 90 degrees, and --theta-limit data follows them there.
-TEST(CliFit, ChArUcoPhotosCalibrateToTheRim) {
-  const auto dir = test::scratch_dir("cli_charuco");
-  std::filesystem::create_directories(dir / "photos");
-  const std::string target = " --target charuco:8x6:0.1:0.06";
-  auto r = run_fishcam("synth-corners " + quoted(test::data_path("kannala_brandt.yaml")) + target +
-                       " --boards 24 --noise 0 --seed 5 --out " + quoted(dir / "truth.vnl") + " --images " +
-                       quoted(dir / "photos"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(std::filesystem::exists(dir / "photos" / "synth-023.png"));
-  std::string photos;
-  for (int b = 0; b < 24; ++b) {
-    char name[32];
-    std::snprintf(name, sizeof name, "synth-%03d.png", b);
-    photos.append(" ").append(quoted(dir / "photos" / name));
-  }
-  r = run_fishcam("detect-corners" + photos + target + " --out " + quoted(dir / "found.vnl"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("of them partly"), std::string::npos) << r.out;
-  // A partial board's missing corners are mrcal's "- - -" rows, every image W*H rows.
-  EXPECT_NE(test::read_file(dir / "found.vnl").find(" - - -\n"), std::string::npos);
-  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") + target +
-                  " --imagersize 1280x966 --model kannala-brandt --theta-limit data --json "
-                  "--out " +
-                  quoted(dir / "calibrated.json"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
-  EXPECT_LT(j["rms_px"].get<double>(), 0.15);
-  EXPECT_NEAR(j["parameters"]["f"]["value"].get<double>(), 331.5526, 1.0);
-  EXPECT_NEAR(j["parameters"]["cx"]["value"].get<double>(), 643.442, 0.5);
-  EXPECT_NEAR(j["parameters"]["cy"]["value"].get<double>(), 479.407, 0.5);
-  r = run_fishcam("info " + quoted(dir / "calibrated.json"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto at = r.out.find("observed angles   theta up to ");
-  ASSERT_NE(at, std::string::npos) << r.out;
-  EXPECT_GT(std::stod(r.out.substr(at + 30)), 95.0) << r.out;
-  // As the chessboard of its inner corners, the same camera.
-  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
-                  " --board 7x5 --spacing 0.1 --imagersize 1280x966 --model kannala-brandt --json --out " +
-                  quoted(dir / "as-chessboard.json"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(nlohmann::json::parse(r.out)["rms_px"], j["rms_px"]);
-  // A chessboard and a ChArUco target at once are refused; so is neither.
-  r = run_fishcam("detect-corners" + photos + target + " --board 7x5 --out " + quoted(dir / "both.vnl"));
-  EXPECT_NE(r.exit_code, 0);
-  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
-                  " --imagersize 1280x966 --model kannala-brandt --out " + quoted(dir / "neither.json"));
-  EXPECT_NE(r.err.find("give --board WxH and --spacing S (a chessboard), or --target charuco:"), std::string::npos)
-      << r.err;
-}
+// What render_detect_calibrate leaves: the photos' paths (one string, each quoted) and
+// the programs' standard outputs.
+struct RenderedTarget {
+  std::string photos, synth_out, detect_out;
+  nlohmann::json calibration;
+};
 
-// Kalibr's AprilGrid the same way: rendered through the 190 degree lens, detected
-// by libapriltag, calibrated to the rim, and its report drawn from the same target.
-TEST(CliFit, AprilGridPhotosCalibrateToTheRim) {
-  const auto dir = test::scratch_dir("cli_aprilgrid");
+// Photos of `target` (a --target option) through the 190-degree lens, boards cut by
+// the image's edges among them: rendered by synth-corners into dir/photos, found by
+// detect-corners with their ids (dir/found.vnl), calibrated (dir/calibrated.json) to
+// the truth with corners past 90 degrees, and --theta-limit data follows them there.
+void render_detect_calibrate(const std::filesystem::path& dir, const std::string& target, int boards,
+                             RenderedTarget* out) {
   std::filesystem::create_directories(dir / "photos");
-  const std::string target = " --target aprilgrid:6x5:0.1:0.3";
-  auto r = run_fishcam("synth-corners " + quoted(test::data_path("kannala_brandt.yaml")) + target +
-                       " --boards 20 --noise 0 --seed 5 --out " + quoted(dir / "truth.vnl") + " --images " +
-                       quoted(dir / "photos"));
+  auto r = run_fishcam("synth-corners " + quoted(test::data_path("kannala_brandt.yaml")) + target + " --boards " +
+                       std::to_string(boards) + " --noise 0 --seed 5 --out " + quoted(dir / "truth.vnl") +
+                       " --images " + quoted(dir / "photos"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("AprilGrid boards of 12x10 corners"), std::string::npos) << r.out;
-  std::string photos;
-  for (int b = 0; b < 20; ++b) {
+  out->synth_out = r.out;
+  for (int b = 0; b < boards; ++b) {
     char name[32];
     std::snprintf(name, sizeof name, "synth-%03d.png", b);
-    photos.append(" ").append(quoted(dir / "photos" / name));
+    out->photos.append(" ").append(quoted(dir / "photos" / name));
   }
-  r = run_fishcam("detect-corners" + photos + target + " --out " + quoted(dir / "found.vnl"));
+  r = run_fishcam("detect-corners" + out->photos + target + " --out " + quoted(dir / "found.vnl"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("of them partly"), std::string::npos) << r.out;
+  out->detect_out = r.out;
   r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") + target +
                   " --imagersize 1280x966 --model kannala-brandt --theta-limit data --json --out " +
                   quoted(dir / "calibrated.json"));
@@ -197,13 +152,47 @@ TEST(CliFit, AprilGridPhotosCalibrateToTheRim) {
   EXPECT_NEAR(j["parameters"]["f"]["value"].get<double>(), 331.5526, 1.0);
   EXPECT_NEAR(j["parameters"]["cx"]["value"].get<double>(), 643.442, 0.5);
   EXPECT_NEAR(j["parameters"]["cy"]["value"].get<double>(), 479.407, 0.5);
+  out->calibration = j;
   r = run_fishcam("info " + quoted(dir / "calibrated.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto at = r.out.find("observed angles   theta up to ");
   ASSERT_NE(at, std::string::npos) << r.out;
   EXPECT_GT(std::stod(r.out.substr(at + 30)), 95.0) << r.out;
-  r = run_fishcam("report " + quoted(dir / "calibrated.json") + " --corners " + quoted(dir / "found.vnl") + target +
-                  " --out " + quoted(dir / "report"));
+}
+
+TEST(CliFit, ChArUcoPhotosCalibrateToTheRim) {
+  const auto dir = test::scratch_dir("cli_charuco");
+  const std::string target = " --target charuco:8x6:0.1:0.06";
+  RenderedTarget rendered;
+  ASSERT_NO_FATAL_FAILURE(render_detect_calibrate(dir, target, 24, &rendered));
+  EXPECT_TRUE(std::filesystem::exists(dir / "photos" / "synth-023.png"));
+  // A partial board's missing corners are mrcal's "- - -" rows, every image W*H rows.
+  EXPECT_NE(test::read_file(dir / "found.vnl").find(" - - -\n"), std::string::npos);
+  // As the chessboard of its inner corners, the same camera.
+  auto r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
+                       " --board 7x5 --spacing 0.1 --imagersize 1280x966 --model kannala-brandt --json --out " +
+                       quoted(dir / "as-chessboard.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["rms_px"], rendered.calibration["rms_px"]);
+  // A chessboard and a ChArUco target at once are refused; so is neither.
+  r = run_fishcam("detect-corners" + rendered.photos + target + " --board 7x5 --out " + quoted(dir / "both.vnl"));
+  EXPECT_NE(r.exit_code, 0);
+  r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
+                  " --imagersize 1280x966 --model kannala-brandt --out " + quoted(dir / "neither.json"));
+  EXPECT_NE(r.err.find("give --board WxH and --spacing S (a chessboard), or --target charuco:"), std::string::npos)
+      << r.err;
+}
+
+// Kalibr's AprilGrid the same way, detected by libapriltag, and its report drawn from
+// the same target.
+TEST(CliFit, AprilGridPhotosCalibrateToTheRim) {
+  const auto dir = test::scratch_dir("cli_aprilgrid");
+  const std::string target = " --target aprilgrid:6x5:0.1:0.3";
+  RenderedTarget rendered;
+  ASSERT_NO_FATAL_FAILURE(render_detect_calibrate(dir, target, 20, &rendered));
+  EXPECT_NE(rendered.synth_out.find("AprilGrid boards of 12x10 corners"), std::string::npos) << rendered.synth_out;
+  auto r = run_fishcam("report " + quoted(dir / "calibrated.json") + " --corners " + quoted(dir / "found.vnl") +
+                       target + " --out " + quoted(dir / "report"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "report" / "index.html"));
   r = run_fishcam("calibrate --corners " + quoted(dir / "found.vnl") +
