@@ -749,13 +749,13 @@ def affine_warp(*, image: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]] | N
     ...
 def affine_warp_depth(depth_map: numpy.ndarray[typing.Any, numpy.dtype[typing.Any]], change: AffineChange, fill: float = ...) -> numpy.ndarray[typing.Any, numpy.dtype[typing.Any]]:
     ...
-def calibrate(observations: list[typing.Any], board: tuple[int, int], spacing: float, image_size: tuple[int, int], model: str, threads: int = 1, board_warp: bool = True) -> Calibration:
+def calibrate(observations: list[typing.Any], board: tuple[int, int] | str, spacing: float | None, image_size: tuple[int, int], model: str, threads: int = 1, board_warp: bool = True) -> Calibration:
     """
-    Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for the independent solves; the result is the same for every count. board_warp: solve the boards' warp (mrcal's calobject_warp, as mrcal does; Calibration.board_warp), False: flat boards (OpenCV's model). Raises fishcam.Error on data that cannot determine a camera (a transposed board, one pose, a principal point off the image, ...).
+    Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: (filename, corners (N, 2)) pairs; board (W, H) inner corners with spacing in metres, or a target's text with spacing None: 'aprilgrid:COLSxROWS:SIZE:SPACING' (Kalibr's AprilGrid: tag side SIZE metres, the gap between tags SPACING times it) or 'charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY]', as `fishcam detect-corners --target` found them; image_size (width, height)): a Calibration. threads: for the independent solves; the result is the same for every count. board_warp: solve the boards' warp (mrcal's calobject_warp, as mrcal does; Calibration.board_warp), False: flat boards (OpenCV's model). Raises fishcam.Error on data that cannot determine a camera (a transposed board, one pose, a principal point off the image, ...).
     """
-def calibrate_rig(cameras: list[typing.Any], board: tuple[int, int], spacing: float, threads: int = 1) -> RigCalibration:
+def calibrate_rig(cameras: list[typing.Any], board: tuple[int, int] | str, spacing: float | None, threads: int = 1) -> RigCalibration:
     """
-    Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per camera, observations as read_corners gives them; images of one instant share their file name (the last path component). model: a model name (the camera's intrinsics solved) or a fishcam.Camera for those images (its intrinsics held fixed, as calibrate --fix-intrinsics FILE: only where it sits is solved). Every solved camera's intrinsics, each camera's pose relative to camera 0 and the boards' poses: a RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.
+    Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per camera, observations as read_corners gives them; board and spacing as calibrate takes them (a chessboard or a target); images of one instant share their file name (the last path component). model: a model name (the camera's intrinsics solved) or a fishcam.Camera for those images (its intrinsics held fixed, as calibrate --fix-intrinsics FILE: only where it sits is solved). Every solved camera's intrinsics, each camera's pose relative to camera 0 and the boards' poses: a RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.
     """
 def check_depth_prior(arg0: str) -> None:
     """
@@ -809,9 +809,9 @@ def random_change(preset: str, seed: int) -> ViewpointChange:
     ...
 def random_change_in(max_rotation_deg: float, max_translation: float, seed: int) -> ViewpointChange:
     ...
-def read_corners(path: str, board: tuple[int, int]) -> list[tuple[str, numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]]]:
+def read_corners(path: str, board: tuple[int, int] | str) -> list[tuple[str, numpy.ndarray[typing.Any, numpy.dtype[numpy.float64]]]]:
     """
-    A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners: a list of (filename, corners (N, 2) float64), N = 0 for an image without a board; a partial board (rows whose level is '-') has all W*H rows in board order, NaN for the corners not observed.
+    A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners, or of a target (its text, as calibrate takes it; an AprilGrid of C x R tags has 2C x 2R corners): a list of (filename, corners (N, 2) float64), N = 0 for an image without a board; a partial board (rows whose level is '-') has all W*H rows in board order, NaN for the corners not observed.
     """
 def render(camera: Camera, scene_seed: int | None = None, change: ViewpointChange | None = None, supersampling: int = 2) -> dict[str, typing.Any]:
     """

@@ -2,20 +2,33 @@
 // calibrated camera knows about its data (Camera.projection_uncertainty, ...).
 #include "fishcam/fit/calibration.hpp"
 #include "bindings.hpp"
+#include "fishcam/augment/target.hpp"
 #include "fishcam/io/corners.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
+#include <variant>
 
 namespace fishcam::python {
 namespace {
 
 constexpr double kDeg = 180 / std::numbers::pi;
 
-BoardSpec board_of(const std::pair<int, int>& board, double spacing) {
-  BoardSpec spec{board.first, board.second, spacing};
+// A chessboard's (W, H) inner corners with its spacing, or a target's text
+// ("aprilgrid:COLSxROWS:SIZE:SPACING", "charuco:..."), whose sizes are in the text.
+using BoardArgument = std::variant<std::pair<int, int>, std::string>;
+
+BoardSpec board_of(const BoardArgument& board, std::optional<double> spacing) {
+  if (const auto* text = std::get_if<std::string>(&board)) {
+    if (spacing) throw Error("spacing: a target's sizes are in its text ('" + *text + "'): give spacing=None");
+    return target_board(parse_target(*text));
+  }
+  if (!spacing) throw Error("spacing: a chessboard (W, H) needs its spacing in metres");
+  const auto [cols, rows] = std::get<std::pair<int, int>>(board);
+  BoardSpec spec{cols, rows, *spacing};
   check_board(spec);
   return spec;
 }
@@ -131,10 +144,12 @@ void bind_camera_calibration(py::module_& m) {
   bind_calibration_result(m);
   m.def(
       "read_corners",
-      [](const std::string& path, std::pair<int, int> board) {
-        const auto observations = read_corners(path, board_of(board, 1.0));
+      [](const std::string& path, const BoardArgument& board) {
+        const BoardSpec spec =
+            std::holds_alternative<std::string>(board) ? board_of(board, std::nullopt) : board_of(board, 1.0);
+        const auto observations = read_corners(path, spec);
         std::vector<std::pair<std::string, py::array_t<double>>> out;
-        const int whole = board.first * board.second;
+        const int whole = spec.corners();
         for (const auto& o : observations) {
           const py::ssize_t rows = o.ids.empty() ? py::ssize_t(o.corners.size()) : py::ssize_t(whole);
           py::array_t<double> corners({rows, py::ssize_t(2)});
@@ -146,13 +161,14 @@ void bind_camera_calibration(py::module_& m) {
         return out;
       },
       py::arg("path"), py::arg("board"),
-      "A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners: a list of "
+      "A corners file (mrcal's vnlog: filename x y level) of a board of (W, H) inner corners, or of a target "
+      "(its text, as calibrate takes it; an AprilGrid of C x R tags has 2C x 2R corners): a list of "
       "(filename, corners (N, 2) float64), N = 0 for an image without a board; a partial board (rows whose "
       "level is '-') has all W*H rows in board order, NaN for the corners not observed.");
   m.def(
       "calibrate",
-      [](const py::list& observations, std::pair<int, int> board, double spacing, std::pair<int, int> image_size,
-         const std::string& model, int threads, bool board_warp) {
+      [](const py::list& observations, const BoardArgument& board, std::optional<double> spacing,
+         std::pair<int, int> image_size, const std::string& model, int threads, bool board_warp) {
         const BoardSpec spec = board_of(board, spacing);
         const std::vector<BoardObservation> boards = observations_of(observations, spec);
         const ModelSpec model_spec = parse_model_spec(model);
@@ -164,7 +180,10 @@ void bind_camera_calibration(py::module_& m) {
       "Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' "
       "p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: "
       "(filename, corners (N, 2)) pairs; "
-      "board (W, H) inner corners, spacing in metres, image_size (width, height)): a Calibration. threads: for "
+      "board (W, H) inner corners with spacing in metres, or a target's text with spacing None: "
+      "'aprilgrid:COLSxROWS:SIZE:SPACING' (Kalibr's AprilGrid: tag side SIZE metres, the gap between tags SPACING "
+      "times it) or 'charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY]', as `fishcam detect-corners --target` "
+      "found them; image_size (width, height)): a Calibration. threads: for "
       "the independent solves; the result is the same for every count. board_warp: solve the boards' warp "
       "(mrcal's calobject_warp, as mrcal does; Calibration.board_warp), False: flat boards (OpenCV's model). Raises "
       "fishcam.Error on data that cannot "
@@ -200,7 +219,7 @@ void bind_rig_calibration(py::module_& m) {
       });
   m.def(
       "calibrate_rig",
-      [](const py::list& cameras, std::pair<int, int> board, double spacing, int threads) {
+      [](const py::list& cameras, const BoardArgument& board, std::optional<double> spacing, int threads) {
         const BoardSpec spec = board_of(board, spacing);
         std::vector<RigCamera> rig;
         for (const py::handle& item : cameras) {
@@ -227,7 +246,8 @@ void bind_rig_calibration(py::module_& m) {
       },
       py::arg("cameras"), py::arg("board"), py::arg("spacing"), py::arg("threads") = 1,
       "Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per "
-      "camera, observations as read_corners gives them; images of one instant share their file name (the last "
+      "camera, observations as read_corners gives them; board and spacing as calibrate takes them (a chessboard "
+      "or a target); images of one instant share their file name (the last "
       "path component). model: a model name (the camera's intrinsics solved) or a fishcam.Camera for those "
       "images (its intrinsics held fixed, as calibrate --fix-intrinsics FILE: only where it sits is solved). "
       "Every solved camera's intrinsics, each camera's pose relative to camera 0 and the boards' poses: a "

@@ -191,3 +191,85 @@ def test_calibrate_rig_holds_a_given_cameras_intrinsics() -> None:
     assert np.allclose(r, rotation(np.radians(10), 0, 0), atol=1e-6)
     with pytest.raises(fishcam.Error, match=r"cameras\[1\]: expected a model name or a fishcam.Camera"):
         fishcam.calibrate_rig([(left, (640, 483), "kannala-brandt"), (right, (640, 483), 3)], BOARD, SPACING)
+
+
+APRILGRID = "aprilgrid:6x5:0.1:0.3"  # Kalibr's: 6 x 5 tags of 0.1 m, 0.03 m between them
+
+
+def aprilgrid_points() -> np.ndarray:
+    """The grid's 12 x 10 corners in board order, written out independently of the
+    library: each tag's two edges 0.1 apart, the tags 0.13 apart."""
+    along = [(i // 2) * 0.13 + (i % 2) * 0.1 for i in range(12)]
+    down = along[:10]
+    return np.array([[x, y, 0.0] for y in down for x in along])
+
+
+def aprilgrid_views(camera: fishcam.Camera, count: int, seed: int, baseline: float = 0.0) -> list[Any]:
+    """Grids close to the camera and to the side (this lens sees past 90 degrees: a grid
+    leaves the image when part of it is near or behind the camera's plane), seen from
+    `baseline` metres to the right (the same grids for every baseline): the corners outside are NaN rows
+    (what read_corners gives for a partial board)."""
+    random = np.random.default_rng(seed)
+    points = aprilgrid_points() - aprilgrid_points().mean(axis=0)
+    views: list[Any] = []
+    for i in range(count):
+        r = rotation(*random.uniform(-0.7, 0.7, 3))
+        centre = np.array([random.uniform(-1.5, 1.5), random.uniform(-1.2, 1.2), random.uniform(0.1, 0.4)])
+        pixels, ok = camera.project(points @ r.T + centre - [baseline, 0, 0])
+        inside = ok & (pixels[:, 0] >= 0) & (pixels[:, 1] >= 0) & (pixels[:, 0] <= 639) & (pixels[:, 1] <= 482)
+        if inside.sum() >= 20:
+            views.append((f"cam/{i:03d}.png", np.where(inside[:, None], pixels, np.nan)))
+    return views
+
+
+def test_aprilgrid_targets_calibrate_by_their_text(tmp_path: Path) -> None:
+    """A target's text in place of (W, H) and a spacing (what `fishcam detect-corners
+    --target` found): partial grids calibrate the lens exactly; the same corners taken
+    for an evenly spaced chessboard are refused."""
+    camera = lens()
+    views = aprilgrid_views(camera, 60, 5)
+    partial = sum(bool(np.isnan(c).any()) for _, c in views)
+    assert len(views) >= 20 and partial >= 15, (len(views), partial)
+    result = fishcam.calibrate(views, APRILGRID, None, (640, 483), "kannala-brandt", board_warp=False)
+    # Every view and corner used (none left in a wrong basin as outliers), the lens
+    # exact to past 90 degrees.
+    assert result.rms_px < 1e-6 and not result.outliers and len(result.images) == len(views)
+    assert result.corners == sum(int(np.isfinite(c[:, 0]).sum()) for _, c in views)
+    theta, phi = np.meshgrid(np.radians(np.linspace(1, 95, 20)), np.radians(np.arange(0, 360, 15)))
+    rays = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1).reshape(-1, 3)
+    (truth, seen), (solved, solved_seen) = camera.project(rays), result.camera.project(rays)
+    assert seen.all() and solved_seen.all() and np.abs(solved - truth).max() < 1e-6
+    # The same corners taken for an evenly spaced chessboard: refused (the gaps break its grid).
+    with pytest.raises(fishcam.Error, match="not in the board order of a 12x10 board"):
+        fishcam.calibrate(views, (12, 10), 0.1, (640, 483), "kannala-brandt", board_warp=False)
+
+    # A rig of two cameras looking at the same grids (camera 1 0.2 m to the right).
+    right = aprilgrid_views(camera, 60, 5, baseline=0.2)
+    rig = fishcam.calibrate_rig(
+        [(views, (640, 483), "kannala-brandt"), (right, (640, 483), "kannala-brandt")], APRILGRID, None, threads=2
+    )
+    assert rig.rms_px < 1e-6 and np.allclose(rig.cameras[1].camera.pose[1], [0.2, 0, 0], atol=1e-6)
+
+    # The corners file: read by the target's text, 120 rows a view, NaN where not seen.
+    rows = ["# filename x y level"]
+    for name, corners in views[:3]:
+        rows += [f"{name} - - -" if np.isnan(x) else f"{name} {x!r} {y!r} 0" for x, y in corners]
+    (tmp_path / "grid.vnl").write_text("\n".join(rows) + "\n")
+    back = fishcam.read_corners(str(tmp_path / "grid.vnl"), APRILGRID)
+    assert [name for name, _ in back] == [name for name, _ in views[:3]]
+    for (_, read), (_, given) in zip(back, views[:3]):
+        assert np.array_equal(read, given, equal_nan=True)
+
+
+def test_targets_and_chessboards_say_what_they_need() -> None:
+    views = aprilgrid_views(lens(), 30, 5)
+    for board, spacing, message in (
+        (APRILGRID, 0.1, "spacing: a target's sizes are in its text"),
+        (BOARD, None, r"spacing: a chessboard \(W, H\) needs its spacing"),
+        ("aprilgrid:6x5:0.1", None, "aprilgrid"),
+        ("checkerboard:9x6", None, "expected charuco:COLSxROWS"),
+    ):
+        with pytest.raises(fishcam.Error, match=message):
+            fishcam.calibrate(views, board, spacing, (640, 483), "kannala-brandt")
+    with pytest.raises(fishcam.Error, match="expected charuco:COLSxROWS"):
+        fishcam.read_corners("none.vnl", "grid")

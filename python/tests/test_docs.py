@@ -188,7 +188,7 @@ def test_every_recipe_of_the_architecture_names_files_that_exist():
 
 # What the fishcam program makes for the blocks, and how a block names it: a block
 # that needs one skips without FISHCAM_BINARY.
-PROGRAM_MADE = {"root": r"\broot\b", "sv": r'"sv"', "corners.vnl": r"corners\.vnl"}
+PROGRAM_MADE = {"root": r"\broot\b", "sv": r'"sv"', "corners.vnl": r"corners\.vnl", "grid.vnl": r"grid\.vnl"}
 SIZE = (160, 121)  # the given camera's (width, height): WoodScape's front lens, resized
 BOARD = (9, 6)
 PEERS = ("torch", "torchvision", "albumentations")  # what the blocks import besides fishcam and numpy
@@ -222,7 +222,8 @@ def _stereo_corners(camera, count, seed):
 def inputs(tmp_path_factory):
     """The files the blocks read, made once: data/ (the repository's), a camera file,
     and what the fishcam program makes: a WoodScape-layout sample set (root), a
-    surround-view set with true test sets (sv) and a 960x600 camera's board corners."""
+    surround-view set with true test sets (sv) and a 960x600 camera's chessboard and
+    AprilGrid corners."""
     folder = tmp_path_factory.mktemp("docs-inputs")
     (folder / "data").symlink_to(os.path.abspath(DATA))
     camera = fishcam.Camera.read(os.path.join(DATA, "woodscape_front.json")).resized(*SIZE)
@@ -235,6 +236,8 @@ def inputs(tmp_path_factory):
             ["sample-dataset", "sv", "--scenes", "2", "--size", "96x73", "--seed", "1", "--depth"],
             ["synth-corners", "lens960.json", "--boards", "10", "--noise", "0.2", "--seed", "1"]
             + ["--board", f"{BOARD[0]}x{BOARD[1]}", "--spacing", "0.03", "--out", "corners.vnl"],
+            ["synth-corners", "lens960.json", "--boards", "15", "--noise", "0.2", "--seed", "1"]
+            + ["--target", "aprilgrid:6x6:0.088:0.3", "--out", "grid.vnl"],
         ):
             subprocess.run([os.path.abspath(BINARY), *args], cwd=folder, check=True, capture_output=True, timeout=300)
     return folder
@@ -333,7 +336,7 @@ def test_every_python_block_of_the_docs_runs(doc, line, code, inputs, tmp_path, 
     if missing_peer():
         RAN[key] = reason = f"{missing_peer()} not installed"
         pytest.skip(reason)
-    for name in ("data", "sv", "corners.vnl"):
+    for name in ("data", "sv", "corners.vnl", "grid.vnl"):
         if (inputs / name).exists():
             (tmp_path / name).symlink_to(inputs / name)
     monkeypatch.chdir(tmp_path)

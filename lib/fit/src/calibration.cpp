@@ -436,6 +436,41 @@ void check_distinct_poses(const CalibrationResult& r) {
   }
 }
 
+// One board's pose through `camera` from `start`, over the corners not in `left_out`
+// (under `loss`; nullptr: plain least squares).
+ceres::Solver::Summary solve_board_pose(const Camera& camera, const std::vector<Eigen::Vector3d>& points,
+                                        const BoardObservation& view, const std::vector<bool>& left_out,
+                                        ceres::LossFunction* loss, std::array<double, 6>* pose) {
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (left_out[i]) continue;
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<detail::FixedCameraCornerResidual, 6>(
+        new detail::FixedCameraCornerResidual(&camera, points[i], view.corners[i], false));
+    cost->AddParameterBlock(6);
+    cost->SetNumResiduals(2);
+    problem.AddResidualBlock(cost, loss, pose->data());
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(detail::solver_options(ceres::DENSE_QR), &problem, &summary);
+  if (!summary.IsSolutionUsable()) throw Error("locate boards: image " + view.filename + ": " + summary.message);
+  return summary;
+}
+
+// Each corner's error at `pose` (infinite where the point does not project).
+std::vector<double> corner_errors(const Camera& camera, const std::vector<Eigen::Vector3d>& points,
+                                  const BoardObservation& view, const std::array<double, 6>& pose) {
+  std::vector<double> errors;
+  const BoardPose board_pose = pose_of(pose);
+  for (size_t i = 0; i < points.size(); ++i) {
+    Eigen::Vector2d q;
+    errors.push_back(camera.project(to_camera(board_pose, points[i]), &q) ? (q - view.corners[i]).norm()
+                                                                          : std::numeric_limits<double>::infinity());
+  }
+  return errors;
+}
+
 // What every step of one calibration reads: the boards' corners and the board's
 // points (the same for every board), and the image size.
 struct Observations {
@@ -610,6 +645,41 @@ void report_uncertainty(const ParameterCovariance& full, const Solve& s, const M
   }
 }
 
+// Boards the robust solve left in a wrong basin (most of their corners outliers: a
+// close board at the rim placed from the equidistant start can settle mirrored or
+// far off) placed again from their rays through the robust solve's camera, the
+// pose taken when it reprojects better (errors truncated at 20 px, as the start is
+// scored). Whether any board moved.
+bool relocate_lost_boards(const Observations& o, const BoardSpec& board, const Camera& camera,
+                          const std::vector<CalibrationResult::Outlier>& outliers, Solve* s) {
+  const auto robust_cost = [&](size_t b, const std::array<double, 6>& pose) {
+    double cost = 0;
+    for (const double e : corner_errors(camera, o.all_points[b], *o.boards[b], pose)) cost += std::min(e, 20.0);
+    return cost;
+  };
+  bool moved = false;
+  for (size_t b = 0; b < o.boards.size(); ++b) {
+    const auto lost = std::count_if(outliers.begin(), outliers.end(),
+                                    [&](const auto& x) { return x.filename == o.boards[b]->filename; });
+    if (2 * size_t(lost) < o.corners[b].size()) continue;
+    std::vector<Eigen::Vector3d> rays(o.corners[b].size());
+    bool all_rays = true;
+    for (size_t i = 0; i < rays.size() && all_rays; ++i) all_rays = camera.unproject(o.corners[b][i], &rays[i]);
+    if (!all_rays) continue;
+    const auto placed = pose_from_rays(rays, o.all_points[b], board);
+    if (!placed) continue;
+    std::array<double, 6> pose = pose_block(*placed);
+    ceres::CauchyLoss loss(1.0);
+    try {
+      solve_board_pose(camera, o.all_points[b], *o.boards[b], std::vector<bool>(rays.size(), false), &loss, &pose);
+    } catch (const Error&) {
+      continue;
+    }
+    if (robust_cost(b, pose) < robust_cost(b, s->poses[b])) s->poses[b] = pose, moved = true;
+  }
+  return moved;
+}
+
 // Step 4, the final plain least squares without the outliers (with the boards' warp
 // when asked: it starts flat), its covariance, and the report: per-image and overall
 // RMS (2-D norm), parameters and their sigmas.
@@ -690,6 +760,13 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
   }
   CalibrationResult result;
   result.outliers = find_outliers(o, Camera(o.camera(robust, make_model(spec.name, robust.model))), robust);
+  if (!result.outliers.empty() &&
+      relocate_lost_boards(o, board, Camera(o.camera(robust, make_model(spec.name, robust.model))), result.outliers,
+                           &robust)) {  // solved again with those boards where they belong
+    ceres::CauchyLoss loss(1.0);
+    solve<Model>(&robust, o.all_points, o.corners, false, &loss, 200, 1e-9);
+    result.outliers = find_outliers(o, Camera(o.camera(robust, make_model(spec.name, robust.model))), robust);
+  }
   if (!result.outliers.empty()) {
     // The robust loss can settle where a whole board near the rim is ignored (a local
     // minimum: seen with the rational `opencv` and with `mei`); the plain solve from
@@ -764,45 +841,6 @@ CalibrationResult calibrate(const std::vector<BoardObservation>& observations, c
   }
   return result;
 }
-
-namespace {
-
-// One board's pose through `camera` from `start`, over the corners not in `left_out`
-// (under `loss`; nullptr: plain least squares).
-ceres::Solver::Summary solve_board_pose(const Camera& camera, const std::vector<Eigen::Vector3d>& points,
-                                        const BoardObservation& view, const std::vector<bool>& left_out,
-                                        ceres::LossFunction* loss, std::array<double, 6>* pose) {
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (left_out[i]) continue;
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<detail::FixedCameraCornerResidual, 6>(
-        new detail::FixedCameraCornerResidual(&camera, points[i], view.corners[i], false));
-    cost->AddParameterBlock(6);
-    cost->SetNumResiduals(2);
-    problem.AddResidualBlock(cost, loss, pose->data());
-  }
-  ceres::Solver::Summary summary;
-  ceres::Solve(detail::solver_options(ceres::DENSE_QR), &problem, &summary);
-  if (!summary.IsSolutionUsable()) throw Error("locate boards: image " + view.filename + ": " + summary.message);
-  return summary;
-}
-
-// Each corner's error at `pose` (infinite where the point does not project).
-std::vector<double> corner_errors(const Camera& camera, const std::vector<Eigen::Vector3d>& points,
-                                  const BoardObservation& view, const std::array<double, 6>& pose) {
-  std::vector<double> errors;
-  const BoardPose board_pose = pose_of(pose);
-  for (size_t i = 0; i < points.size(); ++i) {
-    Eigen::Vector2d q;
-    errors.push_back(camera.project(to_camera(board_pose, points[i]), &q) ? (q - view.corners[i]).norm()
-                                                                          : std::numeric_limits<double>::infinity());
-  }
-  return errors;
-}
-
-}  // namespace
 
 CalibrationResult locate_boards(const std::vector<BoardObservation>& observations, const BoardSpec& board,
                                 const Camera& camera) {
