@@ -17,6 +17,9 @@
 #define FISHCAM_KERNEL_ISA avx2
 #include "warp_kernel_impl.hpp"
 
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 
 namespace fishcam::detail {
@@ -161,23 +164,25 @@ void bilinear_8u(const BilinearSource& src, const short* fixed, const unsigned s
       return bilinear_8u_row<4>(src, fixed, fractions, w, out);
   }
 }
-// bilinear_8u's arithmetic for channels-first images, 8 pixels at a time: the pixel
-// offsets and weights are found once, then each plane's taps gathered (vpgatherdd,
-// four bytes at each pixel's top and bottom offset, of which the first two are the
-// pixel and its right neighbour), weighed across by pmaddubsw and down by pmaddwd,
-// and 8 output bytes stored into the plane. A pair at the last column is read one
-// byte to the left with its weights swapped (the fraction there is 0: the right
-// tap's weight is 0 anyway); a read that would pass the last row's end starts
-// earlier and is shifted back; pixels without a source read offset 0 and are
-// replaced by the fill. So the planes are sampled where they lie, with no merge
-// before and no split after.
-void bilinear_8u_planar(const BilinearPlanes& src, const short* fixed, const unsigned short* fractions, int w,
+// bilinear_8u's arithmetic for channels-first images, 8 pixels at a time, in two
+// passes per chunk of a row as bilinear_8u_row: first each pixel's top and bottom
+// offsets and weights, with the planes' taps asked for; then, plane by plane, the
+// two bytes at each offset (the pixel and its right neighbour) -- gathered
+// (vpgatherdd: four bytes, a read that would pass the last row's end starting
+// earlier and shifted back) or loaded one by one, whichever the CPU does faster
+// (planar_taps_gathered) -- weighed across by pmaddubsw and down by pmaddwd, and 8
+// output bytes stored into the plane. A pair at the last column is read one byte to
+// the left with its weights swapped (the fraction there is 0: the right tap's weight
+// is 0 anyway); pixels without a source read offset 0 and are replaced by the fill.
+// So the planes are sampled where they lie, with no merge before and no split after.
+template <bool kGather>
+void bilinear_8u_planar_taps(const BilinearPlanes& src, const short* fixed, const unsigned short* fractions, int w,
                         unsigned char* const* out) {
   const __m256i outside = _mm256_set1_epi32(kOutsideFixed), five_bits = _mm256_set1_epi32(31);
   const __m256i steps = _mm256_set1_epi32(32), half = _mm256_set1_epi32(512), pair = _mm256_set1_epi32(0xffff);
   const __m256i last_column = _mm256_set1_epi32(src.width - 1), last_row = _mm256_set1_epi32(src.height - 1);
   const __m256i step = _mm256_set1_epi32(int(src.step)), edge_across = _mm256_set1_epi32(32 << 8);
-  // The last offset a 4-byte read may start at (width >= 4).
+  // The last offset a 4-byte gather may start at (width >= 4).
   const __m256i last_read = _mm256_set1_epi32(int(std::size_t(src.height - 1) * src.step) + src.width - 4);
   const __m256i lane_index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i low_dwords = _mm256_setr_epi32(0, 4, 0, 4, 0, 4, 0, 4);
@@ -186,52 +191,108 @@ void bilinear_8u_planar(const BilinearPlanes& src, const short* fixed, const uns
     const __m256i words = _mm256_packus_epi32(lanes32, lanes32);
     return _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_packus_epi16(words, words), low_dwords));
   };
-  for (int u = 0; u < w; u += 8) {
-    const int lanes = w - u < 8 ? w - u : 8;
-    // The maps have room for 7 pixels past the row: their values are not used.
-    const __m256i xy = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(fixed + 2 * u));
-    __m256i x = _mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16), y = _mm256_srai_epi32(xy, 16);
-    const __m256i unused = _mm256_cmpgt_epi32(lane_index, _mm256_set1_epi32(lanes - 1));
-    const __m256i no_source = _mm256_or_si256(_mm256_cmpeq_epi32(x, outside), unused);
-    x = _mm256_andnot_si256(no_source, x), y = _mm256_andnot_si256(no_source, y);
-    const __m256i fraction = _mm256_andnot_si256(
-        no_source, _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(fractions + u))));
-    const __m256i fx = _mm256_and_si256(fraction, five_bits), fy = _mm256_srli_epi32(fraction, 5);
-    const __m256i at_edge = _mm256_cmpeq_epi32(x, last_column);
-    x = _mm256_add_epi32(x, at_edge);  // one to the left (at_edge is -1)
-    const __m256i across = _mm256_blendv_epi8(_mm256_or_si256(_mm256_sub_epi32(steps, fx), _mm256_slli_epi32(fx, 8)),
-                                              edge_across, at_edge);  // bytes (32 - fx, fx, 0, 0)
-    const __m256i down = _mm256_or_si256(_mm256_sub_epi32(steps, fy), _mm256_slli_epi32(fy, 16));
-    const __m256i top = _mm256_add_epi32(_mm256_mullo_epi32(y, step), x);
-    const __m256i bottom = _mm256_add_epi32(top, _mm256_and_si256(_mm256_cmpgt_epi32(last_row, y), step));
-    const __m256i top_read = _mm256_min_epi32(top, last_read), bottom_read = _mm256_min_epi32(bottom, last_read);
-    const __m256i top_shift = _mm256_slli_epi32(_mm256_sub_epi32(top, top_read), 3);
-    const __m256i bottom_shift = _mm256_slli_epi32(_mm256_sub_epi32(bottom, bottom_read), 3);
-    const __m128i fill_lanes = bytes_of(_mm256_and_si256(no_source, _mm256_set1_epi32(255)));
-    for (int c = 0; c < src.count; ++c) {
-      const int* plane = reinterpret_cast<const int*>(src.planes[c]);
-      const __m256i top_taps =
-          _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, top_read, 1), top_shift), pair);
-      const __m256i bottom_taps =
-          _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, bottom_read, 1), bottom_shift), pair);
-      // (top across, bottom across) per pixel, weighed down.
-      const __m256i rows = _mm256_or_si256(_mm256_maddubs_epi16(top_taps, across),
-                                           _mm256_slli_epi32(_mm256_maddubs_epi16(bottom_taps, across), 16));
-      const __m256i value = _mm256_srli_epi32(_mm256_add_epi32(_mm256_madd_epi16(rows, down), half), 10);
-      const __m128i bytes = _mm_blendv_epi8(bytes_of(value), _mm_set1_epi8(char(src.fill[c])), fill_lanes);
-      if (lanes == 8) {
-        _mm_storel_epi64(reinterpret_cast<__m128i*>(out[c] + u), bytes);
-      } else {
-        alignas(16) unsigned char last[16];
-        _mm_store_si128(reinterpret_cast<__m128i*>(last), bytes);
-        std::memcpy(out[c] + u, last, std::size_t(lanes));
+  constexpr int kChunk = 64;
+  alignas(32) int tops[kChunk], bottoms[kChunk], acrosses[kChunk], downs[kChunk], no_sources[kChunk];
+  for (int u0 = 0; u0 < w; u0 += kChunk) {
+    const int n = w - u0 < kChunk ? w - u0 : kChunk;
+    for (int j = 0; j < n; j += 8) {
+      const int u = u0 + j, lanes = w - u < 8 ? w - u : 8;
+      // The maps have room for 7 pixels past the row: their values are not used.
+      const __m256i xy = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(fixed + 2 * u));
+      __m256i x = _mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16), y = _mm256_srai_epi32(xy, 16);
+      const __m256i unused = _mm256_cmpgt_epi32(lane_index, _mm256_set1_epi32(lanes - 1));
+      const __m256i no_source = _mm256_or_si256(_mm256_cmpeq_epi32(x, outside), unused);
+      x = _mm256_andnot_si256(no_source, x), y = _mm256_andnot_si256(no_source, y);
+      const __m256i fraction = _mm256_andnot_si256(
+          no_source, _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(fractions + u))));
+      const __m256i fx = _mm256_and_si256(fraction, five_bits), fy = _mm256_srli_epi32(fraction, 5);
+      const __m256i at_edge = _mm256_cmpeq_epi32(x, last_column);
+      x = _mm256_add_epi32(x, at_edge);  // one to the left (at_edge is -1)
+      const __m256i across = _mm256_blendv_epi8(
+          _mm256_or_si256(_mm256_sub_epi32(steps, fx), _mm256_slli_epi32(fx, 8)), edge_across,
+          at_edge);  // bytes (32 - fx, fx, 0, 0)
+      const __m256i top = _mm256_add_epi32(_mm256_mullo_epi32(y, step), x);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(tops + j), top);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(bottoms + j),
+                         _mm256_add_epi32(top, _mm256_and_si256(_mm256_cmpgt_epi32(last_row, y), step)));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(acrosses + j), across);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(downs + j),
+                         _mm256_or_si256(_mm256_sub_epi32(steps, fy), _mm256_slli_epi32(fy, 16)));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(no_sources + j), no_source);
+      // Eight neighbouring pixels' taps mostly share a cache line per row and plane:
+      // the first and the last pixel's are asked for.
+      for (int c = 0; c < src.count; ++c) {
+        for (const int lane : {j, j + lanes - 1}) {
+          _mm_prefetch(reinterpret_cast<const char*>(src.planes[c] + tops[lane]), _MM_HINT_T0);
+          _mm_prefetch(reinterpret_cast<const char*>(src.planes[c] + bottoms[lane]), _MM_HINT_T0);
+        }
+      }
+    }
+    for (int j = 0; j < n; j += 8) {
+      const int u = u0 + j, lanes = w - u < 8 ? w - u : 8;
+      const auto load = [&](const int* values) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(values)); };
+      const __m256i across = load(acrosses + j), down = load(downs + j);
+      const __m128i fill_lanes = bytes_of(_mm256_and_si256(load(no_sources + j), _mm256_set1_epi32(255)));
+      const __m256i top = load(tops + j), bottom = load(bottoms + j);
+      const __m256i top_read = _mm256_min_epi32(top, last_read), bottom_read = _mm256_min_epi32(bottom, last_read);
+      const __m256i top_shift = _mm256_slli_epi32(_mm256_sub_epi32(top, top_read), 3);
+      const __m256i bottom_shift = _mm256_slli_epi32(_mm256_sub_epi32(bottom, bottom_read), 3);
+      for (int c = 0; c < src.count; ++c) {
+        // Each pixel's pair of bytes in the low half of its lane.
+        __m256i top_taps, bottom_taps;
+        if constexpr (kGather) {
+          const int* plane = reinterpret_cast<const int*>(src.planes[c]);
+          top_taps = _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, top_read, 1), top_shift), pair);
+          bottom_taps =
+              _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, bottom_read, 1), bottom_shift), pair);
+        } else {
+          alignas(32) int top_pairs[8], bottom_pairs[8];
+          for (int l = 0; l < 8; ++l) {
+            std::uint16_t two;
+            std::memcpy(&two, src.planes[c] + tops[j + l], 2);
+            top_pairs[l] = two;
+            std::memcpy(&two, src.planes[c] + bottoms[j + l], 2);
+            bottom_pairs[l] = two;
+          }
+          top_taps = load(top_pairs), bottom_taps = load(bottom_pairs);
+        }
+        // (top across, bottom across) per pixel, weighed down.
+        const __m256i rows = _mm256_or_si256(_mm256_maddubs_epi16(top_taps, across),
+                                             _mm256_slli_epi32(_mm256_maddubs_epi16(bottom_taps, across), 16));
+        const __m256i value = _mm256_srli_epi32(_mm256_add_epi32(_mm256_madd_epi16(rows, down), half), 10);
+        const __m128i bytes = _mm_blendv_epi8(bytes_of(value), _mm_set1_epi8(char(src.fill[c])), fill_lanes);
+        if (lanes == 8) {
+          _mm_storel_epi64(reinterpret_cast<__m128i*>(out[c] + u), bytes);
+        } else {
+          alignas(16) unsigned char last[16];
+          _mm_store_si128(reinterpret_cast<__m128i*>(last), bytes);
+          std::memcpy(out[c] + u, last, std::size_t(lanes));
+        }
       }
     }
   }
 }
+
+// Gathers where they are fast (Intel since Skylake: the gathering kernel measured
+// 1.11x the interleaved one there, the one-by-one loads 1.25-1.33x); loads elsewhere
+// (AMD Zen 3: gathers 1.4-1.6x, loads 1.27-1.40x; docs/performance.md).
+// FISHCAM_PLANAR_TAPS=gather or =loads chooses (how the tests cover both).
+bool planar_taps_gathered() {
+  if (const char* chosen = std::getenv("FISHCAM_PLANAR_TAPS")) {
+    if (std::strcmp(chosen, "gather") == 0) return true;
+    if (std::strcmp(chosen, "loads") == 0) return false;
+  }
+  __builtin_cpu_init();
+  return __builtin_cpu_is("intel");
+}
+// (Chosen on the first call, from code that runs only where AVX2 is used.)
+decltype(&bilinear_8u_planar_taps<true>) bilinear_8u_planar() {
+  static const bool gathered = planar_taps_gathered();
+  return gathered ? bilinear_8u_planar_taps<true> : bilinear_8u_planar_taps<false>;
+}
 #else
 constexpr auto bilinear_8u = nullptr;  // not an x86-64 build: cv::remap
-constexpr auto bilinear_8u_planar = nullptr;
+constexpr std::nullptr_t bilinear_8u_planar() { return nullptr; }
 #endif
 
 }  // namespace
@@ -241,7 +302,7 @@ RangeKernel select_kernel_avx2(DepthPrior prior, bool inside_sphere, SourceParam
 }
 
 GridRowLoops grid_row_loops_avx2() {
-  return {avx2::interpolate4, avx2::to_fixed_point, bilinear_8u, bilinear_8u_planar};
+  return {avx2::interpolate4, avx2::to_fixed_point, bilinear_8u, bilinear_8u_planar()};
 }
 
 }  // namespace fishcam::detail
