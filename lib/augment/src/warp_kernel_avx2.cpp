@@ -175,64 +175,79 @@ void bilinear_8u(const BilinearSource& src, const short* fixed, const unsigned s
 // the left with its weights swapped (the fraction there is 0: the right tap's weight
 // is 0 anyway); pixels without a source read offset 0 and are replaced by the fill.
 // So the planes are sampled where they lie, with no merge before and no split after.
+// The first pass of bilinear_8u_planar_taps over pixels u0 .. u0 + n - 1 of a row:
+// each pixel's top and bottom offsets, weights across and down and whether it has no
+// source, into `chunk`; the planes' taps asked for.
+struct PlanarChunk {
+  static constexpr int kPixels = 64;
+  alignas(32) int tops[kPixels], bottoms[kPixels], acrosses[kPixels], downs[kPixels], no_sources[kPixels];
+};
+[[gnu::always_inline]] inline void planar_offsets(const BilinearPlanes& src, const short* fixed,
+                                                  const unsigned short* fractions, int w, int u0, int n,
+                                                  PlanarChunk* chunk) {
+  const __m256i outside = _mm256_set1_epi32(kOutsideFixed), five_bits = _mm256_set1_epi32(31);
+  const __m256i steps = _mm256_set1_epi32(32), edge_across = _mm256_set1_epi32(32 << 8);
+  const __m256i last_column = _mm256_set1_epi32(src.width - 1), last_row = _mm256_set1_epi32(src.height - 1);
+  const __m256i step = _mm256_set1_epi32(int(src.step)), lane_index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  int *tops = chunk->tops, *bottoms = chunk->bottoms;
+  for (int j = 0; j < n; j += 8) {
+    const int u = u0 + j, lanes = w - u < 8 ? w - u : 8;
+    // The maps have room for 7 pixels past the row: their values are not used.
+    const __m256i xy = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(fixed + 2 * u));
+    __m256i x = _mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16), y = _mm256_srai_epi32(xy, 16);
+    const __m256i unused = _mm256_cmpgt_epi32(lane_index, _mm256_set1_epi32(lanes - 1));
+    const __m256i no_source = _mm256_or_si256(_mm256_cmpeq_epi32(x, outside), unused);
+    x = _mm256_andnot_si256(no_source, x), y = _mm256_andnot_si256(no_source, y);
+    const __m256i fraction = _mm256_andnot_si256(
+        no_source, _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(fractions + u))));
+    const __m256i fx = _mm256_and_si256(fraction, five_bits), fy = _mm256_srli_epi32(fraction, 5);
+    const __m256i at_edge = _mm256_cmpeq_epi32(x, last_column);
+    x = _mm256_add_epi32(x, at_edge);  // one to the left (at_edge is -1)
+    const __m256i across =
+        _mm256_blendv_epi8(_mm256_or_si256(_mm256_sub_epi32(steps, fx), _mm256_slli_epi32(fx, 8)), edge_across,
+                           at_edge);  // bytes (32 - fx, fx, 0, 0)
+    const __m256i top = _mm256_add_epi32(_mm256_mullo_epi32(y, step), x);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(tops + j), top);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(bottoms + j),
+                       _mm256_add_epi32(top, _mm256_and_si256(_mm256_cmpgt_epi32(last_row, y), step)));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(chunk->acrosses + j), across);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(chunk->downs + j),
+                       _mm256_or_si256(_mm256_sub_epi32(steps, fy), _mm256_slli_epi32(fy, 16)));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(chunk->no_sources + j), no_source);
+    // Eight neighbouring pixels' taps mostly share a cache line per row and plane:
+    // the first and the last pixel's are asked for.
+    for (int c = 0; c < src.count; ++c) {
+      for (const int lane : {j, j + lanes - 1}) {
+        _mm_prefetch(reinterpret_cast<const char*>(src.planes[c] + tops[lane]), _MM_HINT_T0);
+        _mm_prefetch(reinterpret_cast<const char*>(src.planes[c] + bottoms[lane]), _MM_HINT_T0);
+      }
+    }
+  }
+}
+
 template <bool kGather>
 void bilinear_8u_planar_taps(const BilinearPlanes& src, const short* fixed, const unsigned short* fractions, int w,
-                        unsigned char* const* out) {
-  const __m256i outside = _mm256_set1_epi32(kOutsideFixed), five_bits = _mm256_set1_epi32(31);
-  const __m256i steps = _mm256_set1_epi32(32), half = _mm256_set1_epi32(512), pair = _mm256_set1_epi32(0xffff);
-  const __m256i last_column = _mm256_set1_epi32(src.width - 1), last_row = _mm256_set1_epi32(src.height - 1);
-  const __m256i step = _mm256_set1_epi32(int(src.step)), edge_across = _mm256_set1_epi32(32 << 8);
+                             unsigned char* const* out) {
+  const __m256i half = _mm256_set1_epi32(512), pair = _mm256_set1_epi32(0xffff);
   // The last offset a 4-byte gather may start at (width >= 4).
   const __m256i last_read = _mm256_set1_epi32(int(std::size_t(src.height - 1) * src.step) + src.width - 4);
-  const __m256i lane_index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i low_dwords = _mm256_setr_epi32(0, 4, 0, 4, 0, 4, 0, 4);
   // The 8 bytes (one per pixel) of 8 32-bit lanes holding bytes.
   auto bytes_of = [&](__m256i lanes32) {
     const __m256i words = _mm256_packus_epi32(lanes32, lanes32);
     return _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_packus_epi16(words, words), low_dwords));
   };
-  constexpr int kChunk = 64;
-  alignas(32) int tops[kChunk], bottoms[kChunk], acrosses[kChunk], downs[kChunk], no_sources[kChunk];
+  constexpr int kChunk = PlanarChunk::kPixels;
+  PlanarChunk chunk;
+  const int *tops = chunk.tops, *bottoms = chunk.bottoms;
   for (int u0 = 0; u0 < w; u0 += kChunk) {
     const int n = w - u0 < kChunk ? w - u0 : kChunk;
-    for (int j = 0; j < n; j += 8) {
-      const int u = u0 + j, lanes = w - u < 8 ? w - u : 8;
-      // The maps have room for 7 pixels past the row: their values are not used.
-      const __m256i xy = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(fixed + 2 * u));
-      __m256i x = _mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16), y = _mm256_srai_epi32(xy, 16);
-      const __m256i unused = _mm256_cmpgt_epi32(lane_index, _mm256_set1_epi32(lanes - 1));
-      const __m256i no_source = _mm256_or_si256(_mm256_cmpeq_epi32(x, outside), unused);
-      x = _mm256_andnot_si256(no_source, x), y = _mm256_andnot_si256(no_source, y);
-      const __m256i fraction = _mm256_andnot_si256(
-          no_source, _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(fractions + u))));
-      const __m256i fx = _mm256_and_si256(fraction, five_bits), fy = _mm256_srli_epi32(fraction, 5);
-      const __m256i at_edge = _mm256_cmpeq_epi32(x, last_column);
-      x = _mm256_add_epi32(x, at_edge);  // one to the left (at_edge is -1)
-      const __m256i across = _mm256_blendv_epi8(
-          _mm256_or_si256(_mm256_sub_epi32(steps, fx), _mm256_slli_epi32(fx, 8)), edge_across,
-          at_edge);  // bytes (32 - fx, fx, 0, 0)
-      const __m256i top = _mm256_add_epi32(_mm256_mullo_epi32(y, step), x);
-      _mm256_store_si256(reinterpret_cast<__m256i*>(tops + j), top);
-      _mm256_store_si256(reinterpret_cast<__m256i*>(bottoms + j),
-                         _mm256_add_epi32(top, _mm256_and_si256(_mm256_cmpgt_epi32(last_row, y), step)));
-      _mm256_store_si256(reinterpret_cast<__m256i*>(acrosses + j), across);
-      _mm256_store_si256(reinterpret_cast<__m256i*>(downs + j),
-                         _mm256_or_si256(_mm256_sub_epi32(steps, fy), _mm256_slli_epi32(fy, 16)));
-      _mm256_store_si256(reinterpret_cast<__m256i*>(no_sources + j), no_source);
-      // Eight neighbouring pixels' taps mostly share a cache line per row and plane:
-      // the first and the last pixel's are asked for.
-      for (int c = 0; c < src.count; ++c) {
-        for (const int lane : {j, j + lanes - 1}) {
-          _mm_prefetch(reinterpret_cast<const char*>(src.planes[c] + tops[lane]), _MM_HINT_T0);
-          _mm_prefetch(reinterpret_cast<const char*>(src.planes[c] + bottoms[lane]), _MM_HINT_T0);
-        }
-      }
-    }
+    planar_offsets(src, fixed, fractions, w, u0, n, &chunk);
     for (int j = 0; j < n; j += 8) {
       const int u = u0 + j, lanes = w - u < 8 ? w - u : 8;
       const auto load = [&](const int* values) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(values)); };
-      const __m256i across = load(acrosses + j), down = load(downs + j);
-      const __m128i fill_lanes = bytes_of(_mm256_and_si256(load(no_sources + j), _mm256_set1_epi32(255)));
+      const __m256i across = load(chunk.acrosses + j), down = load(chunk.downs + j);
+      const __m128i fill_lanes = bytes_of(_mm256_and_si256(load(chunk.no_sources + j), _mm256_set1_epi32(255)));
       const __m256i top = load(tops + j), bottom = load(bottoms + j);
       const __m256i top_read = _mm256_min_epi32(top, last_read), bottom_read = _mm256_min_epi32(bottom, last_read);
       const __m256i top_shift = _mm256_slli_epi32(_mm256_sub_epi32(top, top_read), 3);
