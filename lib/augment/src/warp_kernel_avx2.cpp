@@ -252,28 +252,29 @@ void bilinear_8u_planar_taps(const BilinearPlanes& src, const short* fixed, cons
       const __m256i top_read = _mm256_min_epi32(top, last_read), bottom_read = _mm256_min_epi32(bottom, last_read);
       const __m256i top_shift = _mm256_slli_epi32(_mm256_sub_epi32(top, top_read), 3);
       const __m256i bottom_shift = _mm256_slli_epi32(_mm256_sub_epi32(bottom, bottom_read), 3);
+      // The weights across for a lane holding the top pair and the bottom pair.
+      const __m256i across_both = _mm256_or_si256(across, _mm256_slli_epi32(across, 16));
       for (int c = 0; c < src.count; ++c) {
-        // Each pixel's pair of bytes in the low half of its lane.
-        __m256i top_taps, bottom_taps;
-        if constexpr (kGather) {
+        // Per pixel, (top across, bottom across) as two 16-bit words, to be weighed down.
+        __m256i rows;
+        if constexpr (kGather) {  // each pixel's pair of bytes in the low half of its lane
           const int* plane = reinterpret_cast<const int*>(src.planes[c]);
-          top_taps = _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, top_read, 1), top_shift), pair);
-          bottom_taps =
+          const __m256i top_taps =
+              _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, top_read, 1), top_shift), pair);
+          const __m256i bottom_taps =
               _mm256_and_si256(_mm256_srlv_epi32(_mm256_i32gather_epi32(plane, bottom_read, 1), bottom_shift), pair);
-        } else {
-          alignas(32) int top_pairs[8], bottom_pairs[8];
+          rows = _mm256_or_si256(_mm256_maddubs_epi16(top_taps, across),
+                                 _mm256_slli_epi32(_mm256_maddubs_epi16(bottom_taps, across), 16));
+        } else {  // the top pair and the bottom pair in one lane, weighed across at once
+          alignas(32) unsigned taps[8];
           for (int l = 0; l < 8; ++l) {
-            std::uint16_t two;
-            std::memcpy(&two, src.planes[c] + tops[j + l], 2);
-            top_pairs[l] = two;
-            std::memcpy(&two, src.planes[c] + bottoms[j + l], 2);
-            bottom_pairs[l] = two;
+            std::uint16_t top_pair, bottom_pair;
+            std::memcpy(&top_pair, src.planes[c] + tops[j + l], 2);
+            std::memcpy(&bottom_pair, src.planes[c] + bottoms[j + l], 2);
+            taps[l] = unsigned(top_pair) | unsigned(bottom_pair) << 16;
           }
-          top_taps = load(top_pairs), bottom_taps = load(bottom_pairs);
+          rows = _mm256_maddubs_epi16(_mm256_load_si256(reinterpret_cast<const __m256i*>(taps)), across_both);
         }
-        // (top across, bottom across) per pixel, weighed down.
-        const __m256i rows = _mm256_or_si256(_mm256_maddubs_epi16(top_taps, across),
-                                             _mm256_slli_epi32(_mm256_maddubs_epi16(bottom_taps, across), 16));
         const __m256i value = _mm256_srli_epi32(_mm256_add_epi32(_mm256_madd_epi16(rows, down), half), 10);
         const __m128i bytes = _mm_blendv_epi8(bytes_of(value), _mm_set1_epi8(char(src.fill[c])), fill_lanes);
         if (lanes == 8) {
