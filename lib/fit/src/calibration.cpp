@@ -759,10 +759,10 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
     solve<Model>(&robust, o.all_points, o.corners, false, &loss, 200, 1e-9);
   }
   CalibrationResult result;
-  result.outliers = find_outliers(o, Camera(o.camera(robust, make_model(spec.name, robust.model))), robust);
+  const Camera robust_camera(o.camera(robust, make_model(spec.name, robust.model)));
+  result.outliers = find_outliers(o, robust_camera, robust);
   if (!result.outliers.empty() &&
-      relocate_lost_boards(o, board, Camera(o.camera(robust, make_model(spec.name, robust.model))), result.outliers,
-                           &robust)) {  // solved again with those boards where they belong
+      relocate_lost_boards(o, board, robust_camera, result.outliers, &robust)) {  // solved again, those boards placed
     ceres::CauchyLoss loss(1.0);
     solve<Model>(&robust, o.all_points, o.corners, false, &loss, 200, 1e-9);
     result.outliers = find_outliers(o, Camera(o.camera(robust, make_model(spec.name, robust.model))), robust);
