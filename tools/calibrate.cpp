@@ -151,9 +151,21 @@ void print_calibration(const CalibrationResult& result, const CameraParameters& 
       "calibrated %s%s from %zu images, %ld corners: rms %.4f px (2-D; %.4f per coordinate), %zu outliers; "
       "wrote %s\n",
       std::string(model_name(result.camera.model)).c_str(),
-      displaces(result.camera.distortion) ? " with tangential terms" : "", result.used_images.size(),
-      result.observations, result.rms_px, result.rms_px / std::sqrt(2.0), result.outliers.size(), out.c_str());
+      result.camera.mrcal_lens()            ? (" with " + result.camera.mrcal_lens()->lensmodel()).c_str()
+      : displaces(result.camera.distortion) ? " with tangential terms"
+                                            : "",
+      result.used_images.size(), result.observations, result.rms_px, result.rms_px / std::sqrt(2.0),
+      result.outliers.size(), out.c_str());
+  const MrcalLens* lens = result.camera.mrcal_lens();
   for (size_t i = 0; i < result.parameters.size(); ++i) {
+    // A spline's values (hundreds) summarised: they are in the camera file and --json.
+    if (lens && result.parameter_names[i].starts_with("values[")) {
+      if (result.parameter_names[i] != "values[0]") continue;
+      const auto [low, high] = std::minmax_element(lens->values().begin(), lens->values().end());
+      std::printf("  %zu spline values in [%.4g, %.4g] (in the camera file; --json lists them with sigmas)\n",
+                  lens->values().size(), *low, *high);
+      continue;
+    }
     if (std::isnan(result.sigmas[i])) {
       std::printf("  %-4s %16.10g    not determined by the data\n", result.parameter_names[i].c_str(),
                   result.parameters[i]);
@@ -201,7 +213,9 @@ void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
   cmd->add_option("--model", o->model,
                   "Model: " + fishcam::model_names_text() +
                       "; MODEL+tangential adds OpenCV's p1, p2 and MODEL+thin-prism also s1..s4 (pinhole, opencv, "
-                      "mei: opencv+tangential is mrcal's OPENCV8); for a rig one, or one per camera (comma-separated)")
+                      "mei: opencv+tangential is mrcal's OPENCV8); mrcal's splined model by its mrcal name "
+                      "(LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=10_fov_x_deg=200); for a rig one, or one per "
+                      "camera (comma-separated)")
       ->required();
   cmd->add_option("--images", o->images,
                   "Use only the images whose file name matches one of these shell patterns (comma-separated)");

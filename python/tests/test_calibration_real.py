@@ -146,6 +146,57 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return vt.T @ np.diag([1.0, 1.0, d]) @ u.T
 
 
+def mrcal_calibrate(corners_file: Path, lensmodel: str, out: Path, *options: str) -> tuple[float, fishcam.Camera]:
+    """mrcal-calibrate-cameras on the photos' corners (flat boards, every corner kept):
+    its RMS per coordinate and its camera."""
+    out.mkdir()
+    run = subprocess.run(
+        [
+            str(MRCAL_CALIBRATE),
+            "--corners-cache",
+            str(corners_file),
+            "--lensmodel",
+            lensmodel,
+            "--focal",
+            "240",
+            "--object-spacing",
+            str(SPACING),
+            "--object-width-n",
+            "9",
+            "--object-height-n",
+            "6",
+            "--imagersize",
+            "960",
+            "600",
+            "--skip-calobject-warp-solve",
+            "--skip-outlier-rejection",
+            *options,
+            "--outdir",
+            str(out),
+            "*.jpg",
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    rms = float(re.findall(r"## RMS error: ([0-9.]+)", run.stdout + run.stderr)[-1])
+    return rms, fishcam.Camera.read(str(out / "camera-0.cameramodel"))
+
+
+def difference_over_the_data(ours: fishcam.Camera, theirs: fishcam.Camera) -> tuple[np.ndarray, np.ndarray]:
+    """|theirs(R ray) - pixel| over our data's pixels (every 4th), R the rotation between
+    the frames fitted as mrcal's projection_diff does; and which rays they project."""
+    pixels = data_pixels(ours, step=4)
+    rays, ok = ours.unproject(pixels)
+    their_rays, their_ok = theirs.unproject(pixels)
+    both = ok & their_ok
+    assert both.sum() > 9000
+    unit = rays[both] / np.linalg.norm(rays[both], axis=1)[:, None]
+    their_unit = their_rays[both] / np.linalg.norm(their_rays[both], axis=1)[:, None]
+    projected, seen = theirs.project(unit @ rotation_between(unit, their_unit).T)
+    return np.linalg.norm(projected[seen] - pixels[both][seen], axis=1), seen
+
+
 @pytest.mark.skipif(not MRCAL_CALIBRATE.exists(), reason="no mrcal-calibrate-cameras (Debian's mrcal)")
 def test_opencv8_agrees_with_mrcal_calibrate_cameras(corners_file: Path, observations: list, tmp_path: Path) -> None:
     """opencv+tangential is mrcal's LENSMODEL_OPENCV8 (k1..k6, p1, p2). mrcal solves the
@@ -162,41 +213,9 @@ def test_opencv8_agrees_with_mrcal_calibrate_cameras(corners_file: Path, observa
     # reaches our cost. Ours does not vary (0.12987872 in every run).
     best: typing.Optional[tuple[float, fishcam.Camera]] = None
     for attempt in range(3):
-        out = tmp_path / f"mrcal-{attempt}"
-        out.mkdir()
-        run = subprocess.run(
-            [
-                str(MRCAL_CALIBRATE),
-                "--corners-cache",
-                str(corners_file),
-                "--lensmodel",
-                "LENSMODEL_OPENCV8",
-                "--focal",
-                "240",
-                "--object-spacing",
-                str(SPACING),
-                "--object-width-n",
-                "9",
-                "--object-height-n",
-                "6",
-                "--imagersize",
-                "960",
-                "600",
-                "--skip-calobject-warp-solve",
-                "--skip-regularization",
-                "--skip-outlier-rejection",
-                "--outdir",
-                str(out),
-                "*.jpg",
-            ],
-            capture_output=True,
-            text=True,
-        )
-        assert run.returncode == 0, run.stdout + run.stderr
-        # mrcal prints the RMS per coordinate.
-        mrcal_rms = float(re.findall(r"## RMS error: ([0-9.]+)", run.stdout + run.stderr)[-1])
-        if best is None or mrcal_rms < best[0]:
-            best = (mrcal_rms, fishcam.Camera.read(str(out / "camera-0.cameramodel")))
+        run = mrcal_calibrate(corners_file, "LENSMODEL_OPENCV8", tmp_path / f"mrcal-{attempt}", "--skip-regularization")
+        if best is None or run[0] < best[0]:
+            best = run
         if best[0] <= result.rms_per_coordinate_px * (1 + 1e-4):
             break
     assert best is not None
@@ -207,15 +226,7 @@ def test_opencv8_agrees_with_mrcal_calibrate_cameras(corners_file: Path, observa
     # The terms within two of our sigmas of mrcal's.
     for name in ("p1", "p2"):
         assert abs(result.parameters[name] - theirs.tangential[name]) < 2 * result.sigmas[name], name
-    pixels = data_pixels(ours, step=4)
-    rays, ok = ours.unproject(pixels)
-    their_rays, their_ok = theirs.unproject(pixels)
-    both = ok & their_ok
-    assert both.sum() > 9000
-    unit = rays[both] / np.linalg.norm(rays[both], axis=1)[:, None]
-    their_unit = their_rays[both] / np.linalg.norm(their_rays[both], axis=1)[:, None]
-    projected, seen = theirs.project(unit @ rotation_between(unit, their_unit).T)
-    error = np.linalg.norm(projected[seen] - pixels[both][seen], axis=1)
+    error, seen = difference_over_the_data(ours, theirs)
     # mrcal's fit ends at 66.4 degrees (the pole of its rational distortion), the data at
     # 68.2: the few rays the fitted rotation carries past it do not project.
     assert seen.mean() > 0.97
@@ -223,3 +234,56 @@ def test_opencv8_agrees_with_mrcal_calibrate_cameras(corners_file: Path, observa
         f"fishcam vs mrcal OPENCV8 over the data: rms {np.sqrt(np.mean(error**2)):.3g}, max {error.max():.3g} px "
         f"(mrcal's RMS per coordinate {mrcal_rms:.9g}, ours {result.rms_per_coordinate_px:.9g})"
     )
+
+
+SPLINE = "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=12_Ny=8_fov_x_deg=200"
+
+
+@pytest.mark.skipif(not MRCAL_CALIBRATE.exists(), reason="no mrcal-calibrate-cameras (Debian's mrcal)")
+def test_splined_model_agrees_with_mrcal_calibrate_cameras(
+    corners_file: Path, observations: list, tmp_path: Path
+) -> None:
+    """mrcal's splined model, calibrated by fishcam through libmrcal's projection and
+    gradients with mrcal's regularisation, against mrcal-calibrate-cameras' own solve of
+    the same corners (flat boards, every corner kept, regularised as mrcal does by
+    default): the same cost, the same lens over the data after the rotation between
+    the frames is fitted, and an uncertainty at the size of their difference."""
+    result = fishcam.calibrate(observations, BOARD, SPACING, SIZE, SPLINE, threads=2, board_warp=False)
+    ours = result.camera
+    assert result.outliers == [] and ours.distortion == "mrcal_lens" and ours.model == "stereographic"
+    _, theirs = mrcal_calibrate(corners_file, SPLINE, tmp_path / "mrcal")
+    assert theirs.distortion == "mrcal_lens"
+    # mrcal prints the RMS over its measurements with the regularisation's: the
+    # corners' own from its solution's optimization_inputs, by mrcal's Python.
+    mrcal_corners_rms = float(
+        subprocess.run(
+            [
+                "/usr/bin/python3",
+                "-c",
+                "import sys, numpy, mrcal; i = mrcal.cameramodel(sys.argv[1]).optimization_inputs(); "
+                "x = mrcal.optimizer_callback(**i, no_jacobian=True)[1]; "
+                "print(numpy.sqrt(numpy.mean(x[: mrcal.num_measurements_boards(**i)] ** 2)))",
+                str(tmp_path / "mrcal" / "camera-0.cameramodel"),
+            ],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout
+    )
+    assert abs(result.rms_per_coordinate_px - mrcal_corners_rms) <= 1e-6 * mrcal_corners_rms, (
+        result.rms_per_coordinate_px,
+        mrcal_corners_rms,
+    )
+    error, seen = difference_over_the_data(ours, theirs)
+    assert seen.all()
+    rms = float(np.sqrt(np.mean(error**2)))
+    print(f"fishcam vs mrcal {SPLINE} over the data: rms {rms:.3g}, max {error.max():.3g} px")
+    assert error.max() <= 1e-3 and rms <= 1e-4, f"rms {rms:.3g}, max {error.max():.3g} px"
+    # The covariance: every value's sigma (0 for a knot no corner reaches: only the
+    # corners carry noise, as in mrcal), the core held (sigma 0) as mrcal holds it, and
+    # an uncertainty over the data of a few tenths of a pixel.
+    value_sigmas = np.array([result.sigmas[f"values[{i}]"] for i in range(2 * 12 * 8)])
+    assert np.all(value_sigmas >= 0) and np.mean(value_sigmas > 0) > 0.3
+    assert result.sigmas["f"] == 0 and result.sigmas["cx"] == 0
+    sigma = ours.projection_uncertainty(data_pixels(ours, step=40))
+    assert np.all(np.isfinite(sigma)) and 0.05 < np.median(sigma) < 0.5, np.median(sigma)

@@ -1,5 +1,6 @@
 #include "fishcam/core/mrcal_lens.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string_view>
@@ -116,6 +117,22 @@ MrcalLens::MrcalLens(std::string lensmodel, std::vector<double> values)
 
 MrcalLens::~MrcalLens() = default;
 
+std::shared_ptr<const MrcalLens> MrcalLens::with_zero_values(const std::string& lensmodel) {
+  mrcal_lensmodel_t model;
+  if (!mrcal_lensmodel_from_name(&model, lensmodel.c_str()) || !kind_of(model.type)) {
+    std::string shown = "'";
+    shown.append(lensmodel, 0, 80).push_back('\'');
+    throw Error(shown + " is not one of the mrcal lens models fishcam evaluates (" + kind_names() + ")");
+  }
+  // A configuration libmrcal would assert on, or one too large to allocate, is given
+  // no values: the constructor refuses its configuration before the count.
+  const auto& c = model.LENSMODEL_SPLINED_STEREOGRAPHIC__config;
+  const bool spline = model.type == MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC;
+  const bool sane = !spline || ((c.order == 2 || c.order == 3) && c.Nx >= 4 && c.Nx <= 200 && c.Ny >= 4 && c.Ny <= 200);
+  const int count = sane ? mrcal_lensmodel_num_params(&model) - 4 : 0;
+  return std::make_shared<const MrcalLens>(lensmodel, std::vector<double>(size_t(std::max(0, count)), 0.0));
+}
+
 const char* MrcalLens::base_model() const {
   for (const KindInfo& k : kKinds) {
     if (k.kind == kind_) return k.base_model;
@@ -160,6 +177,35 @@ Eigen::Vector2d MrcalLens::offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jac
     }
   }
   return {q.x - m.x(), q.y - m.y()};
+}
+
+Eigen::Vector2d MrcalLens::project_with_values(const Eigen::Vector3d& point, const double* values,
+                                               Eigen::Matrix<double, 2, 3>* d_point, double* d_values) const {
+  if (kind_ != Kind::splined_stereographic && kind_ != Kind::cahvor) {
+    throw Error(lensmodel_ + ": libmrcal gives no gradients in its values");
+  }
+  const size_t count = values_.size();
+  std::vector<double> intrinsics(4 + count);
+  intrinsics[0] = intrinsics[1] = 1;
+  std::copy(values, values + count, intrinsics.begin() + 4);
+  const mrcal_point3_t p = {{point.x(), point.y(), point.z()}};
+  mrcal_point2_t q;
+  mrcal_point3_t dq_dp[2];
+  std::vector<double> dq_dintrinsics(d_values ? 2 * intrinsics.size() : 0);
+  if ((!parsed_->projects_behind && !(p.z > 0)) ||
+      !mrcal_project(&q, d_point ? dq_dp : nullptr, d_values ? dq_dintrinsics.data() : nullptr, &p, 1, &parsed_->model,
+                     intrinsics.data())) {
+    return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  }
+  if (d_point) {
+    for (int r = 0; r < 2; ++r) d_point->row(r) = Eigen::Vector3d(dq_dp[r].xyz[0], dq_dp[r].xyz[1], dq_dp[r].xyz[2]);
+  }
+  if (d_values) {
+    for (size_t r = 0; r < 2; ++r) {
+      std::copy_n(dq_dintrinsics.begin() + long(r * intrinsics.size() + 4), count, d_values + r * count);
+    }
+  }
+  return {q.x, q.y};
 }
 
 std::optional<MrcalLens::PolynomialCells> MrcalLens::polynomial_cells() const {

@@ -256,8 +256,9 @@ std::vector<std::string> check_fidelity_models(const std::vector<std::string>& m
   std::map<std::string, std::string> seen;  // by meaning: "equidistant" is "equidistant:lsq"
   for (const std::string& token : models) {
     const FidelityModel m = parse_fidelity_model(token);
-    if (!m.own && parse_model_spec(m.spec).tangential_terms > 0) {
-      throw Error("models: " + quoted_for_message(token) + ": fidelity fits radial models (no +tangential)");
+    if (!m.own && (parse_model_spec(m.spec).tangential_terms > 0 || !parse_model_spec(m.spec).mrcal_lens.empty())) {
+      throw Error("models: " + quoted_for_message(token) +
+                  ": fidelity fits radial models (no +tangential, no mrcal lens)");
     }
     const std::string key = m.own ? "own"
                                   : std::string(parse_model_spec(m.spec).name) + "/" +

@@ -119,6 +119,8 @@ namespace {
 
 using detail::check_solution;
 using detail::CornerCost;
+using detail::LensCornerCost;
+using detail::LensRegularisation;
 using detail::ParameterCovariance;
 using detail::pose_block;
 using detail::pose_of;
@@ -197,6 +199,14 @@ void add_corner_residuals(ceres::Problem* problem, Solve* s, const std::vector<s
     for (size_t i = 0; i < corners[b].size(); ++i) {
       const std::optional<Eigen::Vector2d> factors =
           warped ? std::optional(warp_factors(s->board, points[b][i])) : std::nullopt;
+      if (s->lens) {
+        auto* cost = new LensCornerCost(s->lens.get(), points[b][i], corners[b][i], factors);
+        std::vector<double*> blocks = {s->model.data(), s->lens_values.data(), s->center.data(), &s->ay,
+                                       s->poses[b].data()};
+        if (warped) blocks.push_back(s->warp.data());
+        problem->AddResidualBlock(cost, loss, blocks);
+        continue;
+      }
       if (terms == 0) {
         auto* cost = new CornerCost<Model>(points[b][i], corners[b][i], n, factors);
         std::vector<double*> blocks = {s->model.data(), s->center.data(), &s->ay, s->poses[b].data()};
@@ -226,7 +236,17 @@ Eigen::Vector3d warped(const Solve& s, const Eigen::Vector3d& point) {
 std::vector<double*> intrinsic_blocks(Solve* s) {
   std::vector<double*> blocks = {s->model.data(), s->center.data(), &s->ay};
   if (!s->tangential.empty()) blocks.insert(blocks.begin() + 1, s->tangential.data());
+  if (s->lens) blocks.insert(blocks.begin() + 1, s->lens_values.data());
   return blocks;
+}
+
+// An mrcal lens's regularisation for a solve over these corners (none without a lens).
+std::unique_ptr<LensRegularisation> lens_regularisation(const Solve& s,
+                                                        const std::vector<std::vector<Eigen::Vector2d>>& corners) {
+  if (!s.lens) return nullptr;
+  long count = 0;
+  for (const auto& board : corners) count += long(board.size());
+  return std::make_unique<LensRegularisation>(*s.lens, count);
 }
 
 // The joint (or, with intrinsics_fixed, pose-only) solve over all boards; each
@@ -240,11 +260,18 @@ ceres::Solver::Summary solve(Solve* s, const std::vector<std::vector<Eigen::Vect
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   add_corner_residuals<Model>(&problem, s, points, corners, loss);
+  if (s->lens && !s->lens_values_held) {  // the problem owns its cost functions
+    problem.AddResidualBlock(lens_regularisation(*s, corners).release(), nullptr, s->lens_values.data());
+  }
   detail::bound_model_block<Model>(&problem, s->model.data(), int(s->model.size()));
   if (intrinsics_fixed) {
     for (double* block : intrinsic_blocks(s)) problem.SetParameterBlockConstant(block);
     if (!s->warp.empty()) problem.SetParameterBlockConstant(s->warp.data());
   }
+  if (s->core_held) {
+    for (double* block : {s->model.data(), s->center.data(), &s->ay}) problem.SetParameterBlockConstant(block);
+  }
+  if (s->lens && s->lens_values_held) problem.SetParameterBlockConstant(s->lens_values.data());
   ceres::Solver::Summary summary;
   ceres::Solver::Options options = detail::solver_options(ceres::DENSE_SCHUR);
   options.max_num_iterations = max_iterations;
@@ -262,7 +289,23 @@ ParameterCovariance parameter_covariance(Solve s, const std::vector<std::vector<
   std::vector<double*> poses, kept = intrinsic_blocks(&s);
   for (auto& pose : s.poses) poses.push_back(pose.data());
   if (!s.warp.empty()) kept.push_back(s.warp.data());  // after the intrinsics (projection_covariance_of)
-  return detail::covariance_of(&problem, kept, poses);
+  if (!s.core_held) return detail::covariance_of(&problem, kept, poses);
+  // A lens's values over a held core: the solve's covariance (regularised as solved),
+  // the core's rows and columns 0 where the record has them.
+  const Eigen::Index n = Eigen::Index(s.model.size()), k = Eigen::Index(s.lens_values.size());
+  std::vector<double*> solved = {s.lens_values.data()};
+  if (!s.warp.empty()) solved.push_back(s.warp.data());
+  ParameterCovariance c = detail::covariance_of(&problem, solved, poses, lens_regularisation(s, corners)->normal());
+  std::vector<Eigen::Index> place(size_t(c.covariance.rows()));
+  for (Eigen::Index i = 0; i < c.covariance.rows(); ++i) place[size_t(i)] = i < k ? n + i : n + i + 3;
+  const Eigen::Index size = c.covariance.rows() + n + 3;
+  c.covariance = detail::embedded(c.covariance, place, size);
+  for (Eigen::VectorXd& direction : c.undetermined) {
+    Eigen::VectorXd full = Eigen::VectorXd::Zero(size);
+    for (size_t i = 0; i < place.size(); ++i) full[place[i]] = direction[Eigen::Index(i)];
+    direction = full;
+  }
+  return c;
 }
 
 // How far corners, read as a cols x rows grid in board order, are from a grid: the
@@ -494,6 +537,8 @@ struct Observations {
       std::copy(s.tangential.begin(), s.tangential.end(), terms.begin());
       p.distortion = TangentialDistortion{TangentialTerms::from_values(terms)};
     }
+    if (s.lens)
+      p.distortion = MrcalLensDistortion{std::make_shared<const MrcalLens>(s.lens->lensmodel(), s.lens_values)};
     return p;
   }
 };
@@ -714,7 +759,15 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, bool war
   if (used.size() < 3) throw Error("calibrate: fewer than 3 images keep enough corners after the outliers are removed");
   s.poses = std::move(poses);
   if (warp) s.warp = {0.0, 0.0};
-  result->observations = solve<Model>(&s, kept_points, kept_corners, false, nullptr).num_residuals / 2;
+  if (s.lens) {  // mrcal-calibrate-cameras' order: the core solved with the lens at 0, then held
+    std::fill(s.lens_values.begin(), s.lens_values.end(), 0.0);
+    s.core_held = false, s.lens_values_held = true;
+    solve<Model>(&s, kept_points, kept_corners, false, nullptr);
+    s.core_held = true, s.lens_values_held = false;
+  }
+  solve<Model>(&s, kept_points, kept_corners, false, nullptr);
+  result->observations = 0;
+  for (const auto& corners : kept_corners) result->observations += long(corners.size());
   result->camera = o.camera(s, make_model(spec.name, s.model));
   const Camera final_camera(result->camera);
   double sum2 = 0;
@@ -727,7 +780,11 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, bool war
     for (size_t i = 0; i < kept_points[b].size(); ++i) {
       const Eigen::Vector3d point = to_camera(pose, warped(s, kept_points[b][i]));
       Eigen::Vector2d q;
-      final_camera.project(point, &q);
+      if (!final_camera.project(point, &q) && s.lens) {  // the solve has no such limit: the spline's own fold
+        throw Error("calibrate (" + s.lens->lensmodel() + "): the solved spline folds inside the data (image " +
+                    o.boards[used[b]]->filename +
+                    " lies past where it is one-to-one): try more knots, another fov_x_deg or another model");
+      }
       board_sum2 += (q - kept_corners[b][i]).squaredNorm();
       record.observe(point);
     }
@@ -736,9 +793,14 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, bool war
   }
   result->rms_px = std::sqrt(sum2 / double(std::max(1L, result->observations)));
   result->parameter_names = model_param_names(spec.name, int(s.model.size()));
+  if (s.lens) {
+    const std::vector<std::string> names = std::get<MrcalLensDistortion>(result->camera.distortion).parameter_names();
+    result->parameter_names.insert(result->parameter_names.end(), names.begin(), names.end());
+  }
   for (size_t i = 0; i < s.tangential.size(); ++i) result->parameter_names.emplace_back(TangentialTerms::kNames[i]);
   result->parameter_names.insert(result->parameter_names.end(), {"cx", "cy", "a_y"});
   result->parameters = s.model;
+  result->parameters.insert(result->parameters.end(), s.lens_values.begin(), s.lens_values.end());
   result->parameters.insert(result->parameters.end(), s.tangential.begin(), s.tangential.end());
   result->parameters.insert(result->parameters.end(), {s.center.x(), s.center.y(), s.ay});
 
@@ -755,6 +817,13 @@ CalibrationResult calibrate_with(const std::vector<const BoardObservation*>& boa
   Solve robust = robust_solve<Model>(o, initial_solve(o, board), spec);
   if (spec.tangential_terms > 0) {  // from the radial solution, under the same robust loss
     robust.tangential.assign(size_t(spec.tangential_terms), 0.0);
+    ceres::CauchyLoss loss(1.0);
+    solve<Model>(&robust, o.all_points, o.corners, false, &loss, 200, 1e-9);
+  }
+  if (!spec.mrcal_lens.empty()) {  // from the base model's solution (the lens at zero), its core held
+    robust.lens = MrcalLens::with_zero_values(spec.mrcal_lens);
+    robust.lens_values = robust.lens->values();
+    robust.core_held = true;
     ceres::CauchyLoss loss(1.0);
     solve<Model>(&robust, o.all_points, o.corners, false, &loss, 200, 1e-9);
   }

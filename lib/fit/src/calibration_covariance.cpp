@@ -59,7 +59,7 @@ Eigen::MatrixXd pseudo_inverse(const Eigen::SelfAdjointEigenSolver<Eigen::Matrix
 }  // namespace
 
 ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<double*>& kept,
-                                  const std::vector<double*>& eliminated) {
+                                  const std::vector<double*>& eliminated, const Eigen::MatrixXd& prior) {
   std::vector<double*> blocks = kept;
   blocks.insert(blocks.end(), eliminated.begin(), eliminated.end());
   ceres::Problem::EvaluateOptions options;
@@ -74,7 +74,11 @@ ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<dou
   std::vector<Eigen::Index> starts;
   for (Eigen::Index at = a; double* b : eliminated) starts.push_back(at), at += problem->ParameterBlockSize(b);
   const Eigen::Index m = crs.num_cols;
-  Eigen::MatrixXd normal = normal_equations(crs, a, starts);
+  if (prior.rows() > a) throw Error("calibrate: internal error: a prior on parameters that are not kept");
+  const Eigen::Index p = prior.rows();
+  const Eigen::MatrixXd observed = normal_equations(crs, a, starts);
+  Eigen::MatrixXd normal = observed;
+  normal.topLeftCorner(p, p) += prior;
   Eigen::VectorXd scale(m);  // to unit curvature: the threshold then has no units
   for (Eigen::Index i = 0; i < m; ++i) scale[i] = normal(i, i) > 0 ? 1 / std::sqrt(normal(i, i)) : 0.0;
   normal = scale.asDiagonal() * normal * scale.asDiagonal();
@@ -113,6 +117,10 @@ ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<dou
   inverse.topRightCorner(a, e) = -s_inverse * g;
   inverse.bottomLeftCorner(e, a) = inverse.topRightCorner(a, e).transpose();
   inverse.bottomRightCorner(e, e) = d_inverse + g.transpose() * s_inverse * g;
+  if (p > 0) {  // N^-1 J^T J N^-1 (scaled as N is), a product of positive semi-definite matrices
+    const Eigen::MatrixXd sandwich = inverse * (scale.asDiagonal() * observed * scale.asDiagonal()) * inverse;
+    inverse = (sandwich + sandwich.transpose()) / 2;
+  }
   const double dof = double(crs.num_rows - rank);
   out.variance = dof > 0 ? 2 * cost / dof : std::numeric_limits<double>::quiet_NaN();
   out.covariance = out.variance * scale.asDiagonal() * inverse * scale.asDiagonal();
@@ -170,7 +178,8 @@ Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const 
 
 Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const Solve& s) {
   const Eigen::Index n = Eigen::Index(s.model.size()), solved = Eigen::Index(s.tangential.size());
-  const Eigen::Index intrinsics = n + solved + 3;
+  // An mrcal lens's values lie where the terms would (the record holds all of them).
+  const Eigen::Index intrinsics = n + solved + Eigen::Index(s.lens_values.size()) + 3;
   // The boards follow the intrinsics and the warp (parameter_covariance's order).
   const Eigen::Index boards = intrinsics + Eigen::Index(s.warp.size());
   const Eigen::MatrixXd c = projection_covariance_of(full, {0, intrinsics, -1, boards, {}}, s.poses);
@@ -180,7 +189,11 @@ Eigen::MatrixXd projection_covariance_of(const ParameterCovariance& full, const 
   const Eigen::Index held = Eigen::Index(TangentialTerms::kNames.size()) - solved;
   std::vector<Eigen::Index> place(size_t(c.rows()));
   for (Eigen::Index i = 0; i < c.rows(); ++i) place[size_t(i)] = i < n + solved ? i : i + held;
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(c.rows() + held, c.cols() + held);
+  return embedded(c, place, c.rows() + held);
+}
+
+Eigen::MatrixXd embedded(const Eigen::MatrixXd& c, const std::vector<Eigen::Index>& place, Eigen::Index size) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(size, size);
   for (Eigen::Index i = 0; i < c.rows(); ++i) {
     for (Eigen::Index j = 0; j < c.cols(); ++j) out(place[size_t(i)], place[size_t(j)]) = c(i, j);
   }
@@ -208,6 +221,30 @@ struct PointProjection {
   }
 };
 
+// d pixel / d (f, the lens's values, cx, cy, a_y, w, t) of a camera with an mrcal lens
+// on its stereographic plane (as calibrate solves it, LensCornerCost) at a camera-frame
+// point; a board-fixed point moves to p + w x p + t (t only for a point at a distance).
+Eigen::MatrixXd lens_projection_jacobian(const Camera& camera, const MrcalLens& lens, const Eigen::Vector3d& point,
+                                         bool at_distance) {
+  const auto* stereographic = std::get_if<Stereographic<double>>(&camera.model());
+  if (!stereographic) throw Error("projection uncertainty: an mrcal lens is calibrated on the stereographic model");
+  const Eigen::Index k = Eigen::Index(lens.values().size());
+  Eigen::Matrix<double, 2, 3> d_point;
+  Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> d_values(2, k);
+  const Eigen::Vector2d d = lens.project_with_values(point, lens.values().data(), &d_point, d_values.data());
+  const double f = stereographic->f(), ax = camera.pixel_scale().x(), ay = camera.pixel_scale().y();
+  const Eigen::Matrix2d scale = Eigen::Vector2d(ax * f, ay * f).asDiagonal();
+  const Eigen::Matrix<double, 2, 3> dpixel = scale * d_point;
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(2, 1 + k + 9);
+  jacobian.col(0) << ax * d.x(), ay * d.y();
+  jacobian.middleCols(1, k) = scale * d_values;
+  jacobian.block<2, 2>(0, 1 + k).setIdentity();
+  jacobian(1, 3 + k) = f * d.y();
+  jacobian.middleCols(4 + k, 3) = -dpixel * detail::cross_matrix(point);
+  if (at_distance) jacobian.middleCols(7 + k, 3) = dpixel;
+  return jacobian;
+}
+
 }  // namespace
 
 Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2d& pixel,
@@ -224,11 +261,18 @@ Eigen::Matrix2d projection_covariance(const Camera& camera, const Eigen::Vector2
   Eigen::Vector3d ray;
   if (!camera.unproject(pixel, &ray)) return Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Vector3d point = distance ? Eigen::Vector3d(*distance * ray) : ray;
+  if (const MrcalLens* lens = camera.parameters().mrcal_lens()) {
+    const Eigen::MatrixXd jacobian = lens_projection_jacobian(camera, *lens, point, distance.has_value());
+    if (record->covariance.rows() != jacobian.cols()) {
+      throw Error("projection uncertainty: the calibration covariance does not match the camera's parameters");
+    }
+    return jacobian * record->covariance * jacobian.transpose();
+  }
   std::vector<double> model = model_params(camera.model());
   const PlaneDistortionNumbers plane = numbers_of(camera.parameters().distortion);
   if (plane.name != "none" && plane.name != TangentialDistortion::kName) {
     throw Error("projection uncertainty: not for a camera with " + std::string(plane.name) +
-                " (fishcam calibrates radial models and OpenCV's tangential terms)");
+                " (fishcam calibrates radial models, OpenCV's tangential terms and mrcal's splines)");
   }
   std::vector<double> terms = plane.values;
   const int k = int(terms.size());

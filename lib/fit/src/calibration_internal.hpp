@@ -8,12 +8,14 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "ceres_support.hpp"
 #include "fishcam/core/camera.hpp"
+#include "fishcam/core/mrcal_lens.hpp"
 #include "fishcam/fit/calibration.hpp"
 #include "fishcam/fit/fit.hpp"
 
@@ -21,7 +23,8 @@ namespace fishcam::detail {
 
 // The parameters of one camera's solve: the model's, the principal point, a_y, and
 // each board's pose as a block (angle-axis, translation; board -> camera); with
-// ModelSpec::tangential_terms, those terms (p1, p2[, s1..s4]) as one more block.
+// ModelSpec::tangential_terms, those terms (p1, p2[, s1..s4]) as one more block; with
+// ModelSpec::mrcal_lens, the lens's values as that block instead.
 struct Solve {
   std::vector<double> model;
   Eigen::Vector2d center;
@@ -31,6 +34,14 @@ struct Solve {
   // With the boards' warp: (x2, y2) and the board they bend (BoardWarp); empty: flat.
   std::vector<double> warp = {};
   BoardSpec board = {};
+  // An mrcal lens on the model's plane: its values and the lens that says how they
+  // are read (its own values unused). As mrcal-calibrate-cameras solves a spline, the
+  // base model's core (its parameters, cx, cy, a_y) is solved with the values held
+  // at 0, then held while the values are solved (the spline can represent any
+  // change of the core: holding it removes the trade between them).
+  std::vector<double> lens_values = {};
+  std::shared_ptr<const MrcalLens> lens = {};
+  bool core_held = false, lens_values_held = false;
 };
 
 // A board point moved along z by its warp (factors: warp_factors; none: flat).
@@ -122,6 +133,41 @@ struct TangentialCornerResidual {
     residuals[1] = pixel[1] - corner.y();
     return true;
   }
+};
+
+// A corner's residual with an mrcal lens's values solved (ModelSpec::mrcal_lens), its
+// Jacobians from libmrcal's gradients: pixel = c + diag(1, a_y) f D(q), D the lens's
+// projection with fx = fy = 1 (MrcalLens::project_with_values). Blocks: the base
+// model (f), the lens's values, (cx, cy), a_y, board pose[, the boards' warp].
+class LensCornerCost final : public ceres::CostFunction {
+ public:
+  LensCornerCost(const MrcalLens* lens, const Eigen::Vector3d& point, const Eigen::Vector2d& corner,
+                 std::optional<Eigen::Vector2d> warp);
+  bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override;
+
+ private:
+  const MrcalLens* lens_;
+  Eigen::Vector3d point_;
+  Eigen::Vector2d corner_;
+  std::optional<Eigen::Vector2d> warp_;
+};
+
+// mrcal's regularisation of a splined lens, as mrcal 2.2 solves it (mrcal.c, the
+// optimizer callback; its core held, so without the principal point's term): at
+// every knot the control value's displacement along the knot's direction from the
+// centre and across it, the part across weighed 10x (no curl where no data hold the
+// field). Scaled so that at its nominal size (a displacement of 0.2) it adds 0.25 %
+// of the cost of the corners at 1 px each. Linear: residuals A values. One block:
+// the lens's values.
+class LensRegularisation final : public ceres::CostFunction {
+ public:
+  LensRegularisation(const MrcalLens& lens, long corners);
+  bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override;
+  // A^T A: its curvature in the values, what the covariance counts as a prior.
+  Eigen::MatrixXd normal() const { return a_.transpose() * a_; }
+
+ private:
+  Eigen::MatrixXd a_;
 };
 
 // A board point in a rig camera's frame: the board -> camera 0 pose, then (for
@@ -288,8 +334,16 @@ constexpr double kUndetermined = 1e-12;
 // function), in the order `kept` then `eliminated`. No residual may depend on two
 // eliminated blocks (they are board poses): those are then solved block by block
 // and the kept ones through the Schur complement, as Ceres' Schur solvers do.
+// `prior`: the curvature of residuals that are no observations (a regularisation,
+// not in `problem`), over the first prior.rows() kept parameters: the solve's
+// normal matrix is then N = J^T J + prior, and as in mrcal only the observations
+// carry noise: covariance = sigma^2 N^-1 J^T J N^-1.
 ParameterCovariance covariance_of(ceres::Problem* problem, const std::vector<double*>& kept,
-                                  const std::vector<double*>& eliminated);
+                                  const std::vector<double*>& eliminated, const Eigen::MatrixXd& prior = {});
+
+// A covariance of parameters some of which were held: row/column i of c at place[i]
+// of a size x size matrix, zero elsewhere (the held parameters: no variance).
+Eigen::MatrixXd embedded(const Eigen::MatrixXd& c, const std::vector<Eigen::Index>& place, Eigen::Index size);
 
 // What projection uncertainty needs of a single camera's full covariance (the
 // record's (n + k + 9)^2 matrix, k the camera's plane distortion numbers;

@@ -643,10 +643,11 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   const size_t n = cameras.size();
   if (n < 2) throw Error("calibrate rig: needs at least 2 cameras, got " + std::to_string(n));
   for (size_t k = 0; k < n; ++k) {
-    if (!cameras[k].fixed_intrinsics && cameras[k].model.tangential_terms > 0) {
+    if (!cameras[k].fixed_intrinsics &&
+        (cameras[k].model.tangential_terms > 0 || !cameras[k].model.mrcal_lens.empty())) {
       throw Error("calibrate rig: camera " + std::to_string(k) + ": a rig's joint solve takes radial models only (" +
                   cameras[k].model.name +
-                  " without +tangential/+thin-prism; or calibrate it alone and pass "
+                  " without +tangential/+thin-prism or an mrcal lens; or calibrate it alone and pass "
                   "--fix-intrinsics)");
     }
   }

@@ -149,6 +149,29 @@ std::vector<double> fit_params(std::span<const Correspondence> samples, const Mo
 
 ModelSpec parse_model_spec(std::string_view full_text) {
   ModelSpec spec;
+  if (full_text.starts_with("LENSMODEL_")) {
+    const std::string lensmodel(full_text);
+    if (!lensmodel.starts_with("LENSMODEL_SPLINED_STEREOGRAPHIC")) {
+      throw Error("model " + quoted_for_message(lensmodel) +
+                  ": of mrcal's lens models fishcam calibrates LENSMODEL_SPLINED_STEREOGRAPHIC_order=O_Nx=X_Ny=Y_"
+                  "fov_x_deg=F (OPENCV8 is opencv+tangential, OPENCV12 opencv+thin-prism)");
+    }
+    std::shared_ptr<const MrcalLens> lens;
+    try {
+      lens = MrcalLens::with_zero_values(lensmodel);
+    } catch (const Error& e) {
+      throw Error("model " + quoted_for_message(lensmodel) + ": " + e.what());
+    }
+    // f, the values, cx, cy, a_y and the boards' motion: what the covariance holds.
+    if (lens->values().size() + 10 > size_t(CalibrationRecord::kMaxCovarianceRows)) {
+      throw Error("model " + quoted_for_message(lensmodel) + ": " + std::to_string(lens->values().size() / 2) +
+                  " knots; a calibration solves at most " +
+                  std::to_string((CalibrationRecord::kMaxCovarianceRows - 10) / 2) + " (Nx * Ny)");
+    }
+    spec.name = lens->base_model();
+    spec.mrcal_lens = lensmodel;
+    return spec;
+  }
   const auto plus = full_text.find('+');
   const std::string_view text = full_text.substr(0, plus);
   if (plus != std::string_view::npos) {
@@ -195,6 +218,10 @@ ModelSpec parse_model_spec(std::string_view full_text) {
 namespace {
 
 void check_radial_spec(const ModelSpec& spec, std::string_view what) {
+  if (!spec.mrcal_lens.empty()) {
+    throw Error(std::string(what) + ": " + spec.mrcal_lens +
+                " is solved by calibrate only (fit and convert give radial models)");
+  }
   if (spec.tangential_terms > 0) {
     throw Error(std::string(what) + ": " + spec.name +
                 "'s tangential terms are solved by calibrate only (fit and convert give radial models)");

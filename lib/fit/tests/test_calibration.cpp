@@ -515,6 +515,142 @@ TEST(Calibration, AgreesWithMrcalCalibrateCameras) {
   EXPECT_LT(projection_diff(truth, Camera(ours.camera), 8).rms_px, 1.0);
 }
 
+// mrcal's splined model calibrated through libmrcal's projection and gradients, as
+// mrcal-calibrate-cameras solves it (the stereographic core solved, then held while
+// the regularised values are solved): noise-free boards through the spline camera (a
+// stereographic lens with a smooth displacement of a few pixels) give mrcal's own
+// solution of the same corners, the covariance and projection uncertainty of every
+// calibration, and files that hold them. Against the truth, the regularisation's
+// bias shows (mrcal's as much as ours).
+TEST(Calibration, MrcalSplineIsCalibratedAsMrcalCalibratesIt) {
+  const auto [label, truth] = test::spline_camera();
+  const std::string lensmodel = truth.mrcal_lens()->lensmodel();
+  const auto boards = testing::synthesize_boards(Camera(truth), kBoard, 30, 0.0, 11);
+  CalibrationOptions flat;
+  flat.board_warp = false;
+  const CalibrationResult result =
+      calibrate(boards.observations, kBoard, truth.width, truth.height, parse_model_spec(lensmodel), flat);
+  ASSERT_NE(result.camera.mrcal_lens(), nullptr);
+  EXPECT_EQ(result.camera.mrcal_lens()->lensmodel(), lensmodel);
+  const size_t values = truth.mrcal_lens()->values().size();
+  ASSERT_EQ(result.parameters.size(), 1 + values + 3);
+  EXPECT_EQ(result.parameter_names[1], "values[0]");
+  EXPECT_TRUE(result.outliers.empty());
+  // The core (f, cx, cy, a_y) is held as mrcal holds it: no variance.
+  EXPECT_EQ(result.sigmas[0], 0);
+  EXPECT_EQ(result.sigmas[1 + values], 0);
+  EXPECT_GT(result.sigmas[values / 2], 0);
+
+  const auto dir = test::scratch_dir("spline_calibration");
+  write_corners(dir / "corners.vnl", boards.observations, kBoard);
+  const std::string command = "cd '" + dir.string() +
+                              "' && /usr/bin/mrcal-calibrate-cameras --corners-cache corners.vnl --lensmodel " +
+                              lensmodel +
+                              " --focal 330 --object-spacing 0.1 --object-width-n 10 --object-height-n 10 "
+                              "--imagersize 1280 966 --outdir . --skip-calobject-warp-solve --skip-outlier-rejection "
+                              "'synth-*.png' > log.txt 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << test::read_file(dir / "log.txt");
+  const Camera theirs = read_camera(dir / "camera-0.cameramodel"), calibrated(result.camera), exact(truth);
+  ProjectionDiffOptions over_the_data;
+  over_the_data.step = 4;
+  over_the_data.region = [&](const Eigen::Vector2d&, const Eigen::Vector3d& ray) {
+    return result.camera.calibration->observed(ray);
+  };
+  const ProjectionDiff to_mrcal = projection_diff(calibrated, theirs, over_the_data);
+  const ProjectionDiff to_truth = projection_diff(calibrated, exact, over_the_data);
+  std::printf(
+      "  spline over the data (%ld pixels): vs mrcal-calibrate-cameras rms %.2g px, max %.2g px; vs the "
+      "truth rms %.3g px, max %.3g px (corners rms %.3g px)\n",
+      to_mrcal.pixels, to_mrcal.rms_px, to_mrcal.max_px, to_truth.rms_px, to_truth.max_px, result.rms_px);
+  EXPECT_GT(to_mrcal.pixels, 20000);
+  EXPECT_LT(to_mrcal.rms_px, 1e-4);  // measured 4.8e-7 px
+  EXPECT_LT(to_mrcal.max_px, 1e-3);  // measured 1.4e-6 px
+  // The bias: measured 0.288 px rms, 0.707 px max (the truth's field curls, which
+  // mrcal's regularisation weighs 10x).
+  EXPECT_LT(to_truth.rms_px, 0.35);
+  EXPECT_LT(to_truth.max_px, 1.0);
+  // A radial stereographic camera of the same boards misses the displacement.
+  const CalibrationResult radial =
+      calibrate(boards.observations, kBoard, truth.width, truth.height, {"stereographic"}, flat);
+  EXPECT_GT(radial.rms_px, 10 * result.rms_px);
+  // The covariance: f, every value, cx, cy, a_y and the boards' motion; its uncertainty
+  // finite inside the data, carried through fishcam JSON; mrcal's file holds the lens.
+  ASSERT_EQ(result.camera.calibration->covariance.rows(), Eigen::Index(1 + values + 9));
+  write_camera(result.camera, dir / "cal.json", CameraFormat::fishcam, /*overwrite=*/true);
+  write_camera(result.camera, dir / "cal.cameramodel", CameraFormat::mrcal, /*overwrite=*/true);
+  const Camera json = read_camera(dir / "cal.json"), cameramodel = read_camera(dir / "cal.cameramodel");
+  for (const Eigen::Vector2d& pixel : {calibrated.principal_point(), boards.observations[3].corners[0]}) {
+    const double sigma = projection_uncertainty(calibrated, pixel, std::nullopt);
+    EXPECT_TRUE(std::isfinite(sigma) && sigma >= 0) << sigma;
+    EXPECT_NEAR(projection_uncertainty(json, pixel, std::nullopt), sigma, 1e-9 * sigma + 1e-15);
+    Eigen::Vector3d ray;
+    ASSERT_TRUE(calibrated.unproject(pixel, &ray));
+    Eigen::Vector2d again;
+    ASSERT_TRUE(cameramodel.project(ray, &again));
+    EXPECT_LT((again - pixel).norm(), 1e-8);
+  }
+}
+
+// With noise: the covariance predicts how far the noise moves the spline's
+// projection (each board middle's move against the same boards without noise within
+// 4 sigma of the projection uncertainty's worst direction). Against the truth the
+// regularisation's bias adds to it (the noise-free solve's own error, above).
+TEST(Calibration, MrcalSplineUncertaintyCoversTheNoise) {
+  const auto [label, truth] = test::spline_camera();
+  CalibrationOptions flat;
+  flat.board_warp = false;
+  const ModelSpec spec = parse_model_spec(truth.mrcal_lens()->lensmodel());
+  const auto noisy = testing::synthesize_boards(Camera(truth), kBoard, 40, 0.3, 21);
+  const auto clean = testing::synthesize_boards(Camera(truth), kBoard, 40, 0.0, 21);
+  const CalibrationResult result = calibrate(noisy.observations, kBoard, truth.width, truth.height, spec, flat);
+  const Camera calibrated(result.camera),
+      reference(calibrate(clean.observations, kBoard, truth.width, truth.height, spec, flat).camera);
+  EXPECT_NEAR(result.noise_px, 0.3, 0.03);
+  std::vector<double> ratios;
+  for (size_t b = 0; b < clean.observations.size(); b += 5) {
+    const Eigen::Vector2d pixel = clean.observations[b].corners[clean.observations[b].corners.size() / 2];
+    Eigen::Vector3d ray;
+    Eigen::Vector2d seen;
+    if (!reference.unproject(pixel, &ray) || !calibrated.project(ray, &seen)) continue;
+    const double sigma = projection_uncertainty(calibrated, pixel, std::nullopt);
+    ASSERT_TRUE(sigma > 0 && sigma < 1) << sigma;
+    ratios.push_back((seen - pixel).norm() / sigma);
+  }
+  ASSERT_EQ(ratios.size(), 8u);
+  std::printf("  noisy spline: noise %.3f px; the boards' middles moved by the noise / sigma:", result.noise_px);
+  for (double r : ratios) std::printf(" %.2f", r);
+  std::printf("\n");
+  EXPECT_LT(*std::max_element(ratios.begin(), ratios.end()), 4);
+}
+
+// mrcal's splined model by its mrcal name, refused where it cannot be calibrated.
+TEST(Calibration, MrcalSplineSpecsAndRefusals) {
+  const ModelSpec spec = parse_model_spec("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=10_fov_x_deg=200");
+  EXPECT_EQ(spec.name, "stereographic");
+  EXPECT_EQ(spec.mrcal_lens, "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=10_fov_x_deg=200");
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"LENSMODEL_CAHVOR", "fishcam calibrates LENSMODEL_SPLINED_STEREOGRAPHIC"},
+      {"LENSMODEL_SPLINED_STEREOGRAPHIC_order=5_Nx=16_Ny=10_fov_x_deg=200", "order must be 2 or 3"},
+      {"LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=1000_Ny=10_fov_x_deg=200", "Nx and Ny must be in [4, 200]"},
+      {"LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=40_Ny=30_fov_x_deg=200", "a calibration solves at most"},
+      {"LENSMODEL_SPLINED_STEREOGRAPHIC", "not one of the mrcal lens models"},
+  };
+  for (const auto& [text, expected] : refused) {
+    try {
+      parse_model_spec(text);
+      ADD_FAILURE() << text << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  }
+  try {
+    convert_camera(read_camera(test::data_path("kannala_brandt.yaml")), spec);
+    ADD_FAILURE() << "convert fitted a spline";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("solved by calibrate only"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Calibration, ProjectionDiffFitsTheRotationBetweenFrames) {
   const Camera a = read_camera(test::data_path("woodscape_front.json"));
   EXPECT_LT(projection_diff(a, a).max_px, 1e-9);

@@ -36,7 +36,10 @@ CalibrationRecord read_calibration(const DocFields& f) {
   }
   if (f.has("covariance")) {
     const size_t n = f.size("covariance");
-    if (n == 0 || n > 80) f.fail("covariance", "expected a square matrix as a list of rows");
+    if (n == 0 || n > size_t(CalibrationRecord::kMaxCovarianceRows)) {
+      f.fail("covariance", "expected a square matrix of at most " +
+                               std::to_string(CalibrationRecord::kMaxCovarianceRows) + " rows, as a list of rows");
+    }
     r.covariance.resize(Eigen::Index(n), Eigen::Index(n));
     for (size_t i = 0; i < n; ++i) {
       const auto row = f.numbers("covariance", i, n, n);

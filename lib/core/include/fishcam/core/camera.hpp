@@ -86,6 +86,10 @@ struct CalibrationRecord {
   // frames relative to the camera: rotation vector (3, radians) and translation (3,
   // board units)), scaled by the solve's residual variance; empty when not known.
   Eigen::MatrixXd covariance;
+  // The most rows a covariance may have (a file's is refused past it, and a calibration
+  // with more parameters): an mrcal spline of up to ~590 knots (mrcal's documented
+  // 30 x 18 has 540).
+  static constexpr int kMaxCovarianceRows = 1200;
 
   // No corner yet (every sector NaN); observe() each corner's camera-frame point.
   static CalibrationRecord nothing_observed();

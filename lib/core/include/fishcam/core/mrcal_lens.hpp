@@ -53,6 +53,9 @@ class MrcalLens {
   // Throws Error unless lensmodel is one of kinds(), written as mrcal writes it, and
   // values holds exactly its finite values (mrcal's intrinsics after fx, fy, cx, cy).
   MrcalLens(std::string lensmodel, std::vector<double> values);
+  // The lens with all its values 0 (the base model's projection for a spline), as a
+  // calibration starts; throws Error as the constructor does.
+  static std::shared_ptr<const MrcalLens> with_zero_values(const std::string& lensmodel);
   ~MrcalLens();
   MrcalLens(const MrcalLens&) = delete;
   MrcalLens& operator=(const MrcalLens&) = delete;
@@ -67,6 +70,15 @@ class MrcalLens {
   // gives no projection (and behind the camera for a model mrcal cannot project there:
   // CAHVOR(E)), so the valid domain stops there.
   Eigen::Vector2d offset(const Eigen::Vector2d& m, Eigen::Matrix2d* jacobian = nullptr) const;
+
+  // For calibrating a lens's values (splined_stereographic and cahvor, whose gradients
+  // libmrcal gives): D(p) = m + delta(m) for a camera-frame point p (any length) and
+  // `values` in place of values() (as many), i.e. mrcal_project with fx = fy = 1,
+  // cx = cy = 0. On request dD/dp (2 x 3) and dD/dvalues (2 x values, row-major).
+  // NaN where libmrcal gives no projection (as offset). Throws Error for the other
+  // kinds or a wrong count.
+  Eigen::Vector2d project_with_values(const Eigen::Vector3d& point, const double* values,
+                                      Eigen::Matrix<double, 2, 3>* d_point = nullptr, double* d_values = nullptr) const;
 
   // Where mrcal's spline is one polynomial: in cell coordinates g = m * cells_per_u + origin
   // it is a polynomial of degree `order` in each of g_x, g_y on every unit cell

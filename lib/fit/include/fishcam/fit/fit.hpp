@@ -18,10 +18,15 @@ namespace fishcam {
 // p1, p2 and "MODEL+thin-prism" those and the thin prism s1..s4 (the models with an
 // undistorted plane: pinhole, opencv, mei), which only a calibration solves
 // (mrcal's LENSMODEL_OPENCV8 is opencv+tangential, OPENCV12 opencv+thin-prism).
+// mrcal's splined model, named as mrcal names it
+// (LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=10_fov_x_deg=200), is the
+// stereographic model with that lens on its plane (fishcam/core/mrcal_lens.hpp):
+// only a calibration solves it.
 struct ModelSpec {
   std::string name;
-  int order = 4;             // polynomial only
-  int tangential_terms = 0;  // 0, 2 (p1, p2) or 6 (p1, p2, s1..s4)
+  int order = 4;                // polynomial only
+  int tangential_terms = 0;     // 0, 2 (p1, p2) or 6 (p1, p2, s1..s4)
+  std::string mrcal_lens = {};  // mrcal's lensmodel on the model's plane ("": none)
 };
 // The highest polynomial order fitted: past it the normal equations in theta^k
 // lose most of double's digits (a Polynomial itself holds up to
