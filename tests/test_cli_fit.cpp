@@ -269,6 +269,43 @@ TEST(CliFit, SynthCornersCalibrateDiff) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x.json"));
 }
 
+// mrcal's splined model through the program: synthetic corners of the spline camera
+// calibrated by its mrcal name, the report listing every value with its sigma, mrcal's
+// file written and read back, its uncertainty reported; a rig refuses it.
+TEST(CliFit, MrcalSplineCalibratesThroughTheProgram) {
+  const auto dir = test::scratch_dir("cli_spline");
+  const auto [label, truth] = test::spline_camera();
+  write_camera(truth, dir / "truth.json", CameraFormat::fishcam, /*overwrite=*/true);
+  auto r = run_fishcam("synth-corners " + quoted(dir / "truth.json") + " --boards 25 --noise 0.1 --seed 4 --out " +
+                       quoted(dir / "c.vnl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string lensmodel = truth.mrcal_lens()->lensmodel();
+  const std::string calibrate = "calibrate --corners " + quoted(dir / "c.vnl") +
+                                " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model " + lensmodel;
+  r = run_fishcam(calibrate + " --out " + quoted(dir / "spline.cameramodel") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["plane_distortion"], "mrcal_lens");
+  EXPECT_NEAR(j["rms_per_coordinate_px"].get<double>(), 0.1, 0.02);
+  const size_t values = truth.mrcal_lens()->values().size();
+  EXPECT_EQ(j["parameters"].size(), 1 + values + 3);
+  EXPECT_EQ(j["parameters"]["f"]["sigma"].get<double>(), 0);  // the core held, as mrcal holds it
+  EXPECT_GT(j["parameters"]["values[40]"]["sigma"].get<double>(), 0);
+  const Camera written = read_camera(dir / "spline.cameramodel");
+  ASSERT_NE(written.parameters().mrcal_lens(), nullptr);
+  EXPECT_EQ(written.parameters().mrcal_lens()->lensmodel(), lensmodel);
+  r = run_fishcam(calibrate + " --out " + quoted(dir / "spline.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(std::to_string(values) + " spline values in ["), std::string::npos) << r.out;
+  r = run_fishcam("uncertainty " + quoted(dir / "spline.json") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_fishcam("calibrate --corners " + quoted(dir / "c.vnl") + " --corners " + quoted(dir / "c.vnl") +
+                  " --board 10x10 --spacing 0.1 --imagersize 1280x966 --model " + lensmodel + " --out " +
+                  quoted(dir / "rig.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("a rig's joint solve takes radial models only"), std::string::npos) << r.err;
+}
+
 // calibrate --report and report write the page and its figures into a folder they
 // create, refuse a folder that holds other files (or an input) without --force, and
 // write nothing at all when they refuse.

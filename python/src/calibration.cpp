@@ -178,7 +178,9 @@ void bind_camera_calibration(py::module_& m) {
       py::arg("observations"), py::arg("board"), py::arg("spacing"), py::arg("image_size"), py::arg("model"),
       py::arg("threads") = 1, py::arg("board_warp") = true,
       "Calibrates `model` (a model name; 'MODEL+tangential' also solves OpenCV's p1, p2 and 'MODEL+thin-prism' "
-      "p1, p2, s1..s4, for pinhole, opencv and mei) from chessboard corners (what read_corners gives: "
+      "p1, p2, s1..s4, for pinhole, opencv and mei; mrcal's splined model by its mrcal name, "
+      "'LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=10_fov_x_deg=200', solved as mrcal-calibrate-cameras "
+      "solves it) from chessboard corners (what read_corners gives: "
       "(filename, corners (N, 2)) pairs; "
       "board (W, H) inner corners with spacing in metres, or a target's text with spacing None: "
       "'aprilgrid:COLSxROWS:SIZE:SPACING' (Kalibr's AprilGrid: tag side SIZE metres, the gap between tags SPACING "

@@ -146,9 +146,11 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return vt.T @ np.diag([1.0, 1.0, d]) @ u.T
 
 
-def mrcal_calibrate(corners_file: Path, lensmodel: str, out: Path, *options: str) -> tuple[float, fishcam.Camera]:
-    """mrcal-calibrate-cameras on the photos' corners (flat boards, every corner kept):
-    its RMS per coordinate and its camera."""
+def mrcal_calibrate(
+    corners_file: Path, lensmodel: str, out: Path, *options: str, flat: bool = True
+) -> tuple[float, fishcam.Camera]:
+    """mrcal-calibrate-cameras on the photos' corners (every corner kept; flat boards
+    unless told): its RMS per coordinate and its camera."""
     out.mkdir()
     run = subprocess.run(
         [
@@ -168,7 +170,7 @@ def mrcal_calibrate(corners_file: Path, lensmodel: str, out: Path, *options: str
             "--imagersize",
             "960",
             "600",
-            "--skip-calobject-warp-solve",
+            *(["--skip-calobject-warp-solve"] if flat else []),
             "--skip-outlier-rejection",
             *options,
             "--outdir",
@@ -287,3 +289,34 @@ def test_splined_model_agrees_with_mrcal_calibrate_cameras(
     assert result.sigmas["f"] == 0 and result.sigmas["cx"] == 0
     sigma = ours.projection_uncertainty(data_pixels(ours, step=40))
     assert np.all(np.isfinite(sigma)) and 0.05 < np.median(sigma) < 0.5, np.median(sigma)
+
+
+@pytest.mark.skipif(not MRCAL_CALIBRATE.exists(), reason="no mrcal-calibrate-cameras (Debian's mrcal)")
+def test_splined_model_with_the_board_warp_agrees_with_mrcal(
+    corners_file: Path, observations: list, tmp_path: Path
+) -> None:
+    """The same with the boards' warp solved, as both solve it by default (mrcal-
+    calibrate-cameras without --skip-calobject-warp-solve): the same warp and lens."""
+    result = fishcam.calibrate(observations, BOARD, SPACING, SIZE, SPLINE, threads=2)
+    _, theirs = mrcal_calibrate(corners_file, SPLINE, tmp_path / "mrcal", flat=False)
+    their_warp = subprocess.run(
+        [
+            "/usr/bin/python3",
+            "-c",
+            "import sys, mrcal; print(*mrcal.cameramodel(sys.argv[1]).optimization_inputs()['calobject_warp'])",
+            str(tmp_path / "mrcal" / "camera-0.cameramodel"),
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout.split()
+    ours = result.board_warp
+    assert ours is not None
+    # mrcal's warp is in the board's units (metres here), as fishcam's.
+    assert abs(ours[0] - float(their_warp[0])) < 1e-6 and abs(ours[1] - float(their_warp[1])) < 1e-6, (
+        ours,
+        their_warp,
+    )
+    error, _ = difference_over_the_data(result.camera, theirs)
+    rms = float(np.sqrt(np.mean(error**2)))
+    assert error.max() <= 1e-3 and rms <= 1e-4, f"rms {rms:.3g}, max {error.max():.3g} px"

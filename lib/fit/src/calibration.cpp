@@ -758,13 +758,13 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, bool war
   }
   if (used.size() < 3) throw Error("calibrate: fewer than 3 images keep enough corners after the outliers are removed");
   s.poses = std::move(poses);
-  if (warp) s.warp = {0.0, 0.0};
-  if (s.lens) {  // mrcal-calibrate-cameras' order: the core solved with the lens at 0, then held
+  if (s.lens) {  // mrcal-calibrate-cameras' order: the core solved with the lens at 0 on flat boards, then held
     std::fill(s.lens_values.begin(), s.lens_values.end(), 0.0);
     s.core_held = false, s.lens_values_held = true;
     solve<Model>(&s, kept_points, kept_corners, false, nullptr);
     s.core_held = true, s.lens_values_held = false;
   }
+  if (warp) s.warp = {0.0, 0.0};
   solve<Model>(&s, kept_points, kept_corners, false, nullptr);
   result->observations = 0;
   for (const auto& corners : kept_corners) result->observations += long(corners.size());

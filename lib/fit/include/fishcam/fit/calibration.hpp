@@ -109,8 +109,9 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
                                    const CalibrationOptions& options = {});
 
 // The reports `fishcam calibrate --json` prints, built here as convert's is
-// (fit_report_json). One camera: model, plane_distortion ("none", or "tangential"
-// for MODEL+tangential/+thin-prism, whose terms are among the parameters), rms_px (the corners' 2-D reprojection error;
+// (fit_report_json). One camera: model, plane_distortion ("none"; "tangential" for
+// MODEL+tangential/+thin-prism, "mrcal_lens" for mrcal's spline, whose terms or values
+// are among the parameters), rms_px (the corners' 2-D reprojection error;
 // mrcal and OpenCV print it per coordinate, rms_per_coordinate_px = rms_px / sqrt 2),
 // noise_px, corners, images, outliers, undetermined, observed_theta_max_deg,
 // theta_limit_deg and theta_limit_by_azimuth_deg (24 sectors of 15 degrees from -180,
