@@ -85,7 +85,7 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
   for (size_t k = 0; k < o.fix_intrinsics.size(); ++k) {
     if (o.fix_intrinsics[k] != "free") cameras[k].fixed_intrinsics = read_camera(o.fix_intrinsics[k]).parameters();
   }
-  const RigCalibrationResult rig = calibrate_rig(cameras, board, {o.threads});
+  const RigCalibrationResult rig = calibrate_rig(cameras, board, {o.threads, o.board_warp == "on"});
   std::vector<CameraParameters> written;
   for (const auto& r : rig.cameras) written.push_back(apply_theta_limit(r.camera, o.theta_limit));
   std::vector<std::pair<std::filesystem::path, std::string>> files = {{o.output.out, format_rig(written, format)}};
@@ -123,6 +123,10 @@ void calibrate_rig_command(const CalibrateOptions& o, const BoardSpec& board) {
   }
   std::printf("calibrated a rig of %zu cameras from %ld instants: rms %.4f px (2-D; %.4f per coordinate); wrote %s\n",
               n, rig.instants, rig.rms_px, rig.rms_px / std::sqrt(2.0), o.output.out.c_str());
+  if (const auto& warp = rig.cameras[0].board_warp) {
+    std::printf("  board warp (x2, y2) %.4g +- %.2g, %.4g +- %.2g (board units; --board-warp off: flat)\n", warp->x2,
+                rig.cameras[0].board_warp_sigma.x2, warp->y2, rig.cameras[0].board_warp_sigma.y2);
+  }
   for (size_t k = 0; k < n; ++k) {
     const CalibrationResult& r = rig.cameras[k];
     const Pose& pose = *r.camera.pose;
@@ -228,7 +232,8 @@ void add_calibrate_options(CLI::App* cmd, CalibrateOptions* o) {
                   "sits is solved), or 'free' for a camera whose intrinsics are solved");
   cmd->add_option("--board-warp", o->board_warp,
                   "Solve the boards' warp (mrcal's calobject_warp: two parabolic bows, one for every board) with the "
-                  "intrinsics, as mrcal does (on); off: flat boards, as OpenCV. A rig's joint solve holds them flat")
+                  "intrinsics, as mrcal does (on; for a rig, in its joint solve, as mrcal's); off: flat boards, as "
+                  "OpenCV")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
   cmd->add_option("--threads", o->threads, "Threads for the independent solves (the result is the same for any count)")
@@ -254,9 +259,6 @@ void register_calibrate(CLI::App& app) {
     check_outputs(outputs, inputs, o->output.force);
     if (!o->report.empty()) check_report_folder(o->report, inputs, o->output.force, {o->output.out, o->poses});
     const BoardSpec board = board_or_target(o->board, o->spacing, o->target);
-    if (o->corners.size() > 1 && o->board_warp == "on" && cmd->get_option("--board-warp")->count() > 0) {
-      throw Error("--board-warp on: for one camera (a rig's joint solve holds its boards flat)");
-    }
     if (o->corners.size() > 1) return calibrate_rig_command(*o, board);
     if (o->imagersize.size() > 1) throw Error("--imagersize: one camera takes one image size");
     if (!o->fix_intrinsics.empty()) throw Error("--fix-intrinsics: for a rig (several --corners)");

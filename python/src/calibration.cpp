@@ -221,7 +221,8 @@ void bind_rig_calibration(py::module_& m) {
       });
   m.def(
       "calibrate_rig",
-      [](const py::list& cameras, const BoardArgument& board, std::optional<double> spacing, int threads) {
+      [](const py::list& cameras, const BoardArgument& board, std::optional<double> spacing, int threads,
+         bool board_warp) {
         const BoardSpec spec = board_of(board, spacing);
         std::vector<RigCamera> rig;
         for (const py::handle& item : cameras) {
@@ -244,16 +245,18 @@ void bind_rig_calibration(py::module_& m) {
           rig.push_back(std::move(camera));
         }
         py::gil_scoped_release release;
-        return calibrate_rig(rig, spec, {threads});
+        return calibrate_rig(rig, spec, {threads, board_warp});
       },
-      py::arg("cameras"), py::arg("board"), py::arg("spacing"), py::arg("threads") = 1,
+      py::arg("cameras"), py::arg("board"), py::arg("spacing"), py::arg("threads") = 1, py::arg("board_warp") = true,
       "Calibrates a camera rig jointly: cameras is a list of (observations, (width, height), model), one per "
       "camera, observations as read_corners gives them; board and spacing as calibrate takes them (a chessboard "
       "or a target); images of one instant share their file name (the last "
       "path component). model: a model name (the camera's intrinsics solved) or a fishcam.Camera for those "
       "images (its intrinsics held fixed, as calibrate --fix-intrinsics FILE: only where it sits is solved). "
       "Every solved camera's intrinsics, each camera's pose relative to camera 0 and the boards' poses: a "
-      "RigCalibration. Raises fishcam.Error when a camera cannot be calibrated alone or shares no instant.");
+      "RigCalibration. board_warp: solve the boards' warp in the joint solve (mrcal's calobject_warp, as mrcal "
+      "does; every camera's Calibration.board_warp), False: flat boards (OpenCV's stereoCalibrate). Raises "
+      "fishcam.Error when a camera cannot be calibrated alone or shares no instant.");
 }
 
 }  // namespace

@@ -27,6 +27,11 @@ BoardPose pose_of(const std::array<double, 6>& b) {
   return pose;
 }
 
+Eigen::Vector3d warped(const BoardSpec& board, const std::vector<double>& warp, const Eigen::Vector3d& point) {
+  if (warp.empty()) return point;
+  return point + Eigen::Vector3d(0, 0, Eigen::Vector2d(warp[0], warp[1]).dot(warp_factors(board, point)));
+}
+
 double principal_point_offset(const Eigen::Vector2d& p, int width, int height) {
   return std::max(std::abs(p.x() - (width - 1) / 2.0) / width, std::abs(p.y() - (height - 1) / 2.0) / height);
 }
@@ -224,12 +229,6 @@ void add_corner_residuals(ceres::Problem* problem, Solve* s, const std::vector<s
       problem->AddResidualBlock(cost, loss, blocks);
     }
   }
-}
-
-// A board point where the solve's warp puts it (flat: as it is).
-Eigen::Vector3d warped(const Solve& s, const Eigen::Vector3d& point) {
-  if (s.warp.empty()) return point;
-  return point + Eigen::Vector3d(0, 0, Eigen::Vector2d(s.warp[0], s.warp[1]).dot(warp_factors(s.board, point)));
 }
 
 // The intrinsics' blocks of a solve, in the order of its parameters and covariance.
@@ -778,7 +777,7 @@ void final_solve(const Observations& o, Solve s, const ModelSpec& spec, bool war
     result->used_images.push_back(o.boards[used[b]]->filename);
     double board_sum2 = 0;
     for (size_t i = 0; i < kept_points[b].size(); ++i) {
-      const Eigen::Vector3d point = to_camera(pose, warped(s, kept_points[b][i]));
+      const Eigen::Vector3d point = to_camera(pose, detail::warped(s.board, s.warp, kept_points[b][i]));
       Eigen::Vector2d q;
       if (!final_camera.project(point, &q) && s.lens) {  // the solve has no such limit: the spline's own fold
         throw Error("calibrate (" + s.lens->lensmodel() + "): the solved spline folds inside the data (image " +

@@ -51,6 +51,9 @@ void warped_point(const Eigen::Vector3d& point, const std::optional<Eigen::Vecto
   if (factors) out[2] += T(factors->x()) * warp[0] + T(factors->y()) * warp[1];
 }
 
+// A board point where a warp (x2, y2) puts it (empty: flat, as it is).
+Eigen::Vector3d warped(const BoardSpec& board, const std::vector<double>& warp, const Eigen::Vector3d& point);
+
 std::array<double, 6> pose_block(const BoardPose& pose);
 BoardPose pose_of(const std::array<double, 6>& block);
 
@@ -174,8 +177,7 @@ class LensRegularisation final : public ceres::CostFunction {
 // cameras other than 0: rig_to_camera non-null) camera 0 -> the camera; angle-axis
 // and translation blocks.
 template <typename T>
-void board_point_in_camera(const T* board_pose, const T* rig_to_camera, const Eigen::Vector3d& point, T* camera) {
-  const T board[3] = {T(point.x()), T(point.y()), T(point.z())};
+void board_point_in_camera(const T* board_pose, const T* rig_to_camera, const T* board, T* camera) {
   T in_rig[3];
   ceres::AngleAxisRotatePoint(board_pose, board, in_rig);
   for (int k = 0; k < 3; ++k) in_rig[k] += board_pose[3 + k];
@@ -213,14 +215,16 @@ class FixedCameraCornerResidual {
   };
 
  public:
+  // warp: the point's warp factors (the boards' warp (x2, y2) then a last block).
   FixedCameraCornerResidual(const Camera* camera, const Eigen::Vector3d& point, const Eigen::Vector2d& corner,
-                            bool moved)
-      : project_(new Projection(camera, corner)), point_(point), moved_(moved) {}
+                            bool moved, std::optional<Eigen::Vector2d> warp = std::nullopt)
+      : project_(new Projection(camera, corner)), point_(point), moved_(moved), warp_(warp) {}
 
   template <typename T>
   bool operator()(T const* const* p, T* residuals) const {
-    T camera[3];
-    board_point_in_camera(moved_ ? p[1] : p[0], moved_ ? p[0] : static_cast<const T*>(nullptr), point_, camera);
+    T board[3], camera[3];
+    warped_point(point_, warp_, warp_ ? p[moved_ ? 2 : 1] : static_cast<const T*>(nullptr), board);
+    board_point_in_camera(moved_ ? p[1] : p[0], moved_ ? p[0] : static_cast<const T*>(nullptr), board, camera);
     return project_(camera, residuals);
   }
 
@@ -228,6 +232,7 @@ class FixedCameraCornerResidual {
   ceres::CostFunctionToFunctor<2, 3> project_;
   Eigen::Vector3d point_;
   bool moved_;
+  std::optional<Eigen::Vector2d> warp_;
 };
 
 // The same residual with its Jacobians written out; parameter blocks (model,

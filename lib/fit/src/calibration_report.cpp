@@ -41,6 +41,14 @@ nlohmann::json outliers_of(const CalibrationResult& result) {
 
 nlohmann::json sigma_of(double sigma) { return std::isnan(sigma) ? nlohmann::json(nullptr) : nlohmann::json(sigma); }
 
+// {x2: {value, sigma}, y2: ...} in board units, or null: flat boards.
+nlohmann::json board_warp_json(const CalibrationResult& result) {
+  const auto& warp = result.board_warp;
+  if (!warp) return nullptr;
+  return {{"x2", {{"value", warp->x2}, {"sigma", sigma_of(result.board_warp_sigma.x2)}}},
+          {"y2", {{"value", warp->y2}, {"sigma", sigma_of(result.board_warp_sigma.y2)}}}};
+}
+
 }  // namespace
 
 std::string calibration_report_json(const CalibrationResult& result, const CameraParameters& written,
@@ -66,11 +74,7 @@ std::string calibration_report_json(const CalibrationResult& result, const Camer
   if (written.theta_limit_by_azimuth) {
     for (double a : *written.theta_limit_by_azimuth) j["theta_limit_by_azimuth_deg"].push_back(a * kDegreesPerRadian);
   }
-  j["board_warp"] = nullptr;
-  if (const auto& warp = result.board_warp) {
-    j["board_warp"] = {{"x2", {{"value", warp->x2}, {"sigma", sigma_of(result.board_warp_sigma.x2)}}},
-                       {"y2", {{"value", warp->y2}, {"sigma", sigma_of(result.board_warp_sigma.y2)}}}};
-  }
+  j["board_warp"] = board_warp_json(result);
   for (size_t i = 0; i < result.parameters.size(); ++i) {
     const double sigma = result.sigmas[i];
     j["parameters"][result.parameter_names[i]] = {
@@ -87,6 +91,7 @@ std::string rig_calibration_report_json(const RigCalibrationResult& rig, const s
   nlohmann::json report = {{"rms_px", rig.rms_px},
                            {"rms_per_coordinate_px", rig.rms_px / std::sqrt(2.0)},
                            {"instants", rig.instants},
+                           {"board_warp", rig.cameras.empty() ? nullptr : board_warp_json(rig.cameras[0])},
                            {"warnings", rig.warnings},
                            {"out", out},
                            {"pose_convention",

@@ -66,20 +66,23 @@ std::vector<std::string> joint_solve_warnings(const std::string& name, const Cal
 }
 
 // One corner of a rig camera at one instant: p[0..2] the camera's intrinsics, then
-// (cameras other than 0) camera 0 -> this camera, then the board -> camera 0.
+// (cameras other than 0) camera 0 -> this camera, then the board -> camera 0, then
+// (with warp factors) the boards' warp (x2, y2).
 template <template <typename> class Model>
 struct RigCornerResidual {
   Eigen::Vector3d point;
   Eigen::Vector2d corner;
   int params;
   bool moved;  // false for camera 0, whose frame is the rig's
+  std::optional<Eigen::Vector2d> warp = std::nullopt;
 
   template <typename T>
   bool operator()(T const* const* p, T* residuals) const {
     const Model<T> model = detail::model_from_block<Model>(p[0], params);
     const T mapping[4] = {p[1][0], p[1][1], T(1.0), p[2][0]};
-    T camera[3];
-    detail::board_point_in_camera(moved ? p[4] : p[3], moved ? p[3] : static_cast<const T*>(nullptr), point, camera);
+    T board[3], camera[3];
+    detail::warped_point(point, warp, warp ? p[moved ? 5 : 4] : static_cast<const T*>(nullptr), board);
+    detail::board_point_in_camera(moved ? p[4] : p[3], moved ? p[3] : static_cast<const T*>(nullptr), board, camera);
     T pixel[2];
     project_radial(model, mapping, camera, pixel);
     residuals[0] = pixel[0] - corner.x();
@@ -214,6 +217,12 @@ struct JointParameters {
   std::vector<Solve> intrinsics;  // unused for a camera held fixed
   std::vector<std::array<double, 6>> cameras, boards;
   std::vector<std::shared_ptr<const Camera>> fixed;  // per camera: its intrinsics held fixed, or null
+  // The boards' warp (x2, y2), one for every board as in one camera's solve; empty: flat.
+  std::vector<double> warp = {};
+  BoardSpec board = {};
+  std::optional<Eigen::Vector2d> warp_factors_of(const Eigen::Vector3d& point) const {
+    return warp.empty() ? std::nullopt : std::optional(warp_factors(board, point));
+  }
 };
 
 // Corners left out of the joint solve, per camera: (image, corner).
@@ -229,12 +238,15 @@ long add_fixed_camera_residuals(ceres::Problem* problem, JointParameters* p, siz
   for (const auto& [i, o] : observed) {
     for (size_t c = 0; c < o->corners.size(); ++c) {
       if (excluded.count({o->filename, o->id(c)})) continue;
+      const Eigen::Vector3d& point = points[size_t(o->id(c))];
       auto* cost = new ceres::DynamicAutoDiffCostFunction<detail::FixedCameraCornerResidual, 6>(
-          new detail::FixedCameraCornerResidual(p->fixed[k].get(), points[size_t(o->id(c))], o->corners[c], k > 0));
+          new detail::FixedCameraCornerResidual(p->fixed[k].get(), point, o->corners[c], k > 0,
+                                                p->warp_factors_of(point)));
       std::vector<double*> blocks;
       if (k > 0) cost->AddParameterBlock(6), blocks.push_back(p->cameras[k].data());
       cost->AddParameterBlock(6);
       blocks.push_back(p->boards[size_t(i)].data());
+      if (!p->warp.empty()) cost->AddParameterBlock(2), blocks.push_back(p->warp.data());
       cost->SetNumResiduals(2);
       problem->AddResidualBlock(cost, loss, blocks);
       ++corners;
@@ -262,8 +274,9 @@ std::vector<long> add_joint_residuals(ceres::Problem* problem, JointParameters* 
       for (const auto& [i, o] : observed[k]) {
         for (size_t c = 0; c < o->corners.size(); ++c) {
           if (excluded[k].count({o->filename, o->id(c)})) continue;
+          const Eigen::Vector3d& point = points[size_t(o->id(c))];
           auto* cost = new ceres::DynamicAutoDiffCostFunction<RigCornerResidual<Model>, 8>(
-              new RigCornerResidual<Model>{points[size_t(o->id(c))], o->corners[c], params, k > 0});
+              new RigCornerResidual<Model>{point, o->corners[c], params, k > 0, p->warp_factors_of(point)});
           cost->AddParameterBlock(params);
           cost->AddParameterBlock(2);
           cost->AddParameterBlock(1);
@@ -272,6 +285,7 @@ std::vector<long> add_joint_residuals(ceres::Problem* problem, JointParameters* 
           if (k > 0) cost->AddParameterBlock(6), blocks.push_back(p->cameras[k].data());
           cost->AddParameterBlock(6);
           blocks.push_back(p->boards[size_t(i)].data());
+          if (!p->warp.empty()) cost->AddParameterBlock(2), blocks.push_back(p->warp.data());
           cost->SetNumResiduals(2);
           problem->AddResidualBlock(cost, loss, blocks);
           ++corners_of[k];
@@ -313,7 +327,8 @@ std::vector<std::vector<CalibrationResult::Outlier>> joint_outliers(
       for (size_t c = 0; c < o->corners.size(); ++c) {
         if (excluded[k].count({o->filename, o->id(c)})) continue;
         Eigen::Vector2d q;
-        const bool seen = camera.project(board_pose.rotation * points[size_t(o->id(c))] + board_pose.translation, &q);
+        const Eigen::Vector3d point = detail::warped(p.board, p.warp, points[size_t(o->id(c))]);
+        const bool seen = camera.project(board_pose.rotation * point + board_pose.translation, &q);
         errors.push_back({o->filename, o->id(c), seen ? (q - o->corners[c]).norm() : kUnprojectedError});
       }
     }
@@ -342,11 +357,10 @@ struct RigViews {
 };
 
 // Step 1: each camera alone (intrinsics, its boards' poses, its outliers), its boards
-// flat as the joint solve holds them (its numbers are the joint solve's start and
-// what its warnings compare it with).
+// warped or flat as the joint solve has them (its numbers are the joint solve's start
+// and what its warnings compare it with).
 std::vector<CalibrationResult> calibrate_each(const std::vector<RigCamera>& cameras, const BoardSpec& board,
-                                              CalibrationOptions options) {
-  options.board_warp = false;
+                                              const CalibrationOptions& options) {
   std::vector<CalibrationResult> singles;
   for (size_t k = 0; k < cameras.size(); ++k) {
     try {
@@ -462,8 +476,11 @@ std::vector<Pose> relative_poses(const RigViews& v) {
 // Step 3's start: the single calibrations' intrinsics, the relative poses, each
 // instant's board relative to camera 0 (placed from the first camera that saw it).
 JointParameters joint_start(const std::vector<CalibrationResult>& singles, const std::vector<Pose>& from_rig,
-                            const RigViews& v, const std::vector<RigCamera>& cameras) {
+                            const RigViews& v, const std::vector<RigCamera>& cameras, const BoardSpec& board,
+                            bool warp) {
   JointParameters joint;
+  joint.board = board;
+  if (warp) joint.warp = {0.0, 0.0};
   for (size_t k = 0; k < singles.size(); ++k) {
     const auto& fixed = cameras[k].fixed_intrinsics;
     joint.fixed.push_back(fixed ? std::make_shared<const Camera>(*fixed) : nullptr);
@@ -516,11 +533,11 @@ std::vector<std::vector<CalibrationResult::Outlier>> reject_joint_outliers(
 }
 
 // The joint solution's covariance and where each camera's parameters lie in it:
-// intrinsics, then cameras 1..'s poses, then the boards that kept a corner.
+// intrinsics, then cameras 1..'s poses, the boards' warp, then the boards that kept a corner.
 struct JointCovariance {
   ParameterCovariance full;
   std::vector<Eigen::Index> intrinsic_start, pose_start;
-  Eigen::Index boards_start = 0;
+  Eigen::Index warp_start = -1, boards_start = 0;  // warp: -1 for flat boards
   std::vector<std::array<double, 6>> used_boards;
 };
 
@@ -541,6 +558,7 @@ JointCovariance joint_covariance(ceres::Problem* problem, JointParameters* joint
     column += Eigen::Index(s.model.size()) + 3;
   }
   for (size_t k = 1; k < n; ++k) c.pose_start[k] = column, blocks.push_back(joint->cameras[k].data()), column += 6;
+  if (!joint->warp.empty()) c.warp_start = column, blocks.push_back(joint->warp.data()), column += 2;
   c.boards_start = column;
   // The instants whose board kept a corner (an instant only one camera saw may lose
   // them all to the joint outliers).
@@ -550,6 +568,38 @@ JointCovariance joint_covariance(ceres::Problem* problem, JointParameters* joint
   }
   c.full = detail::covariance_of(problem, blocks, boards);
   return c;
+}
+
+// The joint solve's warp (one for all boards) and its sigma in a camera's report;
+// none for flat boards.
+void report_joint_warp(const JointParameters& joint, const JointCovariance& c, CalibrationResult* r) {
+  r->board_warp.reset();
+  if (joint.warp.empty()) return;
+  const auto sigma = [&](Eigen::Index i) { return std::sqrt(c.full.covariance(i, i)); };
+  r->board_warp = BoardWarp{joint.warp[0], joint.warp[1]};
+  r->board_warp_sigma = BoardWarp{sigma(c.warp_start), sigma(c.warp_start + 1)};
+}
+
+// A solved camera's intrinsics, their sigmas and what the joint solve does not determine.
+void report_joint_intrinsics(size_t k, const Solve& s, const JointCovariance& c, const std::string& model,
+                             CalibrationResult* r) {
+  r->parameters = s.model;
+  r->parameters.insert(r->parameters.end(), {s.center.x(), s.center.y(), s.ay});
+  r->undetermined.clear();
+  for (size_t i = 0; i < r->parameters.size(); ++i) {
+    const Eigen::Index at = c.intrinsic_start[k] + Eigen::Index(i);
+    r->sigmas[i] = std::sqrt(c.full.covariance(at, at));
+  }
+  for (const Eigen::VectorXd& direction : c.full.undetermined) {
+    std::vector<std::string> names;
+    for (size_t i = 0; i < r->parameters.size(); ++i) {
+      if (std::abs(direction[c.intrinsic_start[k] + Eigen::Index(i)]) >= 0.1) {
+        names.push_back(r->parameter_names[i]);
+        r->sigmas[i] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+    if (!names.empty()) r->undetermined.push_back(undetermined_text(names, false, model, r->parameters));
+  }
 }
 
 // Step 4 for camera k: its report from the joint solution -- intrinsics and sigmas,
@@ -589,7 +639,9 @@ CalibrationResult joint_report(size_t k, const CalibrationResult& single, const 
     long used = 0;
     for (size_t corner = 0; corner < o->corners.size(); ++corner) {
       if (excluded.count({o->filename, o->id(corner)})) continue;
-      const Eigen::Vector3d point = board_pose.rotation * points[size_t(o->id(corner))] + board_pose.translation;
+      const Eigen::Vector3d point =
+          board_pose.rotation * detail::warped(joint.board, joint.warp, points[size_t(o->id(corner))]) +
+          board_pose.translation;
       Eigen::Vector2d q;
       camera.project(point, &q);
       board_sum2 += (q - o->corners[corner]).squaredNorm(), ++used;
@@ -609,28 +661,13 @@ CalibrationResult joint_report(size_t k, const CalibrationResult& single, const 
     r.outliers.push_back(o);
   }
   r.noise_px = std::sqrt(c.full.variance);
+  report_joint_warp(joint, c, &r);
   if (joint.fixed[k]) {  // parameters as given, sigma 0
     r.camera = p;
     return r;
   }
   p.calibration = record;
-  r.parameters = s.model;
-  r.parameters.insert(r.parameters.end(), {s.center.x(), s.center.y(), s.ay});
-  r.undetermined.clear();
-  for (size_t i = 0; i < r.parameters.size(); ++i) {
-    const Eigen::Index at = c.intrinsic_start[k] + Eigen::Index(i);
-    r.sigmas[i] = std::sqrt(c.full.covariance(at, at));
-  }
-  for (const Eigen::VectorXd& direction : c.full.undetermined) {
-    std::vector<std::string> names;
-    for (size_t i = 0; i < r.parameters.size(); ++i) {
-      if (std::abs(direction[c.intrinsic_start[k] + Eigen::Index(i)]) >= 0.1) {
-        names.push_back(r.parameter_names[i]);
-        r.sigmas[i] = std::numeric_limits<double>::quiet_NaN();
-      }
-    }
-    if (!names.empty()) r.undetermined.push_back(undetermined_text(names, false, rig_camera.model.name, r.parameters));
-  }
+  report_joint_intrinsics(k, s, c, rig_camera.model.name, &r);
   r.camera = p;
   check_solution(r, rig_camera.width, rig_camera.height, camera_name(k) + " " + rig_camera.model.name);
   return r;
@@ -655,7 +692,7 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
   RigViews views;
   index_views(cameras, singles, &views);
   resolve_numbering(board, &views);
-  JointParameters joint = joint_start(singles, relative_poses(views), views, cameras);
+  JointParameters joint = joint_start(singles, relative_poses(views), views, cameras, board, options.board_warp);
   // 3. The joint solve, the outliers of step 1 left out, then the joint outliers.
   const auto points = board_points(board);
   std::vector<CornerSet> excluded(n);  // (image, corner) per camera

@@ -54,7 +54,8 @@ struct CalibrationOptions {
   // Solve the boards' warp (BoardWarp, mrcal's two-parameter calobject_warp, one for
   // every board) with the intrinsics, as mrcal does by default: real boards are
   // rarely flat to the corners' precision. Off: the boards are flat (OpenCV's model).
-  // The rig's joint solve holds its boards flat.
+  // A rig solves one warp in its joint solve (and each camera's own calibration, its
+  // start, its own), as mrcal's joint solve does.
   bool board_warp = true;
 };
 
@@ -120,7 +121,8 @@ RigCalibrationResult calibrate_rig(const std::vector<RigCamera>& cameras, const 
 // warnings, out, parameters {name: {value, sigma, determined}}, per_image_rms_px.
 std::string calibration_report_json(const CalibrationResult& result, const CameraParameters& written,
                                     const std::string& out);
-// A rig: rms_px, rms_per_coordinate_px, instants, warnings, out, pose_convention, and
+// A rig: rms_px, rms_per_coordinate_px, instants, board_warp (as one camera's: the
+// joint solve's), warnings, out, pose_convention, and
 // per camera its corners file, model, rms_px, corners, images, outliers, undetermined,
 // pose (camera -> camera 0, with sigmas) and parameters {name: {value, sigma}}.
 std::string rig_calibration_report_json(const RigCalibrationResult& rig, const std::vector<std::string>& corners_files,
