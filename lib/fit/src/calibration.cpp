@@ -32,6 +32,21 @@ Eigen::Vector3d warped(const BoardSpec& board, const std::vector<double>& warp, 
   return point + Eigen::Vector3d(0, 0, Eigen::Vector2d(warp[0], warp[1]).dot(warp_factors(board, point)));
 }
 
+void board_jacobians(const Eigen::Matrix<double, 2, 3>& dpixel, const Eigen::Vector3d& rotated, const double* pose,
+                     const std::optional<Eigen::Vector2d>& warp, double* d_pose, double* d_warp) {
+  if (d_pose) {
+    Eigen::Map<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> d(d_pose);
+    d.leftCols<3>() = -dpixel * cross_matrix(rotated) * left_jacobian({pose[0], pose[1], pose[2]});
+    d.rightCols<3>() = dpixel;
+  }
+  if (d_warp && warp) {  // the point moves along the board's z, R e_z per unit of warp
+    const double unit_z[3] = {0, 0, 1};
+    Eigen::Vector3d normal;
+    ceres::AngleAxisRotatePoint(pose, unit_z, normal.data());
+    Eigen::Map<Eigen::Matrix<double, 2, 2, Eigen::RowMajor>>(d_warp, 2, 2) = (dpixel * normal) * warp->transpose();
+  }
+}
+
 double principal_point_offset(const Eigen::Vector2d& p, int width, int height) {
   return std::max(std::abs(p.x() - (width - 1) / 2.0) / width, std::abs(p.y() - (height - 1) / 2.0) / height);
 }

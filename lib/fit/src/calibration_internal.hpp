@@ -235,6 +235,13 @@ class FixedCameraCornerResidual {
   std::optional<Eigen::Vector2d> warp_;
 };
 
+// A corner's Jacobians in its board's pose (angle-axis, translation: 2 x 6, row-major)
+// and in the boards' warp (2 x 2) from d pixel / d camera-frame point: `rotated` is the
+// (warped) board point turned by the pose, `warp` its warp factors. Either output may be
+// null (not wanted).
+void board_jacobians(const Eigen::Matrix<double, 2, 3>& dpixel, const Eigen::Vector3d& rotated, const double* pose,
+                     const std::optional<Eigen::Vector2d>& warp, double* d_pose, double* d_warp);
+
 // The same residual with its Jacobians written out; parameter blocks (model,
 // (cx, cy), a_y, board pose[, the boards' warp (x2, y2) when the point has factors]).
 // A radial model enters only through rho(theta): one
@@ -299,18 +306,7 @@ class CornerCost final : public ceres::CostFunction {
       Eigen::Matrix<double, 2, 3> dpixel;
       dpixel.row(0) = q.x() * ds.transpose(), dpixel(0, 0) += s;
       dpixel.row(1) = ay * q.y() * ds.transpose(), dpixel(1, 1) += ay * s;
-      if (jacobians[3]) {
-        Eigen::Map<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> d_pose(jacobians[3]);
-        d_pose.leftCols<3>() = -dpixel * cross_matrix(rotated) * left_jacobian({p[3][0], p[3][1], p[3][2]});
-        d_pose.rightCols<3>() = dpixel;
-      }
-      if (warp_wanted) {  // the point moves along the board's z, R e_z per unit of warp
-        const double unit_z[3] = {0, 0, 1};
-        Eigen::Vector3d normal;
-        ceres::AngleAxisRotatePoint(p[3], unit_z, normal.data());
-        Eigen::Map<Eigen::Matrix<double, 2, 2, Eigen::RowMajor>> d_warp(jacobians[4]);
-        d_warp = (dpixel * normal) * warp_->transpose();
-      }
+      board_jacobians(dpixel, rotated, p[3], warp_, jacobians[3], warp_wanted ? jacobians[4] : nullptr);
     }
     return true;
   }

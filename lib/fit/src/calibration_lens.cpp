@@ -39,18 +39,7 @@ bool LensCornerCost::Evaluate(double const* const* p, double* residuals, double*
   if (jacobians[3]) jacobians[3][0] = 0, jacobians[3][1] = f * d.y();
   if (point_wanted) {
     const Eigen::Matrix<double, 2, 3> dpixel = Eigen::Vector2d(f, ay * f).asDiagonal() * d_point;
-    if (jacobians[4]) {
-      Eigen::Map<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> d_pose(jacobians[4]);
-      d_pose.leftCols<3>() = -dpixel * cross_matrix(rotated) * left_jacobian({p[4][0], p[4][1], p[4][2]});
-      d_pose.rightCols<3>() = dpixel;
-    }
-    if (warp_wanted) {  // the point moves along the board's z, R e_z per unit of warp
-      const double unit_z[3] = {0, 0, 1};
-      Eigen::Vector3d normal;
-      ceres::AngleAxisRotatePoint(p[4], unit_z, normal.data());
-      Eigen::Map<Eigen::Matrix<double, 2, 2, Eigen::RowMajor>> d_warp(jacobians[5]);
-      d_warp = (dpixel * normal) * warp_->transpose();
-    }
+    board_jacobians(dpixel, rotated, p[4], warp_, jacobians[4], warp_wanted ? jacobians[5] : nullptr);
   }
   return true;
 }
