@@ -1,9 +1,11 @@
 #include "grid_warp.hpp"
 
+#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -387,32 +389,54 @@ std::shared_ptr<const GridPlan> make_grid_plan(const Camera& source, const Camer
 }
 
 namespace {
-// A channels-first image's planes as bilinear_8u_planar samples them, or nullopt
-// where it cannot (not 8-bit, rows of different steps, offsets past 31 bits).
-std::optional<BilinearPlanes> planar_source(const AugmentIO& io, const GridRowLoops& loops) {
+// A channels-first 8-bit image as bilinear_8u reads it: one plane where it lies, more
+// interleaved into a buffer the calling thread keeps; nullopt where the grid path
+// cannot sample it (no fast kernel, not 8-bit, 2 GiB or more). Sampling the planes
+// where they lie took two gathers or six loads per pixel and plane against two
+// loads: it cost more than this pass over the image (docs/performance.md).
+std::optional<BilinearSource> interleaved_planes(const AugmentIO& io, const GridRowLoops& loops) {
   const std::span<const cv::Mat> planes = io.image_planes;
-  if (planes.empty() || !loops.bilinear_8u_planar || planes[0].depth() != CV_8U || planes[0].cols < 4) {
-    return std::nullopt;
-  }
-  BilinearPlanes source{{}, int(planes.size()), planes[0].step[0], planes[0].cols, planes[0].rows, {}};
+  if (planes.empty() || !loops.bilinear_8u_to_planes || planes[0].depth() != CV_8U) return std::nullopt;
+  const int channels = int(planes.size()), width = planes[0].cols, height = planes[0].rows;
   const unsigned char fill = cv::saturate_cast<unsigned char>(io.fill);
-  for (std::size_t c = 0; c < planes.size(); ++c) {
-    if (planes[c].step[0] != source.step || planes[c].dataend - planes[c].data >= kMaxFusedImageBytes) {
-      return std::nullopt;
-    }
-    source.planes[c] = planes[c].data;
-    source.fill[c] = fill;
+  const auto source = [&](const unsigned char* data, std::size_t step) {
+    return BilinearSource{data, data + (height - 1) * step + std::size_t(width) * channels, step, width, height,
+                          channels, {fill, fill, fill, fill}};
+  };
+  if (channels == 1) {
+    if (planes[0].dataend - planes[0].data >= kMaxFusedImageBytes) return std::nullopt;
+    return source(planes[0].data, planes[0].step[0]);
   }
-  return source;
+  // Rows of whole cache lines starting one byte past one: OpenCV's merge writes an
+  // aligned row with non-temporal stores, which leave it out of the cache the warp
+  // then reads it from.
+  const std::size_t step = (std::size_t(width) * channels + 63) / 64 * 64;
+  if (std::ptrdiff_t(step * height) >= kMaxFusedImageBytes) return std::nullopt;
+  thread_local std::vector<unsigned char> buffer;
+  buffer.resize(step * height + 64);
+  const std::uintptr_t start = reinterpret_cast<std::uintptr_t>(buffer.data());
+  unsigned char* const data = buffer.data() + ((64 - start % 64) % 64 + 1) % 64;
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      const unsigned char* row_planes[4] = {};
+      for (int c = 0; c < channels; ++c) row_planes[c] = planes[std::size_t(c)].ptr<unsigned char>(v);
+      cv::hal::merge8u(row_planes, data + std::size_t(v) * step, width, channels);
+    }
+  });
+  return source(data, step);
 }
 }  // namespace
 
 bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
                   const RigidMotion& change, DepthPrior prior, const AugmentIO& io) {
   const GridRowLoops loops = grid_row_loops_for_cpu();
-  const std::optional<BilinearPlanes> planar = planar_source(io, loops);
-  if (!io.image_planes.empty() && !planar) return false;  // the caller samples an interleaved copy
+  const bool planar = !io.image_planes.empty();
+  if (planar && !(loops.bilinear_8u_to_planes && io.image_planes[0].depth() == CV_8U)) {
+    return false;  // the caller samples an interleaved copy
+  }
   if (!measured(plan, change)) return false;
+  std::optional<BilinearSource> fused = planar ? interleaved_planes(io, loops) : std::nullopt;
+  if (planar && !fused) return false;
   const GridChange prepared = prepare(plan, src, change, prior);
   const int w = target.width(), h = target.height();
   if (io.image) io.out_image->create(h, w, io.image->type());
@@ -420,11 +444,9 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
   if (io.valid) io.valid->create(h, w, CV_8UC1);
   const float limit_x = src.grid.width - 0.5f, limit_y = src.grid.height - 0.5f;
   const float max_x = src.grid.width - 1, max_y = src.grid.height - 1;
-  // 8-bit images with 1, 3 or 4 channels are interpolated row by row while the row's
+  // 8-bit images with 1 to 4 channels are interpolated row by row while the row's
   // maps are in L1 (byte for byte what cv::remap gives); others by cv::remap per tile.
-  std::optional<BilinearSource> fused;
-  if (io.image && loops.bilinear_8u && io.image->depth() == CV_8U &&
-      (io.image->channels() == 1 || io.image->channels() == 3 || io.image->channels() == 4) &&
+  if (io.image && loops.bilinear_8u && io.image->depth() == CV_8U && io.image->channels() <= 4 &&
       io.image->dataend - io.image->data < kMaxFusedImageBytes) {
     const cv::Mat& image = *io.image;
     const unsigned char fill = cv::saturate_cast<unsigned char>(io.fill);
@@ -451,15 +473,15 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
         loops.to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
                              fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
                              io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
-        if (fused) {
+        if (fused && planar) {
+          unsigned char* out_rows[4] = {};
+          for (int c = 0; c < fused->channels; ++c)
+            out_rows[c] = io.out_image_planes[std::size_t(c)].ptr<unsigned char>(v);
+          loops.bilinear_8u_to_planes(*fused, fixed.ptr<short>(v - r0), fractions.ptr<unsigned short>(v - r0), w,
+                                      out_rows);
+        } else if (fused) {
           loops.bilinear_8u(*fused, fixed.ptr<short>(v - r0), fractions.ptr<unsigned short>(v - r0), w,
                             io.out_image->ptr<unsigned char>(v));
-        } else if (planar) {
-          unsigned char* out_rows[4] = {};
-          for (int c = 0; c < planar->count; ++c)
-            out_rows[c] = io.out_image_planes[std::size_t(c)].ptr<unsigned char>(v);
-          loops.bilinear_8u_planar(*planar, fixed.ptr<short>(v - r0), fractions.ptr<unsigned short>(v - r0), w,
-                                   out_rows);
         }
       }
       const int rows = r1 - r0;

@@ -118,15 +118,6 @@ struct BilinearSource {
   int width, height, channels;
   unsigned char fill[4];  // the border value per channel
 };
-// An 8-bit channels-first source for GridRowLoops::bilinear_8u_planar: 1 to 4 planes
-// of one size sharing a row step, each where it lies.
-struct BilinearPlanes {
-  const unsigned char* planes[4];  // each plane's first row
-  int count;
-  std::size_t step;       // bytes per row
-  int width, height;      // width >= 4
-  unsigned char fill[4];  // the border value per plane
-};
 struct GridRowLoops {
   // Spacing 4: pixels 4i .. 4i+3 from the node columns interpolated to the row,
   // column[i] + a (column[i+1] - column[i]) / 4 for a = 0..3, cells [0, cells)
@@ -136,17 +127,16 @@ struct GridRowLoops {
   // valid may be null.
   void (*to_fixed_point)(const float* x, const float* y, int w, float limit_x, float limit_y, float max_x, float max_y,
                          short* fixed, unsigned short* fractions, short* nearest, unsigned char* valid);
-  // cv::remap's INTER_LINEAR + BORDER_CONSTANT of an 8-bit image with 1, 3 or 4
+  // cv::remap's INTER_LINEAR + BORDER_CONSTANT of an 8-bit image with 1 to 4
   // channels from one row of those maps, byte for byte; null where the instruction
   // set has no fast form (the caller then calls cv::remap). The image is smaller
   // than 2 GiB; the maps can be read 7 pixels past the row (those values are unused).
   void (*bilinear_8u)(const BilinearSource& source, const short* fixed, const unsigned short* fractions, int w,
                       unsigned char* out);
-  // The same for each plane of a channels-first image, written to out[c] (the
-  // output row of plane c), byte for byte what cv::remap gives for that plane;
-  // null where the instruction set has no fast form. The planes' offsets fit 31 bits.
-  void (*bilinear_8u_planar)(const BilinearPlanes& source, const short* fixed, const unsigned short* fractions, int w,
-                             unsigned char* const* out);
+  // The same with channel c written to out[c] (a channels-first output's row of
+  // plane c); null where bilinear_8u is.
+  void (*bilinear_8u_to_planes)(const BilinearSource& source, const short* fixed, const unsigned short* fractions,
+                                int w, unsigned char* const* out);
 };
 GridRowLoops grid_row_loops_baseline();
 GridRowLoops grid_row_loops_avx2();
