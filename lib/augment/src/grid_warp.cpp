@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <mutex>
 #include <numbers>
@@ -400,8 +400,13 @@ std::optional<BilinearSource> interleaved_planes(const AugmentIO& io, const Grid
   const int channels = int(planes.size()), width = planes[0].cols, height = planes[0].rows;
   const unsigned char fill = cv::saturate_cast<unsigned char>(io.fill);
   const auto source = [&](const unsigned char* data, std::size_t step) {
-    return BilinearSource{data, data + (height - 1) * step + std::size_t(width) * channels, step, width, height,
-                          channels, {fill, fill, fill, fill}};
+    return BilinearSource{data,
+                          data + (height - 1) * step + std::size_t(width) * channels,
+                          step,
+                          width,
+                          height,
+                          channels,
+                          {fill, fill, fill, fill}};
   };
   if (channels == 1) {
     if (planes[0].dataend - planes[0].data >= kMaxFusedImageBytes) return std::nullopt;

@@ -1116,7 +1116,7 @@ TEST(Augmentation, GridImagesAreCvRemapOfTheGridMapByteForByte) {
   cv::Mat wide_buffer = noise(CV_8UC3);
   cv::copyMakeBorder(wide_buffer, wide_buffer, 3, 5, 7, 11, cv::BORDER_REFLECT);
   const cv::Mat view = wide_buffer(cv::Rect(7, 3, camera.width(), camera.height()));
-  const std::vector<cv::Mat> images = {noise(CV_8UC1), noise(CV_8UC3),  noise(CV_8UC4),
+  const std::vector<cv::Mat> images = {noise(CV_8UC1), noise(CV_8UC2),  noise(CV_8UC3), noise(CV_8UC4),
                                        view,           noise(CV_16UC3), noise(CV_32FC1)};
   const float max_x = float(camera.width() - 1), max_y = float(camera.height() - 1);
   // Three large changes, and the identity: it samples the image's last pixels, whose
@@ -1147,8 +1147,9 @@ TEST(Augmentation, GridImagesAreCvRemapOfTheGridMapByteForByte) {
       cv::remap(image, expected, fixed, fractions, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(fill));
       warp.augment(change, prior, {&image, &actual, fill, nullptr, nullptr, 0, nullptr}, Sampling::grid);
       EXPECT_EQ(cv::norm(actual, expected, cv::NORM_INF), 0) << seed << " type " << image.type();
-      // Channels-first: 8-bit planes sampled where they lie (bilinear_8u_planar on
-      // AVX2), others through an interleaved copy; contiguous planes and strided ones.
+      // Channels-first: 8-bit planes interleaved for bilinear_8u, which writes the
+      // output planes (AVX2), others through an interleaved copy; contiguous planes and
+      // strided ones.
       for (const int pad : {0, 5}) {
         const cv::Mat planar = augment_channels_first(warp, change, prior, image, fill, Sampling::grid, pad);
         EXPECT_EQ(cv::norm(planar, expected, cv::NORM_INF), 0) << seed << " type " << image.type() << " pad " << pad;
@@ -1157,10 +1158,9 @@ TEST(Augmentation, GridImagesAreCvRemapOfTheGridMapByteForByte) {
   }
 }
 
-// Channels-first images on every path: two planes (the planar kernel's other
-// count), an odd width (a partial last vector), the exact path and a depth map
-// (through an interleaved copy), byte for byte the interleaved image's result; and the
-// planes' errors.
+// Channels-first images on every path: two planes, an odd width (a partial last
+// vector), the exact path and a depth map (through an interleaved copy), byte for
+// byte the interleaved image's result; and the planes' errors.
 TEST(Augmentation, ChannelsFirstImagesEqualInterleavedOnEveryPath) {
   const Camera camera(resized(woodscape().parameters(), 157, 119));
   const ViewpointWarp warp(camera);

@@ -33,6 +33,7 @@ from .targets import (
     _numpy,
     _numpy_to_image,
     _split_fill,
+    _wrapped_like,
     is_instance_mask,
 )
 
@@ -177,7 +178,7 @@ def warped_masks(mask: torch.Tensor, change: _transforms.SampleChange, instance:
 @register_kernel(tv_tensors.Mask)
 def _mask(mask: tv_tensors.Mask, change: _transforms.SampleChange, options: ChangeOptions) -> tv_tensors.Mask:
     instance = options.instance if options.instance is not None else is_instance_mask(mask)
-    return tv_tensors.wrap(warped_masks(mask, change, instance), like=mask)
+    return typing.cast(tv_tensors.Mask, _wrapped_like(warped_masks(mask, change, instance), mask))
 
 
 @register_kernel(tv_tensors.KeyPoints)

@@ -28,6 +28,7 @@ from .targets import (
     _numpy_to_image,
     _size_of,
     _split_fill,
+    _wrapped_like,
     is_instance_mask,
 )
 
@@ -151,7 +152,7 @@ class _FishcamTransform(v2.Transform):
         )
         return {
             id(image): _numpy_to_image(out_image, image),
-            id(mask): tv_tensors.wrap(torch.from_numpy(out_mask), like=mask),
+            id(mask): _wrapped_like(torch.from_numpy(out_mask), mask),
         }
 
     def transform(self, inpt: typing.Any, params: Params) -> typing.Any:
