@@ -250,7 +250,8 @@ def peers(fishcam, data, samples, rounds, batch=8):
 def v2_path(fishcam, data, samples, rounds):
     """Per-sample ms of the numpy transform (HWC array) and of fishcam.torch.RandomViewpoint
     on the same pixels as an HWC-backed and as a contiguous CHW image, same seeds,
-    interleaved sample by sample; one thread each."""
+    interleaved sample by sample; one thread each; every case returns the image and
+    the augmented camera."""
     import torch
 
     fishcam.set_num_threads(1)
@@ -270,7 +271,7 @@ def _v2_path_at(fishcam, data, width, height, samples, rounds):
     backed = tv_tensors.Image(torch.from_numpy(hwc).permute(2, 0, 1))
     planar = tv_tensors.Image(backed.contiguous())
     cases = {
-        "numpy": lambda seed: numpy_transform(hwc, seed=seed)["image"],
+        "numpy": lambda seed: numpy_transform(hwc, camera=camera, seed=seed),
         "hwc_backed": lambda seed: torch_transform(backed, camera),
         "chw": lambda seed: torch_transform(planar, camera),
     }

@@ -72,12 +72,12 @@ double Camera::drho(double theta) const {
 }
 
 double Camera::theta_from_rho(double rho) const {
-  return std::visit([&](const auto& m) { return theta_of(m, domain_, table_, rho, InversePath::robust); },
+  return std::visit([&](const auto& m) { return theta_of(m, domain_, *table_, rho, InversePath::robust); },
                     params_.model);
 }
 
 double Camera::theta_from_rho_table(double rho) const {
-  return std::visit([&](const auto& m) { return theta_of(m, domain_, table_, rho, InversePath::table); },
+  return std::visit([&](const auto& m) { return theta_of(m, domain_, *table_, rho, InversePath::table); },
                     params_.model);
 }
 
@@ -97,7 +97,7 @@ bool Camera::project(const Eigen::Vector3d& point, Eigen::Vector2d* pixel,
 bool Camera::unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const {
   const Eigen::Vector2d s = params_.grid.skewed_offset(pixel);
   const bool ok = visit_parts(params_, [&](const auto& m, const auto& part) {
-    return ray_of_point(m, part, params_, domain_, table_, s.x(), s.y(), InversePath::robust, ray->data());
+    return ray_of_point(m, part, params_, domain_, *table_, s.x(), s.y(), InversePath::robust, ray->data());
   });
   if (!ok) ray->setConstant(kNaN);
   return ok;
@@ -129,7 +129,7 @@ void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen:
     parallel_chunks(pixels.size(), [&](size_t begin, size_t end) {
       for (size_t i = begin; i < end; ++i) {
         const double x = (pixels[i].x() - c.x()) * inv_scale.x(), y = (pixels[i].y() - c.y()) * inv_scale.y();
-        const bool ok = ray_of_point(m, part, params_, domain_, table_, x, y, path, rays[i].data());
+        const bool ok = ray_of_point(m, part, params_, domain_, *table_, x, y, path, rays[i].data());
         if (!ok) rays[i].setConstant(kNaN);
         if (!valid.empty()) valid[i] = ok;
       }
@@ -140,7 +140,7 @@ void Camera::unproject(std::span<const Eigen::Vector2d> pixels, std::span<Eigen:
 void Camera::unproject_image(std::span<float> rays_xyz, InversePath path) const {
   const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
   if (rays_xyz.size() != 3 * n) throw Error("unproject_image: output must hold 3 * width * height floats");
-  unproject_pixels<3>(params_, domain_, table_, rays_xyz.data(), rays_xyz.data() + 1, rays_xyz.data() + 2, path);
+  unproject_pixels<3>(params_, domain_, *table_, rays_xyz.data(), rays_xyz.data() + 1, rays_xyz.data() + 2, path);
 }
 
 void Camera::unproject_image(std::span<float> x, std::span<float> y, std::span<float> z, InversePath path) const {
@@ -148,7 +148,7 @@ void Camera::unproject_image(std::span<float> x, std::span<float> y, std::span<f
   if (x.size() < n || y.size() < n || z.size() < n) {
     throw Error("unproject_image: each output plane must hold width * height floats");
   }
-  unproject_pixels<1>(params_, domain_, table_, x.data(), y.data(), z.data(), path);
+  unproject_pixels<1>(params_, domain_, *table_, x.data(), y.data(), z.data(), path);
 }
 
 Camera::FieldOfView Camera::field_of_view_deg() const {

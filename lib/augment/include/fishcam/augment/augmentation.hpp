@@ -109,8 +109,9 @@ struct AugmentIO {
   // A channels-first image in place of `image` / `out_image`: its planes (1 to 4,
   // one channel each, the source's size, one type) and the output's planes (the
   // target's size and that type, allocated by the caller: written where they lie).
-  // 8-bit planes sharing a row step are sampled where they lie on the grid path;
-  // other paths take them through an interleaved copy.
+  // On the grid path 8-bit planes are interleaved into a buffer the calling thread
+  // keeps and the output planes written directly; other paths take them through an
+  // interleaved copy whose output is split into the planes.
   std::span<const cv::Mat> image_planes = {};
   std::span<cv::Mat> out_image_planes = {};
 };

@@ -185,7 +185,7 @@ class Camera {
   // rho, theta_from_rho and rho_of_pixel describe its whole projection.
   bool radial() const { return params_.radially_symmetric(); }
   const ValidDomain& domain() const { return domain_; }
-  const InverseTable& inverse_table() const { return table_; }
+  const InverseTable& inverse_table() const { return *table_; }
 
   // The radial model (for a camera with a plane distortion, its radial part).
   double rho(double theta) const;
@@ -232,7 +232,9 @@ class Camera {
   void bound_plane_reach();    // domain_.plane_reach
   CameraParameters params_;
   ValidDomain domain_;
-  InverseTable table_;
+  // Shared by the copies with_pose makes (an augmented camera per sample): the
+  // table depends on the model and the domain only.
+  std::shared_ptr<const InverseTable> table_;
 };
 
 }  // namespace fishcam
