@@ -205,9 +205,9 @@ Camera::Camera(CameraParameters parameters, double table_tolerance_px) : params_
         fail(part, ": ", what.substr(0, 100), " cannot be evaluated everywhere in its domain (", problem, ")");
     }
   }
-  table_ = std::visit(
-      [&](const auto& m) { return std::make_shared<const InverseTable>(m, domain_, table_tolerance_px); },
-      params_.model);
+  table_ =
+      std::visit([&](const auto& m) { return std::make_shared<const InverseTable>(m, domain_, table_tolerance_px); },
+                 params_.model);
 }
 
 void Camera::limit_to_plane_fold() {
