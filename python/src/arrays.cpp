@@ -26,8 +26,13 @@ PointArray rows_of(const py::handle& input, py::ssize_t k, const char* what) {
 
 // A numpy image as a cv::Mat header on its memory (no copy). HxW or HxWxC, C <= 4,
 // C-contiguous (else copied), dtype among `depths`.
-cv::Mat as_mat(py::array& array, const char* what, bool labels) {
-  if (!(array.flags() & py::array::c_style)) {
+cv::Mat as_mat(py::array& array, const char* what, bool labels, bool rows_apart) {
+  // Rows apart: an HxW array whose rows are contiguous and do not overlap (a plane of
+  // a cropped CxHxW image), read through its row step.
+  const py::ssize_t item = array.itemsize();
+  rows_apart = rows_apart && array.ndim() == 2 && array.strides(1) == item && array.strides(0) % item == 0 &&
+               array.strides(0) >= array.shape(1) * item;
+  if (!rows_apart && !(array.flags() & py::array::c_style)) {
     array = py::array::ensure(array, py::array::c_style);  // a contiguous copy: never strided reads
   }
   if (array.ndim() >= 2 && (array.shape(0) >= 32767 || array.shape(1) >= 32767)) {
@@ -51,7 +56,8 @@ cv::Mat as_mat(py::array& array, const char* what, bool labels) {
   // Inputs are only read: read-only arrays (np.asarray of a PIL image, a memory map
   // opened with mode 'r') are taken as they are.
   return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_MAKETYPE(depth, channels),
-                 const_cast<void*>(array.data()));
+                 const_cast<void*>(array.data()),
+                 rows_apart ? static_cast<std::size_t>(array.strides(0)) : std::size_t(cv::Mat::AUTO_STEP));
 }
 
 namespace {
@@ -61,8 +67,10 @@ int image_depth(const py::array& like) { return like.itemsize() == 1 ? CV_8U : l
 
 bool is_planar_view(const py::array& array) {
   if (array.ndim() != 3 || array.shape(2) < 2) return false;
-  const py::ssize_t item = array.itemsize(), h = array.shape(0), w = array.shape(1);
-  return array.strides(1) == item && array.strides(0) == w * item && array.strides(2) == h * w * item;
+  const py::ssize_t item = array.itemsize(), w = array.shape(1);
+  // Contiguous rows that do not overlap, the planes anywhere (a crop of a CxHxW image
+  // too; an interleaved image has a column stride of C items).
+  return array.strides(1) == item && array.strides(0) % item == 0 && array.strides(0) >= w * item;
 }
 
 std::vector<cv::Mat> image_planes(py::array& array, const char* what) {
@@ -70,13 +78,13 @@ std::vector<cv::Mat> image_planes(py::array& array, const char* what) {
   if (channels > 4) throw Error(std::string(what) + ": expected 1 to 4 channels, got " + std::to_string(channels));
   std::vector<cv::Mat> planes;
   for (py::ssize_t c = 0; c < channels; ++c) {
-    // A plane is an HxW C-contiguous view (is_planar_view), checked as any image; the
-    // header is taken on the array's own memory, which the caller keeps alive.
+    // A plane is an HxW view with contiguous rows (is_planar_view), checked as any
+    // image; the header is taken on the array's own memory, which the caller keeps alive.
     py::array plane = array[py::make_tuple(py::ellipsis(), c)];
-    const cv::Mat checked = as_mat(plane, what, false);
+    const cv::Mat checked = as_mat(plane, what, false, true);
     const auto* lies = static_cast<const unsigned char*>(array.data()) + c * array.strides(2);
     if (checked.data != lies) throw Error(std::string(what) + ": internal: a plane was copied");
-    planes.emplace_back(checked.rows, checked.cols, checked.type(), const_cast<unsigned char*>(lies));
+    planes.push_back(checked);
   }
   return planes;
 }

@@ -59,15 +59,17 @@ std::pair<py::array_t<double>, py::array_t<bool>> batch(const py::handle& input,
 }
 
 // A numpy image as a cv::Mat header on its memory (no copy). HxW or HxWxC, C <= 4,
-// C-contiguous (else copied), dtype among `depths`.
-cv::Mat as_mat(py::array& array, const char* what, bool labels);
+// C-contiguous (else copied) -- or, with rows_apart, an HxW array of contiguous rows
+// at any larger step -- dtype uint8, uint16 or float32 (labels: uint8 or uint16).
+cv::Mat as_mat(py::array& array, const char* what, bool labels, bool rows_apart = false);
 
 // A new numpy array of height x width (x the channels of `like`), dtype of `like`,
 // and a cv::Mat header on its memory.
 py::array new_image(const py::array& like, int height, int width, cv::Mat* header);
 // Channels-first images (what torch's CxHxW images are as numpy: np.moveaxis of C
-// contiguous HxW planes) are read and written plane by plane, never through a
-// transposing copy: whether `array` is such an HxWxC view; a header per plane of it
+// HxW planes of contiguous rows, a crop's too) are handed to the library and written
+// plane by plane, never through a numpy copy: whether `array` is such an HxWxC view;
+// a header per plane of it
 // (AugmentIO::image_planes); a new (C, H, W) array like it, returned as its HxWxC
 // view, with a header per plane for the library to write the result into.
 bool is_planar_view(const py::array& array);

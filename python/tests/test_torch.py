@@ -588,23 +588,34 @@ def test_a_dataset_refuses_files_it_cannot_read_without_blocking(tmp_path, small
     [(3, torch.uint8), (2, torch.uint8), (4, torch.uint8), (2, torch.uint16), (4, torch.float32)],
 )
 def test_channels_first_images_keep_their_layout(small_camera, channels, dtype):
-    """A contiguous CxHxW image (what v2.ToImage, Resize and ColorJitter give) is read
-    plane by plane and comes back contiguous CxHxW, equal to the same image given
-    channels-last (8-bit planes are sampled where they lie, others through an
-    interleaved copy); an HWC-backed one comes back as it did."""
+    """A contiguous CxHxW image (what v2.ToImage, Resize and ColorJitter give), or a
+    crop of a larger one, is handed over plane by plane and comes back contiguous
+    CxHxW, equal to the same image given channels-last; an HWC-backed one comes back
+    as it did."""
     rng = np.random.default_rng(channels)
     hwc = rng.integers(0, 200, (121, 160, channels)).astype(torch.empty(0, dtype=dtype).numpy().dtype)
     transform = ft.RandomViewpoint(preset="medium")
+    larger = torch.zeros((channels, 121 + 7, 160 + 9), dtype=dtype)
+    cropped = larger[:, 3:124, 5:165]
+    cropped.copy_(torch.from_numpy(hwc).permute(2, 0, 1))
+    assert not cropped.is_contiguous()
     outputs = []
-    for image in (torch.from_numpy(hwc).permute(2, 0, 1), torch.from_numpy(hwc).permute(2, 0, 1).contiguous()):
+    for image in (torch.from_numpy(hwc).permute(2, 0, 1), torch.from_numpy(hwc).permute(2, 0, 1).contiguous(), cropped):
         with ft.sample_seed(4):
             outputs.append(transform(tv_tensors.Image(image), small_camera)[0])
-    backed, planar = outputs
-    assert planar.is_contiguous() and planar.shape == (channels, 121, 160) and planar.dtype == dtype
-    assert torch.equal(backed, planar)
+    backed, planar, crop = outputs
+    for out in (planar, crop):
+        assert out.is_contiguous() and out.shape == (channels, 121, 160) and out.dtype == dtype
+        assert torch.equal(backed, out)
     # The numpy transform given the same channels-first buffer as an HxWxC view.
     numpy_transform = fishcam.transforms.RandomViewpoint(small_camera, preset="medium")
     view = np.moveaxis(np.ascontiguousarray(np.moveaxis(hwc, -1, 0)), 0, -1)
     out = numpy_transform(view, seed=5)["image"]
     assert np.array_equal(out, numpy_transform(hwc, seed=5)["image"])
     assert out.strides[-1] == out.shape[0] * out.shape[1] * out.itemsize  # written plane by plane
+    # A crop's planes are handed over as they lie too (a copy would be interleaved and
+    # come back channels-last).
+    crop_view = cropped.numpy().transpose(1, 2, 0)
+    out = numpy_transform(crop_view, seed=5)["image"]
+    assert np.array_equal(out, numpy_transform(hwc, seed=5)["image"])
+    assert out.strides[-1] == out.shape[0] * out.shape[1] * out.itemsize
