@@ -24,8 +24,7 @@ PointArray rows_of(const py::handle& input, py::ssize_t k, const char* what) {
   return array;
 }
 
-// A numpy image as a cv::Mat header on its memory (no copy). HxW or HxWxC, C <= 4,
-// C-contiguous (else copied), dtype among `depths`.
+// A numpy image as a cv::Mat header on its memory (no copy); see bindings.hpp.
 cv::Mat as_mat(py::array& array, const char* what, bool labels, bool rows_apart) {
   // Rows apart: an HxW array whose rows are contiguous and do not overlap (a plane of
   // a cropped CxHxW image), read through its row step.
@@ -70,7 +69,8 @@ bool is_planar_view(const py::array& array) {
   const py::ssize_t item = array.itemsize(), w = array.shape(1);
   // Contiguous rows that do not overlap, the planes anywhere (a crop of a CxHxW image
   // too; an interleaved image has a column stride of C items).
-  return array.strides(1) == item && array.strides(0) % item == 0 && array.strides(0) >= w * item;
+  return array.strides(1) == item && array.strides(0) % item == 0 && array.strides(0) >= w * item &&
+         array.strides(2) % item == 0;
 }
 
 std::vector<cv::Mat> image_planes(py::array& array, const char* what) {

@@ -35,7 +35,7 @@ py::dict resample(std::optional<py::array> image, std::optional<py::array> label
                   double fill, int label_fill, bool return_valid, const Apply& apply) {
   py::dict out;
   cv::Mat image_in, labels_in, image_out, labels_out, valid_out;
-  // A channels-first image: its planes and the output's, sampled where they lie.
+  // A channels-first image: its planes and the output's, handed over where they lie.
   std::vector<cv::Mat> in_planes, out_planes;
   const bool planar = image && is_planar_view(*image);
   if (planar) {

@@ -417,8 +417,9 @@ std::optional<BilinearSource> interleaved_planes(const AugmentIO& io, const Grid
   // then reads it from.
   const std::size_t step = (std::size_t(width) * channels + 63) / 64 * 64;
   if (std::ptrdiff_t(step * height) >= kMaxFusedImageBytes) return std::nullopt;
+  // Kept at the largest size this thread has used (grown only: no refill of memory it has).
   thread_local std::vector<unsigned char> buffer;
-  buffer.resize(step * height + 64);
+  if (buffer.size() < step * height + 64) buffer.resize(step * height + 64);
   const std::uintptr_t start = reinterpret_cast<std::uintptr_t>(buffer.data());
   unsigned char* const data = buffer.data() + ((64 - start % 64) % 64 + 1) % 64;
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {

@@ -109,9 +109,10 @@ struct AugmentIO {
   // A channels-first image in place of `image` / `out_image`: its planes (1 to 4,
   // one channel each, the source's size, one type) and the output's planes (the
   // target's size and that type, allocated by the caller: written where they lie).
-  // On the grid path 8-bit planes are interleaved into a buffer the calling thread
-  // keeps and the output planes written directly; other paths take them through an
-  // interleaved copy whose output is split into the planes.
+  // On the grid path with AVX2, 8-bit planes (more than one) are interleaved into a
+  // buffer the calling thread keeps, one plane is read where it lies, and the output
+  // planes are written directly; other paths take them through an interleaved copy
+  // whose output is split into the planes.
   std::span<const cv::Mat> image_planes = {};
   std::span<cv::Mat> out_image_planes = {};
 };
