@@ -436,13 +436,10 @@ std::optional<BilinearSource> interleaved_planes(const AugmentIO& io, const Grid
 bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& pixel_rays, const Camera& target,
                   const RigidMotion& change, DepthPrior prior, const AugmentIO& io) {
   const GridRowLoops loops = grid_row_loops_for_cpu();
-  const bool planar = !io.image_planes.empty();
-  if (planar && !(loops.bilinear_8u_to_planes && io.image_planes[0].depth() == CV_8U)) {
-    return false;  // the caller samples an interleaved copy
-  }
   if (!measured(plan, change)) return false;
+  const bool planar = !io.image_planes.empty();
   std::optional<BilinearSource> fused = planar ? interleaved_planes(io, loops) : std::nullopt;
-  if (planar && !fused) return false;
+  if (planar && !fused) return false;  // the caller samples an interleaved copy
   const GridChange prepared = prepare(plan, src, change, prior);
   const int w = target.width(), h = target.height();
   if (io.image) io.out_image->create(h, w, io.image->type());
@@ -479,7 +476,7 @@ bool grid_augment(const GridPlan& plan, const SourceParams& src, const cv::Mat& 
         loops.to_fixed_point(x.data(), y.data(), w, limit_x, limit_y, max_x, max_y, fixed.ptr<short>(v - r0),
                              fractions.ptr<unsigned short>(v - r0), nearest.ptr<short>(v - r0),
                              io.valid ? io.valid->ptr<unsigned char>(v) : nullptr);
-        if (fused && planar) {
+        if (planar) {
           unsigned char* out_rows[4] = {};
           for (int c = 0; c < fused->channels; ++c)
             out_rows[c] = io.out_image_planes[std::size_t(c)].ptr<unsigned char>(v);
